@@ -1,0 +1,283 @@
+//! The [`Link`] address: which serial port, TCP peer or pseudo-terminal carries the XBee
+//! API byte stream, written as a short string (see the crate docs for the table).
+
+use std::fmt;
+use std::str::FromStr;
+
+/// Baud rate used by `serial:` links that do not name one (the deployed XBee modules run
+/// at 115200 baud, 8N1).
+pub const DEFAULT_BAUD: u32 = 115_200;
+
+/// Where the XBee API byte stream comes from.
+///
+/// Parsed from and displayed as a string; `Display` always writes the baud rate of a
+/// serial link, so `link.to_string().parse()` gives the same link back.
+///
+/// ```
+/// use mcp_host::Link;
+///
+/// let link: Link = "serial:/dev/ttyUSB0".parse()?;
+/// assert_eq!(link, Link::Serial { path: "/dev/ttyUSB0".into(), baud: 115_200 });
+/// assert_eq!(link.to_string(), "serial:/dev/ttyUSB0:115200");
+///
+/// let link: Link = "tcp:[::1]:9750".parse()?;
+/// assert_eq!(link, Link::Tcp { host: "::1".into(), port: 9750 });
+/// assert_eq!(link.to_string(), "tcp:[::1]:9750");
+/// # Ok::<(), mcp_host::LinkParseError>(())
+/// ```
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub enum Link {
+    /// A serial port (`serial:PATH[:BAUD]`), 8 data bits, no parity, 1 stop bit.
+    Serial {
+        /// Device path, e.g. `/dev/ttyUSB0`.
+        path: String,
+        /// Baud rate.
+        baud: u32,
+    },
+    /// A TCP connection to `HOST:PORT` (`tcp:HOST:PORT`).
+    Tcp {
+        /// Host name or IP address (IPv6 without brackets).
+        host: String,
+        /// TCP port.
+        port: u16,
+    },
+    /// A TCP listener on `ADDR:PORT` serving one peer at a time (`tcp-listen:ADDR:PORT`).
+    TcpListen {
+        /// Local address to bind (IPv6 without brackets).
+        addr: String,
+        /// TCP port (0 picks a free port; see [`crate::Connector::local_addr`]).
+        port: u16,
+    },
+    /// A fresh pseudo-terminal pair (`pty`); the far end's path is reported once opened.
+    Pty,
+}
+
+/// Why a link string could not be parsed.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum LinkParseError {
+    /// The string was empty.
+    #[error(
+        "empty link string (expected serial:PATH[:BAUD], tcp:HOST:PORT, tcp-listen:ADDR:PORT or pty)"
+    )]
+    Empty,
+    /// The part before the first `:` is not a known link kind.
+    #[error("unknown link kind {0:?} (expected serial, tcp, tcp-listen or pty)")]
+    UnknownKind(String),
+    /// `serial:` without a device path.
+    #[error("serial link without a device path (expected serial:PATH[:BAUD])")]
+    MissingPath,
+    /// The baud rate is not a positive integer.
+    #[error("invalid baud rate {0:?} (expected a positive integer)")]
+    InvalidBaud(String),
+    /// `tcp:`/`tcp-listen:` without `HOST:PORT`.
+    #[error("missing port in {0:?} (expected HOST:PORT)")]
+    MissingPort(String),
+    /// `tcp:`/`tcp-listen:` with an empty host or address.
+    #[error("missing host in {0:?} (expected HOST:PORT)")]
+    MissingHost(String),
+    /// The port is not an integer in 0..=65535.
+    #[error("invalid port {0:?} (expected 0-65535)")]
+    InvalidPort(String),
+    /// `pty` followed by anything.
+    #[error("unexpected text after pty: {0:?}")]
+    TrailingPty(String),
+}
+
+impl FromStr for Link {
+    type Err = LinkParseError;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        if s.is_empty() {
+            return Err(LinkParseError::Empty);
+        }
+        let (kind, rest) = match s.split_once(':') {
+            Some((kind, rest)) => (kind, Some(rest)),
+            None => (s, None),
+        };
+        match kind {
+            "pty" => match rest {
+                None => Ok(Link::Pty),
+                Some(rest) => Err(LinkParseError::TrailingPty(rest.to_owned())),
+            },
+            "serial" => parse_serial(rest.unwrap_or("")),
+            "tcp" => {
+                let (host, port) = parse_host_port(rest.unwrap_or(""))?;
+                Ok(Link::Tcp { host, port })
+            }
+            "tcp-listen" => {
+                let (addr, port) = parse_host_port(rest.unwrap_or(""))?;
+                Ok(Link::TcpListen { addr, port })
+            }
+            other => Err(LinkParseError::UnknownKind(other.to_owned())),
+        }
+    }
+}
+
+fn parse_serial(rest: &str) -> Result<Link, LinkParseError> {
+    // A trailing `:DIGITS` is the baud rate; anything else belongs to the path.
+    let (path, baud) = match rest.rsplit_once(':') {
+        Some((path, baud)) if !baud.is_empty() && baud.bytes().all(|b| b.is_ascii_digit()) => {
+            let value = baud
+                .parse::<u32>()
+                .ok()
+                .filter(|b| *b > 0)
+                .ok_or_else(|| LinkParseError::InvalidBaud(baud.to_owned()))?;
+            (path, value)
+        }
+        Some((path, "")) => (path, DEFAULT_BAUD),
+        _ => (rest, DEFAULT_BAUD),
+    };
+    if path.is_empty() {
+        return Err(LinkParseError::MissingPath);
+    }
+    Ok(Link::Serial {
+        path: path.to_owned(),
+        baud,
+    })
+}
+
+fn parse_host_port(rest: &str) -> Result<(String, u16), LinkParseError> {
+    let (host, port) = rest
+        .rsplit_once(':')
+        .ok_or_else(|| LinkParseError::MissingPort(rest.to_owned()))?;
+    let host = host
+        .strip_prefix('[')
+        .and_then(|h| h.strip_suffix(']'))
+        .unwrap_or(host);
+    if host.is_empty() {
+        return Err(LinkParseError::MissingHost(rest.to_owned()));
+    }
+    if port.is_empty() {
+        return Err(LinkParseError::MissingPort(rest.to_owned()));
+    }
+    let port = port
+        .parse::<u16>()
+        .map_err(|_| LinkParseError::InvalidPort(port.to_owned()))?;
+    Ok((host.to_owned(), port))
+}
+
+/// `HOST:PORT`, with brackets around an IPv6 host.
+pub(crate) fn host_port(host: &str, port: u16) -> String {
+    HostPort(host, port).to_string()
+}
+
+struct HostPort<'a>(&'a str, u16);
+
+impl fmt::Display for HostPort<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.0.contains(':') {
+            write!(f, "[{}]:{}", self.0, self.1)
+        } else {
+            write!(f, "{}:{}", self.0, self.1)
+        }
+    }
+}
+
+impl fmt::Display for Link {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Link::Serial { path, baud } => write!(f, "serial:{path}:{baud}"),
+            Link::Tcp { host, port } => write!(f, "tcp:{}", HostPort(host, *port)),
+            Link::TcpListen { addr, port } => write!(f, "tcp-listen:{}", HostPort(addr, *port)),
+            Link::Pty => f.write_str("pty"),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_each_kind() {
+        assert_eq!(
+            "serial:/dev/ttyUSB0".parse(),
+            Ok(Link::Serial {
+                path: "/dev/ttyUSB0".into(),
+                baud: 115_200
+            })
+        );
+        assert_eq!(
+            "serial:/dev/ttyS1:9600".parse(),
+            Ok(Link::Serial {
+                path: "/dev/ttyS1".into(),
+                baud: 9600
+            })
+        );
+        assert_eq!(
+            "serial:COM3".parse(),
+            Ok(Link::Serial {
+                path: "COM3".into(),
+                baud: 115_200
+            })
+        );
+        assert_eq!(
+            "tcp:localhost:9750".parse(),
+            Ok(Link::Tcp {
+                host: "localhost".into(),
+                port: 9750
+            })
+        );
+        assert_eq!(
+            "tcp-listen:0.0.0.0:0".parse(),
+            Ok(Link::TcpListen {
+                addr: "0.0.0.0".into(),
+                port: 0
+            })
+        );
+        assert_eq!(
+            "tcp-listen:[::]:80".parse(),
+            Ok(Link::TcpListen {
+                addr: "::".into(),
+                port: 80
+            })
+        );
+        assert_eq!("pty".parse(), Ok(Link::Pty));
+    }
+
+    #[test]
+    fn rejects_bad_strings() {
+        use LinkParseError::*;
+        let cases: &[(&str, LinkParseError)] = &[
+            ("", Empty),
+            ("udp:1.2.3.4:5", UnknownKind("udp".into())),
+            ("ttyUSB0", UnknownKind("ttyUSB0".into())),
+            ("serial", MissingPath),
+            ("serial:", MissingPath),
+            ("serial::9600", MissingPath),
+            ("serial:/dev/ttyS0:0", InvalidBaud("0".into())),
+            (
+                "serial:/dev/ttyS0:99999999999",
+                InvalidBaud("99999999999".into()),
+            ),
+            ("tcp", MissingPort("".into())),
+            ("tcp:localhost", MissingPort("localhost".into())),
+            ("tcp:localhost:", MissingPort("localhost:".into())),
+            ("tcp::80", MissingHost(":80".into())),
+            ("tcp:[]:80", MissingHost("[]:80".into())),
+            ("tcp:host:65536", InvalidPort("65536".into())),
+            ("tcp-listen:host:http", InvalidPort("http".into())),
+            ("pty:/dev/pts/3", TrailingPty("/dev/pts/3".into())),
+        ];
+        for (text, expected) in cases {
+            assert_eq!(text.parse::<Link>().as_ref(), Err(expected), "{text:?}");
+            // Every error has a message that names the problem.
+            assert!(!expected.to_string().is_empty());
+        }
+    }
+
+    #[test]
+    fn display_round_trips() {
+        for text in [
+            "serial:/dev/ttyUSB0:115200",
+            "serial:/dev/serial/by-id/usb-FTDI_FT232R-if00:57600",
+            "tcp:127.0.0.1:9750",
+            "tcp:[fe80::1]:1",
+            "tcp-listen:0.0.0.0:65535",
+            "pty",
+        ] {
+            let link: Link = text.parse().unwrap();
+            assert_eq!(link.to_string(), text);
+        }
+    }
+}

@@ -1,0 +1,107 @@
+//! Link and send options.
+
+use std::time::Duration;
+
+/// Default timeout for a delivery status: longer than a Zigbee route discovery (10 s).
+pub const DEFAULT_SEND_TIMEOUT: Duration = Duration::from_secs(12);
+/// Default timeout for opening a TCP connection or a serial port.
+pub const DEFAULT_CONNECT_TIMEOUT: Duration = Duration::from_secs(5);
+
+/// How a link reconnects after its transport goes away (serial device unplugged, TCP peer
+/// gone).
+///
+/// Attempts are spaced by an exponential backoff: the first one waits `initial_delay`,
+/// each failure doubles the delay up to `max_delay`. The delay returns to `initial_delay`
+/// once a connection has carried data, so a port that opens and fails at once keeps backing
+/// off instead of spinning.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ReconnectPolicy {
+    /// Reconnect at all; when false the link ends at the first disconnection.
+    pub enabled: bool,
+    /// Delay before the first attempt.
+    pub initial_delay: Duration,
+    /// Upper bound of the delay between attempts.
+    pub max_delay: Duration,
+}
+
+impl ReconnectPolicy {
+    /// No reconnection: the first disconnection ends the link.
+    pub fn disabled() -> Self {
+        ReconnectPolicy {
+            enabled: false,
+            ..Self::default()
+        }
+    }
+
+    /// The delay after `delay`: doubled, capped at `max_delay`, never zero.
+    pub(crate) fn next_delay(&self, delay: Duration) -> Duration {
+        delay
+            .saturating_mul(2)
+            .min(self.max_delay)
+            .max(Duration::from_millis(1))
+    }
+}
+
+impl Default for ReconnectPolicy {
+    /// Enabled, 100 ms initial delay, 5 s maximum.
+    fn default() -> Self {
+        ReconnectPolicy {
+            enabled: true,
+            initial_delay: Duration::from_millis(100),
+            max_delay: Duration::from_secs(5),
+        }
+    }
+}
+
+/// Options of a link: XBee API mode, framing limit, timeouts and reconnection.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct LinkOptions {
+    /// Timeout for opening a TCP connection or a serial port.
+    pub connect_timeout: Duration,
+    /// Default timeout of [`crate::CommandSender::send`] and friends (delivery status or
+    /// response).
+    pub send_timeout: Duration,
+    /// Reconnection after the transport goes away.
+    pub reconnect: ReconnectPolicy,
+    /// Capacity of the event queue between the background task and the
+    /// [`crate::PacketStream`]; when the consumer falls behind by this many events, newer
+    /// events are dropped and counted ([`crate::Stats::events_dropped`]).
+    pub event_capacity: usize,
+}
+
+impl Default for LinkOptions {
+    fn default() -> Self {
+        LinkOptions {
+            connect_timeout: DEFAULT_CONNECT_TIMEOUT,
+            send_timeout: DEFAULT_SEND_TIMEOUT,
+            reconnect: ReconnectPolicy::default(),
+            event_capacity: 1024,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn backoff_doubles_up_to_the_cap() {
+        let policy = ReconnectPolicy {
+            enabled: true,
+            initial_delay: Duration::from_millis(100),
+            max_delay: Duration::from_millis(700),
+        };
+        let mut delay = policy.initial_delay;
+        let mut seen = vec![];
+        for _ in 0..5 {
+            seen.push(delay.as_millis());
+            delay = policy.next_delay(delay);
+        }
+        assert_eq!(seen, [100, 200, 400, 700, 700]);
+        let zero = ReconnectPolicy {
+            initial_delay: Duration::ZERO,
+            ..policy
+        };
+        assert_eq!(zero.next_delay(Duration::ZERO), Duration::from_millis(1));
+    }
+}

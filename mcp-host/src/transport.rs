@@ -1,0 +1,378 @@
+//! Opening links: the [`Connector`] turns a [`Link`] into [`Transport`]s, again and again
+//! when the link reconnects.
+
+use std::io;
+use std::net::SocketAddr;
+use std::path::{Path, PathBuf};
+use std::pin::Pin;
+use std::task::{Context, Poll};
+use std::time::Duration;
+
+use tokio::io::{AsyncRead, AsyncWrite, ReadBuf};
+use tokio::net::{TcpListener, TcpStream};
+use tokio_serial::{SerialPort, SerialPortBuilderExt, SerialStream};
+
+use crate::link::Link;
+use crate::options::{LinkOptions, ReconnectPolicy};
+
+/// Why a link could not be opened.
+#[derive(Debug, thiserror::Error)]
+pub enum LinkError {
+    /// The serial port could not be opened or configured.
+    #[error("cannot open serial port {path} at {baud} baud: {source}")]
+    Serial {
+        /// Device path.
+        path: String,
+        /// Requested baud rate.
+        baud: u32,
+        /// What the system said.
+        #[source]
+        source: tokio_serial::Error,
+    },
+    /// The TCP connection failed.
+    #[error("cannot connect to {addr}: {source}")]
+    Connect {
+        /// `HOST:PORT` as given.
+        addr: String,
+        /// What the system said.
+        #[source]
+        source: io::Error,
+    },
+    /// The TCP connection did not complete within the connect timeout.
+    #[error("timed out after {timeout:?} connecting to {addr}")]
+    ConnectTimeout {
+        /// `HOST:PORT` as given.
+        addr: String,
+        /// The connect timeout.
+        timeout: Duration,
+    },
+    /// The TCP listener could not be bound.
+    #[error("cannot listen on {addr}: {source}")]
+    Listen {
+        /// `ADDR:PORT` as given.
+        addr: String,
+        /// What the system said.
+        #[source]
+        source: io::Error,
+    },
+    /// Accepting a peer failed.
+    #[error("cannot accept a peer on {addr}: {source}")]
+    Accept {
+        /// `ADDR:PORT` as given.
+        addr: String,
+        /// What the system said.
+        #[source]
+        source: io::Error,
+    },
+    /// The pseudo-terminal pair could not be created.
+    #[error("cannot create a pseudo-terminal pair: {0}")]
+    Pty(#[source] tokio_serial::Error),
+    /// The local side of a `pty` link was closed; a pseudo-terminal cannot be reopened
+    /// under the same path.
+    #[error("the pseudo-terminal link was closed and cannot be reopened")]
+    PtyClosed,
+    /// The transport went away and reconnection is disabled by the options.
+    #[error("the link went down and reconnection is disabled")]
+    ReconnectDisabled,
+}
+
+impl LinkError {
+    /// Whether trying again later may succeed (a device may come back, a peer may start
+    /// listening); false for errors that no retry can fix.
+    pub fn is_retryable(&self) -> bool {
+        !matches!(
+            self,
+            LinkError::Listen { .. }
+                | LinkError::Pty(_)
+                | LinkError::PtyClosed
+                | LinkError::ReconnectDisabled
+        )
+    }
+}
+
+enum Inner {
+    Tcp(TcpStream),
+    Serial(SerialStream),
+}
+
+/// An open byte stream to the radio: a serial port, a TCP connection or the local side of
+/// a pseudo-terminal. Implements [`AsyncRead`] and [`AsyncWrite`].
+pub struct Transport {
+    inner: Inner,
+    peer: String,
+}
+
+impl std::fmt::Debug for Transport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Transport")
+            .field("peer", &self.peer)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Transport {
+    /// What is at the other end: the serial device path, the TCP peer address, or the far
+    /// end of the pseudo-terminal.
+    pub fn peer(&self) -> &str {
+        &self.peer
+    }
+}
+
+impl AsyncRead for Transport {
+    fn poll_read(
+        self: Pin<&mut Self>,
+        cx: &mut Context<'_>,
+        buf: &mut ReadBuf<'_>,
+    ) -> Poll<io::Result<()>> {
+        match &mut self.get_mut().inner {
+            Inner::Tcp(s) => Pin::new(s).poll_read(cx, buf),
+            Inner::Serial(s) => Pin::new(s).poll_read(cx, buf),
+        }
+    }
+}
+
+impl AsyncWrite for Transport {
+    fn poll_write(
+        self: Pin<&mut Self>,
+        cx: &mut Context<'_>,
+        buf: &[u8],
+    ) -> Poll<io::Result<usize>> {
+        match &mut self.get_mut().inner {
+            Inner::Tcp(s) => Pin::new(s).poll_write(cx, buf),
+            Inner::Serial(s) => Pin::new(s).poll_write(cx, buf),
+        }
+    }
+
+    fn poll_flush(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<io::Result<()>> {
+        match &mut self.get_mut().inner {
+            Inner::Tcp(s) => Pin::new(s).poll_flush(cx),
+            Inner::Serial(s) => Pin::new(s).poll_flush(cx),
+        }
+    }
+
+    fn poll_shutdown(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<io::Result<()>> {
+        match &mut self.get_mut().inner {
+            Inner::Tcp(s) => Pin::new(s).poll_shutdown(cx),
+            Inner::Serial(s) => Pin::new(s).poll_shutdown(cx),
+        }
+    }
+}
+
+struct PtyPair {
+    /// The local side, handed out by the first [`Connector::open`].
+    master: Option<SerialStream>,
+    /// The far end, held open so that its path stays valid while simulators come and go.
+    _slave: SerialStream,
+    path: PathBuf,
+}
+
+enum Kind {
+    Serial { path: String, baud: u32 },
+    Tcp { host: String, port: u16 },
+    Listen { listener: TcpListener, name: String },
+    Pty(PtyPair),
+}
+
+/// Opens [`Transport`]s for a [`Link`], and reopens them after a disconnection.
+///
+/// Creating the connector binds a `tcp-listen` socket and creates the `pty` pair (so the
+/// listening address and the far-end path are known before any peer shows up); serial
+/// ports and TCP connections are opened by [`Connector::open`].
+///
+/// - `serial`: every open opens the device path again (after a USB unplug the device
+///   comes back under the same path, or the retry waits for it).
+/// - `tcp`: every open connects again, within the connect timeout.
+/// - `tcp-listen`: every open accepts the next peer. One peer is served at a time: while
+///   one is connected, further peers are not accepted and wait in the listen backlog; the
+///   next one is accepted when the current one leaves.
+/// - `pty`: the local side is opened once; the far end stays open for the life of the
+///   connector, so its path stays valid and a simulator can close and reopen it at will
+///   (the local side never sees a disconnection).
+pub struct Connector {
+    link: Link,
+    kind: Kind,
+    connect_timeout: Duration,
+    delay: Option<Duration>,
+}
+
+impl std::fmt::Debug for Connector {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Connector")
+            .field("link", &self.link)
+            .field("pty_path", &self.pty_path())
+            .field("local_addr", &self.local_addr())
+            .finish_non_exhaustive()
+    }
+}
+
+impl Connector {
+    /// Prepares `link`: binds a listener or creates a pseudo-terminal pair where needed.
+    pub async fn new(link: &Link, options: &LinkOptions) -> Result<Self, LinkError> {
+        let kind = match link {
+            Link::Serial { path, baud } => Kind::Serial {
+                path: path.clone(),
+                baud: *baud,
+            },
+            Link::Tcp { host, port } => Kind::Tcp {
+                host: host.clone(),
+                port: *port,
+            },
+            Link::TcpListen { addr, port } => {
+                let name = link.to_string();
+                let listener =
+                    TcpListener::bind((addr.as_str(), *port))
+                        .await
+                        .map_err(|source| LinkError::Listen {
+                            addr: name.clone(),
+                            source,
+                        })?;
+                Kind::Listen { listener, name }
+            }
+            Link::Pty => {
+                // The pair takes no lock (no TIOCEXCL, no flock) on the far end, so a
+                // simulator can open it, even exclusively, while this side holds it open.
+                let (master, slave) = SerialStream::pair().map_err(LinkError::Pty)?;
+                let path = slave.name().map(PathBuf::from).ok_or_else(|| {
+                    LinkError::Pty(tokio_serial::Error::new(
+                        tokio_serial::ErrorKind::Unknown,
+                        "the pseudo-terminal has no name",
+                    ))
+                })?;
+                Kind::Pty(PtyPair {
+                    master: Some(master),
+                    _slave: slave,
+                    path,
+                })
+            }
+        };
+        Ok(Connector {
+            link: link.clone(),
+            kind,
+            connect_timeout: options.connect_timeout,
+            delay: None,
+        })
+    }
+
+    /// The link this connector opens.
+    pub fn link(&self) -> &Link {
+        &self.link
+    }
+
+    /// For a `pty` link, the path of the far end, for a simulator or test to open.
+    pub fn pty_path(&self) -> Option<&Path> {
+        match &self.kind {
+            Kind::Pty(pair) => Some(&pair.path),
+            _ => None,
+        }
+    }
+
+    /// For a `tcp-listen` link, the bound address (useful with port 0).
+    pub fn local_addr(&self) -> Option<SocketAddr> {
+        match &self.kind {
+            Kind::Listen { listener, .. } => listener.local_addr().ok(),
+            _ => None,
+        }
+    }
+
+    /// Opens a transport once: opens the serial port, connects, accepts the next peer
+    /// (waiting for one), or hands out the local side of the pseudo-terminal.
+    pub async fn open(&mut self) -> Result<Transport, LinkError> {
+        match &mut self.kind {
+            Kind::Serial { path, baud } => {
+                let stream = tokio_serial::new(path.as_str(), *baud)
+                    .data_bits(tokio_serial::DataBits::Eight)
+                    .parity(tokio_serial::Parity::None)
+                    .stop_bits(tokio_serial::StopBits::One)
+                    .flow_control(tokio_serial::FlowControl::None)
+                    .open_native_async()
+                    .map_err(|source| LinkError::Serial {
+                        path: path.clone(),
+                        baud: *baud,
+                        source,
+                    })?;
+                Ok(Transport {
+                    inner: Inner::Serial(stream),
+                    peer: path.clone(),
+                })
+            }
+            Kind::Tcp { host, port } => {
+                let addr = crate::link::host_port(host, *port);
+                let stream = tokio::time::timeout(
+                    self.connect_timeout,
+                    TcpStream::connect((host.as_str(), *port)),
+                )
+                .await
+                .map_err(|_| LinkError::ConnectTimeout {
+                    addr: addr.clone(),
+                    timeout: self.connect_timeout,
+                })?
+                .map_err(|source| LinkError::Connect {
+                    addr: addr.clone(),
+                    source,
+                })?;
+                let _ = stream.set_nodelay(true);
+                let peer = stream.peer_addr().map(|a| a.to_string()).unwrap_or(addr);
+                Ok(Transport {
+                    inner: Inner::Tcp(stream),
+                    peer,
+                })
+            }
+            Kind::Listen { listener, name } => {
+                let (stream, peer) =
+                    listener
+                        .accept()
+                        .await
+                        .map_err(|source| LinkError::Accept {
+                            addr: name.clone(),
+                            source,
+                        })?;
+                let _ = stream.set_nodelay(true);
+                Ok(Transport {
+                    inner: Inner::Tcp(stream),
+                    peer: peer.to_string(),
+                })
+            }
+            Kind::Pty(pair) => {
+                let master = pair.master.take().ok_or(LinkError::PtyClosed)?;
+                Ok(Transport {
+                    inner: Inner::Serial(master),
+                    peer: pair.path.display().to_string(),
+                })
+            }
+        }
+    }
+
+    /// Opens a transport after a disconnection, following `policy`: waits the current
+    /// backoff delay before each attempt and doubles it after each failure (capped at
+    /// `max_delay`). Returns the first error that no retry can fix, and
+    /// [`LinkError::ReconnectDisabled`] at once when reconnection is disabled. Failed
+    /// attempts are logged.
+    ///
+    /// The delay carries over between calls until [`Connector::mark_healthy`] resets it,
+    /// so a transport that opens and fails at once keeps backing off.
+    ///
+    /// Cancel-safe: dropping the future loses nothing but the attempt under way.
+    pub async fn reopen(&mut self, policy: &ReconnectPolicy) -> Result<Transport, LinkError> {
+        if !policy.enabled {
+            return Err(LinkError::ReconnectDisabled);
+        }
+        loop {
+            let delay = *self.delay.get_or_insert(policy.initial_delay);
+            tokio::time::sleep(delay).await;
+            self.delay = Some(policy.next_delay(delay));
+            match self.open().await {
+                Ok(transport) => return Ok(transport),
+                Err(e) if e.is_retryable() => {
+                    tracing::warn!(link = %self.link, error = %e, retry_in = ?self.delay, "reconnect attempt failed");
+                }
+                Err(e) => return Err(e),
+            }
+        }
+    }
+
+    /// Tells the connector that the current transport works (it carried data), so the
+    /// next reconnection starts again from the initial delay.
+    pub fn mark_healthy(&mut self) {
+        self.delay = None;
+    }
+}

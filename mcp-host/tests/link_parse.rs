@@ -1,0 +1,34 @@
+//! Link strings: every link displays to a string that parses back to it.
+
+use mcp_host::Link;
+use proptest::prelude::*;
+
+fn link() -> impl Strategy<Value = Link> {
+    let host = prop_oneof![
+        "[a-z][a-z0-9.-]{0,20}",
+        any::<std::net::Ipv4Addr>().prop_map(|a| a.to_string()),
+        any::<std::net::Ipv6Addr>().prop_map(|a| a.to_string()),
+    ];
+    prop_oneof![
+        ("[^\\x00]{1,40}", 1u32..).prop_map(|(path, baud)| Link::Serial { path, baud }),
+        (host.clone(), any::<u16>()).prop_map(|(host, port)| Link::Tcp { host, port }),
+        (host, any::<u16>()).prop_map(|(addr, port)| Link::TcpListen { addr, port }),
+        Just(Link::Pty),
+    ]
+}
+
+proptest! {
+    #[test]
+    fn display_then_parse_is_identity(link in link()) {
+        let text = link.to_string();
+        prop_assert_eq!(text.parse::<Link>(), Ok(link));
+    }
+
+    #[test]
+    fn parsing_arbitrary_text_never_panics(text in "\\PC{0,60}") {
+        if let Ok(link) = text.parse::<Link>() {
+            // Whatever parses displays to something that parses to the same link.
+            prop_assert_eq!(link.to_string().parse::<Link>(), Ok(link));
+        }
+    }
+}

@@ -1,0 +1,197 @@
+//! Links opened for real: pseudo-terminals and TCP on 127.0.0.1.
+
+use std::time::Duration;
+
+use mcp_host::{Connector, Link, LinkError, LinkOptions, ReconnectPolicy};
+use tokio::io::{AsyncReadExt, AsyncWriteExt};
+use tokio::net::{TcpListener, TcpStream};
+use tokio::time::timeout;
+
+/// Failure guard only: every wait below ends on an event long before this.
+const GUARD: Duration = Duration::from_secs(10);
+
+fn fast_reconnect() -> LinkOptions {
+    LinkOptions {
+        reconnect: ReconnectPolicy {
+            enabled: true,
+            initial_delay: Duration::from_millis(5),
+            max_delay: Duration::from_millis(50),
+        },
+        ..LinkOptions::default()
+    }
+}
+
+async fn read_exact_n<R: AsyncReadExt + Unpin>(r: &mut R, n: usize) -> Vec<u8> {
+    let mut buf = vec![0; n];
+    timeout(GUARD, r.read_exact(&mut buf))
+        .await
+        .expect("read timed out")
+        .expect("read failed");
+    buf
+}
+
+#[tokio::test]
+async fn pty_carries_bytes_both_ways_and_its_path_outlives_the_far_end() {
+    let mut connector = Connector::new(&Link::Pty, &LinkOptions::default())
+        .await
+        .unwrap();
+    let path = connector.pty_path().unwrap().to_owned();
+    assert!(path.exists(), "{path:?}");
+    let mut local = connector.open().await.unwrap();
+    assert_eq!(local.peer(), path.display().to_string());
+
+    for round in 0..2u8 {
+        // A simulator opens the far end, talks, and closes it again.
+        let mut far =
+            tokio_serial::SerialStream::open(&tokio_serial::new(path.to_str().unwrap(), 115_200))
+                .unwrap();
+        far.write_all(&[0x7E, round, 0x11]).await.unwrap();
+        assert_eq!(read_exact_n(&mut local, 3).await, [0x7E, round, 0x11]);
+        local.write_all(&[0x7D, 0x33, round]).await.unwrap();
+        assert_eq!(read_exact_n(&mut far, 3).await, [0x7D, 0x33, round]);
+        drop(far);
+        assert!(path.exists());
+    }
+    // The local side is handed out once.
+    assert!(matches!(connector.open().await, Err(LinkError::PtyClosed)));
+}
+
+#[tokio::test]
+async fn tcp_reconnects_after_the_peer_goes_away() {
+    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let port = listener.local_addr().unwrap().port();
+    let link: Link = format!("tcp:127.0.0.1:{port}").parse().unwrap();
+    let options = fast_reconnect();
+    let mut connector = Connector::new(&link, &options).await.unwrap();
+
+    let mut transport = connector.open().await.unwrap();
+    let (mut peer, _) = listener.accept().await.unwrap();
+    peer.write_all(b"one").await.unwrap();
+    assert_eq!(read_exact_n(&mut transport, 3).await, b"one");
+    connector.mark_healthy();
+
+    // The peer goes away: the transport reads end of file.
+    drop(peer);
+    let mut buf = [0u8; 8];
+    let n = timeout(GUARD, transport.read(&mut buf))
+        .await
+        .unwrap()
+        .unwrap();
+    assert_eq!(n, 0);
+    drop(transport);
+
+    // Reconnection succeeds once the peer accepts again.
+    let (reopened, accepted) =
+        tokio::join!(connector.reopen(&options.reconnect), listener.accept());
+    let mut transport = reopened.unwrap();
+    let (mut peer, _) = accepted.unwrap();
+    peer.write_all(b"two").await.unwrap();
+    assert_eq!(read_exact_n(&mut transport, 3).await, b"two");
+}
+
+#[tokio::test]
+async fn tcp_reconnect_retries_until_the_port_listens_again() {
+    // Find a free port, then close it so that the first attempts are refused.
+    let port = TcpListener::bind("127.0.0.1:0")
+        .await
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let link: Link = format!("tcp:127.0.0.1:{port}").parse().unwrap();
+    let options = fast_reconnect();
+    let mut connector = Connector::new(&link, &options).await.unwrap();
+    let err = connector.open().await.unwrap_err();
+    assert!(matches!(err, LinkError::Connect { .. }), "{err}");
+    assert!(err.is_retryable());
+    assert!(
+        err.to_string().contains(&format!("127.0.0.1:{port}")),
+        "{err}"
+    );
+
+    let reopen = tokio::spawn(async move {
+        let transport = connector.reopen(&options.reconnect).await;
+        transport.map(|t| t.peer().to_owned())
+    });
+    let listener = TcpListener::bind(("127.0.0.1", port)).await.unwrap();
+    let (_peer, _) = timeout(GUARD, listener.accept()).await.unwrap().unwrap();
+    let peer = timeout(GUARD, reopen).await.unwrap().unwrap().unwrap();
+    assert_eq!(peer, format!("127.0.0.1:{port}"));
+}
+
+#[tokio::test]
+async fn disabled_reconnect_gives_up_at_once() {
+    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let port = listener.local_addr().unwrap().port();
+    let link: Link = format!("tcp:127.0.0.1:{port}").parse().unwrap();
+    let mut connector = Connector::new(&link, &LinkOptions::default())
+        .await
+        .unwrap();
+    let err = connector
+        .reopen(&ReconnectPolicy::disabled())
+        .await
+        .unwrap_err();
+    assert!(matches!(err, LinkError::ReconnectDisabled));
+    assert!(!err.is_retryable());
+}
+
+#[tokio::test]
+async fn tcp_listen_serves_one_peer_at_a_time() {
+    let link: Link = "tcp-listen:127.0.0.1:0".parse().unwrap();
+    let options = fast_reconnect();
+    let mut connector = Connector::new(&link, &options).await.unwrap();
+    let addr = connector.local_addr().unwrap();
+
+    let mut first = TcpStream::connect(addr).await.unwrap();
+    let mut transport = connector.open().await.unwrap();
+    assert_eq!(transport.peer(), first.local_addr().unwrap().to_string());
+
+    // A second peer connects while the first is served: it waits, and what it sends is
+    // not mixed into the first peer's stream.
+    let mut second = TcpStream::connect(addr).await.unwrap();
+    second.write_all(b"2nd").await.unwrap();
+    first.write_all(b"1st").await.unwrap();
+    assert_eq!(read_exact_n(&mut transport, 3).await, b"1st");
+
+    drop(first);
+    let mut buf = [0u8; 8];
+    let n = timeout(GUARD, transport.read(&mut buf))
+        .await
+        .unwrap()
+        .unwrap();
+    assert_eq!(n, 0);
+
+    // The next open accepts the waiting peer.
+    let mut transport = timeout(GUARD, connector.reopen(&options.reconnect))
+        .await
+        .unwrap()
+        .unwrap();
+    assert_eq!(transport.peer(), second.local_addr().unwrap().to_string());
+    assert_eq!(read_exact_n(&mut transport, 3).await, b"2nd");
+    transport.write_all(b"ack").await.unwrap();
+    assert_eq!(read_exact_n(&mut second, 3).await, b"ack");
+}
+
+#[tokio::test]
+async fn open_errors_are_clear() {
+    let link: Link = "serial:/dev/does-not-exist-mcp:9600".parse().unwrap();
+    let mut connector = Connector::new(&link, &LinkOptions::default())
+        .await
+        .unwrap();
+    let err = connector.open().await.unwrap_err();
+    assert!(err.is_retryable());
+    let text = err.to_string();
+    assert!(
+        text.contains("/dev/does-not-exist-mcp") && text.contains("9600"),
+        "{text}"
+    );
+
+    let taken = TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let port = taken.local_addr().unwrap().port();
+    let link: Link = format!("tcp-listen:127.0.0.1:{port}").parse().unwrap();
+    let err = Connector::new(&link, &LinkOptions::default())
+        .await
+        .unwrap_err();
+    assert!(matches!(err, LinkError::Listen { .. }));
+    assert!(!err.is_retryable());
+}
