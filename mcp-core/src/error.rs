@@ -1,0 +1,167 @@
+//! Errors: why a packet was rejected, and why an encoder stopped.
+
+use core::fmt;
+
+use crate::id::{Category, CommandType};
+
+/// Why a packet failed to parse, and at which byte offset.
+///
+/// ```
+/// use mcp_core::{parse, ErrorKind};
+/// let err = parse(b"c\x02\x01\x00").unwrap_err();
+/// assert!(matches!(err.kind(), ErrorKind::WrongLength { got: 4, .. }));
+/// assert_eq!(err.offset(), 3);
+/// assert_eq!(
+///     err.to_string(),
+///     "wrong length for landing command: expected 3 bytes, got 4 (at byte 3)"
+/// );
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[error("{kind} (at byte {offset})")]
+pub struct Error {
+    kind: ErrorKind,
+    offset: usize,
+}
+
+impl Error {
+    /// An error of `kind` found at byte `offset` of the packet.
+    pub fn new(kind: ErrorKind, offset: usize) -> Self {
+        Error { kind, offset }
+    }
+
+    /// What was wrong.
+    pub fn kind(&self) -> &ErrorKind {
+        &self.kind
+    }
+
+    /// The byte offset in the packet at which the problem was found. For a length
+    /// error this is the first missing or the first extra byte.
+    pub fn offset(&self) -> usize {
+        self.offset
+    }
+}
+
+/// What was wrong with a packet.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum ErrorKind {
+    /// The packet has no bytes at all.
+    Empty,
+    /// The first byte is not a known packet category.
+    UnknownCategory(u8),
+    /// A command or report packet ends before its type byte.
+    MissingType(Category),
+    /// The type byte of a command or report is not a known type for that category.
+    UnknownType {
+        /// Command or report.
+        category: Category,
+        /// The type byte.
+        value: u8,
+    },
+    /// The packet length does not fit its type.
+    WrongLength {
+        /// The packet's category.
+        category: Category,
+        /// The command or report type, if the category has types.
+        packet_type: Option<CommandType>,
+        /// Whether the packet is a status request (its byte 3 is 0xFF).
+        status_request: bool,
+        /// The lengths the type allows.
+        expected: Expected,
+        /// The length of the packet.
+        got: usize,
+    },
+    /// A trajectory packet's size byte does not match the number of waypoints the
+    /// length holds.
+    SizeMismatch {
+        /// The size byte.
+        size: u8,
+        /// The number of waypoints that the packet length holds.
+        waypoints: usize,
+    },
+    /// A trajectory report holds more than 254 waypoints (size 0xFF).
+    TooManyWaypoints(usize),
+    /// A firmware-form position slave set command names a slot other than 0-3.
+    InvalidSlot(u8),
+}
+
+/// The packet lengths a type allows (see [`ErrorKind::WrongLength`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Expected {
+    /// Exactly this many bytes.
+    Exactly(usize),
+    /// One of two lengths (the two position slave set forms).
+    Either(usize, usize),
+    /// `base + stride * k` bytes for some k >= 0.
+    Multiple {
+        /// The fixed part.
+        base: usize,
+        /// The size of one repeated item.
+        stride: usize,
+    },
+}
+
+impl fmt::Display for Expected {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Expected::Exactly(n) => write!(f, "{n} bytes"),
+            Expected::Either(a, b) => write!(f, "{a} or {b} bytes"),
+            Expected::Multiple { base, stride } => write!(f, "{base} + {stride}k bytes"),
+        }
+    }
+}
+
+impl fmt::Display for ErrorKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ErrorKind::Empty => f.write_str("empty packet"),
+            ErrorKind::UnknownCategory(c) => write!(f, "unknown packet category {c:#04x}"),
+            ErrorKind::MissingType(c) => write!(f, "{c} packet ends before its type byte"),
+            ErrorKind::UnknownType { category, value } => {
+                write!(f, "unknown {category} type {value:#04x}")
+            }
+            ErrorKind::WrongLength {
+                category,
+                packet_type,
+                status_request,
+                expected,
+                got,
+            } => {
+                f.write_str("wrong length for ")?;
+                if let Some(t) = packet_type {
+                    write!(f, "{t} ")?;
+                }
+                write!(f, "{category}")?;
+                if *status_request {
+                    f.write_str(" status request")?;
+                }
+                write!(f, ": expected {expected}, got {got}")
+            }
+            ErrorKind::SizeMismatch { size, waypoints } => write!(
+                f,
+                "trajectory size byte {size} does not match the {waypoints} waypoints in the packet length"
+            ),
+            ErrorKind::TooManyWaypoints(n) => {
+                write!(f, "{n} trajectory waypoints, at most 254 allowed")
+            }
+            ErrorKind::InvalidSlot(s) => write!(f, "position slave slot {s} is not 0-3"),
+        }
+    }
+}
+
+/// The output buffer is too small for the packet being encoded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[error("buffer too small: {needed} bytes needed, {available} available")]
+pub struct BufferTooSmall {
+    /// Bytes the packet needs.
+    pub needed: usize,
+    /// Bytes the buffer has.
+    pub available: usize,
+}
+
+/// An incremental builder is full: one more item would overrun the buffer, the
+/// 255-byte XBee payload limit ([`MAX_PAYLOAD`](crate::MAX_PAYLOAD)) or the
+/// packet's own item limit. The packet built so far is intact.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[error("packet full")]
+pub struct Full;

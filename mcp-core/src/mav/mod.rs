@@ -1,0 +1,265 @@
+//! The MAV side: a state machine that answers commands the way the deployed MAV does.
+//!
+//! [`Mav`] holds the protocol state (which telemetry ids are enabled, the four slave
+//! addresses, the last landing state and controller it reported); everything else goes
+//! through the [`Vehicle`] trait, which the firmware or a simulator implements. Answers
+//! are written into caller buffers; nothing allocates.
+//!
+//! Behaviour:
+//!
+//! - [`Mav::handle`] answers a status request with the matching report, and a trajectory
+//!   set with a trajectory report at once. Other set commands get no reply.
+//! - A landing state or controller change produces that report unsolicited:
+//!   [`Mav::poll_changes`] compares the vehicle's state with the last one it reported.
+//!   Call it after every command and in the main loop (the vehicle may change state on
+//!   its own, e.g. when a landing ends), until it returns `None`.
+//! - [`Mav::telemetry`] builds the 20 Hz telemetry packet: every enabled id in
+//!   ascending order, nothing when none is enabled. 50 records fill the 255-byte
+//!   payload; ids past those are left out.
+//! - Position slave set: the MAV keeps the firmware's four slots. A spec-form command
+//!   (no slot) sets slot 0. The status request is answered with the firmware-form
+//!   report (four addresses, 34 bytes).
+//! - Telemetry to coordinator accepts every id 0-255; ids outside table 29 are enabled
+//!   like the others and read through [`Vehicle::telemetry`].
+//!
+//! ```
+//! use mcp_core::mav::{Mav, Vehicle};
+//! use mcp_core::{parse, Packet, Controller, LandingState, TelemetryId, Waypoint, Waypoints};
+//!
+//! struct Sim { landing: LandingState, controller: Controller, time: u32 }
+//!
+//! impl Vehicle for Sim {
+//!     fn landing_state(&self) -> LandingState { self.landing }
+//!     fn set_landing(&mut self, on: bool) {
+//!         self.landing = if on { LandingState::Landing } else { LandingState::Flight };
+//!     }
+//!     fn controller(&self) -> Controller { self.controller }
+//!     fn set_controller(&mut self, c: Controller) { self.controller = c }
+//!     fn time(&self) -> u32 { self.time }
+//!     fn set_time(&mut self, t: u32) { self.time = t }
+//!     fn set_position(&mut self, _elevator: f32, _aileron: f32) {}
+//!     fn telemetry(&self, _id: TelemetryId) -> f32 { 0.0 }
+//!     fn set_trajectory(&mut self, _waypoints: Waypoints<&[u8]>) {}
+//!     fn waypoint(&self, _index: usize) -> Option<Waypoint> { None }
+//! }
+//!
+//! let mut sim = Sim { landing: LandingState::Flight, controller: Controller::Manual, time: 0 };
+//! let mut mav = Mav::new(&sim);
+//! let mut buf = [0u8; mcp_core::MAX_PAYLOAD];
+//!
+//! // Landing on: no direct reply, then the unsolicited landing report.
+//! let Ok(Packet::Command(cmd)) = parse(b"c\x02\x01") else { panic!() };
+//! assert_eq!(mav.handle(&mut sim, &cmd, &mut buf), Ok(None));
+//! let len = mav.poll_changes(&sim, &mut buf).unwrap().unwrap();
+//! assert_eq!(&buf[..len], b"r\x02\x01");
+//! assert_eq!(mav.poll_changes(&sim, &mut buf), Ok(None));
+//!
+//! // A status request gets the matching report.
+//! let Ok(Packet::Command(cmd)) = parse(b"c\x03\xff") else { panic!() };
+//! let len = mav.handle(&mut sim, &cmd, &mut buf).unwrap().unwrap();
+//! assert_eq!(&buf[..len], b"r\x03\x01");
+//! ```
+
+mod telemetry_set;
+mod vehicle;
+
+pub use telemetry_set::{TelemetrySet, TelemetrySetIter};
+pub use vehicle::Vehicle;
+
+use crate::{
+    Address, BufferTooSmall, Command, Packet, Report, SlaveAddresses, StatusRequest,
+    TelemetryBuilder, TrajectoryBuilder,
+    id::{Controller, LandingState},
+};
+
+/// The MAV's protocol state machine. See the [module docs](self).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Mav {
+    enabled: TelemetrySet,
+    slaves: [Address; 4],
+    landing: LandingState,
+    controller: Controller,
+}
+
+impl Mav {
+    /// A MAV with no telemetry enabled and all slave addresses zero, taking the
+    /// vehicle's current landing state and controller as already reported.
+    pub fn new<V: Vehicle + ?Sized>(vehicle: &V) -> Self {
+        Mav {
+            enabled: TelemetrySet::new(),
+            slaves: [Address::default(); 4],
+            landing: vehicle.landing_state(),
+            controller: vehicle.controller(),
+        }
+    }
+
+    /// The telemetry ids sent to the coordinator.
+    pub fn enabled(&self) -> &TelemetrySet {
+        &self.enabled
+    }
+
+    /// The telemetry ids sent to the coordinator, to change them directly.
+    pub fn enabled_mut(&mut self) -> &mut TelemetrySet {
+        &mut self.enabled
+    }
+
+    /// The slave addresses of slots 0 to 3.
+    pub fn slaves(&self) -> [Address; 4] {
+        self.slaves
+    }
+
+    /// Carries out a command and writes the direct reply, if any, into `buf`,
+    /// returning its length. Status requests get the matching report; trajectory set
+    /// gets a trajectory report (as many of the vehicle's waypoints as fit); other
+    /// set commands get none. On error (`buf` too small for the reply) the command
+    /// has still been carried out.
+    ///
+    /// Call [`Mav::poll_changes`] afterwards for the unsolicited reports.
+    pub fn handle<V, B>(
+        &mut self,
+        vehicle: &mut V,
+        command: &Command<B>,
+        buf: &mut [u8],
+    ) -> Result<Option<usize>, BufferTooSmall>
+    where
+        V: Vehicle + ?Sized,
+        B: AsRef<[u8]>,
+    {
+        match command {
+            Command::TelemetryToCoordinator { on, id } => {
+                self.enabled.set(*id, *on);
+                Ok(None)
+            }
+            Command::Landing { on } => {
+                vehicle.set_landing(*on);
+                Ok(None)
+            }
+            Command::Controllers(c) => {
+                vehicle.set_controller(*c);
+                Ok(None)
+            }
+            Command::TrajectorySet(waypoints) => {
+                vehicle.set_trajectory(waypoints.as_borrowed());
+                Self::trajectory_report(vehicle, buf).map(Some)
+            }
+            Command::PositionSlaveSet { slot, address } => {
+                let slot = slot.unwrap_or_default();
+                if let Some(s) = self.slaves.get_mut(slot.index()) {
+                    *s = *address;
+                }
+                vehicle.set_slave(slot, *address);
+                Ok(None)
+            }
+            Command::Time(time) => {
+                vehicle.set_time(*time);
+                Ok(None)
+            }
+            Command::PositionSet { elevator, aileron } => {
+                vehicle.set_position(*elevator, *aileron);
+                Ok(None)
+            }
+            Command::StatusRequest(request) => self.answer(vehicle, *request, buf).map(Some),
+        }
+    }
+
+    /// Like [`Mav::handle`] for any packet: commands are handled, other categories
+    /// (telemetry, reports, messages, warnings) are ignored.
+    pub fn handle_packet<V, B>(
+        &mut self,
+        vehicle: &mut V,
+        packet: &Packet<B>,
+        buf: &mut [u8],
+    ) -> Result<Option<usize>, BufferTooSmall>
+    where
+        V: Vehicle + ?Sized,
+        B: AsRef<[u8]>,
+    {
+        match packet {
+            Packet::Command(command) => self.handle(vehicle, command, buf),
+            _ => Ok(None),
+        }
+    }
+
+    /// Writes the report answering a status request.
+    fn answer<V: Vehicle + ?Sized>(
+        &self,
+        vehicle: &V,
+        request: StatusRequest,
+        buf: &mut [u8],
+    ) -> Result<usize, BufferTooSmall> {
+        let report: Report<&[u8]> = match request {
+            StatusRequest::TelemetryToCoordinator(id) => Report::TelemetryToCoordinator {
+                on: self.enabled.contains(id),
+                id,
+            },
+            StatusRequest::Landing => Report::Landing(vehicle.landing_state()),
+            StatusRequest::Controllers => Report::Controllers(vehicle.controller()),
+            StatusRequest::TrajectorySet => return Self::trajectory_report(vehicle, buf),
+            StatusRequest::PositionSlaveSet => {
+                Report::PositionSlaveSet(SlaveAddresses::Slots(self.slaves))
+            }
+            StatusRequest::Time => Report::Time(vehicle.time()),
+        };
+        report.encode(buf)
+    }
+
+    /// Writes a trajectory report of the vehicle's waypoints, as many as fit.
+    fn trajectory_report<V: Vehicle + ?Sized>(
+        vehicle: &V,
+        buf: &mut [u8],
+    ) -> Result<usize, BufferTooSmall> {
+        let mut builder = TrajectoryBuilder::report(buf)?;
+        let mut index = 0;
+        while let Some(waypoint) = vehicle.waypoint(index) {
+            if builder.push(waypoint).is_err() {
+                break;
+            }
+            index += 1;
+        }
+        Ok(builder.finish())
+    }
+
+    /// Writes one unsolicited report if the vehicle's landing state or controller
+    /// changed since the last one reported (landing first), returning its length.
+    /// Returns `None` when nothing changed; call again until it does, as both may
+    /// have changed. If `buf` is too small, the change stays pending.
+    pub fn poll_changes<V: Vehicle + ?Sized>(
+        &mut self,
+        vehicle: &V,
+        buf: &mut [u8],
+    ) -> Result<Option<usize>, BufferTooSmall> {
+        let landing = vehicle.landing_state();
+        if landing != self.landing {
+            let len = Report::<&[u8]>::Landing(landing).encode(buf)?;
+            self.landing = landing;
+            return Ok(Some(len));
+        }
+        let controller = vehicle.controller();
+        if controller != self.controller {
+            let len = Report::<&[u8]>::Controllers(controller).encode(buf)?;
+            self.controller = controller;
+            return Ok(Some(len));
+        }
+        Ok(None)
+    }
+
+    /// Writes the periodic telemetry packet: every enabled id in ascending order with
+    /// its value from [`Vehicle::telemetry`]. Returns `None` (send nothing) when no id
+    /// is enabled. Records that do not fit `buf` or the 255-byte payload are left out.
+    pub fn telemetry<V: Vehicle + ?Sized>(
+        &self,
+        vehicle: &V,
+        buf: &mut [u8],
+    ) -> Result<Option<usize>, BufferTooSmall> {
+        if self.enabled.is_empty() {
+            return Ok(None);
+        }
+        let mut builder = TelemetryBuilder::new(buf)?;
+        for id in self.enabled.iter() {
+            if builder.push(id, vehicle.telemetry(id)).is_err() {
+                break;
+            }
+        }
+        Ok(Some(builder.finish()))
+    }
+}

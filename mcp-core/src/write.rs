@@ -1,0 +1,73 @@
+//! A bounds-checked output cursor for the encoders.
+
+use crate::error::BufferTooSmall;
+
+/// Writes a packet of known length into a caller buffer.
+pub(crate) struct Writer<'a> {
+    buf: &'a mut [u8],
+    pos: usize,
+    overflow: bool,
+}
+
+impl<'a> Writer<'a> {
+    /// Starts a packet of `len` bytes, failing if `buf` cannot hold it.
+    pub(crate) fn new(buf: &'a mut [u8], len: usize) -> Result<Self, BufferTooSmall> {
+        if buf.len() < len {
+            return Err(BufferTooSmall {
+                needed: len,
+                available: buf.len(),
+            });
+        }
+        Ok(Writer {
+            buf,
+            pos: 0,
+            overflow: false,
+        })
+    }
+
+    /// Appends bytes.
+    pub(crate) fn bytes(&mut self, data: &[u8]) -> &mut Self {
+        let end = self.pos.saturating_add(data.len());
+        match self.buf.get_mut(self.pos..end) {
+            Some(dst) => {
+                dst.copy_from_slice(data);
+                self.pos = end;
+            }
+            None => self.overflow = true,
+        }
+        self
+    }
+
+    /// Appends one byte.
+    pub(crate) fn u8(&mut self, value: u8) -> &mut Self {
+        self.bytes(&[value])
+    }
+
+    /// Appends a little-endian `u32`.
+    pub(crate) fn u32(&mut self, value: u32) -> &mut Self {
+        self.bytes(&value.to_le_bytes())
+    }
+
+    /// Appends a little-endian binary32.
+    pub(crate) fn f32(&mut self, value: f32) -> &mut Self {
+        self.bytes(&value.to_le_bytes())
+    }
+
+    /// Appends an on/off byte (0x00 or 0x01).
+    pub(crate) fn on_off(&mut self, on: bool) -> &mut Self {
+        self.u8(u8::from(on))
+    }
+
+    /// The number of bytes written, or an error if a write did not fit (which the
+    /// length given to [`Writer::new`] rules out when it is right).
+    pub(crate) fn finish(&self) -> Result<usize, BufferTooSmall> {
+        if self.overflow {
+            Err(BufferTooSmall {
+                needed: self.buf.len() + 1,
+                available: self.buf.len(),
+            })
+        } else {
+            Ok(self.pos)
+        }
+    }
+}
