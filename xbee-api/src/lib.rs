@@ -1,4 +1,74 @@
-//! Placeholder.
+//! XBee API frames, API modes 1 and 2, without allocation.
+//!
+//! An API frame on the wire is `7E | length (u16 big-endian) | frame data | checksum`,
+//! where the length counts the frame data only, the frame data starts with the frame
+//! type byte, and the checksum is `0xFF - (sum of the frame data bytes & 0xFF)`. In API
+//! mode 2 every byte after the start delimiter that is 0x7E, 0x7D, 0x11 or 0x13 is sent
+//! as `0x7D, byte ^ 0x20` (length and checksum are computed before escaping).
+//!
+//! - [`Decoder`]: streaming decoder with a fixed buffer, fed a byte or a slice at a
+//!   time, yielding [`RawFrame`]s (untyped frame data) or [`DecodeError`]s.
+//! - [`Frame`]: typed frames, parsed from a [`RawFrame`]; unknown frame types pass
+//!   through intact. Each frame type has a zero-copy view and a `*Repr` in [`frame`].
+//! - [`EncodeFrame`]: encodes any frame into a caller buffer in either mode.
+//!
+//! ```
+//! use xbee_api::{Address16, Address64, ApiMode, Decoder, EncodeFrame, Frame};
+//! use xbee_api::frame::transmit_request::TransmitRequestRepr;
+//!
+//! let request = TransmitRequestRepr {
+//!     frame_id: 1,
+//!     dst64: Address64(0x0013A200400A0127),
+//!     dst16: Address16::UNKNOWN,
+//!     radius: 0,
+//!     options: 0,
+//!     data: b"TxData0A",
+//! };
+//! let mut wire = [0u8; 64];
+//! let n = request.encode(ApiMode::Escaped, &mut wire).unwrap();
+//! assert_eq!(n, request.encoded_len(ApiMode::Escaped));
+//!
+//! let mut decoder: Decoder = Decoder::new(ApiMode::Escaped);
+//! let (consumed, event) = decoder.decode(&wire[..n]);
+//! assert_eq!(consumed, n);
+//! let frame = Frame::parse(event.unwrap().unwrap()).unwrap();
+//! assert_eq!(frame, Frame::TransmitRequest(request));
+//! ```
 #![no_std]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
+
+mod address;
+mod decode_error;
+mod decoder;
+mod encode;
+mod error;
+pub mod frame;
+mod mode;
+mod raw;
+mod stats;
+mod status;
+pub mod wire;
+
+pub use address::{Address16, Address64, ParseAddressError};
+pub use decode_error::DecodeError;
+pub use decoder::{DEFAULT_CAPACITY, Decoder, Event};
+pub use encode::{EncodeFrame, MAX_FRAME_DATA_LEN};
+pub use error::{EncodeError, FrameError};
+pub use frame::Frame;
+pub use frame::at_command::{AtCommand, AtCommandRepr};
+pub use frame::at_command_response::{AtCommandResponse, AtCommandResponseRepr};
+pub use frame::explicit_addressing_command::{
+    ExplicitAddressingCommand, ExplicitAddressingCommandRepr,
+};
+pub use frame::explicit_rx_indicator::{ExplicitRxIndicator, ExplicitRxIndicatorRepr};
+pub use frame::modem_status::{ModemStatusFrame, ModemStatusRepr};
+pub use frame::receive_packet::{ReceivePacket, ReceivePacketRepr};
+pub use frame::remote_at_command::{RemoteAtCommand, RemoteAtCommandRepr};
+pub use frame::remote_at_response::{RemoteAtResponse, RemoteAtResponseRepr};
+pub use frame::transmit_request::{TransmitRequest, TransmitRequestRepr};
+pub use frame::transmit_status::{TransmitStatus, TransmitStatusRepr};
+pub use mode::{ApiMode, InvalidApiMode};
+pub use raw::RawFrame;
+pub use stats::Stats;
+pub use status::{AtStatus, DeliveryStatus, DiscoveryStatus, ModemStatus};

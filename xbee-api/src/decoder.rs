@@ -1,0 +1,636 @@
+//! Streaming decoder of API frames with a fixed buffer.
+
+use memchr::{memchr, memchr2};
+
+use crate::wire::{ESCAPE, ESCAPE_XOR, START_DELIMITER, checksum_of_sum, needs_escape, sum};
+use crate::{ApiMode, DecodeError, RawFrame, Stats};
+
+/// Default buffer capacity of [`Decoder`]: 512 bytes.
+///
+/// XBee frame data tops out near 273 bytes (a 255-byte fragmented payload plus the
+/// Explicit Rx Indicator's 18-byte header), so 512 leaves room for every frame a radio
+/// sends, with margin, in both modes (mode 1 also buffers the 4 framing bytes).
+pub const DEFAULT_CAPACITY: usize = 512;
+
+/// What the decoder yields: a frame borrowed from its buffer, or why a candidate frame
+/// was dropped. The frame stays valid until the decoder is called again.
+pub type Event<'a> = Result<RawFrame<'a>, DecodeError>;
+
+/// An event before it borrows the buffer: a frame as a range of the buffer.
+type Outcome = Result<(usize, usize), DecodeError>;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum State {
+    /// Looking for a start delimiter.
+    Hunt,
+    /// Expecting the high byte of the length.
+    LenHi,
+    /// Expecting the low byte of the length.
+    LenLo,
+    /// Receiving frame data.
+    Data,
+    /// Expecting the checksum.
+    Checksum,
+}
+
+/// A streaming decoder of XBee API frames in mode 1 or 2, with a fixed buffer of `N`
+/// bytes and no allocation.
+///
+/// Feed it bytes one at a time ([`push`](Self::push), cheap enough for a UART interrupt)
+/// or a slice at a time ([`decode`](Self::decode), which copies runs without special
+/// bytes in bulk); it yields [`RawFrame`]s borrowed from its buffer, or a
+/// [`DecodeError`] for each candidate frame it drops, and counts both in
+/// [`stats`](Self::stats). At the end of input, call [`finish`](Self::finish) until it
+/// returns `None`.
+///
+/// # Guarantee
+///
+/// No valid frame is lost because of garbage, a corrupt frame or a cut-off frame before
+/// it, however the input is split:
+///
+/// - **Mode 2** (escaped): a raw 0x7E always starts a new frame and aborts a partial one
+///   (reported as [`DecodeError::Truncated`], or [`DecodeError::BadEscape`] right after
+///   a 0x7D). A byte after 0x7D must be 0x5E, 0x5D, 0x31 or 0x33 (an escaped special
+///   byte); anything else is [`DecodeError::BadEscape`] and the decoder hunts for the
+///   next 0x7E.
+/// - **Mode 1** (unescaped): 0x7E may occur inside frames, so a candidate frame can
+///   swallow valid frames behind it. When a candidate fails (bad checksum, oversize or
+///   zero length, or truncated at the end of input), the decoder drops it and scans
+///   again from the byte right after its start delimiter, out of its buffer. That rescan
+///   can find several frames and further failures before any new input is needed, so
+///   one input byte can produce several events: drain them as shown below. A corrupt
+///   candidate whose checksum matches by chance (1 in 256) is a frame in mode 1; nothing
+///   can tell it apart.
+///
+/// # Loops
+///
+/// Slice at a time (the `usize` is how many input bytes were taken; it is 0 while
+/// events pending in the buffer are delivered; `None` means all input was taken and
+/// nothing is pending):
+///
+/// ```
+/// use xbee_api::{ApiMode, Decoder};
+/// let stream = [0x00, 0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F, 0x7E, 0x00];
+/// let mut decoder: Decoder = Decoder::new(ApiMode::Escaped);
+/// let mut frames = 0;
+/// let mut input = &stream[..];
+/// loop {
+///     let (consumed, event) = decoder.decode(input);
+///     input = &input[consumed..];
+///     match event {
+///         Some(Ok(frame)) => { assert_eq!(frame.data(), &[0x8A, 0x06]); frames += 1 }
+///         Some(Err(error)) => panic!("{error}"),
+///         None => break,
+///     }
+/// }
+/// // End of input: the cut-off frame at the end is reported.
+/// while let Some(event) = decoder.finish() {
+///     assert!(event.is_err());
+/// }
+/// assert_eq!(frames, 1);
+/// assert_eq!(decoder.stats().truncated, 1);
+/// ```
+///
+/// Byte at a time (after [`push`](Self::push) returns an event, call
+/// [`poll`](Self::poll) until it returns `None` before the next `push`):
+///
+/// ```
+/// use xbee_api::{ApiMode, Decoder};
+/// let mut decoder: Decoder<64> = Decoder::new(ApiMode::Unescaped);
+/// let mut frames = 0;
+/// for byte in [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F] {
+///     let mut event = decoder.push(byte);
+///     while let Some(e) = event {
+///         if e.is_ok() { frames += 1 }
+///         event = decoder.poll();
+///     }
+/// }
+/// assert_eq!(frames, 1);
+/// ```
+///
+/// Pushing without draining first is not lost either, as long as the buffer has room:
+/// the byte is queued behind the pending ones. Once the buffer is full such a byte is
+/// dropped and counted in `bytes_skipped`.
+///
+/// # Memory
+///
+/// `size_of::<Decoder<N>>()` is `N` plus the cursors and counters (52 bytes on a 32-bit
+/// target, 68 on a 64-bit one). Mode 2 holds frame data of up to `N` bytes; mode 1 holds
+/// the whole frame, so frame data of up to `N - 4` bytes ([`capacity`](Self::capacity)).
+#[derive(Debug, Clone)]
+pub struct Decoder<const N: usize = DEFAULT_CAPACITY> {
+    buf: [u8; N],
+    /// Mode 1: index of the candidate's start delimiter in `buf`.
+    start: usize,
+    /// Mode 1: next buffered byte to process. Mode 2: frame data bytes stored.
+    pos: usize,
+    /// Mode 1: bytes in `buf`.
+    end: usize,
+    /// Length field of the current candidate.
+    len: usize,
+    sum: u8,
+    state: State,
+    /// Mode 2: the previous byte was 0x7D.
+    escaped: bool,
+    mode: ApiMode,
+    stats: Stats,
+}
+
+impl<const N: usize> Decoder<N> {
+    /// A decoder for `mode`, hunting for a start delimiter.
+    ///
+    /// `N` must be at least 8 (checked at compile time).
+    pub const fn new(mode: ApiMode) -> Self {
+        const { assert!(N >= 8, "Decoder capacity N must be at least 8") };
+        Self {
+            buf: [0; N],
+            start: 0,
+            pos: 0,
+            end: 0,
+            len: 0,
+            sum: 0,
+            state: State::Hunt,
+            escaped: false,
+            mode,
+            stats: Stats {
+                frames_ok: 0,
+                bad_checksum: 0,
+                oversize: 0,
+                empty: 0,
+                truncated: 0,
+                bad_escape: 0,
+                bytes_skipped: 0,
+            },
+        }
+    }
+
+    /// The API mode this decoder reads.
+    pub const fn mode(&self) -> ApiMode {
+        self.mode
+    }
+
+    /// Largest frame data length (the length field) this decoder accepts: `N` in mode 2,
+    /// `N - 4` in mode 1. Longer frames are [`DecodeError::Oversize`].
+    pub const fn capacity(&self) -> usize {
+        match self.mode {
+            ApiMode::Unescaped => N.saturating_sub(4),
+            ApiMode::Escaped => N,
+        }
+    }
+
+    /// Counters of frames, errors and skipped bytes so far.
+    pub const fn stats(&self) -> &Stats {
+        &self.stats
+    }
+
+    /// Whether the decoder is between frames with no byte pending: false inside a
+    /// candidate frame or while mode 1 holds bytes to scan again.
+    pub const fn is_idle(&self) -> bool {
+        matches!(self.state, State::Hunt) && self.pos == self.end && !self.escaped
+    }
+
+    /// Drops any partial frame and pending bytes; keeps the counters.
+    pub fn reset(&mut self) {
+        self.start = 0;
+        self.pos = 0;
+        self.end = 0;
+        self.state = State::Hunt;
+        self.escaped = false;
+    }
+
+    /// Feeds one byte; returns the event it completes, if any.
+    ///
+    /// In mode 1 an event can leave more events pending: call [`poll`](Self::poll)
+    /// until it returns `None` before pushing the next byte.
+    #[inline]
+    pub fn push(&mut self, byte: u8) -> Option<Event<'_>> {
+        let outcome = match self.mode {
+            ApiMode::Escaped => self.step2(byte),
+            ApiMode::Unescaped => self.push1(byte),
+        };
+        outcome.map(|o| self.event(o))
+    }
+
+    /// Delivers the next pending event (mode 1 rescans of buffered bytes) without new
+    /// input; `None` when nothing is pending. Always `None` in mode 2.
+    pub fn poll(&mut self) -> Option<Event<'_>> {
+        let outcome = match self.mode {
+            ApiMode::Escaped => None,
+            ApiMode::Unescaped => self.drain1(),
+        };
+        outcome.map(|o| self.event(o))
+    }
+
+    /// Feeds bytes from `input` until an event; returns how many bytes it took and the
+    /// event. Pending events are delivered first, with 0 bytes taken. `None` means all of
+    /// `input` was taken and nothing is pending: feed more, or [`finish`](Self::finish).
+    ///
+    /// The bytes taken are the decoder's from then on (a caller holding a `BytesMut` can
+    /// advance past them at once).
+    pub fn decode(&mut self, input: &[u8]) -> (usize, Option<Event<'_>>) {
+        let (consumed, outcome) = match self.mode {
+            ApiMode::Escaped => self.decode2(input),
+            ApiMode::Unescaped => self.decode1(input),
+        };
+        (consumed, outcome.map(|o| self.event(o)))
+    }
+
+    /// Ends the input: delivers pending events, then reports a partial frame as
+    /// [`DecodeError::Truncated`] (in mode 1 its bytes are then scanned again). Call it
+    /// until it returns `None`; the decoder is then idle and can take new input.
+    pub fn finish(&mut self) -> Option<Event<'_>> {
+        let outcome = match self.mode {
+            ApiMode::Escaped => {
+                if self.state == State::Hunt {
+                    self.escaped = false;
+                    None
+                } else {
+                    let error = self.truncated(self.pos);
+                    self.escaped = false;
+                    self.state = State::Hunt;
+                    Some(Err(self.record(error)))
+                }
+            }
+            ApiMode::Unescaped => match self.drain1() {
+                Some(outcome) => Some(outcome),
+                None if self.state == State::Hunt => None,
+                None => {
+                    let received = self.pos.saturating_sub(self.start + 3);
+                    let error = self.truncated(received);
+                    Some(Err(self.fail1(error)))
+                }
+            },
+        };
+        outcome.map(|o| self.event(o))
+    }
+
+    fn event(&self, outcome: Outcome) -> Event<'_> {
+        outcome
+            .map(|(start, end)| RawFrame::from_data(self.buf.get(start..end).unwrap_or_default()))
+    }
+
+    fn truncated(&self, received: usize) -> DecodeError {
+        DecodeError::Truncated {
+            length: match self.state {
+                State::Data | State::Checksum => Some(self.len as u16),
+                _ => None,
+            },
+            received,
+        }
+    }
+
+    /// Counts an error and passes it on.
+    fn record(&mut self, error: DecodeError) -> DecodeError {
+        let counter = match error {
+            DecodeError::BadChecksum { .. } => &mut self.stats.bad_checksum,
+            DecodeError::Oversize { .. } => &mut self.stats.oversize,
+            DecodeError::EmptyFrame => &mut self.stats.empty,
+            DecodeError::Truncated { .. } => &mut self.stats.truncated,
+            DecodeError::BadEscape { .. } => &mut self.stats.bad_escape,
+        };
+        *counter = counter.wrapping_add(1);
+        error
+    }
+
+    fn skipped(&mut self, n: usize) {
+        self.stats.bytes_skipped = self.stats.bytes_skipped.wrapping_add(n as u32);
+    }
+
+    /// Checks a complete length field; the error if the frame cannot be taken.
+    fn check_len(&self) -> Option<DecodeError> {
+        if self.len == 0 {
+            Some(DecodeError::EmptyFrame)
+        } else if self.len > self.capacity() {
+            Some(DecodeError::Oversize {
+                length: self.len as u16,
+                capacity: self.capacity(),
+            })
+        } else {
+            None
+        }
+    }
+
+    // ---- Mode 2: a raw 0x7E always starts a frame, nothing is ever rescanned. ----
+
+    /// One raw byte of a mode 2 stream.
+    #[inline]
+    fn step2(&mut self, raw: u8) -> Option<Outcome> {
+        if raw == START_DELIMITER {
+            let cut = match self.state {
+                State::Hunt => None,
+                _ if self.escaped => Some(DecodeError::BadEscape {
+                    byte: raw,
+                    received: self.pos,
+                }),
+                _ => Some(self.truncated(self.pos)),
+            };
+            self.state = State::LenHi;
+            self.escaped = false;
+            self.pos = 0;
+            self.sum = 0;
+            return cut.map(|e| Err(self.record(e)));
+        }
+        if self.state == State::Hunt {
+            self.skipped(1);
+            return None;
+        }
+        let byte = if self.escaped {
+            self.escaped = false;
+            let byte = raw ^ ESCAPE_XOR;
+            if !needs_escape(byte) {
+                self.state = State::Hunt;
+                let error = DecodeError::BadEscape {
+                    byte: raw,
+                    received: self.pos,
+                };
+                return Some(Err(self.record(error)));
+            }
+            byte
+        } else if raw == ESCAPE {
+            self.escaped = true;
+            return None;
+        } else {
+            raw
+        };
+        match self.state {
+            State::Data => {
+                if let Some(slot) = self.buf.get_mut(self.pos) {
+                    *slot = byte;
+                }
+                self.pos += 1;
+                self.sum = self.sum.wrapping_add(byte);
+                if self.pos >= self.len {
+                    self.state = State::Checksum;
+                }
+                None
+            }
+            State::LenHi => {
+                self.len = usize::from(byte) << 8;
+                self.state = State::LenLo;
+                None
+            }
+            State::LenLo => {
+                self.len |= usize::from(byte);
+                if let Some(error) = self.check_len() {
+                    self.state = State::Hunt;
+                    return Some(Err(self.record(error)));
+                }
+                self.state = State::Data;
+                None
+            }
+            State::Checksum => {
+                self.state = State::Hunt;
+                let expected = checksum_of_sum(self.sum);
+                if byte == expected {
+                    self.stats.frames_ok = self.stats.frames_ok.wrapping_add(1);
+                    Some(Ok((0, self.len)))
+                } else {
+                    let error = DecodeError::BadChecksum {
+                        expected,
+                        got: byte,
+                    };
+                    Some(Err(self.record(error)))
+                }
+            }
+            State::Hunt => None,
+        }
+    }
+
+    fn decode2(&mut self, input: &[u8]) -> (usize, Option<Outcome>) {
+        let mut i = 0;
+        while let Some(rest) = input.get(i..).filter(|r| !r.is_empty()) {
+            match self.state {
+                State::Hunt => match memchr(START_DELIMITER, rest) {
+                    Some(k) => {
+                        self.skipped(k);
+                        i += k;
+                    }
+                    None => {
+                        self.skipped(rest.len());
+                        return (input.len(), None);
+                    }
+                },
+                State::Data if !self.escaped => {
+                    let want = self.len.saturating_sub(self.pos).min(rest.len());
+                    let chunk = &rest[..want];
+                    let run = memchr2(ESCAPE, START_DELIMITER, chunk).unwrap_or(want);
+                    if run > 0 {
+                        let bytes = &chunk[..run];
+                        if let Some(dst) = self.buf.get_mut(self.pos..self.pos + run) {
+                            dst.copy_from_slice(bytes);
+                        }
+                        self.sum = self.sum.wrapping_add(sum(bytes));
+                        self.pos += run;
+                        i += run;
+                        if self.pos >= self.len {
+                            self.state = State::Checksum;
+                        }
+                        continue;
+                    }
+                }
+                _ => {}
+            }
+            let byte = input.get(i).copied().unwrap_or(0);
+            i += 1;
+            if let Some(outcome) = self.step2(byte) {
+                return (i, Some(outcome));
+            }
+        }
+        (i.min(input.len()), None)
+    }
+
+    // ---- Mode 1: candidates stay in the buffer until they succeed, so that a failed
+    // one can be scanned again from the byte after its start delimiter. ----
+
+    /// Moves the candidate (and pending bytes) to the start of the buffer.
+    fn compact(&mut self) {
+        self.buf.copy_within(self.start..self.end, 0);
+        self.pos -= self.start;
+        self.end -= self.start;
+        self.start = 0;
+    }
+
+    /// Drops the current candidate: scan again from the byte after its delimiter.
+    fn fail1(&mut self, error: DecodeError) -> DecodeError {
+        self.start += 1;
+        self.pos = self.start;
+        self.state = State::Hunt;
+        self.record(error)
+    }
+
+    /// Processes buffered bytes until an event or until none is left.
+    fn drain1(&mut self) -> Option<Outcome> {
+        while self.pos < self.end {
+            match self.state {
+                State::Hunt => {
+                    let hay = self.buf.get(self.pos..self.end).unwrap_or_default();
+                    match memchr(START_DELIMITER, hay) {
+                        Some(k) => {
+                            self.skipped(k);
+                            self.start = self.pos + k;
+                            self.pos = self.start + 1;
+                            self.state = State::LenHi;
+                        }
+                        None => {
+                            self.skipped(hay.len());
+                            self.pos = self.end;
+                        }
+                    }
+                }
+                State::LenHi => {
+                    self.len = usize::from(self.buf[self.pos]) << 8;
+                    self.pos += 1;
+                    self.state = State::LenLo;
+                }
+                State::LenLo => {
+                    self.len |= usize::from(self.buf[self.pos]);
+                    self.pos += 1;
+                    if let Some(error) = self.check_len() {
+                        return Some(Err(self.fail1(error)));
+                    }
+                    if self.start + self.len + 4 > N {
+                        self.compact();
+                    }
+                    self.sum = 0;
+                    self.state = State::Data;
+                }
+                State::Data => {
+                    let frame_end = self.start + 3 + self.len;
+                    let upto = frame_end.min(self.end);
+                    self.sum = self
+                        .sum
+                        .wrapping_add(sum(self.buf.get(self.pos..upto).unwrap_or_default()));
+                    self.pos = upto;
+                    if self.pos == frame_end {
+                        self.state = State::Checksum;
+                    }
+                }
+                State::Checksum => {
+                    let got = self.buf[self.pos];
+                    self.pos += 1;
+                    let expected = checksum_of_sum(self.sum);
+                    if got != expected {
+                        let error = DecodeError::BadChecksum { expected, got };
+                        return Some(Err(self.fail1(error)));
+                    }
+                    self.stats.frames_ok = self.stats.frames_ok.wrapping_add(1);
+                    let data = self.start + 3;
+                    self.start = self.pos;
+                    self.state = State::Hunt;
+                    return Some(Ok((data, data + self.len)));
+                }
+            }
+        }
+        if self.state == State::Hunt {
+            self.start = 0;
+            self.pos = 0;
+            self.end = 0;
+        }
+        None
+    }
+
+    /// Bytes the current mode 1 candidate still needs (header, data and checksum).
+    fn needed1(&self) -> usize {
+        let have = self.end - self.start;
+        match self.state {
+            State::LenHi | State::LenLo => 3usize.saturating_sub(have),
+            _ => (self.len + 4).saturating_sub(have),
+        }
+    }
+
+    /// Starts a candidate with a start delimiter from new input (nothing pending).
+    fn begin1(&mut self) {
+        self.start = 0;
+        self.pos = 0;
+        self.end = 0;
+        if let Some(slot) = self.buf.first_mut() {
+            *slot = START_DELIMITER;
+            self.pos = 1;
+            self.end = 1;
+            self.state = State::LenHi;
+        }
+    }
+
+    #[inline]
+    fn push1(&mut self, byte: u8) -> Option<Outcome> {
+        if self.pos == self.end {
+            match self.state {
+                State::Hunt => {
+                    if byte == START_DELIMITER {
+                        self.begin1();
+                    } else {
+                        self.skipped(1);
+                    }
+                    return None;
+                }
+                State::Data => {
+                    if let Some(slot) = self.buf.get_mut(self.end) {
+                        *slot = byte;
+                        self.end += 1;
+                        self.pos = self.end;
+                        self.sum = self.sum.wrapping_add(byte);
+                        if self.pos == self.start + 3 + self.len {
+                            self.state = State::Checksum;
+                        }
+                        return None;
+                    }
+                }
+                _ => {}
+            }
+        }
+        if self.end == N {
+            self.compact();
+        }
+        match self.buf.get_mut(self.end) {
+            Some(slot) => {
+                *slot = byte;
+                self.end += 1;
+            }
+            None => self.skipped(1),
+        }
+        self.drain1()
+    }
+
+    fn decode1(&mut self, input: &[u8]) -> (usize, Option<Outcome>) {
+        if let Some(outcome) = self.drain1() {
+            return (0, Some(outcome));
+        }
+        let mut i = 0;
+        while let Some(rest) = input.get(i..).filter(|r| !r.is_empty()) {
+            if self.state == State::Hunt {
+                match memchr(START_DELIMITER, rest) {
+                    Some(k) => {
+                        self.skipped(k);
+                        i += k + 1;
+                        self.begin1();
+                    }
+                    None => {
+                        self.skipped(rest.len());
+                        return (input.len(), None);
+                    }
+                }
+                continue;
+            }
+            let take = self.needed1().min(rest.len());
+            if self.end + take > N {
+                self.compact();
+            }
+            match self.buf.get_mut(self.end..self.end + take) {
+                Some(dst) => dst.copy_from_slice(&rest[..take]),
+                // Unreachable: a candidate always fits once compacted (N >= 8).
+                None => {
+                    self.skipped(take);
+                    self.reset();
+                    i += take;
+                    continue;
+                }
+            }
+            self.end += take;
+            i += take;
+            if let Some(outcome) = self.drain1() {
+                return (i, Some(outcome));
+            }
+        }
+        (i.min(input.len()), None)
+    }
+}

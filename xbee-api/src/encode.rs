@@ -1,0 +1,232 @@
+//! Encoding frames to the wire: length, checksum and, in API mode 2, escaping.
+
+use crate::wire::{ESCAPE, ESCAPE_XOR, START_DELIMITER, checksum_of_sum, needs_escape, sum};
+use crate::{ApiMode, EncodeError};
+
+/// Largest frame data length the 16-bit length field can carry, and so the largest the
+/// encoder accepts. Radios take far less (frame data tops out near 273 bytes), but the
+/// encoder only enforces what the wire format can express.
+pub const MAX_FRAME_DATA_LEN: usize = 0xFFFF;
+
+/// Anything that can be written as the frame data of an API frame: typed `*Repr`s,
+/// [`Frame`](crate::Frame) and [`RawFrame`](crate::RawFrame).
+///
+/// Implementors give the unescaped frame data (type byte first) as a sequence of chunks;
+/// the provided methods add the start delimiter, the length, the checksum and escaping.
+///
+/// ```
+/// use xbee_api::{ApiMode, EncodeFrame, ModemStatus, ModemStatusRepr};
+/// let frame = ModemStatusRepr { status: ModemStatus::CoordinatorStarted };
+/// let mut buf = [0u8; 8];
+/// let n = frame.encode(ApiMode::Unescaped, &mut buf).unwrap();
+/// assert_eq!(&buf[..n], &[0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F]);
+/// assert_eq!(frame.encoded_len(ApiMode::Escaped), 6);
+/// ```
+pub trait EncodeFrame {
+    /// Length of the frame data (type byte included): the value of the length field.
+    fn frame_data_len(&self) -> usize;
+
+    /// Calls `out` with the unescaped frame data, in order, in one or more chunks whose
+    /// lengths add up to [`frame_data_len`](Self::frame_data_len).
+    fn write_frame_data<F: FnMut(&[u8])>(&self, out: &mut F);
+
+    /// Exact number of bytes [`encode`](Self::encode) writes in `mode`.
+    fn encoded_len(&self, mode: ApiMode) -> usize {
+        let len = self.frame_data_len();
+        match mode {
+            ApiMode::Unescaped => len + 4,
+            ApiMode::Escaped => {
+                let mut total = 1;
+                let mut s = 0u8;
+                let [hi, lo] = (len as u16).to_be_bytes();
+                total += escaped_len(&[hi, lo]);
+                self.write_frame_data(&mut |chunk: &[u8]| {
+                    total += escaped_len(chunk);
+                    s = s.wrapping_add(sum(chunk));
+                });
+                total + escaped_len(&[checksum_of_sum(s)])
+            }
+        }
+    }
+
+    /// Encodes the whole frame (delimiter, length, frame data, checksum) into the start
+    /// of `buf`, escaped in [`ApiMode::Escaped`]; returns the number of bytes written.
+    ///
+    /// Fails with [`EncodeError::BufferTooSmall`] when `buf` is shorter than
+    /// [`encoded_len`](Self::encoded_len) (nothing useful is written then), and with
+    /// [`EncodeError::FrameTooLong`] above [`MAX_FRAME_DATA_LEN`].
+    fn encode(&self, mode: ApiMode, buf: &mut [u8]) -> Result<usize, EncodeError> {
+        let len = self.frame_data_len();
+        if len > MAX_FRAME_DATA_LEN {
+            return Err(EncodeError::FrameTooLong { len });
+        }
+        let needed = self.encoded_len(mode);
+        if buf.len() < needed {
+            return Err(EncodeError::BufferTooSmall {
+                needed,
+                available: buf.len(),
+            });
+        }
+        let mut w = Writer {
+            buf,
+            pos: 1,
+            escape: mode == ApiMode::Escaped,
+            overflow: false,
+        };
+        w.buf[0] = START_DELIMITER;
+        w.put(&(len as u16).to_be_bytes());
+        let mut s = 0u8;
+        let mut written = 0usize;
+        self.write_frame_data(&mut |chunk: &[u8]| {
+            s = s.wrapping_add(sum(chunk));
+            written += chunk.len();
+            w.put(chunk);
+        });
+        w.put(&[checksum_of_sum(s)]);
+        if written != len || w.overflow {
+            return Err(EncodeError::LengthMismatch {
+                announced: len,
+                written,
+            });
+        }
+        Ok(w.pos)
+    }
+
+    /// Writes the unescaped frame data alone (no delimiter, length or checksum) into the
+    /// start of `buf`; returns its length.
+    fn emit_frame_data(&self, buf: &mut [u8]) -> Result<usize, EncodeError> {
+        let len = self.frame_data_len();
+        if buf.len() < len {
+            return Err(EncodeError::BufferTooSmall {
+                needed: len,
+                available: buf.len(),
+            });
+        }
+        let mut w = Writer {
+            buf,
+            pos: 0,
+            escape: false,
+            overflow: false,
+        };
+        self.write_frame_data(&mut |chunk: &[u8]| w.put(chunk));
+        if w.pos != len || w.overflow {
+            return Err(EncodeError::LengthMismatch {
+                announced: len,
+                written: w.pos,
+            });
+        }
+        Ok(len)
+    }
+}
+
+/// Length of `bytes` once escaped for API mode 2.
+fn escaped_len(bytes: &[u8]) -> usize {
+    bytes.len() + bytes.iter().filter(|b| needs_escape(**b)).count()
+}
+
+/// Bounds-checked output cursor; a write past the end sets `overflow` instead of
+/// panicking.
+struct Writer<'b> {
+    buf: &'b mut [u8],
+    pos: usize,
+    escape: bool,
+    overflow: bool,
+}
+
+impl Writer<'_> {
+    fn put(&mut self, bytes: &[u8]) {
+        if !self.escape {
+            match self.buf.get_mut(self.pos..self.pos + bytes.len()) {
+                Some(dst) => {
+                    dst.copy_from_slice(bytes);
+                    self.pos += bytes.len();
+                }
+                None => self.overflow = true,
+            }
+            return;
+        }
+        for &b in bytes {
+            if needs_escape(b) {
+                self.byte(ESCAPE);
+                self.byte(b ^ ESCAPE_XOR);
+            } else {
+                self.byte(b);
+            }
+        }
+    }
+
+    fn byte(&mut self, b: u8) {
+        match self.buf.get_mut(self.pos) {
+            Some(slot) => {
+                *slot = b;
+                self.pos += 1;
+            }
+            None => self.overflow = true,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::RawFrame;
+
+    #[test]
+    fn escapes_length_type_and_checksum() {
+        // Unknown frame type 0x23 with data 0x11, from Digi's manual.
+        let raw = RawFrame::new(&[0x23, 0x11]).unwrap();
+        let mut buf = [0u8; 16];
+        let n = raw.encode(ApiMode::Unescaped, &mut buf).unwrap();
+        assert_eq!(&buf[..n], &[0x7E, 0x00, 0x02, 0x23, 0x11, 0xCB]);
+        let n = raw.encode(ApiMode::Escaped, &mut buf).unwrap();
+        assert_eq!(&buf[..n], &[0x7E, 0x00, 0x02, 0x23, 0x7D, 0x31, 0xCB]);
+        assert_eq!(raw.encoded_len(ApiMode::Escaped), 7);
+    }
+
+    #[test]
+    fn buffer_too_small_is_exact() {
+        let raw = RawFrame::new(&[0x8A, 0x7E]).unwrap();
+        let needed = raw.encoded_len(ApiMode::Escaped);
+        let mut buf = [0u8; 32];
+        assert_eq!(
+            raw.encode(ApiMode::Escaped, &mut buf[..needed - 1]),
+            Err(EncodeError::BufferTooSmall {
+                needed,
+                available: needed - 1
+            })
+        );
+        assert_eq!(raw.encode(ApiMode::Escaped, &mut buf[..needed]), Ok(needed));
+    }
+
+    struct Liar;
+
+    impl EncodeFrame for Liar {
+        fn frame_data_len(&self) -> usize {
+            1
+        }
+        fn write_frame_data<F: FnMut(&[u8])>(&self, out: &mut F) {
+            out(&[1, 2, 3, 4, 5, 6, 7, 8]);
+        }
+    }
+
+    #[test]
+    fn inconsistent_writer_is_an_error_not_a_panic() {
+        let mut buf = [0u8; 6];
+        assert!(matches!(
+            Liar.encode(ApiMode::Unescaped, &mut buf),
+            Err(EncodeError::LengthMismatch { announced: 1, .. })
+        ));
+        assert!(Liar.emit_frame_data(&mut buf).is_err());
+    }
+
+    #[test]
+    fn too_long() {
+        let data = [0u8; MAX_FRAME_DATA_LEN + 1];
+        let raw = RawFrame::new(&data).unwrap();
+        let mut buf = [0u8; 8];
+        assert_eq!(
+            raw.encode(ApiMode::Unescaped, &mut buf),
+            Err(EncodeError::FrameTooLong { len: data.len() })
+        );
+    }
+}

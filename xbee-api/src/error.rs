@@ -1,0 +1,94 @@
+//! Errors of frame views and encoders.
+
+use core::fmt;
+
+/// Why frame data is not a valid frame of the expected type.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FrameError {
+    /// The frame data is empty: there is not even a frame type byte.
+    Empty,
+    /// The frame type byte is not the one the view is for.
+    WrongType {
+        /// Frame type the view expects.
+        expected: u8,
+        /// Frame type found (frame data byte 0).
+        found: u8,
+    },
+    /// The frame data is shorter than the fixed fields of its frame type.
+    TooShort {
+        /// The frame type.
+        frame_type: u8,
+        /// Least frame data length (type byte included) this frame type takes.
+        needed: usize,
+        /// Frame data length received.
+        got: usize,
+    },
+}
+
+impl fmt::Display for FrameError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Empty => f.write_str("empty frame data"),
+            Self::WrongType { expected, found } => {
+                write!(f, "frame type 0x{found:02X}, expected 0x{expected:02X}")
+            }
+            Self::TooShort {
+                frame_type,
+                needed,
+                got,
+            } => write!(
+                f,
+                "frame type 0x{frame_type:02X} needs at least {needed} bytes of frame data, got {got}"
+            ),
+        }
+    }
+}
+
+impl core::error::Error for FrameError {}
+
+/// Why a frame could not be encoded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EncodeError {
+    /// The output buffer is shorter than the encoded frame.
+    BufferTooSmall {
+        /// Bytes the encoded frame takes.
+        needed: usize,
+        /// Bytes the buffer has.
+        available: usize,
+    },
+    /// The frame data is longer than the 16-bit length field (0xFFFF bytes) can say.
+    FrameTooLong {
+        /// Frame data length.
+        len: usize,
+    },
+    /// An [`EncodeFrame`](crate::EncodeFrame) implementation wrote a different number of
+    /// bytes than its `frame_data_len` announced.
+    LengthMismatch {
+        /// Length announced.
+        announced: usize,
+        /// Bytes written.
+        written: usize,
+    },
+}
+
+impl fmt::Display for EncodeError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::BufferTooSmall { needed, available } => {
+                write!(f, "buffer too small: need {needed} bytes, have {available}")
+            }
+            Self::FrameTooLong { len } => {
+                write!(
+                    f,
+                    "frame data of {len} bytes exceeds the 65535-byte maximum"
+                )
+            }
+            Self::LengthMismatch { announced, written } => write!(
+                f,
+                "frame data writer wrote {written} bytes, announced {announced}"
+            ),
+        }
+    }
+}
+
+impl core::error::Error for EncodeError {}

@@ -1,0 +1,292 @@
+//! Typed API frames: one module per frame type, each with a view over the frame data
+//! (`new_checked`/`check_len`, a `field` module of byte positions, accessors) and a
+//! `*Repr` holding the fields that parses from the view and encodes with
+//! [`EncodeFrame`]; plus [`Frame`], the enum over all of them.
+
+use crate::{EncodeFrame, FrameError, RawFrame};
+
+pub mod at_command;
+pub mod at_command_response;
+pub mod explicit_addressing_command;
+pub mod explicit_rx_indicator;
+pub mod modem_status;
+pub mod receive_packet;
+pub mod remote_at_command;
+pub mod remote_at_response;
+pub mod transmit_request;
+pub mod transmit_status;
+
+/// Frame type bytes (API identifiers) of the typed frames.
+pub mod frame_type {
+    /// AT Command.
+    pub const AT_COMMAND: u8 = 0x08;
+    /// Transmit Request.
+    pub const TRANSMIT_REQUEST: u8 = 0x10;
+    /// Explicit Addressing Command.
+    pub const EXPLICIT_ADDRESSING_COMMAND: u8 = 0x11;
+    /// Remote AT Command.
+    pub const REMOTE_AT_COMMAND: u8 = 0x17;
+    /// AT Command Response.
+    pub const AT_COMMAND_RESPONSE: u8 = 0x88;
+    /// Modem Status.
+    pub const MODEM_STATUS: u8 = 0x8A;
+    /// Transmit Status.
+    pub const TRANSMIT_STATUS: u8 = 0x8B;
+    /// Receive Packet.
+    pub const RECEIVE_PACKET: u8 = 0x90;
+    /// Explicit Rx Indicator.
+    pub const EXPLICIT_RX_INDICATOR: u8 = 0x91;
+    /// Remote AT Command Response.
+    pub const REMOTE_AT_RESPONSE: u8 = 0x97;
+}
+
+use at_command::AtCommandRepr;
+use at_command_response::AtCommandResponseRepr;
+use explicit_addressing_command::ExplicitAddressingCommandRepr;
+use explicit_rx_indicator::ExplicitRxIndicatorRepr;
+use modem_status::ModemStatusRepr;
+use receive_packet::ReceivePacketRepr;
+use remote_at_command::RemoteAtCommandRepr;
+use remote_at_response::RemoteAtResponseRepr;
+use transmit_request::TransmitRequestRepr;
+use transmit_status::TransmitStatusRepr;
+
+/// Checks the type byte and the least length of frame data.
+pub(crate) fn check_frame(data: &[u8], expected: u8, needed: usize) -> Result<(), FrameError> {
+    let Some(&found) = data.first() else {
+        return Err(FrameError::Empty);
+    };
+    if found != expected {
+        return Err(FrameError::WrongType { expected, found });
+    }
+    if data.len() < needed {
+        return Err(FrameError::TooShort {
+            frame_type: found,
+            needed,
+            got: data.len(),
+        });
+    }
+    Ok(())
+}
+
+/// Copies a field of exactly `N` bytes into an array (zeros if the length differs, which
+/// the field ranges rule out).
+pub(crate) fn be<const N: usize>(bytes: &[u8]) -> [u8; N] {
+    bytes.try_into().unwrap_or([0; N])
+}
+
+/// Any API frame, typed when this crate knows its type, borrowed from the frame data.
+///
+/// Parse one from a [`RawFrame`] (as the [`Decoder`](crate::Decoder) yields) with
+/// [`Frame::parse`]; encode one with [`EncodeFrame`]. Frame types this crate does not
+/// know pass through intact as [`Frame::Unknown`].
+///
+/// ```
+/// use xbee_api::{Address64, Frame, RawFrame};
+/// // Receive Packet from Digi's manual.
+/// let data = [0x90, 0x00, 0x13, 0xA2, 0x00, 0x40, 0x52, 0x2B, 0xAA, 0x7D, 0x84, 0x01,
+///             b'R', b'x', b'D', b'a', b't', b'a'];
+/// match Frame::parse(RawFrame::new(&data).unwrap()).unwrap() {
+///     Frame::ReceivePacket(rx) => {
+///         assert_eq!(rx.src64, Address64(0x0013A20040522BAA));
+///         assert_eq!(rx.data, b"RxData");
+///     }
+///     other => panic!("unexpected {other:?}"),
+/// }
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Frame<'a> {
+    /// 0x10 Transmit Request.
+    TransmitRequest(TransmitRequestRepr<'a>),
+    /// 0x90 Receive Packet.
+    ReceivePacket(ReceivePacketRepr<'a>),
+    /// 0x8B Transmit Status.
+    TransmitStatus(TransmitStatusRepr),
+    /// 0x08 AT Command.
+    AtCommand(AtCommandRepr<'a>),
+    /// 0x88 AT Command Response.
+    AtCommandResponse(AtCommandResponseRepr<'a>),
+    /// 0x8A Modem Status.
+    ModemStatus(ModemStatusRepr),
+    /// 0x11 Explicit Addressing Command.
+    ExplicitAddressingCommand(ExplicitAddressingCommandRepr<'a>),
+    /// 0x91 Explicit Rx Indicator.
+    ExplicitRxIndicator(ExplicitRxIndicatorRepr<'a>),
+    /// 0x17 Remote AT Command.
+    RemoteAtCommand(RemoteAtCommandRepr<'a>),
+    /// 0x97 Remote AT Command Response.
+    RemoteAtResponse(RemoteAtResponseRepr<'a>),
+    /// Any other frame type, kept intact.
+    Unknown {
+        /// The frame type byte.
+        frame_type: u8,
+        /// The frame data after the type byte.
+        data: &'a [u8],
+    },
+}
+
+impl<'a> Frame<'a> {
+    /// Types a raw frame. Fails with [`FrameError::TooShort`] when the data is shorter
+    /// than the fixed fields of its (known) type; never panics.
+    pub fn parse(raw: RawFrame<'a>) -> Result<Self, FrameError> {
+        let data = raw.data();
+        Ok(match raw.frame_type() {
+            frame_type::TRANSMIT_REQUEST => {
+                Self::TransmitRequest(TransmitRequestRepr::parse_bytes(data)?)
+            }
+            frame_type::RECEIVE_PACKET => {
+                Self::ReceivePacket(ReceivePacketRepr::parse_bytes(data)?)
+            }
+            frame_type::TRANSMIT_STATUS => {
+                Self::TransmitStatus(TransmitStatusRepr::parse_bytes(data)?)
+            }
+            frame_type::AT_COMMAND => Self::AtCommand(AtCommandRepr::parse_bytes(data)?),
+            frame_type::AT_COMMAND_RESPONSE => {
+                Self::AtCommandResponse(AtCommandResponseRepr::parse_bytes(data)?)
+            }
+            frame_type::MODEM_STATUS => Self::ModemStatus(ModemStatusRepr::parse_bytes(data)?),
+            frame_type::EXPLICIT_ADDRESSING_COMMAND => {
+                Self::ExplicitAddressingCommand(ExplicitAddressingCommandRepr::parse_bytes(data)?)
+            }
+            frame_type::EXPLICIT_RX_INDICATOR => {
+                Self::ExplicitRxIndicator(ExplicitRxIndicatorRepr::parse_bytes(data)?)
+            }
+            frame_type::REMOTE_AT_COMMAND => {
+                Self::RemoteAtCommand(RemoteAtCommandRepr::parse_bytes(data)?)
+            }
+            frame_type::REMOTE_AT_RESPONSE => {
+                Self::RemoteAtResponse(RemoteAtResponseRepr::parse_bytes(data)?)
+            }
+            other => Self::Unknown {
+                frame_type: other,
+                data: raw.body(),
+            },
+        })
+    }
+
+    /// Types frame data (type byte included); see [`Frame::parse`].
+    pub fn parse_bytes(data: &'a [u8]) -> Result<Self, FrameError> {
+        Self::parse(RawFrame::new(data)?)
+    }
+
+    /// The frame type byte.
+    pub fn frame_type(&self) -> u8 {
+        match self {
+            Self::TransmitRequest(_) => frame_type::TRANSMIT_REQUEST,
+            Self::ReceivePacket(_) => frame_type::RECEIVE_PACKET,
+            Self::TransmitStatus(_) => frame_type::TRANSMIT_STATUS,
+            Self::AtCommand(_) => frame_type::AT_COMMAND,
+            Self::AtCommandResponse(_) => frame_type::AT_COMMAND_RESPONSE,
+            Self::ModemStatus(_) => frame_type::MODEM_STATUS,
+            Self::ExplicitAddressingCommand(_) => frame_type::EXPLICIT_ADDRESSING_COMMAND,
+            Self::ExplicitRxIndicator(_) => frame_type::EXPLICIT_RX_INDICATOR,
+            Self::RemoteAtCommand(_) => frame_type::REMOTE_AT_COMMAND,
+            Self::RemoteAtResponse(_) => frame_type::REMOTE_AT_RESPONSE,
+            Self::Unknown { frame_type, .. } => *frame_type,
+        }
+    }
+}
+
+impl EncodeFrame for Frame<'_> {
+    fn frame_data_len(&self) -> usize {
+        match self {
+            Self::TransmitRequest(f) => f.frame_data_len(),
+            Self::ReceivePacket(f) => f.frame_data_len(),
+            Self::TransmitStatus(f) => f.frame_data_len(),
+            Self::AtCommand(f) => f.frame_data_len(),
+            Self::AtCommandResponse(f) => f.frame_data_len(),
+            Self::ModemStatus(f) => f.frame_data_len(),
+            Self::ExplicitAddressingCommand(f) => f.frame_data_len(),
+            Self::ExplicitRxIndicator(f) => f.frame_data_len(),
+            Self::RemoteAtCommand(f) => f.frame_data_len(),
+            Self::RemoteAtResponse(f) => f.frame_data_len(),
+            Self::Unknown { data, .. } => 1 + data.len(),
+        }
+    }
+
+    fn write_frame_data<F: FnMut(&[u8])>(&self, out: &mut F) {
+        match self {
+            Self::TransmitRequest(f) => f.write_frame_data(out),
+            Self::ReceivePacket(f) => f.write_frame_data(out),
+            Self::TransmitStatus(f) => f.write_frame_data(out),
+            Self::AtCommand(f) => f.write_frame_data(out),
+            Self::AtCommandResponse(f) => f.write_frame_data(out),
+            Self::ModemStatus(f) => f.write_frame_data(out),
+            Self::ExplicitAddressingCommand(f) => f.write_frame_data(out),
+            Self::ExplicitRxIndicator(f) => f.write_frame_data(out),
+            Self::RemoteAtCommand(f) => f.write_frame_data(out),
+            Self::RemoteAtResponse(f) => f.write_frame_data(out),
+            Self::Unknown { frame_type, data } => {
+                out(&[*frame_type]);
+                out(data);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn too_short_for_every_known_type() {
+        let types = [
+            (frame_type::TRANSMIT_REQUEST, 14),
+            (frame_type::RECEIVE_PACKET, 12),
+            (frame_type::TRANSMIT_STATUS, 7),
+            (frame_type::AT_COMMAND, 4),
+            (frame_type::AT_COMMAND_RESPONSE, 5),
+            (frame_type::MODEM_STATUS, 2),
+            (frame_type::EXPLICIT_ADDRESSING_COMMAND, 20),
+            (frame_type::EXPLICIT_RX_INDICATOR, 18),
+            (frame_type::REMOTE_AT_COMMAND, 15),
+            (frame_type::REMOTE_AT_RESPONSE, 15),
+        ];
+        let zeros = [0u8; 32];
+        for (t, needed) in types {
+            let mut data = zeros;
+            data[0] = t;
+            for got in 1..needed {
+                assert_eq!(
+                    Frame::parse_bytes(&data[..got]),
+                    Err(FrameError::TooShort {
+                        frame_type: t,
+                        needed,
+                        got
+                    })
+                );
+            }
+            let frame = Frame::parse_bytes(&data[..needed]).unwrap();
+            assert_eq!(frame.frame_type(), t);
+            assert_eq!(frame.frame_data_len(), needed);
+        }
+        assert_eq!(Frame::parse_bytes(&[]), Err(FrameError::Empty));
+    }
+
+    #[test]
+    fn unknown_passes_through() {
+        let frame = Frame::parse_bytes(&[0x23, 1, 2, 3]).unwrap();
+        assert_eq!(
+            frame,
+            Frame::Unknown {
+                frame_type: 0x23,
+                data: &[1, 2, 3]
+            }
+        );
+        let mut buf = [0u8; 4];
+        assert_eq!(frame.emit_frame_data(&mut buf), Ok(4));
+        assert_eq!(buf, [0x23, 1, 2, 3]);
+    }
+
+    #[test]
+    fn views_check_type() {
+        use transmit_status::TransmitStatus;
+        assert_eq!(
+            TransmitStatus::new_checked(&[0x8A, 0, 0, 0, 0, 0, 0][..]).err(),
+            Some(FrameError::WrongType {
+                expected: 0x8B,
+                found: 0x8A
+            })
+        );
+    }
+}

@@ -1,0 +1,59 @@
+//! API operating mode (Digi's `AP` parameter).
+
+use core::fmt;
+
+/// The API operating mode of an XBee (`AP` parameter).
+///
+/// ```
+/// use xbee_api::ApiMode;
+/// assert_eq!(ApiMode::try_from(2), Ok(ApiMode::Escaped));
+/// assert_eq!(u8::from(ApiMode::Unescaped), 1);
+/// assert!(ApiMode::try_from(0).is_err());
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum ApiMode {
+    /// API mode 1 (`AP=1`): frames are sent as they are.
+    Unescaped,
+    /// API mode 2 (`AP=2`): every byte after the start delimiter that is 0x7E, 0x7D, 0x11
+    /// or 0x13 is sent as `0x7D, byte ^ 0x20`.
+    Escaped,
+}
+
+/// An `AP` value that is not an API mode with frames (1 or 2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct InvalidApiMode(pub u8);
+
+impl fmt::Display for InvalidApiMode {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "invalid API mode {} (expected 1 or 2)", self.0)
+    }
+}
+
+impl core::error::Error for InvalidApiMode {}
+
+impl TryFrom<u8> for ApiMode {
+    type Error = InvalidApiMode;
+
+    fn try_from(value: u8) -> Result<Self, Self::Error> {
+        match value {
+            1 => Ok(Self::Unescaped),
+            2 => Ok(Self::Escaped),
+            other => Err(InvalidApiMode(other)),
+        }
+    }
+}
+
+impl From<ApiMode> for u8 {
+    fn from(mode: ApiMode) -> u8 {
+        match mode {
+            ApiMode::Unescaped => 1,
+            ApiMode::Escaped => 2,
+        }
+    }
+}
+
+impl fmt::Display for ApiMode {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "API mode {}", u8::from(*self))
+    }
+}

@@ -1,0 +1,89 @@
+//! Status codes carried by response frames, each an enum with an `Unknown` arm so that
+//! every byte converts both ways without loss.
+
+macro_rules! code_enum {
+    (
+        $(#[$meta:meta])*
+        pub enum $name:ident {
+            $( $(#[$vmeta:meta])* $variant:ident = $value:expr, )+
+        }
+    ) => {
+        $(#[$meta])*
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        pub enum $name {
+            $( $(#[$vmeta])* $variant, )+
+            /// A code this crate does not name, kept as received.
+            Unknown(u8),
+        }
+
+        impl From<u8> for $name {
+            fn from(code: u8) -> Self {
+                match code {
+                    $( $value => Self::$variant, )+
+                    other => Self::Unknown(other),
+                }
+            }
+        }
+
+        impl From<$name> for u8 {
+            fn from(status: $name) -> u8 {
+                match status {
+                    $( $name::$variant => $value, )+
+                    $name::Unknown(other) => other,
+                }
+            }
+        }
+    };
+}
+
+mod at;
+mod delivery;
+mod discovery;
+mod modem;
+
+pub use at::AtStatus;
+pub use delivery::DeliveryStatus;
+pub use discovery::DiscoveryStatus;
+pub use modem::ModemStatus;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_code_round_trips() {
+        for code in 0..=255u8 {
+            assert_eq!(u8::from(AtStatus::from(code)), code);
+            assert_eq!(u8::from(DeliveryStatus::from(code)), code);
+            assert_eq!(u8::from(DiscoveryStatus::from(code)), code);
+            assert_eq!(u8::from(ModemStatus::from(code)), code);
+        }
+    }
+
+    #[test]
+    fn named_codes() {
+        assert_eq!(DeliveryStatus::from(0x00), DeliveryStatus::Success);
+        assert_eq!(
+            DeliveryStatus::from(0x21),
+            DeliveryStatus::NetworkAckFailure
+        );
+        assert_eq!(DeliveryStatus::from(0x24), DeliveryStatus::AddressNotFound);
+        assert_eq!(
+            DeliveryStatus::from(0x75),
+            DeliveryStatus::IndirectMessageUnrequested
+        );
+        assert_eq!(DeliveryStatus::from(0x99), DeliveryStatus::Unknown(0x99));
+        assert_eq!(
+            DiscoveryStatus::from(0x40),
+            DiscoveryStatus::ExtendedTimeoutDiscovery
+        );
+        assert_eq!(DiscoveryStatus::from(0x04), DiscoveryStatus::Unknown(0x04));
+        assert_eq!(AtStatus::from(3), AtStatus::InvalidParameter);
+        assert_eq!(ModemStatus::from(0x06), ModemStatus::CoordinatorStarted);
+        assert_eq!(ModemStatus::from(0x80), ModemStatus::StackError(0x80));
+        assert_eq!(ModemStatus::from(0x7F), ModemStatus::Unknown(0x7F));
+        assert!(DeliveryStatus::Success.is_success());
+        assert!(!DeliveryStatus::MacAckFailure.is_success());
+        assert!(AtStatus::Ok.is_ok());
+    }
+}
