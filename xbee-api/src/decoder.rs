@@ -186,7 +186,11 @@ impl<const N: usize> Decoder<N> {
     /// Whether the decoder is between frames with no byte pending: false inside a
     /// candidate frame or while mode 1 holds bytes to scan again.
     pub const fn is_idle(&self) -> bool {
-        matches!(self.state, State::Hunt) && self.pos == self.end && !self.escaped
+        matches!(self.state, State::Hunt)
+            && match self.mode {
+                ApiMode::Unescaped => self.pos == self.end,
+                ApiMode::Escaped => !self.escaped,
+            }
     }
 
     /// Drops any partial frame and pending bytes; keeps the counters.
