@@ -1,0 +1,258 @@
+//! Decoder behaviour: every error kind with its counters, mode 2 escaping of every frame
+//! id and of length bytes, mode 1 rescans.
+
+mod common;
+
+use common::{Owned, decode_bytes, decode_slices, frames, hex};
+use xbee_api::{
+    Address16, Address64, ApiMode, DecodeError, Decoder, EncodeFrame, Frame, RawFrame,
+    TransmitRequestRepr,
+};
+
+const MODEM: &str = "7E 00 02 8A 06 6F";
+
+fn both<const N: usize>(mode: ApiMode, stream: &[u8]) -> (Vec<Owned>, xbee_api::Stats) {
+    let slices = decode_slices::<N>(mode, stream, &[stream.len()]);
+    let ones = decode_slices::<N>(mode, stream, &[1]);
+    let bytes = decode_bytes::<N>(mode, stream);
+    assert_eq!(slices, ones);
+    assert_eq!(slices, bytes);
+    slices
+}
+
+fn encode(frame: &impl EncodeFrame, mode: ApiMode) -> Vec<u8> {
+    let mut buf = vec![0u8; frame.encoded_len(mode)];
+    let n = frame.encode(mode, &mut buf).unwrap();
+    assert_eq!(n, buf.len());
+    buf
+}
+
+#[test]
+fn bad_checksum_then_next_frame() {
+    for mode in [ApiMode::Unescaped, ApiMode::Escaped] {
+        let stream = hex(&format!("7E 00 02 8A 06 70 {MODEM}"));
+        let (events, stats) = both::<64>(mode, &stream);
+        assert_eq!(
+            events[0],
+            Owned::Error(DecodeError::BadChecksum {
+                expected: 0x6F,
+                got: 0x70
+            })
+        );
+        assert_eq!(events[1..], [Owned::Frame(vec![0x8A, 0x06])]);
+        assert_eq!(stats.bad_checksum, 1);
+        assert_eq!(stats.frames_ok, 1);
+        assert_eq!(stats.errors(), 1);
+    }
+}
+
+#[test]
+fn oversize_and_empty() {
+    for mode in [ApiMode::Unescaped, ApiMode::Escaped] {
+        let capacity = Decoder::<16>::new(mode).capacity();
+        let stream = hex(&format!("7E 00 40 00 7E 00 00 FF {MODEM}"));
+        let (events, stats) = both::<16>(mode, &stream);
+        assert_eq!(
+            events[0],
+            Owned::Error(DecodeError::Oversize {
+                length: 0x40,
+                capacity
+            })
+        );
+        assert_eq!(events[1], Owned::Error(DecodeError::EmptyFrame));
+        assert_eq!(events[2..], [Owned::Frame(vec![0x8A, 0x06])]);
+        assert_eq!((stats.oversize, stats.empty, stats.frames_ok), (1, 1, 1));
+    }
+    assert_eq!(Decoder::<16>::new(ApiMode::Unescaped).capacity(), 12);
+    assert_eq!(Decoder::<16>::new(ApiMode::Escaped).capacity(), 16);
+}
+
+#[test]
+fn frame_as_long_as_capacity_fits() {
+    for mode in [ApiMode::Unescaped, ApiMode::Escaped] {
+        let capacity = Decoder::<32>::new(mode).capacity();
+        let data: Vec<u8> = (0..capacity as u8).map(|i| i | 0x80).collect();
+        let stream = encode(&RawFrame::new(&data).unwrap(), mode);
+        let (events, stats) = both::<32>(mode, &stream);
+        assert_eq!(events, [Owned::Frame(data)]);
+        assert_eq!(stats.errors(), 0);
+    }
+}
+
+#[test]
+fn mode2_truncated_by_start_delimiter() {
+    let stream = hex(&format!("7E 00 05 8A 06 {MODEM}"));
+    let (events, stats) = both::<64>(ApiMode::Escaped, &stream);
+    assert_eq!(
+        events,
+        [
+            Owned::Error(DecodeError::Truncated {
+                length: Some(5),
+                received: 2
+            }),
+            Owned::Frame(vec![0x8A, 0x06])
+        ]
+    );
+    assert_eq!(stats.truncated, 1);
+    // Cut inside the length field.
+    let stream = hex(&format!("7E 00 {MODEM}"));
+    let (events, _) = both::<64>(ApiMode::Escaped, &stream);
+    assert_eq!(
+        events[0],
+        Owned::Error(DecodeError::Truncated {
+            length: None,
+            received: 0
+        })
+    );
+}
+
+#[test]
+fn truncated_at_end_of_input() {
+    for mode in [ApiMode::Unescaped, ApiMode::Escaped] {
+        let stream = hex(&format!("{MODEM} 7E 00 05 8A 06"));
+        let (events, stats) = both::<64>(mode, &stream);
+        assert_eq!(
+            events,
+            [
+                Owned::Frame(vec![0x8A, 0x06]),
+                Owned::Error(DecodeError::Truncated {
+                    length: Some(5),
+                    received: 2
+                })
+            ]
+        );
+        assert_eq!((stats.truncated, stats.frames_ok), (1, 1));
+    }
+}
+
+#[test]
+fn mode2_bad_escapes() {
+    // 7D followed by a byte that is not an escaped special byte.
+    let stream = hex(&format!("7E 00 02 8A 7D 06 6F {MODEM}"));
+    let (events, stats) = both::<64>(ApiMode::Escaped, &stream);
+    assert_eq!(
+        events[0],
+        Owned::Error(DecodeError::BadEscape {
+            byte: 0x06,
+            received: 1
+        })
+    );
+    assert_eq!(events[1..], [Owned::Frame(vec![0x8A, 0x06])]);
+    assert_eq!(stats.bad_escape, 1);
+    // The bytes after the bad escape up to the next 0x7E are skipped.
+    assert_eq!(stats.bytes_skipped, 1);
+    // 7D followed by a raw 7E: reported as a bad escape, and the 7E starts a frame.
+    let stream = hex(&format!("7E 00 02 8A 7D {MODEM}"));
+    let (events, stats) = both::<64>(ApiMode::Escaped, &stream);
+    assert_eq!(
+        events,
+        [
+            Owned::Error(DecodeError::BadEscape {
+                byte: 0x7E,
+                received: 1
+            }),
+            Owned::Frame(vec![0x8A, 0x06])
+        ]
+    );
+    assert_eq!((stats.bad_escape, stats.truncated), (1, 0));
+}
+
+#[test]
+fn skipped_bytes_are_counted() {
+    for mode in [ApiMode::Unescaped, ApiMode::Escaped] {
+        let stream = hex(&format!("00 01 02 {MODEM} 55 {MODEM} AA BB"));
+        let (events, stats) = both::<64>(mode, &stream);
+        assert_eq!(frames(&events).len(), 2);
+        assert_eq!(stats.bytes_skipped, 6);
+        assert_eq!(stats.errors(), 0);
+    }
+}
+
+#[test]
+fn mode1_rescan_finds_frames_inside_a_failed_candidate() {
+    // A bogus 0x7E with length 0x0010 swallows two valid frames; its checksum fails,
+    // and the rescan from the byte after it finds both.
+    let stream = hex(&format!("7E 00 10 {MODEM} {MODEM} 01 02 03 04 05"));
+    let (events, stats) = both::<64>(ApiMode::Unescaped, &stream);
+    assert!(matches!(events[0], Owned::Error(DecodeError::BadChecksum { .. })));
+    assert_eq!(frames(&events), vec![vec![0x8A, 0x06]; 2]);
+    assert_eq!(stats.frames_ok, 2);
+    // Bogus candidate cut by the end of input: its frames come out of `finish`.
+    let stream = hex(&format!("7E 01 00 {MODEM} {MODEM}"));
+    let (events, stats) = both::<512>(ApiMode::Unescaped, &stream);
+    assert_eq!(
+        events[0],
+        Owned::Error(DecodeError::Truncated {
+            length: Some(0x100),
+            received: 12
+        })
+    );
+    assert_eq!(frames(&events).len(), 2);
+    assert_eq!((stats.truncated, stats.frames_ok), (1, 2));
+    // An oversize length in garbage does not hide the frame behind it.
+    let stream = hex(&format!("7E FF FF {MODEM}"));
+    let (events, _) = both::<64>(ApiMode::Unescaped, &stream);
+    assert_eq!(frames(&events).len(), 1);
+}
+
+#[test]
+fn mode1_push_without_poll_queues_the_byte() {
+    let stream = hex(&format!("7E 00 08 {MODEM} 00 {MODEM}"));
+    let mut decoder: Decoder<64> = Decoder::new(ApiMode::Unescaped);
+    let mut frames = 0;
+    for &b in &stream {
+        // Deliberately never calls `poll`.
+        if let Some(Ok(_)) = decoder.push(b) {
+            frames += 1;
+        }
+    }
+    while let Some(event) = decoder.finish() {
+        frames += usize::from(event.is_ok());
+    }
+    assert_eq!(frames, 2);
+}
+
+#[test]
+fn mode2_every_frame_id_and_special_lengths() {
+    for id in 0..=255u8 {
+        let request = TransmitRequestRepr {
+            frame_id: id,
+            dst64: Address64(0x0013_A200_7D7E_1113),
+            dst16: Address16(0x117E),
+            radius: 0x13,
+            options: 0x7D,
+            data: &[0x7E, 0x7D, 0x11, 0x13, id],
+        };
+        let wire = encode(&request, ApiMode::Escaped);
+        assert!(wire[1..].iter().all(|&b| b != 0x7E), "raw 0x7E after start");
+        let (events, stats) = both::<64>(ApiMode::Escaped, &wire);
+        assert_eq!(stats.errors(), 0);
+        let [Owned::Frame(data)] = &events[..] else {
+            panic!("{events:?}")
+        };
+        assert_eq!(
+            Frame::parse_bytes(data).unwrap(),
+            Frame::TransmitRequest(request)
+        );
+    }
+    for len in [0x11usize, 0x13, 0x7D, 0x7E] {
+        let data: Vec<u8> = (0..len).map(|i| i as u8).collect();
+        let raw = RawFrame::new(&data).unwrap();
+        let wire = encode(&raw, ApiMode::Escaped);
+        assert_eq!(&wire[..4], &[0x7E, 0x00, 0x7D, len as u8 ^ 0x20]);
+        let (events, stats) = both::<512>(ApiMode::Escaped, &wire);
+        assert_eq!(events, [Owned::Frame(data.clone())]);
+        assert_eq!(stats.errors(), 0);
+    }
+}
+
+#[test]
+fn reset_drops_partial_frame() {
+    let mut decoder: Decoder = Decoder::new(ApiMode::Escaped);
+    assert!(decoder.decode(&hex("7E 00 02 8A")).1.is_none());
+    assert!(!decoder.is_idle());
+    decoder.reset();
+    assert!(decoder.is_idle());
+    let (_, event) = decoder.decode(&hex(MODEM));
+    assert_eq!(event.unwrap().unwrap().data(), &[0x8A, 0x06]);
+}
