@@ -174,7 +174,10 @@ fn mode1_rescan_finds_frames_inside_a_failed_candidate() {
     // and the rescan from the byte after it finds both.
     let stream = hex(&format!("7E 00 10 {MODEM} {MODEM} 01 02 03 04 05"));
     let (events, stats) = both::<64>(ApiMode::Unescaped, &stream);
-    assert!(matches!(events[0], Owned::Error(DecodeError::BadChecksum { .. })));
+    assert!(matches!(
+        events[0],
+        Owned::Error(DecodeError::BadChecksum { .. })
+    ));
     assert_eq!(frames(&events), vec![vec![0x8A, 0x06]; 2]);
     assert_eq!(stats.frames_ok, 2);
     // Bogus candidate cut by the end of input: its frames come out of `finish`.

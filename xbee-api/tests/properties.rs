@@ -1,0 +1,221 @@
+//! Property tests: valid frames among garbage, corrupt and cut-off frames, fed in any
+//! read sizes, all come out in order and nothing else does; encode then decode is the
+//! identity for every frame type.
+
+mod common;
+
+use common::{decode_bytes, decode_slices, frames};
+use proptest::prelude::*;
+use xbee_api::wire::{checksum, needs_escape};
+use xbee_api::{ApiMode, EncodeFrame, Frame, RawFrame};
+
+const N: usize = 512;
+
+/// Frame types with the least frame data length of each; 0x23 stands for unknown types.
+const TYPES: [(u8, usize); 11] = [
+    (0x10, 14),
+    (0x90, 12),
+    (0x8B, 7),
+    (0x08, 4),
+    (0x88, 5),
+    (0x8A, 2),
+    (0x11, 20),
+    (0x91, 18),
+    (0x17, 15),
+    (0x97, 15),
+    (0x23, 1),
+];
+
+/// Frame data of a random frame of a random type, at least as long as its fixed fields
+/// (exactly as long for the fixed-size Transmit Status and Modem Status).
+fn frame_data() -> impl Strategy<Value = Vec<u8>> {
+    (
+        0..TYPES.len(),
+        proptest::collection::vec(any::<u8>(), 0..120),
+    )
+        .prop_map(|(t, mut extra)| {
+            let (frame_type, min) = TYPES[t];
+            if matches!(frame_type, 0x8B | 0x8A) {
+                extra.clear();
+            }
+            let mut data = vec![frame_type];
+            data.extend((1..min).map(|i| extra.get(i).copied().unwrap_or(i as u8)));
+            data.extend_from_slice(&extra);
+            data
+        })
+}
+
+/// Wire bytes of frame data with a given checksum byte.
+fn wire(data: &[u8], check: u8, mode: ApiMode) -> Vec<u8> {
+    let mut body = (data.len() as u16).to_be_bytes().to_vec();
+    body.extend_from_slice(data);
+    body.push(check);
+    let mut out = vec![0x7E];
+    for b in body {
+        if mode == ApiMode::Escaped && needs_escape(b) {
+            out.extend([0x7D, b ^ 0x20]);
+        } else {
+            out.push(b);
+        }
+    }
+    out
+}
+
+#[derive(Debug, Clone)]
+enum Item {
+    Valid(Vec<u8>),
+    /// Garbage without 0x7E.
+    Garbage(Vec<u8>),
+    /// A frame with its checksum off by a non-zero amount.
+    BadChecksum(Vec<u8>, u8),
+    /// A frame whose data holds an invalid escape (mode 2; a bad checksum in mode 1).
+    BadEscape(Vec<u8>, usize),
+    /// A frame cut after the given fraction of its bytes.
+    Cut(Vec<u8>, f64),
+}
+
+fn item() -> impl Strategy<Value = Item> {
+    prop_oneof![
+        4 => frame_data().prop_map(Item::Valid),
+        2 => proptest::collection::vec(any::<u8>().prop_filter("no 0x7E", |b| *b != 0x7E), 1..40)
+            .prop_map(Item::Garbage),
+        1 => (frame_data(), 1..=255u8).prop_map(|(d, off)| Item::BadChecksum(d, off)),
+        1 => (frame_data(), any::<usize>()).prop_map(|(d, at)| Item::BadEscape(d, at)),
+        1 => (frame_data(), 0.0..1.0f64).prop_map(|(d, f)| Item::Cut(d, f)),
+    ]
+}
+
+/// The stream, the valid frames in order, and the byte ranges of the valid frames.
+fn build(items: &[Item], mode: ApiMode) -> (Vec<u8>, Vec<Vec<u8>>, Vec<(usize, usize)>) {
+    let mut stream = Vec::new();
+    let mut valid = Vec::new();
+    let mut ranges = Vec::new();
+    for item in items {
+        match item {
+            Item::Valid(data) => {
+                let start = stream.len();
+                stream.extend(wire(data, checksum(data), mode));
+                ranges.push((start, stream.len()));
+                valid.push(data.clone());
+            }
+            Item::Garbage(bytes) => stream.extend_from_slice(bytes),
+            Item::BadChecksum(data, off) => {
+                stream.extend(wire(data, checksum(data).wrapping_add(*off), mode))
+            }
+            Item::BadEscape(data, at) => {
+                let mut w = wire(data, checksum(data), mode);
+                let at = 3 + at % (w.len() - 3);
+                w.splice(at..at, [0x7D, 0x01]);
+                stream.extend(w);
+            }
+            Item::Cut(data, fraction) => {
+                let w = wire(data, checksum(data), mode);
+                let keep = 1 + ((w.len() - 1) as f64 * fraction) as usize;
+                stream.extend_from_slice(&w[..keep.min(w.len() - 1)]);
+            }
+        }
+    }
+    (stream, valid, ranges)
+}
+
+/// Whether a candidate frame starting at `p` (a 0x7E that does not start a valid frame)
+/// would by chance decode as a frame: such streams are not what the property is about.
+fn bogus_frame_at(stream: &[u8], p: usize, mode: ApiMode) -> bool {
+    let mut bytes = Vec::new();
+    let mut i = p + 1;
+    while i < stream.len() {
+        let b = stream[i];
+        match mode {
+            ApiMode::Unescaped => bytes.push(b),
+            ApiMode::Escaped => {
+                if b == 0x7E {
+                    break;
+                }
+                if b == 0x7D {
+                    match stream.get(i + 1) {
+                        Some(&n) if needs_escape(n ^ 0x20) => {
+                            bytes.push(n ^ 0x20);
+                            i += 1;
+                        }
+                        _ => break,
+                    }
+                } else {
+                    bytes.push(b);
+                }
+            }
+        }
+        i += 1;
+        if bytes.len() >= 2 {
+            let len = usize::from(u16::from_be_bytes([bytes[0], bytes[1]]));
+            if len == 0 || len > N - 4 {
+                return false;
+            }
+            if bytes.len() == len + 3 {
+                return checksum(&bytes[2..2 + len]) == bytes[2 + len];
+            }
+        }
+    }
+    false
+}
+
+fn plausible(stream: &[u8], ranges: &[(usize, usize)], mode: ApiMode) -> bool {
+    (0..stream.len())
+        .filter(|&p| stream[p] == 0x7E)
+        .filter(|&p| !ranges.iter().any(|&(s, e)| p >= s && p < e))
+        .all(|p| !bogus_frame_at(stream, p, mode))
+}
+
+fn mode() -> impl Strategy<Value = ApiMode> {
+    prop_oneof![Just(ApiMode::Unescaped), Just(ApiMode::Escaped)]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(512))]
+
+    #[test]
+    fn every_valid_frame_comes_out_in_order(
+        mode in mode(),
+        items in proptest::collection::vec(item(), 0..24),
+        reads in proptest::collection::vec(1..80usize, 1..16),
+    ) {
+        let (stream, valid, ranges) = build(&items, mode);
+        prop_assume!(plausible(&stream, &ranges, mode));
+        let (events, stats) = decode_slices::<N>(mode, &stream, &reads);
+        prop_assert_eq!(&frames(&events), &valid);
+        prop_assert_eq!(stats.frames_ok as usize, valid.len());
+        let (events, _) = decode_bytes::<N>(mode, &stream);
+        prop_assert_eq!(&frames(&events), &valid);
+    }
+
+    #[test]
+    fn encode_then_decode_is_identity(mode in mode(), data in frame_data()) {
+        let frame = Frame::parse_bytes(&data).unwrap();
+        prop_assert_eq!(frame.frame_type(), data[0]);
+        let mut wire_bytes = vec![0u8; frame.encoded_len(mode)];
+        let n = frame.encode(mode, &mut wire_bytes).unwrap();
+        prop_assert_eq!(n, wire_bytes.len());
+        prop_assert_eq!(&wire_bytes, &wire(&data, checksum(&data), mode));
+        prop_assert!(frame.encode(mode, &mut vec![0u8; n - 1]).is_err());
+        let (events, stats) = decode_slices::<N>(mode, &wire_bytes, &[n]);
+        prop_assert_eq!(stats.errors(), 0);
+        let decoded = frames(&events);
+        prop_assert_eq!(decoded.len(), 1);
+        let again = Frame::parse(RawFrame::new(&decoded[0]).unwrap()).unwrap();
+        prop_assert_eq!(again, frame);
+    }
+
+    #[test]
+    fn arbitrary_bytes_never_panic(
+        mode in mode(),
+        stream in proptest::collection::vec(any::<u8>(), 0..600),
+        reads in proptest::collection::vec(1..64usize, 1..8),
+    ) {
+        let (events, stats) = decode_slices::<64>(mode, &stream, &reads);
+        prop_assert_eq!(frames(&events).len(), stats.frames_ok as usize);
+        for data in frames(&events) {
+            let _ = Frame::parse_bytes(&data);
+        }
+        let (bytes_events, _) = decode_bytes::<64>(mode, &stream);
+        prop_assert_eq!(events, bytes_events);
+    }
+}
