@@ -1,11 +1,178 @@
-//! Host side of the MAV communication protocol (MCP): links to an XBee radio.
+//! Host side of the MAV communication protocol (MCP): talk to MAVs through a local XBee
+//! radio from a ground station, a simulator or a test.
+//!
+//! [`connect`] opens a [`Link`] and starts a background task that owns the transport. It
+//! returns a [`PacketStream`] of [`Event`]s (MCP packets with their source address,
+//! other XBee frames, link state changes, framing errors) and a [`CommandSender`] that
+//! sends commands and waits for the radio's delivery status, or for the MAV's report.
+//! Reading and sending run at the same time; the sender is `Clone + Send + Sync`.
+//!
+//! # Links
+//!
+//! | Link string | Meaning |
+//! |---|---|
+//! | `serial:PATH[:BAUD]` | Serial port `PATH` (e.g. `/dev/ttyUSB0`, `COM3`), `BAUD` default 115200, 8N1, no flow control. Reopened after the device disappears (USB unplugged). |
+//! | `tcp:HOST:PORT` | TCP connection to `HOST:PORT` (a serial-to-TCP bridge, a simulator). Reconnected after the peer goes away. IPv6 hosts in brackets: `tcp:[::1]:9750`. |
+//! | `tcp-listen:ADDR:PORT` | Listens on `ADDR:PORT` and serves one peer at a time: while a peer is connected, further peers wait in the listen backlog; the next is accepted when the current one leaves. Port 0 picks a free port ([`LinkInfo::local_addr`]). |
+//! | `pty` | Creates a pseudo-terminal pair; the far end's path ([`LinkInfo::pty_path`], e.g. `/dev/pts/7`) is for a simulator or test to open. The pair stays open for the life of the link, so the path stays valid while simulators come and go. |
+//!
+//! [`LinkOptions`] sets the XBee API mode (1, as the deployed MAVs use, or 2), the frame
+//! size limit, timeouts and the [`ReconnectPolicy`] (exponential backoff, or none).
+//! While the transport is down, requests fail at once with [`SendError::Disconnected`];
+//! requests in flight when it goes down fail with the same error.
+//!
+//! # Example
+//!
+//! ```no_run
+//! use futures::StreamExt;
+//! use mcp_core::{Command, StatusRequest, TelemetryId};
+//! use mcp_host::{Event, Link, LinkOptions};
+//! use xbee_api::Address64;
+//!
+//! # async fn run() -> Result<(), Box<dyn std::error::Error>> {
+//! let link: Link = "serial:/dev/ttyUSB0".parse()?;
+//! let (mut stream, sender) = mcp_host::connect(&link, LinkOptions::default()).await?;
+//! let mav: Address64 = "0013A20040B599B9".parse()?;
+//!
+//! // Ask for altitude telemetry; wait for the radio's delivery status.
+//! let on = Command::<&[u8]>::TelemetryToCoordinator { on: true, id: TelemetryId::Altitude };
+//! sender.send(mav, &on).await?;
+//!
+//! // Ask the landing state and wait for the MAV's report.
+//! let report = sender.request(mav, StatusRequest::Landing).await?;
+//! println!("{report:?}");
+//!
+//! while let Some(event) = stream.next().await {
+//!     match event {
+//!         Event::Packet(rx) => println!("{} {:?}", rx.origin.src64, rx.packet),
+//!         other => println!("{other:?}"),
+//!     }
+//! }
+//! # Ok(())
+//! # }
+//! ```
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
+pub mod codec;
+mod driver;
+mod error;
+mod event;
+mod ids;
 pub mod link;
 pub mod options;
+mod sender;
+mod stats;
 pub mod transport;
 
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::pin::Pin;
+use std::sync::Arc;
+use std::task::{Context, Poll};
+
+use tokio::sync::mpsc;
+
+pub use error::{ConnectError, RequestError, SendError};
+pub use event::{Event, InvalidPacket, LinkEvent, Origin, OwnedFrame, OwnedPacket, Received};
 pub use link::{Link, LinkParseError};
 pub use options::{LinkOptions, ReconnectPolicy};
+pub use sender::{CommandSender, DeliveryReport, FrameId, SendOptions};
+pub use stats::Stats;
 pub use transport::{Connector, LinkError, Transport};
+
+/// Capacity of the queue of requests from senders to the background task.
+const OPS_CAPACITY: usize = 256;
+
+/// What a connected link is attached to.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct LinkInfo {
+    /// The link.
+    pub link: Link,
+    /// For `pty`: the far end's path.
+    pub pty_path: Option<PathBuf>,
+    /// For `tcp-listen`: the bound address.
+    pub local_addr: Option<SocketAddr>,
+}
+
+/// Opens `link` and starts the background task serving it.
+///
+/// For `serial` and `tcp` links the first connection is made before this returns (so a
+/// wrong path or a refused connection fails here); `tcp-listen` binds and returns at
+/// once, the first peer being announced by [`LinkEvent::Connected`]; `pty` creates the
+/// pair and returns.
+///
+/// The task runs until the link ends for good ([`LinkEvent::Closed`]) or the stream and
+/// every sender are dropped. Must be called within a tokio runtime.
+pub async fn connect(
+    link: &Link,
+    options: LinkOptions,
+) -> Result<(PacketStream, CommandSender), ConnectError> {
+    if options.event_capacity == 0 {
+        return Err(ConnectError::Options("event_capacity must be at least 1"));
+    }
+    if options.max_frame_len == 0 || options.max_frame_len > codec::MAX_FRAME_DATA {
+        return Err(ConnectError::Options(
+            "max_frame_len must be in 1..=codec::MAX_FRAME_DATA",
+        ));
+    }
+    let mut connector = Connector::new(link, &options).await?;
+    let transport = match link {
+        Link::TcpListen { .. } => None,
+        _ => Some(connector.open().await?),
+    };
+    let info = Arc::new(LinkInfo {
+        link: link.clone(),
+        pty_path: connector.pty_path().map(PathBuf::from),
+        local_addr: connector.local_addr(),
+    });
+    let counters = Arc::new(stats::Counters::default());
+    let (ops_tx, ops_rx) = mpsc::channel(OPS_CAPACITY);
+    let (events_tx, events_rx) = mpsc::channel(options.event_capacity);
+    let sender = CommandSender {
+        ops: ops_tx,
+        default_timeout: options.send_timeout,
+        counters: counters.clone(),
+        info: info.clone(),
+    };
+    let driver = driver::Driver::new(connector, options, ops_rx, events_tx, counters.clone());
+    tokio::spawn(driver.run(transport));
+    let stream = PacketStream {
+        events: events_rx,
+        counters,
+        info,
+    };
+    Ok((stream, sender))
+}
+
+/// The [`Event`]s of a link, as a [`futures::Stream`]. Ends after [`LinkEvent::Closed`].
+///
+/// Reading it is optional: requests are matched inside the background task. If the
+/// consumer falls behind by [`LinkOptions::event_capacity`] events, newer events are
+/// dropped and counted ([`Stats::events_dropped`]).
+#[derive(Debug)]
+pub struct PacketStream {
+    events: mpsc::Receiver<Event>,
+    counters: Arc<stats::Counters>,
+    info: Arc<LinkInfo>,
+}
+
+impl PacketStream {
+    /// The link's counters.
+    pub fn stats(&self) -> Stats {
+        self.counters.snapshot()
+    }
+
+    /// What the link is attached to.
+    pub fn info(&self) -> &LinkInfo {
+        &self.info
+    }
+}
+
+impl futures::Stream for PacketStream {
+    type Item = Event;
+
+    fn poll_next(mut self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<Option<Event>> {
+        self.events.poll_recv(cx)
+    }
+}

@@ -56,6 +56,13 @@ impl Default for ReconnectPolicy {
 /// Options of a link: XBee API mode, framing limit, timeouts and reconnection.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct LinkOptions {
+    /// XBee API mode of the local radio (`AP` setting): 1 (unescaped, as the deployed
+    /// MAVs use) or 2 (escaped).
+    pub api_mode: xbee_api::ApiMode,
+    /// Largest frame data length (frame type byte included) accepted from the radio;
+    /// longer frames are dropped and counted as oversize. At most
+    /// [`crate::codec::MAX_FRAME_DATA`] (4 less in API mode 1), the decoder's capacity.
+    pub max_frame_len: usize,
     /// Timeout for opening a TCP connection or a serial port.
     pub connect_timeout: Duration,
     /// Default timeout of [`crate::CommandSender::send`] and friends (delivery status or
@@ -72,6 +79,8 @@ pub struct LinkOptions {
 impl Default for LinkOptions {
     fn default() -> Self {
         LinkOptions {
+            api_mode: xbee_api::ApiMode::Unescaped,
+            max_frame_len: crate::codec::MAX_FRAME_DATA,
             connect_timeout: DEFAULT_CONNECT_TIMEOUT,
             send_timeout: DEFAULT_SEND_TIMEOUT,
             reconnect: ReconnectPolicy::default(),

@@ -1,0 +1,202 @@
+//! Framing: a tokio-util [`Decoder`]/[`Encoder`] for XBee API frames over
+//! [`xbee_api::Decoder`].
+//!
+//! A corrupt frame never ends the stream (an `Err` from a codec would end a framed stream
+//! for good): it comes out as [`CodecItem::Error`], is counted and logged, and decoding
+//! resumes at the next start delimiter.
+
+use std::sync::Arc;
+
+use bytes::{Buf, Bytes, BytesMut};
+use tokio_util::codec::{Decoder, Encoder};
+use xbee_api::{ApiMode, DecodeError, EncodeFrame};
+
+use crate::event::OwnedFrame;
+use crate::stats::{Counters, add};
+
+/// Largest frame data length the codec can accept (mode 2; 4 less in mode 1): the
+/// capacity of the underlying decoder, well above the ~273 bytes a radio sends.
+pub const MAX_FRAME_DATA: usize = xbee_api::DEFAULT_CAPACITY;
+
+/// What the codec yields.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum CodecItem {
+    /// A frame with a good checksum.
+    Frame(OwnedFrame),
+    /// A candidate frame was dropped; decoding goes on.
+    Error(DecodeError),
+}
+
+/// The XBee API frame codec, for one API mode.
+///
+/// Decoding yields [`CodecItem`]s and never fails except on I/O errors; encoding writes
+/// any [`EncodeFrame`] (typed frame reprs of `xbee-api`, or a [`xbee_api::RawFrame`]).
+///
+/// ```
+/// use bytes::BytesMut;
+/// use mcp_host::codec::{CodecItem, XBeeCodec};
+/// use tokio_util::codec::Decoder;
+/// use xbee_api::ApiMode;
+///
+/// let mut codec = XBeeCodec::new(ApiMode::Unescaped);
+/// // Garbage, a frame with a bad checksum, then a Modem Status frame.
+/// let mut buf = BytesMut::from(&[0x01, 0x7E, 0x00, 0x02, 0x8A, 0x06, 0x00,
+///                                0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F][..]);
+/// assert!(matches!(codec.decode(&mut buf)?, Some(CodecItem::Error(_))));
+/// match codec.decode(&mut buf)? {
+///     Some(CodecItem::Frame(frame)) => assert_eq!(&frame.data()[..], [0x8A, 0x06]),
+///     other => panic!("{other:?}"),
+/// }
+/// assert_eq!(codec.stats().bad_checksum, 1);
+/// # Ok::<(), std::io::Error>(())
+/// ```
+#[derive(Debug)]
+pub struct XBeeCodec {
+    decoder: Box<xbee_api::Decoder>,
+    mode: ApiMode,
+    max_frame_len: usize,
+    counters: Arc<Counters>,
+    seen: xbee_api::Stats,
+}
+
+impl XBeeCodec {
+    /// A codec for `mode` accepting frames up to [`MAX_FRAME_DATA`].
+    pub fn new(mode: ApiMode) -> Self {
+        Self::with_counters(mode, MAX_FRAME_DATA, Arc::default())
+    }
+
+    pub(crate) fn with_counters(
+        mode: ApiMode,
+        max_frame_len: usize,
+        counters: Arc<Counters>,
+    ) -> Self {
+        XBeeCodec {
+            decoder: Box::new(xbee_api::Decoder::new(mode)),
+            mode,
+            max_frame_len,
+            counters,
+            seen: xbee_api::Stats::default(),
+        }
+    }
+
+    /// The API mode.
+    pub fn mode(&self) -> ApiMode {
+        self.mode
+    }
+
+    /// Counters of this codec (frames, errors by kind, bytes skipped).
+    pub fn stats(&self) -> crate::Stats {
+        self.counters.snapshot()
+    }
+
+    /// Copies the decoder's counters that moved into the shared ones.
+    fn sync_counters(&mut self) {
+        let now = *self.decoder.stats();
+        let c = &self.counters;
+        let delta = |new: u32, old: u32| u64::from(new.wrapping_sub(old));
+        add(&c.frames, delta(now.frames_ok, self.seen.frames_ok));
+        add(
+            &c.bad_checksum,
+            delta(now.bad_checksum, self.seen.bad_checksum),
+        );
+        add(&c.oversize, delta(now.oversize, self.seen.oversize));
+        add(&c.empty, delta(now.empty, self.seen.empty));
+        add(&c.truncated, delta(now.truncated, self.seen.truncated));
+        add(&c.bad_escape, delta(now.bad_escape, self.seen.bad_escape));
+        add(
+            &c.bytes_skipped,
+            delta(now.bytes_skipped, self.seen.bytes_skipped),
+        );
+        self.seen = now;
+    }
+
+    /// Updates the counters for `item` and logs it.
+    fn account(&mut self, item: Converted) -> Option<CodecItem> {
+        self.sync_counters();
+        let (item, over_limit) = item?;
+        if over_limit {
+            // The decoder counted it as a good frame.
+            self.counters
+                .frames
+                .fetch_sub(1, std::sync::atomic::Ordering::Relaxed);
+            add(&self.counters.oversize, 1);
+        }
+        if let CodecItem::Error(error) = &item {
+            tracing::debug!(%error, "frame dropped");
+        }
+        Some(item)
+    }
+}
+
+/// An owned item, and whether it is a frame beyond the configured limit.
+type Converted = Option<(CodecItem, bool)>;
+
+fn convert(event: Option<xbee_api::Event<'_>>, max: usize) -> Converted {
+    let item = match event? {
+        Ok(frame) if frame.len() > max => {
+            let error = DecodeError::Oversize {
+                length: u16::try_from(frame.len()).unwrap_or(u16::MAX),
+                capacity: max,
+            };
+            return Some((CodecItem::Error(error), true));
+        }
+        Ok(frame) => match OwnedFrame::new(Bytes::copy_from_slice(frame.data())) {
+            Some(frame) => CodecItem::Frame(frame),
+            None => CodecItem::Error(DecodeError::EmptyFrame),
+        },
+        Err(error) => CodecItem::Error(error),
+    };
+    Some((item, false))
+}
+
+impl Decoder for XBeeCodec {
+    type Item = CodecItem;
+    type Error = std::io::Error;
+
+    fn decode(&mut self, src: &mut BytesMut) -> Result<Option<CodecItem>, std::io::Error> {
+        let (consumed, event) = self.decoder.decode(&src[..]);
+        let item = convert(event, self.max_frame_len);
+        src.advance(consumed);
+        Ok(self.account(item))
+    }
+
+    fn decode_eof(&mut self, src: &mut BytesMut) -> Result<Option<CodecItem>, std::io::Error> {
+        if let Some(item) = self.decode(src)? {
+            return Ok(Some(item));
+        }
+        let item = convert(self.decoder.finish(), self.max_frame_len);
+        Ok(self.account(item))
+    }
+}
+
+impl<F: EncodeFrame + ?Sized> Encoder<&F> for XBeeCodec {
+    type Error = std::io::Error;
+
+    /// Appends the encoded frame; a frame too long for the wire is an
+    /// [`std::io::ErrorKind::InvalidInput`] error.
+    fn encode(&mut self, frame: &F, dst: &mut BytesMut) -> Result<(), Self::Error> {
+        encode_frame(frame, self.mode, dst)
+            .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidInput, e))
+    }
+}
+
+/// Appends `frame`, encoded in `mode`, to `dst`.
+pub(crate) fn encode_frame<F: EncodeFrame + ?Sized>(
+    frame: &F,
+    mode: ApiMode,
+    dst: &mut BytesMut,
+) -> Result<(), xbee_api::EncodeError> {
+    let start = dst.len();
+    let len = frame.encoded_len(mode);
+    dst.resize(start + len, 0);
+    match frame.encode(mode, &mut dst[start..]) {
+        Ok(n) => {
+            dst.truncate(start + n);
+            Ok(())
+        }
+        Err(e) => {
+            dst.truncate(start);
+            Err(e)
+        }
+    }
+}

@@ -1,0 +1,773 @@
+//! The background task that owns the transport: decodes frames into events, writes
+//! frames, matches statuses, responses and reports to the requests in flight, and
+//! reconnects.
+
+use std::fmt;
+use std::sync::Arc;
+use std::time::{Duration, SystemTime};
+
+use bytes::{Bytes, BytesMut};
+use futures::StreamExt;
+use tokio::io::AsyncWriteExt;
+use tokio::sync::{mpsc, oneshot};
+use tokio::time::Instant;
+use tokio_util::codec::FramedRead;
+use xbee_api::{Address16, Address64, EncodeFrame};
+
+use crate::codec::{CodecItem, XBeeCodec, encode_frame};
+use crate::error::{RequestError, SendError};
+use crate::event::{Event, InvalidPacket, LinkEvent, Origin, OwnedFrame, Received, is_response};
+use crate::ids::IdTable;
+use crate::options::LinkOptions;
+use crate::sender::DeliveryReport;
+use crate::stats::{Counters, bump};
+use crate::transport::{Connector, Transport};
+
+/// Stop accepting new requests while this many bytes wait to be written.
+const HIGH_WATER: usize = 16 * 1024;
+
+/// A request from a [`crate::CommandSender`] to the background task.
+#[derive(Debug)]
+pub(crate) enum Op {
+    Transmit {
+        to: Address64,
+        payload: Bytes,
+        with_status: bool,
+        deadline: Instant,
+        timeout: Duration,
+        reply: oneshot::Sender<Result<DeliveryReport, SendError>>,
+    },
+    Request {
+        to: Address64,
+        payload: Bytes,
+        key: ReportKey,
+        deadline: Instant,
+        timeout: Duration,
+        reply: oneshot::Sender<Result<mcp_core::Report<Bytes>, RequestError>>,
+    },
+    Frame {
+        data: Bytes,
+        deadline: Instant,
+        timeout: Duration,
+        reply: oneshot::Sender<Result<OwnedFrame, SendError>>,
+    },
+    Write {
+        data: Bytes,
+        reply: oneshot::Sender<Result<(), SendError>>,
+    },
+}
+
+/// Which report answers a status request: its type, and for telemetry to coordinator
+/// the telemetry id.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub(crate) struct ReportKey {
+    report_type: mcp_core::CommandType,
+    telemetry: Option<mcp_core::TelemetryId>,
+}
+
+impl ReportKey {
+    pub(crate) fn of_request(request: &mcp_core::StatusRequest) -> Self {
+        let telemetry = match request {
+            mcp_core::StatusRequest::TelemetryToCoordinator(id) => Some(*id),
+            _ => None,
+        };
+        ReportKey {
+            report_type: request.command_type(),
+            telemetry,
+        }
+    }
+
+    fn of_report<B: AsRef<[u8]>>(report: &mcp_core::Report<B>) -> Self {
+        let telemetry = match report {
+            mcp_core::Report::TelemetryToCoordinator { id, .. } => Some(*id),
+            _ => None,
+        };
+        ReportKey {
+            report_type: report.report_type(),
+            telemetry,
+        }
+    }
+}
+
+impl fmt::Display for ReportKey {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.telemetry {
+            Some(id) => write!(f, "{} ({id})", self.report_type),
+            None => write!(f, "{}", self.report_type),
+        }
+    }
+}
+
+#[derive(Debug)]
+struct Pending {
+    deadline: Instant,
+    timeout: Duration,
+    kind: PendingKind,
+}
+
+#[derive(Debug)]
+enum PendingKind {
+    Transmit {
+        to: Address64,
+        reply: oneshot::Sender<Result<DeliveryReport, SendError>>,
+    },
+    Request {
+        to: Address64,
+        waiter: u64,
+    },
+    Frame {
+        reply: oneshot::Sender<Result<OwnedFrame, SendError>>,
+    },
+}
+
+#[derive(Debug)]
+struct Waiter {
+    id: u64,
+    from: Address64,
+    key: ReportKey,
+    deadline: Instant,
+    timeout: Duration,
+    reply: oneshot::Sender<Result<mcp_core::Report<Bytes>, RequestError>>,
+}
+
+enum Served {
+    /// Every sender and the stream are gone.
+    Shutdown,
+    /// The transport failed.
+    Failed(String),
+}
+
+enum Stop {
+    Shutdown,
+    Fatal(String),
+}
+
+pub(crate) struct Driver {
+    pub(crate) connector: Connector,
+    pub(crate) options: LinkOptions,
+    pub(crate) ops: mpsc::Receiver<Op>,
+    pub(crate) events: mpsc::Sender<Event>,
+    pub(crate) counters: Arc<Counters>,
+    ops_open: bool,
+    ids: IdTable<Pending>,
+    waiters: Vec<Waiter>,
+    next_waiter: u64,
+    healthy: bool,
+}
+
+impl Driver {
+    pub(crate) fn new(
+        connector: Connector,
+        options: LinkOptions,
+        ops: mpsc::Receiver<Op>,
+        events: mpsc::Sender<Event>,
+        counters: Arc<Counters>,
+    ) -> Self {
+        Driver {
+            connector,
+            options,
+            ops,
+            events,
+            counters,
+            ops_open: true,
+            ids: IdTable::new(),
+            waiters: Vec::new(),
+            next_waiter: 0,
+            healthy: false,
+        }
+    }
+
+    /// Runs until the link ends for good or nobody holds a sender or the stream.
+    pub(crate) async fn run(mut self, mut transport: Option<Transport>) {
+        let mut ever_connected = false;
+        loop {
+            let current = match transport.take() {
+                Some(t) => t,
+                None => match self.wait_for_transport(ever_connected).await {
+                    Ok(t) => t,
+                    Err(Stop::Shutdown) => return,
+                    Err(Stop::Fatal(reason)) => {
+                        self.close(reason);
+                        return;
+                    }
+                },
+            };
+            let peer = current.peer().to_owned();
+            if ever_connected {
+                bump(&self.counters.reconnects);
+                tracing::info!(link = %self.connector.link(), %peer, "reconnected");
+                self.emit(Event::Link(LinkEvent::Reconnected { peer }));
+            } else {
+                tracing::info!(link = %self.connector.link(), %peer, "connected");
+                self.emit(Event::Link(LinkEvent::Connected { peer }));
+            }
+            ever_connected = true;
+            match self.serve(current).await {
+                Served::Shutdown => return,
+                Served::Failed(reason) => {
+                    bump(&self.counters.disconnects);
+                    tracing::warn!(link = %self.connector.link(), %reason, "disconnected");
+                    self.emit(Event::Link(LinkEvent::Disconnected {
+                        reason: reason.clone(),
+                    }));
+                    self.fail_all(&reason);
+                    if !self.options.reconnect.enabled {
+                        self.close(format!("{reason}; reconnection is disabled"));
+                        return;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Waits for a transport while failing requests at once.
+    async fn wait_for_transport(&mut self, ever_connected: bool) -> Result<Transport, Stop> {
+        let down = if ever_connected {
+            format!("reconnecting to {}", self.connector.link())
+        } else {
+            format!("not connected yet to {}", self.connector.link())
+        };
+        let policy = self.options.reconnect.clone();
+        let connector = &mut self.connector;
+        let opening = async move {
+            if !ever_connected {
+                match connector.open().await {
+                    Ok(t) => return Ok(t),
+                    Err(e) if !e.is_retryable() => return Err(e),
+                    Err(e) => tracing::warn!(error = %e, "opening the link failed"),
+                }
+            }
+            connector.reopen(&policy).await
+        };
+        tokio::pin!(opening);
+        loop {
+            tokio::select! {
+                result = &mut opening => {
+                    return result.map_err(|e| Stop::Fatal(e.to_string()));
+                }
+                op = self.ops.recv(), if self.ops_open => match op {
+                    Some(op) => refuse(op, &down),
+                    None => self.ops_open = false,
+                },
+                _ = self.events.closed(), if !self.ops_open => return Err(Stop::Shutdown),
+            }
+        }
+    }
+
+    /// Serves one transport until it fails.
+    async fn serve(&mut self, transport: Transport) -> Served {
+        let (rd, mut wr) = tokio::io::split(transport);
+        let codec = XBeeCodec::with_counters(
+            self.options.api_mode,
+            self.options.max_frame_len,
+            self.counters.clone(),
+        );
+        let mut reader = FramedRead::new(rd, codec);
+        let mut out = BytesMut::new();
+        self.healthy = false;
+        loop {
+            let deadline = self.next_deadline();
+            let accept_ops = self.ops_open && self.ids.has_free() && out.len() < HIGH_WATER;
+            tokio::select! {
+                item = reader.next() => match item {
+                    Some(Ok(item)) => self.handle_item(item),
+                    Some(Err(e)) => return Served::Failed(format!("read error: {e}")),
+                    None => return Served::Failed("end of stream (peer closed or device gone)".into()),
+                },
+                written = wr.write_buf(&mut out), if !out.is_empty() => match written {
+                    Ok(0) => return Served::Failed("the transport accepts no more data".into()),
+                    Ok(_) => {}
+                    Err(e) => return Served::Failed(format!("write error: {e}")),
+                },
+                op = self.ops.recv(), if accept_ops => match op {
+                    Some(op) => self.start(op, &mut out),
+                    None => self.ops_open = false,
+                },
+                _ = tokio::time::sleep_until(deadline.unwrap_or_else(Instant::now)), if deadline.is_some() => {
+                    self.expire(Instant::now());
+                }
+                _ = self.events.closed(), if !self.ops_open => return Served::Shutdown,
+            }
+        }
+    }
+
+    fn emit(&self, event: Event) {
+        match self.events.try_send(event) {
+            Ok(()) => {}
+            Err(mpsc::error::TrySendError::Full(event)) => {
+                bump(&self.counters.events_dropped);
+                tracing::debug!(?event, "event queue full, event dropped");
+            }
+            Err(mpsc::error::TrySendError::Closed(_)) => {}
+        }
+    }
+
+    fn handle_item(&mut self, item: CodecItem) {
+        match item {
+            CodecItem::Error(error) => {
+                tracing::warn!(link = %self.connector.link(), %error, "dropped a corrupt frame");
+                self.emit(Event::DecodeError(error));
+            }
+            CodecItem::Frame(frame) => {
+                if !self.healthy {
+                    self.healthy = true;
+                    self.connector.mark_healthy();
+                }
+                self.dispatch(frame);
+            }
+        }
+    }
+
+    fn dispatch(&mut self, frame: OwnedFrame) {
+        let received_at = SystemTime::now();
+        let data = frame.data().clone();
+        match frame.frame_type() {
+            0x90 => match xbee_api::ReceivePacketRepr::parse_bytes(&data) {
+                Ok(rx) => {
+                    let origin = Origin {
+                        src64: rx.src64,
+                        src16: rx.src16,
+                        options: rx.options,
+                        received_at,
+                    };
+                    let payload = data.slice_ref(rx.data);
+                    self.on_payload(origin, payload);
+                }
+                Err(error) => self.malformed(frame, &error),
+            },
+            0x91 => match xbee_api::ExplicitRxIndicatorRepr::parse_bytes(&data) {
+                Ok(rx) => {
+                    let origin = Origin {
+                        src64: rx.src64,
+                        src16: rx.src16,
+                        options: rx.options,
+                        received_at,
+                    };
+                    let payload = data.slice_ref(rx.data);
+                    self.on_payload(origin, payload);
+                }
+                Err(error) => self.malformed(frame, &error),
+            },
+            t if is_response(t) => self.on_response(frame),
+            _ => self.emit(Event::Frame(frame)),
+        }
+    }
+
+    fn malformed(&self, frame: OwnedFrame, error: &dyn fmt::Display) {
+        bump(&self.counters.malformed_frames);
+        tracing::warn!(?frame, %error, "malformed frame");
+        self.emit(Event::Frame(frame));
+    }
+
+    fn on_payload(&mut self, origin: Origin, payload: Bytes) {
+        match mcp_core::parse(&payload) {
+            Ok(packet) => {
+                let packet = packet.map_bytes(|s| payload.slice_ref(s));
+                if let mcp_core::Packet::Report(report) = &packet {
+                    self.resolve_waiters(origin.src64, report);
+                }
+                self.emit(Event::Packet(Received {
+                    origin,
+                    packet,
+                    payload,
+                }));
+            }
+            Err(error) => {
+                bump(&self.counters.invalid_packets);
+                tracing::debug!(src64 = %origin.src64, %error, "invalid MCP packet");
+                self.emit(Event::InvalidPacket(InvalidPacket {
+                    origin,
+                    error,
+                    payload,
+                }));
+            }
+        }
+    }
+
+    fn resolve_waiters(&mut self, src: Address64, report: &mcp_core::Report<Bytes>) {
+        let key = ReportKey::of_report(report);
+        let mut i = 0;
+        while i < self.waiters.len() {
+            let w = &self.waiters[i];
+            if w.key == key && (w.from == src || w.from == Address64::BROADCAST) {
+                let w = self.waiters.swap_remove(i);
+                let _ = w.reply.send(Ok(report.clone()));
+            } else {
+                i += 1;
+            }
+        }
+    }
+
+    fn on_response(&mut self, frame: OwnedFrame) {
+        let frame_type = frame.frame_type();
+        let Some(id) = frame.frame_id().filter(|id| *id != 0) else {
+            return self.unclaimed(frame);
+        };
+        let claims = match self.ids.get(id).map(|p| &p.kind) {
+            Some(PendingKind::Frame { .. }) => true,
+            Some(PendingKind::Transmit { .. } | PendingKind::Request { .. }) => frame_type == 0x8B,
+            None => false,
+        };
+        if !claims {
+            return self.unclaimed(frame);
+        }
+        let Some(pending) = self.ids.remove(id) else {
+            return self.unclaimed(frame);
+        };
+        match pending.kind {
+            PendingKind::Frame { reply } => {
+                let _ = reply.send(Ok(frame));
+            }
+            PendingKind::Transmit { to, reply } => {
+                let result = match xbee_api::TransmitStatusRepr::parse_bytes(frame.data()) {
+                    Ok(status) => delivery(to, &status),
+                    Err(error) => {
+                        self.malformed(frame, &error);
+                        // The id answered, but its status is unreadable.
+                        Err(SendError::Timeout {
+                            frame_id: id,
+                            timeout: pending.timeout,
+                        })
+                    }
+                };
+                let _ = reply.send(result);
+            }
+            PendingKind::Request { to, waiter } => {
+                match xbee_api::TransmitStatusRepr::parse_bytes(frame.data()) {
+                    Ok(status) => {
+                        if let Err(error) = delivery(to, &status) {
+                            if let Some(pos) = self.waiters.iter().position(|w| w.id == waiter) {
+                                let w = self.waiters.swap_remove(pos);
+                                let _ = w.reply.send(Err(error.into()));
+                            }
+                        }
+                    }
+                    Err(error) => self.malformed(frame, &error),
+                }
+            }
+        }
+    }
+
+    fn unclaimed(&self, frame: OwnedFrame) {
+        bump(&self.counters.unclaimed_responses);
+        self.emit(Event::Frame(frame));
+    }
+
+    /// Starts a request: allocates a frame id where needed and queues its frame.
+    fn start(&mut self, op: Op, out: &mut BytesMut) {
+        let now = Instant::now();
+        match op {
+            Op::Transmit {
+                to,
+                payload,
+                with_status,
+                deadline,
+                timeout,
+                reply,
+            } => {
+                if reply.is_closed() {
+                    return;
+                }
+                if deadline <= now {
+                    bump(&self.counters.timeouts);
+                    let _ = reply.send(Err(SendError::Timeout {
+                        frame_id: 0,
+                        timeout,
+                    }));
+                    return;
+                }
+                if !with_status {
+                    let result = write_transmit(self.options.api_mode, out, 0, to, &payload)
+                        .map(|()| DeliveryReport::Written);
+                    let _ = reply.send(result);
+                    return;
+                }
+                let pending = Pending {
+                    deadline,
+                    timeout,
+                    kind: PendingKind::Transmit { to, reply },
+                };
+                match self.ids.insert(pending) {
+                    Ok(id) => {
+                        if let Err(e) = write_transmit(self.options.api_mode, out, id, to, &payload)
+                        {
+                            if let Some(Pending {
+                                kind: PendingKind::Transmit { reply, .. },
+                                ..
+                            }) = self.ids.remove(id)
+                            {
+                                let _ = reply.send(Err(e));
+                            }
+                        }
+                    }
+                    Err(pending) => {
+                        if let PendingKind::Transmit { reply, .. } = pending.kind {
+                            let _ = reply.send(Err(SendError::Timeout {
+                                frame_id: 0,
+                                timeout,
+                            }));
+                        }
+                    }
+                }
+            }
+            Op::Request {
+                to,
+                payload,
+                key,
+                deadline,
+                timeout,
+                reply,
+            } => {
+                if reply.is_closed() {
+                    return;
+                }
+                if deadline <= now {
+                    bump(&self.counters.timeouts);
+                    let _ = reply.send(Err(RequestError::Timeout {
+                        from: to,
+                        what: key.to_string(),
+                        timeout,
+                    }));
+                    return;
+                }
+                let waiter = self.next_waiter;
+                self.next_waiter += 1;
+                let pending = Pending {
+                    deadline,
+                    timeout,
+                    kind: PendingKind::Request { to, waiter },
+                };
+                // Without a free id (cannot happen: requests are accepted only when one is
+                // free) the request still goes out, without a delivery status.
+                let id = self.ids.insert(pending).unwrap_or(0);
+                if let Err(e) = write_transmit(self.options.api_mode, out, id, to, &payload) {
+                    self.ids.remove(id);
+                    let _ = reply.send(Err(e.into()));
+                    return;
+                }
+                self.waiters.push(Waiter {
+                    id: waiter,
+                    from: to,
+                    key,
+                    deadline,
+                    timeout,
+                    reply,
+                });
+            }
+            Op::Frame {
+                data,
+                deadline,
+                timeout,
+                reply,
+            } => {
+                if reply.is_closed() {
+                    return;
+                }
+                if deadline <= now {
+                    bump(&self.counters.timeouts);
+                    let _ = reply.send(Err(SendError::Timeout {
+                        frame_id: 0,
+                        timeout,
+                    }));
+                    return;
+                }
+                let pending = Pending {
+                    deadline,
+                    timeout,
+                    kind: PendingKind::Frame { reply },
+                };
+                match self.ids.insert(pending) {
+                    Ok(id) => {
+                        let mut data = BytesMut::from(&data[..]);
+                        data[1] = id;
+                        if let Err(e) = write_raw(self.options.api_mode, out, &data) {
+                            if let Some(Pending {
+                                kind: PendingKind::Frame { reply },
+                                ..
+                            }) = self.ids.remove(id)
+                            {
+                                let _ = reply.send(Err(e));
+                            }
+                        }
+                    }
+                    Err(pending) => {
+                        if let PendingKind::Frame { reply } = pending.kind {
+                            let _ = reply.send(Err(SendError::Timeout {
+                                frame_id: 0,
+                                timeout,
+                            }));
+                        }
+                    }
+                }
+            }
+            Op::Write { data, reply } => {
+                let _ = reply.send(write_raw(self.options.api_mode, out, &data));
+            }
+        }
+    }
+
+    fn next_deadline(&self) -> Option<Instant> {
+        let ids = self.ids.values().map(|p| p.deadline);
+        let waiters = self.waiters.iter().map(|w| w.deadline);
+        ids.chain(waiters).min()
+    }
+
+    /// Fails every request whose deadline has passed, freeing its frame id.
+    fn expire(&mut self, now: Instant) {
+        let counters = &self.counters;
+        self.ids.remove_where(
+            |p| p.deadline <= now,
+            |id, p| {
+                let error = SendError::Timeout {
+                    frame_id: id,
+                    timeout: p.timeout,
+                };
+                match p.kind {
+                    PendingKind::Transmit { reply, .. } => {
+                        bump(&counters.timeouts);
+                        let _ = reply.send(Err(error));
+                    }
+                    PendingKind::Frame { reply } => {
+                        bump(&counters.timeouts);
+                        let _ = reply.send(Err(error));
+                    }
+                    // The report waiter has the same deadline and answers below.
+                    PendingKind::Request { .. } => {}
+                }
+            },
+        );
+        let mut i = 0;
+        while i < self.waiters.len() {
+            if self.waiters[i].deadline <= now {
+                let w = self.waiters.swap_remove(i);
+                bump(&self.counters.timeouts);
+                let _ = w.reply.send(Err(RequestError::Timeout {
+                    from: w.from,
+                    what: w.key.to_string(),
+                    timeout: w.timeout,
+                }));
+            } else {
+                i += 1;
+            }
+        }
+    }
+
+    /// Fails every request in flight after a disconnection.
+    fn fail_all(&mut self, reason: &str) {
+        let error = SendError::Disconnected {
+            reason: reason.to_owned(),
+        };
+        self.ids.drain(|_, p| match p.kind {
+            PendingKind::Transmit { reply, .. } => {
+                let _ = reply.send(Err(error.clone()));
+            }
+            PendingKind::Frame { reply } => {
+                let _ = reply.send(Err(error.clone()));
+            }
+            PendingKind::Request { .. } => {}
+        });
+        for w in self.waiters.drain(..) {
+            let _ = w.reply.send(Err(error.clone().into()));
+        }
+    }
+
+    fn close(&mut self, reason: String) {
+        tracing::warn!(link = %self.connector.link(), %reason, "link closed");
+        self.fail_all(&reason);
+        self.emit(Event::Link(LinkEvent::Closed { reason }));
+        self.ops.close();
+        while let Ok(op) = self.ops.try_recv() {
+            refuse_closed(op);
+        }
+    }
+}
+
+/// Answers a request made while the transport is down.
+fn refuse(op: Op, why: &str) {
+    let error = SendError::Disconnected {
+        reason: why.to_owned(),
+    };
+    match op {
+        Op::Transmit { reply, .. } => {
+            let _ = reply.send(Err(error));
+        }
+        Op::Request { reply, .. } => {
+            let _ = reply.send(Err(error.into()));
+        }
+        Op::Frame { reply, .. } => {
+            let _ = reply.send(Err(error));
+        }
+        Op::Write { reply, .. } => {
+            let _ = reply.send(Err(error));
+        }
+    }
+}
+
+fn refuse_closed(op: Op) {
+    match op {
+        Op::Transmit { reply, .. } => {
+            let _ = reply.send(Err(SendError::Closed));
+        }
+        Op::Request { reply, .. } => {
+            let _ = reply.send(Err(SendError::Closed.into()));
+        }
+        Op::Frame { reply, .. } => {
+            let _ = reply.send(Err(SendError::Closed));
+        }
+        Op::Write { reply, .. } => {
+            let _ = reply.send(Err(SendError::Closed));
+        }
+    }
+}
+
+/// The outcome of a Transmit Status.
+fn delivery(
+    to: Address64,
+    status: &xbee_api::TransmitStatusRepr,
+) -> Result<DeliveryReport, SendError> {
+    if status.delivery == xbee_api::DeliveryStatus::Success {
+        Ok(DeliveryReport::Delivered {
+            frame_id: status.frame_id,
+            dst16: status.dst16,
+            retries: status.retries,
+            discovery: status.discovery,
+        })
+    } else {
+        Err(SendError::Delivery {
+            to,
+            status: status.delivery,
+            retries: status.retries,
+            discovery: status.discovery,
+        })
+    }
+}
+
+/// Queues a Transmit Request (16-bit address FFFE, radius 0, options 0).
+fn write_transmit(
+    mode: xbee_api::ApiMode,
+    out: &mut BytesMut,
+    frame_id: u8,
+    to: Address64,
+    payload: &[u8],
+) -> Result<(), SendError> {
+    let frame = xbee_api::TransmitRequestRepr {
+        frame_id,
+        dst64: to,
+        dst16: Address16::UNKNOWN,
+        radius: 0,
+        options: 0,
+        data: payload,
+    };
+    encode_frame(&frame, mode, out).map_err(|_| SendError::TooLarge {
+        len: frame.frame_data_len(),
+        max: xbee_api::MAX_FRAME_DATA_LEN,
+    })
+}
+
+fn write_raw(mode: xbee_api::ApiMode, out: &mut BytesMut, data: &[u8]) -> Result<(), SendError> {
+    let frame = xbee_api::RawFrame::new(data).map_err(|_| SendError::NoFrameId(0))?;
+    encode_frame(&frame, mode, out).map_err(|_| SendError::TooLarge {
+        len: data.len(),
+        max: xbee_api::MAX_FRAME_DATA_LEN,
+    })
+}

@@ -1,0 +1,85 @@
+//! Errors of the sender API.
+
+use std::time::Duration;
+
+use xbee_api::{Address64, DeliveryStatus, DiscoveryStatus};
+
+use crate::transport::LinkError;
+
+/// Why [`crate::connect`] failed.
+#[derive(Debug, thiserror::Error)]
+pub enum ConnectError {
+    /// The link could not be opened.
+    #[error(transparent)]
+    Link(#[from] LinkError),
+    /// The options are inconsistent.
+    #[error("invalid link options: {0}")]
+    Options(&'static str),
+}
+
+/// Why a send did not succeed.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum SendError {
+    /// The radio reported a delivery failure in its Transmit Status.
+    #[error(
+        "delivery to {to} failed: {status:?} (Digi status 0x{code:02X}, retries {retries}, discovery {discovery:?})",
+        code = u8::from(*.status)
+    )]
+    Delivery {
+        /// Destination.
+        to: Address64,
+        /// Digi's delivery status code (never success).
+        status: DeliveryStatus,
+        /// Transmit retries the radio made.
+        retries: u8,
+        /// Route discovery the radio did.
+        discovery: DiscoveryStatus,
+    },
+    /// No status or response came before the timeout (the frame id is freed).
+    #[error("no answer to frame id {frame_id} within {timeout:?}")]
+    Timeout {
+        /// The frame id used (0 if none was allocated yet).
+        frame_id: u8,
+        /// The timeout that expired.
+        timeout: Duration,
+    },
+    /// The transport went away while the request was in flight, or is down now.
+    #[error("link disconnected: {reason}")]
+    Disconnected {
+        /// Why the transport went away.
+        reason: String,
+    },
+    /// The link has ended for good.
+    #[error("link closed")]
+    Closed,
+    /// The packet does not fit the payload limit.
+    #[error("packet of {len} bytes exceeds the {max}-byte payload limit")]
+    TooLarge {
+        /// Encoded length.
+        len: usize,
+        /// The limit.
+        max: usize,
+    },
+    /// A frame given to [`crate::CommandSender::send_frame`] has no frame id field.
+    #[error("frame type 0x{0:02X} carries no frame id, so no response can be matched")]
+    NoFrameId(u8),
+}
+
+/// Why a status request did not produce a report.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum RequestError {
+    /// Sending the request failed (delivery failure, disconnection, ...).
+    #[error("status request not delivered: {0}")]
+    Send(#[from] SendError),
+    /// The request was delivered (or no status came) but no matching report arrived in
+    /// time.
+    #[error("no {what} report from {from} within {timeout:?}")]
+    Timeout {
+        /// Whom the request went to.
+        from: Address64,
+        /// Which report was awaited.
+        what: String,
+        /// The timeout that expired.
+        timeout: Duration,
+    },
+}

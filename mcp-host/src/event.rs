@@ -1,0 +1,151 @@
+//! What a [`crate::PacketStream`] yields.
+
+use std::fmt;
+use std::time::SystemTime;
+
+use bytes::Bytes;
+use xbee_api::{Address16, Address64};
+
+/// The byte storage of owned MCP packets: slices of the received frame, no copy.
+pub type OwnedPacket = mcp_core::Packet<Bytes>;
+
+/// Something that happened on the link.
+#[derive(Debug, Clone)]
+pub enum Event {
+    /// A valid MCP packet arrived.
+    Packet(Received),
+    /// A Receive Packet whose payload is not a valid MCP packet.
+    InvalidPacket(InvalidPacket),
+    /// Any other frame: modem status, a transmit status or response that no request in
+    /// flight claimed, AT responses, unknown frame types.
+    Frame(OwnedFrame),
+    /// The transport went down, came up, or the link ended.
+    Link(LinkEvent),
+    /// A frame was dropped by the framing layer (bad checksum, cut off, ...); the stream
+    /// resynchronises on the next start delimiter.
+    DecodeError(xbee_api::DecodeError),
+}
+
+/// Where and when a radio frame came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Origin {
+    /// 64-bit source address.
+    pub src64: Address64,
+    /// 16-bit source network address.
+    pub src16: Address16,
+    /// Receive options byte of the frame (0x01 acknowledged, 0x02 broadcast, ...).
+    pub options: u8,
+    /// When the frame was decoded.
+    pub received_at: SystemTime,
+}
+
+/// A valid MCP packet, with where it came from.
+#[derive(Debug, Clone)]
+pub struct Received {
+    /// Source and time.
+    pub origin: Origin,
+    /// The packet; its byte views share the frame's storage.
+    pub packet: OwnedPacket,
+    /// The raw MCP payload.
+    pub payload: Bytes,
+}
+
+/// A Receive Packet whose payload failed to parse as MCP.
+#[derive(Debug, Clone)]
+pub struct InvalidPacket {
+    /// Source and time.
+    pub origin: Origin,
+    /// What was wrong, and at which byte.
+    pub error: mcp_core::Error,
+    /// The payload as received.
+    pub payload: Bytes,
+}
+
+/// A transport state change.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum LinkEvent {
+    /// The transport is up for the first time (for `tcp-listen`: the first peer arrived).
+    Connected {
+        /// What is at the other end.
+        peer: String,
+    },
+    /// The transport went away; requests in flight failed. Reconnection follows unless
+    /// disabled.
+    Disconnected {
+        /// Why.
+        reason: String,
+    },
+    /// The transport is up again after a disconnection.
+    Reconnected {
+        /// What is at the other end now.
+        peer: String,
+    },
+    /// The link ended for good (reconnection disabled or impossible); the stream ends
+    /// after this event.
+    Closed {
+        /// Why.
+        reason: String,
+    },
+}
+
+/// An XBee API frame, owned: the frame data (frame type byte first) without delimiter,
+/// length or checksum.
+#[derive(Clone, PartialEq, Eq)]
+pub struct OwnedFrame {
+    data: Bytes,
+}
+
+impl OwnedFrame {
+    /// Wraps frame data (frame type first). Returns `None` for empty data.
+    pub fn new(data: Bytes) -> Option<Self> {
+        (!data.is_empty()).then_some(OwnedFrame { data })
+    }
+
+    /// The frame type byte.
+    pub fn frame_type(&self) -> u8 {
+        self.data.first().copied().unwrap_or(0)
+    }
+
+    /// The frame id, for frame types that carry one in their second byte (requests and
+    /// their responses: 0x08, 0x09, 0x10, 0x11, 0x17, 0x88, 0x89, 0x8B, 0x97).
+    pub fn frame_id(&self) -> Option<u8> {
+        if carries_frame_id(self.frame_type()) {
+            self.data.get(1).copied()
+        } else {
+            None
+        }
+    }
+
+    /// The frame data, frame type byte first.
+    pub fn data(&self) -> &Bytes {
+        &self.data
+    }
+
+    /// The typed view (fails when the data is too short for its frame type).
+    pub fn parse(&self) -> Result<xbee_api::Frame<'_>, xbee_api::FrameError> {
+        xbee_api::Frame::parse_bytes(&self.data)
+    }
+}
+
+impl fmt::Debug for OwnedFrame {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "OwnedFrame(0x{:02X}:", self.frame_type())?;
+        for b in self.data.iter().skip(1) {
+            write!(f, " {b:02X}")?;
+        }
+        f.write_str(")")
+    }
+}
+
+/// Frame types whose second byte is a frame id.
+pub(crate) fn carries_frame_id(frame_type: u8) -> bool {
+    matches!(
+        frame_type,
+        0x08 | 0x09 | 0x10 | 0x11 | 0x17 | 0x88 | 0x89 | 0x8B | 0x97
+    )
+}
+
+/// Response frame types answering a request by frame id.
+pub(crate) fn is_response(frame_type: u8) -> bool {
+    matches!(frame_type, 0x88 | 0x89 | 0x8B | 0x97)
+}

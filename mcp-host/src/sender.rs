@@ -1,0 +1,316 @@
+//! [`CommandSender`]: sends MCP packets and XBee frames, awaits their answers.
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use bytes::Bytes;
+use tokio::sync::{mpsc, oneshot};
+use tokio::time::Instant;
+use xbee_api::{Address16, Address64, DiscoveryStatus};
+
+use crate::LinkInfo;
+use crate::driver::{Op, ReportKey};
+use crate::error::{RequestError, SendError};
+use crate::event::{OwnedFrame, carries_frame_id};
+use crate::stats::{Counters, Stats};
+
+/// How long a caller waits past its deadline for the background task's answer.
+const GRACE: Duration = Duration::from_millis(500);
+
+/// Whether a transmission asks the radio for a Transmit Status.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum FrameId {
+    /// Allocate a frame id (1..=255) and await the radio's Transmit Status.
+    #[default]
+    Auto,
+    /// Frame id 0: fire and forget, the radio sends no status.
+    None,
+}
+
+/// Per-call options of [`CommandSender::send_with`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct SendOptions {
+    /// How long to wait for the status; `None` uses the link's
+    /// [`crate::LinkOptions::send_timeout`].
+    pub timeout: Option<Duration>,
+    /// Frame id allocation.
+    pub frame_id: FrameId,
+}
+
+/// How a transmission went, as far as the local radio knows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DeliveryReport {
+    /// The radio reported success in its Transmit Status (0x8B, status 0x00).
+    Delivered {
+        /// The frame id used.
+        frame_id: u8,
+        /// The destination's 16-bit address as the radio resolved it.
+        dst16: Address16,
+        /// Transmit retries.
+        retries: u8,
+        /// Route discovery overhead.
+        discovery: DiscoveryStatus,
+    },
+    /// Sent with frame id 0: handed to the transport, no status asked for.
+    Written,
+}
+
+/// Sends MCP packets and XBee frames over a link. Cheap to clone; usable from many tasks
+/// at once.
+///
+/// Every method waits at most its timeout and fails with a clear [`SendError`] when the
+/// link goes down while the request is in flight, or is down when it is made.
+#[derive(Debug, Clone)]
+pub struct CommandSender {
+    pub(crate) ops: mpsc::Sender<Op>,
+    pub(crate) default_timeout: Duration,
+    pub(crate) counters: Arc<Counters>,
+    pub(crate) info: Arc<LinkInfo>,
+}
+
+impl CommandSender {
+    /// Sends an MCP command to `to` (16-bit address FFFE, radius 0, options 0) and waits
+    /// for the radio's delivery status.
+    pub async fn send<B: AsRef<[u8]>>(
+        &self,
+        to: Address64,
+        command: &mcp_core::Command<B>,
+    ) -> Result<DeliveryReport, SendError> {
+        self.send_with(to, command, SendOptions::default()).await
+    }
+
+    /// [`CommandSender::send`] with a per-call timeout or frame id 0.
+    pub async fn send_with<B: AsRef<[u8]>>(
+        &self,
+        to: Address64,
+        command: &mcp_core::Command<B>,
+        options: SendOptions,
+    ) -> Result<DeliveryReport, SendError> {
+        let payload = encode_command(command)?;
+        self.send_payload(to, payload, options).await
+    }
+
+    /// Sends any MCP packet (command, report, telemetry, message, warning).
+    pub async fn send_packet<B: AsRef<[u8]>>(
+        &self,
+        to: Address64,
+        packet: &mcp_core::Packet<B>,
+        options: SendOptions,
+    ) -> Result<DeliveryReport, SendError> {
+        let mut buf = [0u8; mcp_core::MAX_PAYLOAD];
+        let len = packet.encode(&mut buf).map_err(|_| SendError::TooLarge {
+            len: packet.encoded_len(),
+            max: mcp_core::MAX_PAYLOAD,
+        })?;
+        self.send_payload(to, Bytes::copy_from_slice(&buf[..len]), options)
+            .await
+    }
+
+    /// Sends raw payload bytes in a Transmit Request (no MCP validation).
+    pub async fn send_payload(
+        &self,
+        to: Address64,
+        payload: impl Into<Bytes>,
+        options: SendOptions,
+    ) -> Result<DeliveryReport, SendError> {
+        let payload = payload.into();
+        if payload.len() > mcp_core::MAX_PAYLOAD {
+            return Err(SendError::TooLarge {
+                len: payload.len(),
+                max: mcp_core::MAX_PAYLOAD,
+            });
+        }
+        let timeout = options.timeout.unwrap_or(self.default_timeout);
+        let deadline = Instant::now() + timeout;
+        let (reply, answer) = oneshot::channel();
+        let op = Op::Transmit {
+            to,
+            payload,
+            with_status: options.frame_id == FrameId::Auto,
+            deadline,
+            timeout,
+            reply,
+        };
+        self.call(op, answer, deadline, timeout).await
+    }
+
+    /// Sends a status request to `to` and resolves with the matching report from that
+    /// address (for telemetry to coordinator, the report on the same telemetry id), or a
+    /// timeout. To [`Address64::BROADCAST`], the first matching report from anyone.
+    ///
+    /// Reports are matched inside the background task: this works whether or not the
+    /// [`crate::PacketStream`] is read. The report also appears on the stream.
+    pub async fn request(
+        &self,
+        to: Address64,
+        request: mcp_core::StatusRequest,
+    ) -> Result<mcp_core::Report<Bytes>, RequestError> {
+        self.request_with(to, request, None).await
+    }
+
+    /// [`CommandSender::request`] with a timeout (`None`: the link's default).
+    pub async fn request_with(
+        &self,
+        to: Address64,
+        request: mcp_core::StatusRequest,
+        timeout: Option<Duration>,
+    ) -> Result<mcp_core::Report<Bytes>, RequestError> {
+        let command: mcp_core::Command<&[u8]> = mcp_core::Command::StatusRequest(request);
+        let payload = encode_command(&command)?;
+        let timeout = timeout.unwrap_or(self.default_timeout);
+        let deadline = Instant::now() + timeout;
+        let (reply, answer) = oneshot::channel();
+        let key = ReportKey::of_request(&request);
+        let op = Op::Request {
+            to,
+            payload,
+            key,
+            deadline,
+            timeout,
+            reply,
+        };
+        let exchange = async {
+            match tokio::time::timeout_at(deadline, self.ops.send(op)).await {
+                Ok(Ok(())) => {}
+                Ok(Err(_)) => return Err(SendError::Closed.into()),
+                Err(_) => {
+                    return Err(SendError::Timeout {
+                        frame_id: 0,
+                        timeout,
+                    }
+                    .into());
+                }
+            }
+            // The background task answers by the deadline; the grace only guards
+            // against a stalled task.
+            match tokio::time::timeout_at(deadline + GRACE, answer).await {
+                Ok(Ok(result)) => result,
+                Ok(Err(_)) => Err(SendError::Closed.into()),
+                Err(_) => Err(RequestError::Timeout {
+                    from: to,
+                    what: key.to_string(),
+                    timeout,
+                }),
+            }
+        };
+        exchange.await
+    }
+
+    /// Sends any XBee frame that carries a frame id (AT command 0x08, remote AT command
+    /// 0x17, Transmit Request 0x10, ...) and resolves with the response frame that carries
+    /// the same frame id (0x88, 0x97, 0x8B, ...).
+    ///
+    /// `frame_data` is the frame data, frame type first; its frame id byte (the second
+    /// byte) is replaced by the allocated id.
+    pub async fn send_frame(
+        &self,
+        frame_data: &[u8],
+        timeout: Option<Duration>,
+    ) -> Result<OwnedFrame, SendError> {
+        let frame_type = frame_data.first().copied().unwrap_or(0);
+        if frame_data.len() < 2 || !carries_frame_id(frame_type) {
+            return Err(SendError::NoFrameId(frame_type));
+        }
+        let timeout = timeout.unwrap_or(self.default_timeout);
+        let deadline = Instant::now() + timeout;
+        let (reply, answer) = oneshot::channel();
+        let op = Op::Frame {
+            data: Bytes::copy_from_slice(frame_data),
+            deadline,
+            timeout,
+            reply,
+        };
+        self.call(op, answer, deadline, timeout).await
+    }
+
+    /// Writes any XBee frame as given (frame data, frame type first), awaiting nothing.
+    pub async fn write_frame(&self, frame_data: &[u8]) -> Result<(), SendError> {
+        let (reply, answer) = oneshot::channel();
+        let op = Op::Write {
+            data: Bytes::copy_from_slice(frame_data),
+            reply,
+        };
+        let deadline = Instant::now() + self.default_timeout;
+        self.call(op, answer, deadline, self.default_timeout).await
+    }
+
+    /// Sends a local AT command (0x08) and resolves with its AT Command Response (0x88).
+    pub async fn at(
+        &self,
+        command: [u8; 2],
+        parameter: &[u8],
+        timeout: Option<Duration>,
+    ) -> Result<OwnedFrame, SendError> {
+        let mut data = Vec::with_capacity(4 + parameter.len());
+        data.extend_from_slice(&[0x08, 0, command[0], command[1]]);
+        data.extend_from_slice(parameter);
+        self.send_frame(&data, timeout).await
+    }
+
+    /// Sends a remote AT command (0x17) to `to` and resolves with its Remote AT Command
+    /// Response (0x97). `apply` sets the apply-changes option (0x02).
+    pub async fn remote_at(
+        &self,
+        to: Address64,
+        command: [u8; 2],
+        parameter: &[u8],
+        apply: bool,
+        timeout: Option<Duration>,
+    ) -> Result<OwnedFrame, SendError> {
+        let mut data = Vec::with_capacity(15 + parameter.len());
+        data.extend_from_slice(&[0x17, 0]);
+        data.extend_from_slice(&to.0.to_be_bytes());
+        data.extend_from_slice(&Address16::UNKNOWN.0.to_be_bytes());
+        data.push(if apply { 0x02 } else { 0x00 });
+        data.extend_from_slice(&command);
+        data.extend_from_slice(parameter);
+        self.send_frame(&data, timeout).await
+    }
+
+    /// The link's counters.
+    pub fn stats(&self) -> Stats {
+        self.counters.snapshot()
+    }
+
+    /// What the link is connected to.
+    pub fn info(&self) -> &LinkInfo {
+        &self.info
+    }
+
+    async fn call<T>(
+        &self,
+        op: Op,
+        answer: oneshot::Receiver<Result<T, SendError>>,
+        deadline: Instant,
+        timeout: Duration,
+    ) -> Result<T, SendError> {
+        match tokio::time::timeout_at(deadline, self.ops.send(op)).await {
+            Ok(Ok(())) => {}
+            Ok(Err(_)) => return Err(SendError::Closed),
+            Err(_) => {
+                return Err(SendError::Timeout {
+                    frame_id: 0,
+                    timeout,
+                });
+            }
+        }
+        // The background task answers by the deadline (freeing the frame id); the grace
+        // only guards against a stalled task.
+        match tokio::time::timeout_at(deadline + GRACE, answer).await {
+            Ok(result) => result.unwrap_or(Err(SendError::Closed)),
+            Err(_) => Err(SendError::Timeout {
+                frame_id: 0,
+                timeout,
+            }),
+        }
+    }
+}
+
+fn encode_command<B: AsRef<[u8]>>(command: &mcp_core::Command<B>) -> Result<Bytes, SendError> {
+    let mut buf = [0u8; mcp_core::MAX_PAYLOAD];
+    let len = command.encode(&mut buf).map_err(|_| SendError::TooLarge {
+        len: command.encoded_len(),
+        max: mcp_core::MAX_PAYLOAD,
+    })?;
+    Ok(Bytes::copy_from_slice(&buf[..len]))
+}

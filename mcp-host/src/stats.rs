@@ -1,0 +1,87 @@
+//! Link statistics: counters shared by the background task, the stream and the senders.
+
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// A snapshot of a link's counters, since the link was connected.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
+pub struct Stats {
+    /// Frames with a good checksum.
+    pub frames: u64,
+    /// Frames dropped for a bad checksum.
+    pub bad_checksum: u64,
+    /// Frames dropped for a length beyond the frame size limit.
+    pub oversize: u64,
+    /// Frames dropped for an announced length of 0.
+    pub empty: u64,
+    /// Frames cut off (by a new start delimiter, or by a disconnection).
+    pub truncated: u64,
+    /// Frames dropped for an invalid escape (API mode 2).
+    pub bad_escape: u64,
+    /// Bytes skipped while looking for a start delimiter.
+    pub bytes_skipped: u64,
+    /// Receive Packets whose payload is not a valid MCP packet.
+    pub invalid_packets: u64,
+    /// Frames received that the radio announces but the link does not understand (too
+    /// short for their frame type).
+    pub malformed_frames: u64,
+    /// Transmit statuses and responses that matched no request in flight.
+    pub unclaimed_responses: u64,
+    /// Requests (sends, frames, status requests) that timed out.
+    pub timeouts: u64,
+    /// Events dropped because the [`crate::PacketStream`] consumer fell behind.
+    pub events_dropped: u64,
+    /// Times the transport went away.
+    pub disconnects: u64,
+    /// Times the transport came back.
+    pub reconnects: u64,
+}
+
+impl Stats {
+    /// Frames dropped for any framing error.
+    pub fn decode_errors(&self) -> u64 {
+        self.bad_checksum + self.oversize + self.empty + self.truncated + self.bad_escape
+    }
+}
+
+macro_rules! counters {
+    ($($name:ident),* $(,)?) => {
+        /// The live counters behind [`Stats`].
+        #[derive(Debug, Default)]
+        pub(crate) struct Counters {
+            $(pub(crate) $name: AtomicU64,)*
+        }
+
+        impl Counters {
+            pub(crate) fn snapshot(&self) -> Stats {
+                Stats { $($name: self.$name.load(Ordering::Relaxed),)* }
+            }
+        }
+    };
+}
+
+counters!(
+    frames,
+    bad_checksum,
+    oversize,
+    empty,
+    truncated,
+    bad_escape,
+    bytes_skipped,
+    invalid_packets,
+    malformed_frames,
+    unclaimed_responses,
+    timeouts,
+    events_dropped,
+    disconnects,
+    reconnects,
+);
+
+/// Adds `n` to a counter.
+pub(crate) fn add(counter: &AtomicU64, n: u64) {
+    counter.fetch_add(n, Ordering::Relaxed);
+}
+
+/// Adds one to a counter.
+pub(crate) fn bump(counter: &AtomicU64) {
+    add(counter, 1);
+}
