@@ -1,0 +1,341 @@
+//! The MAV state machine behaves like the deployed MAV.
+
+use mcp_core::{
+    Address, Command, Controller, LandingState, Packet, Report, SlaveAddresses, Slot,
+    StatusRequest, TelemetryId, Waypoint, Waypoints,
+    mav::{Mav, Vehicle},
+    parse,
+};
+
+/// A simulated vehicle recording what the commands did.
+#[derive(Debug, Default)]
+struct Sim {
+    landing: Option<LandingState>,
+    controller: Option<Controller>,
+    time: u32,
+    position: Option<(f32, f32)>,
+    trajectory: Vec<Waypoint>,
+    slaves: Vec<(Slot, Address)>,
+}
+
+impl Sim {
+    fn flying() -> Self {
+        Sim {
+            landing: Some(LandingState::Flight),
+            controller: Some(Controller::Manual),
+            ..Sim::default()
+        }
+    }
+}
+
+impl Vehicle for Sim {
+    fn landing_state(&self) -> LandingState {
+        self.landing.unwrap_or(LandingState::OnGround)
+    }
+    fn set_landing(&mut self, on: bool) {
+        self.landing = Some(if on {
+            LandingState::Landing
+        } else {
+            LandingState::Flight
+        });
+    }
+    fn controller(&self) -> Controller {
+        self.controller.unwrap_or(Controller::Manual)
+    }
+    fn set_controller(&mut self, controller: Controller) {
+        self.controller = Some(controller);
+    }
+    fn time(&self) -> u32 {
+        self.time
+    }
+    fn set_time(&mut self, time: u32) {
+        self.time = time;
+    }
+    fn set_position(&mut self, elevator: f32, aileron: f32) {
+        self.position = Some((elevator, aileron));
+    }
+    fn telemetry(&self, id: TelemetryId) -> f32 {
+        f32::from(u8::from(id)) + 0.5
+    }
+    fn set_trajectory(&mut self, waypoints: Waypoints<&[u8]>) {
+        self.trajectory = waypoints.iter().collect();
+    }
+    fn waypoint(&self, index: usize) -> Option<Waypoint> {
+        self.trajectory.get(index).copied()
+    }
+    fn set_slave(&mut self, slot: Slot, address: Address) {
+        self.slaves.push((slot, address));
+    }
+}
+
+/// Parses and handles one command, returning the direct reply.
+fn send(mav: &mut Mav, sim: &mut Sim, bytes: &[u8]) -> Option<Vec<u8>> {
+    let Ok(Packet::Command(command)) = parse(bytes) else {
+        panic!("not a command: {bytes:02x?}");
+    };
+    let mut buf = [0u8; 255];
+    mav.handle(sim, &command, &mut buf)
+        .unwrap()
+        .map(|len| buf[..len].to_vec())
+}
+
+fn poll(mav: &mut Mav, sim: &Sim) -> Option<Vec<u8>> {
+    let mut buf = [0u8; 255];
+    mav.poll_changes(sim, &mut buf)
+        .unwrap()
+        .map(|len| buf[..len].to_vec())
+}
+
+fn telemetry(mav: &Mav, sim: &Sim) -> Option<Vec<u8>> {
+    let mut buf = [0u8; 255];
+    mav.telemetry(sim, &mut buf)
+        .unwrap()
+        .map(|len| buf[..len].to_vec())
+}
+
+fn ids_in(packet: &[u8]) -> Vec<u8> {
+    let Ok(Packet::Telemetry(t)) = parse(packet) else {
+        panic!("not telemetry: {packet:02x?}");
+    };
+    t.iter().map(|r| u8::from(r.id)).collect()
+}
+
+#[test]
+fn no_telemetry_is_sent_when_none_is_enabled() {
+    let sim = Sim::flying();
+    let mav = Mav::new(&sim);
+    assert_eq!(telemetry(&mav, &sim), None);
+}
+
+#[test]
+fn telemetry_to_coordinator_enables_ids_and_reports_them() {
+    let mut sim = Sim::flying();
+    let mut mav = Mav::new(&sim);
+    assert_eq!(send(&mut mav, &mut sim, b"c\x01\x01\x19"), None);
+    assert_eq!(send(&mut mav, &mut sim, b"c\x01\x07\xf0"), None);
+    assert_eq!(send(&mut mav, &mut sim, b"c\x01\x01\x01"), None);
+    // Ascending id order, values from the vehicle.
+    let packet = telemetry(&mav, &sim).unwrap();
+    assert_eq!(ids_in(&packet), [0x01, 0x19, 0xF0]);
+    let Ok(Packet::Telemetry(t)) = parse(&packet) else {
+        unreachable!()
+    };
+    assert_eq!(t.value(TelemetryId::PitchAngle), Some(25.5));
+
+    assert_eq!(
+        send(&mut mav, &mut sim, b"c\x01\xff\x19").unwrap(),
+        b"r\x01\x01\x19"
+    );
+    assert_eq!(send(&mut mav, &mut sim, b"c\x01\x00\x19"), None);
+    assert_eq!(
+        send(&mut mav, &mut sim, b"c\x01\xff\x19").unwrap(),
+        b"r\x01\x00\x19"
+    );
+    assert_eq!(ids_in(&telemetry(&mav, &sim).unwrap()), [0x01, 0xF0]);
+    assert_eq!(mav.enabled().len(), 2);
+}
+
+#[test]
+fn telemetry_stops_at_the_payload_limit() {
+    let mut sim = Sim::flying();
+    let mut mav = Mav::new(&sim);
+    for id in 0..=255u8 {
+        send(&mut mav, &mut sim, &[b'c', 0x01, 0x01, id]);
+    }
+    assert_eq!(mav.enabled().len(), 256);
+    let packet = telemetry(&mav, &sim).unwrap();
+    assert_eq!(packet.len(), 1 + 50 * 5);
+    assert_eq!(ids_in(&packet), (0..50).collect::<Vec<u8>>());
+}
+
+#[test]
+fn landing_change_is_reported_unsolicited() {
+    let mut sim = Sim::flying();
+    let mut mav = Mav::new(&sim);
+    assert_eq!(poll(&mut mav, &sim), None);
+    assert_eq!(send(&mut mav, &mut sim, b"c\x02\x01"), None);
+    assert_eq!(poll(&mut mav, &sim).unwrap(), b"r\x02\x01");
+    assert_eq!(poll(&mut mav, &sim), None);
+    // The vehicle finishes landing on its own.
+    sim.landing = Some(LandingState::OnGround);
+    assert_eq!(poll(&mut mav, &sim).unwrap(), b"r\x02\x00");
+    assert_eq!(poll(&mut mav, &sim), None);
+    // Status request.
+    assert_eq!(
+        send(&mut mav, &mut sim, b"c\x02\xff").unwrap(),
+        b"r\x02\x00"
+    );
+}
+
+#[test]
+fn controller_change_is_reported_unsolicited() {
+    let mut sim = Sim::flying();
+    let mut mav = Mav::new(&sim);
+    // Same controller: no change, no report.
+    assert_eq!(send(&mut mav, &mut sim, b"c\x03\x01"), None);
+    assert_eq!(poll(&mut mav, &sim), None);
+    assert_eq!(send(&mut mav, &mut sim, b"c\x03\x03"), None);
+    assert_eq!(sim.controller, Some(Controller::Mpc));
+    assert_eq!(poll(&mut mav, &sim).unwrap(), b"r\x03\x03");
+    assert_eq!(poll(&mut mav, &sim), None);
+    assert_eq!(
+        send(&mut mav, &mut sim, b"c\x03\xff").unwrap(),
+        b"r\x03\x03"
+    );
+}
+
+#[test]
+fn both_changes_are_reported_landing_first() {
+    let mut sim = Sim::flying();
+    let mut mav = Mav::new(&sim);
+    sim.landing = Some(LandingState::TakeOff);
+    sim.controller = Some(Controller::Altitude);
+    assert_eq!(poll(&mut mav, &sim).unwrap(), b"r\x02\x03");
+    assert_eq!(poll(&mut mav, &sim).unwrap(), b"r\x03\x02");
+    assert_eq!(poll(&mut mav, &sim), None);
+}
+
+#[test]
+fn a_change_stays_pending_when_the_buffer_is_too_small() {
+    let mut sim = Sim::flying();
+    let mut mav = Mav::new(&sim);
+    sim.landing = Some(LandingState::OnGround);
+    let mut small = [0u8; 2];
+    assert!(mav.poll_changes(&sim, &mut small).is_err());
+    assert_eq!(poll(&mut mav, &sim).unwrap(), b"r\x02\x00");
+}
+
+#[test]
+fn trajectory_set_is_answered_at_once_with_a_report() {
+    let mut sim = Sim::flying();
+    let mut mav = Mav::new(&sim);
+    let w = [
+        Waypoint {
+            time: 10,
+            elevator: 1.0,
+            aileron: 2.0,
+            altitude: 3.0,
+        },
+        Waypoint {
+            time: 20,
+            elevator: -1.0,
+            aileron: -2.0,
+            altitude: 1.5,
+        },
+    ];
+    let mut command = vec![b'c', 0x04, 0x02];
+    command.extend(w.iter().flat_map(Waypoint::to_bytes));
+    let reply = send(&mut mav, &mut sim, &command).unwrap();
+    let mut expected = command.clone();
+    expected[0] = b'r';
+    assert_eq!(reply, expected);
+    assert_eq!(sim.trajectory, w);
+    // The status request gets the same report.
+    assert_eq!(send(&mut mav, &mut sim, b"c\x04\xff").unwrap(), expected);
+    // An empty trajectory.
+    assert_eq!(
+        send(&mut mav, &mut sim, b"c\x04\x00").unwrap(),
+        b"r\x04\x00"
+    );
+}
+
+#[test]
+fn trajectory_report_holds_what_fits_the_payload() {
+    let mut sim = Sim::flying();
+    let mav = &mut Mav::new(&sim);
+    sim.trajectory = vec![Waypoint::default(); 40];
+    let reply = send(mav, &mut sim, b"c\x04\xff").unwrap();
+    assert_eq!(reply.len(), 3 + 15 * 16);
+    assert_eq!(reply[2], 15);
+    assert!(parse(&reply).is_ok());
+}
+
+#[test]
+fn position_slave_set_keeps_four_slots() {
+    let mut sim = Sim::flying();
+    let mut mav = Mav::new(&sim);
+    let a = Address::from(0x0013_A200_40B5_99B9);
+    let b = Address::from(0x0013_A200_40B5_99BD);
+    // Spec form writes slot 0.
+    let mut spec = vec![b'c', 0x05];
+    spec.extend_from_slice(&a.0);
+    assert_eq!(send(&mut mav, &mut sim, &spec), None);
+    // Firmware form writes its slot.
+    let mut firmware = vec![b'c', 0x05, 0x02];
+    firmware.extend_from_slice(&b.0);
+    assert_eq!(send(&mut mav, &mut sim, &firmware), None);
+    let zero = Address::default();
+    assert_eq!(mav.slaves(), [a, zero, b, zero]);
+    assert_eq!(
+        sim.slaves,
+        [(Slot::new(0).unwrap(), a), (Slot::new(2).unwrap(), b)]
+    );
+    let reply = send(&mut mav, &mut sim, b"c\x05\xff").unwrap();
+    assert_eq!(reply.len(), 34);
+    assert_eq!(
+        parse(&reply).unwrap(),
+        Packet::Report(Report::PositionSlaveSet(SlaveAddresses::Slots([
+            a, zero, b, zero
+        ])))
+    );
+}
+
+#[test]
+fn time_and_position_set_get_no_reply() {
+    let mut sim = Sim::flying();
+    let mut mav = Mav::new(&sim);
+    assert_eq!(send(&mut mav, &mut sim, b"c\x06\x00\xf1\x53\x65"), None);
+    assert_eq!(sim.time, 1_700_000_000);
+    assert_eq!(
+        send(&mut mav, &mut sim, b"c\x06\xff").unwrap(),
+        b"r\x06\x00\xf1\x53\x65"
+    );
+    assert_eq!(
+        send(&mut mav, &mut sim, b"c\x07\x00\x00\xc0\x3f\x00\x00\x10\xc0"),
+        None
+    );
+    assert_eq!(sim.position, Some((1.5, -2.25)));
+    assert_eq!(poll(&mut mav, &sim), None);
+}
+
+#[test]
+fn only_commands_are_handled() {
+    let mut sim = Sim::flying();
+    let mut mav = Mav::new(&sim);
+    let mut buf = [0u8; 255];
+    for bytes in [
+        &b"m hello"[..],
+        b"w\xff",
+        b"r\x02\x01",
+        b"t\x01\x00\x00\x00\x00",
+    ] {
+        let p = parse(bytes).unwrap();
+        assert_eq!(mav.handle_packet(&mut sim, &p, &mut buf), Ok(None));
+    }
+    let p = parse(b"c\x06\xff").unwrap();
+    assert_eq!(mav.handle_packet(&mut sim, &p, &mut buf), Ok(Some(6)));
+    assert_eq!(sim.landing, Some(LandingState::Flight));
+}
+
+#[test]
+fn a_reply_that_does_not_fit_is_an_error_but_the_command_is_done() {
+    let mut sim = Sim::flying();
+    let mut mav = Mav::new(&sim);
+    let command: Command<&[u8]> = Command::TrajectorySet(Waypoints::new_unchecked(&[0u8; 16]));
+    let mut small = [0u8; 2];
+    assert!(mav.handle(&mut sim, &command, &mut small).is_err());
+    assert_eq!(sim.trajectory.len(), 1);
+    let status = Command::<&[u8]>::StatusRequest(StatusRequest::Time);
+    assert!(mav.handle(&mut sim, &status, &mut small).is_err());
+}
+
+#[test]
+fn the_vehicle_trait_is_object_safe() {
+    let mut sim = Sim::flying();
+    let vehicle: &mut dyn Vehicle = &mut sim;
+    let mut mav = Mav::new(vehicle);
+    let mut buf = [0u8; 8];
+    let command = Command::<&[u8]>::Landing { on: true };
+    assert_eq!(mav.handle(vehicle, &command, &mut buf), Ok(None));
+    assert_eq!(mav.poll_changes(vehicle, &mut buf), Ok(Some(3)));
+}
