@@ -17,6 +17,8 @@
 //! - Encoding: `encoded_len` and `encode` on [`Packet`], [`Command`], [`Report`] and
 //!   [`Telemetry`]; [`TelemetryBuilder`] and [`TrajectoryBuilder`] build packets item
 //!   by item and stop cleanly at the buffer or the [`MAX_PAYLOAD`] limit.
+//! - `Display` on [`Packet`], [`Command`], [`Report`], [`Telemetry`] and [`Waypoints`]
+//!   gives one readable line, e.g. `report landing flight`.
 //! - [`mav`]: the MAV side, a state machine that answers commands the way the deployed
 //!   MAV does.
 //!
@@ -85,6 +87,7 @@
 
 mod address;
 mod command;
+mod display;
 mod error;
 mod field;
 mod id;

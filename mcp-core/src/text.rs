@@ -54,7 +54,7 @@ impl<B: AsRef<[u8]>> Text<B> {
         self.as_bytes().is_empty()
     }
 
-    /// The length of a packet of `category` carrying this text.
+    /// The length of a message or warning packet carrying this text.
     pub fn encoded_len(&self) -> usize {
         1 + self.len()
     }

@@ -1,0 +1,152 @@
+//! One-line, human-readable `Display` for packets, e.g. `report landing flight` or
+//! `telemetry altitude=1.5 pitch_angle=-0.25`.
+
+use core::fmt;
+
+use crate::{
+    command::{Command, StatusRequest},
+    packet::Packet,
+    report::{Report, SlaveAddresses},
+    telemetry::Telemetry,
+    trajectory::{Waypoint, Waypoints},
+};
+
+fn on_off(on: bool) -> &'static str {
+    if on { "on" } else { "off" }
+}
+
+impl fmt::Display for Waypoint {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "(time={} elevator={} aileron={} altitude={})",
+            self.time, self.elevator, self.aileron, self.altitude
+        )
+    }
+}
+
+impl<B: AsRef<[u8]>> fmt::Display for Waypoints<B> {
+    /// `N waypoints` followed by each waypoint.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{} waypoints", self.len())?;
+        self.iter().try_for_each(|w| write!(f, " {w}"))
+    }
+}
+
+impl<B: AsRef<[u8]>> fmt::Display for Telemetry<B> {
+    /// `id=value` pairs separated by spaces.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let mut sep = "";
+        for r in self.iter() {
+            write!(f, "{sep}{}={}", r.id, r.value)?;
+            sep = " ";
+        }
+        Ok(())
+    }
+}
+
+impl<B: AsRef<[u8]>> fmt::Display for Command<B> {
+    /// The command type and its fields, e.g. `landing on`.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.command_type())?;
+        match self {
+            Command::TelemetryToCoordinator { on, id } => write!(f, " {} {id}", on_off(*on)),
+            Command::Landing { on } => write!(f, " {}", on_off(*on)),
+            Command::Controllers(c) => write!(f, " {c}"),
+            Command::TrajectorySet(w) => write!(f, " {w}"),
+            Command::PositionSlaveSet {
+                slot: Some(slot),
+                address,
+            } => write!(f, " slot {slot} {address}"),
+            Command::PositionSlaveSet {
+                slot: None,
+                address,
+            } => write!(f, " {address}"),
+            Command::Time(t) => write!(f, " {t}"),
+            Command::PositionSet { elevator, aileron } => {
+                write!(f, " elevator={elevator} aileron={aileron}")
+            }
+            Command::StatusRequest(StatusRequest::TelemetryToCoordinator(id)) => {
+                write!(f, " status request {id}")
+            }
+            Command::StatusRequest(_) => f.write_str(" status request"),
+        }
+    }
+}
+
+impl<B: AsRef<[u8]>> fmt::Display for Report<B> {
+    /// The report type and its fields, e.g. `controllers mpc`.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.report_type())?;
+        match self {
+            Report::TelemetryToCoordinator { on, id } => write!(f, " {} {id}", on_off(*on)),
+            Report::Landing(s) => write!(f, " {s}"),
+            Report::Controllers(c) => write!(f, " {c}"),
+            Report::TrajectorySet(w) => write!(f, " {w}"),
+            Report::PositionSlaveSet(SlaveAddresses::Single(a)) => write!(f, " {a}"),
+            Report::PositionSlaveSet(SlaveAddresses::Slots(all)) => {
+                all.iter().try_for_each(|a| write!(f, " {a}"))
+            }
+            Report::Time(t) => write!(f, " {t}"),
+        }
+    }
+}
+
+impl<B: AsRef<[u8]>> fmt::Display for Packet<B> {
+    /// The category, then the packet's content: `command landing on`,
+    /// `telemetry altitude=1.5`, `message "Hello World"` (text escaped as by
+    /// [`Text`](crate::Text)'s `Display`).
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.category())?;
+        match self {
+            Packet::Command(c) => write!(f, " {c}"),
+            Packet::Report(r) => write!(f, " {r}"),
+            Packet::Telemetry(t) if t.is_empty() => Ok(()),
+            Packet::Telemetry(t) => write!(f, " {t}"),
+            Packet::Message(t) | Packet::Warning(t) => write!(f, " \"{t}\""),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use std::string::ToString;
+
+    use crate::parse;
+
+    fn show(bytes: &[u8]) -> std::string::String {
+        parse(bytes).unwrap().to_string()
+    }
+
+    #[test]
+    fn packets_display_on_one_line() {
+        assert_eq!(show(b"c\x02\x05"), "command landing on");
+        assert_eq!(
+            show(b"c\x01\xff\x19"),
+            "command telemetry_to_coordinator status request pitch_angle"
+        );
+        assert_eq!(show(b"c\x03\xff"), "command controllers status request");
+        assert_eq!(show(b"r\x02\x04"), "report landing flight");
+        assert_eq!(show(b"r\x03\x09"), "report controllers unknown(0x09)");
+        assert_eq!(
+            show(b"t\x01\x00\x00\xc0\x3f\x19\x00\x00\x80\xbe"),
+            "telemetry altitude=1.5 pitch_angle=-0.25"
+        );
+        assert_eq!(show(b"t"), "telemetry");
+        assert_eq!(show(b"m\"hi\"\xff"), "message \"\"hi\"\\xff\"");
+        assert_eq!(show(b"r\x06\x78\x56\x34\x12"), "report time 305419896");
+        assert_eq!(
+            show(b"c\x05\x01\x00\x13\xa2\x00\x40\xb5\x99\xb9"),
+            "command position_slave_set slot 1 0013A20040B599B9"
+        );
+        assert_eq!(
+            show(b"c\x04\x01\x01\x00\x00\x00\x00\x00\x80\x3f\x00\x00\x00\x40\x00\x00\x40\x40"),
+            "command trajectory_set 1 waypoints (time=1 elevator=1 aileron=2 altitude=3)"
+        );
+        assert_eq!(
+            show(b"c\x07\x00\x00\xc0\x3f\x00\x00\x10\xc0"),
+            "command position_set elevator=1.5 aileron=-2.25"
+        );
+    }
+}
