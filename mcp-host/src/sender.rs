@@ -241,9 +241,12 @@ impl CommandSender {
         parameter: &[u8],
         timeout: Option<Duration>,
     ) -> Result<OwnedFrame, SendError> {
-        let mut data = Vec::with_capacity(4 + parameter.len());
-        data.extend_from_slice(&[0x08, 0, command[0], command[1]]);
-        data.extend_from_slice(parameter);
+        let frame = xbee_api::AtCommandRepr {
+            frame_id: 0,
+            command,
+            parameter,
+        };
+        let data = frame_data(&frame)?;
         self.send_frame(&data, timeout).await
     }
 
@@ -257,13 +260,15 @@ impl CommandSender {
         apply: bool,
         timeout: Option<Duration>,
     ) -> Result<OwnedFrame, SendError> {
-        let mut data = Vec::with_capacity(15 + parameter.len());
-        data.extend_from_slice(&[0x17, 0]);
-        data.extend_from_slice(&to.0.to_be_bytes());
-        data.extend_from_slice(&Address16::UNKNOWN.0.to_be_bytes());
-        data.push(if apply { 0x02 } else { 0x00 });
-        data.extend_from_slice(&command);
-        data.extend_from_slice(parameter);
+        let frame = xbee_api::RemoteAtCommandRepr {
+            frame_id: 0,
+            dst64: to,
+            dst16: Address16::UNKNOWN,
+            options: if apply { 0x02 } else { 0x00 },
+            command,
+            parameter,
+        };
+        let data = frame_data(&frame)?;
         self.send_frame(&data, timeout).await
     }
 
@@ -304,6 +309,19 @@ impl CommandSender {
             }),
         }
     }
+}
+
+/// The frame data of `frame` (frame type first).
+fn frame_data(frame: &impl xbee_api::EncodeFrame) -> Result<Vec<u8>, SendError> {
+    let len = frame.frame_data_len();
+    let mut data = vec![0u8; len];
+    frame
+        .emit_frame_data(&mut data)
+        .map_err(|_| SendError::TooLarge {
+            len,
+            max: xbee_api::MAX_FRAME_DATA_LEN,
+        })?;
+    Ok(data)
 }
 
 fn encode_command<B: AsRef<[u8]>>(command: &mcp_core::Command<B>) -> Result<Bytes, SendError> {

@@ -1,0 +1,193 @@
+//! A fake XBee radio for tests: the far side of a link, speaking XBee API frames encoded
+//! and decoded with `xbee-api`.
+
+#![allow(dead_code, unreachable_pub)]
+
+use std::time::Duration;
+
+use bytes::BytesMut;
+use futures::StreamExt;
+use mcp_host::{Event, LinkEvent, PacketStream};
+use tokio::io::{AsyncRead, AsyncReadExt, AsyncWrite, AsyncWriteExt};
+use xbee_api::{
+    Address16, Address64, ApiMode, DeliveryStatus, DiscoveryStatus, EncodeFrame, ReceivePacketRepr,
+    TransmitRequestRepr, TransmitStatusRepr,
+};
+
+/// Failure guard only: every wait ends on an event long before this.
+pub const GUARD: Duration = Duration::from_secs(20);
+
+pub const MAV: Address64 = Address64(0x0013_A200_40B5_99B9);
+pub const OTHER_MAV: Address64 = Address64(0x0013_A200_40B5_99BF);
+
+/// Byte stream of the far side.
+pub trait Io: AsyncRead + AsyncWrite + Unpin + Send {}
+impl<T: AsyncRead + AsyncWrite + Unpin + Send> Io for T {}
+
+/// The radio side of a link.
+pub struct FakeXBee {
+    io: Box<dyn Io>,
+    mode: ApiMode,
+    decoder: Box<xbee_api::Decoder>,
+    pending: BytesMut,
+}
+
+/// A Transmit Request as the fake radio received it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Tx {
+    pub frame_id: u8,
+    pub dst64: Address64,
+    pub dst16: Address16,
+    pub radius: u8,
+    pub options: u8,
+    pub data: Vec<u8>,
+}
+
+impl FakeXBee {
+    pub fn new(io: impl Io + 'static, mode: ApiMode) -> Self {
+        FakeXBee {
+            io: Box::new(io),
+            mode,
+            decoder: Box::new(xbee_api::Decoder::new(mode)),
+            pending: BytesMut::new(),
+        }
+    }
+
+    /// Opens the far end of a `pty` link.
+    pub fn open_pty(path: &std::path::Path, mode: ApiMode) -> Self {
+        let port = tokio_serial::SerialStream::open(&tokio_serial::new(
+            path.to_str().expect("utf-8 path"),
+            115_200,
+        ))
+        .expect("open the pty far end");
+        Self::new(port, mode)
+    }
+
+    /// The next frame the host wrote (frame data, type first), skipping decode errors.
+    pub async fn next_frame(&mut self) -> Vec<u8> {
+        tokio::time::timeout(GUARD, self.next_frame_inner())
+            .await
+            .expect("no frame from the host")
+    }
+
+    async fn next_frame_inner(&mut self) -> Vec<u8> {
+        loop {
+            let (consumed, event) = self.decoder.decode(&self.pending);
+            let frame = match event {
+                Some(Ok(frame)) => Some(frame.data().to_vec()),
+                Some(Err(e)) => panic!("host wrote a corrupt frame: {e}"),
+                None => None,
+            };
+            let _ = self.pending.split_to(consumed);
+            if let Some(frame) = frame {
+                return frame;
+            }
+            // All input taken, nothing pending: read more.
+            let mut buf = [0u8; 512];
+            let n = self.io.read(&mut buf).await.expect("fake radio read");
+            assert!(n > 0, "host closed the link");
+            self.pending.extend_from_slice(&buf[..n]);
+        }
+    }
+
+    /// The next Transmit Request the host wrote (panics on any other frame).
+    pub async fn next_tx(&mut self) -> Tx {
+        let data = self.next_frame().await;
+        let tx = TransmitRequestRepr::parse_bytes(&data).expect("a Transmit Request");
+        assert_eq!(data[0], 0x10);
+        Tx {
+            frame_id: tx.frame_id,
+            dst64: tx.dst64,
+            dst16: tx.dst16,
+            radius: tx.radius,
+            options: tx.options,
+            data: tx.data.to_vec(),
+        }
+    }
+
+    /// Encodes and writes a frame.
+    pub async fn send(&mut self, frame: &impl EncodeFrame) {
+        let mut buf = vec![0u8; frame.encoded_len(self.mode)];
+        let n = frame.encode(self.mode, &mut buf).expect("encode");
+        self.write_raw(&buf[..n]).await;
+    }
+
+    /// Encodes a frame into bytes (for tests that splice garbage around it).
+    pub fn encode(&self, frame: &impl EncodeFrame) -> Vec<u8> {
+        let mut buf = vec![0u8; frame.encoded_len(self.mode)];
+        let n = frame.encode(self.mode, &mut buf).expect("encode");
+        buf.truncate(n);
+        buf
+    }
+
+    /// Writes raw bytes.
+    pub async fn write_raw(&mut self, bytes: &[u8]) {
+        self.io.write_all(bytes).await.expect("fake radio write");
+        self.io.flush().await.expect("fake radio flush");
+    }
+
+    /// Answers a Transmit Request with a Transmit Status.
+    pub async fn status(&mut self, frame_id: u8, delivery: DeliveryStatus) {
+        self.send(&TransmitStatusRepr {
+            frame_id,
+            dst16: Address16(0x1234),
+            retries: 0,
+            delivery,
+            discovery: DiscoveryStatus::from(0),
+        })
+        .await;
+    }
+
+    /// Sends an MCP payload as a Receive Packet from `src`.
+    pub async fn receive(&mut self, src: Address64, payload: &[u8]) {
+        self.send(&rx(src, payload)).await;
+    }
+
+    /// Shuts the byte stream down.
+    pub async fn close(mut self) {
+        let _ = self.io.shutdown().await;
+    }
+}
+
+/// A Receive Packet from `src` (16-bit 0x7D33, acknowledged).
+pub fn rx(src: Address64, payload: &[u8]) -> ReceivePacketRepr<'_> {
+    ReceivePacketRepr {
+        src64: src,
+        src16: Address16(0x7D33),
+        options: 0x01,
+        data: payload,
+    }
+}
+
+/// Encodes an MCP packet.
+pub fn mcp<B: AsRef<[u8]>>(packet: &mcp_core::Packet<B>) -> Vec<u8> {
+    let mut buf = [0u8; mcp_core::MAX_PAYLOAD];
+    let n = packet.encode(&mut buf).expect("encode MCP packet");
+    buf[..n].to_vec()
+}
+
+/// The next event of the stream (failure guard: GUARD).
+pub async fn next_event(stream: &mut PacketStream) -> Event {
+    tokio::time::timeout(GUARD, stream.next())
+        .await
+        .expect("no event")
+        .expect("stream ended")
+}
+
+/// Skips events until a link event, returns it.
+pub async fn next_link_event(stream: &mut PacketStream) -> LinkEvent {
+    loop {
+        if let Event::Link(e) = next_event(stream).await {
+            return e;
+        }
+    }
+}
+
+/// Skips events until a packet arrives, returns it.
+pub async fn next_packet(stream: &mut PacketStream) -> mcp_host::Received {
+    loop {
+        if let Event::Packet(p) = next_event(stream).await {
+            return p;
+        }
+    }
+}

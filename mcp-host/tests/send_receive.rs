@@ -1,0 +1,565 @@
+//! Sending every command and receiving every report through a real pseudo-terminal,
+//! with a fake radio on the far end.
+
+mod common;
+
+use std::collections::HashSet;
+use std::time::Duration;
+
+use common::*;
+use mcp_core::{
+    Address, Command, Controller, LandingState, Packet, Report, SlaveAddresses, Slot,
+    StatusRequest, TelemetryBuilder, TelemetryId, TrajectoryBuilder, Waypoint,
+};
+use mcp_host::{
+    CommandSender, DeliveryReport, Event, FrameId, Link, LinkOptions, PacketStream, RequestError,
+    SendError, SendOptions,
+};
+use xbee_api::{Address16, Address64, ApiMode, DeliveryStatus};
+
+async fn pty_link(mode: ApiMode) -> (PacketStream, CommandSender, FakeXBee) {
+    pty_link_with(LinkOptions {
+        api_mode: mode,
+        ..LinkOptions::default()
+    })
+    .await
+}
+
+async fn pty_link_with(options: LinkOptions) -> (PacketStream, CommandSender, FakeXBee) {
+    let mode = options.api_mode;
+    let (mut stream, sender) = mcp_host::connect(&Link::Pty, options).await.unwrap();
+    let path = stream.info().pty_path.clone().unwrap();
+    let fake = FakeXBee::open_pty(&path, mode);
+    assert!(matches!(
+        next_link_event(&mut stream).await,
+        mcp_host::LinkEvent::Connected { .. }
+    ));
+    (stream, sender, fake)
+}
+
+fn trajectory_bytes(report: bool, n: u32) -> Vec<u8> {
+    let mut buf = [0u8; mcp_core::MAX_PAYLOAD];
+    let mut builder = if report {
+        TrajectoryBuilder::report(&mut buf).unwrap()
+    } else {
+        TrajectoryBuilder::command(&mut buf).unwrap()
+    };
+    for i in 0..n {
+        builder
+            .push(Waypoint {
+                time: 1000 + i,
+                elevator: i as f32 * 0.5,
+                aileron: -(i as f32),
+                altitude: 2.0 + i as f32,
+            })
+            .unwrap();
+    }
+    let len = builder.finish();
+    buf[..len].to_vec()
+}
+
+/// One of every command packet (set commands, both slave-set forms, every status
+/// request), as encoded bytes.
+fn every_command() -> Vec<Vec<u8>> {
+    let addr = Address::from(0x0013_A200_40B5_99BD);
+    let mut commands: Vec<Command<&[u8]>> = vec![
+        Command::TelemetryToCoordinator {
+            on: true,
+            id: TelemetryId::Altitude,
+        },
+        Command::TelemetryToCoordinator {
+            on: false,
+            id: TelemetryId::Unknown(0x42),
+        },
+        Command::Landing { on: true },
+        Command::Landing { on: false },
+        Command::Controllers(Controller::Mpc),
+        Command::Controllers(Controller::Unknown(0x10)),
+        Command::PositionSlaveSet {
+            slot: None,
+            address: addr,
+        },
+        Command::PositionSlaveSet {
+            slot: Slot::new(3),
+            address: addr,
+        },
+        Command::Time(1_700_000_000),
+        Command::PositionSet {
+            elevator: 1.25,
+            aileron: -3.5,
+        },
+    ];
+    for request in [
+        StatusRequest::TelemetryToCoordinator(TelemetryId::ValidBlob),
+        StatusRequest::Landing,
+        StatusRequest::Controllers,
+        StatusRequest::TrajectorySet,
+        StatusRequest::PositionSlaveSet,
+        StatusRequest::Time,
+    ] {
+        commands.push(Command::StatusRequest(request));
+    }
+    let mut out: Vec<Vec<u8>> = commands.iter().map(|c| mcp(&Packet::Command(*c))).collect();
+    // Trajectory set commands, empty and with waypoints.
+    out.push(trajectory_bytes(false, 0));
+    out.push(trajectory_bytes(false, 3));
+    out
+}
+
+#[tokio::test]
+async fn every_command_type_is_sent_and_decoded_on_the_far_side() {
+    let (_stream, sender, mut fake) = pty_link(ApiMode::Unescaped).await;
+    for bytes in every_command() {
+        let Ok(Packet::Command(command)) = mcp_core::parse(&bytes) else {
+            panic!("test command does not parse: {bytes:02X?}");
+        };
+        let send = {
+            let sender = sender.clone();
+            let bytes = bytes.clone();
+            tokio::spawn(async move {
+                let Ok(Packet::Command(command)) = mcp_core::parse(&bytes) else {
+                    unreachable!()
+                };
+                sender.send(MAV, &command).await
+            })
+        };
+        let tx = fake.next_tx().await;
+        assert_ne!(tx.frame_id, 0);
+        assert_eq!(tx.dst64, MAV);
+        assert_eq!(tx.dst16, Address16::UNKNOWN);
+        assert_eq!((tx.radius, tx.options), (0, 0));
+        assert_eq!(
+            mcp_core::parse(&tx.data).unwrap(),
+            Packet::Command(command),
+            "{:02X?}",
+            tx.data
+        );
+        fake.status(tx.frame_id, DeliveryStatus::Success).await;
+        let report = send.await.unwrap().unwrap();
+        assert!(
+            matches!(report, DeliveryReport::Delivered { frame_id, dst16, .. }
+                if frame_id == tx.frame_id && dst16 == Address16(0x1234)),
+            "{report:?}"
+        );
+    }
+}
+
+#[tokio::test]
+async fn every_packet_category_is_sendable_fire_and_forget_and_broadcast() {
+    let (_stream, sender, mut fake) = pty_link(ApiMode::Escaped).await;
+    let no_status = SendOptions {
+        frame_id: FrameId::None,
+        ..SendOptions::default()
+    };
+
+    let mut buf = [0u8; 64];
+    let mut t = TelemetryBuilder::new(&mut buf).unwrap();
+    t.push(TelemetryId::PitchAngle, 0.25).unwrap();
+    let len = t.finish();
+    let telemetry = buf[..len].to_vec();
+    let message = b"mHello World\x11\x13\x7E\x7D\xFF".to_vec();
+    let warning = b"wlow battery".to_vec();
+    let report = mcp(&Packet::<&[u8]>::Report(Report::Landing(
+        LandingState::Flight,
+    )));
+
+    for bytes in [telemetry, message, warning, report] {
+        let packet = mcp_core::parse(&bytes).unwrap();
+        let written = sender
+            .send_packet(Address64::BROADCAST, &packet, no_status)
+            .await
+            .unwrap();
+        assert_eq!(written, DeliveryReport::Written);
+        let tx = fake.next_tx().await;
+        assert_eq!(tx.frame_id, 0);
+        assert_eq!(tx.dst64, Address64::BROADCAST);
+        assert_eq!(tx.data, bytes);
+    }
+}
+
+#[tokio::test]
+async fn every_report_type_and_category_is_received() {
+    let (mut stream, _sender, mut fake) = pty_link(ApiMode::Escaped).await;
+    let reports: Vec<Report<&[u8]>> = vec![
+        Report::TelemetryToCoordinator {
+            on: true,
+            id: TelemetryId::AileronAccelerationError,
+        },
+        Report::Landing(LandingState::TakeOff),
+        Report::Landing(LandingState::Unknown(9)),
+        Report::Controllers(Controller::Manual),
+        Report::PositionSlaveSet(SlaveAddresses::Single(Address::from(7))),
+        Report::PositionSlaveSet(SlaveAddresses::Slots([
+            Address::from(1),
+            Address::from(2),
+            Address::from(0x7E7D_1113),
+            Address::from(4),
+        ])),
+        Report::Time(0x7E7D_1113),
+    ];
+    let mut payloads: Vec<Vec<u8>> = reports.iter().map(|r| mcp(&Packet::Report(*r))).collect();
+    payloads.push(trajectory_bytes(true, 0));
+    payloads.push(trajectory_bytes(true, 2));
+    payloads.push(vec![b't']);
+    payloads.push(b"mHi".to_vec());
+    payloads.push(b"w\x80\xFF".to_vec());
+    let mut buf = [0u8; 64];
+    let mut t = TelemetryBuilder::new(&mut buf).unwrap();
+    t.push(TelemetryId::Altitude, 1.5).unwrap();
+    t.push(TelemetryId::Unknown(0xC4), f32::NAN).unwrap();
+    let len = t.finish();
+    payloads.push(buf[..len].to_vec());
+
+    for payload in &payloads {
+        fake.receive(OTHER_MAV, payload).await;
+    }
+    for payload in &payloads {
+        let rx = next_packet(&mut stream).await;
+        assert_eq!(rx.origin.src64, OTHER_MAV);
+        assert_eq!(rx.origin.src16, Address16(0x7D33));
+        assert_eq!(rx.origin.options, 0x01);
+        assert_eq!(&rx.payload[..], &payload[..]);
+        // The owned packet equals a fresh parse of the payload, and re-encodes to it.
+        let expected = mcp_core::parse(payload).unwrap();
+        assert_eq!(mcp(&rx.packet), *payload);
+        assert_eq!(rx.packet.category(), expected.category());
+    }
+    // Telemetry values come through bit for bit (NaN included).
+    let last = payloads.last().unwrap();
+    let Ok(Packet::Telemetry(t)) = mcp_core::parse(last) else {
+        panic!()
+    };
+    assert_eq!(t.value(TelemetryId::Altitude), Some(1.5));
+}
+
+#[tokio::test]
+async fn invalid_mcp_payloads_and_other_frames_are_events() {
+    let (mut stream, _sender, mut fake) = pty_link(ApiMode::Unescaped).await;
+    fake.receive(MAV, b"c\x02").await; // landing command too short
+    fake.receive(MAV, b"").await; // empty payload
+    fake.write_raw(&[0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F]).await; // modem status
+    fake.status(77, DeliveryStatus::Success).await; // nobody waits for id 77
+    fake.write_raw(&[0x7E, 0x00, 0x02, 0x23, 0x11, 0xCB]).await; // unknown type 0x23
+
+    match next_event(&mut stream).await {
+        Event::InvalidPacket(p) => {
+            assert_eq!(&p.payload[..], b"c\x02");
+            assert_eq!(p.origin.src64, MAV);
+            assert!(p.error.to_string().contains("landing"), "{}", p.error);
+        }
+        other => panic!("{other:?}"),
+    }
+    assert!(matches!(
+        next_event(&mut stream).await,
+        Event::InvalidPacket(_)
+    ));
+    let types: Vec<(u8, Option<u8>)> = [
+        next_event(&mut stream).await,
+        next_event(&mut stream).await,
+        next_event(&mut stream).await,
+    ]
+    .into_iter()
+    .map(|e| match e {
+        Event::Frame(f) => (f.frame_type(), f.frame_id()),
+        other => panic!("{other:?}"),
+    })
+    .collect();
+    assert_eq!(types, [(0x8A, None), (0x8B, Some(77)), (0x23, None)]);
+    let stats = stream.stats();
+    assert_eq!(stats.invalid_packets, 2);
+    assert_eq!(stats.unclaimed_responses, 1);
+    assert_eq!(stats.frames, 5);
+}
+
+#[tokio::test]
+async fn concurrent_sends_get_their_own_status_and_failures_are_typed() {
+    let (_stream, sender, mut fake) = pty_link(ApiMode::Escaped).await;
+    const N: u32 = 200;
+    let mut tasks = Vec::new();
+    for i in 0..N {
+        let sender = sender.clone();
+        tasks.push(tokio::spawn(async move {
+            sender.send(MAV, &Command::<&[u8]>::Time(i)).await
+        }));
+    }
+    // Collect every request, then answer in reverse order; every third fails.
+    let mut seen = Vec::new();
+    for _ in 0..N {
+        let tx = fake.next_tx().await;
+        let Ok(Packet::Command(Command::Time(i))) = mcp_core::parse(&tx.data) else {
+            panic!("{:02X?}", tx.data)
+        };
+        seen.push((tx.frame_id, i));
+    }
+    let ids: HashSet<u8> = seen.iter().map(|(id, _)| *id).collect();
+    assert_eq!(ids.len(), N as usize, "frame ids in flight are distinct");
+    assert!(!ids.contains(&0));
+    for (id, i) in seen.iter().rev() {
+        let status = if i % 3 == 0 {
+            DeliveryStatus::AddressNotFound
+        } else {
+            DeliveryStatus::Success
+        };
+        fake.status(*id, status).await;
+    }
+    let by_value: std::collections::HashMap<u32, u8> =
+        seen.iter().map(|(id, i)| (*i, *id)).collect();
+    for (i, task) in tasks.into_iter().enumerate() {
+        let i = i as u32;
+        let result = task.await.unwrap();
+        if i % 3 == 0 {
+            let err = result.unwrap_err();
+            assert_eq!(
+                err,
+                SendError::Delivery {
+                    to: MAV,
+                    status: DeliveryStatus::AddressNotFound,
+                    retries: 0,
+                    discovery: xbee_api::DiscoveryStatus::from(0),
+                }
+            );
+            assert!(err.to_string().contains("0x24"), "{err}");
+        } else {
+            match result.unwrap() {
+                DeliveryReport::Delivered { frame_id, .. } => assert_eq!(frame_id, by_value[&i]),
+                other => panic!("{other:?}"),
+            }
+        }
+    }
+}
+
+#[tokio::test]
+async fn frame_ids_are_reused_and_no_send_is_lost_when_statuses_never_come() {
+    let (stream, sender, mut fake) = pty_link(ApiMode::Unescaped).await;
+    let short = SendOptions {
+        timeout: Some(Duration::from_millis(300)),
+        frame_id: FrameId::Auto,
+    };
+    const BATCHES: u32 = 8;
+    const BATCH: u32 = 50; // 400 sends in all, more than 255 ids
+    let mut used_ids = Vec::new();
+    let mut timed_out = 0;
+    for batch in 0..BATCHES {
+        let tasks: Vec<_> = (0..BATCH)
+            .map(|k| {
+                let sender = sender.clone();
+                let value = batch * BATCH + k;
+                tokio::spawn(async move {
+                    sender
+                        .send_with(MAV, &Command::<&[u8]>::Time(value), short)
+                        .await
+                })
+            })
+            .collect();
+        let mut unanswered = HashSet::new();
+        for _ in 0..BATCH {
+            let tx = fake.next_tx().await;
+            let Ok(Packet::Command(Command::Time(value))) = mcp_core::parse(&tx.data) else {
+                panic!()
+            };
+            used_ids.push(tx.frame_id);
+            if value % 5 == 0 {
+                unanswered.insert(tx.frame_id); // this status never comes
+            } else {
+                fake.status(tx.frame_id, DeliveryStatus::Success).await;
+            }
+        }
+        for (k, task) in tasks.into_iter().enumerate() {
+            let value = batch * BATCH + k as u32;
+            match task.await.unwrap() {
+                Ok(DeliveryReport::Delivered { .. }) => assert_ne!(value % 5, 0),
+                Err(SendError::Timeout { frame_id, .. }) => {
+                    assert_eq!(value % 5, 0, "answered send {value} timed out");
+                    assert!(unanswered.contains(&frame_id), "{frame_id}");
+                    timed_out += 1;
+                }
+                other => panic!("send {value}: {other:?}"),
+            }
+        }
+    }
+    assert_eq!(timed_out, BATCHES * BATCH / 5);
+    assert_eq!(used_ids.len(), (BATCHES * BATCH) as usize);
+    assert!(used_ids.iter().all(|id| *id != 0));
+    let distinct: HashSet<u8> = used_ids.iter().copied().collect();
+    assert!(distinct.len() <= 255);
+    // Ids of sends that timed out came back into use.
+    assert_eq!(stream.stats().timeouts, u64::from(timed_out));
+}
+
+#[tokio::test]
+async fn request_gets_its_report_while_unrelated_telemetry_floods_in() {
+    // A tiny event queue nobody reads: events are dropped, requests still resolve.
+    let (stream, sender, mut fake) = pty_link_with(LinkOptions {
+        event_capacity: 4,
+        ..LinkOptions::default()
+    })
+    .await;
+    let request = tokio::spawn({
+        let sender = sender.clone();
+        async move {
+            sender
+                .request(
+                    MAV,
+                    StatusRequest::TelemetryToCoordinator(TelemetryId::ElevatorSpeed),
+                )
+                .await
+        }
+    });
+    let tx = fake.next_tx().await;
+    assert_eq!(tx.data, b"c\x01\xFF\x02");
+    fake.status(tx.frame_id, DeliveryStatus::Success).await;
+
+    let mut buf = [0u8; 255];
+    let mut t = TelemetryBuilder::new(&mut buf).unwrap();
+    for id in 0..20u8 {
+        t.push(TelemetryId::from(id), f32::from(id)).unwrap();
+    }
+    let len = t.finish();
+    let telemetry = buf[..len].to_vec();
+    for round in 0..200 {
+        let src = if round % 2 == 0 { MAV } else { OTHER_MAV };
+        fake.receive(src, &telemetry).await;
+        if round == 50 {
+            // Same report type, wrong telemetry id, right address.
+            let wrong_id = Report::<&[u8]>::TelemetryToCoordinator {
+                on: false,
+                id: TelemetryId::AileronSpeed,
+            };
+            fake.receive(MAV, &mcp(&Packet::Report(wrong_id))).await;
+            // Right report, wrong address.
+            let other = Report::<&[u8]>::TelemetryToCoordinator {
+                on: false,
+                id: TelemetryId::ElevatorSpeed,
+            };
+            fake.receive(OTHER_MAV, &mcp(&Packet::Report(other))).await;
+            // Another report type from the right address.
+            let landing = Report::<&[u8]>::Landing(LandingState::Flight);
+            fake.receive(MAV, &mcp(&Packet::Report(landing))).await;
+        }
+    }
+    let right = Report::<&[u8]>::TelemetryToCoordinator {
+        on: true,
+        id: TelemetryId::ElevatorSpeed,
+    };
+    fake.receive(MAV, &mcp(&Packet::Report(right))).await;
+    for _ in 0..50 {
+        fake.receive(MAV, &telemetry).await;
+    }
+    let report = tokio::time::timeout(GUARD, request)
+        .await
+        .unwrap()
+        .unwrap()
+        .unwrap();
+    assert_eq!(report.as_borrowed(), right);
+    assert!(stream.stats().events_dropped > 0);
+}
+
+#[tokio::test]
+async fn request_fails_on_delivery_failure_and_times_out_without_report() {
+    let (_stream, sender, mut fake) = pty_link(ApiMode::Unescaped).await;
+    let failing = tokio::spawn({
+        let sender = sender.clone();
+        async move { sender.request(MAV, StatusRequest::Time).await }
+    });
+    let tx = fake.next_tx().await;
+    assert_eq!(tx.data, b"c\x06\xFF");
+    fake.status(tx.frame_id, DeliveryStatus::RouteNotFound)
+        .await;
+    let err = failing.await.unwrap().unwrap_err();
+    assert!(
+        matches!(
+            err,
+            RequestError::Send(SendError::Delivery {
+                status: DeliveryStatus::RouteNotFound,
+                ..
+            })
+        ),
+        "{err}"
+    );
+
+    let silent = tokio::spawn({
+        let sender = sender.clone();
+        async move {
+            sender
+                .request_with(
+                    OTHER_MAV,
+                    StatusRequest::Landing,
+                    Some(Duration::from_millis(200)),
+                )
+                .await
+        }
+    });
+    let tx = fake.next_tx().await;
+    fake.status(tx.frame_id, DeliveryStatus::Success).await;
+    // A landing report from somebody else does not answer it.
+    let landing = Report::<&[u8]>::Landing(LandingState::OnGround);
+    fake.receive(MAV, &mcp(&Packet::Report(landing))).await;
+    let err = silent.await.unwrap().unwrap_err();
+    match &err {
+        RequestError::Timeout { from, what, .. } => {
+            assert_eq!(*from, OTHER_MAV);
+            assert_eq!(what, "landing");
+        }
+        other => panic!("{other}"),
+    }
+}
+
+#[tokio::test]
+async fn at_and_remote_at_commands_get_their_responses() {
+    let (_stream, sender, mut fake) = pty_link(ApiMode::Escaped).await;
+    let at = tokio::spawn({
+        let sender = sender.clone();
+        async move { sender.at(*b"NI", &[], None).await }
+    });
+    let frame = fake.next_frame().await;
+    assert_eq!((frame[0], &frame[2..]), (0x08, &b"NI"[..]));
+    let id = frame[1];
+    assert_ne!(id, 0);
+    fake.send(&xbee_api::AtCommandResponseRepr {
+        frame_id: id,
+        command: *b"NI",
+        status: xbee_api::AtStatus::from(0),
+        data: b"GROUND",
+    })
+    .await;
+    let response = at.await.unwrap().unwrap();
+    match response.parse().unwrap() {
+        xbee_api::Frame::AtCommandResponse(r) => {
+            assert_eq!(
+                (r.frame_id, r.command, r.data),
+                (id, *b"NI", &b"GROUND"[..])
+            );
+        }
+        other => panic!("{other:?}"),
+    }
+
+    let remote = tokio::spawn({
+        let sender = sender.clone();
+        async move { sender.remote_at(MAV, *b"D0", &[4], true, None).await }
+    });
+    let frame = fake.next_frame().await;
+    let Ok(xbee_api::Frame::RemoteAtCommand(cmd)) = xbee_api::Frame::parse_bytes(&frame) else {
+        panic!("{frame:02X?}")
+    };
+    assert_eq!(cmd.dst64, MAV);
+    assert_eq!(cmd.command, *b"D0");
+    assert_eq!(cmd.parameter, &[4]);
+    fake.send(&xbee_api::RemoteAtResponseRepr {
+        frame_id: cmd.frame_id,
+        src64: MAV,
+        src16: Address16(0x1111),
+        command: *b"D0",
+        status: xbee_api::AtStatus::from(0),
+        data: &[],
+    })
+    .await;
+    let response = remote.await.unwrap().unwrap();
+    assert_eq!(response.frame_type(), 0x97);
+    assert_eq!(response.frame_id(), Some(cmd.frame_id));
+
+    // A frame type without a frame id cannot be awaited.
+    assert_eq!(
+        sender.send_frame(&[0x8A, 0x00], None).await,
+        Err(SendError::NoFrameId(0x8A))
+    );
+}
