@@ -86,7 +86,9 @@ fn item() -> impl Strategy<Value = Item> {
 }
 
 /// The stream, the valid frames in order, and the byte ranges of the valid frames.
-fn build(items: &[Item], mode: ApiMode) -> (Vec<u8>, Vec<Vec<u8>>, Vec<(usize, usize)>) {
+type Built = (Vec<u8>, Vec<Vec<u8>>, Vec<(usize, usize)>);
+
+fn build(items: &[Item], mode: ApiMode) -> Built {
     let mut stream = Vec::new();
     let mut valid = Vec::new();
     let mut ranges = Vec::new();
