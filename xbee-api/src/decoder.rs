@@ -114,8 +114,8 @@ enum State {
 ///
 /// # Memory
 ///
-/// `size_of::<Decoder<N>>()` is `N` plus the cursors and counters (52 bytes on a 32-bit
-/// target, 68 on a 64-bit one). Mode 2 holds frame data of up to `N` bytes; mode 1 holds
+/// `size_of::<Decoder<N>>()` is `N` plus the cursors and counters (48 bytes on a 32-bit
+/// target, 64 on a 64-bit one). Mode 2 holds frame data of up to `N` bytes; mode 1 holds
 /// the whole frame, so frame data of up to `N - 4` bytes ([`capacity`](Self::capacity)).
 #[derive(Debug, Clone)]
 pub struct Decoder<const N: usize = DEFAULT_CAPACITY> {

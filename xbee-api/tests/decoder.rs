@@ -259,3 +259,10 @@ fn reset_drops_partial_frame() {
     let (_, event) = decoder.decode(&hex(MODEM));
     assert_eq!(event.unwrap().unwrap().data(), &[0x8A, 0x06]);
 }
+
+#[test]
+fn decoder_ram_is_buffer_plus_a_few_words() {
+    let overhead = std::mem::size_of::<Decoder>() - xbee_api::DEFAULT_CAPACITY;
+    println!("size_of::<Decoder>() = {}", std::mem::size_of::<Decoder>());
+    assert!(overhead <= 72, "overhead {overhead}");
+}

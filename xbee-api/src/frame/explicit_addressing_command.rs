@@ -13,7 +13,7 @@ pub mod field {
     pub const FRAME_ID: usize = 1;
     /// 64-bit destination address.
     pub const DST64: Range<usize> = 2..10;
-    /// 16-bit destination address ([`Address16::UNKNOWN`] if unknown).
+    /// 16-bit destination address ([`Address16::UNKNOWN`](crate::Address16::UNKNOWN) if unknown).
     pub const DST16: Range<usize> = 10..12;
     /// Source endpoint.
     pub const SRC_ENDPOINT: usize = 12;
@@ -83,7 +83,7 @@ impl<T: AsRef<[u8]>> ExplicitAddressingCommand<T> {
         Address64::from_bytes(be::<8>(&d[field::DST64]))
     }
 
-    /// 16-bit destination address ([`Address16::UNKNOWN`] if unknown).
+    /// 16-bit destination address ([`Address16::UNKNOWN`](crate::Address16::UNKNOWN) if unknown).
     pub fn dst16(&self) -> Address16 {
         let d = self.buffer.as_ref();
         Address16::from_bytes(be::<2>(&d[field::DST16]))
@@ -141,7 +141,7 @@ pub struct ExplicitAddressingCommandRepr<'a> {
     pub frame_id: u8,
     /// 64-bit destination address.
     pub dst64: Address64,
-    /// 16-bit destination address ([`Address16::UNKNOWN`] if unknown).
+    /// 16-bit destination address ([`Address16::UNKNOWN`](crate::Address16::UNKNOWN) if unknown).
     pub dst16: Address16,
     /// Source endpoint.
     pub src_endpoint: u8,
