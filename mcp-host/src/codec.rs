@@ -200,3 +200,119 @@ pub(crate) fn encode_frame<F: EncodeFrame + ?Sized>(
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use futures::StreamExt;
+    use proptest::prelude::*;
+    use tokio_util::codec::FramedRead;
+    use xbee_api::RawFrame;
+
+    fn encode(mode: ApiMode, data: &[u8]) -> Vec<u8> {
+        let mut out = BytesMut::new();
+        encode_frame(&RawFrame::new(data).unwrap(), mode, &mut out).unwrap();
+        out.to_vec()
+    }
+
+    #[tokio::test]
+    async fn end_of_input_reports_the_cut_off_frame_and_ends() {
+        for mode in [ApiMode::Unescaped, ApiMode::Escaped] {
+            let mut input = encode(mode, &[0x8A, 0x06]);
+            let cut = encode(mode, &[0x8A, 0x02]);
+            input.extend(&cut[..cut.len() - 2]);
+            let mut framed = FramedRead::new(&input[..], XBeeCodec::new(mode));
+            match framed.next().await {
+                Some(Ok(CodecItem::Frame(f))) => assert_eq!(&f.data()[..], [0x8A, 0x06]),
+                other => panic!("{other:?}"),
+            }
+            match framed.next().await {
+                Some(Ok(CodecItem::Error(DecodeError::Truncated { .. }))) => {}
+                other => panic!("{mode}: {other:?}"),
+            }
+            assert!(framed.next().await.is_none());
+            let stats = framed.decoder().stats();
+            assert_eq!((stats.frames, stats.truncated), (1, 1));
+        }
+    }
+
+    #[test]
+    fn frames_beyond_the_configured_limit_are_oversize() {
+        let mut codec =
+            XBeeCodec::with_counters(ApiMode::Unescaped, 3, Arc::new(Counters::default()));
+        let mut buf = BytesMut::from(&encode(ApiMode::Unescaped, &[0x23, 1, 2, 3])[..]);
+        buf.extend_from_slice(&encode(ApiMode::Unescaped, &[0x23, 1])[..]);
+        assert_eq!(
+            codec.decode(&mut buf).unwrap(),
+            Some(CodecItem::Error(DecodeError::Oversize {
+                length: 4,
+                capacity: 3
+            }))
+        );
+        assert!(matches!(
+            codec.decode(&mut buf).unwrap(),
+            Some(CodecItem::Frame(_))
+        ));
+        assert_eq!(codec.decode(&mut buf).unwrap(), None);
+        let stats = codec.stats();
+        assert_eq!((stats.frames, stats.oversize), (1, 1));
+    }
+
+    #[test]
+    fn encoder_writes_what_the_decoder_reads() {
+        for mode in [ApiMode::Unescaped, ApiMode::Escaped] {
+            let mut codec = XBeeCodec::new(mode);
+            let mut buf = BytesMut::new();
+            let frame = RawFrame::new(&[0x10, 0x7E, 0x7D, 0x11, 0x13]).unwrap();
+            Encoder::<&RawFrame<'_>>::encode(&mut codec, &frame, &mut buf).unwrap();
+            match codec.decode(&mut buf).unwrap() {
+                Some(CodecItem::Frame(f)) => assert_eq!(&f.data()[..], frame.data()),
+                other => panic!("{other:?}"),
+            }
+            assert!(buf.is_empty());
+        }
+    }
+
+    proptest! {
+        /// Valid frames separated by garbage without start delimiters, fed in random
+        /// chunks: every frame comes out, in order, and decoding never fails.
+        #[test]
+        fn every_frame_survives_any_chunking(
+            mode2 in any::<bool>(),
+            frames in prop::collection::vec(prop::collection::vec(any::<u8>(), 1..40), 1..20),
+            garbage in prop::collection::vec(prop::collection::vec(0u8..0x7E, 0..10), 20),
+            chunks in prop::collection::vec(1usize..64, 1..50),
+        ) {
+            let mode = if mode2 { ApiMode::Escaped } else { ApiMode::Unescaped };
+            let mut input = Vec::new();
+            for (i, f) in frames.iter().enumerate() {
+                input.extend(&garbage[i]);
+                input.extend(encode(mode, f));
+            }
+            let mut codec = XBeeCodec::new(mode);
+            let mut buf = BytesMut::new();
+            let mut out = Vec::new();
+            let mut rest = &input[..];
+            let mut sizes = chunks.iter().cycle();
+            while !rest.is_empty() {
+                let n = (*sizes.next().unwrap()).min(rest.len());
+                buf.extend_from_slice(&rest[..n]);
+                rest = &rest[n..];
+                while let Some(item) = codec.decode(&mut buf).unwrap() {
+                    out.push(item);
+                }
+            }
+            while let Some(item) = codec.decode_eof(&mut buf).unwrap() {
+                out.push(item);
+            }
+            let got: Vec<Vec<u8>> = out
+                .into_iter()
+                .filter_map(|item| match item {
+                    CodecItem::Frame(f) => Some(f.data().to_vec()),
+                    CodecItem::Error(_) => None,
+                })
+                .collect();
+            prop_assert_eq!(got, frames);
+        }
+    }
+}

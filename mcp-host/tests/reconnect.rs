@@ -1,0 +1,228 @@
+//! Transports going away and coming back, over real TCP on 127.0.0.1.
+
+mod common;
+
+use std::time::Duration;
+
+use common::*;
+use mcp_core::{Command, Packet, Report, StatusRequest};
+use mcp_host::{
+    Event, LinkEvent, LinkOptions, PacketStream, ReconnectPolicy, RequestError, SendError,
+};
+use tokio::net::{TcpListener, TcpStream};
+use xbee_api::{ApiMode, DecodeError, DeliveryStatus};
+
+fn options(mode: ApiMode, reconnect: bool) -> LinkOptions {
+    LinkOptions {
+        api_mode: mode,
+        reconnect: ReconnectPolicy {
+            enabled: reconnect,
+            initial_delay: Duration::from_millis(5),
+            max_delay: Duration::from_millis(50),
+        },
+        ..LinkOptions::default()
+    }
+}
+
+fn time_report(t: u32) -> Vec<u8> {
+    mcp(&Packet::<&[u8]>::Report(Report::Time(t)))
+}
+
+async fn expect_time_report(stream: &mut PacketStream, t: u32) {
+    let rx = next_packet(stream).await;
+    assert_eq!(&rx.payload[..], &time_report(t)[..]);
+}
+
+async fn accept(listener: &TcpListener, mode: ApiMode) -> FakeXBee {
+    let (socket, _) = tokio::time::timeout(GUARD, listener.accept())
+        .await
+        .expect("no connection")
+        .unwrap();
+    FakeXBee::new(socket, mode)
+}
+
+#[tokio::test]
+async fn tcp_link_reconnects_and_fails_requests_in_flight() {
+    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let port = listener.local_addr().unwrap().port();
+    let link = format!("tcp:127.0.0.1:{port}").parse().unwrap();
+    let (mut stream, sender) = mcp_host::connect(&link, options(ApiMode::Escaped, true))
+        .await
+        .unwrap();
+    let mut fake = accept(&listener, ApiMode::Escaped).await;
+    assert!(matches!(
+        next_link_event(&mut stream).await,
+        LinkEvent::Connected { .. }
+    ));
+
+    fake.receive(MAV, &time_report(1)).await;
+    expect_time_report(&mut stream, 1).await;
+
+    // A send and a request are in flight when the peer goes away mid-frame.
+    let send = tokio::spawn({
+        let sender = sender.clone();
+        async move { sender.send(MAV, &Command::<&[u8]>::Time(5)).await }
+    });
+    let request = tokio::spawn({
+        let sender = sender.clone();
+        async move { sender.request(MAV, StatusRequest::Time).await }
+    });
+    fake.next_tx().await;
+    fake.next_tx().await;
+    let frame = fake.encode(&rx(MAV, &time_report(2)));
+    fake.write_raw(&frame[..frame.len() / 2]).await;
+    fake.close().await;
+
+    // The cut-off frame is reported, then the disconnection.
+    match next_event(&mut stream).await {
+        Event::DecodeError(DecodeError::Truncated { .. }) => {}
+        other => panic!("{other:?}"),
+    }
+    let LinkEvent::Disconnected { reason } = next_link_event(&mut stream).await else {
+        panic!()
+    };
+    assert!(reason.contains("end of stream"), "{reason}");
+    let err = send.await.unwrap().unwrap_err();
+    assert!(matches!(err, SendError::Disconnected { .. }), "{err}");
+    assert!(err.to_string().starts_with("link disconnected"), "{err}");
+    let err = request.await.unwrap().unwrap_err();
+    assert!(
+        matches!(err, RequestError::Send(SendError::Disconnected { .. })),
+        "{err}"
+    );
+
+    // The link reconnects by itself, and the stream carries on.
+    let mut fake = accept(&listener, ApiMode::Escaped).await;
+    assert!(matches!(
+        next_link_event(&mut stream).await,
+        LinkEvent::Reconnected { .. }
+    ));
+    fake.receive(MAV, &time_report(3)).await;
+    expect_time_report(&mut stream, 3).await;
+    let send = tokio::spawn({
+        let sender = sender.clone();
+        async move { sender.send(MAV, &Command::<&[u8]>::Time(6)).await }
+    });
+    let tx = fake.next_tx().await;
+    fake.status(tx.frame_id, DeliveryStatus::Success).await;
+    send.await.unwrap().unwrap();
+    let stats = stream.stats();
+    assert_eq!((stats.disconnects, stats.reconnects), (1, 1));
+    assert_eq!(stats.truncated, 1);
+}
+
+#[tokio::test]
+async fn tcp_listen_waits_for_the_next_peer() {
+    let link = "tcp-listen:127.0.0.1:0".parse().unwrap();
+    let (mut stream, sender) = mcp_host::connect(&link, options(ApiMode::Unescaped, true))
+        .await
+        .unwrap();
+    let addr = stream.info().local_addr.unwrap();
+
+    // Before any peer, requests fail at once with a clear error.
+    let err = sender
+        .send(MAV, &Command::<&[u8]>::Landing { on: true })
+        .await
+        .unwrap_err();
+    match &err {
+        SendError::Disconnected { reason } => assert!(reason.contains("not connected"), "{err}"),
+        other => panic!("{other}"),
+    }
+
+    let mut fake = FakeXBee::new(TcpStream::connect(addr).await.unwrap(), ApiMode::Unescaped);
+    assert!(matches!(
+        next_link_event(&mut stream).await,
+        LinkEvent::Connected { .. }
+    ));
+    fake.receive(MAV, &time_report(10)).await;
+    expect_time_report(&mut stream, 10).await;
+
+    let request = tokio::spawn({
+        let sender = sender.clone();
+        async move { sender.request(MAV, StatusRequest::Landing).await }
+    });
+    fake.next_tx().await;
+    drop(fake);
+    assert!(matches!(
+        next_link_event(&mut stream).await,
+        LinkEvent::Disconnected { .. }
+    ));
+    let err = request.await.unwrap().unwrap_err();
+    assert!(
+        matches!(err, RequestError::Send(SendError::Disconnected { .. })),
+        "{err}"
+    );
+    // While no peer is connected, sends fail at once.
+    let err = sender
+        .send(MAV, &Command::<&[u8]>::Time(1))
+        .await
+        .unwrap_err();
+    assert!(matches!(err, SendError::Disconnected { .. }), "{err}");
+
+    // The next peer is served.
+    let mut fake = FakeXBee::new(TcpStream::connect(addr).await.unwrap(), ApiMode::Unescaped);
+    assert!(matches!(
+        next_link_event(&mut stream).await,
+        LinkEvent::Reconnected { .. }
+    ));
+    fake.receive(MAV, &time_report(11)).await;
+    expect_time_report(&mut stream, 11).await;
+    let request = tokio::spawn({
+        let sender = sender.clone();
+        async move { sender.request(MAV, StatusRequest::Time).await }
+    });
+    let tx = fake.next_tx().await;
+    fake.status(tx.frame_id, DeliveryStatus::Success).await;
+    fake.receive(MAV, &time_report(12)).await;
+    let report = request.await.unwrap().unwrap();
+    assert_eq!(report.as_borrowed(), Report::Time(12));
+}
+
+#[tokio::test]
+async fn without_reconnection_the_link_closes_and_the_stream_ends() {
+    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let port = listener.local_addr().unwrap().port();
+    let link = format!("tcp:127.0.0.1:{port}").parse().unwrap();
+    let (mut stream, sender) = mcp_host::connect(&link, options(ApiMode::Unescaped, false))
+        .await
+        .unwrap();
+    let fake = accept(&listener, ApiMode::Unescaped).await;
+    assert!(matches!(
+        next_link_event(&mut stream).await,
+        LinkEvent::Connected { .. }
+    ));
+    fake.close().await;
+    assert!(matches!(
+        next_link_event(&mut stream).await,
+        LinkEvent::Disconnected { .. }
+    ));
+    match next_link_event(&mut stream).await {
+        LinkEvent::Closed { reason } => assert!(reason.contains("disabled"), "{reason}"),
+        other => panic!("{other:?}"),
+    }
+    let end = tokio::time::timeout(GUARD, futures::StreamExt::next(&mut stream)).await;
+    assert!(end.unwrap().is_none(), "the stream ends after Closed");
+    let err = sender
+        .send(MAV, &Command::<&[u8]>::Time(1))
+        .await
+        .unwrap_err();
+    assert_eq!(err, SendError::Closed);
+}
+
+#[tokio::test]
+async fn connect_fails_fast_when_the_first_connection_fails() {
+    let port = TcpListener::bind("127.0.0.1:0")
+        .await
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let link = format!("tcp:127.0.0.1:{port}").parse().unwrap();
+    let err = mcp_host::connect(&link, LinkOptions::default())
+        .await
+        .unwrap_err();
+    assert!(
+        err.to_string().contains(&format!("127.0.0.1:{port}")),
+        "{err}"
+    );
+}

@@ -1,0 +1,132 @@
+//! The stream survives garbage, corrupt and cut-off frames between valid ones, in both
+//! API modes, over a real pseudo-terminal.
+
+mod common;
+
+use common::*;
+use mcp_core::{Packet, TelemetryBuilder, TelemetryId};
+use mcp_host::{Event, Link, LinkEvent, LinkOptions};
+use xbee_api::{ApiMode, DecodeError};
+
+fn telemetry(k: u32) -> Vec<u8> {
+    let mut buf = [0u8; 32];
+    let mut t = TelemetryBuilder::new(&mut buf).unwrap();
+    t.push(TelemetryId::Altitude, k as f32).unwrap();
+    // A value whose bytes need escaping in mode 2 (0x7E, 0x7D, 0x11, 0x13).
+    t.push(
+        TelemetryId::Unknown(0x7E),
+        f32::from_le_bytes([0x7E, 0x7D, 0x11, 0x13]),
+    )
+    .unwrap();
+    let len = t.finish();
+    buf[..len].to_vec()
+}
+
+/// Garbage without start delimiters.
+fn garbage(seed: u32, len: usize) -> Vec<u8> {
+    let mut x = seed.wrapping_mul(2_654_435_761).wrapping_add(1);
+    (0..len)
+        .map(|_| {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            match (x & 0xFF) as u8 {
+                0x7E => 0x00,
+                b => b,
+            }
+        })
+        .collect()
+}
+
+async fn survives(mode: ApiMode) {
+    let options = LinkOptions {
+        api_mode: mode,
+        ..LinkOptions::default()
+    };
+    let (mut stream, _sender) = mcp_host::connect(&Link::Pty, options).await.unwrap();
+    let mut fake = FakeXBee::open_pty(stream.info().pty_path.as_ref().unwrap(), mode);
+    assert!(matches!(
+        next_link_event(&mut stream).await,
+        LinkEvent::Connected { .. }
+    ));
+
+    const N: u32 = 40;
+    let mut bytes = Vec::new();
+    for k in 0..N {
+        let frame = fake.encode(&rx(MAV, &telemetry(k)));
+        if k < 30 {
+            match k % 5 {
+                0 => bytes.extend(garbage(k, 1 + k as usize)),
+                1 => {
+                    // The same frame with a corrupted payload byte: bad checksum.
+                    let mut bad = frame.clone();
+                    let i = bad.len() - 3;
+                    bad[i] ^= 0x01;
+                    bytes.extend(bad);
+                }
+                2 => {
+                    // The first half of a frame, cut off.
+                    bytes.extend(&frame[..frame.len() / 2]);
+                }
+                3 => {
+                    // A lone start delimiter and a bogus length in the noise.
+                    bytes.extend([0x7E, 0x00, 0x30]);
+                    bytes.extend(garbage(k, 5));
+                }
+                _ => {}
+            }
+        }
+        bytes.extend(frame);
+    }
+    // Trailing valid frames flush any candidate still waiting for its length in mode 1.
+    fake.write_raw(&bytes).await;
+
+    let mut values = Vec::new();
+    let mut errors = Vec::new();
+    while values.len() < N as usize {
+        match next_event(&mut stream).await {
+            Event::Packet(rx) => {
+                let Packet::Telemetry(t) = rx.packet else {
+                    panic!("{:?}", rx.packet)
+                };
+                values.push(t.value(TelemetryId::Altitude).unwrap() as u32);
+            }
+            Event::DecodeError(e) => errors.push(e),
+            other => panic!("unexpected {other:?}"),
+        }
+    }
+    assert_eq!(
+        values,
+        (0..N).collect::<Vec<_>>(),
+        "every valid frame, in order"
+    );
+    assert!(
+        errors
+            .iter()
+            .any(|e| matches!(e, DecodeError::BadChecksum { .. })),
+        "{errors:?}"
+    );
+    if mode == ApiMode::Escaped {
+        // A raw 0x7E cuts a partial frame off.
+        assert!(
+            errors
+                .iter()
+                .any(|e| matches!(e, DecodeError::Truncated { .. })),
+            "{errors:?}"
+        );
+    }
+    let stats = stream.stats();
+    assert_eq!(stats.frames, u64::from(N));
+    assert!(stats.decode_errors() >= errors.len() as u64);
+    assert!(stats.bytes_skipped > 0);
+}
+
+#[tokio::test]
+async fn survives_garbage_and_corrupt_frames_in_api_mode_1() {
+    survives(ApiMode::Unescaped).await;
+}
+
+#[tokio::test]
+async fn survives_garbage_and_corrupt_frames_in_api_mode_2() {
+    survives(ApiMode::Escaped).await;
+}
