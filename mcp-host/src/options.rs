@@ -4,7 +4,7 @@ use std::time::Duration;
 
 /// Default timeout for a delivery status: longer than a Zigbee route discovery (10 s).
 pub const DEFAULT_SEND_TIMEOUT: Duration = Duration::from_secs(12);
-/// Default timeout for opening a TCP connection or a serial port.
+/// Default timeout for opening a TCP connection.
 pub const DEFAULT_CONNECT_TIMEOUT: Duration = Duration::from_secs(5);
 
 /// How a link reconnects after its transport goes away (serial device unplugged, TCP peer
@@ -63,7 +63,8 @@ pub struct LinkOptions {
     /// longer frames are dropped and counted as oversize. At most
     /// [`crate::codec::MAX_FRAME_DATA`] (4 less in API mode 1), the decoder's capacity.
     pub max_frame_len: usize,
-    /// Timeout for opening a TCP connection or a serial port.
+    /// Timeout for opening a TCP connection (serial ports and pseudo-terminals open at
+    /// once or fail).
     pub connect_timeout: Duration,
     /// Default timeout of [`crate::CommandSender::send`] and friends (delivery status or
     /// response).

@@ -51,7 +51,8 @@ pub enum DeliveryReport {
         /// Route discovery overhead.
         discovery: DiscoveryStatus,
     },
-    /// Sent with frame id 0: handed to the transport, no status asked for.
+    /// Sent with frame id 0: queued for the transport, no status asked for (a
+    /// disconnection before the bytes leave loses it silently).
     Written,
 }
 

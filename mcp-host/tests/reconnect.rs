@@ -226,3 +226,56 @@ async fn connect_fails_fast_when_the_first_connection_fails() {
         "{err}"
     );
 }
+
+#[tokio::test]
+async fn serial_link_reports_the_device_going_away() {
+    // A pseudo-terminal stands in for a USB serial adapter: the test holds the radio
+    // side, the link opens the device path, and closing the radio side removes the
+    // device under the link.
+    let (radio, device) = tokio_serial::SerialStream::pair().unwrap();
+    let path = tokio_serial::SerialPort::name(&device).unwrap();
+    drop(device);
+    let link = format!("serial:{path}:115200").parse().unwrap();
+    let (mut stream, sender) = mcp_host::connect(&link, options(ApiMode::Unescaped, true))
+        .await
+        .unwrap();
+    assert!(matches!(
+        next_link_event(&mut stream).await,
+        LinkEvent::Connected { .. }
+    ));
+    let mut fake = FakeXBee::new(radio, ApiMode::Unescaped);
+    fake.receive(MAV, &time_report(7)).await;
+    expect_time_report(&mut stream, 7).await;
+
+    let send = tokio::spawn({
+        let sender = sender.clone();
+        async move { sender.send(MAV, &Command::<&[u8]>::Time(8)).await }
+    });
+    fake.next_tx().await;
+    drop(fake); // "unplugged"
+    assert!(matches!(
+        next_link_event(&mut stream).await,
+        LinkEvent::Disconnected { .. }
+    ));
+    let err = send.await.unwrap().unwrap_err();
+    assert!(matches!(err, SendError::Disconnected { .. }), "{err}");
+    // While the device is gone, the link keeps retrying and requests fail at once.
+    let err = sender
+        .send(MAV, &Command::<&[u8]>::Time(9))
+        .await
+        .unwrap_err();
+    match &err {
+        SendError::Disconnected { reason } => assert!(reason.contains("reconnecting"), "{err}"),
+        other => panic!("{other}"),
+    }
+}
+
+#[test]
+fn handles_are_send_and_sync() {
+    fn check<T: Send + Sync + 'static>() {}
+    check::<mcp_host::CommandSender>();
+    check::<mcp_host::PacketStream>();
+    check::<mcp_host::Event>();
+    check::<mcp_host::SendError>();
+    check::<mcp_host::RequestError>();
+}

@@ -332,7 +332,7 @@ async fn concurrent_sends_get_their_own_status_and_failures_are_typed() {
 async fn frame_ids_are_reused_and_no_send_is_lost_when_statuses_never_come() {
     let (stream, sender, mut fake) = pty_link(ApiMode::Unescaped).await;
     let short = SendOptions {
-        timeout: Some(Duration::from_millis(300)),
+        timeout: Some(Duration::from_secs(1)),
         frame_id: FrameId::Auto,
     };
     const BATCHES: u32 = 8;
