@@ -765,7 +765,7 @@ fn write_transmit(
 }
 
 fn write_raw(mode: xbee_api::ApiMode, out: &mut BytesMut, data: &[u8]) -> Result<(), SendError> {
-    let frame = xbee_api::RawFrame::new(data).map_err(|_| SendError::NoFrameId(0))?;
+    let frame = xbee_api::RawFrame::new(data).map_err(|_| SendError::EmptyFrame)?;
     encode_frame(&frame, mode, out).map_err(|_| SendError::TooLarge {
         len: data.len(),
         max: xbee_api::MAX_FRAME_DATA_LEN,

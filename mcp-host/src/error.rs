@@ -63,6 +63,9 @@ pub enum SendError {
     /// A frame given to [`crate::CommandSender::send_frame`] has no frame id field.
     #[error("frame type 0x{0:02X} carries no frame id, so no response can be matched")]
     NoFrameId(u8),
+    /// A frame given to [`crate::CommandSender::write_frame`] is empty (no frame type).
+    #[error("empty frame data (no frame type byte)")]
+    EmptyFrame,
 }
 
 /// Why a status request did not produce a report.

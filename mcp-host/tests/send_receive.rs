@@ -265,10 +265,44 @@ async fn invalid_mcp_payloads_and_other_frames_are_events() {
     })
     .collect();
     assert_eq!(types, [(0x8A, None), (0x8B, Some(77)), (0x23, None)]);
+    // An MCP packet in an Explicit Rx Indicator (radio in AO=1) is a packet too.
+    fake.send(&xbee_api::ExplicitRxIndicatorRepr {
+        src64: OTHER_MAV,
+        src16: Address16(0x0102),
+        src_endpoint: 0xE8,
+        dst_endpoint: 0xE8,
+        cluster_id: 0x0011,
+        profile_id: 0xC105,
+        options: 0x02,
+        data: b"r\x03\x03",
+    })
+    .await;
+    let rx = next_packet(&mut stream).await;
+    assert_eq!(rx.origin.src64, OTHER_MAV);
+    assert_eq!(rx.origin.options, 0x02);
+    assert_eq!(
+        rx.packet.as_borrowed(),
+        Packet::Report(Report::Controllers(Controller::Mpc))
+    );
     let stats = stream.stats();
     assert_eq!(stats.invalid_packets, 2);
     assert_eq!(stats.unclaimed_responses, 1);
-    assert_eq!(stats.frames, 5);
+    assert_eq!(stats.frames, 6);
+}
+
+#[tokio::test]
+async fn any_frame_can_be_written_as_is() {
+    let (_stream, sender, mut fake) = pty_link(ApiMode::Escaped).await;
+    // An AT command queued with frame id 0x7E (escaped on the wire), no response awaited.
+    sender
+        .write_frame(&[0x09, 0x7E, b'N', b'J', 0x11])
+        .await
+        .unwrap();
+    assert_eq!(fake.next_frame().await, [0x09, 0x7E, b'N', b'J', 0x11]);
+    assert!(matches!(
+        sender.write_frame(&[]).await,
+        Err(SendError::EmptyFrame)
+    ));
 }
 
 #[tokio::test]
