@@ -61,7 +61,11 @@ mod event;
 mod ids;
 pub mod link;
 pub mod options;
+pub mod radio;
+pub mod record;
+pub mod render;
 mod sender;
+pub mod sim;
 mod stats;
 pub mod transport;
 

@@ -1,0 +1,282 @@
+//! The COMMAND words of `send` and `encode`: every MCP command, as an operator types it.
+
+use std::time::{SystemTime, UNIX_EPOCH};
+
+use clap::{Subcommand, ValueEnum};
+use mcp_core::{
+    Address, Command, CommandType, Controller, MAX_PAYLOAD, Packet, Slot, StatusRequest,
+    TelemetryId, Text, TrajectoryBuilder, Waypoint,
+};
+
+/// On or off.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub(crate) enum OnOff {
+    /// Turn on.
+    On,
+    /// Turn off.
+    Off,
+}
+
+impl OnOff {
+    fn is_on(self) -> bool {
+        self == Self::On
+    }
+}
+
+/// A time value: `now` or seconds since the Unix epoch.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum TimeArg {
+    /// This machine's clock, read when the command is built.
+    Now,
+    /// Seconds since 1970-01-01 00:00:00 UTC.
+    Seconds(u32),
+}
+
+impl std::str::FromStr for TimeArg {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        if s.eq_ignore_ascii_case("now") {
+            return Ok(Self::Now);
+        }
+        s.parse().map(Self::Seconds).map_err(|_| {
+            format!(
+                "expected `now` or seconds since 1970 (0 to {}), got `{s}`",
+                u32::MAX
+            )
+        })
+    }
+}
+
+/// Parses `TIME,ELEVATOR,AILERON,ALTITUDE`.
+fn parse_waypoint(s: &str) -> Result<Waypoint, String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let [time, elevator, aileron, altitude] = parts[..] else {
+        return Err(format!(
+            "expected TIME,ELEVATOR,AILERON,ALTITUDE (4 values), got {} in `{s}`",
+            parts.len()
+        ));
+    };
+    let float = |name: &str, v: &str| {
+        v.parse::<f32>()
+            .map_err(|_| format!("{name} `{v}` is not a number"))
+    };
+    Ok(Waypoint {
+        time: time
+            .parse()
+            .map_err(|_| format!("time `{time}` is not a whole number of seconds (u32)"))?,
+        elevator: float("elevator", elevator)?,
+        aileron: float("aileron", aileron)?,
+        altitude: float("altitude", altitude)?,
+    })
+}
+
+fn parse_slot(s: &str) -> Result<Slot, String> {
+    s.parse::<u8>()
+        .ok()
+        .and_then(Slot::new)
+        .ok_or_else(|| format!("slot must be 0, 1, 2 or 3, got `{s}`"))
+}
+
+/// An MCP command (or message) to send. Identifiers take a name or a number.
+#[derive(Debug, Clone, PartialEq, Subcommand)]
+pub(crate) enum CommandArgs {
+    /// Telemetry to coordinator: turn sending of one telemetry id on or off
+    /// (e.g. `telemetry on altitude`, `telemetry off 0x11`).
+    Telemetry {
+        /// on or off.
+        state: OnOff,
+        /// Telemetry id: a name (e.g. `estimated_altitude`) or a number (0-255).
+        id: TelemetryId,
+    },
+    /// Landing: turn autonomous landing on or off.
+    Landing {
+        /// on or off.
+        state: OnOff,
+    },
+    /// Controllers: switch the active controller (`manual`, `altitude`, `mpc` or a number).
+    Controller {
+        /// Controller: a name or a number (0-254).
+        id: Controller,
+    },
+    /// Trajectory set: send the waypoints, in order (none clears the trajectory).
+    Trajectory {
+        /// A waypoint as TIME,ELEVATOR,AILERON,ALTITUDE; repeat for more.
+        #[arg(long = "waypoint", value_name = "TIME,ELEV,AIL,ALT", value_parser = parse_waypoint, allow_hyphen_values = true)]
+        waypoints: Vec<Waypoint>,
+    },
+    /// Position slave set: the slave MAV for coordinate system distribution.
+    SlaveSet {
+        /// The slave's 64-bit address (16 hex digits).
+        address: Address,
+        /// Use the deployed firmware's form, with this slot (0-3).
+        #[arg(long, value_parser = parse_slot)]
+        slot: Option<Slot>,
+    },
+    /// Time: set the MAV's clock.
+    Time {
+        /// `now` or seconds since 1970-01-01 UTC.
+        time: TimeArg,
+    },
+    /// Position set: the MAV's position in the new coordinate system.
+    #[command(allow_negative_numbers = true)]
+    PositionSet {
+        /// New elevator position.
+        elevator: f32,
+        /// New aileron position.
+        aileron: f32,
+    },
+    /// A status request (the MAV answers with the matching report).
+    Status {
+        /// What to ask: `telemetry_to_coordinator`, `landing`, `controllers`,
+        /// `trajectory_set`, `position_slave_set`, `time`, or a number.
+        kind: CommandType,
+        /// For `telemetry_to_coordinator`: the telemetry id.
+        id: Option<TelemetryId>,
+    },
+    /// A text message (category `m`).
+    Message {
+        /// The text (at most 254 bytes).
+        text: String,
+    },
+    /// Any payload, as hex (not checked: for testing radios and MAV firmware).
+    Raw {
+        /// The payload bytes in hex, e.g. `630201`.
+        #[arg(value_parser = parse_hex_payload)]
+        payload: HexPayload,
+    },
+}
+
+/// Payload bytes given as hex on the command line.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct HexPayload(pub(crate) Vec<u8>);
+
+fn parse_hex_payload(s: &str) -> Result<HexPayload, String> {
+    let digits: String = s
+        .chars()
+        .filter(|c| !c.is_whitespace() && *c != ':')
+        .collect();
+    let digits = digits.strip_prefix("0x").unwrap_or(&digits);
+    if digits.len() % 2 != 0 {
+        return Err("hex payload needs an even number of digits".into());
+    }
+    let bytes = (0..digits.len())
+        .step_by(2)
+        .map(|i| {
+            digits
+                .get(i..i + 2)
+                .and_then(|pair| u8::from_str_radix(pair, 16).ok())
+                .ok_or_else(|| format!("`{}` is not hex", &digits[i..]))
+        })
+        .collect::<Result<Vec<u8>, String>>()?;
+    if bytes.len() > MAX_PAYLOAD {
+        return Err(format!(
+            "payload of {} bytes exceeds {MAX_PAYLOAD}",
+            bytes.len()
+        ));
+    }
+    Ok(HexPayload(bytes))
+}
+
+/// Builds the status request for `kind` (and `id` for telemetry-to-coordinator).
+pub(crate) fn status_request(
+    kind: CommandType,
+    id: Option<TelemetryId>,
+) -> Result<StatusRequest, String> {
+    match (kind, id) {
+        (CommandType::TelemetryToCoordinator, None) => Err(
+            "a telemetry_to_coordinator status request needs a telemetry id (e.g. `altitude`)"
+                .into(),
+        ),
+        (CommandType::TelemetryToCoordinator, Some(id)) => {
+            Ok(StatusRequest::TelemetryToCoordinator(id))
+        }
+        (_, Some(_)) => Err(format!("a {kind} status request takes no telemetry id")),
+        (kind, None) => StatusRequest::for_type(kind, TelemetryId::from(0)).ok_or_else(|| {
+            format!("{kind} has no status request (the position is in the telemetry)")
+        }),
+    }
+}
+
+impl CommandArgs {
+    /// The MCP payload bytes.
+    pub(crate) fn payload(&self) -> Result<Vec<u8>, String> {
+        if let Self::Raw { payload } = self {
+            return Ok(payload.0.clone());
+        }
+        let mut buf = [0u8; MAX_PAYLOAD];
+        let len = match self {
+            Self::Trajectory { waypoints } => {
+                let mut builder =
+                    TrajectoryBuilder::command(&mut buf).map_err(|e| e.to_string())?;
+                for (i, waypoint) in waypoints.iter().enumerate() {
+                    builder.push(*waypoint).map_err(|_| {
+                        format!(
+                            "too many waypoints: {} fit in one packet, got {}",
+                            i,
+                            waypoints.len()
+                        )
+                    })?;
+                }
+                builder.finish()
+            }
+            other => {
+                let text;
+                let packet: Packet<&[u8]> = match other {
+                    Self::Telemetry { state, id } => Command::TelemetryToCoordinator {
+                        on: state.is_on(),
+                        id: *id,
+                    }
+                    .into(),
+                    Self::Landing { state } => Command::Landing { on: state.is_on() }.into(),
+                    Self::Controller { id } => {
+                        if u8::from(*id) == 0xFF {
+                            return Err("controller 255 (0xFF) is the status request byte: use `status controllers`".into());
+                        }
+                        Command::Controllers(*id).into()
+                    }
+                    Self::SlaveSet { address, slot } => Command::PositionSlaveSet {
+                        slot: *slot,
+                        address: *address,
+                    }
+                    .into(),
+                    Self::Time { time } => Command::Time(match time {
+                        TimeArg::Seconds(s) => *s,
+                        TimeArg::Now => now()?,
+                    })
+                    .into(),
+                    Self::PositionSet { elevator, aileron } => Command::PositionSet {
+                        elevator: *elevator,
+                        aileron: *aileron,
+                    }
+                    .into(),
+                    Self::Status { kind, id } => {
+                        Command::StatusRequest(status_request(*kind, *id)?).into()
+                    }
+                    Self::Message { text: t } => {
+                        text = t.as_bytes();
+                        Packet::Message(Text::new(text))
+                    }
+                    Self::Trajectory { .. } | Self::Raw { .. } => unreachable!("handled above"),
+                };
+                packet.encode(&mut buf).map_err(|e| match packet {
+                    Packet::Message(_) => format!(
+                        "message too long: {} bytes, at most {} fit",
+                        e.needed - 1,
+                        MAX_PAYLOAD - 1
+                    ),
+                    _ => e.to_string(),
+                })?
+            }
+        };
+        Ok(buf[..len].to_vec())
+    }
+}
+
+fn now() -> Result<u32, String> {
+    let secs = SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map_err(|_| "this machine's clock is before 1970".to_string())?
+        .as_secs();
+    u32::try_from(secs)
+        .map_err(|_| "this machine's clock is past 2106: time does not fit u32".into())
+}

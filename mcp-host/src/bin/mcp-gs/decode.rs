@@ -1,0 +1,301 @@
+//! `mcp-gs decode`: decode a captured byte stream or a recording.
+
+use std::fs::File;
+use std::io::{self, BufRead, BufReader, Read, Write};
+use std::path::PathBuf;
+
+use clap::Args;
+use xbee_api::{ApiMode, DecodeError, Decoder, Frame};
+
+use mcp_host::record::{self, Direction, RecordReader};
+use mcp_host::render;
+
+use crate::{ApiModeArg, Failure, Format};
+
+/// Arguments of `decode`.
+#[derive(Debug, Args)]
+pub(crate) struct DecodeArgs {
+    /// The capture: a file of raw bytes as read from the radio, a hex dump (`--hex`), or
+    /// a recording made by `monitor --record`; `-` or nothing for standard input.
+    #[arg(default_value = "-")]
+    input: PathBuf,
+    /// API mode of a raw capture (recordings are stored unescaped).
+    #[arg(long, default_value = "1")]
+    api_mode: ApiModeArg,
+    /// The input is hex text (whitespace, `:` and `,` between bytes are ignored).
+    #[arg(long)]
+    hex: bool,
+    /// Output format.
+    #[arg(long, value_enum, default_value_t = Format::Text)]
+    format: Format,
+    /// Print only counts: frames, MCP packets by category, and errors.
+    #[arg(long)]
+    summary: bool,
+}
+
+/// Counts for `--summary`.
+#[derive(Debug, Default)]
+struct Summary {
+    frames: u64,
+    frame_types: std::collections::BTreeMap<u8, u64>,
+    categories: std::collections::BTreeMap<&'static str, u64>,
+    invalid_frames: u64,
+}
+
+/// Runs `decode`.
+pub(crate) fn run(args: DecodeArgs) -> Result<(), Failure> {
+    let input: Box<dyn Read> =
+        if args.input.as_os_str() == "-" {
+            Box::new(io::stdin().lock())
+        } else {
+            Box::new(File::open(&args.input).map_err(|e| {
+                Failure::input(format!("cannot open {}: {e}", args.input.display()))
+            })?)
+        };
+    let mut input = BufReader::with_capacity(1 << 16, input);
+    let stdout = io::stdout().lock();
+    let mut out = io::BufWriter::with_capacity(1 << 16, stdout);
+    let mut printer = Printer {
+        format: args.format,
+        summary: args.summary.then(Summary::default),
+        out: &mut out,
+    };
+
+    let head = input
+        .fill_buf()
+        .map_err(|e| Failure::input(format!("cannot read input: {e}")))?;
+    let result = if !args.hex && record::is_recording(head) {
+        decode_recording(input, &mut printer)
+    } else if args.hex {
+        let bytes = read_hex(input)?;
+        decode_stream(&bytes[..], args.api_mode.0, &mut printer)
+    } else {
+        decode_stream(input, args.api_mode.0, &mut printer)
+    };
+    let result = result.and_then(|()| printer.finish());
+    match result.and_then(|()| out.flush()) {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == io::ErrorKind::BrokenPipe => Ok(()),
+        Err(e) => Err(Failure::input(e.to_string())),
+    }
+}
+
+struct Printer<'w, W: Write> {
+    format: Format,
+    summary: Option<Summary>,
+    out: &'w mut W,
+}
+
+impl<W: Write> Printer<'_, W> {
+    fn frame(
+        &mut self,
+        data: &[u8],
+        direction: Option<(Direction, std::time::SystemTime)>,
+    ) -> io::Result<()> {
+        let parsed = Frame::parse_bytes(data);
+        if let Some(summary) = &mut self.summary {
+            summary.frames += 1;
+            *summary.frame_types.entry(data[0]).or_default() += 1;
+            match parsed {
+                Ok(Frame::ReceivePacket(rx)) => summary.count_mcp(rx.data),
+                Ok(Frame::TransmitRequest(tx)) => summary.count_mcp(tx.data),
+                Ok(_) => {}
+                Err(_) => summary.invalid_frames += 1,
+            }
+            return Ok(());
+        }
+        match (self.format, parsed) {
+            (Format::Json, Ok(frame)) => {
+                let mut value = render::json::frame(&frame);
+                if let Some((direction, time)) = direction {
+                    render::json::add_record_fields(&mut value, direction, time);
+                }
+                writeln!(self.out, "{value}")
+            }
+            (Format::Text, Ok(frame)) => {
+                if let Some((direction, time)) = direction {
+                    write!(
+                        self.out,
+                        "{} {} ",
+                        render::text::time(time),
+                        render::text::direction(direction)
+                    )?;
+                }
+                writeln!(self.out, "{}", render::text::frame(&frame))
+            }
+            (Format::Json, Err(e)) => writeln!(
+                self.out,
+                "{}",
+                serde_json::json!({"error": "frame", "message": e.to_string(), "data": render::json::hex(data)})
+            ),
+            (Format::Text, Err(e)) => writeln!(self.out, "error: {e}: {}", render::json::hex(data)),
+        }
+    }
+
+    fn error(&mut self, error: &DecodeError, offset: u64) -> io::Result<()> {
+        if self.summary.is_some() {
+            return Ok(()); // counted by the decoder's statistics
+        }
+        match self.format {
+            Format::Json => writeln!(self.out, "{}", render::json::decode_error(error, offset)),
+            Format::Text => writeln!(self.out, "{}", render::text::decode_error(error, offset)),
+        }
+    }
+
+    fn finish(&mut self) -> io::Result<()> {
+        Ok(())
+    }
+}
+
+impl Summary {
+    fn count_mcp(&mut self, payload: &[u8]) {
+        let name = match mcp_core::parse(payload) {
+            Ok(packet) => packet.category().name().unwrap_or("unknown"),
+            Err(_) => "invalid",
+        };
+        *self.categories.entry(name).or_default() += 1;
+    }
+}
+
+fn decode_stream(
+    mut input: impl Read,
+    mode: ApiMode,
+    printer: &mut Printer<'_, impl Write>,
+) -> io::Result<()> {
+    let mut decoder: Decoder = Decoder::new(mode);
+    let mut chunk = vec![0u8; 1 << 16];
+    let mut offset = 0u64;
+    loop {
+        let n = match input.read(&mut chunk) {
+            Ok(0) => break,
+            Ok(n) => n,
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(e),
+        };
+        let mut rest = &chunk[..n];
+        loop {
+            let (consumed, event) = decoder.decode(rest);
+            rest = &rest[consumed..];
+            offset += consumed as u64;
+            match event {
+                Some(Ok(frame)) => printer.frame(frame.data(), None)?,
+                Some(Err(error)) => printer.error(&error, offset)?,
+                None => break,
+            }
+        }
+    }
+    while let Some(event) = decoder.finish() {
+        match event {
+            Ok(frame) => printer.frame(frame.data(), None)?,
+            Err(error) => printer.error(&error, offset)?,
+        }
+    }
+    if let Some(summary) = &printer.summary {
+        print_summary(
+            printer.out,
+            summary,
+            printer.format,
+            offset,
+            decoder.stats(),
+        )?;
+    }
+    Ok(())
+}
+
+fn decode_recording(input: impl Read, printer: &mut Printer<'_, impl Write>) -> io::Result<()> {
+    let mut reader = RecordReader::new(input)?;
+    while let Some(record) = reader.next_record()? {
+        printer.frame(&record.frame, Some((record.direction, record.time)))?;
+    }
+    if let Some(summary) = &printer.summary {
+        print_summary(
+            printer.out,
+            summary,
+            printer.format,
+            reader.offset(),
+            &xbee_api::Stats::default(),
+        )?;
+    }
+    Ok(())
+}
+
+fn print_summary(
+    out: &mut impl Write,
+    summary: &Summary,
+    format: Format,
+    bytes: u64,
+    stats: &xbee_api::Stats,
+) -> io::Result<()> {
+    let errors = serde_json::json!({
+        "checksum": stats.bad_checksum,
+        "oversize": stats.oversize,
+        "empty_frame": stats.empty,
+        "truncated": stats.truncated,
+        "bad_escape": stats.bad_escape,
+        "bytes_skipped": stats.bytes_skipped,
+        "invalid_frame": summary.invalid_frames,
+    });
+    match format {
+        Format::Json => {
+            let types: serde_json::Map<String, serde_json::Value> = summary
+                .frame_types
+                .iter()
+                .map(|(t, n)| (format!("0x{t:02x}"), (*n).into()))
+                .collect();
+            let value = serde_json::json!({
+                "bytes": bytes,
+                "frames": summary.frames,
+                "frame_types": types,
+                "mcp": summary.categories,
+                "errors": errors,
+            });
+            writeln!(out, "{value}")
+        }
+        Format::Text => {
+            writeln!(out, "bytes: {bytes}")?;
+            writeln!(out, "frames: {}", summary.frames)?;
+            for (t, n) in &summary.frame_types {
+                writeln!(out, "  type 0x{t:02x}: {n}")?;
+            }
+            writeln!(out, "mcp packets:")?;
+            for (c, n) in &summary.categories {
+                writeln!(out, "  {c}: {n}")?;
+            }
+            writeln!(out, "errors:")?;
+            for (k, v) in errors.as_object().into_iter().flatten() {
+                writeln!(out, "  {k}: {v}")?;
+            }
+            Ok(())
+        }
+    }
+}
+
+/// Reads hex text: pairs of hex digits; whitespace, `:`, `,` and `0x` prefixes between
+/// bytes are ignored; `#` starts a comment to the end of the line.
+fn read_hex(input: impl BufRead) -> Result<Vec<u8>, Failure> {
+    let mut bytes = Vec::new();
+    for (n, line) in input.lines().enumerate() {
+        let line = line.map_err(|e| Failure::input(format!("cannot read input: {e}")))?;
+        let line = line.split('#').next().unwrap_or("");
+        for word in line.split(|c: char| c.is_whitespace() || c == ':' || c == ',') {
+            let word = word
+                .strip_prefix("0x")
+                .or_else(|| word.strip_prefix("0X"))
+                .unwrap_or(word);
+            if word.len() % 2 != 0 {
+                return Err(Failure::input(format!(
+                    "line {}: `{word}` is not whole bytes of hex (odd number of digits)",
+                    n + 1
+                )));
+            }
+            for pair in word.as_bytes().chunks(2) {
+                let text = std::str::from_utf8(pair).unwrap_or("??");
+                let byte = u8::from_str_radix(text, 16).map_err(|_| {
+                    Failure::input(format!("line {}: `{text}` is not a hex byte", n + 1))
+                })?;
+                bytes.push(byte);
+            }
+        }
+    }
+    Ok(bytes)
+}

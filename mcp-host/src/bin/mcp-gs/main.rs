@@ -1,0 +1,123 @@
+//! `mcp-gs`: the MCP ground station.
+
+mod command;
+mod decode;
+mod demo;
+mod encode;
+mod radio;
+mod sim;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+use xbee_api::ApiMode;
+
+/// MCP ground station: talk to MAVs through an XBee radio, or to a simulated one.
+#[derive(Debug, Parser)]
+#[command(name = "mcp-gs", version, propagate_version = true)]
+struct Cli {
+    #[command(subcommand)]
+    command: Sub,
+}
+
+#[derive(Debug, Subcommand)]
+enum Sub {
+    /// Decode a captured byte stream or a recording and print every frame.
+    Decode(decode::DecodeArgs),
+    /// Print the Transmit Request frame of a command as hex.
+    Encode(encode::EncodeArgs),
+    /// Run a virtual XBee network between links (radios emulated in software).
+    Radio(radio::RadioArgs),
+    /// Run simulated MAVs behind a virtual XBee network on a link.
+    Sim(sim::SimArgs),
+    /// A ground station and a simulated MAV in one process: no hardware needed.
+    Demo(demo::DemoArgs),
+}
+
+/// Output format of `monitor` and `decode`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub(crate) enum Format {
+    /// One readable line per frame.
+    Text,
+    /// JSON Lines: one object per frame (schema in the README).
+    Json,
+}
+
+/// An XBee API mode on the command line: 1 or 2.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ApiModeArg(pub ApiMode);
+
+impl std::str::FromStr for ApiModeArg {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        s.parse::<u8>()
+            .ok()
+            .and_then(|n| ApiMode::try_from(n).ok())
+            .map(Self)
+            .ok_or_else(|| format!("API mode must be 1 or 2, got `{s}`"))
+    }
+}
+
+/// Why a subcommand failed: a one-line message and an exit code.
+#[derive(Debug)]
+pub(crate) struct Failure {
+    message: String,
+    code: u8,
+}
+
+impl Failure {
+    /// Exit code of other failures.
+    pub(crate) const OTHER: u8 = 1;
+    /// Exit code of bad arguments or input (as clap's usage errors).
+    pub(crate) const INPUT: u8 = 2;
+    /// Exit code of a link that cannot be opened or that went away.
+    pub(crate) const LINK: u8 = 3;
+    /// Exit code of a timeout: no transmit status, response or report in time.
+    pub(crate) const TIMEOUT: u8 = 4;
+    /// Exit code of a delivery the radio reported as failed.
+    pub(crate) const DELIVERY: u8 = 5;
+
+    /// A failure with `code`.
+    pub(crate) fn new(code: u8, message: impl Into<String>) -> Self {
+        Self {
+            message: message.into(),
+            code,
+        }
+    }
+
+    /// Bad input or arguments.
+    pub(crate) fn input(message: impl Into<String>) -> Self {
+        Self::new(Self::INPUT, message)
+    }
+
+    /// A link that cannot be opened or went away.
+    pub(crate) fn link(message: impl Into<String>) -> Self {
+        Self::new(Self::LINK, message)
+    }
+}
+
+#[tokio::main]
+async fn main() -> ExitCode {
+    let cli = Cli::parse();
+    tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_env("MCP_LOG")
+                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn")),
+        )
+        .with_writer(std::io::stderr)
+        .init();
+    let result = match cli.command {
+        Sub::Decode(args) => decode::run(args),
+        Sub::Encode(args) => encode::run(args),
+        Sub::Radio(args) => radio::run(args).await,
+        Sub::Sim(args) => sim::run(args).await,
+        Sub::Demo(args) => demo::run(args).await,
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(failure) => {
+            eprintln!("mcp-gs: {}", failure.message);
+            ExitCode::from(failure.code)
+        }
+    }
+}

@@ -1,0 +1,1 @@
+//! A virtual XBee network (in progress).

@@ -1,0 +1,265 @@
+//! Recordings: timestamped raw frames, as `mcp-gs monitor --record` writes them and
+//! `mcp-gs decode` and `mcp-gs replay` read them.
+//!
+//! # Format, version 1
+//!
+//! A file starts with an 8-byte header: the magic `MCPREC` (6 ASCII bytes) and the
+//! format version as a little-endian `u16` (1). Records follow, back to back, until the
+//! end of the file:
+//!
+//! | bytes | field |
+//! |---|---|
+//! | 8 | timestamp: microseconds since 1970-01-01 00:00:00 UTC, `u64` little-endian |
+//! | 1 | direction: 0 received from the radio, 1 sent to the radio |
+//! | 2 | length N of the frame data, `u16` little-endian (1 or more) |
+//! | N | the API frame's data: frame type byte first, unescaped, without start delimiter, length or checksum |
+//!
+//! Frames are stored without their API-mode framing so that a recording replays onto a
+//! link in either mode. A reader stops with an error at a truncated record, after
+//! handing out every whole record before it.
+
+use std::io::{self, Read, Write};
+use std::time::{Duration, SystemTime, UNIX_EPOCH};
+
+/// The first 6 bytes of a recording.
+pub const MAGIC: &[u8; 6] = b"MCPREC";
+/// The format version this module writes and reads.
+pub const VERSION: u16 = 1;
+/// Header length: magic and version.
+pub const HEADER_LEN: usize = 8;
+
+/// Whether a frame came from the radio or went to it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Direction {
+    /// Received from the local radio.
+    Received,
+    /// Sent to the local radio.
+    Sent,
+}
+
+/// One recorded frame.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Record {
+    /// When the frame was received or sent.
+    pub time: SystemTime,
+    /// Which way it went.
+    pub direction: Direction,
+    /// The frame data (type byte first).
+    pub frame: Vec<u8>,
+}
+
+/// Writes a recording.
+#[derive(Debug)]
+pub struct RecordWriter<W: Write> {
+    out: W,
+}
+
+impl<W: Write> RecordWriter<W> {
+    /// Writes the header and returns the writer.
+    pub fn new(mut out: W) -> io::Result<Self> {
+        out.write_all(MAGIC)?;
+        out.write_all(&VERSION.to_le_bytes())?;
+        Ok(Self { out })
+    }
+
+    /// Appends one frame.
+    pub fn write(
+        &mut self,
+        time: SystemTime,
+        direction: Direction,
+        frame: &[u8],
+    ) -> io::Result<()> {
+        let len = u16::try_from(frame.len())
+            .ok()
+            .filter(|&n| n > 0)
+            .ok_or_else(|| {
+                io::Error::new(
+                    io::ErrorKind::InvalidInput,
+                    "frame data must be 1 to 65535 bytes",
+                )
+            })?;
+        let micros = time
+            .duration_since(UNIX_EPOCH)
+            .unwrap_or_default()
+            .as_micros();
+        let micros = u64::try_from(micros).unwrap_or(u64::MAX);
+        let mut head = [0u8; 11];
+        head[..8].copy_from_slice(&micros.to_le_bytes());
+        head[8] = match direction {
+            Direction::Received => 0,
+            Direction::Sent => 1,
+        };
+        head[9..].copy_from_slice(&len.to_le_bytes());
+        self.out.write_all(&head)?;
+        self.out.write_all(frame)
+    }
+
+    /// Flushes the underlying writer.
+    pub fn flush(&mut self) -> io::Result<()> {
+        self.out.flush()
+    }
+}
+
+/// Whether `bytes` start like a recording.
+pub fn is_recording(bytes: &[u8]) -> bool {
+    bytes.starts_with(MAGIC)
+}
+
+/// Reads a recording record by record.
+#[derive(Debug)]
+pub struct RecordReader<R: Read> {
+    input: R,
+    offset: u64,
+}
+
+impl<R: Read> RecordReader<R> {
+    /// Reads and checks the header.
+    pub fn new(mut input: R) -> io::Result<Self> {
+        let mut header = [0u8; HEADER_LEN];
+        input.read_exact(&mut header).map_err(|e| match e.kind() {
+            io::ErrorKind::UnexpectedEof => invalid("not a recording: shorter than its header"),
+            _ => e,
+        })?;
+        if &header[..6] != MAGIC {
+            return Err(invalid("not a recording: no MCPREC header"));
+        }
+        let version = u16::from_le_bytes([header[6], header[7]]);
+        if version != VERSION {
+            return Err(invalid(&format!(
+                "recording format version {version} is not supported (this program reads version {VERSION})"
+            )));
+        }
+        Ok(Self {
+            input,
+            offset: HEADER_LEN as u64,
+        })
+    }
+
+    /// Byte offset of the next record in the file.
+    pub fn offset(&self) -> u64 {
+        self.offset
+    }
+
+    /// The next record; `None` at the end of the file.
+    pub fn next_record(&mut self) -> io::Result<Option<Record>> {
+        let mut head = [0u8; 11];
+        let got = read_full(&mut self.input, &mut head)?;
+        if got == 0 {
+            return Ok(None);
+        }
+        if got < head.len() {
+            return Err(invalid(&format!(
+                "record at byte {} is cut off in its header",
+                self.offset
+            )));
+        }
+        let micros = u64::from_le_bytes(head[..8].try_into().expect("8 bytes"));
+        let direction = match head[8] {
+            0 => Direction::Received,
+            1 => Direction::Sent,
+            other => {
+                return Err(invalid(&format!(
+                    "record at byte {}: direction byte {other} is neither 0 nor 1",
+                    self.offset
+                )));
+            }
+        };
+        let len = usize::from(u16::from_le_bytes([head[9], head[10]]));
+        if len == 0 {
+            return Err(invalid(&format!(
+                "record at byte {}: empty frame",
+                self.offset
+            )));
+        }
+        let mut frame = vec![0u8; len];
+        if read_full(&mut self.input, &mut frame)? < len {
+            return Err(invalid(&format!(
+                "record at byte {} is cut off: {len} frame bytes announced",
+                self.offset
+            )));
+        }
+        self.offset += (head.len() + len) as u64;
+        Ok(Some(Record {
+            time: UNIX_EPOCH + Duration::from_micros(micros),
+            direction,
+            frame,
+        }))
+    }
+}
+
+impl<R: Read> Iterator for RecordReader<R> {
+    type Item = io::Result<Record>;
+    fn next(&mut self) -> Option<Self::Item> {
+        self.next_record().transpose()
+    }
+}
+
+fn invalid(message: &str) -> io::Error {
+    io::Error::new(io::ErrorKind::InvalidData, message.to_string())
+}
+
+/// Reads until `buf` is full or the input ends; returns the bytes read.
+fn read_full(input: &mut impl Read, buf: &mut [u8]) -> io::Result<usize> {
+    let mut filled = 0;
+    while filled < buf.len() {
+        match input.read(&mut buf[filled..]) {
+            Ok(0) => break,
+            Ok(n) => filled += n,
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(filled)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn round_trip() {
+        let t = UNIX_EPOCH + Duration::from_micros(1_763_683_200_123_456);
+        let mut w = RecordWriter::new(Vec::new()).unwrap();
+        w.write(t, Direction::Received, &[0x8A, 0x06]).unwrap();
+        w.write(t, Direction::Sent, &[0x10, 1, 2, 3]).unwrap();
+        let bytes = w.out;
+        assert!(is_recording(&bytes));
+        let records: Vec<_> = RecordReader::new(&bytes[..])
+            .unwrap()
+            .collect::<Result<_, _>>()
+            .unwrap();
+        assert_eq!(records.len(), 2);
+        assert_eq!(
+            records[0],
+            Record {
+                time: t,
+                direction: Direction::Received,
+                frame: vec![0x8A, 0x06]
+            }
+        );
+        assert_eq!(records[1].direction, Direction::Sent);
+        assert_eq!(records[1].frame, vec![0x10, 1, 2, 3]);
+    }
+
+    #[test]
+    fn truncated_record_is_an_error_after_whole_ones() {
+        let mut w = RecordWriter::new(Vec::new()).unwrap();
+        w.write(UNIX_EPOCH, Direction::Received, &[0x8A, 0x06])
+            .unwrap();
+        w.write(UNIX_EPOCH, Direction::Received, &[0x8A, 0x02])
+            .unwrap();
+        let mut bytes = w.out;
+        bytes.truncate(bytes.len() - 1);
+        let mut r = RecordReader::new(&bytes[..]).unwrap();
+        assert!(r.next_record().unwrap().is_some());
+        let err = r.next_record().unwrap_err();
+        assert!(err.to_string().contains("cut off"), "{err}");
+    }
+
+    #[test]
+    fn rejects_other_files_and_versions() {
+        assert!(RecordReader::new(&b"\x7e\x00\x02\x8a\x06\x6f\x00\x00"[..]).is_err());
+        let err = RecordReader::new(&b"MCPREC\x02\x00"[..]).unwrap_err();
+        assert!(err.to_string().contains("version 2"), "{err}");
+    }
+}

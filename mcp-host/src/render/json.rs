@@ -1,0 +1,342 @@
+//! The JSON Lines form of frames and packets (`mcp-gs --format json`).
+//!
+//! One JSON object per frame; the schema is documented in the README and is stable:
+//! fields are only ever added. Addresses and hex data are lowercase hex; identifiers
+//! and codes are numbers, with their names beside them (`*_name`) where the protocol
+//! or Digi names them; non-finite floats are the strings `"NaN"`, `"Infinity"` and
+//! `"-Infinity"`; message and warning text keeps printable ASCII and writes any other
+//! byte as `\xNN` (a backslash as `\\`), so the original bytes can always be recovered.
+
+use mcp_core::{
+    Command, Packet, Report, SlaveAddresses, StatusRequest, Telemetry, Text, Waypoints,
+};
+use serde_json::{Map, Value, json};
+use xbee_api::{DecodeError, Frame};
+
+/// Lowercase hex of `bytes`, no separators.
+pub fn hex(bytes: &[u8]) -> String {
+    use std::fmt::Write;
+    bytes
+        .iter()
+        .fold(String::with_capacity(bytes.len() * 2), |mut s, b| {
+            let _ = write!(s, "{b:02x}");
+            s
+        })
+}
+
+/// A float as JSON: a number, or `"NaN"`, `"Infinity"`, `"-Infinity"`.
+pub fn float(value: f32) -> Value {
+    if value.is_nan() {
+        Value::from("NaN")
+    } else if value.is_infinite() {
+        Value::from(if value > 0.0 { "Infinity" } else { "-Infinity" })
+    } else {
+        Value::from(f64::from(value))
+    }
+}
+
+/// Inserts `key: number` and, when `name` is known, `key_name: name`.
+fn named(map: &mut Map<String, Value>, key: &str, code: u8, name: Option<&str>) {
+    map.insert(key.into(), code.into());
+    if let Some(name) = name {
+        map.insert(format!("{key}_name"), name.into());
+    }
+}
+
+/// One frame as a JSON object.
+pub fn frame(frame: &Frame<'_>) -> Value {
+    let mut m = Map::new();
+    match frame {
+        Frame::ReceivePacket(rx) => {
+            m.insert("frame".into(), "receive".into());
+            m.insert("src64".into(), rx.src64.to_string().into());
+            m.insert("src16".into(), rx.src16.to_string().into());
+            m.insert("options".into(), rx.options.into());
+            m.insert("mcp".into(), mcp(rx.data));
+        }
+        Frame::TransmitRequest(tx) => {
+            m.insert("frame".into(), "transmit".into());
+            m.insert("id".into(), tx.frame_id.into());
+            m.insert("dst64".into(), tx.dst64.to_string().into());
+            m.insert("dst16".into(), tx.dst16.to_string().into());
+            m.insert("radius".into(), tx.radius.into());
+            m.insert("options".into(), tx.options.into());
+            m.insert("mcp".into(), mcp(tx.data));
+        }
+        Frame::TransmitStatus(st) => {
+            m.insert("frame".into(), "transmit_status".into());
+            m.insert("id".into(), st.frame_id.into());
+            m.insert("dst16".into(), st.dst16.to_string().into());
+            m.insert("retries".into(), st.retries.into());
+            m.insert("delivery".into(), u8::from(st.delivery).into());
+            m.insert("discovery".into(), u8::from(st.discovery).into());
+        }
+        Frame::ModemStatus(ms) => {
+            m.insert("frame".into(), "modem_status".into());
+            m.insert("status".into(), u8::from(ms.status).into());
+        }
+        Frame::AtCommand(at) => {
+            m.insert("frame".into(), "at".into());
+            m.insert("id".into(), at.frame_id.into());
+            m.insert("command".into(), at_name(at.command).into());
+            m.insert("parameter".into(), hex(at.parameter).into());
+        }
+        Frame::AtCommandResponse(at) => {
+            m.insert("frame".into(), "at_response".into());
+            m.insert("id".into(), at.frame_id.into());
+            m.insert("command".into(), at_name(at.command).into());
+            m.insert("status".into(), u8::from(at.status).into());
+            m.insert("data".into(), hex(at.data).into());
+        }
+        Frame::RemoteAtCommand(at) => {
+            m.insert("frame".into(), "remote_at".into());
+            m.insert("id".into(), at.frame_id.into());
+            m.insert("dst64".into(), at.dst64.to_string().into());
+            m.insert("dst16".into(), at.dst16.to_string().into());
+            m.insert("options".into(), at.options.into());
+            m.insert("command".into(), at_name(at.command).into());
+            m.insert("parameter".into(), hex(at.parameter).into());
+        }
+        Frame::RemoteAtResponse(at) => {
+            m.insert("frame".into(), "remote_at_response".into());
+            m.insert("id".into(), at.frame_id.into());
+            m.insert("src64".into(), at.src64.to_string().into());
+            m.insert("src16".into(), at.src16.to_string().into());
+            m.insert("command".into(), at_name(at.command).into());
+            m.insert("status".into(), u8::from(at.status).into());
+            m.insert("data".into(), hex(at.data).into());
+        }
+        Frame::ExplicitAddressingCommand(tx) => {
+            m.insert("frame".into(), "explicit_transmit".into());
+            m.insert("id".into(), tx.frame_id.into());
+            m.insert("dst64".into(), tx.dst64.to_string().into());
+            m.insert("dst16".into(), tx.dst16.to_string().into());
+            m.insert("src_endpoint".into(), tx.src_endpoint.into());
+            m.insert("dst_endpoint".into(), tx.dst_endpoint.into());
+            m.insert("cluster".into(), tx.cluster_id.into());
+            m.insert("profile".into(), tx.profile_id.into());
+            m.insert("radius".into(), tx.radius.into());
+            m.insert("options".into(), tx.options.into());
+            m.insert("data".into(), hex(tx.data).into());
+        }
+        Frame::ExplicitRxIndicator(rx) => {
+            m.insert("frame".into(), "explicit_receive".into());
+            m.insert("src64".into(), rx.src64.to_string().into());
+            m.insert("src16".into(), rx.src16.to_string().into());
+            m.insert("src_endpoint".into(), rx.src_endpoint.into());
+            m.insert("dst_endpoint".into(), rx.dst_endpoint.into());
+            m.insert("cluster".into(), rx.cluster_id.into());
+            m.insert("profile".into(), rx.profile_id.into());
+            m.insert("options".into(), rx.options.into());
+            m.insert("data".into(), hex(rx.data).into());
+        }
+        Frame::Unknown { frame_type, data } => {
+            m.insert("frame".into(), "unknown".into());
+            m.insert("type".into(), (*frame_type).into());
+            m.insert("data".into(), hex(data).into());
+        }
+    }
+    Value::Object(m)
+}
+
+/// An AT command name: its two characters, or hex when they are not printable.
+pub(crate) fn at_name(command: [u8; 2]) -> String {
+    if command.iter().all(|b| b.is_ascii_graphic()) {
+        command.iter().map(|&b| char::from(b)).collect()
+    } else {
+        hex(&command)
+    }
+}
+
+/// A frame the decoder dropped, at byte `offset` of the input.
+pub fn decode_error(error: &DecodeError, offset: u64) -> Value {
+    let mut m = Map::new();
+    m.insert("error".into(), decode_error_kind(error).into());
+    m.insert("offset".into(), offset.into());
+    match *error {
+        DecodeError::BadChecksum { expected, got } => {
+            m.insert("expected".into(), expected.into());
+            m.insert("got".into(), got.into());
+        }
+        DecodeError::Oversize { length, capacity } => {
+            m.insert("length".into(), length.into());
+            m.insert("capacity".into(), capacity.into());
+        }
+        DecodeError::EmptyFrame => {}
+        DecodeError::Truncated { length, received } => {
+            m.insert("length".into(), length.map_or(Value::Null, Value::from));
+            m.insert("received".into(), received.into());
+        }
+        DecodeError::BadEscape { byte, received } => {
+            m.insert("byte".into(), byte.into());
+            m.insert("received".into(), received.into());
+        }
+    }
+    m.insert("message".into(), error.to_string().into());
+    Value::Object(m)
+}
+
+/// The stable name of a decode error kind.
+pub fn decode_error_kind(error: &DecodeError) -> &'static str {
+    match error {
+        DecodeError::BadChecksum { .. } => "checksum",
+        DecodeError::Oversize { .. } => "oversize",
+        DecodeError::EmptyFrame => "empty_frame",
+        DecodeError::Truncated { .. } => "truncated",
+        DecodeError::BadEscape { .. } => "bad_escape",
+    }
+}
+
+/// An MCP payload as a JSON object: the packet, or `{"category":"invalid",...}`.
+pub fn mcp(payload: &[u8]) -> Value {
+    match mcp_core::parse(payload) {
+        Ok(packet) => packet_json(&packet),
+        Err(error) => json!({
+            "category": "invalid",
+            "error": error.to_string(),
+            "offset": error.offset(),
+            "data": hex(payload),
+        }),
+    }
+}
+
+/// A parsed MCP packet as a JSON object.
+pub fn packet_json<B: AsRef<[u8]>>(packet: &Packet<B>) -> Value {
+    let mut m = Map::new();
+    m.insert("category".into(), packet.category().to_string().into());
+    match packet {
+        Packet::Command(command) => command_fields(&mut m, command),
+        Packet::Report(report) => report_fields(&mut m, report),
+        Packet::Telemetry(telemetry) => {
+            m.insert("values".into(), telemetry_values(telemetry));
+        }
+        Packet::Message(text) | Packet::Warning(text) => {
+            m.insert("text".into(), text_json(text));
+        }
+    }
+    Value::Object(m)
+}
+
+fn text_json<B: AsRef<[u8]>>(text: &Text<B>) -> Value {
+    text.as_borrowed().to_string().into()
+}
+
+fn telemetry_values<B: AsRef<[u8]>>(telemetry: &Telemetry<B>) -> Value {
+    telemetry
+        .as_borrowed()
+        .iter()
+        .map(|record| {
+            let mut v = Map::new();
+            v.insert("id".into(), u8::from(record.id).into());
+            if let Some(name) = record.id.name() {
+                v.insert("name".into(), name.into());
+            }
+            v.insert("value".into(), float(record.value));
+            Value::Object(v)
+        })
+        .collect()
+}
+
+fn waypoints_json<B: AsRef<[u8]>>(waypoints: &Waypoints<B>) -> Value {
+    waypoints
+        .as_borrowed()
+        .iter()
+        .map(|w| {
+            json!({
+                "time": w.time,
+                "elevator": float(w.elevator),
+                "aileron": float(w.aileron),
+                "altitude": float(w.altitude),
+            })
+        })
+        .collect()
+}
+
+fn address(address: mcp_core::Address) -> Value {
+    hex(&address.0).into()
+}
+
+fn command_fields<B: AsRef<[u8]>>(m: &mut Map<String, Value>, command: &Command<B>) {
+    let ty = command.command_type();
+    m.insert("type".into(), ty.to_string().into());
+    match command {
+        Command::StatusRequest(request) => {
+            m.insert("status_request".into(), true.into());
+            if let StatusRequest::TelemetryToCoordinator(id) = request {
+                named(m, "telemetry", u8::from(*id), id.name());
+            }
+        }
+        Command::TelemetryToCoordinator { on, id } => {
+            m.insert("on".into(), (*on).into());
+            named(m, "telemetry", u8::from(*id), id.name());
+        }
+        Command::Landing { on } => {
+            m.insert("on".into(), (*on).into());
+        }
+        Command::Controllers(controller) => {
+            named(m, "controller", u8::from(*controller), controller.name());
+        }
+        Command::TrajectorySet(waypoints) => {
+            m.insert("waypoints".into(), waypoints_json(waypoints));
+        }
+        Command::PositionSlaveSet { slot, address: a } => {
+            m.insert("address".into(), address(*a));
+            if let Some(slot) = slot {
+                m.insert("slot".into(), slot.get().into());
+            }
+        }
+        Command::Time(time) => {
+            m.insert("time".into(), (*time).into());
+        }
+        Command::PositionSet { elevator, aileron } => {
+            m.insert("elevator".into(), float(*elevator));
+            m.insert("aileron".into(), float(*aileron));
+        }
+    }
+}
+
+fn report_fields<B: AsRef<[u8]>>(m: &mut Map<String, Value>, report: &Report<B>) {
+    m.insert("type".into(), report.report_type().to_string().into());
+    match report {
+        Report::TelemetryToCoordinator { on, id } => {
+            m.insert("on".into(), (*on).into());
+            named(m, "telemetry", u8::from(*id), id.name());
+        }
+        Report::Landing(state) => named(m, "state", u8::from(*state), state.name()),
+        Report::Controllers(controller) => {
+            named(m, "controller", u8::from(*controller), controller.name());
+        }
+        Report::TrajectorySet(waypoints) => {
+            m.insert("waypoints".into(), waypoints_json(waypoints));
+        }
+        Report::PositionSlaveSet(SlaveAddresses::Single(a)) => {
+            m.insert("address".into(), address(*a));
+        }
+        Report::PositionSlaveSet(SlaveAddresses::Slots(all)) => {
+            m.insert(
+                "addresses".into(),
+                all.iter().map(|a| address(*a)).collect(),
+            );
+        }
+        Report::Time(time) => {
+            m.insert("time".into(), (*time).into());
+        }
+    }
+}
+
+/// Adds a recording's `time` (seconds since 1970, with microseconds) and `direction`
+/// (`"rx"`/`"tx"`) to a frame object.
+pub fn add_record_fields(
+    value: &mut Value,
+    direction: crate::record::Direction,
+    time: std::time::SystemTime,
+) {
+    if let Value::Object(map) = value {
+        let secs = time
+            .duration_since(std::time::UNIX_EPOCH)
+            .map(|d| d.as_secs_f64())
+            .unwrap_or(0.0);
+        map.insert("time".into(), secs.into());
+        map.insert("direction".into(), super::text::direction(direction).into());
+    }
+}

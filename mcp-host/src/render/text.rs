@@ -1,0 +1,160 @@
+//! The one-line text form of frames and packets (`mcp-gs --format text`).
+
+use std::fmt::Write;
+
+use xbee_api::{DecodeError, Frame};
+
+use super::json::hex;
+
+/// An MCP payload as text: the packet, or why it is invalid and its bytes.
+pub fn mcp(payload: &[u8]) -> String {
+    match mcp_core::parse(payload) {
+        Ok(packet) => packet.to_string(),
+        Err(error) => format!("invalid MCP packet ({error}): {}", hex(payload)),
+    }
+}
+
+/// One frame as a line of text (no newline).
+pub fn frame(frame: &Frame<'_>) -> String {
+    let mut s = String::new();
+    let _ = match frame {
+        Frame::ReceivePacket(rx) => write!(
+            s,
+            "rx  {}/{} opt {:02x}: {}",
+            rx.src64,
+            rx.src16,
+            rx.options,
+            mcp(rx.data)
+        ),
+        Frame::TransmitRequest(tx) => write!(
+            s,
+            "tx  {}/{} id {} radius {} opt {:02x}: {}",
+            tx.dst64,
+            tx.dst16,
+            tx.frame_id,
+            tx.radius,
+            tx.options,
+            mcp(tx.data)
+        ),
+        Frame::TransmitStatus(st) => write!(
+            s,
+            "transmit status id {} to {}: delivery {:?} (0x{:02x}), retries {}, discovery {:?} (0x{:02x})",
+            st.frame_id,
+            st.dst16,
+            st.delivery,
+            u8::from(st.delivery),
+            st.retries,
+            st.discovery,
+            u8::from(st.discovery)
+        ),
+        Frame::ModemStatus(ms) => write!(
+            s,
+            "modem status {:?} (0x{:02x})",
+            ms.status,
+            u8::from(ms.status)
+        ),
+        Frame::AtCommand(at) => write!(
+            s,
+            "at id {} {}{}",
+            at.frame_id,
+            at_name(at.command),
+            data_suffix(at.parameter)
+        ),
+        Frame::AtCommandResponse(at) => write!(
+            s,
+            "at response id {} {} {:?}{}",
+            at.frame_id,
+            at_name(at.command),
+            at.status,
+            data_suffix(at.data)
+        ),
+        Frame::RemoteAtCommand(at) => write!(
+            s,
+            "remote at id {} to {}/{} opt {:02x} {}{}",
+            at.frame_id,
+            at.dst64,
+            at.dst16,
+            at.options,
+            at_name(at.command),
+            data_suffix(at.parameter)
+        ),
+        Frame::RemoteAtResponse(at) => write!(
+            s,
+            "remote at response id {} from {}/{} {} {:?}{}",
+            at.frame_id,
+            at.src64,
+            at.src16,
+            at_name(at.command),
+            at.status,
+            data_suffix(at.data)
+        ),
+        Frame::ExplicitAddressingCommand(tx) => write!(
+            s,
+            "explicit tx {}/{} id {} ep {:02x}->{:02x} cluster {:04x} profile {:04x}: {}",
+            tx.dst64,
+            tx.dst16,
+            tx.frame_id,
+            tx.src_endpoint,
+            tx.dst_endpoint,
+            tx.cluster_id,
+            tx.profile_id,
+            hex(tx.data)
+        ),
+        Frame::ExplicitRxIndicator(rx) => write!(
+            s,
+            "explicit rx {}/{} ep {:02x}->{:02x} cluster {:04x} profile {:04x} opt {:02x}: {}",
+            rx.src64,
+            rx.src16,
+            rx.src_endpoint,
+            rx.dst_endpoint,
+            rx.cluster_id,
+            rx.profile_id,
+            rx.options,
+            hex(rx.data)
+        ),
+        Frame::Unknown { frame_type, data } => {
+            write!(s, "frame type 0x{frame_type:02x}{}", data_suffix(data))
+        }
+    };
+    s
+}
+
+fn at_name(command: [u8; 2]) -> String {
+    super::json::at_name(command)
+}
+
+fn data_suffix(data: &[u8]) -> String {
+    if data.is_empty() {
+        String::new()
+    } else {
+        format!(" {}", hex(data))
+    }
+}
+
+/// A dropped frame as a line of text.
+pub fn decode_error(error: &DecodeError, offset: u64) -> String {
+    format!("error at byte {offset}: {error}")
+}
+
+/// `rx` or `tx`.
+pub fn direction(direction: crate::record::Direction) -> &'static str {
+    match direction {
+        crate::record::Direction::Received => "rx",
+        crate::record::Direction::Sent => "tx",
+    }
+}
+
+/// A time as UTC `HH:MM:SS.mmm`.
+pub fn time(time: std::time::SystemTime) -> String {
+    let d = time
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap_or_default();
+    let secs = d.as_secs();
+    format!(
+        "{:02}:{:02}:{:02}.{:03}",
+        secs / 3600 % 24,
+        secs / 60 % 60,
+        secs % 60,
+        d.subsec_millis()
+    )
+}

@@ -1,0 +1,1 @@
+//! A simulated MAV (in progress).
