@@ -13,6 +13,8 @@ use mcp_core::{
 use serde_json::{Map, Value, json};
 use xbee_api::{DecodeError, Frame};
 
+use crate::{Event, LinkEvent, Origin};
+
 /// Lowercase hex of `bytes`, no separators.
 pub fn hex(bytes: &[u8]) -> String {
     use std::fmt::Write;
@@ -148,11 +150,13 @@ pub(crate) fn at_name(command: [u8; 2]) -> String {
     }
 }
 
-/// A frame the decoder dropped, at byte `offset` of the input.
-pub fn decode_error(error: &DecodeError, offset: u64) -> Value {
+/// A frame the decoder dropped, at byte `offset` of the input when known.
+pub fn decode_error(error: &DecodeError, offset: Option<u64>) -> Value {
     let mut m = Map::new();
     m.insert("error".into(), decode_error_kind(error).into());
-    m.insert("offset".into(), offset.into());
+    if let Some(offset) = offset {
+        m.insert("offset".into(), offset.into());
+    }
     match *error {
         DecodeError::BadChecksum { expected, got } => {
             m.insert("expected".into(), expected.into());
@@ -338,5 +342,52 @@ pub fn add_record_fields(
             .unwrap_or(0.0);
         map.insert("time".into(), secs.into());
         map.insert("direction".into(), super::text::direction(direction).into());
+    }
+}
+
+/// An event of a [`crate::PacketStream`] as a JSON object: received packets as
+/// `receive` frames, other frames as [`frame`] writes them, decode errors as
+/// [`decode_error`] does (without offset), link changes as
+/// `{"link":"disconnected","reason":"..."}`. Every object has a `time` (seconds since
+/// 1970) where the event carries one.
+pub fn event(event: &Event) -> Value {
+    match event {
+        Event::Packet(rx) => receive(&rx.origin, packet_json(&rx.packet)),
+        Event::InvalidPacket(rx) => receive(&rx.origin, mcp(&rx.payload)),
+        Event::Frame(frame) => match frame.parse() {
+            Ok(parsed) => self::frame(&parsed),
+            Err(error) => json!({
+                "error": "frame",
+                "message": error.to_string(),
+                "data": hex(frame.data()),
+            }),
+        },
+        Event::DecodeError(error) => decode_error(error, None),
+        Event::Link(link) => link_event(link),
+    }
+}
+
+fn receive(origin: &Origin, mcp: Value) -> Value {
+    let time = origin
+        .received_at
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_secs_f64())
+        .unwrap_or(0.0);
+    json!({
+        "frame": "receive",
+        "src64": origin.src64.to_string(),
+        "src16": origin.src16.to_string(),
+        "options": origin.options,
+        "mcp": mcp,
+        "time": time,
+    })
+}
+
+fn link_event(link: &LinkEvent) -> Value {
+    match link {
+        LinkEvent::Connected { peer } => json!({"link": "connected", "peer": peer}),
+        LinkEvent::Disconnected { reason } => json!({"link": "disconnected", "reason": reason}),
+        LinkEvent::Reconnected { peer } => json!({"link": "reconnected", "peer": peer}),
+        LinkEvent::Closed { reason } => json!({"link": "closed", "reason": reason}),
     }
 }

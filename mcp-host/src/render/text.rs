@@ -131,9 +131,44 @@ fn data_suffix(data: &[u8]) -> String {
     }
 }
 
-/// A dropped frame as a line of text.
-pub fn decode_error(error: &DecodeError, offset: u64) -> String {
-    format!("error at byte {offset}: {error}")
+/// A dropped frame as a line of text, with its byte offset in the input when known.
+pub fn decode_error(error: &DecodeError, offset: Option<u64>) -> String {
+    match offset {
+        Some(offset) => format!("error at byte {offset}: {error}"),
+        None => format!("error: {error}"),
+    }
+}
+
+/// An event of a [`crate::PacketStream`] as a line of text (no time stamp: see
+/// [`time`]).
+pub fn event(event: &crate::Event) -> String {
+    use crate::{Event, LinkEvent};
+    match event {
+        Event::Packet(rx) => format!(
+            "rx  {}/{} opt {:02x}: {}",
+            rx.origin.src64,
+            rx.origin.src16,
+            rx.origin.options,
+            rx.packet.as_borrowed()
+        ),
+        Event::InvalidPacket(rx) => format!(
+            "rx  {}/{} opt {:02x}: invalid MCP packet ({}): {}",
+            rx.origin.src64,
+            rx.origin.src16,
+            rx.origin.options,
+            rx.error,
+            hex(&rx.payload)
+        ),
+        Event::Frame(owned) => match owned.parse() {
+            Ok(parsed) => frame(&parsed),
+            Err(error) => format!("error: {error}: {}", hex(owned.data())),
+        },
+        Event::DecodeError(error) => decode_error(error, None),
+        Event::Link(LinkEvent::Connected { peer }) => format!("link connected: {peer}"),
+        Event::Link(LinkEvent::Disconnected { reason }) => format!("link disconnected: {reason}"),
+        Event::Link(LinkEvent::Reconnected { peer }) => format!("link reconnected: {peer}"),
+        Event::Link(LinkEvent::Closed { reason }) => format!("link closed: {reason}"),
+    }
 }
 
 /// `rx` or `tx`.

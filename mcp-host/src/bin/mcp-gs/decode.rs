@@ -137,8 +137,16 @@ impl<W: Write> Printer<'_, W> {
             return Ok(()); // counted by the decoder's statistics
         }
         match self.format {
-            Format::Json => writeln!(self.out, "{}", render::json::decode_error(error, offset)),
-            Format::Text => writeln!(self.out, "{}", render::text::decode_error(error, offset)),
+            Format::Json => writeln!(
+                self.out,
+                "{}",
+                render::json::decode_error(error, Some(offset))
+            ),
+            Format::Text => writeln!(
+                self.out,
+                "{}",
+                render::text::decode_error(error, Some(offset))
+            ),
         }
     }
 

@@ -1,11 +1,18 @@
 //! `mcp-gs`: the MCP ground station.
 
+mod at;
 mod command;
 mod decode;
 mod demo;
 mod encode;
+mod link_args;
+mod monitor;
+mod ports;
 mod radio;
+mod replay;
+mod send;
 mod sim;
+mod status;
 
 use std::process::ExitCode;
 
@@ -22,10 +29,22 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Sub {
+    /// Print live packets from a link, optionally recording them.
+    Monitor(monitor::MonitorArgs),
+    /// Send one command to a MAV and print the radio's delivery status.
+    Send(send::SendArgs),
+    /// Ask a MAV for a status report and print it.
+    Status(status::StatusArgs),
     /// Decode a captured byte stream or a recording and print every frame.
     Decode(decode::DecodeArgs),
     /// Print the Transmit Request frame of a command as hex.
     Encode(encode::EncodeArgs),
+    /// Play a recording back onto a link.
+    Replay(replay::ReplayArgs),
+    /// Read or set an AT parameter of the local radio, or of a remote one.
+    At(at::AtArgs),
+    /// List the serial ports present.
+    Ports(ports::PortsArgs),
     /// Run a virtual XBee network between links (radios emulated in software).
     Radio(radio::RadioArgs),
     /// Run simulated MAVs behind a virtual XBee network on a link.
@@ -107,6 +126,12 @@ async fn main() -> ExitCode {
         .with_writer(std::io::stderr)
         .init();
     let result = match cli.command {
+        Sub::Monitor(args) => monitor::run(args).await,
+        Sub::Send(args) => send::run(args).await,
+        Sub::Status(args) => status::run(args).await,
+        Sub::Replay(args) => replay::run(args).await,
+        Sub::At(args) => at::run(args).await,
+        Sub::Ports(args) => ports::run(args),
         Sub::Decode(args) => decode::run(args),
         Sub::Encode(args) => encode::run(args),
         Sub::Radio(args) => radio::run(args).await,

@@ -1,0 +1,182 @@
+//! Options shared by the subcommands that talk over a link, and opening that link.
+
+use std::time::Duration;
+
+use clap::Args;
+use mcp_host::{
+    CommandSender, ConnectError, Link, LinkOptions, PacketStream, ReconnectPolicy, SendError,
+};
+use xbee_api::{ApiMode, AtStatus, Frame};
+
+use crate::Failure;
+
+/// API mode of the local radio on the command line: 1, 2 or `auto`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum ApiModeChoice {
+    /// This mode.
+    Fixed(ApiMode),
+    /// Ask the radio (`AT AP`) and use its answer.
+    Auto,
+}
+
+impl std::str::FromStr for ApiModeChoice {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        if s.eq_ignore_ascii_case("auto") {
+            return Ok(Self::Auto);
+        }
+        s.parse::<crate::ApiModeArg>()
+            .map(|m| Self::Fixed(m.0))
+            .map_err(|_| format!("API mode must be 1, 2 or auto, got `{s}`"))
+    }
+}
+
+/// `--link`, `--api-mode` and `--timeout`.
+#[derive(Debug, Clone, Args)]
+pub(crate) struct LinkArgs {
+    /// The local radio: serial:PATH[:BAUD] (default 115200 8N1), tcp:HOST:PORT,
+    /// tcp-listen:ADDR:PORT or pty.
+    #[arg(long, value_name = "LINK")]
+    pub(crate) link: Link,
+    /// XBee API mode of the local radio (its AP setting): 1, 2, or auto to ask the radio.
+    #[arg(long, value_name = "1|2|auto", default_value = "1")]
+    pub(crate) api_mode: ApiModeChoice,
+    /// Seconds to wait for a transmit status, response or report (and to connect).
+    #[arg(long, value_name = "SECONDS", default_value_t = 12.0, value_parser = parse_seconds)]
+    pub(crate) timeout: f64,
+}
+
+fn parse_seconds(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 && v <= 86_400.0 => Ok(v),
+        _ => Err(format!(
+            "expected a number of seconds between 0 and 86400, got `{s}`"
+        )),
+    }
+}
+
+impl LinkArgs {
+    /// The timeout as a duration.
+    pub(crate) fn timeout(&self) -> Duration {
+        Duration::from_secs_f64(self.timeout)
+    }
+
+    /// Opens the link. `reconnect` keeps it alive across disconnections (for long-running
+    /// subcommands); one-shot subcommands fail at once instead.
+    pub(crate) async fn open(
+        &self,
+        reconnect: bool,
+    ) -> Result<(PacketStream, CommandSender), Failure> {
+        let mode = match self.api_mode {
+            ApiModeChoice::Fixed(mode) => mode,
+            ApiModeChoice::Auto => self.detect_mode().await?,
+        };
+        self.connect(mode, reconnect).await
+    }
+
+    async fn connect(
+        &self,
+        mode: ApiMode,
+        reconnect: bool,
+    ) -> Result<(PacketStream, CommandSender), Failure> {
+        let options = LinkOptions {
+            api_mode: mode,
+            connect_timeout: self.timeout(),
+            send_timeout: self.timeout(),
+            reconnect: if reconnect {
+                ReconnectPolicy::default()
+            } else {
+                ReconnectPolicy::disabled()
+            },
+            ..LinkOptions::default()
+        };
+        mcp_host::connect(&self.link, options)
+            .await
+            .map_err(|e| connect_failure(&self.link, e))
+    }
+
+    /// Asks the radio for its API mode. `AT AP` with frame id 1 reads the same in both
+    /// modes (no byte of it needs escaping), and so does its answer.
+    async fn detect_mode(&self) -> Result<ApiMode, Failure> {
+        if !matches!(self.link, Link::Serial { .. } | Link::Tcp { .. }) {
+            return Err(Failure::input(
+                "--api-mode auto needs a link to a radio (serial: or tcp:); give 1 or 2",
+            ));
+        }
+        let (_stream, sender) = self.connect(ApiMode::Unescaped, false).await?;
+        let timeout = self.timeout().min(Duration::from_secs(3));
+        let response = sender
+            .at(*b"AP", &[], Some(timeout))
+            .await
+            .map_err(|e| match e {
+                SendError::Timeout { .. } => Failure::new(
+                    Failure::TIMEOUT,
+                    format!(
+                        "the radio on {} did not answer AT AP within {timeout:?}: it may be in \
+                     transparent mode (AP=0) or at another baud rate",
+                        self.link
+                    ),
+                ),
+                other => send_failure(other),
+            })?;
+        let mode = match response.parse() {
+            Ok(Frame::AtCommandResponse(at)) if at.status == AtStatus::Ok => {
+                at.data.last().copied()
+            }
+            _ => None,
+        };
+        match mode {
+            Some(1) => Ok(ApiMode::Unescaped),
+            Some(2) => Ok(ApiMode::Escaped),
+            Some(0) => Err(Failure::input(
+                "the radio is in transparent mode (AP=0): set AP=1 or 2 with XCTU or `mcp-gs at`",
+            )),
+            other => Err(Failure::new(
+                Failure::OTHER,
+                format!("the radio answered AT AP with {other:?}, not 1 or 2"),
+            )),
+        }
+    }
+}
+
+/// Warns once when the radio's API mode differs from the configured one: the commonest
+/// cause of silently dropped frames.
+pub(crate) async fn check_mode(sender: &CommandSender, configured: ApiMode) {
+    let Ok(response) = sender.at(*b"AP", &[], Some(Duration::from_secs(3))).await else {
+        return;
+    };
+    if let Ok(Frame::AtCommandResponse(at)) = response.parse() {
+        let radio = at.data.last().copied();
+        let configured = u8::from(configured);
+        if at.status == AtStatus::Ok && radio.is_some_and(|r| r != configured) {
+            eprintln!(
+                "mcp-gs: warning: the radio is in API mode {} (AP={}) but --api-mode is {configured}: \
+                 frames will be dropped or garbled; use --api-mode {} or auto",
+                radio.unwrap_or(0),
+                radio.unwrap_or(0),
+                radio.unwrap_or(0),
+            );
+        }
+    }
+}
+
+/// A failure to open `link`.
+pub(crate) fn connect_failure(link: &Link, error: ConnectError) -> Failure {
+    match error {
+        ConnectError::Options(what) => Failure::input(format!("invalid link options: {what}")),
+        ConnectError::Link(e) => Failure::link(format!("cannot open {link}: {e}")),
+    }
+}
+
+/// A send that did not succeed.
+pub(crate) fn send_failure(error: SendError) -> Failure {
+    let code = match &error {
+        SendError::Delivery { .. } => Failure::DELIVERY,
+        SendError::Timeout { .. } => Failure::TIMEOUT,
+        SendError::Disconnected { .. } | SendError::Closed => Failure::LINK,
+        SendError::TooLarge { .. } | SendError::NoFrameId(_) | SendError::EmptyFrame => {
+            Failure::INPUT
+        }
+    };
+    Failure::new(code, error.to_string())
+}

@@ -1,0 +1,139 @@
+//! `mcp-gs monitor`: print live packets, optionally recording them.
+
+use std::fs::File;
+use std::io::{self, BufWriter, Write};
+use std::path::PathBuf;
+use std::time::SystemTime;
+
+use clap::Args;
+use futures::StreamExt;
+use mcp_host::record::{Direction, RecordWriter};
+use mcp_host::render;
+use mcp_host::{Event, LinkEvent};
+use xbee_api::{ApiMode, EncodeFrame, ReceivePacketRepr};
+
+use crate::link_args::{ApiModeChoice, LinkArgs, check_mode};
+use crate::{Failure, Format};
+
+/// Arguments of `monitor`.
+#[derive(Debug, Args)]
+pub(crate) struct MonitorArgs {
+    #[command(flatten)]
+    link: LinkArgs,
+    /// Output format.
+    #[arg(long, value_enum, default_value_t = Format::Text)]
+    format: Format,
+    /// Also record every received frame to FILE (see `decode` and `replay`).
+    #[arg(long, value_name = "FILE")]
+    record: Option<PathBuf>,
+    /// Stop after this many events (default: run until the link closes or Ctrl-C).
+    #[arg(long, value_name = "N")]
+    count: Option<u64>,
+}
+
+/// After this many checksum errors in API mode 1 without a good frame, suggest mode 2.
+const MODE_HINT_ERRORS: u64 = 5;
+
+/// Runs `monitor`.
+pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
+    let mut recorder = match &args.record {
+        Some(path) => {
+            let file = File::create(path)
+                .map_err(|e| Failure::input(format!("cannot create {}: {e}", path.display())))?;
+            Some(
+                RecordWriter::new(BufWriter::new(file))
+                    .map_err(|e| Failure::input(format!("cannot write {}: {e}", path.display())))?,
+            )
+        }
+        None => None,
+    };
+    let (mut stream, sender) = args.link.open(true).await?;
+    if let Some(path) = &stream.info().pty_path {
+        eprintln!(
+            "mcp-gs: pseudo-terminal for the radio side: {}",
+            path.display()
+        );
+    }
+    if let (ApiModeChoice::Fixed(mode), mcp_host::Link::Serial { .. }) =
+        (args.link.api_mode, &args.link.link)
+    {
+        let sender = sender.clone();
+        tokio::spawn(async move { check_mode(&sender, mode).await });
+    }
+    let stdout = io::stdout();
+    let mut seen = 0u64;
+    let (mut good, mut checksum_errors, mut hinted) = (0u64, 0u64, false);
+    let ctrl_c = tokio::signal::ctrl_c();
+    tokio::pin!(ctrl_c);
+    loop {
+        let event = tokio::select! {
+            event = stream.next() => event,
+            _ = &mut ctrl_c => None,
+        };
+        let Some(event) = event else { break };
+        if let Some(recorder) = &mut recorder {
+            if let Some(frame) = frame_data(&event) {
+                recorder
+                    .write(SystemTime::now(), Direction::Received, &frame)
+                    .and_then(|()| recorder.flush())
+                    .map_err(|e| Failure::input(format!("cannot write the recording: {e}")))?;
+            }
+        }
+        match &event {
+            Event::DecodeError(xbee_api::DecodeError::BadChecksum { .. }) => checksum_errors += 1,
+            Event::DecodeError(_) | Event::Link(_) => {}
+            _ => good += 1,
+        }
+        let line = match args.format {
+            Format::Json => render::json::event(&event).to_string(),
+            Format::Text => format!(
+                "{} {}",
+                render::text::time(SystemTime::now()),
+                render::text::event(&event)
+            ),
+        };
+        let mut out = stdout.lock();
+        if writeln!(out, "{line}").and_then(|()| out.flush()).is_err() {
+            break; // stdout closed (e.g. piped into `head`)
+        }
+        if !hinted
+            && good == 0
+            && checksum_errors >= MODE_HINT_ERRORS
+            && args.link.api_mode == ApiModeChoice::Fixed(ApiMode::Unescaped)
+        {
+            hinted = true;
+            eprintln!(
+                "mcp-gs: hint: only checksum errors so far: the radio may be in API mode 2 (AP=2); \
+                 try --api-mode 2 or --api-mode auto"
+            );
+        }
+        if let Event::Link(LinkEvent::Closed { reason }) = &event {
+            return Err(Failure::link(format!("link closed: {reason}")));
+        }
+        seen += 1;
+        if args.count.is_some_and(|n| seen >= n) {
+            break;
+        }
+    }
+    Ok(())
+}
+
+/// The frame data of an event, for the recording: received packets are written back as
+/// the Receive Packet (0x90) frame they came in.
+fn frame_data(event: &Event) -> Option<Vec<u8>> {
+    let (origin, payload) = match event {
+        Event::Packet(rx) => (&rx.origin, &rx.payload),
+        Event::InvalidPacket(rx) => (&rx.origin, &rx.payload),
+        Event::Frame(frame) => return Some(frame.data().to_vec()),
+        Event::DecodeError(_) | Event::Link(_) => return None,
+    };
+    let repr = ReceivePacketRepr {
+        src64: origin.src64,
+        src16: origin.src16,
+        options: origin.options,
+        data: payload,
+    };
+    let mut data = vec![0u8; repr.frame_data_len()];
+    repr.emit_frame_data(&mut data).ok()?;
+    Some(data)
+}

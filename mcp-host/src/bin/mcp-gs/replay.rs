@@ -1,0 +1,84 @@
+//! `mcp-gs replay`: play a recording back onto a link.
+
+use std::fs::File;
+use std::io::BufReader;
+use std::path::PathBuf;
+use std::time::Duration;
+
+use clap::{Args, ValueEnum};
+use mcp_host::record::{Direction, RecordReader};
+
+use crate::Failure;
+use crate::link_args::{LinkArgs, send_failure};
+
+/// Which recorded frames to play.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub(crate) enum Which {
+    /// Frames received from the radio (what a ground station saw): the default.
+    Rx,
+    /// Frames sent to the radio.
+    Tx,
+    /// Both.
+    Both,
+}
+
+/// Arguments of `replay`.
+#[derive(Debug, Args)]
+pub(crate) struct ReplayArgs {
+    /// A recording made by `monitor --record`.
+    file: PathBuf,
+    #[command(flatten)]
+    link: LinkArgs,
+    /// Playback speed: 1 is real time, 2 twice as fast, 0 as fast as possible.
+    #[arg(long, default_value_t = 1.0)]
+    speed: f64,
+    /// Which frames to play.
+    #[arg(long, value_enum, default_value_t = Which::Rx)]
+    frames: Which,
+}
+
+/// Runs `replay`.
+pub(crate) async fn run(args: ReplayArgs) -> Result<(), Failure> {
+    if !(args.speed.is_finite() && args.speed >= 0.0) {
+        return Err(Failure::input(format!(
+            "--speed must be 0 or more, got {}",
+            args.speed
+        )));
+    }
+    let file = File::open(&args.file)
+        .map_err(|e| Failure::input(format!("cannot open {}: {e}", args.file.display())))?;
+    let reader = RecordReader::new(BufReader::new(file))
+        .map_err(|e| Failure::input(format!("{}: {e}", args.file.display())))?;
+    let (stream, sender) = args.link.open(false).await?;
+    if let Some(path) = &stream.info().pty_path {
+        eprintln!("mcp-gs: pseudo-terminal: {}", path.display());
+    }
+    let start = tokio::time::Instant::now();
+    let mut first = None;
+    let mut played = 0u64;
+    for record in reader {
+        let record = record.map_err(|e| Failure::input(format!("{}: {e}", args.file.display())))?;
+        let wanted = match (args.frames, record.direction) {
+            (Which::Both, _) | (Which::Rx, Direction::Received) | (Which::Tx, Direction::Sent) => {
+                true
+            }
+            _ => false,
+        };
+        if !wanted {
+            continue;
+        }
+        let first = *first.get_or_insert(record.time);
+        if args.speed > 0.0 {
+            let offset = record.time.duration_since(first).unwrap_or_default();
+            let at = start + Duration::from_secs_f64(offset.as_secs_f64() / args.speed);
+            tokio::time::sleep_until(at).await;
+        }
+        sender
+            .write_frame(&record.frame)
+            .await
+            .map_err(send_failure)?;
+        played += 1;
+    }
+    eprintln!("mcp-gs: replayed {played} frames");
+    Ok(())
+}

@@ -1,0 +1,49 @@
+//! `mcp-gs status`: send a status request and print the report.
+
+use clap::Args;
+use mcp_core::{CommandType, Packet, TelemetryId};
+use mcp_host::RequestError;
+use xbee_api::Address64;
+
+use crate::command::status_request;
+use crate::link_args::{LinkArgs, send_failure};
+use crate::{Failure, Format};
+
+/// Arguments of `status`.
+#[derive(Debug, Args)]
+pub(crate) struct StatusArgs {
+    #[command(flatten)]
+    link: LinkArgs,
+    /// The MAV's 64-bit address (16 hex digits).
+    #[arg(long)]
+    to: Address64,
+    /// Output format.
+    #[arg(long, value_enum, default_value_t = Format::Text)]
+    format: Format,
+    /// What to ask: telemetry_to_coordinator, landing, controllers, trajectory_set,
+    /// position_slave_set or time (or the type number).
+    kind: CommandType,
+    /// For telemetry_to_coordinator: the telemetry id (a name or a number).
+    id: Option<TelemetryId>,
+}
+
+/// Runs `status`.
+pub(crate) async fn run(args: StatusArgs) -> Result<(), Failure> {
+    let request = status_request(args.kind, args.id).map_err(Failure::input)?;
+    let (_stream, sender) = args.link.open(false).await?;
+    let report = sender
+        .request_with(args.to, request, Some(args.link.timeout()))
+        .await
+        .map_err(|e| match e {
+            RequestError::Send(e) => send_failure(e),
+            timeout @ RequestError::Timeout { .. } => {
+                Failure::new(Failure::TIMEOUT, timeout.to_string())
+            }
+        })?;
+    let packet = Packet::Report(report);
+    match args.format {
+        Format::Text => println!("{}", packet.as_borrowed()),
+        Format::Json => println!("{}", mcp_host::render::json::packet_json(&packet)),
+    }
+    Ok(())
+}
