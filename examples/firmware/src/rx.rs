@@ -1,0 +1,170 @@
+//! The receive path: UART0 bytes, the XBee API mode 1 decoder, Receive Packet
+//! payloads queued for the main loop.
+//!
+//! The UART0 interrupt drains the RX FIFO into the byte-at-a-time decoder; the
+//! [`Inbox`] keeps the MCP payload (RF data) of every Receive Packet (0x90) in a small
+//! queue. The main loop takes the payloads with [`take`] and parses
+//! them in place.
+
+use core::cell::RefCell;
+
+use critical_section::{CriticalSection, Mutex};
+use heapless::{Deque, Vec};
+use xbee_api::{ApiMode, Decoder, RawFrame, ReceivePacket};
+
+use crate::hw::{self, RxError};
+
+/// Largest MCP payload taken: the XBee RF payload limit for unicast without
+/// fragmentation. Longer frames are dropped by the decoder as oversize.
+pub const MAX_PAYLOAD: usize = 84;
+
+/// Receive Packet frame data before the payload: type, 64-bit and 16-bit source
+/// addresses, options.
+pub const RECEIVE_HEADER_LEN: usize = 12;
+
+/// Decoder buffer: in API mode 1 it holds the whole frame, delimiter, length and
+/// checksum (4 bytes) included, so frame data of `DECODER_CAPACITY - 4` = 96 bytes,
+/// exactly a Receive Packet with an 84-byte payload.
+pub const DECODER_CAPACITY: usize = RECEIVE_HEADER_LEN + MAX_PAYLOAD + 4;
+
+/// Payloads waiting for the main loop.
+pub const QUEUE_LEN: usize = 4;
+
+/// One received MCP payload.
+pub type Payload = Vec<u8, MAX_PAYLOAD>;
+
+/// The decoder the firmware runs.
+pub type XbeeDecoder = Decoder<DECODER_CAPACITY>;
+
+/// Counters of the receive path, past the decoder's own.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct RxStats {
+    /// Receive Packets queued.
+    pub packets: u32,
+    /// Valid frames of other types (modem status, AT responses...), ignored.
+    pub other_frames: u32,
+    /// Receive Packets dropped because the queue was full.
+    pub dropped: u32,
+    /// Bytes received with a UART error (framing, parity, break, overrun), dropped.
+    pub uart_errors: u32,
+}
+
+/// The payload queue and the receive counters.
+#[derive(Debug)]
+pub struct Inbox {
+    queue: Deque<Payload, QUEUE_LEN>,
+    stats: RxStats,
+}
+
+impl Default for Inbox {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Inbox {
+    /// An empty inbox.
+    pub const fn new() -> Self {
+        Inbox {
+            queue: Deque::new(),
+            stats: RxStats {
+                packets: 0,
+                other_frames: 0,
+                dropped: 0,
+                uart_errors: 0,
+            },
+        }
+    }
+
+    /// Feeds one byte from the UART to `decoder`, queueing the payload of every
+    /// Receive Packet it completes.
+    pub fn push(&mut self, decoder: &mut XbeeDecoder, byte: Result<u8, RxError>) {
+        let Ok(byte) = byte else {
+            self.stats.uart_errors = self.stats.uart_errors.wrapping_add(1);
+            return;
+        };
+        let mut event = decoder.push(byte);
+        while let Some(e) = event {
+            // Decode errors are counted by the decoder; it resynchronises by itself.
+            if let Ok(frame) = e {
+                self.accept(frame);
+            }
+            event = decoder.poll();
+        }
+    }
+
+    /// Queues the payload of a Receive Packet; counts anything else.
+    fn accept(&mut self, frame: RawFrame<'_>) {
+        let stats = &mut self.stats;
+        let Ok(packet) = ReceivePacket::new_checked(frame.data()) else {
+            stats.other_frames = stats.other_frames.wrapping_add(1);
+            return;
+        };
+        // The decoder's capacity bounds the payload to MAX_PAYLOAD bytes.
+        let Ok(payload) = Payload::from_slice(packet.data()) else {
+            stats.dropped = stats.dropped.wrapping_add(1);
+            return;
+        };
+        if self.queue.push_back(payload).is_err() {
+            stats.dropped = stats.dropped.wrapping_add(1);
+        } else {
+            stats.packets = stats.packets.wrapping_add(1);
+        }
+    }
+
+    /// The oldest queued payload.
+    pub fn pop(&mut self) -> Option<Payload> {
+        self.queue.pop_front()
+    }
+
+    /// `true` if a payload is queued.
+    pub fn is_pending(&self) -> bool {
+        !self.queue.is_empty()
+    }
+
+    /// The receive path's counters.
+    pub fn stats(&self) -> RxStats {
+        self.stats
+    }
+}
+
+// The decoder's RAM is the goal's: under 300 bytes.
+const _: () = assert!(core::mem::size_of::<XbeeDecoder>() < 300);
+
+/// The decoder, in its own static so that its RAM shows in the symbol table.
+static DECODER: Mutex<RefCell<XbeeDecoder>> =
+    Mutex::new(RefCell::new(Decoder::new(ApiMode::Unescaped)));
+
+static INBOX: Mutex<RefCell<Inbox>> = Mutex::new(RefCell::new(Inbox::new()));
+
+/// The UART0 interrupt: drains the RX FIFO through the decoder into the inbox.
+pub fn on_uart0_interrupt() {
+    critical_section::with(|cs| {
+        let mut decoder = DECODER.borrow_ref_mut(cs);
+        let mut inbox = INBOX.borrow_ref_mut(cs);
+        while let Some(byte) = hw::uart0_read() {
+            inbox.push(&mut decoder, byte);
+        }
+        hw::uart0_clear_rx_interrupts();
+    });
+}
+
+/// Takes the oldest received payload.
+pub fn take() -> Option<Payload> {
+    critical_section::with(|cs| INBOX.borrow_ref_mut(cs).pop())
+}
+
+/// `true` if a payload is waiting (for the idle check, inside a critical section).
+pub fn is_pending(cs: CriticalSection<'_>) -> bool {
+    INBOX.borrow_ref(cs).is_pending()
+}
+
+/// The receive counters and the decoder's.
+pub fn stats() -> (RxStats, xbee_api::Stats) {
+    critical_section::with(|cs| {
+        (
+            INBOX.borrow_ref(cs).stats(),
+            *DECODER.borrow_ref(cs).stats(),
+        )
+    })
+}
