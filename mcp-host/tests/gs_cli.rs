@@ -1,0 +1,365 @@
+//! The `mcp-gs` binary: decode, encode, argument errors and exit codes.
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::process::{Command, Output, Stdio};
+
+use serde_json::Value;
+
+fn gs() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+}
+
+fn testdata(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../testdata")
+        .join(name)
+}
+
+fn run(args: &[&str]) -> Output {
+    gs().args(args).output().expect("mcp-gs runs")
+}
+
+fn stdout(output: &Output) -> String {
+    assert!(
+        output.status.success(),
+        "mcp-gs failed: {}\n{}",
+        output.status,
+        String::from_utf8_lossy(&output.stderr)
+    );
+    String::from_utf8(output.stdout.clone()).expect("utf-8 output")
+}
+
+/// `expected` is contained in `got`: same values for its keys (floats within 1e-6
+/// relative), extra keys in `got` allowed.
+fn assert_subset(got: &Value, expected: &Value, path: &str) {
+    match (got, expected) {
+        (Value::Object(g), Value::Object(e)) => {
+            for (key, value) in e {
+                let Some(got) = g.get(key) else {
+                    panic!("{path}.{key} missing in {got:?}")
+                };
+                assert_subset(got, value, &format!("{path}.{key}"));
+            }
+        }
+        (Value::Array(g), Value::Array(e)) => {
+            assert_eq!(g.len(), e.len(), "{path}: array lengths");
+            for (i, (g, e)) in g.iter().zip(e).enumerate() {
+                assert_subset(g, e, &format!("{path}[{i}]"));
+            }
+        }
+        (Value::Number(g), Value::Number(e)) if e.is_f64() => {
+            let (g, e) = (g.as_f64().unwrap(), e.as_f64().unwrap());
+            assert!((g - e).abs() <= 1e-6 * e.abs(), "{path}: {g} != {e}");
+        }
+        _ => assert_eq!(got, expected, "{path}"),
+    }
+}
+
+fn check_decode_json(stream: &str, expected: &str, mode: &str) {
+    let out = stdout(&run(&[
+        "decode",
+        testdata(stream).to_str().unwrap(),
+        "--api-mode",
+        mode,
+        "--format",
+        "json",
+    ]));
+    let expected = std::fs::read_to_string(testdata(expected)).unwrap();
+    let got: Vec<Value> = out
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let expected: Vec<Value> = expected
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(got.len(), expected.len(), "number of frames");
+    for (i, (g, e)) in got.iter().zip(&expected).enumerate() {
+        assert_subset(g, e, &format!("frame {i}"));
+    }
+}
+
+#[test]
+fn decode_json_of_mode_1_stream_matches_expected() {
+    check_decode_json("ap1.bin", "ap1.expected.jsonl", "1");
+}
+
+#[test]
+fn decode_json_of_mode_2_stream_matches_expected() {
+    check_decode_json("ap2.bin", "ap2.expected.jsonl", "2");
+}
+
+#[test]
+fn decode_names_ids_and_escapes_text() {
+    // Receive Packet holding a telemetry record (altitude = 1.5) and one holding a
+    // message with a byte >= 0x80.
+    let hex = "7E 00 12 90 00 13 A2 00 40 52 2B AA 7D 84 01 74 01 00 00 C0 3F DD\n\
+               7E 00 0F 90 00 13 A2 00 40 52 2B AA 7D 84 01 6D 68 E9 93\n";
+    let mut child = gs()
+        .args(["decode", "--hex", "--format", "json"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(hex.as_bytes())
+        .unwrap();
+    let out = stdout(&child.wait_with_output().unwrap());
+    let lines: Vec<Value> = out
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines.len(), 2, "{out}");
+    assert_eq!(
+        lines[0]["mcp"],
+        serde_json::json!({"category": "telemetry", "values": [{"id": 1, "name": "altitude", "value": 1.5}]})
+    );
+    assert_eq!(lines[1]["mcp"]["text"], "h\\xe9");
+}
+
+#[test]
+fn decode_reports_bad_frames_and_goes_on() {
+    // A frame with a wrong checksum between two good modem status frames.
+    let stream = [
+        0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F, // good
+        0x7E, 0x00, 0x02, 0x8A, 0x06, 0x00, // bad checksum
+        0x7E, 0x00, 0x02, 0x8A, 0x02, 0x73, // good
+    ];
+    let dir = tempdir();
+    let path = dir.join("bad.bin");
+    std::fs::write(&path, stream).unwrap();
+    let out = stdout(&run(&[
+        "decode",
+        path.to_str().unwrap(),
+        "--format",
+        "json",
+    ]));
+    let lines: Vec<Value> = out
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines.len(), 3, "{out}");
+    assert_eq!(
+        lines[0],
+        serde_json::json!({"frame": "modem_status", "status": 6})
+    );
+    assert_eq!(lines[1]["error"], "checksum");
+    assert_eq!(lines[1]["offset"], 12);
+    assert_eq!(
+        lines[2],
+        serde_json::json!({"frame": "modem_status", "status": 2})
+    );
+
+    let text = stdout(&run(&["decode", path.to_str().unwrap()]));
+    assert_eq!(text.lines().count(), 3, "{text}");
+    assert!(
+        text.lines()
+            .nth(1)
+            .unwrap()
+            .starts_with("error at byte 12: bad checksum"),
+        "{text}"
+    );
+}
+
+#[test]
+fn decode_summary_counts() {
+    let out = stdout(&run(&[
+        "decode",
+        testdata("ap2.bin").to_str().unwrap(),
+        "--api-mode",
+        "2",
+        "--summary",
+        "--format",
+        "json",
+    ]));
+    let summary: Value = serde_json::from_str(out.trim()).unwrap();
+    let expected = std::fs::read_to_string(testdata("ap2.expected.jsonl")).unwrap();
+    let frames = expected.lines().count() as u64;
+    let telemetry = expected
+        .lines()
+        .filter(|l| l.contains(r#""category": "telemetry""#))
+        .count() as u64;
+    assert_eq!(summary["frames"], frames);
+    assert_eq!(summary["mcp"]["telemetry"], telemetry);
+    assert_eq!(summary["errors"]["checksum"], 0);
+}
+
+/// Digi's manual: Transmit Request of "TxData0A" to 0013A200400A0127, frame id 1.
+#[test]
+fn encode_gives_digi_manual_bytes() {
+    let lines: Vec<String> = std::fs::read_to_string(testdata("digi-manual.txt"))
+        .unwrap()
+        .lines()
+        .filter(|l| l.starts_with("10 "))
+        .map(|l| l[5..].trim().to_string())
+        .collect();
+    assert_eq!(lines.len(), 2);
+    for (mode, expected) in ["1", "2"].iter().zip(&lines) {
+        let out = stdout(&run(&[
+            "encode",
+            "--to",
+            "0013A200400A0127",
+            "--frame-id",
+            "1",
+            "--api-mode",
+            mode,
+            "raw",
+            "5478446174613041",
+        ]));
+        assert_eq!(out.trim(), expected, "mode {mode}");
+    }
+}
+
+#[test]
+fn encode_every_command() {
+    let to = "0013A20040B599B9";
+    let cases: &[(&[&str], &str)] = &[
+        (&["telemetry", "on", "altitude"], "63 01 01 01"),
+        (&["telemetry", "off", "0x11"], "63 01 00 11"),
+        (&["landing", "on"], "63 02 01"),
+        (&["controller", "mpc"], "63 03 03"),
+        (&["controller", "2"], "63 03 02"),
+        (
+            &["trajectory", "--waypoint", "1700000000,1.5,-2.25,3"],
+            "63 04 01 00 F1 53 65 00 00 C0 3F 00 00 10 C0 00 00 40 40",
+        ),
+        (
+            &["slave-set", "0013A20040B599BF"],
+            "63 05 00 13 A2 00 40 B5 99 BF",
+        ),
+        (
+            &["slave-set", "0013A20040B599BF", "--slot", "2"],
+            "63 05 02 00 13 A2 00 40 B5 99 BF",
+        ),
+        (&["time", "1763683200"], "63 06 80 AB 1F 69"),
+        (
+            &["position-set", "-1.5", "2"],
+            "63 07 00 00 C0 BF 00 00 00 40",
+        ),
+        (&["status", "landing"], "63 02 FF"),
+        (
+            &["status", "telemetry_to_coordinator", "pitch_angle"],
+            "63 01 FF 19",
+        ),
+        (&["message", "Hi"], "6D 48 69"),
+    ];
+    for (args, payload) in cases {
+        let mut argv = vec!["encode", "--to", to, "--frame-id", "0"];
+        argv.extend_from_slice(args);
+        let out = stdout(&run(&argv));
+        let bytes: Vec<&str> = out.split_whitespace().collect();
+        // 7E, length (2), 10, id, 8 + 2 address bytes, radius, options, payload, checksum.
+        let got = bytes[17..bytes.len() - 1].join(" ");
+        assert_eq!(got, *payload, "{args:?}");
+        let len = usize::from_str_radix(&(bytes[1].to_string() + bytes[2]), 16).unwrap();
+        assert_eq!(len, bytes.len() - 4, "{args:?}: length field");
+    }
+}
+
+#[test]
+fn bad_arguments_exit_2_with_one_line() {
+    for args in [
+        &["encode", "--to", "xyz", "landing", "on"][..],
+        &["encode", "--to", "1", "controller", "fast"],
+        &["encode", "--to", "1", "trajectory", "--waypoint", "1,2,3"],
+        &["encode", "--to", "1", "status", "position_set"],
+        &["encode", "--to", "1", "status", "telemetry_to_coordinator"],
+        &["decode", "/nonexistent/capture.bin"],
+        &["decode", "--api-mode", "3", "-"],
+        &[
+            "send",
+            "--link",
+            "bogus:thing",
+            "--to",
+            "1",
+            "landing",
+            "on",
+        ],
+    ] {
+        let output = run(args);
+        assert_eq!(output.status.code(), Some(2), "{args:?}");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(!stderr.trim().is_empty(), "{args:?}: no message");
+        assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+    }
+}
+
+#[test]
+fn missing_device_exits_3() {
+    let output = run(&[
+        "send",
+        "--link",
+        "serial:/dev/mcp-gs-test-no-such-device",
+        "--to",
+        "0013A20040B599B9",
+        "landing",
+        "on",
+    ]);
+    assert_eq!(output.status.code(), Some(3));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.contains("/dev/mcp-gs-test-no-such-device"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn status_timeout_exits_4() {
+    // A peer that accepts and acknowledges every Transmit Request but never reports.
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let port = listener.local_addr().unwrap().port();
+    let peer = std::thread::spawn(move || {
+        let (mut socket, _) = listener.accept().unwrap();
+        let mut buf = [0u8; 64];
+        // Read until the ground station hangs up; never answer.
+        while let Ok(n) = std::io::Read::read(&mut socket, &mut buf) {
+            if n == 0 {
+                break;
+            }
+        }
+    });
+    let link = format!("tcp:127.0.0.1:{port}");
+    let output = run(&[
+        "status",
+        "--link",
+        &link,
+        "--to",
+        "0013A20040B599B9",
+        "--timeout",
+        "0.5",
+        "landing",
+    ]);
+    assert_eq!(output.status.code(), Some(4));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("no ") && stderr.contains("within"),
+        "{stderr}"
+    );
+    peer.join().unwrap();
+}
+
+#[test]
+fn every_subcommand_has_help() {
+    for sub in [
+        "monitor", "send", "status", "decode", "encode", "replay", "at", "ports", "radio", "sim",
+        "demo",
+    ] {
+        let out = stdout(&run(&[sub, "--help"]));
+        assert!(out.contains("Usage: mcp-gs"), "{sub}: {out}");
+    }
+}
+
+fn tempdir() -> PathBuf {
+    let dir = std::env::temp_dir().join(format!(
+        "mcp-gs-test-{}-{:?}",
+        std::process::id(),
+        std::thread::current().id()
+    ));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
