@@ -180,3 +180,8 @@ impl futures::Stream for PacketStream {
         self.events.poll_recv(cx)
     }
 }
+
+/// The README's examples, compiled and run as doc tests.
+#[cfg(doctest)]
+#[doc = include_str!("../../README.md")]
+pub struct ReadmeDoctests;
