@@ -58,12 +58,10 @@ pub(crate) async fn run(args: ReplayArgs) -> Result<(), Failure> {
     let mut played = 0u64;
     for record in reader {
         let record = record.map_err(|e| Failure::input(format!("{}: {e}", args.file.display())))?;
-        let wanted = match (args.frames, record.direction) {
-            (Which::Both, _) | (Which::Rx, Direction::Received) | (Which::Tx, Direction::Sent) => {
-                true
-            }
-            _ => false,
-        };
+        let wanted = matches!(
+            (args.frames, record.direction),
+            (Which::Both, _) | (Which::Rx, Direction::Received) | (Which::Tx, Direction::Sent)
+        );
         if !wanted {
             continue;
         }
