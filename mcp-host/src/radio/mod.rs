@@ -1,1 +1,533 @@
-//! A virtual XBee network (in progress).
+//! A virtual XBee network: radios emulated in software, each attached to a device
+//! through a link (serial, TCP, pseudo-terminal) or an in-process byte stream.
+//!
+//! Each node's device speaks XBee API frames to its (virtual) radio, exactly as it would
+//! over a UART to a real XBee: it writes Transmit Requests (0x10) and local AT commands
+//! (0x08), and reads Receive Packets (0x90), Transmit Statuses (0x8B), AT Command
+//! Responses (0x88) and Modem Statuses (0x8A).
+//!
+//! - The coordinator has the 64-bit address 0000000000000000 and the 16-bit address
+//!   0000. Other nodes get a 16-bit address folded from their 64-bit address
+//!   ([`Network::addr16`]).
+//! - A Transmit Request to a known node is delivered as a Receive Packet carrying the
+//!   sender's addresses (receive options 0x01); to 000000000000FFFF it goes to every
+//!   other connected node (receive options 0x02). A Transmit Request with a non-zero frame
+//!   id is answered with a Transmit Status: success (0x00, the destination's 16-bit
+//!   address, no retries, no discovery), 0x24 address not found (discovery 0x01) for an
+//!   unknown destination, 0x74 payload too large beyond [`NetworkConfig::max_unicast`]
+//!   (84 bytes unless fragmentation is assumed, up to 255) or
+//!   [`NetworkConfig::max_broadcast`] (92), 0x21 network ACK failure when the destination
+//!   is known but its link is down or cut, 0x23 to itself. Explicit Addressing Commands
+//!   (0x11) are delivered like Transmit Requests.
+//! - Local AT commands are answered: `AP` (the node's API mode), `NP` (the unicast
+//!   payload limit), `SH`/`SL` (the 64-bit address), `MY` (the 16-bit address), `AI` (0,
+//!   joined), `CE` (1 on the coordinator); any other command gets status 2, invalid
+//!   command.
+//! - When a link comes up its device gets a Modem Status: 0x06 coordinator started on the
+//!   coordinator, 0x02 joined network on other nodes. Links that go down are reopened
+//!   (a `tcp-listen` node's next peer is the node back); frames for a node whose link is
+//!   down are not queued.
+//! - [`Faults`] (loss, latency, jitter, duplication, reordering, corruption) apply to the
+//!   frames written to a link, network-wide or per node, drawn from a generator seeded
+//!   with [`NetworkConfig::seed`] and the node's address, so that a run replays.
+//!   [`Network::cut`] takes a node out of radio range until [`Network::restore`].
+//!
+//! ```
+//! use mcp_host::radio::{Network, NetworkConfig, NodeOptions};
+//! use tokio::io::{AsyncReadExt, AsyncWriteExt};
+//! use xbee_api::{Address64, Address16, EncodeFrame, TransmitRequestRepr, ApiMode};
+//!
+//! # #[tokio::main(flavor = "current_thread")]
+//! # async fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let network = Network::new(NetworkConfig::default());
+//! // Two in-process devices: the coordinator and a MAV.
+//! let (_, mut ground) = network.add_in_process(Address64::COORDINATOR, NodeOptions::default())?;
+//! let mav: Address64 = "0013A20040B599B9".parse()?;
+//! let (_, mut device) = network.add_in_process(mav, NodeOptions::default())?;
+//!
+//! // The MAV sends "r\x02\x04" to the coordinator, asking for no status (frame id 0).
+//! let tx = TransmitRequestRepr {
+//!     frame_id: 0, dst64: Address64::COORDINATOR, dst16: Address16::UNKNOWN,
+//!     radius: 0, options: 0, data: b"r\x02\x04",
+//! };
+//! let mut buf = vec![0; tx.encoded_len(ApiMode::Unescaped)];
+//! tx.encode(ApiMode::Unescaped, &mut buf)?;
+//! device.write_all(&buf).await?;
+//!
+//! // The coordinator's device reads its modem status (6 bytes), then the Receive Packet.
+//! let mut frame = [0u8; 6 + 4 + 12 + 3];
+//! ground.read_exact(&mut frame).await?;
+//! assert_eq!(frame[3..5], [0x8A, 0x06]);
+//! assert_eq!(frame[9], 0x90);
+//! assert_eq!(frame[10..18], mav.to_bytes());
+//! assert_eq!(&frame[21..24], b"r\x02\x04");
+//! # Ok(())
+//! # }
+//! ```
+
+mod faults;
+mod port;
+mod router;
+mod wire;
+
+use std::collections::BTreeMap;
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use tokio::io::{AsyncRead, AsyncWrite, DuplexStream};
+use tokio::sync::{broadcast, mpsc};
+use tokio_util::sync::CancellationToken;
+use xbee_api::{Address16, Address64, ApiMode, AtStatus, DecodeError, DeliveryStatus};
+
+pub use faults::{Faults, REORDER_WINDOW};
+
+use crate::link::Link;
+use crate::options::{DEFAULT_CONNECT_TIMEOUT, LinkOptions, ReconnectPolicy};
+use crate::transport::{Connector, LinkError};
+use port::{Source, lock};
+use router::{Node, OUT_CAPACITY, State};
+
+/// Largest unicast RF payload without fragmentation (`NP` = 0x54).
+pub const MAX_UNICAST: usize = 84;
+/// Largest unicast RF payload with fragmentation.
+pub const MAX_UNICAST_FRAGMENTED: usize = 255;
+/// Largest broadcast RF payload.
+pub const MAX_BROADCAST: usize = 92;
+/// Size of an in-process node's byte stream buffer, each way.
+pub const IN_PROCESS_BUFFER: usize = 64 * 1024;
+
+/// Settings of the whole network.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NetworkConfig {
+    /// Seed of the fault generators.
+    pub seed: u64,
+    /// Faults of the nodes that have none of their own.
+    pub faults: Faults,
+    /// Largest unicast payload: [`MAX_UNICAST`] by default, up to
+    /// [`MAX_UNICAST_FRAGMENTED`] with fragmentation.
+    pub max_unicast: usize,
+    /// Largest broadcast payload.
+    pub max_broadcast: usize,
+}
+
+impl Default for NetworkConfig {
+    /// Seed 0, no faults, the XBee's payload limits.
+    fn default() -> Self {
+        NetworkConfig {
+            seed: 0,
+            faults: Faults::default(),
+            max_unicast: MAX_UNICAST,
+            max_broadcast: MAX_BROADCAST,
+        }
+    }
+}
+
+/// Settings of one node.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NodeOptions {
+    /// API mode its device speaks.
+    pub api_mode: ApiMode,
+    /// Its own faults; `None` uses the network's.
+    pub faults: Option<Faults>,
+    /// How its link is reopened after a disconnection.
+    pub reconnect: ReconnectPolicy,
+    /// Timeout of a TCP connection attempt.
+    pub connect_timeout: Duration,
+}
+
+impl Default for NodeOptions {
+    /// API mode 1, the network's faults, the default reconnection policy.
+    fn default() -> Self {
+        NodeOptions {
+            api_mode: ApiMode::Unescaped,
+            faults: None,
+            reconnect: ReconnectPolicy::default(),
+            connect_timeout: DEFAULT_CONNECT_TIMEOUT,
+        }
+    }
+}
+
+impl NodeOptions {
+    /// Default options in `mode`.
+    pub fn with_mode(api_mode: ApiMode) -> Self {
+        NodeOptions {
+            api_mode,
+            ..Self::default()
+        }
+    }
+}
+
+/// A node as added to the network.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct NodeInfo {
+    /// Its 64-bit address.
+    pub address: Address64,
+    /// Its 16-bit address.
+    pub addr16: Address16,
+    /// Its API mode.
+    pub api_mode: ApiMode,
+    /// For a `pty` link: the path its device opens.
+    pub pty_path: Option<PathBuf>,
+    /// For a `tcp-listen` link: the bound address.
+    pub local_addr: Option<SocketAddr>,
+}
+
+/// Counters of one node.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct NodeStats {
+    /// Frames received from its device.
+    pub frames_in: u64,
+    /// Frames queued for its device (duplicates included, lost ones not).
+    pub frames_out: u64,
+    /// Candidate frames from its device its decoder dropped.
+    pub decode_errors: u64,
+    /// Frames dropped by the loss fault.
+    pub lost: u64,
+    /// Frames duplicated.
+    pub duplicated: u64,
+    /// Frames held back behind the next one.
+    pub reordered: u64,
+    /// Frames corrupted.
+    pub corrupted: u64,
+    /// Frames dropped because its write queue was full.
+    pub overflow: u64,
+    /// Times its link came up.
+    pub connections: u64,
+}
+
+/// What happens on the network, for monitoring ([`Network::subscribe`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum NetEvent {
+    /// A node's link came up.
+    Connected {
+        /// The node.
+        node: Address64,
+        /// What is at the other end of its link.
+        peer: String,
+    },
+    /// A node's link went down.
+    Disconnected {
+        /// The node.
+        node: Address64,
+        /// Why.
+        reason: String,
+    },
+    /// A unicast payload was delivered.
+    Delivered {
+        /// Sender.
+        from: Address64,
+        /// Receiver.
+        to: Address64,
+        /// Payload length.
+        len: usize,
+    },
+    /// A broadcast payload was sent.
+    Broadcast {
+        /// Sender.
+        from: Address64,
+        /// Payload length.
+        len: usize,
+        /// How many nodes it was delivered to.
+        receivers: usize,
+    },
+    /// A transmission failed.
+    Failed {
+        /// Sender.
+        from: Address64,
+        /// Destination as requested.
+        to: Address64,
+        /// Payload length.
+        len: usize,
+        /// The delivery status the sender got.
+        status: DeliveryStatus,
+    },
+    /// A local AT command was answered.
+    AtCommand {
+        /// The node.
+        node: Address64,
+        /// The command.
+        command: [u8; 2],
+        /// The answer's status.
+        status: AtStatus,
+    },
+    /// A node's decoder dropped a candidate frame.
+    DecodeError {
+        /// The node.
+        node: Address64,
+        /// Why.
+        error: DecodeError,
+    },
+    /// A frame a radio does not act on (a device sent, say, a Receive Packet).
+    Ignored {
+        /// The node.
+        node: Address64,
+        /// Its frame type.
+        frame_type: u8,
+    },
+}
+
+/// Why a node cannot be added.
+#[derive(Debug, thiserror::Error)]
+pub enum NetworkError {
+    /// A node with this address is already in the network.
+    #[error("node {0} is already in the network")]
+    Duplicate(Address64),
+    /// The broadcast address cannot be a node.
+    #[error("{0} is the broadcast address")]
+    Broadcast(Address64),
+    /// The link could not be prepared.
+    #[error("node {node}: {source}")]
+    Link {
+        /// The node.
+        node: Address64,
+        /// Why.
+        #[source]
+        source: LinkError,
+    },
+}
+
+/// Capacity of the event channel of [`Network::subscribe`].
+const EVENT_CAPACITY: usize = 1024;
+
+/// A running virtual XBee network. Dropping it (or [`Network::shutdown`]) stops every
+/// node. See the [module docs](self).
+#[derive(Debug)]
+pub struct Network {
+    state: Arc<Mutex<State>>,
+    shutdown: CancellationToken,
+}
+
+impl Network {
+    /// An empty network. Nodes are added with [`Network::add_link`],
+    /// [`Network::add_stream`] or [`Network::add_in_process`], within a tokio runtime.
+    pub fn new(config: NetworkConfig) -> Self {
+        let (events, _) = broadcast::channel(EVENT_CAPACITY);
+        Network {
+            state: Arc::new(Mutex::new(State {
+                config,
+                nodes: BTreeMap::new(),
+                events,
+            })),
+            shutdown: CancellationToken::new(),
+        }
+    }
+
+    /// The seed of the fault generators.
+    pub fn seed(&self) -> u64 {
+        lock(&self.state).config.seed
+    }
+
+    /// Adds a node whose device is at the other end of `link`: a serial port, a TCP
+    /// connection, a TCP listener (each new peer is the device back) or a
+    /// pseudo-terminal (its path is in the returned [`NodeInfo::pty_path`]). The link is
+    /// opened in the background and reopened after each disconnection; a `serial` or
+    /// `tcp` link that is not there yet is retried.
+    pub async fn add_link(
+        &self,
+        address: Address64,
+        link: &Link,
+        options: NodeOptions,
+    ) -> Result<NodeInfo, NetworkError> {
+        self.check_new(address)?;
+        let link_options = LinkOptions {
+            api_mode: options.api_mode,
+            connect_timeout: options.connect_timeout,
+            ..LinkOptions::default()
+        };
+        let connector = Connector::new(link, &link_options)
+            .await
+            .map_err(|source| NetworkError::Link {
+                node: address,
+                source,
+            })?;
+        let pty_path = connector.pty_path().map(PathBuf::from);
+        let local_addr = connector.local_addr();
+        let source = Source::Link {
+            connector: Box::new(connector),
+            policy: options.reconnect.clone(),
+            opened: false,
+        };
+        let mut info = self.insert(address, options, source)?;
+        info.pty_path = pty_path;
+        info.local_addr = local_addr;
+        Ok(info)
+    }
+
+    /// Adds a node whose device is at the other end of `stream`. The node stays in the
+    /// network when the stream ends, unreachable.
+    pub fn add_stream<S>(
+        &self,
+        address: Address64,
+        stream: S,
+        options: NodeOptions,
+    ) -> Result<NodeInfo, NetworkError>
+    where
+        S: AsyncRead + AsyncWrite + Send + Unpin + 'static,
+    {
+        self.check_new(address)?;
+        self.insert(address, options, Source::Once(Some(Box::new(stream))))
+    }
+
+    /// Adds an in-process node and returns its device's end of an in-memory byte stream
+    /// ([`tokio::io::duplex`]), for a simulator or a test.
+    pub fn add_in_process(
+        &self,
+        address: Address64,
+        options: NodeOptions,
+    ) -> Result<(NodeInfo, DuplexStream), NetworkError> {
+        let (device, radio) = tokio::io::duplex(IN_PROCESS_BUFFER);
+        let info = self.add_stream(address, radio, options)?;
+        Ok((info, device))
+    }
+
+    fn check_new(&self, address: Address64) -> Result<(), NetworkError> {
+        if address == Address64::BROADCAST {
+            return Err(NetworkError::Broadcast(address));
+        }
+        if lock(&self.state).nodes.contains_key(&address) {
+            return Err(NetworkError::Duplicate(address));
+        }
+        Ok(())
+    }
+
+    fn insert(
+        &self,
+        address: Address64,
+        options: NodeOptions,
+        source: Source,
+    ) -> Result<NodeInfo, NetworkError> {
+        let (tx, rx) = mpsc::channel(OUT_CAPACITY);
+        let info = {
+            let mut state = lock(&self.state);
+            if state.nodes.contains_key(&address) {
+                return Err(NetworkError::Duplicate(address));
+            }
+            let addr16 = state.derive_addr16(address);
+            let seed = state.config.seed;
+            state.nodes.insert(
+                address,
+                Node {
+                    addr16,
+                    mode: options.api_mode,
+                    faults: options.faults,
+                    rng: faults::FaultRng::new(seed, address),
+                    out: tx,
+                    connected: false,
+                    cut: false,
+                    stats: NodeStats::default(),
+                },
+            );
+            NodeInfo {
+                address,
+                addr16,
+                api_mode: options.api_mode,
+                pty_path: None,
+                local_addr: None,
+            }
+        };
+        tokio::spawn(port::run(
+            self.shutdown.clone(),
+            self.state.clone(),
+            address,
+            options.api_mode,
+            source,
+            rx,
+        ));
+        Ok(info)
+    }
+
+    /// The 16-bit address of a node.
+    pub fn addr16(&self, address: Address64) -> Option<Address16> {
+        lock(&self.state).nodes.get(&address).map(|n| n.addr16)
+    }
+
+    /// The nodes' 64-bit addresses, ascending.
+    pub fn addresses(&self) -> Vec<Address64> {
+        lock(&self.state).nodes.keys().copied().collect()
+    }
+
+    /// Whether a node's link is up.
+    pub fn is_connected(&self, address: Address64) -> bool {
+        lock(&self.state)
+            .nodes
+            .get(&address)
+            .is_some_and(|n| n.connected)
+    }
+
+    /// Waits until a node's link is up (at once if it is). Returns `false` if the node
+    /// is unknown.
+    pub async fn connected(&self, address: Address64) -> bool {
+        let mut events = self.subscribe();
+        loop {
+            {
+                let state = lock(&self.state);
+                match state.nodes.get(&address) {
+                    None => return false,
+                    Some(node) if node.connected => return true,
+                    Some(_) => {}
+                }
+            }
+            if let Err(broadcast::error::RecvError::Closed) = events.recv().await {
+                return false;
+            }
+        }
+    }
+
+    /// Takes a node out of radio range: nothing reaches it, nothing it sends gets
+    /// through (its transmissions fail with 0x21 network ACK failure), though its local
+    /// radio still answers it. Returns `false` if the node is unknown.
+    pub fn cut(&self, address: Address64) -> bool {
+        self.set_cut(address, true)
+    }
+
+    /// Brings a node cut by [`Network::cut`] back in range.
+    pub fn restore(&self, address: Address64) -> bool {
+        self.set_cut(address, false)
+    }
+
+    fn set_cut(&self, address: Address64, cut: bool) -> bool {
+        match lock(&self.state).nodes.get_mut(&address) {
+            Some(node) => {
+                node.cut = cut;
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Replaces a node's faults (`None`: the network's). Returns `false` if the node is
+    /// unknown.
+    pub fn set_faults(&self, address: Address64, faults: Option<Faults>) -> bool {
+        match lock(&self.state).nodes.get_mut(&address) {
+            Some(node) => {
+                node.faults = faults;
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// A node's counters.
+    pub fn stats(&self, address: Address64) -> Option<NodeStats> {
+        lock(&self.state).nodes.get(&address).map(|n| n.stats)
+    }
+
+    /// Events from now on. A receiver that falls more than 1024 events behind loses
+    /// the oldest ones.
+    pub fn subscribe(&self) -> broadcast::Receiver<NetEvent> {
+        lock(&self.state).events.subscribe()
+    }
+
+    /// Stops every node and closes their links.
+    pub fn shutdown(&self) {
+        self.shutdown.cancel();
+    }
+}
+
+impl Drop for Network {
+    fn drop(&mut self) {
+        self.shutdown.cancel();
+    }
+}

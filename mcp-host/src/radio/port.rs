@@ -1,0 +1,193 @@
+//! The task serving one node: opens its byte stream (again after a disconnection),
+//! decodes the frames its device writes and writes the frames the network sends it.
+
+use std::collections::VecDeque;
+use std::sync::{Arc, Mutex};
+
+use bytes::Bytes;
+use futures::StreamExt;
+use tokio::io::{AsyncRead, AsyncWrite, AsyncWriteExt};
+use tokio::sync::mpsc;
+use tokio::time::{Instant, sleep_until};
+use tokio_util::codec::FramedRead;
+use xbee_api::{Address64, ApiMode};
+
+use super::faults::REORDER_WINDOW;
+use super::router::{OUT_CAPACITY, Out, State};
+use crate::codec::{CodecItem, XBeeCodec};
+use crate::options::ReconnectPolicy;
+use crate::transport::Connector;
+
+/// A byte stream to a device.
+pub(crate) trait Io: AsyncRead + AsyncWrite + Send + Unpin {}
+impl<T: AsyncRead + AsyncWrite + Send + Unpin> Io for T {}
+
+/// Where a node's byte streams come from.
+pub(crate) enum Source {
+    /// A link, reopened after each disconnection.
+    Link {
+        connector: Box<Connector>,
+        policy: ReconnectPolicy,
+        opened: bool,
+    },
+    /// One stream; the node is gone when it ends.
+    Once(Option<Box<dyn Io>>),
+}
+
+impl Source {
+    /// The next stream and a description of the peer, or `None` when there will be none.
+    async fn next(&mut self, node: Address64) -> Option<(Box<dyn Io>, String)> {
+        match self {
+            Source::Once(io) => io.take().map(|io| (io, "in-process".to_owned())),
+            Source::Link {
+                connector,
+                policy,
+                opened,
+            } => loop {
+                let result = if *opened {
+                    connector.reopen(policy).await
+                } else {
+                    *opened = true;
+                    connector.open().await
+                };
+                match result {
+                    Ok(t) => {
+                        let peer = t.peer().to_owned();
+                        return Some((Box::new(t), peer));
+                    }
+                    Err(e) if e.is_retryable() => {
+                        tracing::warn!(%node, error = %e, "node link not available yet");
+                    }
+                    Err(e) => {
+                        tracing::warn!(%node, error = %e, "node link ended");
+                        return None;
+                    }
+                }
+            },
+        }
+    }
+
+    fn mark_healthy(&mut self) {
+        if let Source::Link { connector, .. } = self {
+            connector.mark_healthy();
+        }
+    }
+}
+
+/// Serves a node until its source runs dry or the network is shut down.
+pub(crate) async fn run(
+    shutdown: tokio_util::sync::CancellationToken,
+    state: Arc<Mutex<State>>,
+    addr: Address64,
+    mode: ApiMode,
+    source: Source,
+    out: mpsc::Receiver<Out>,
+) {
+    tokio::select! {
+        () = shutdown.cancelled() => {}
+        () = run_node(state, addr, mode, source, out) => {}
+    }
+}
+
+async fn run_node(
+    state: Arc<Mutex<State>>,
+    addr: Address64,
+    mode: ApiMode,
+    mut source: Source,
+    mut out: mpsc::Receiver<Out>,
+) {
+    while let Some((io, peer)) = source.next(addr).await {
+        // Frames queued while the link was down are stale.
+        while out.try_recv().is_ok() {}
+        lock(&state).connected(addr, peer);
+        let reason = serve(&state, addr, mode, io, &mut out, &mut source).await;
+        let ended = matches!(reason, End::NetworkGone);
+        lock(&state).disconnected(addr, reason.to_string());
+        if ended {
+            return;
+        }
+    }
+}
+
+pub(crate) fn lock(state: &Mutex<State>) -> std::sync::MutexGuard<'_, State> {
+    state
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+enum End {
+    Closed,
+    Io(std::io::Error),
+    NetworkGone,
+}
+
+impl std::fmt::Display for End {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            End::Closed => f.write_str("the peer closed the link"),
+            End::Io(e) => write!(f, "{e}"),
+            End::NetworkGone => f.write_str("the network was shut down"),
+        }
+    }
+}
+
+async fn serve(
+    state: &Mutex<State>,
+    addr: Address64,
+    mode: ApiMode,
+    io: Box<dyn Io>,
+    out: &mut mpsc::Receiver<Out>,
+    source: &mut Source,
+) -> End {
+    let (reader, mut writer) = tokio::io::split(io);
+    let mut frames = FramedRead::new(reader, XBeeCodec::new(mode));
+    let mut pending: VecDeque<Out> = VecDeque::new();
+    let mut held: Option<(Bytes, Instant)> = None;
+    loop {
+        let next_at = pending.front().map(|o| o.at);
+        let held_until = held.as_ref().map(|(_, until)| *until);
+        tokio::select! {
+            item = frames.next() => match item {
+                Some(Ok(CodecItem::Frame(frame))) => {
+                    source.mark_healthy();
+                    lock(state).handle(addr, frame.data());
+                }
+                Some(Ok(CodecItem::Error(error))) => lock(state).decode_error(addr, error),
+                Some(Err(e)) => return End::Io(e),
+                None => return End::Closed,
+            },
+            item = out.recv() => match item {
+                Some(item) if pending.len() < OUT_CAPACITY => pending.push_back(item),
+                Some(_) => tracing::warn!(node = %addr, "write queue full: frame dropped"),
+                None => return End::NetworkGone,
+            },
+            () = sleep_until(next_at.unwrap_or_else(Instant::now)), if next_at.is_some() => {
+                let Some(item) = pending.pop_front() else { continue };
+                if item.reorder && held.is_none() {
+                    held = Some((item.bytes, Instant::now() + REORDER_WINDOW));
+                    continue;
+                }
+                if let Err(e) = write(&mut writer, &item.bytes).await {
+                    return End::Io(e);
+                }
+                if let Some((bytes, _)) = held.take() {
+                    if let Err(e) = write(&mut writer, &bytes).await {
+                        return End::Io(e);
+                    }
+                }
+            },
+            () = sleep_until(held_until.unwrap_or_else(Instant::now)), if held_until.is_some() => {
+                if let Some((bytes, _)) = held.take() {
+                    if let Err(e) = write(&mut writer, &bytes).await {
+                        return End::Io(e);
+                    }
+                }
+            },
+        }
+    }
+}
+
+async fn write<W: AsyncWrite + Unpin>(writer: &mut W, bytes: &[u8]) -> std::io::Result<()> {
+    writer.write_all(bytes).await?;
+    writer.flush().await
+}

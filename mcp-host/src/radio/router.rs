@@ -1,0 +1,405 @@
+//! The network's shared state and routing: what a frame from one node turns into.
+
+use std::collections::BTreeMap;
+
+use bytes::Bytes;
+use tokio::sync::{broadcast, mpsc};
+use tokio::time::Instant;
+use xbee_api::{
+    Address16, Address64, ApiMode, AtCommandRepr, AtCommandResponseRepr, AtStatus, DeliveryStatus,
+    DiscoveryStatus, EncodeFrame, Frame, ModemStatus, ModemStatusRepr, ReceivePacketRepr,
+    TransmitStatusRepr,
+};
+
+use super::faults::{FaultRng, Faults};
+use super::wire;
+use super::{NetEvent, NetworkConfig, NodeStats};
+
+/// Receive option of a unicast: acknowledged.
+pub(crate) const RX_ACKNOWLEDGED: u8 = 0x01;
+/// Receive option of a broadcast.
+pub(crate) const RX_BROADCAST: u8 = 0x02;
+/// Capacity of the queue of frames waiting to be written to one link.
+pub(crate) const OUT_CAPACITY: usize = 1024;
+/// The 64-bit address that means "use the 16-bit address".
+const ADDRESS64_UNKNOWN: Address64 = Address64(0xFFFF_FFFF_FFFF_FFFF);
+
+/// A frame ready for a link: when to write it and whether to hold it back.
+#[derive(Debug)]
+pub(crate) struct Out {
+    pub(crate) at: Instant,
+    pub(crate) bytes: Bytes,
+    pub(crate) reorder: bool,
+}
+
+/// One radio of the network.
+#[derive(Debug)]
+pub(crate) struct Node {
+    pub(crate) addr16: Address16,
+    pub(crate) mode: ApiMode,
+    pub(crate) faults: Option<Faults>,
+    pub(crate) rng: FaultRng,
+    pub(crate) out: mpsc::Sender<Out>,
+    pub(crate) connected: bool,
+    pub(crate) cut: bool,
+    pub(crate) stats: NodeStats,
+}
+
+/// Everything the nodes share, behind one mutex; no lock is held across an await.
+#[derive(Debug)]
+pub(crate) struct State {
+    pub(crate) config: NetworkConfig,
+    pub(crate) nodes: BTreeMap<Address64, Node>,
+    pub(crate) events: broadcast::Sender<NetEvent>,
+}
+
+impl State {
+    /// A 16-bit address for `addr64`: the coordinator's is 0000; others fold the 64-bit
+    /// address into 16 bits, stepping past reserved values and addresses in use.
+    pub(crate) fn derive_addr16(&self, addr64: Address64) -> Address16 {
+        if addr64 == Address64::COORDINATOR {
+            return Address16::COORDINATOR;
+        }
+        let a = addr64.0;
+        let mut n = ((a ^ (a >> 16) ^ (a >> 32) ^ (a >> 48)) & 0xFFFF) as u16;
+        loop {
+            let taken = self
+                .nodes
+                .iter()
+                .any(|(k, node)| *k != addr64 && node.addr16.0 == n);
+            if n != 0 && n < 0xFFF0 && !taken {
+                return Address16(n);
+            }
+            n = n.wrapping_add(1);
+        }
+    }
+
+    fn emit(&self, event: NetEvent) {
+        let _ = self.events.send(event);
+    }
+
+    /// Queues `frame` for `to`, through that node's faults. Returns `false` if the node
+    /// is unknown or its queue is full.
+    pub(crate) fn send_to<F: EncodeFrame + ?Sized>(
+        &mut self,
+        to: Address64,
+        frame: &F,
+        with_faults: bool,
+    ) -> bool {
+        let default_faults = self.config.faults;
+        let Some(node) = self.nodes.get_mut(&to) else {
+            return false;
+        };
+        let faults = node.faults.unwrap_or(default_faults);
+        let now = Instant::now();
+        let fate = with_faults.then(|| node.rng.decide(&faults));
+        let mut copies = 1;
+        let mut at = now;
+        let mut reorder = false;
+        let bytes = match fate {
+            Some(fate) => {
+                if fate.lost {
+                    node.stats.lost += 1;
+                    return true;
+                }
+                if fate.duplicate {
+                    node.stats.duplicated += 1;
+                    copies = 2;
+                }
+                if fate.reorder {
+                    node.stats.reordered += 1;
+                    reorder = true;
+                }
+                at = now + fate.delay;
+                match fate.corrupt {
+                    Some((index, mask)) => {
+                        node.stats.corrupted += 1;
+                        wire::encode_corrupt(frame, node.mode, index, mask)
+                    }
+                    None => wire::encode(frame, node.mode),
+                }
+            }
+            None => wire::encode(frame, node.mode),
+        };
+        let Some(bytes) = bytes else {
+            return false;
+        };
+        for i in 0..copies {
+            let out = Out {
+                at,
+                bytes: bytes.clone(),
+                reorder: reorder && i == 0,
+            };
+            if node.out.try_send(out).is_err() {
+                node.stats.overflow += 1;
+                return false;
+            }
+            node.stats.frames_out += 1;
+        }
+        true
+    }
+
+    /// A link came up: the node is reachable again and gets its modem status.
+    pub(crate) fn connected(&mut self, addr: Address64, peer: String) {
+        if let Some(node) = self.nodes.get_mut(&addr) {
+            node.connected = true;
+            node.stats.connections += 1;
+        }
+        let status = if addr == Address64::COORDINATOR {
+            ModemStatus::CoordinatorStarted
+        } else {
+            ModemStatus::JoinedNetwork
+        };
+        self.send_to(addr, &ModemStatusRepr { status }, false);
+        self.emit(NetEvent::Connected { node: addr, peer });
+    }
+
+    /// A link went down.
+    pub(crate) fn disconnected(&mut self, addr: Address64, reason: String) {
+        if let Some(node) = self.nodes.get_mut(&addr) {
+            node.connected = false;
+        }
+        self.emit(NetEvent::Disconnected { node: addr, reason });
+    }
+
+    /// A link's decoder dropped a candidate frame.
+    pub(crate) fn decode_error(&mut self, addr: Address64, error: xbee_api::DecodeError) {
+        if let Some(node) = self.nodes.get_mut(&addr) {
+            node.stats.decode_errors += 1;
+        }
+        self.emit(NetEvent::DecodeError { node: addr, error });
+    }
+
+    /// Handles a frame a node's device wrote to its radio.
+    pub(crate) fn handle(&mut self, from: Address64, data: &[u8]) {
+        let Some(node) = self.nodes.get_mut(&from) else {
+            return;
+        };
+        node.stats.frames_in += 1;
+        match Frame::parse_bytes(data) {
+            Ok(Frame::TransmitRequest(tx)) => {
+                self.transmit(from, tx.frame_id, tx.dst64, tx.dst16, tx.data);
+            }
+            Ok(Frame::ExplicitAddressingCommand(ex)) => {
+                self.transmit(from, ex.frame_id, ex.dst64, ex.dst16, ex.data);
+            }
+            Ok(Frame::AtCommand(at)) => self.at_command(from, &at),
+            Ok(other) => {
+                self.emit(NetEvent::Ignored {
+                    node: from,
+                    frame_type: other.frame_type(),
+                });
+            }
+            Err(error) => {
+                tracing::debug!(node = %from, %error, "malformed frame ignored");
+                self.emit(NetEvent::Ignored {
+                    node: from,
+                    frame_type: data.first().copied().unwrap_or(0),
+                });
+            }
+        }
+    }
+
+    fn status(
+        &mut self,
+        from: Address64,
+        frame_id: u8,
+        dst16: Address16,
+        delivery: DeliveryStatus,
+        discovery: DiscoveryStatus,
+    ) {
+        if frame_id == 0 {
+            return;
+        }
+        let status = TransmitStatusRepr {
+            frame_id,
+            dst16,
+            retries: 0,
+            delivery,
+            discovery,
+        };
+        self.send_to(from, &status, true);
+    }
+
+    /// Delivers a Transmit Request's payload and answers with a Transmit Status.
+    fn transmit(
+        &mut self,
+        from: Address64,
+        frame_id: u8,
+        dst64: Address64,
+        dst16: Address16,
+        data: &[u8],
+    ) {
+        let Some(src) = self.nodes.get(&from) else {
+            return;
+        };
+        let src16 = src.addr16;
+        let src_cut = src.cut;
+        let broadcast = dst64 == Address64::BROADCAST;
+        let limit = if broadcast {
+            self.config.max_broadcast
+        } else {
+            self.config.max_unicast
+        };
+        let ok = DiscoveryStatus::NoDiscoveryOverhead;
+        if data.len() > limit {
+            self.emit(NetEvent::Failed {
+                from,
+                to: dst64,
+                len: data.len(),
+                status: DeliveryStatus::PayloadTooLarge,
+            });
+            self.status(
+                from,
+                frame_id,
+                Address16::UNKNOWN,
+                DeliveryStatus::PayloadTooLarge,
+                ok,
+            );
+            return;
+        }
+        if broadcast {
+            let others: Vec<Address64> = self
+                .nodes
+                .iter()
+                .filter(|(a, n)| **a != from && n.connected && !n.cut && !src_cut)
+                .map(|(a, _)| *a)
+                .collect();
+            let rx = ReceivePacketRepr {
+                src64: from,
+                src16,
+                options: RX_BROADCAST,
+                data,
+            };
+            for to in &others {
+                self.send_to(*to, &rx, true);
+            }
+            self.emit(NetEvent::Broadcast {
+                from,
+                len: data.len(),
+                receivers: others.len(),
+            });
+            self.status(
+                from,
+                frame_id,
+                Address16::UNKNOWN,
+                DeliveryStatus::Success,
+                ok,
+            );
+            return;
+        }
+        let dst = if dst64 == ADDRESS64_UNKNOWN {
+            self.nodes
+                .iter()
+                .find(|(_, n)| n.addr16 == dst16)
+                .map(|(a, _)| *a)
+        } else {
+            self.nodes.contains_key(&dst64).then_some(dst64)
+        };
+        let Some(dst) = dst else {
+            self.emit(NetEvent::Failed {
+                from,
+                to: dst64,
+                len: data.len(),
+                status: DeliveryStatus::AddressNotFound,
+            });
+            self.status(
+                from,
+                frame_id,
+                Address16::UNKNOWN,
+                DeliveryStatus::AddressNotFound,
+                DiscoveryStatus::AddressDiscovery,
+            );
+            return;
+        };
+        let Some(node) = self.nodes.get(&dst) else {
+            return;
+        };
+        let dst16 = node.addr16;
+        let delivery = if dst == from {
+            DeliveryStatus::SelfAddressed
+        } else if !node.connected || node.cut || src_cut {
+            DeliveryStatus::NetworkAckFailure
+        } else {
+            DeliveryStatus::Success
+        };
+        if delivery == DeliveryStatus::Success {
+            let rx = ReceivePacketRepr {
+                src64: from,
+                src16,
+                options: RX_ACKNOWLEDGED,
+                data,
+            };
+            self.send_to(dst, &rx, true);
+            self.emit(NetEvent::Delivered {
+                from,
+                to: dst,
+                len: data.len(),
+            });
+        } else {
+            self.emit(NetEvent::Failed {
+                from,
+                to: dst,
+                len: data.len(),
+                status: delivery,
+            });
+        }
+        self.status(from, frame_id, dst16, delivery, ok);
+    }
+
+    /// Answers a local AT command.
+    fn at_command(&mut self, from: Address64, at: &AtCommandRepr<'_>) {
+        let Some(node) = self.nodes.get(&from) else {
+            return;
+        };
+        let mut value = [0u8; 8];
+        let (status, len) = match (&at.command, at.parameter) {
+            (b"AP", []) => {
+                value[0] = u8::from(node.mode);
+                (AtStatus::Ok, 1)
+            }
+            (b"AP", [mode]) if *mode == u8::from(node.mode) => (AtStatus::Ok, 0),
+            (b"NP", []) => {
+                let np = u16::try_from(self.config.max_unicast).unwrap_or(u16::MAX);
+                value[..2].copy_from_slice(&np.to_be_bytes());
+                (AtStatus::Ok, 2)
+            }
+            (b"SH", []) => {
+                value[..4].copy_from_slice(&from.to_bytes()[..4]);
+                (AtStatus::Ok, 4)
+            }
+            (b"SL", []) => {
+                value[..4].copy_from_slice(&from.to_bytes()[4..]);
+                (AtStatus::Ok, 4)
+            }
+            (b"MY", []) => {
+                value[..2].copy_from_slice(&node.addr16.to_bytes());
+                (AtStatus::Ok, 2)
+            }
+            (b"AI", []) => (AtStatus::Ok, 1),
+            (b"CE", []) => {
+                value[0] = u8::from(from == Address64::COORDINATOR);
+                (AtStatus::Ok, 1)
+            }
+            (b"AP" | b"NP" | b"SH" | b"SL" | b"MY" | b"AI" | b"CE", _) => {
+                (AtStatus::InvalidParameter, 0)
+            }
+            _ => (AtStatus::InvalidCommand, 0),
+        };
+        self.emit(NetEvent::AtCommand {
+            node: from,
+            command: at.command,
+            status,
+        });
+        if at.frame_id == 0 {
+            return;
+        }
+        let response = AtCommandResponseRepr {
+            frame_id: at.frame_id,
+            command: at.command,
+            status,
+            data: &value[..len],
+        };
+        self.send_to(from, &response, true);
+    }
+}

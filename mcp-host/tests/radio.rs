@@ -1,0 +1,677 @@
+//! The virtual XBee network: devices on pseudo-terminals, TCP and in-process streams
+//! exchange frames through it.
+
+use std::time::Duration;
+
+use futures::{SinkExt, StreamExt};
+use mcp_host::codec::{CodecItem, XBeeCodec};
+use mcp_host::radio::{Faults, NetEvent, Network, NetworkConfig, NodeOptions};
+use mcp_host::{Link, OwnedFrame};
+use tokio::io::{AsyncRead, AsyncWrite};
+use tokio::net::{TcpListener, TcpStream};
+use tokio_util::codec::Framed;
+use xbee_api::{
+    Address16, Address64, ApiMode, AtCommandRepr, AtStatus, DecodeError, DeliveryStatus,
+    DiscoveryStatus, Frame, ModemStatus, TransmitRequestRepr,
+};
+
+/// Failure guard only: every wait ends on a frame long before this.
+const GUARD: Duration = Duration::from_secs(20);
+const COORD: Address64 = Address64::COORDINATOR;
+const MAV_A: Address64 = Address64(0x0013_A200_40B5_99B9);
+const MAV_B: Address64 = Address64(0x0013_A200_40B5_99BF);
+const NOBODY: Address64 = Address64(0x0013_A200_DEAD_BEEF);
+
+trait Io: AsyncRead + AsyncWrite + Unpin + Send {}
+impl<T: AsyncRead + AsyncWrite + Unpin + Send> Io for T {}
+
+/// A device: the far side of a node's link.
+struct Dev {
+    framed: Framed<Box<dyn Io>, XBeeCodec>,
+}
+
+impl Dev {
+    fn new(io: impl Io + 'static, mode: ApiMode) -> Self {
+        let io: Box<dyn Io> = Box::new(io);
+        Dev {
+            framed: Framed::new(io, XBeeCodec::new(mode)),
+        }
+    }
+
+    fn pty(path: &std::path::Path, mode: ApiMode) -> Self {
+        let port = tokio_serial::SerialStream::open(&tokio_serial::new(
+            path.to_str().expect("utf-8 path"),
+            115_200,
+        ))
+        .expect("open the pty");
+        Dev::new(port, mode)
+    }
+
+    async fn tcp(addr: std::net::SocketAddr, mode: ApiMode) -> Self {
+        Dev::new(TcpStream::connect(addr).await.expect("connect"), mode)
+    }
+
+    async fn send(&mut self, frame: &Frame<'_>) {
+        self.framed.send(frame).await.expect("write a frame");
+    }
+
+    async fn tx(&mut self, frame_id: u8, dst64: Address64, data: &[u8]) {
+        self.send(&Frame::TransmitRequest(TransmitRequestRepr {
+            frame_id,
+            dst64,
+            dst16: Address16::UNKNOWN,
+            radius: 0,
+            options: 0,
+            data,
+        }))
+        .await;
+    }
+
+    async fn item(&mut self) -> CodecItem {
+        tokio::time::timeout(GUARD, self.framed.next())
+            .await
+            .expect("a frame in time")
+            .expect("the link stays open")
+            .expect("no I/O error")
+    }
+
+    async fn frame(&mut self) -> OwnedFrame {
+        match self.item().await {
+            CodecItem::Frame(frame) => frame,
+            CodecItem::Error(e) => panic!("decode error {e}"),
+        }
+    }
+
+    async fn modem_status(&mut self) -> ModemStatus {
+        let frame = self.frame().await;
+        match frame.parse() {
+            Ok(Frame::ModemStatus(ms)) => ms.status,
+            other => panic!("expected a modem status, got {other:?}"),
+        }
+    }
+
+    /// The next Receive Packet: (source, source 16-bit, options, data).
+    async fn rx(&mut self) -> (Address64, Address16, u8, Vec<u8>) {
+        let frame = self.frame().await;
+        match frame.parse() {
+            Ok(Frame::ReceivePacket(rx)) => (rx.src64, rx.src16, rx.options, rx.data.to_vec()),
+            other => panic!("expected a receive packet, got {other:?}"),
+        }
+    }
+
+    /// The next Transmit Status: (frame id, 16-bit, delivery, discovery).
+    async fn status(&mut self) -> (u8, Address16, DeliveryStatus, DiscoveryStatus) {
+        let frame = self.frame().await;
+        match frame.parse() {
+            Ok(Frame::TransmitStatus(st)) => {
+                assert_eq!(st.retries, 0);
+                (st.frame_id, st.dst16, st.delivery, st.discovery)
+            }
+            other => panic!("expected a transmit status, got {other:?}"),
+        }
+    }
+
+    async fn at(
+        &mut self,
+        frame_id: u8,
+        command: &[u8; 2],
+        parameter: &[u8],
+    ) -> (AtStatus, Vec<u8>) {
+        self.send(&Frame::AtCommand(AtCommandRepr {
+            frame_id,
+            command: *command,
+            parameter,
+        }))
+        .await;
+        let frame = self.frame().await;
+        match frame.parse() {
+            Ok(Frame::AtCommandResponse(r)) => {
+                assert_eq!(r.frame_id, frame_id);
+                assert_eq!(&r.command, command);
+                (r.status, r.data.to_vec())
+            }
+            other => panic!("expected an AT response, got {other:?}"),
+        }
+    }
+}
+
+const OK: DiscoveryStatus = DiscoveryStatus::NoDiscoveryOverhead;
+
+/// A network of in-process nodes, each device already past its modem status.
+async fn in_process(config: NetworkConfig, nodes: &[Address64]) -> (Network, Vec<Dev>) {
+    let network = Network::new(config);
+    let mut devs = Vec::new();
+    for &addr in nodes {
+        let (_, io) = network
+            .add_in_process(addr, NodeOptions::default())
+            .expect("add a node");
+        let mut dev = Dev::new(io, ApiMode::Unescaped);
+        let expected = if addr == COORD {
+            ModemStatus::CoordinatorStarted
+        } else {
+            ModemStatus::JoinedNetwork
+        };
+        assert_eq!(dev.modem_status().await, expected);
+        devs.push(dev);
+    }
+    (network, devs)
+}
+
+#[tokio::test]
+async fn unicast_and_broadcast_between_a_tcp_coordinator_and_pty_nodes() {
+    let network = Network::new(NetworkConfig::default());
+    let coord = network
+        .add_link(
+            COORD,
+            &"tcp-listen:127.0.0.1:0".parse().unwrap(),
+            NodeOptions::default(),
+        )
+        .await
+        .unwrap();
+    let a = network
+        .add_link(MAV_A, &Link::Pty, NodeOptions::default())
+        .await
+        .unwrap();
+    let b = network
+        .add_link(MAV_B, &Link::Pty, NodeOptions::with_mode(ApiMode::Escaped))
+        .await
+        .unwrap();
+    assert_eq!(coord.addr16, Address16::COORDINATOR);
+    assert_ne!(a.addr16, b.addr16);
+    for info in [&a, &b] {
+        assert!(![0x0000, 0xFFFE, 0xFFFF].contains(&info.addr16.0));
+        assert_eq!(network.addr16(info.address), Some(info.addr16));
+    }
+    let mut ground = Dev::tcp(coord.local_addr.unwrap(), ApiMode::Unescaped).await;
+    let mut dev_a = Dev::pty(a.pty_path.as_deref().unwrap(), ApiMode::Unescaped);
+    let mut dev_b = Dev::pty(b.pty_path.as_deref().unwrap(), ApiMode::Escaped);
+    assert_eq!(ground.modem_status().await, ModemStatus::CoordinatorStarted);
+    assert_eq!(dev_a.modem_status().await, ModemStatus::JoinedNetwork);
+    assert_eq!(dev_b.modem_status().await, ModemStatus::JoinedNetwork);
+
+    // Node to coordinator, with a status.
+    dev_a.tx(1, COORD, b"r\x02\x04").await;
+    assert_eq!(
+        ground.rx().await,
+        (MAV_A, a.addr16, 0x01, b"r\x02\x04".to_vec())
+    );
+    assert_eq!(
+        dev_a.status().await,
+        (1, Address16::COORDINATOR, DeliveryStatus::Success, OK)
+    );
+
+    // Coordinator to a node in API mode 2, with bytes that need escaping.
+    let data = [b'c', 0x06, 0x7E, 0x7D, 0x11, 0x13];
+    ground.tx(7, MAV_B, &data).await;
+    assert_eq!(
+        dev_b.rx().await,
+        (COORD, Address16::COORDINATOR, 0x01, data.to_vec())
+    );
+    assert_eq!(
+        ground.status().await,
+        (7, b.addr16, DeliveryStatus::Success, OK)
+    );
+
+    // Frame id 0: delivered, no status (the next frame the sender sees is the answer).
+    ground.tx(0, MAV_A, b"c\x02\xff").await;
+    assert_eq!(dev_a.rx().await.3, b"c\x02\xff");
+    dev_a.tx(0, COORD, b"r\x02\x01").await;
+    assert_eq!(ground.rx().await.3, b"r\x02\x01");
+
+    // Broadcast from B reaches the coordinator and A, with receive option 0x02.
+    dev_b.tx(9, Address64::BROADCAST, b"hello").await;
+    assert_eq!(
+        ground.rx().await,
+        (MAV_B, b.addr16, 0x02, b"hello".to_vec())
+    );
+    assert_eq!(dev_a.rx().await, (MAV_B, b.addr16, 0x02, b"hello".to_vec()));
+    assert_eq!(
+        dev_b.status().await,
+        (9, Address16::UNKNOWN, DeliveryStatus::Success, OK)
+    );
+
+    // Node to node.
+    dev_a.tx(3, MAV_B, b"x").await;
+    assert_eq!(dev_b.rx().await, (MAV_A, a.addr16, 0x01, b"x".to_vec()));
+    assert_eq!(
+        dev_a.status().await,
+        (3, b.addr16, DeliveryStatus::Success, OK)
+    );
+}
+
+#[tokio::test]
+async fn unknown_destination_self_and_oversize_payloads_fail_like_a_radio() {
+    let (network, mut devs) = in_process(NetworkConfig::default(), &[COORD, MAV_A]).await;
+    let a16 = network.addr16(MAV_A).unwrap();
+    let [ground, dev_a] = &mut devs[..] else {
+        unreachable!()
+    };
+
+    ground.tx(1, NOBODY, b"c\x02\xff").await;
+    assert_eq!(
+        ground.status().await,
+        (
+            1,
+            Address16::UNKNOWN,
+            DeliveryStatus::AddressNotFound,
+            DiscoveryStatus::AddressDiscovery
+        )
+    );
+    ground.tx(2, COORD, b"me").await;
+    assert_eq!(
+        ground.status().await,
+        (2, Address16::COORDINATOR, DeliveryStatus::SelfAddressed, OK)
+    );
+
+    // 84 bytes unicast pass, 85 do not; 92 broadcast pass, 93 do not.
+    ground.tx(3, MAV_A, &[0x55; 85]).await;
+    assert_eq!(
+        ground.status().await,
+        (3, Address16::UNKNOWN, DeliveryStatus::PayloadTooLarge, OK)
+    );
+    ground.tx(4, MAV_A, &[0x55; 84]).await;
+    assert_eq!(dev_a.rx().await.3, vec![0x55; 84]);
+    assert_eq!(ground.status().await, (4, a16, DeliveryStatus::Success, OK));
+    ground.tx(5, Address64::BROADCAST, &[0x66; 93]).await;
+    assert_eq!(
+        ground.status().await,
+        (5, Address16::UNKNOWN, DeliveryStatus::PayloadTooLarge, OK)
+    );
+    ground.tx(6, Address64::BROADCAST, &[0x66; 92]).await;
+    assert_eq!(
+        dev_a.rx().await,
+        (COORD, Address16::COORDINATOR, 0x02, vec![0x66; 92])
+    );
+    assert_eq!(
+        ground.status().await,
+        (6, Address16::UNKNOWN, DeliveryStatus::Success, OK)
+    );
+
+    // Addressed by 16-bit address alone.
+    ground
+        .send(&Frame::TransmitRequest(TransmitRequestRepr {
+            frame_id: 8,
+            dst64: Address64(u64::MAX),
+            dst16: a16,
+            radius: 0,
+            options: 0,
+            data: b"by16",
+        }))
+        .await;
+    assert_eq!(dev_a.rx().await.3, b"by16");
+    assert_eq!(ground.status().await, (8, a16, DeliveryStatus::Success, OK));
+}
+
+#[tokio::test]
+async fn fragmentation_raises_the_unicast_limit_to_255() {
+    let config = NetworkConfig {
+        max_unicast: mcp_host::radio::MAX_UNICAST_FRAGMENTED,
+        ..NetworkConfig::default()
+    };
+    let (network, mut devs) = in_process(config, &[COORD, MAV_A]).await;
+    let a16 = network.addr16(MAV_A).unwrap();
+    let [ground, dev_a] = &mut devs[..] else {
+        unreachable!()
+    };
+    ground.tx(1, MAV_A, &[0xAA; 255]).await;
+    assert_eq!(dev_a.rx().await.3, vec![0xAA; 255]);
+    assert_eq!(ground.status().await, (1, a16, DeliveryStatus::Success, OK));
+    ground.tx(2, MAV_A, &[0xAA; 256]).await;
+    assert_eq!(ground.status().await.2, DeliveryStatus::PayloadTooLarge);
+    assert_eq!(
+        ground.at(3, b"NP", &[]).await,
+        (AtStatus::Ok, vec![0x00, 0xFF])
+    );
+}
+
+#[tokio::test]
+async fn local_at_commands_are_answered() {
+    let network = Network::new(NetworkConfig::default());
+    let (_, io) = network
+        .add_in_process(MAV_A, NodeOptions::with_mode(ApiMode::Escaped))
+        .unwrap();
+    let a16 = network.addr16(MAV_A).unwrap();
+    let mut dev = Dev::new(io, ApiMode::Escaped);
+    assert_eq!(dev.modem_status().await, ModemStatus::JoinedNetwork);
+    assert_eq!(dev.at(1, b"AP", &[]).await, (AtStatus::Ok, vec![2]));
+    assert_eq!(
+        dev.at(2, b"NP", &[]).await,
+        (AtStatus::Ok, vec![0x00, 0x54])
+    );
+    assert_eq!(
+        dev.at(3, b"SH", &[]).await,
+        (AtStatus::Ok, vec![0x00, 0x13, 0xA2, 0x00])
+    );
+    assert_eq!(
+        dev.at(4, b"SL", &[]).await,
+        (AtStatus::Ok, vec![0x40, 0xB5, 0x99, 0xB9])
+    );
+    assert_eq!(
+        dev.at(5, b"MY", &[]).await,
+        (AtStatus::Ok, a16.to_bytes().to_vec())
+    );
+    assert_eq!(dev.at(6, b"CE", &[]).await, (AtStatus::Ok, vec![0]));
+    assert_eq!(
+        dev.at(7, b"ZZ", &[]).await,
+        (AtStatus::InvalidCommand, vec![])
+    );
+    assert_eq!(
+        dev.at(8, b"AP", &[1]).await,
+        (AtStatus::InvalidParameter, vec![])
+    );
+}
+
+#[tokio::test]
+async fn a_ground_station_reads_the_coordinator_through_mcp_host() {
+    let network = Network::new(NetworkConfig::default());
+    let coord = network
+        .add_link(
+            COORD,
+            &"tcp-listen:127.0.0.1:0".parse().unwrap(),
+            NodeOptions::default(),
+        )
+        .await
+        .unwrap();
+    let (_, io) = network
+        .add_in_process(MAV_A, NodeOptions::default())
+        .unwrap();
+    let mut dev_a = Dev::new(io, ApiMode::Unescaped);
+    assert_eq!(dev_a.modem_status().await, ModemStatus::JoinedNetwork);
+    let link: Link = format!("tcp:{}", coord.local_addr.unwrap())
+        .parse()
+        .unwrap();
+    let (_stream, sender) = mcp_host::connect(&link, mcp_host::LinkOptions::default())
+        .await
+        .unwrap();
+    let ap = sender.at(*b"AP", &[], Some(GUARD)).await.unwrap();
+    match ap.parse().unwrap() {
+        Frame::AtCommandResponse(r) => assert_eq!((r.status, r.data), (AtStatus::Ok, &[1][..])),
+        other => panic!("{other:?}"),
+    }
+    let command = mcp_core::Command::<&[u8]>::Time(1_700_000_000);
+    let report = sender.send(MAV_A, &command).await.unwrap();
+    assert!(matches!(
+        report,
+        mcp_host::DeliveryReport::Delivered { dst16, .. } if Some(dst16) == network.addr16(MAV_A)
+    ));
+    let mut buf = [0u8; 16];
+    let len = command.encode(&mut buf).unwrap();
+    assert_eq!(
+        dev_a.rx().await,
+        (COORD, Address16::COORDINATOR, 0x01, buf[..len].to_vec())
+    );
+}
+
+/// Sends `n` numbered payloads from `from` to the coordinator with frame ids, and
+/// waits for every status, so that all of them have been routed.
+async fn send_numbered(from: &mut Dev, n: u8) {
+    for i in 1..=n {
+        from.tx(i, COORD, &[b'm', i]).await;
+    }
+    for i in 1..=n {
+        let (id, _, delivery, _) = from.status().await;
+        assert_eq!((id, delivery), (i, DeliveryStatus::Success));
+    }
+}
+
+/// Clears the coordinator's faults and sends a marker: everything before it has been
+/// decided, and arrives before it.
+async fn marker(network: &Network, from: &mut Dev) {
+    network.set_faults(COORD, Some(Faults::default()));
+    from.tx(0, COORD, b"end").await;
+}
+
+/// Reads the coordinator's side up to the marker: payloads and decode errors, in order.
+async fn until_marker(ground: &mut Dev) -> Vec<Result<Vec<u8>, DecodeError>> {
+    let mut seen = Vec::new();
+    loop {
+        match ground.item().await {
+            CodecItem::Frame(f) => match f.parse() {
+                Ok(Frame::ReceivePacket(rx)) if rx.data == b"end" => return seen,
+                Ok(Frame::ReceivePacket(rx)) => seen.push(Ok(rx.data.to_vec())),
+                other => panic!("unexpected {other:?}"),
+            },
+            CodecItem::Error(e) => seen.push(Err(e)),
+        }
+    }
+}
+
+async fn faulty(faults: Faults, seed: u64, n: u8) -> (Vec<Result<Vec<u8>, DecodeError>>, Network) {
+    let config = NetworkConfig {
+        seed,
+        ..NetworkConfig::default()
+    };
+    let (network, mut devs) = in_process(config, &[COORD, MAV_A]).await;
+    network.set_faults(COORD, Some(faults));
+    let [ground, dev_a] = &mut devs[..] else {
+        unreachable!()
+    };
+    send_numbered(dev_a, n).await;
+    marker(&network, dev_a).await;
+    let seen = until_marker(ground).await;
+    (seen, network)
+}
+
+fn numbered(range: impl IntoIterator<Item = u8>) -> Vec<Result<Vec<u8>, DecodeError>> {
+    range.into_iter().map(|i| Ok(vec![b'm', i])).collect()
+}
+
+#[tokio::test]
+async fn loss_one_drops_everything_and_loss_zero_nothing() {
+    let (seen, network) = faulty(
+        Faults {
+            loss: 1.0,
+            ..Faults::default()
+        },
+        1,
+        20,
+    )
+    .await;
+    assert_eq!(seen, vec![]);
+    assert_eq!(network.stats(COORD).unwrap().lost, 20);
+    let (seen, network) = faulty(
+        Faults {
+            loss: 0.0,
+            ..Faults::default()
+        },
+        1,
+        20,
+    )
+    .await;
+    assert_eq!(seen, numbered(1..=20));
+    assert_eq!(network.stats(COORD).unwrap().lost, 0);
+}
+
+#[tokio::test]
+async fn duplicate_one_writes_every_frame_twice() {
+    let (seen, network) = faulty(
+        Faults {
+            duplicate: 1.0,
+            ..Faults::default()
+        },
+        2,
+        10,
+    )
+    .await;
+    let twice: Vec<_> = numbered(1..=10)
+        .into_iter()
+        .flat_map(|f| [f.clone(), f])
+        .collect();
+    assert_eq!(seen, twice);
+    assert_eq!(network.stats(COORD).unwrap().duplicated, 10);
+}
+
+#[tokio::test]
+async fn reorder_one_swaps_each_pair() {
+    let (seen, _) = faulty(
+        Faults {
+            reorder: 1.0,
+            ..Faults::default()
+        },
+        3,
+        6,
+    )
+    .await;
+    assert_eq!(seen, numbered([2, 1, 4, 3, 6, 5]));
+}
+
+#[tokio::test]
+async fn corrupt_one_turns_every_frame_into_a_checksum_error() {
+    let (seen, network) = faulty(
+        Faults {
+            corrupt: 1.0,
+            ..Faults::default()
+        },
+        4,
+        12,
+    )
+    .await;
+    assert_eq!(seen.len(), 12);
+    assert!(
+        seen.iter()
+            .all(|s| matches!(s, Err(DecodeError::BadChecksum { .. }))),
+        "{seen:?}"
+    );
+    assert_eq!(network.stats(COORD).unwrap().corrupted, 12);
+}
+
+#[tokio::test]
+async fn latency_and_jitter_keep_every_frame_in_order() {
+    let faults = Faults {
+        latency: Duration::from_millis(5),
+        jitter: Duration::from_millis(20),
+        ..Faults::default()
+    };
+    let (seen, _) = faulty(faults, 5, 20).await;
+    assert_eq!(seen, numbered(1..=20));
+}
+
+#[tokio::test]
+async fn seeded_faults_replay_identically() {
+    let faults = Faults {
+        loss: 0.3,
+        duplicate: 0.3,
+        corrupt: 0.3,
+        ..Faults::default()
+    };
+    let (first, _) = faulty(faults, 1234, 60).await;
+    let (again, _) = faulty(faults, 1234, 60).await;
+    let (other, _) = faulty(faults, 4321, 60).await;
+    assert_eq!(first, again);
+    assert_ne!(first, other);
+    // Every outcome happened: losses, duplicates and corruptions.
+    let frames = first.iter().filter(|s| s.is_ok()).count();
+    let errors = first.len() - frames;
+    assert!(errors > 0 && frames > 0 && first.len() != 60, "{first:?}");
+}
+
+#[tokio::test]
+async fn a_cut_node_is_unreachable_until_restored() {
+    let (network, mut devs) = in_process(NetworkConfig::default(), &[COORD, MAV_A]).await;
+    let a16 = network.addr16(MAV_A).unwrap();
+    let [ground, dev_a] = &mut devs[..] else {
+        unreachable!()
+    };
+    assert!(network.cut(MAV_A));
+    ground.tx(1, MAV_A, b"c\x02\xff").await;
+    assert_eq!(
+        ground.status().await,
+        (1, a16, DeliveryStatus::NetworkAckFailure, OK)
+    );
+    dev_a.tx(2, COORD, b"r\x02\x04").await;
+    assert_eq!(
+        dev_a.status().await,
+        (
+            2,
+            Address16::COORDINATOR,
+            DeliveryStatus::NetworkAckFailure,
+            OK
+        )
+    );
+    // Its own radio still answers it.
+    assert_eq!(dev_a.at(3, b"AP", &[]).await, (AtStatus::Ok, vec![1]));
+    assert!(network.restore(MAV_A));
+    ground.tx(4, MAV_A, b"c\x02\xff").await;
+    assert_eq!(dev_a.rx().await.3, b"c\x02\xff");
+    assert_eq!(ground.status().await, (4, a16, DeliveryStatus::Success, OK));
+    assert!(!network.cut(NOBODY));
+}
+
+async fn wait_for(
+    events: &mut tokio::sync::broadcast::Receiver<NetEvent>,
+    f: impl Fn(&NetEvent) -> bool,
+) {
+    tokio::time::timeout(GUARD, async {
+        loop {
+            if f(&events.recv().await.expect("events")) {
+                return;
+            }
+        }
+    })
+    .await
+    .expect("the event in time");
+}
+
+#[tokio::test]
+async fn nodes_that_disconnect_come_back() {
+    let network = Network::new(NetworkConfig::default());
+    let mut events = network.subscribe();
+    let coord = network
+        .add_link(
+            COORD,
+            &"tcp-listen:127.0.0.1:0".parse().unwrap(),
+            NodeOptions::default(),
+        )
+        .await
+        .unwrap();
+    // MAV A is a device listening on TCP; its node connects to it.
+    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let link: Link = format!("tcp:{}", listener.local_addr().unwrap())
+        .parse()
+        .unwrap();
+    let mut options = NodeOptions::default();
+    options.reconnect.initial_delay = Duration::from_millis(10);
+    network.add_link(MAV_A, &link, options).await.unwrap();
+    let a16 = network.addr16(MAV_A).unwrap();
+
+    let mut ground = Dev::tcp(coord.local_addr.unwrap(), ApiMode::Unescaped).await;
+    assert_eq!(ground.modem_status().await, ModemStatus::CoordinatorStarted);
+    let (io, _) = listener.accept().await.unwrap();
+    let mut dev_a = Dev::new(io, ApiMode::Unescaped);
+    assert_eq!(dev_a.modem_status().await, ModemStatus::JoinedNetwork);
+    assert!(network.connected(MAV_A).await);
+
+    // A goes away: transmissions to it fail until it is back.
+    drop(dev_a);
+    wait_for(
+        &mut events,
+        |e| matches!(e, NetEvent::Disconnected { node, .. } if *node == MAV_A),
+    )
+    .await;
+    assert!(!network.is_connected(MAV_A));
+    ground.tx(1, MAV_A, b"c\x02\xff").await;
+    assert_eq!(
+        ground.status().await,
+        (1, a16, DeliveryStatus::NetworkAckFailure, OK)
+    );
+    let (io, _) = listener.accept().await.unwrap();
+    let mut dev_a = Dev::new(io, ApiMode::Unescaped);
+    assert_eq!(dev_a.modem_status().await, ModemStatus::JoinedNetwork);
+    ground.tx(2, MAV_A, b"c\x02\xff").await;
+    assert_eq!(dev_a.rx().await.3, b"c\x02\xff");
+    assert_eq!(ground.status().await, (2, a16, DeliveryStatus::Success, OK));
+
+    // The ground station goes away; the next TCP peer is the coordinator back.
+    drop(ground);
+    wait_for(
+        &mut events,
+        |e| matches!(e, NetEvent::Disconnected { node, .. } if *node == COORD),
+    )
+    .await;
+    let mut ground = Dev::tcp(coord.local_addr.unwrap(), ApiMode::Unescaped).await;
+    assert_eq!(ground.modem_status().await, ModemStatus::CoordinatorStarted);
+    dev_a.tx(0, COORD, b"r\x02\x04").await;
+    assert_eq!(ground.rx().await, (MAV_A, a16, 0x01, b"r\x02\x04".to_vec()));
+    assert_eq!(network.stats(MAV_A).unwrap().connections, 2);
+    assert_eq!(network.stats(COORD).unwrap().connections, 2);
+}
