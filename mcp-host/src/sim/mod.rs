@@ -1,1 +1,266 @@
-//! A simulated MAV (in progress).
+//! Simulated MAVs: the MCP state machine of `mcp_core::mav` over a small flight model,
+//! speaking XBee API mode 1 to a virtual radio, as the deployed MAVs do.
+//!
+//! - [`SimVehicle`]: the flight model (landing state machine, controllers, trajectory,
+//!   position, clock).
+//! - [`SimMav`]: the protocol side without I/O: feed it payloads and ticks, get the
+//!   payloads it sends (answers, unsolicited reports, 20 Hz telemetry).
+//! - [`run_mav`]: a MAV on a byte stream to its XBee (Receive Packets in, Transmit
+//!   Requests to the coordinator out: frame id 0, 16-bit address FFFE, option 0x01).
+//! - [`Simulator`]: a fleet of MAVs behind a [virtual XBee network](crate::radio) whose
+//!   coordinator is a link: the far end of the link sees what a ground station sees from
+//!   its local XBee.
+//!
+//! ```no_run
+//! use mcp_host::sim::{Simulator, fleet_addresses};
+//! use mcp_host::radio::NetworkConfig;
+//! use xbee_api::ApiMode;
+//!
+//! # async fn run() -> Result<(), Box<dyn std::error::Error>> {
+//! let sim = Simulator::start(&"pty".parse()?, ApiMode::Unescaped, &fleet_addresses(2),
+//!                            NetworkConfig::default()).await?;
+//! println!("ground station: serial:{}", sim.coordinator().pty_path.as_ref().unwrap().display());
+//! # Ok(())
+//! # }
+//! ```
+
+mod vehicle;
+
+use std::time::{Duration, SystemTime};
+
+use bytes::Bytes;
+use futures::{SinkExt, StreamExt};
+use mcp_core::mav::Mav;
+use tokio::io::{AsyncRead, AsyncWrite};
+use tokio::time::{Instant, MissedTickBehavior};
+use tokio_util::codec::Framed;
+use xbee_api::{Address16, Address64, ApiMode, Frame, TransmitRequestRepr};
+
+pub use vehicle::{CRUISE_ALTITUDE, LANDING_RATE, STABILIZATION_TIME, SimVehicle};
+
+use crate::codec::{CodecItem, XBeeCodec};
+use crate::link::Link;
+use crate::radio::{Network, NetworkConfig, NetworkError, NodeInfo, NodeOptions};
+
+/// Period of the telemetry packets (20 Hz).
+pub const TELEMETRY_PERIOD: Duration = Duration::from_millis(50);
+
+/// The known MAV addresses, in fleet order.
+pub const KNOWN_MAVS: [Address64; 4] = [
+    Address64(0x0013_A200_40B5_99B9),
+    Address64(0x0013_A200_40B5_99BF),
+    Address64(0x0013_A200_40B5_99BD),
+    Address64(0x0013_A200_40B5_99B8),
+];
+
+/// `n` MAV addresses: the known ones first, then made-up ones
+/// (0013A20040B5A000, 0013A20040B5A001...).
+///
+/// ```
+/// use mcp_host::sim::fleet_addresses;
+/// let fleet = fleet_addresses(5);
+/// assert_eq!(fleet[0].to_string().to_uppercase(), "0013A20040B599B9");
+/// assert_eq!(fleet[4].0, 0x0013_A200_40B5_A000);
+/// ```
+pub fn fleet_addresses(n: usize) -> Vec<Address64> {
+    (0..n)
+        .map(|i| match KNOWN_MAVS.get(i) {
+            Some(a) => *a,
+            None => Address64(0x0013_A200_40B5_A000 + (i - KNOWN_MAVS.len()) as u64),
+        })
+        .collect()
+}
+
+/// The current POSIX time in seconds, saturated to `u32`.
+pub fn posix_now() -> u32 {
+    SystemTime::now()
+        .duration_since(SystemTime::UNIX_EPOCH)
+        .map(|d| u32::try_from(d.as_secs()).unwrap_or(u32::MAX))
+        .unwrap_or(0)
+}
+
+/// One simulated MAV without I/O: the protocol state machine and the flight model.
+///
+/// ```
+/// use mcp_host::sim::SimMav;
+/// let mut mav = SimMav::new(1_700_000_000);
+/// // Status request of the landing state: answered at once.
+/// assert_eq!(mav.handle_payload(b"c\x02\xff"), vec![&b"r\x02\x04"[..]]);
+/// // Telemetry of altitude: one packet per tick.
+/// assert!(mav.handle_payload(b"c\x01\x01\x01").is_empty());
+/// let out = mav.tick(0.05);
+/// assert_eq!(out.len(), 1);
+/// assert_eq!(&out[0][..], b"t\x01\x00\x00\x80\x3f"); // altitude 1.0 (little-endian f32)
+/// ```
+#[derive(Debug, Clone)]
+pub struct SimMav {
+    mav: Mav,
+    vehicle: SimVehicle,
+}
+
+impl SimMav {
+    /// A MAV in flight, its clock at `time`.
+    pub fn new(time: u32) -> Self {
+        let vehicle = SimVehicle::new(time);
+        SimMav {
+            mav: Mav::new(&vehicle),
+            vehicle,
+        }
+    }
+
+    /// The flight model.
+    pub fn vehicle(&self) -> &SimVehicle {
+        &self.vehicle
+    }
+
+    /// The protocol state.
+    pub fn mav(&self) -> &Mav {
+        &self.mav
+    }
+
+    /// Handles a received payload; returns the payloads to send: the direct answer, if
+    /// any, then the unsolicited reports. Invalid packets and non-commands are ignored.
+    pub fn handle_payload(&mut self, payload: &[u8]) -> Vec<Bytes> {
+        let mut out = Vec::new();
+        let mut buf = [0u8; mcp_core::MAX_PAYLOAD];
+        match mcp_core::parse(payload) {
+            Ok(packet) => {
+                if let Ok(Some(len)) = self.mav.handle_packet(&mut self.vehicle, &packet, &mut buf)
+                {
+                    out.push(Bytes::copy_from_slice(&buf[..len]));
+                }
+            }
+            Err(error) => tracing::debug!(%error, "invalid packet ignored"),
+        }
+        self.changes(&mut out);
+        out
+    }
+
+    /// Advances the flight model by `dt` seconds; returns the payloads to send: the
+    /// unsolicited reports of state changes, then the telemetry packet (if any id is
+    /// enabled).
+    pub fn tick(&mut self, dt: f32) -> Vec<Bytes> {
+        self.vehicle.step(dt);
+        let mut out = Vec::new();
+        self.changes(&mut out);
+        let mut buf = [0u8; mcp_core::MAX_PAYLOAD];
+        if let Ok(Some(len)) = self.mav.telemetry(&self.vehicle, &mut buf) {
+            out.push(Bytes::copy_from_slice(&buf[..len]));
+        }
+        out
+    }
+
+    fn changes(&mut self, out: &mut Vec<Bytes>) {
+        let mut buf = [0u8; mcp_core::MAX_PAYLOAD];
+        while let Ok(Some(len)) = self.mav.poll_changes(&self.vehicle, &mut buf) {
+            out.push(Bytes::copy_from_slice(&buf[..len]));
+        }
+    }
+}
+
+/// Runs a simulated MAV on `io`, the UART to its XBee in API mode 1, until the stream
+/// ends. Commands arrive as Receive Packets; answers, reports and 20 Hz telemetry leave as
+/// Transmit Requests to the coordinator.
+pub async fn run_mav<S>(io: S, mut mav: SimMav) -> std::io::Result<()>
+where
+    S: AsyncRead + AsyncWrite + Unpin,
+{
+    let mut framed = Framed::new(io, XBeeCodec::new(ApiMode::Unescaped));
+    let mut ticks = tokio::time::interval(TELEMETRY_PERIOD);
+    ticks.set_missed_tick_behavior(MissedTickBehavior::Delay);
+    let mut last = Instant::now();
+    loop {
+        let out = tokio::select! {
+            item = framed.next() => match item {
+                Some(Ok(CodecItem::Frame(frame))) => match frame.parse() {
+                    Ok(Frame::ReceivePacket(rx)) => mav.handle_payload(rx.data),
+                    _ => Vec::new(),
+                },
+                Some(Ok(CodecItem::Error(error))) => {
+                    tracing::debug!(%error, "MAV UART: frame dropped");
+                    Vec::new()
+                }
+                Some(Err(e)) => return Err(e),
+                None => return Ok(()),
+            },
+            now = ticks.tick() => {
+                let dt = now.duration_since(last).as_secs_f32();
+                last = now;
+                mav.tick(dt)
+            }
+        };
+        for payload in out {
+            let tx = TransmitRequestRepr {
+                frame_id: 0,
+                dst64: Address64::COORDINATOR,
+                dst16: Address16::UNKNOWN,
+                radius: 0,
+                options: 0x01,
+                data: &payload,
+            };
+            framed.feed(&tx).await?;
+        }
+        SinkExt::<&TransmitRequestRepr<'_>>::flush(&mut framed).await?;
+    }
+}
+
+/// Simulated MAVs behind a virtual XBee network whose coordinator is a link.
+#[derive(Debug)]
+pub struct Simulator {
+    network: Network,
+    coordinator: NodeInfo,
+    mavs: Vec<NodeInfo>,
+}
+
+impl Simulator {
+    /// Starts the network with `link` as its coordinator (in `mode`) and one simulated
+    /// MAV per address as in-process nodes in API mode 1, clocks at the current time.
+    pub async fn start(
+        link: &Link,
+        mode: ApiMode,
+        addresses: &[Address64],
+        config: NetworkConfig,
+    ) -> Result<Self, NetworkError> {
+        let network = Network::new(config);
+        let coordinator = network
+            .add_link(Address64::COORDINATOR, link, NodeOptions::with_mode(mode))
+            .await?;
+        let mut mavs = Vec::new();
+        for &address in addresses {
+            let (info, io) =
+                network.add_in_process(address, NodeOptions::with_mode(ApiMode::Unescaped))?;
+            tokio::spawn(async move {
+                if let Err(error) = run_mav(io, SimMav::new(posix_now())).await {
+                    tracing::warn!(mav = %address, %error, "simulated MAV stopped");
+                }
+            });
+            mavs.push(info);
+        }
+        Ok(Simulator {
+            network,
+            coordinator,
+            mavs,
+        })
+    }
+
+    /// The network.
+    pub fn network(&self) -> &Network {
+        &self.network
+    }
+
+    /// The coordinator: where its link listens ([`NodeInfo::pty_path`],
+    /// [`NodeInfo::local_addr`]).
+    pub fn coordinator(&self) -> &NodeInfo {
+        &self.coordinator
+    }
+
+    /// The simulated MAVs.
+    pub fn mavs(&self) -> &[NodeInfo] {
+        &self.mavs
+    }
+
+    /// Stops the MAVs and the network.
+    pub fn shutdown(&self) {
+        self.network.shutdown();
+    }
+}
