@@ -2,6 +2,7 @@
 
 use memchr::{memchr, memchr2};
 
+use crate::unescape::{is_plain, unescape, unescape_byte};
 use crate::wire::{ESCAPE, ESCAPE_XOR, START_DELIMITER, checksum_of_sum, needs_escape, sum};
 use crate::{ApiMode, DecodeError, RawFrame, Stats};
 
@@ -114,21 +115,24 @@ enum State {
 ///
 /// # Memory
 ///
-/// `size_of::<Decoder<N>>()` is `N` plus the cursors and counters (48 bytes on a 32-bit
-/// target, 64 on a 64-bit one). Mode 2 holds frame data of up to `N` bytes; mode 1 holds
+/// `size_of::<Decoder<N>>()` is `N` plus the cursors and counters (52 bytes on a 32-bit
+/// target, 72 on a 64-bit one). Mode 2 holds frame data of up to `N` bytes; mode 1 holds
 /// the whole frame, so frame data of up to `N - 4` bytes ([`capacity`](Self::capacity)).
 #[derive(Debug, Clone)]
 pub struct Decoder<const N: usize = DEFAULT_CAPACITY> {
     buf: [u8; N],
     /// Mode 1: index of the candidate's start delimiter in `buf`.
     start: usize,
-    /// Mode 1: next buffered byte to process. Mode 2: frame data bytes stored.
+    /// Mode 1: next buffered byte to process.
     pos: usize,
-    /// Mode 1: bytes in `buf`.
+    /// Bytes in `buf`. Mode 1: bytes buffered. Mode 2: frame data bytes stored.
     end: usize,
+    /// While `end < fill_to`, [`push`](Self::push) stores a byte that is neither 0x7D
+    /// nor 0x7E at `end` and does nothing else: the bytes are frame data, summed when
+    /// the frame is complete. 0 outside frame data.
+    fill_to: usize,
     /// Length field of the current candidate.
     len: usize,
-    sum: u8,
     state: State,
     /// Mode 2: the previous byte was 0x7D.
     escaped: bool,
@@ -147,8 +151,8 @@ impl<const N: usize> Decoder<N> {
             start: 0,
             pos: 0,
             end: 0,
+            fill_to: 0,
             len: 0,
-            sum: 0,
             state: State::Hunt,
             escaped: false,
             mode,
@@ -198,6 +202,7 @@ impl<const N: usize> Decoder<N> {
         self.start = 0;
         self.pos = 0;
         self.end = 0;
+        self.fill_to = 0;
         self.state = State::Hunt;
         self.escaped = false;
     }
@@ -206,8 +211,27 @@ impl<const N: usize> Decoder<N> {
     ///
     /// In mode 1 an event can leave more events pending: call [`poll`](Self::poll)
     /// until it returns `None` before pushing the next byte.
+    ///
+    /// A byte of frame data that is neither 0x7D nor 0x7E is only stored: one compare
+    /// of two cursors, one of the byte, a bounds check and the store. Everything else
+    /// (delimiters, length, escapes, checksum, and the sum of the frame data) is done
+    /// out of line, once a frame.
     #[inline]
     pub fn push(&mut self, byte: u8) -> Option<Event<'_>> {
+        let end = self.end;
+        if end < self.fill_to && is_plain(byte) {
+            if let Some(slot) = self.buf.get_mut(end) {
+                *slot = byte;
+                self.end = end + 1;
+                return None;
+            }
+        }
+        self.push_slow(byte)
+    }
+
+    /// [`push`](Self::push) for every byte but plain frame data.
+    #[inline(never)]
+    fn push_slow(&mut self, byte: u8) -> Option<Event<'_>> {
         let outcome = match self.mode {
             ApiMode::Escaped => self.step2(byte),
             ApiMode::Unescaped => self.push1(byte),
@@ -229,6 +253,10 @@ impl<const N: usize> Decoder<N> {
     /// event. Pending events are delivered first, with 0 bytes taken. `None` means all of
     /// `input` was taken and nothing is pending: feed more, or [`finish`](Self::finish).
     ///
+    /// A frame that lies whole in `input` is decoded in one go: unescaped 8 bytes a step,
+    /// copied to the buffer and summed a word at a time. Frames split across calls go
+    /// through the buffer and come out the same.
+    ///
     /// The bytes taken are the decoder's from then on (a caller holding a `BytesMut` can
     /// advance past them at once).
     pub fn decode(&mut self, input: &[u8]) -> (usize, Option<Event<'_>>) {
@@ -249,9 +277,9 @@ impl<const N: usize> Decoder<N> {
                     self.escaped = false;
                     None
                 } else {
-                    let error = self.truncated(self.pos);
+                    let error = self.truncated(self.end);
                     self.escaped = false;
-                    self.state = State::Hunt;
+                    self.hunt();
                     Some(Err(self.record(error)))
                 }
             }
@@ -271,6 +299,12 @@ impl<const N: usize> Decoder<N> {
     fn event(&self, outcome: Outcome) -> Event<'_> {
         outcome
             .map(|(start, end)| RawFrame::from_data(self.buf.get(start..end).unwrap_or_default()))
+    }
+
+    /// Back to hunting for a start delimiter; `push` stores nothing on its own.
+    fn hunt(&mut self) {
+        self.state = State::Hunt;
+        self.fill_to = 0;
     }
 
     fn truncated(&self, received: usize) -> DecodeError {
@@ -314,24 +348,47 @@ impl<const N: usize> Decoder<N> {
         }
     }
 
+    /// Checks the checksum byte of frame data at `start..start + len` of the buffer;
+    /// the frame's range (counted), or the error (not counted yet).
+    fn check(&mut self, start: usize, got: u8) -> Outcome {
+        let data = self.buf.get(start..start + self.len).unwrap_or_default();
+        self.check_sum(sum(data), start, got)
+    }
+
+    /// [`check`](Self::check) with the sum of the frame data known.
+    fn check_sum(&mut self, sum: u8, start: usize, got: u8) -> Outcome {
+        let expected = checksum_of_sum(sum);
+        if got == expected {
+            self.stats.frames_ok = self.stats.frames_ok.wrapping_add(1);
+            Ok((start, start + self.len))
+        } else {
+            Err(DecodeError::BadChecksum { expected, got })
+        }
+    }
+
     // ---- Mode 2: a raw 0x7E always starts a frame, nothing is ever rescanned. ----
 
+    /// A start delimiter was read: expect the length.
+    fn begin2(&mut self) {
+        self.state = State::LenHi;
+        self.escaped = false;
+        self.end = 0;
+        self.fill_to = 0;
+    }
+
     /// One raw byte of a mode 2 stream.
-    #[inline]
+    #[inline(never)]
     fn step2(&mut self, raw: u8) -> Option<Outcome> {
         if raw == START_DELIMITER {
             let cut = match self.state {
                 State::Hunt => None,
                 _ if self.escaped => Some(DecodeError::BadEscape {
                     byte: raw,
-                    received: self.pos,
+                    received: self.end,
                 }),
-                _ => Some(self.truncated(self.pos)),
+                _ => Some(self.truncated(self.end)),
             };
-            self.state = State::LenHi;
-            self.escaped = false;
-            self.pos = 0;
-            self.sum = 0;
+            self.begin2();
             return cut.map(|e| Err(self.record(e)));
         }
         if self.state == State::Hunt {
@@ -342,31 +399,35 @@ impl<const N: usize> Decoder<N> {
             self.escaped = false;
             let byte = raw ^ ESCAPE_XOR;
             if !needs_escape(byte) {
-                self.state = State::Hunt;
+                self.hunt();
                 let error = DecodeError::BadEscape {
                     byte: raw,
-                    received: self.pos,
+                    received: self.end,
                 };
                 return Some(Err(self.record(error)));
             }
             byte
         } else if raw == ESCAPE {
             self.escaped = true;
+            self.fill_to = 0;
             return None;
         } else {
             raw
         };
         match self.state {
-            State::Data => {
-                if let Some(slot) = self.buf.get_mut(self.pos) {
+            // Once `end` reaches the length, frame data is complete and this byte is the
+            // checksum.
+            State::Data if self.end < self.len => {
+                if let Some(slot) = self.buf.get_mut(self.end) {
                     *slot = byte;
                 }
-                self.pos += 1;
-                self.sum = self.sum.wrapping_add(byte);
-                if self.pos >= self.len {
-                    self.state = State::Checksum;
-                }
+                self.end += 1;
+                self.fill_to = self.len;
                 None
+            }
+            State::Data | State::Checksum => {
+                self.hunt();
+                Some(self.check(0, byte).map_err(|e| self.record(e)))
             }
             State::LenHi => {
                 self.len = usize::from(byte) << 8;
@@ -376,59 +437,87 @@ impl<const N: usize> Decoder<N> {
             State::LenLo => {
                 self.len |= usize::from(byte);
                 if let Some(error) = self.check_len() {
-                    self.state = State::Hunt;
+                    self.hunt();
                     return Some(Err(self.record(error)));
                 }
                 self.state = State::Data;
+                self.fill_to = self.len;
                 None
-            }
-            State::Checksum => {
-                self.state = State::Hunt;
-                let expected = checksum_of_sum(self.sum);
-                if byte == expected {
-                    self.stats.frames_ok = self.stats.frames_ok.wrapping_add(1);
-                    Some(Ok((0, self.len)))
-                } else {
-                    let error = DecodeError::BadChecksum {
-                        expected,
-                        got: byte,
-                    };
-                    Some(Err(self.record(error)))
-                }
             }
             State::Hunt => None,
         }
     }
 
+    /// Decodes a frame that lies whole in `body`, the bytes after its start delimiter;
+    /// how many bytes of `body` it took and the outcome. `None`, with nothing changed
+    /// but the buffer's content, if the frame is not whole in `body` or has anything
+    /// but a bad checksum wrong: [`step2`](Self::step2) then reads it byte by byte.
+    fn whole2(&mut self, body: &[u8]) -> Option<(usize, Outcome)> {
+        let mut i = 0;
+        let hi = unescape_byte(body, &mut i)?;
+        let lo = unescape_byte(body, &mut i)?;
+        let len = usize::from(u16::from_be_bytes([hi, lo]));
+        let rest = body.get(i..)?;
+        if len == 0 || len > self.capacity() || rest.len() <= len {
+            return None;
+        }
+        i += unescape(rest, &mut self.buf, len)?;
+        let got = unescape_byte(body, &mut i)?;
+        self.len = len;
+        self.end = len;
+        self.hunt();
+        let outcome = self.check(0, got).map_err(|e| self.record(e));
+        Some((i, outcome))
+    }
+
     fn decode2(&mut self, input: &[u8]) -> (usize, Option<Outcome>) {
+        // Between frames, at a start delimiter: the whole frame at once if it is there.
+        let mut try_whole = true;
+        if self.state == State::Hunt {
+            if let Some((&START_DELIMITER, body)) = input.split_first() {
+                if let Some((n, outcome)) = self.whole2(body) {
+                    return (1 + n, Some(outcome));
+                }
+                try_whole = false;
+            }
+        }
         let mut i = 0;
         while let Some(rest) = input.get(i..).filter(|r| !r.is_empty()) {
             match self.state {
-                State::Hunt => match memchr(START_DELIMITER, rest) {
-                    Some(k) => {
-                        self.skipped(k);
-                        i += k;
+                State::Hunt => {
+                    let k = match rest.first() {
+                        Some(&START_DELIMITER) => 0,
+                        _ => match memchr(START_DELIMITER, rest) {
+                            Some(k) => k,
+                            None => {
+                                self.skipped(rest.len());
+                                return (input.len(), None);
+                            }
+                        },
+                    };
+                    self.skipped(k);
+                    i += k + 1;
+                    self.begin2();
+                    try_whole |= i > 1;
+                    continue;
+                }
+                // Right after a start delimiter: try the whole frame at once.
+                State::LenHi if !self.escaped && try_whole => {
+                    try_whole = false;
+                    if let Some((n, outcome)) = self.whole2(rest) {
+                        return (i + n, Some(outcome));
                     }
-                    None => {
-                        self.skipped(rest.len());
-                        return (input.len(), None);
-                    }
-                },
-                State::Data if !self.escaped => {
-                    let want = self.len.saturating_sub(self.pos).min(rest.len());
+                }
+                State::Data if !self.escaped && self.end < self.len => {
+                    let want = (self.len - self.end).min(rest.len());
                     let chunk = &rest[..want];
                     let run = memchr2(ESCAPE, START_DELIMITER, chunk).unwrap_or(want);
                     if run > 0 {
-                        let bytes = &chunk[..run];
-                        if let Some(dst) = self.buf.get_mut(self.pos..self.pos + run) {
-                            dst.copy_from_slice(bytes);
+                        if let Some(dst) = self.buf.get_mut(self.end..self.end + run) {
+                            dst.copy_from_slice(&chunk[..run]);
                         }
-                        self.sum = self.sum.wrapping_add(sum(bytes));
-                        self.pos += run;
+                        self.end += run;
                         i += run;
-                        if self.pos >= self.len {
-                            self.state = State::Checksum;
-                        }
                         continue;
                     }
                 }
@@ -451,6 +540,7 @@ impl<const N: usize> Decoder<N> {
         self.buf.copy_within(self.start..self.end, 0);
         self.pos -= self.start;
         self.end -= self.start;
+        self.fill_to = self.fill_to.saturating_sub(self.start);
         self.start = 0;
     }
 
@@ -458,7 +548,7 @@ impl<const N: usize> Decoder<N> {
     fn fail1(&mut self, error: DecodeError) -> DecodeError {
         self.start += 1;
         self.pos = self.start;
-        self.state = State::Hunt;
+        self.hunt();
         self.record(error)
     }
 
@@ -495,33 +585,32 @@ impl<const N: usize> Decoder<N> {
                     if self.start + self.len + 4 > N {
                         self.compact();
                     }
-                    self.sum = 0;
                     self.state = State::Data;
+                    self.fill_to = self.start + 3 + self.len;
                 }
+                // Frame data is summed with the checksum, once it is all there.
                 State::Data => {
                     let frame_end = self.start + 3 + self.len;
-                    let upto = frame_end.min(self.end);
-                    self.sum = self
-                        .sum
-                        .wrapping_add(sum(self.buf.get(self.pos..upto).unwrap_or_default()));
-                    self.pos = upto;
-                    if self.pos == frame_end {
+                    if self.end < frame_end {
+                        self.pos = self.end;
+                    } else {
+                        self.pos = frame_end;
                         self.state = State::Checksum;
+                        self.fill_to = 0;
                     }
                 }
                 State::Checksum => {
                     let got = self.buf[self.pos];
                     self.pos += 1;
-                    let expected = checksum_of_sum(self.sum);
-                    if got != expected {
-                        let error = DecodeError::BadChecksum { expected, got };
-                        return Some(Err(self.fail1(error)));
-                    }
-                    self.stats.frames_ok = self.stats.frames_ok.wrapping_add(1);
-                    let data = self.start + 3;
-                    self.start = self.pos;
-                    self.state = State::Hunt;
-                    return Some(Ok((data, data + self.len)));
+                    let outcome = self.check(self.start + 3, got);
+                    return Some(match outcome {
+                        Ok(range) => {
+                            self.start = self.pos;
+                            self.hunt();
+                            Ok(range)
+                        }
+                        Err(error) => Err(self.fail1(error)),
+                    });
                 }
             }
         }
@@ -555,32 +644,14 @@ impl<const N: usize> Decoder<N> {
         }
     }
 
-    #[inline]
     fn push1(&mut self, byte: u8) -> Option<Outcome> {
-        if self.pos == self.end {
-            match self.state {
-                State::Hunt => {
-                    if byte == START_DELIMITER {
-                        self.begin1();
-                    } else {
-                        self.skipped(1);
-                    }
-                    return None;
-                }
-                State::Data => {
-                    if let Some(slot) = self.buf.get_mut(self.end) {
-                        *slot = byte;
-                        self.end += 1;
-                        self.pos = self.end;
-                        self.sum = self.sum.wrapping_add(byte);
-                        if self.pos == self.start + 3 + self.len {
-                            self.state = State::Checksum;
-                        }
-                        return None;
-                    }
-                }
-                _ => {}
+        if self.pos == self.end && self.state == State::Hunt {
+            if byte == START_DELIMITER {
+                self.begin1();
+            } else {
+                self.skipped(1);
             }
+            return None;
         }
         if self.end == N {
             self.compact();
@@ -595,17 +666,42 @@ impl<const N: usize> Decoder<N> {
         self.drain1()
     }
 
+    /// Decodes a frame that lies whole and valid in `frame` (from its start delimiter)
+    /// with nothing pending; how many bytes of `frame` it took and the outcome. `None`,
+    /// with nothing changed but the buffer's content, for anything else: the buffered
+    /// path then reads it (and rescans it if it fails).
+    fn whole1(&mut self, frame: &[u8]) -> Option<(usize, Outcome)> {
+        let (&[_, hi, lo], rest) = frame.split_first_chunk::<3>()?;
+        let len = usize::from(u16::from_be_bytes([hi, lo]));
+        if len == 0 || len > self.capacity() {
+            return None;
+        }
+        let data = rest.get(..len)?;
+        let got = *rest.get(len)?;
+        if got != checksum_of_sum(sum(data)) {
+            return None;
+        }
+        self.buf.get_mut(..len)?.copy_from_slice(data);
+        self.stats.frames_ok = self.stats.frames_ok.wrapping_add(1);
+        Some((len + 4, Ok((0, len))))
+    }
+
     fn decode1(&mut self, input: &[u8]) -> (usize, Option<Outcome>) {
         if let Some(outcome) = self.drain1() {
             return (0, Some(outcome));
         }
         let mut i = 0;
         while let Some(rest) = input.get(i..).filter(|r| !r.is_empty()) {
+            // Nothing is pending while hunting here: `drain1` took every buffered byte.
             if self.state == State::Hunt {
                 match memchr(START_DELIMITER, rest) {
                     Some(k) => {
                         self.skipped(k);
-                        i += k + 1;
+                        i += k;
+                        if let Some((n, outcome)) = self.whole1(&rest[k..]) {
+                            return (i + n, Some(outcome));
+                        }
+                        i += 1;
                         self.begin1();
                     }
                     None => {

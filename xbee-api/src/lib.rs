@@ -48,6 +48,7 @@ mod mode;
 mod raw;
 mod stats;
 mod status;
+mod unescape;
 pub mod wire;
 
 pub use address::{Address16, Address64, ParseAddressError};
