@@ -1,17 +1,393 @@
-//! `mcp-gs radio` (not implemented yet).
+//! `mcp-gs radio`: a virtual XBee network between links.
+
+use std::time::{Duration, SystemTime};
 
 use clap::Args;
+use mcp_host::Link;
+use mcp_host::radio::{
+    Faults, MAX_UNICAST, MAX_UNICAST_FRAGMENTED, NetEvent, Network, NetworkConfig, NodeInfo,
+    NodeOptions,
+};
+use tokio::sync::broadcast;
+use xbee_api::{Address64, ApiMode};
 
-use crate::Failure;
+use crate::{ApiModeArg, Failure};
 
 /// Arguments of `radio`.
 #[derive(Debug, Args)]
-pub(crate) struct RadioArgs {}
+#[command(after_long_help = RADIO_HELP)]
+pub(crate) struct RadioArgs {
+    /// The coordinator's link (64-bit address 0000000000000000, 16-bit 0000), where the
+    /// ground station is: LINK or LINK@MODE (e.g. `pty`, `tcp-listen:0.0.0.0:9750@2`).
+    #[arg(long, value_name = "LINK[@MODE]")]
+    coordinator: LinkArg,
+    /// A node: its 64-bit address and the link to its device, ADDR=LINK or
+    /// ADDR=LINK@MODE (e.g. `0013A20040B599B9=tcp:127.0.0.1:5000@1`). Repeat for more.
+    #[arg(long = "node", value_name = "ADDR=LINK[@MODE]")]
+    nodes: Vec<NodeArg>,
+    /// API mode of links given without @MODE.
+    #[arg(long, default_value = "1", value_name = "1|2")]
+    api_mode: ApiModeArg,
+    #[command(flatten)]
+    net: NetArgs,
+    /// Print every delivery, not only connections and failures.
+    #[arg(long, short)]
+    verbose: bool,
+    /// Stop after this many seconds (default: run until Ctrl-C).
+    #[arg(long, value_name = "S")]
+    duration: Option<f64>,
+}
+
+const RADIO_HELP: &str = "\
+Links: serial:PATH[:BAUD], tcp:HOST:PORT, tcp-listen:ADDR:PORT (each new peer is the device \
+back), pty (the path to open is printed). A link's API mode is given after an @ \
+(LINK@1, LINK@2), else --api-mode.
+
+Faults apply to the frames the network writes to a link: --loss, --latency, --jitter, \
+--duplicate, --reorder and --corrupt for every link, --faults ADDR=SPEC for one (SPEC: \
+comma-separated loss=P, latency=MS, jitter=MS, duplicate=P, reorder=P, corrupt=P; ADDR \
+`coordinator` or a 64-bit address). The seed is printed at start; --seed replays a run.
+
+Example: a ground station on a pty, a MAV firmware's UART on TCP port 5000:
+  mcp-gs radio --coordinator pty --node 0013A20040B599B9=tcp:127.0.0.1:5000";
+
+/// Network-wide settings shared by `radio` and `sim`.
+#[derive(Debug, Args)]
+pub(crate) struct NetArgs {
+    /// Seed of the fault generators (default: from the clock; printed at start).
+    #[arg(long, value_name = "N")]
+    seed: Option<u64>,
+    /// Largest unicast payload (84 without fragmentation, at most 255).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..=255))]
+    max_unicast: Option<u16>,
+    /// Assume fragmentation: unicast payloads up to 255 bytes.
+    #[arg(long, conflicts_with = "max_unicast")]
+    fragmentation: bool,
+    /// Probability that a frame to a link is lost.
+    #[arg(long, value_name = "P", default_value_t = 0.0)]
+    loss: f64,
+    /// Delay before a frame is written to a link, milliseconds.
+    #[arg(long, value_name = "MS", default_value_t = 0)]
+    latency: u64,
+    /// Random extra delay, up to this many milliseconds.
+    #[arg(long, value_name = "MS", default_value_t = 0)]
+    jitter: u64,
+    /// Probability that a frame is written twice.
+    #[arg(long, value_name = "P", default_value_t = 0.0)]
+    duplicate: f64,
+    /// Probability that a frame is held back behind the next one.
+    #[arg(long, value_name = "P", default_value_t = 0.0)]
+    reorder: f64,
+    /// Probability that a frame's bytes are corrupted (bad checksum).
+    #[arg(long, value_name = "P", default_value_t = 0.0)]
+    corrupt: f64,
+    /// Faults of one link, ADDR=SPEC (see below). Repeat for more.
+    #[arg(long = "faults", value_name = "ADDR=SPEC")]
+    link_faults: Vec<LinkFaults>,
+}
+
+impl NetArgs {
+    pub(crate) fn config(&self) -> Result<NetworkConfig, Failure> {
+        for (name, p) in [
+            ("loss", self.loss),
+            ("duplicate", self.duplicate),
+            ("reorder", self.reorder),
+            ("corrupt", self.corrupt),
+        ] {
+            if !(0.0..=1.0).contains(&p) {
+                return Err(Failure::input(format!(
+                    "--{name} must be in 0..=1, got {p}"
+                )));
+            }
+        }
+        let seed = self.seed.unwrap_or_else(|| {
+            SystemTime::now()
+                .duration_since(SystemTime::UNIX_EPOCH)
+                .map(|d| d.as_nanos() as u64)
+                .unwrap_or(0)
+        });
+        let max_unicast = match (self.fragmentation, self.max_unicast) {
+            (true, _) => MAX_UNICAST_FRAGMENTED,
+            (false, Some(n)) => usize::from(n),
+            (false, None) => MAX_UNICAST,
+        };
+        Ok(NetworkConfig {
+            seed,
+            faults: Faults {
+                loss: self.loss,
+                latency: Duration::from_millis(self.latency),
+                jitter: Duration::from_millis(self.jitter),
+                duplicate: self.duplicate,
+                reorder: self.reorder,
+                corrupt: self.corrupt,
+            },
+            max_unicast,
+            ..NetworkConfig::default()
+        })
+    }
+
+    /// The per-link faults of `address`, if given.
+    pub(crate) fn faults_of(&self, address: Address64) -> Option<Faults> {
+        self.link_faults
+            .iter()
+            .rev()
+            .find(|f| f.address == address)
+            .map(|f| f.faults)
+    }
+
+    /// Prints the seed and the faults.
+    pub(crate) fn describe(&self, config: &NetworkConfig) {
+        println!("seed {} (replay with --seed {})", config.seed, config.seed);
+        println!(
+            "unicast payloads up to {} bytes, broadcast up to {}",
+            config.max_unicast, config.max_broadcast
+        );
+        if !config.faults.is_none() {
+            println!("faults on every link: {}", describe_faults(&config.faults));
+        }
+        for f in &self.link_faults {
+            println!("faults on {}: {}", f.address, describe_faults(&f.faults));
+        }
+    }
+}
+
+fn describe_faults(f: &Faults) -> String {
+    format!(
+        "loss {}, latency {} ms, jitter {} ms, duplicate {}, reorder {}, corrupt {}",
+        f.loss,
+        f.latency.as_millis(),
+        f.jitter.as_millis(),
+        f.duplicate,
+        f.reorder,
+        f.corrupt
+    )
+}
+
+/// `LINK` or `LINK@MODE`.
+#[derive(Debug, Clone)]
+pub(crate) struct LinkArg {
+    pub(crate) link: Link,
+    pub(crate) mode: Option<ApiMode>,
+}
+
+impl std::str::FromStr for LinkArg {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let (link, mode) = match s.rsplit_once('@') {
+            Some((link, mode)) => (link, Some(mode.parse::<ApiModeArg>()?.0)),
+            None => (s, None),
+        };
+        let link = link.parse::<Link>().map_err(|e| e.to_string())?;
+        Ok(LinkArg { link, mode })
+    }
+}
+
+/// `ADDR=LINK[@MODE]`.
+#[derive(Debug, Clone)]
+pub(crate) struct NodeArg {
+    address: Address64,
+    link: LinkArg,
+}
+
+impl std::str::FromStr for NodeArg {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let (address, link) = s
+            .split_once('=')
+            .ok_or_else(|| format!("expected ADDR=LINK[@MODE], got `{s}`"))?;
+        Ok(NodeArg {
+            address: parse_address(address)?,
+            link: link.parse()?,
+        })
+    }
+}
+
+/// `ADDR=SPEC`.
+#[derive(Debug, Clone)]
+pub(crate) struct LinkFaults {
+    address: Address64,
+    faults: Faults,
+}
+
+impl std::str::FromStr for LinkFaults {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let (address, spec) = s
+            .split_once('=')
+            .ok_or_else(|| format!("expected ADDR=SPEC, got `{s}`"))?;
+        let mut faults = Faults::default();
+        for item in spec.split(',').filter(|i| !i.is_empty()) {
+            let (key, value) = item
+                .split_once('=')
+                .ok_or_else(|| format!("expected KEY=VALUE in `{item}`"))?;
+            let number: f64 = value
+                .parse()
+                .map_err(|_| format!("`{value}` is not a number (in `{item}`)"))?;
+            let probability = || {
+                (0.0..=1.0)
+                    .contains(&number)
+                    .then_some(number)
+                    .ok_or_else(|| format!("{key} must be in 0..=1, got {number}"))
+            };
+            let millis = || {
+                (number >= 0.0 && number.is_finite())
+                    .then(|| Duration::from_secs_f64(number / 1000.0))
+                    .ok_or_else(|| format!("{key} must be a number of milliseconds"))
+            };
+            match key {
+                "loss" => faults.loss = probability()?,
+                "duplicate" => faults.duplicate = probability()?,
+                "reorder" => faults.reorder = probability()?,
+                "corrupt" => faults.corrupt = probability()?,
+                "latency" => faults.latency = millis()?,
+                "jitter" => faults.jitter = millis()?,
+                other => return Err(format!("unknown fault `{other}`")),
+            }
+        }
+        Ok(LinkFaults {
+            address: parse_address(address)?,
+            faults,
+        })
+    }
+}
+
+/// A 64-bit address, or `coordinator`.
+pub(crate) fn parse_address(s: &str) -> Result<Address64, String> {
+    if s.eq_ignore_ascii_case("coordinator") {
+        return Ok(Address64::COORDINATOR);
+    }
+    s.parse::<Address64>()
+        .map_err(|e| format!("bad 64-bit address `{s}`: {e}"))
+}
+
+/// Where a node's device connects, as a line.
+pub(crate) fn describe_node(name: &str, info: &NodeInfo, link: &Link) -> String {
+    let at = match (&info.pty_path, &info.local_addr) {
+        (Some(path), _) => format!(
+            "pseudo-terminal {} (open it as serial:{})",
+            path.display(),
+            path.display()
+        ),
+        (_, Some(addr)) => format!("listening on {addr} (connect with tcp:{addr})"),
+        _ => format!("link {link}"),
+    };
+    format!(
+        "{name} {}/{}: {at}, API mode {}",
+        info.address,
+        info.addr16,
+        u8::from(info.api_mode)
+    )
+}
+
+/// One line for a network event, or `None` to stay quiet.
+pub(crate) fn event_line(event: &NetEvent, verbose: bool) -> Option<String> {
+    let now = mcp_host::render::text::time(SystemTime::now());
+    let text = match event {
+        NetEvent::Connected { node, peer } if verbose || peer != "in-process" => {
+            format!("{node} connected ({peer})")
+        }
+        NetEvent::Disconnected { node, reason } => format!("{node} disconnected: {reason}"),
+        NetEvent::Failed {
+            from,
+            to,
+            len,
+            status,
+        } => format!(
+            "{from} -> {to}: {len} bytes not delivered: {status:?} (0x{:02x})",
+            u8::from(*status)
+        ),
+        NetEvent::DecodeError { node, error } => format!("{node}: frame dropped: {error}"),
+        NetEvent::Delivered { from, to, len } if verbose => {
+            format!("{from} -> {to}: {len} bytes delivered")
+        }
+        NetEvent::Broadcast {
+            from,
+            len,
+            receivers,
+        } if verbose => format!("{from} -> broadcast: {len} bytes to {receivers} nodes"),
+        NetEvent::AtCommand {
+            node,
+            command,
+            status,
+        } if verbose => format!(
+            "{node}: AT {} answered {status:?}",
+            String::from_utf8_lossy(command)
+        ),
+        NetEvent::Ignored { node, frame_type } if verbose => {
+            format!("{node}: frame type 0x{frame_type:02x} ignored")
+        }
+        _ => return None,
+    };
+    Some(format!("{now} {text}"))
+}
+
+/// Prints network events until Ctrl-C or `duration`.
+pub(crate) async fn watch(
+    mut events: broadcast::Receiver<NetEvent>,
+    verbose: bool,
+    duration: Option<f64>,
+) -> Result<(), Failure> {
+    let deadline = match duration {
+        Some(s) if s.is_finite() && s >= 0.0 => {
+            Some(tokio::time::Instant::now() + Duration::from_secs_f64(s))
+        }
+        Some(s) => return Err(Failure::input(format!("bad --duration {s}"))),
+        None => None,
+    };
+    let stop = async {
+        match deadline {
+            Some(d) => tokio::time::sleep_until(d).await,
+            None => {
+                let _ = tokio::signal::ctrl_c().await;
+            }
+        }
+    };
+    tokio::pin!(stop);
+    loop {
+        tokio::select! {
+            () = &mut stop => return Ok(()),
+            event = events.recv() => match event {
+                Ok(event) => {
+                    if let Some(line) = event_line(&event, verbose) {
+                        println!("{line}");
+                    }
+                }
+                Err(broadcast::error::RecvError::Lagged(n)) => println!("({n} events not shown)"),
+                Err(broadcast::error::RecvError::Closed) => return Ok(()),
+            },
+        }
+    }
+}
 
 /// Runs `radio`.
-pub(crate) async fn run(_args: RadioArgs) -> Result<(), Failure> {
-    Err(Failure::new(
-        Failure::OTHER,
-        "`radio` is not implemented yet",
-    ))
+pub(crate) async fn run(args: RadioArgs) -> Result<(), Failure> {
+    let config = args.net.config()?;
+    args.net.describe(&config);
+    let network = Network::new(config);
+    let events = network.subscribe();
+    let default_mode = args.api_mode.0;
+    let coordinator = std::iter::once((Address64::COORDINATOR, args.coordinator.clone()));
+    let nodes = args.nodes.iter().map(|n| (n.address, n.link.clone()));
+    for (address, link) in coordinator.chain(nodes) {
+        let options = NodeOptions {
+            api_mode: link.mode.unwrap_or(default_mode),
+            faults: args.net.faults_of(address),
+            ..NodeOptions::default()
+        };
+        let info = network
+            .add_link(address, &link.link, options)
+            .await
+            .map_err(|e| match e {
+                mcp_host::radio::NetworkError::Link { .. } => Failure::link(e.to_string()),
+                other => Failure::input(other.to_string()),
+            })?;
+        let name = if address == Address64::COORDINATOR {
+            "coordinator"
+        } else {
+            "node"
+        };
+        println!("{}", describe_node(name, &info, &link.link));
+    }
+    println!("running; Ctrl-C stops");
+    watch(events, args.verbose, args.duration).await
 }

@@ -1,14 +1,102 @@
-//! `mcp-gs sim` (not implemented yet).
+//! `mcp-gs sim`: simulated MAVs behind a virtual XBee network on a link.
 
 use clap::Args;
+use mcp_host::Link;
+use mcp_host::sim::{Simulator, fleet_addresses};
+use xbee_api::Address64;
 
-use crate::Failure;
+use crate::radio::{NetArgs, describe_node, parse_address, watch};
+use crate::{ApiModeArg, Failure};
 
 /// Arguments of `sim`.
 #[derive(Debug, Args)]
-pub(crate) struct SimArgs {}
+#[command(after_long_help = SIM_HELP)]
+pub(crate) struct SimArgs {
+    /// Where the ground station connects: the link of the network's coordinator
+    /// (`pty`, `tcp-listen:127.0.0.1:9750`, `serial:/dev/pts/5`...).
+    #[arg(long, value_name = "LINK")]
+    link: Link,
+    /// A simulated MAV's 64-bit address (repeat for more). Default 0013A20040B599B9.
+    #[arg(long = "address", value_name = "ADDR", value_parser = parse_address)]
+    addresses: Vec<Address64>,
+    /// Number of MAVs: the given addresses, then the known MAVs 0013A20040B599B9,
+    /// 0013A20040B599BF, 0013A20040B599BD, 0013A20040B599B8, then made-up ones.
+    #[arg(long, value_name = "N")]
+    mavs: Option<usize>,
+    /// API mode of the link (what the ground station's XBee would be set to).
+    #[arg(long, default_value = "1", value_name = "1|2")]
+    api_mode: ApiModeArg,
+    #[command(flatten)]
+    net: NetArgs,
+    /// Print every delivery, not only connections and failures.
+    #[arg(long, short)]
+    verbose: bool,
+    /// Stop after this many seconds (default: run until Ctrl-C).
+    #[arg(long, value_name = "S")]
+    duration: Option<f64>,
+}
+
+const SIM_HELP: &str = "\
+Each MAV answers commands as the deployed MAVs do (status requests with reports, trajectory \
+set with a trajectory report, unsolicited landing and controller reports), sends 20 Hz \
+telemetry of the enabled ids, and flies a small model: landing on -> landing -> on_ground, \
+landing off -> take_off -> stabilization -> flight, the mpc controller follows the \
+trajectory by MAV time. The MAVs are XBee nodes in API mode 1 behind a virtual network \
+whose coordinator is --link: the ground station sees Transmit Statuses and Receive \
+Packets as from its own XBee. Faults options as in `mcp-gs radio`.
+
+Example: mcp-gs sim --link pty --mavs 2   (then connect a ground station to the printed path)";
 
 /// Runs `sim`.
-pub(crate) async fn run(_args: SimArgs) -> Result<(), Failure> {
-    Err(Failure::new(Failure::OTHER, "`sim` is not implemented yet"))
+pub(crate) async fn run(args: SimArgs) -> Result<(), Failure> {
+    let mut addresses = args.addresses.clone();
+    let wanted = args.mavs.unwrap_or(addresses.len().max(1));
+    if wanted > 4096 {
+        return Err(Failure::input("--mavs must be at most 4096"));
+    }
+    for address in fleet_addresses(wanted + addresses.len()) {
+        if addresses.len() >= wanted {
+            break;
+        }
+        if !addresses.contains(&address) {
+            addresses.push(address);
+        }
+    }
+    addresses.truncate(wanted.max(args.addresses.len()));
+    if addresses.contains(&Address64::COORDINATOR) || addresses.contains(&Address64::BROADCAST) {
+        return Err(Failure::input(
+            "a MAV cannot have the coordinator's or the broadcast address",
+        ));
+    }
+    let config = args.net.config()?;
+    args.net.describe(&config);
+    let sim = Simulator::start(&args.link, args.api_mode.0, &addresses, config)
+        .await
+        .map_err(|e| Failure::link(e.to_string()))?;
+    for mav in sim.mavs() {
+        if let Some(faults) = args.net.faults_of(mav.address) {
+            sim.network().set_faults(mav.address, Some(faults));
+        }
+    }
+    if let Some(faults) = args.net.faults_of(Address64::COORDINATOR) {
+        sim.network()
+            .set_faults(Address64::COORDINATOR, Some(faults));
+    }
+    let events = sim.network().subscribe();
+    println!(
+        "{}",
+        describe_node(
+            "ground station link: coordinator",
+            sim.coordinator(),
+            &args.link
+        )
+    );
+    let list: Vec<String> = sim
+        .mavs()
+        .iter()
+        .map(|m| format!("{}/{}", m.address, m.addr16))
+        .collect();
+    println!("simulating {} MAV(s): {}", list.len(), list.join(", "));
+    println!("running; Ctrl-C stops");
+    watch(events, args.verbose, args.duration).await
 }
