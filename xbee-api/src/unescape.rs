@@ -10,8 +10,9 @@ const HIGHS: u64 = 0x8080_8080_8080_8080;
 /// may be spurious, which does not matter as only the lowest one is used.
 #[inline]
 fn flags(word: u64) -> u64 {
-    let x = (word ^ (0x7C * ONES)) & (0xFC * ONES);
-    x.wrapping_sub(ONES) & !x & HIGHS
+    // Bytes 0x7C..=0x7F become 0..=3; those below 4 borrow into their bit 7.
+    let x = word ^ (0x7C * ONES);
+    x.wrapping_sub(4 * ONES) & !x & HIGHS
 }
 
 /// Whether a raw mode 2 byte stands for itself after a start delimiter.
@@ -55,35 +56,38 @@ pub(crate) fn unescape(src: &[u8], dst: &mut [u8], len: usize) -> Option<usize> 
     let mut i = 0;
     let mut o = 0;
     while o < len {
-        while let (Some(s), Some(d)) = (
-            src.get(i..).and_then(<[u8]>::first_chunk::<8>),
-            dst.get_mut(o..).and_then(<[u8]>::first_chunk_mut::<8>),
-        ) {
-            *d = *s;
-            let flags = flags(u64::from_le_bytes(*s));
-            if flags != 0 {
-                // The plain bytes before the flagged one.
-                let k = (flags.trailing_zeros() / 8) as usize;
-                i += k;
-                o += k;
-                break;
-            }
-            i += 8;
-            o += 8;
-            if o >= len {
-                break;
-            }
-        }
+        let n = copy_plain(src.get(i..)?, dst.get_mut(o..)?, len - o);
+        i += n;
+        o += n;
         if o >= len {
-            // Past the end: the last word held bytes beyond the frame data.
-            i -= o - len;
-            return Some(i);
+            // The last word held bytes beyond the frame data.
+            return Some(i - (o - len));
         }
         // A flagged byte, or one of the last bytes without room for a word.
         *dst.get_mut(o)? = unescape_byte(src, &mut i)?;
         o += 1;
     }
     Some(i)
+}
+
+/// Copies words of 8 bytes from `src` to `dst` until one holds a flagged byte or at
+/// least `len` bytes are copied; how many bytes come before the flagged one, or were
+/// copied (possibly more than `len`).
+#[inline]
+fn copy_plain(src: &[u8], dst: &mut [u8], len: usize) -> usize {
+    let mut n = 0;
+    for (s, d) in src.chunks_exact(8).zip(dst.chunks_exact_mut(8)) {
+        d.copy_from_slice(s);
+        let flags = s.try_into().map_or(HIGHS, |w| flags(u64::from_le_bytes(w)));
+        if flags != 0 {
+            return n + (flags.trailing_zeros() / 8) as usize;
+        }
+        n += 8;
+        if n >= len {
+            break;
+        }
+    }
+    n
 }
 
 #[cfg(test)]
