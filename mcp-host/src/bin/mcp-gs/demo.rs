@@ -1,17 +1,403 @@
-//! `mcp-gs demo` (not implemented yet).
+//! `mcp-gs demo`: a ground station and a simulated MAV in one process, over a
+//! pseudo-terminal, showing every command, delivery status, report and some telemetry.
+
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, SystemTime};
 
 use clap::Args;
+use futures::StreamExt;
+use mcp_core::{
+    Address, Command, Controller, LandingState, Packet, Report, Slot, StatusRequest, TelemetryId,
+    TrajectoryBuilder, Waypoint,
+};
+use mcp_host::radio::NetworkConfig;
+use mcp_host::sim::{Simulator, posix_now};
+use mcp_host::{
+    CommandSender, DeliveryReport, Event, Link, LinkEvent, LinkOptions, PacketStream, RequestError,
+    SendError,
+};
+use tokio::sync::watch;
+use tokio::time::Instant;
+use xbee_api::{Address64, ApiMode, Frame};
 
 use crate::Failure;
 
 /// Arguments of `demo`.
 #[derive(Debug, Args)]
-pub(crate) struct DemoArgs {}
+pub(crate) struct DemoArgs {
+    /// How long the demo runs, seconds; 0 runs until Ctrl-C.
+    #[arg(long, default_value_t = 10.0, value_name = "S")]
+    duration: f64,
+    /// Show every Nth telemetry packet (they arrive at 20 Hz).
+    #[arg(long, default_value_t = 10, value_name = "N",
+          value_parser = clap::value_parser!(u64).range(1..))]
+    telemetry_every: u64,
+}
+
+/// The simulated MAV.
+const MAV: Address64 = Address64(0x0013_A200_40B5_99B9);
+/// How long to wait for the simulator's radio to come up.
+const STARTUP: Duration = Duration::from_secs(5);
+
+/// What the ground station saw, for the summary.
+#[derive(Debug, Default)]
+struct Seen {
+    telemetry: u64,
+    shown: u64,
+    reports: u64,
+    other: u64,
+    decode_errors: u64,
+}
+
+fn now() -> String {
+    mcp_host::render::text::time(SystemTime::now())
+}
+
+/// Prints what arrives on the ground station's link.
+async fn print_events(
+    mut stream: PacketStream,
+    seen: Arc<Mutex<Seen>>,
+    every: u64,
+    landing: watch::Sender<Option<LandingState>>,
+    radio_up: watch::Sender<bool>,
+) {
+    while let Some(event) = stream.next().await {
+        let mut seen = seen.lock().unwrap_or_else(|p| p.into_inner());
+        match event {
+            Event::Packet(rx) => {
+                let from = rx.origin.src64;
+                let time = mcp_host::render::text::time(rx.origin.received_at);
+                match &rx.packet {
+                    Packet::Telemetry(_) => {
+                        seen.telemetry += 1;
+                        if (seen.telemetry - 1) % every == 0 {
+                            seen.shown += 1;
+                            println!("{time} {from} {} (#{})", rx.packet, seen.telemetry);
+                        }
+                    }
+                    Packet::Report(report) => {
+                        seen.reports += 1;
+                        println!("{time} {from} <- {}", rx.packet);
+                        if let Report::Landing(state) = report {
+                            landing.send_replace(Some(*state));
+                        }
+                    }
+                    _ => {
+                        seen.other += 1;
+                        println!("{time} {from} {}", rx.packet);
+                    }
+                }
+            }
+            Event::Frame(frame) => match frame.parse() {
+                Ok(Frame::ModemStatus(ms)) => {
+                    println!(
+                        "{} radio: modem status {:?} (0x{:02x})",
+                        now(),
+                        ms.status,
+                        u8::from(ms.status)
+                    );
+                    radio_up.send_replace(true);
+                }
+                Ok(f) => println!("{} radio: {}", now(), mcp_host::render::text::frame(&f)),
+                Err(e) => println!("{} radio: malformed frame: {e}", now()),
+            },
+            Event::InvalidPacket(bad) => {
+                seen.other += 1;
+                println!(
+                    "{} {} invalid packet: {}",
+                    now(),
+                    bad.origin.src64,
+                    bad.error
+                );
+            }
+            Event::DecodeError(e) => {
+                seen.decode_errors += 1;
+                println!("{} link: frame dropped: {e}", now());
+            }
+            Event::Link(LinkEvent::Closed { reason }) => {
+                println!("{} link closed: {reason}", now());
+                return;
+            }
+            Event::Link(e) => println!("{} link: {e:?}", now()),
+        }
+    }
+}
+
+/// Pause after each step, so that a reader can follow and the answers and
+/// unsolicited reports print before the next step; skipped once the time is up.
+const STEP_PAUSE: Duration = Duration::from_millis(150);
+
+/// Sends the commands and tallies the outcomes.
+struct Script {
+    sender: CommandSender,
+    deadline: Option<Instant>,
+    delivered: u64,
+    answered: u64,
+    failures: Vec<Failure>,
+}
+
+impl Script {
+    async fn pause(&self) {
+        if self
+            .deadline
+            .is_none_or(|d| Instant::now() + STEP_PAUSE < d)
+        {
+            tokio::time::sleep(STEP_PAUSE).await;
+        }
+    }
+
+    async fn send(&mut self, what: &str, command: &Command<&[u8]>) {
+        println!("{} {MAV} -> {command}   ({what})", now());
+        match self.sender.send(MAV, command).await {
+            Ok(DeliveryReport::Delivered {
+                frame_id,
+                dst16,
+                retries,
+                ..
+            }) => {
+                self.delivered += 1;
+                println!(
+                    "{}                  delivered (transmit status id {frame_id}: success, to {dst16}, {retries} retries)",
+                    now()
+                );
+            }
+            Ok(DeliveryReport::Written) => self.delivered += 1,
+            Err(e) => {
+                println!("{}                  NOT delivered: {e}", now());
+                self.failures.push(send_failure(&e));
+            }
+        }
+        self.pause().await;
+    }
+
+    async fn request(&mut self, request: StatusRequest) {
+        let command: Command<&[u8]> = Command::StatusRequest(request);
+        println!("{} {MAV} -> {command}", now());
+        match self.sender.request(MAV, request).await {
+            Ok(_) => self.answered += 1,
+            Err(RequestError::Send(e)) => {
+                println!("{}                  NOT delivered: {e}", now());
+                self.failures.push(send_failure(&e));
+            }
+            Err(e) => {
+                println!("{}                  no answer: {e}", now());
+                self.failures
+                    .push(Failure::new(Failure::TIMEOUT, e.to_string()));
+            }
+        }
+    }
+}
+
+fn send_failure(e: &SendError) -> Failure {
+    match e {
+        SendError::Delivery { .. } => Failure::new(Failure::DELIVERY, e.to_string()),
+        SendError::Timeout { .. } => Failure::new(Failure::TIMEOUT, e.to_string()),
+        SendError::Disconnected { .. } | SendError::Closed => Failure::link(e.to_string()),
+        _ => Failure::new(Failure::OTHER, e.to_string()),
+    }
+}
+
+fn heading(text: &str) {
+    println!("\n== {text}");
+}
 
 /// Runs `demo`.
-pub(crate) async fn run(_args: DemoArgs) -> Result<(), Failure> {
-    Err(Failure::new(
-        Failure::OTHER,
-        "`demo` is not implemented yet",
-    ))
+pub(crate) async fn run(args: DemoArgs) -> Result<(), Failure> {
+    if !args.duration.is_finite() || args.duration < 0.0 {
+        return Err(Failure::input(format!("bad --duration {}", args.duration)));
+    }
+    let started = Instant::now();
+    let deadline = (args.duration > 0.0).then(|| started + Duration::from_secs_f64(args.duration));
+
+    println!("MCP demo: a ground station talking to a simulated MAV. No hardware needed.");
+    // The ground station's end: a pseudo-terminal, as if its XBee were on a serial port.
+    let options = LinkOptions {
+        api_mode: ApiMode::Unescaped,
+        send_timeout: Duration::from_secs(5),
+        ..LinkOptions::default()
+    };
+    let (stream, sender) = mcp_host::connect(&Link::Pty, options)
+        .await
+        .map_err(|e| Failure::link(e.to_string()))?;
+    let path = stream
+        .info()
+        .pty_path
+        .clone()
+        .ok_or_else(|| Failure::link("the pseudo-terminal has no path"))?;
+    // The simulator's end: a virtual XBee coordinator on the pty's far end, the MAV
+    // behind it.
+    let sim_link: Link = format!("serial:{}", path.display())
+        .parse()
+        .map_err(|e: mcp_host::LinkParseError| Failure::link(e.to_string()))?;
+    let sim = Simulator::start(
+        &sim_link,
+        ApiMode::Unescaped,
+        &[MAV],
+        NetworkConfig::default(),
+    )
+    .await
+    .map_err(|e| Failure::link(e.to_string()))?;
+    println!(
+        "  ground station <-> pseudo-terminal {} <-> virtual XBee coordinator <-> radio <-> MAV {MAV} (XBee API mode 1)",
+        path.display()
+    );
+    println!(
+        "  Lines: time (UTC), MAV address, what happened. `->` is a command sent, `<-` a report received."
+    );
+    println!(
+        "  Telemetry arrives at 20 Hz: every {}th packet is shown (#n counts them all).",
+        args.telemetry_every
+    );
+    match deadline {
+        Some(_) => println!("  Runs for {} s, then prints a summary.", args.duration),
+        None => println!("  Runs until Ctrl-C, then prints a summary."),
+    }
+
+    let seen = Arc::new(Mutex::new(Seen::default()));
+    let (landing_tx, mut landing) = watch::channel(None);
+    let (radio_tx, mut radio_up) = watch::channel(false);
+    let printer = tokio::spawn(print_events(
+        stream,
+        seen.clone(),
+        args.telemetry_every,
+        landing_tx,
+        radio_tx,
+    ));
+
+    heading("Starting the radio");
+    let _ = tokio::time::timeout(STARTUP, radio_up.wait_for(|up| *up)).await;
+
+    let mut script = Script {
+        sender,
+        deadline,
+        delivered: 0,
+        answered: 0,
+        failures: Vec::new(),
+    };
+
+    heading("Clock: set the MAV time, then ask for it");
+    script.send("time set", &Command::Time(posix_now())).await;
+    script.request(StatusRequest::Time).await;
+
+    heading("Telemetry: turn on four ids; the MAV sends them in one packet, ascending ids");
+    for id in [
+        TelemetryId::Altitude,
+        TelemetryId::EstimatedAltitude,
+        TelemetryId::AltitudeSetpoint,
+        TelemetryId::PitchAngle,
+    ] {
+        let on = Command::TelemetryToCoordinator { on: true, id };
+        script.send("telemetry on", &on).await;
+    }
+    script
+        .request(StatusRequest::TelemetryToCoordinator(TelemetryId::Altitude))
+        .await;
+
+    heading("Controller: switch to MPC (the MAV reports the change by itself)");
+    script
+        .send("controller", &Command::Controllers(Controller::Mpc))
+        .await;
+    script.request(StatusRequest::Controllers).await;
+
+    heading("Trajectory: three waypoints, answered at once by a trajectory report");
+    let t0 = posix_now();
+    let mut buf = [0u8; mcp_core::MAX_PAYLOAD];
+    let mut builder = TrajectoryBuilder::command(&mut buf)
+        .map_err(|e| Failure::new(Failure::OTHER, e.to_string()))?;
+    for (i, (elevator, aileron, altitude)) in [(0.5, 0.0, 1.2), (0.5, 0.5, 1.4), (0.0, 0.5, 1.2)]
+        .into_iter()
+        .enumerate()
+    {
+        let waypoint = Waypoint {
+            time: t0 + 1 + i as u32,
+            elevator,
+            aileron,
+            altitude,
+        };
+        builder
+            .push(waypoint)
+            .map_err(|e| Failure::new(Failure::OTHER, e.to_string()))?;
+    }
+    let len = builder.finish();
+    match mcp_core::parse(&buf[..len]) {
+        Ok(Packet::Command(command)) => script.send("trajectory set", &command).await,
+        _ => {
+            return Err(Failure::new(
+                Failure::OTHER,
+                "trajectory command did not encode",
+            ));
+        }
+    }
+    script.request(StatusRequest::TrajectorySet).await;
+
+    heading("Position: move the coordinate system, name a slave MAV");
+    let position = Command::PositionSet {
+        elevator: 0.25,
+        aileron: -0.25,
+    };
+    script.send("position set", &position).await;
+    let slave = Command::PositionSlaveSet {
+        slot: Slot::new(1),
+        address: Address(0x0013_A200_40B5_99BF_u64.to_be_bytes()),
+    };
+    script.send("position slave set", &slave).await;
+    script.request(StatusRequest::PositionSlaveSet).await;
+
+    heading("Landing: turn autonomous landing on and watch the state change");
+    script
+        .send("landing on", &Command::Landing { on: true })
+        .await;
+    script.request(StatusRequest::Landing).await;
+
+    let until = |d: Option<Instant>| async move {
+        match d {
+            Some(d) => tokio::time::sleep_until(d).await,
+            None => {
+                let _ = tokio::signal::ctrl_c().await;
+            }
+        }
+    };
+    let landed = tokio::select! {
+        r = landing.wait_for(|s| *s == Some(LandingState::OnGround)) => r.is_ok(),
+        () = until(deadline) => false,
+    };
+    if landed {
+        heading("Take-off: landing off on the ground");
+        script
+            .send("landing off", &Command::Landing { on: false })
+            .await;
+        let _ = tokio::select! {
+            r = landing.wait_for(|s| *s == Some(LandingState::Flight)) => r.is_ok(),
+            () = until(deadline) => false,
+        };
+        script.request(StatusRequest::Landing).await;
+    }
+    heading(match deadline {
+        Some(_) => "Watching telemetry until the time is up",
+        None => "Watching telemetry until Ctrl-C",
+    });
+    until(deadline).await;
+
+    sim.shutdown();
+    printer.abort();
+    let seen = seen.lock().unwrap_or_else(|p| p.into_inner());
+    heading("Summary");
+    println!(
+        "  {:.1} s, MAV {MAV}: {} commands delivered, {} status requests answered, {} failures",
+        started.elapsed().as_secs_f64(),
+        script.delivered,
+        script.answered,
+        script.failures.len()
+    );
+    println!(
+        "  received {} telemetry packets ({} shown), {} reports, {} other packets, {} frames dropped",
+        seen.telemetry, seen.shown, seen.reports, seen.other, seen.decode_errors
+    );
+    println!(
+        "  Next: `mcp-gs sim --link pty` runs the simulated MAV alone for your own ground station."
+    );
+    match script.failures.into_iter().next() {
+        Some(failure) => Err(failure),
+        None => Ok(()),
+    }
 }
