@@ -175,6 +175,12 @@ pub fn uart0_clear_rx_interrupts() {
     uart0::ICR.write(uart0::RX_INTERRUPTS);
 }
 
+/// Turns the UART0 receive interrupts on or off. While they are off, received bytes
+/// wait in the RX FIFO; turning them on with bytes waiting raises the interrupt.
+pub fn uart0_rx_interrupts(on: bool) {
+    uart0::IM.write(if on { uart0::RX_INTERRUPTS } else { 0 });
+}
+
 /// Writes bytes to UART0, waiting for room in the TX FIFO.
 pub fn uart0_write(bytes: &[u8]) {
     for &b in bytes {

@@ -122,6 +122,11 @@ impl Inbox {
         !self.queue.is_empty()
     }
 
+    /// `true` if the queue can take another payload.
+    pub fn has_room(&self) -> bool {
+        !self.queue.is_full()
+    }
+
     /// The receive path's counters.
     pub fn stats(&self) -> RxStats {
         self.stats
@@ -138,20 +143,35 @@ static DECODER: Mutex<RefCell<XbeeDecoder>> =
 static INBOX: Mutex<RefCell<Inbox>> = Mutex::new(RefCell::new(Inbox::new()));
 
 /// The UART0 interrupt: drains the RX FIFO through the decoder into the inbox.
+///
+/// When the inbox is full it stops, leaving the bytes in the RX FIFO, and turns the
+/// receive interrupts off until [`take`] makes room: the UART then holds the sender
+/// back (in QEMU, where bytes arrive without baud-rate pacing, nothing is lost; on
+/// the board, the main loop empties a slot long before the FIFO overruns).
 pub fn on_uart0_interrupt() {
     critical_section::with(|cs| {
         let mut decoder = DECODER.borrow_ref_mut(cs);
         let mut inbox = INBOX.borrow_ref_mut(cs);
-        while let Some(byte) = hw::uart0_read() {
+        while inbox.has_room() {
+            let Some(byte) = hw::uart0_read() else { break };
             inbox.push(&mut decoder, byte);
         }
         hw::uart0_clear_rx_interrupts();
+        if !inbox.has_room() {
+            hw::uart0_rx_interrupts(false);
+        }
     });
 }
 
-/// Takes the oldest received payload.
+/// Takes the oldest received payload, and turns the receive interrupts back on.
 pub fn take() -> Option<Payload> {
-    critical_section::with(|cs| INBOX.borrow_ref_mut(cs).pop())
+    critical_section::with(|cs| {
+        let payload = INBOX.borrow_ref_mut(cs).pop();
+        if payload.is_some() {
+            hw::uart0_rx_interrupts(true);
+        }
+        payload
+    })
 }
 
 /// `true` if a payload is waiting (for the idle check, inside a critical section).
