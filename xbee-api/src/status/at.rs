@@ -5,15 +5,15 @@ code_enum! {
     /// (0x97).
     pub enum AtStatus {
         /// 0x00: OK.
-        Ok = 0x00,
+        Ok = 0x00 => "ok",
         /// 0x01: ERROR.
-        Error = 0x01,
+        Error = 0x01 => "error",
         /// 0x02: invalid command.
-        InvalidCommand = 0x02,
+        InvalidCommand = 0x02 => "invalid_command",
         /// 0x03: invalid parameter.
-        InvalidParameter = 0x03,
+        InvalidParameter = 0x03 => "invalid_parameter",
         /// 0x04: transmission failure (remote command not delivered).
-        TxFailure = 0x04,
+        TxFailure = 0x04 => "tx_failure",
     }
 }
 

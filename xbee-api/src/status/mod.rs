@@ -1,17 +1,24 @@
 //! Status codes carried by response frames, each an enum with an `Unknown` arm so that
-//! every byte converts both ways without loss.
+//! every byte converts both ways without loss, a stable snake_case name and a `Display`
+//! that prints it.
 
 macro_rules! code_enum {
     (
         $(#[$meta:meta])*
         pub enum $name:ident {
-            $( $(#[$vmeta:meta])* $variant:ident = $value:expr, )+
+            $( $(#[$vmeta:meta])* $variant:ident = $value:expr => $vname:literal, )+
+            $(
+                ;
+                $(#[$rmeta:meta])*
+                $range:ident($lo:literal..=$hi:literal) => $rname:literal,
+            )?
         }
     ) => {
         $(#[$meta])*
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         pub enum $name {
             $( $(#[$vmeta])* $variant, )+
+            $( $(#[$rmeta])* $range(u8), )?
             /// A code this crate does not name, kept as received.
             Unknown(u8),
         }
@@ -20,6 +27,7 @@ macro_rules! code_enum {
             fn from(code: u8) -> Self {
                 match code {
                     $( $value => Self::$variant, )+
+                    $( $lo..=$hi => Self::$range(code), )?
                     other => Self::Unknown(other),
                 }
             }
@@ -29,7 +37,34 @@ macro_rules! code_enum {
             fn from(status: $name) -> u8 {
                 match status {
                     $( $name::$variant => $value, )+
+                    $( $name::$range(code) => code, )?
                     $name::Unknown(other) => other,
+                }
+            }
+        }
+
+        impl $name {
+            /// The status's stable snake_case name (the variant's name), for logs and
+            /// machine-readable output beside the code; `None` for a code this crate
+            /// does not name.
+            pub const fn name(&self) -> Option<&'static str> {
+                match self {
+                    $( Self::$variant => Some($vname), )+
+                    $( Self::$range(_) => Some($rname), )?
+                    Self::Unknown(_) => None,
+                }
+            }
+        }
+
+        /// The [`name`](Self::name), with the code after a name that stands for a range
+        /// of codes (`name(0xNN)`), or `unknown(0xNN)` for a code this crate does not
+        /// name.
+        impl core::fmt::Display for $name {
+            fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+                match (self, self.name()) {
+                    $( (Self::$range(code), Some(name)) => write!(f, "{name}(0x{code:02X})"), )?
+                    (_, Some(name)) => f.write_str(name),
+                    (_, None) => write!(f, "unknown(0x{:02X})", u8::from(*self)),
                 }
             }
         }
