@@ -1,11 +1,12 @@
 //! Split invariance of the XBee streaming decoder: the events out of a stream are the
-//! same whether it is fed whole, in chunks of any sizes, or a byte at a time; the
-//! decoder takes new input after `finish` as if new; every frame it yields encodes and
-//! decodes to itself.
+//! same whether it is fed whole, in chunks of any sizes, or a byte at a time, and are
+//! those of the plain reference decoder over the whole input; the decoder takes new
+//! input after `finish` as if new; every frame it yields encodes and decodes to itself.
 
 use xbee_api::{ApiMode, Decoder, EncodeFrame, Frame, RawFrame};
 
 use crate::events::{Event, check_stats, decode_all, event_bound, finish_all, push_all};
+use crate::reference;
 
 /// Chunk sizes from fuzzer bytes, cycled over the stream; an empty or all-zero list
 /// means one byte at a time (a zero entry is an empty `decode` call).
@@ -40,6 +41,17 @@ pub fn check_stream<const N: usize>(mode: ApiMode, sizes: &[u8], stream: &[u8]) 
     finish_all(&mut whole, &mut expected, bound);
     check_stats(whole.stats(), &expected);
     let stats = *whole.stats();
+
+    // The plain whole-input decoder.
+    let (reference, skipped) = match mode {
+        ApiMode::Unescaped => reference::mode1(stream, whole.capacity()),
+        ApiMode::Escaped => reference::mode2(stream, whole.capacity()),
+    };
+    assert_eq!(
+        expected, reference,
+        "decoder differs from the reference decoder"
+    );
+    assert_eq!(u64::from(stats.bytes_skipped), skipped, "bytes skipped");
 
     // Byte at a time.
     let mut bytewise = Decoder::<N>::new(mode);
