@@ -221,3 +221,89 @@ proptest! {
         prop_assert_eq!(events, bytes_events);
     }
 }
+
+/// Frame data like [`frame_data`], with bytes drawn often from those the mode 2 decoder
+/// looks at (0x7C..=0x7F, XON, XOFF), so that escapes fall at every place of a word.
+fn escape_rich_data() -> impl Strategy<Value = Vec<u8>> {
+    let byte = prop_oneof![
+        2 => any::<u8>(),
+        1 => proptest::sample::select(vec![0x7Cu8, 0x7D, 0x7E, 0x7F, 0x11, 0x13, 0x5D, 0x5E]),
+    ];
+    (0..TYPES.len(), proptest::collection::vec(byte, 0..300)).prop_map(|(t, mut extra)| {
+        let (frame_type, min) = TYPES[t];
+        if matches!(frame_type, 0x8B | 0x8A) {
+            extra.truncate(min - 1);
+        }
+        let mut data = vec![frame_type];
+        data.extend((1..min).map(|i| extra.get(i).copied().unwrap_or(i as u8)));
+        data.extend_from_slice(&extra);
+        data
+    })
+}
+
+/// Items like [`item`], mostly valid frames of escape-rich data.
+fn rich_item() -> impl Strategy<Value = Item> {
+    prop_oneof![
+        6 => escape_rich_data().prop_map(Item::Valid),
+        1 => proptest::collection::vec(any::<u8>().prop_filter("no 0x7E", |b| *b != 0x7E), 1..40)
+            .prop_map(Item::Garbage),
+        1 => (escape_rich_data(), 1..=255u8).prop_map(|(d, off)| Item::BadChecksum(d, off)),
+        1 => (escape_rich_data(), any::<usize>()).prop_map(|(d, at)| Item::BadEscape(d, at)),
+        1 => (escape_rich_data(), 0.0..1.0f64).prop_map(|(d, f)| Item::Cut(d, f)),
+    ]
+}
+
+/// Read sizes from a byte to the whole stream, so that frames often lie whole in the
+/// input given to `decode` and its whole-frame paths take them.
+fn reads_up_to_whole() -> impl Strategy<Value = Vec<usize>> {
+    proptest::collection::vec(prop_oneof![1..80usize, 80..2000usize, Just(1 << 20)], 1..8)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(512))]
+
+    /// The slice path, with frames whole in its input, yields exactly the events and
+    /// counters of the byte-at-a-time path, and every valid frame in order.
+    #[test]
+    fn whole_frames_in_the_input_decode_as_byte_at_a_time(
+        mode in mode(),
+        items in proptest::collection::vec(rich_item(), 0..24),
+        reads in reads_up_to_whole(),
+    ) {
+        let (stream, valid, ranges) = build(&items, mode);
+        prop_assume!(plausible(&stream, &ranges, mode));
+        let (events, stats) = decode_slices::<N>(mode, &stream, &reads);
+        prop_assert_eq!(&frames(&events), &valid);
+        let (whole, whole_stats) = decode_slices::<N>(mode, &stream, &[1 << 20]);
+        let (bytes, bytes_stats) = decode_bytes::<N>(mode, &stream);
+        prop_assert_eq!(&events, &bytes);
+        prop_assert_eq!(&whole, &bytes);
+        prop_assert_eq!(stats, bytes_stats);
+        prop_assert_eq!(whole_stats, bytes_stats);
+    }
+
+    /// Frames as long as the buffer (no room past the data in mode 2) and garbage around
+    /// them: the slice path, fed whole, matches the byte-at-a-time path.
+    #[test]
+    fn whole_frames_near_capacity_decode_as_byte_at_a_time(
+        mode in mode(),
+        frames_data in proptest::collection::vec(
+            proptest::collection::vec(
+                prop_oneof![3 => any::<u8>(), 1 => Just(0x7Du8), 1 => Just(0x7Eu8)],
+                56..=64,
+            ),
+            1..6,
+        ),
+        garbage in proptest::collection::vec(any::<u8>(), 0..6),
+    ) {
+        let mut stream = Vec::new();
+        for data in &frames_data {
+            stream.extend(wire(data, checksum(data), mode));
+            stream.extend_from_slice(&garbage);
+        }
+        let (whole, whole_stats) = decode_slices::<64>(mode, &stream, &[1 << 20]);
+        let (bytes, bytes_stats) = decode_bytes::<64>(mode, &stream);
+        prop_assert_eq!(whole, bytes);
+        prop_assert_eq!(whole_stats, bytes_stats);
+    }
+}
