@@ -1,0 +1,178 @@
+//! `mcp-gs radio` and `mcp-gs sim` as processes: they print where to connect, and route.
+
+use std::io::{BufRead, BufReader};
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc;
+use std::time::Duration;
+
+use futures::{SinkExt, StreamExt};
+use mcp_core::{LandingState, Report, StatusRequest};
+use mcp_host::codec::{CodecItem, XBeeCodec};
+use mcp_host::{Link, LinkOptions};
+use tokio::net::TcpStream;
+use tokio_util::codec::Framed;
+use xbee_api::{Address16, Address64, ApiMode, Frame, ModemStatus, TransmitRequestRepr};
+
+/// Failure guard only.
+const GUARD: Duration = Duration::from_secs(20);
+
+/// A child process, killed when dropped, and its stdout lines.
+struct Running {
+    child: Child,
+    lines: mpsc::Receiver<String>,
+}
+
+impl Running {
+    fn start(args: &[&str]) -> Self {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+            .args(args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::inherit())
+            .spawn()
+            .expect("start mcp-gs");
+        let stdout = child.stdout.take().expect("stdout");
+        let (tx, lines) = mpsc::channel();
+        std::thread::spawn(move || {
+            for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+                if tx.send(line).is_err() {
+                    return;
+                }
+            }
+        });
+        Running { child, lines }
+    }
+
+    /// The next line satisfying `f`.
+    fn line(&self, f: impl Fn(&str) -> bool) -> String {
+        loop {
+            let line = self.lines.recv_timeout(GUARD).expect("a line in time");
+            if f(&line) {
+                return line;
+            }
+        }
+    }
+
+    /// The address in the next `... listening on ADDR (...` line starting with `prefix`.
+    fn listening(&self, prefix: &str) -> std::net::SocketAddr {
+        let line = self.line(|l| l.starts_with(prefix) && l.contains("listening on "));
+        let rest = line.split("listening on ").nth(1).unwrap();
+        rest.split(' ').next().unwrap().parse().expect("an address")
+    }
+}
+
+impl Drop for Running {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+async fn device(addr: std::net::SocketAddr, mode: ApiMode) -> Framed<TcpStream, XBeeCodec> {
+    Framed::new(
+        TcpStream::connect(addr).await.unwrap(),
+        XBeeCodec::new(mode),
+    )
+}
+
+async fn next_frame(dev: &mut Framed<TcpStream, XBeeCodec>) -> mcp_host::OwnedFrame {
+    match tokio::time::timeout(GUARD, dev.next()).await {
+        Ok(Some(Ok(CodecItem::Frame(frame)))) => frame,
+        other => panic!("expected a frame, got {other:?}"),
+    }
+}
+
+#[tokio::test]
+async fn radio_routes_between_the_links_it_prints() {
+    let radio = Running::start(&[
+        "radio",
+        "--coordinator",
+        "tcp-listen:127.0.0.1:0",
+        "--node",
+        "0013A20040B599B9=tcp-listen:127.0.0.1:0@2",
+        "--seed",
+        "7",
+        "--duration",
+        "120",
+    ]);
+    radio.line(|l| l.starts_with("seed 7 "));
+    let coordinator = radio.listening("coordinator ");
+    let node = radio.listening("node 0013a20040b599b9/");
+    let mut ground = device(coordinator, ApiMode::Unescaped).await;
+    let mut mav = device(node, ApiMode::Escaped).await;
+    for (dev, status) in [
+        (&mut ground, ModemStatus::CoordinatorStarted),
+        (&mut mav, ModemStatus::JoinedNetwork),
+    ] {
+        match next_frame(dev).await.parse() {
+            Ok(Frame::ModemStatus(ms)) => assert_eq!(ms.status, status),
+            other => panic!("{other:?}"),
+        }
+    }
+    let tx = TransmitRequestRepr {
+        frame_id: 0,
+        dst64: Address64::COORDINATOR,
+        dst16: Address16::UNKNOWN,
+        radius: 0,
+        options: 0x01,
+        data: b"r\x02\x04",
+    };
+    mav.send(&tx).await.unwrap();
+    match next_frame(&mut ground).await.parse() {
+        Ok(Frame::ReceivePacket(rx)) => {
+            assert_eq!(rx.src64, Address64(0x0013_A200_40B5_99B9));
+            assert_eq!(rx.data, b"r\x02\x04");
+        }
+        other => panic!("{other:?}"),
+    }
+    radio.line(|l| l.contains("0013a20040b599b9 connected"));
+}
+
+#[tokio::test]
+async fn sim_serves_a_fleet_on_the_link_it_prints() {
+    let sim = Running::start(&[
+        "sim",
+        "--link",
+        "tcp-listen:127.0.0.1:0",
+        "--mavs",
+        "2",
+        "--duration",
+        "120",
+    ]);
+    let addr = sim.listening("ground station link");
+    let fleet = sim.line(|l| l.starts_with("simulating 2 MAV(s): "));
+    assert!(fleet.contains("0013a20040b599b9/") && fleet.contains("0013a20040b599bf/"));
+    let link: Link = format!("tcp:{addr}").parse().unwrap();
+    let (_stream, sender) = mcp_host::connect(&link, LinkOptions::default())
+        .await
+        .unwrap();
+    for mav in [0x0013_A200_40B5_99B9, 0x0013_A200_40B5_99BF] {
+        let report = sender
+            .request_with(Address64(mav), StatusRequest::Landing, Some(GUARD))
+            .await
+            .unwrap();
+        assert_eq!(report, Report::Landing(LandingState::Flight));
+    }
+}
+
+#[test]
+fn bad_node_arguments_are_input_errors() {
+    for args in [
+        &["radio", "--coordinator", "pty", "--node", "nonsense"][..],
+        &["radio", "--coordinator", "pty@3"],
+        &["radio", "--coordinator", "pty", "--loss", "1.5"],
+        &[
+            "radio",
+            "--coordinator",
+            "pty",
+            "--faults",
+            "coordinator=loss=2",
+        ],
+        &["sim", "--link", "pty", "--address", "0000000000000000"],
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+            .args(args)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+    }
+}
