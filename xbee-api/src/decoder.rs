@@ -220,7 +220,14 @@ impl<const N: usize> Decoder<N> {
     pub fn push(&mut self, byte: u8) -> Option<Event<'_>> {
         let end = self.end;
         if end < self.fill_to && is_plain(byte) {
-            if let Some(slot) = self.buf.get_mut(end) {
+            // `fill_to <= N`, so the mask changes nothing; it shows the compiler that the
+            // index is in bounds when `N` is a power of two.
+            let at = if N.is_power_of_two() {
+                end & (N - 1)
+            } else {
+                end
+            };
+            if let Some(slot) = self.buf.get_mut(at) {
                 *slot = byte;
                 self.end = end + 1;
                 return None;
