@@ -675,3 +675,70 @@ async fn nodes_that_disconnect_come_back() {
     assert_eq!(network.stats(MAV_A).unwrap().connections, 2);
     assert_eq!(network.stats(COORD).unwrap().connections, 2);
 }
+
+#[tokio::test]
+async fn explicit_addressing_and_remote_at_commands() {
+    use xbee_api::{ExplicitAddressingCommandRepr, RemoteAtCommandRepr};
+    let (network, mut devs) = in_process(NetworkConfig::default(), &[COORD, MAV_A]).await;
+    let a16 = network.addr16(MAV_A).unwrap();
+    let [ground, dev_a] = &mut devs[..] else {
+        unreachable!()
+    };
+    ground
+        .send(&Frame::ExplicitAddressingCommand(
+            ExplicitAddressingCommandRepr {
+                frame_id: 1,
+                dst64: MAV_A,
+                dst16: Address16::UNKNOWN,
+                src_endpoint: 0xE8,
+                dst_endpoint: 0xE6,
+                cluster_id: 0x0011,
+                profile_id: 0xC105,
+                radius: 0,
+                options: 0,
+                data: b"hi",
+            },
+        ))
+        .await;
+    match dev_a.frame().await.parse() {
+        Ok(Frame::ExplicitRxIndicator(rx)) => {
+            assert_eq!((rx.src64, rx.src16), (COORD, Address16::COORDINATOR));
+            assert_eq!((rx.src_endpoint, rx.dst_endpoint), (0xE8, 0xE6));
+            assert_eq!((rx.cluster_id, rx.profile_id), (0x0011, 0xC105));
+            assert_eq!((rx.options, rx.data), (0x01, &b"hi"[..]));
+        }
+        other => panic!("{other:?}"),
+    }
+    assert_eq!(ground.status().await, (1, a16, DeliveryStatus::Success, OK));
+
+    for (frame_id, dst64, expected) in [
+        (
+            2,
+            MAV_A,
+            (MAV_A, a16, AtStatus::Ok, vec![0x40, 0xB5, 0x99, 0xB9]),
+        ),
+        (
+            3,
+            NOBODY,
+            (NOBODY, Address16::UNKNOWN, AtStatus::TxFailure, vec![]),
+        ),
+    ] {
+        ground
+            .send(&Frame::RemoteAtCommand(RemoteAtCommandRepr {
+                frame_id,
+                dst64,
+                dst16: Address16::UNKNOWN,
+                options: 0,
+                command: *b"SL",
+                parameter: &[],
+            }))
+            .await;
+        match ground.frame().await.parse() {
+            Ok(Frame::RemoteAtResponse(r)) => {
+                assert_eq!((r.frame_id, r.command), (frame_id, *b"SL"));
+                assert_eq!((r.src64, r.src16, r.status, r.data.to_vec()), expected);
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+}

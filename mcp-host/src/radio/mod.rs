@@ -18,11 +18,13 @@
 //!   (84 bytes unless fragmentation is assumed, up to 255) or
 //!   [`NetworkConfig::max_broadcast`] (92), 0x21 network ACK failure when the destination
 //!   is known but its link is down or cut, 0x23 to itself. Explicit Addressing Commands
-//!   (0x11) are delivered like Transmit Requests.
+//!   (0x11) are delivered the same way, as Explicit Rx Indicators (0x91) carrying their
+//!   endpoints, cluster and profile.
 //! - Local AT commands are answered: `AP` (the node's API mode), `NP` (the unicast
 //!   payload limit), `SH`/`SL` (the 64-bit address), `MY` (the 16-bit address), `AI` (0,
 //!   joined), `CE` (1 on the coordinator); any other command gets status 2, invalid
-//!   command.
+//!   command. Remote AT commands (0x17) get the same answers from the destination's
+//!   radio (0x97), or status 4, transmission failure, when it cannot be reached.
 //! - When a link comes up its device gets a Modem Status: 0x06 coordinator started on the
 //!   coordinator, 0x02 joined network on other nodes. Links that go down are reopened
 //!   (a `tcp-listen` node's next peer is the node back); frames for a node whose link is

@@ -7,8 +7,8 @@ use tokio::sync::{broadcast, mpsc};
 use tokio::time::Instant;
 use xbee_api::{
     Address16, Address64, ApiMode, AtCommandRepr, AtCommandResponseRepr, AtStatus, DeliveryStatus,
-    DiscoveryStatus, EncodeFrame, Frame, ModemStatus, ModemStatusRepr, ReceivePacketRepr,
-    TransmitStatusRepr,
+    DiscoveryStatus, EncodeFrame, ExplicitRxIndicatorRepr, Frame, ModemStatus, ModemStatusRepr,
+    ReceivePacketRepr, RemoteAtCommandRepr, RemoteAtResponseRepr, TransmitStatusRepr,
 };
 
 use super::faults::{FaultRng, Faults};
@@ -178,12 +178,26 @@ impl State {
         node.stats.frames_in += 1;
         match Frame::parse_bytes(data) {
             Ok(Frame::TransmitRequest(tx)) => {
-                self.transmit(from, tx.frame_id, tx.dst64, tx.dst16, tx.data);
+                self.transmit(from, tx.frame_id, tx.dst64, tx.dst16, tx.data, None);
             }
             Ok(Frame::ExplicitAddressingCommand(ex)) => {
-                self.transmit(from, ex.frame_id, ex.dst64, ex.dst16, ex.data);
+                let explicit = Explicit {
+                    src_endpoint: ex.src_endpoint,
+                    dst_endpoint: ex.dst_endpoint,
+                    cluster_id: ex.cluster_id,
+                    profile_id: ex.profile_id,
+                };
+                self.transmit(
+                    from,
+                    ex.frame_id,
+                    ex.dst64,
+                    ex.dst16,
+                    ex.data,
+                    Some(explicit),
+                );
             }
             Ok(Frame::AtCommand(at)) => self.at_command(from, &at),
+            Ok(Frame::RemoteAtCommand(at)) => self.remote_at_command(from, &at),
             Ok(other) => {
                 self.emit(NetEvent::Ignored {
                     node: from,
@@ -221,6 +235,43 @@ impl State {
         self.send_to(from, &status, true);
     }
 
+    /// Queues a received payload for `to`: a Receive Packet, or an Explicit Rx
+    /// Indicator for an Explicit Addressing Command.
+    fn deliver(
+        &mut self,
+        to: Address64,
+        from: Address64,
+        src16: Address16,
+        options: u8,
+        data: &[u8],
+        explicit: Option<Explicit>,
+    ) {
+        match explicit {
+            None => {
+                let rx = ReceivePacketRepr {
+                    src64: from,
+                    src16,
+                    options,
+                    data,
+                };
+                self.send_to(to, &rx, true);
+            }
+            Some(e) => {
+                let rx = ExplicitRxIndicatorRepr {
+                    src64: from,
+                    src16,
+                    src_endpoint: e.src_endpoint,
+                    dst_endpoint: e.dst_endpoint,
+                    cluster_id: e.cluster_id,
+                    profile_id: e.profile_id,
+                    options,
+                    data,
+                };
+                self.send_to(to, &rx, true);
+            }
+        }
+    }
+
     /// Delivers a Transmit Request's payload and answers with a Transmit Status.
     fn transmit(
         &mut self,
@@ -229,6 +280,7 @@ impl State {
         dst64: Address64,
         dst16: Address16,
         data: &[u8],
+        explicit: Option<Explicit>,
     ) {
         let Some(src) = self.nodes.get(&from) else {
             return;
@@ -265,14 +317,8 @@ impl State {
                 .filter(|(a, n)| **a != from && n.connected && !n.cut && !src_cut)
                 .map(|(a, _)| *a)
                 .collect();
-            let rx = ReceivePacketRepr {
-                src64: from,
-                src16,
-                options: RX_BROADCAST,
-                data,
-            };
             for to in &others {
-                self.send_to(*to, &rx, true);
+                self.deliver(*to, from, src16, RX_BROADCAST, data, explicit);
             }
             self.emit(NetEvent::Broadcast {
                 from,
@@ -288,15 +334,7 @@ impl State {
             );
             return;
         }
-        let dst = if dst64 == ADDRESS64_UNKNOWN {
-            self.nodes
-                .iter()
-                .find(|(_, n)| n.addr16 == dst16)
-                .map(|(a, _)| *a)
-        } else {
-            self.nodes.contains_key(&dst64).then_some(dst64)
-        };
-        let Some(dst) = dst else {
+        let Some(dst) = self.resolve(dst64, dst16) else {
             self.emit(NetEvent::Failed {
                 from,
                 to: dst64,
@@ -324,13 +362,7 @@ impl State {
             DeliveryStatus::Success
         };
         if delivery == DeliveryStatus::Success {
-            let rx = ReceivePacketRepr {
-                src64: from,
-                src16,
-                options: RX_ACKNOWLEDGED,
-                data,
-            };
-            self.send_to(dst, &rx, true);
+            self.deliver(dst, from, src16, RX_ACKNOWLEDGED, data, explicit);
             self.emit(NetEvent::Delivered {
                 from,
                 to: dst,
@@ -347,45 +379,70 @@ impl State {
         self.status(from, frame_id, dst16, delivery, ok);
     }
 
-    /// Answers a local AT command.
-    fn at_command(&mut self, from: Address64, at: &AtCommandRepr<'_>) {
-        let Some(node) = self.nodes.get(&from) else {
-            return;
+    /// The node a destination means: by 64-bit address, or by 16-bit address when the
+    /// 64-bit one is FFFFFFFFFFFFFFFF.
+    fn resolve(&self, dst64: Address64, dst16: Address16) -> Option<Address64> {
+        if dst64 == ADDRESS64_UNKNOWN {
+            self.nodes
+                .iter()
+                .find(|(_, n)| n.addr16 == dst16)
+                .map(|(a, _)| *a)
+        } else {
+            self.nodes.contains_key(&dst64).then_some(dst64)
+        }
+    }
+
+    /// Executes an AT command on `node`'s radio: its status and the value, written into
+    /// `value`, of length returned.
+    fn at_value(
+        &self,
+        node: Address64,
+        command: [u8; 2],
+        parameter: &[u8],
+        value: &mut [u8; 8],
+    ) -> (AtStatus, usize) {
+        let Some(radio) = self.nodes.get(&node) else {
+            return (AtStatus::Error, 0);
         };
-        let mut value = [0u8; 8];
-        let (status, len) = match (&at.command, at.parameter) {
+        match (&command, parameter) {
             (b"AP", []) => {
-                value[0] = u8::from(node.mode);
+                value[0] = u8::from(radio.mode);
                 (AtStatus::Ok, 1)
             }
-            (b"AP", [mode]) if *mode == u8::from(node.mode) => (AtStatus::Ok, 0),
+            (b"AP", [mode]) if *mode == u8::from(radio.mode) => (AtStatus::Ok, 0),
             (b"NP", []) => {
                 let np = u16::try_from(self.config.max_unicast).unwrap_or(u16::MAX);
                 value[..2].copy_from_slice(&np.to_be_bytes());
                 (AtStatus::Ok, 2)
             }
             (b"SH", []) => {
-                value[..4].copy_from_slice(&from.to_bytes()[..4]);
+                value[..4].copy_from_slice(&node.to_bytes()[..4]);
                 (AtStatus::Ok, 4)
             }
             (b"SL", []) => {
-                value[..4].copy_from_slice(&from.to_bytes()[4..]);
+                value[..4].copy_from_slice(&node.to_bytes()[4..]);
                 (AtStatus::Ok, 4)
             }
             (b"MY", []) => {
-                value[..2].copy_from_slice(&node.addr16.to_bytes());
+                value[..2].copy_from_slice(&radio.addr16.to_bytes());
                 (AtStatus::Ok, 2)
             }
             (b"AI", []) => (AtStatus::Ok, 1),
             (b"CE", []) => {
-                value[0] = u8::from(from == Address64::COORDINATOR);
+                value[0] = u8::from(node == Address64::COORDINATOR);
                 (AtStatus::Ok, 1)
             }
             (b"AP" | b"NP" | b"SH" | b"SL" | b"MY" | b"AI" | b"CE", _) => {
                 (AtStatus::InvalidParameter, 0)
             }
             _ => (AtStatus::InvalidCommand, 0),
-        };
+        }
+    }
+
+    /// Answers a local AT command.
+    fn at_command(&mut self, from: Address64, at: &AtCommandRepr<'_>) {
+        let mut value = [0u8; 8];
+        let (status, len) = self.at_value(from, at.command, at.parameter, &mut value);
         self.emit(NetEvent::AtCommand {
             node: from,
             command: at.command,
@@ -402,4 +459,49 @@ impl State {
         };
         self.send_to(from, &response, true);
     }
+
+    /// Answers a remote AT command on behalf of the destination's radio; a destination
+    /// that is unknown, down or cut gets status 4, transmission failure.
+    fn remote_at_command(&mut self, from: Address64, at: &RemoteAtCommandRepr<'_>) {
+        let target = self.resolve(at.dst64, at.dst16).filter(|t| {
+            let reachable =
+                |a: &Address64| self.nodes.get(a).is_some_and(|n| n.connected && !n.cut);
+            reachable(t) && reachable(&from)
+        });
+        let mut value = [0u8; 8];
+        let (src64, src16, status, len) = match target {
+            Some(t) => {
+                let (status, len) = self.at_value(t, at.command, at.parameter, &mut value);
+                let src16 = self.nodes.get(&t).map_or(Address16::UNKNOWN, |n| n.addr16);
+                (t, src16, status, len)
+            }
+            None => (at.dst64, Address16::UNKNOWN, AtStatus::TxFailure, 0),
+        };
+        self.emit(NetEvent::AtCommand {
+            node: src64,
+            command: at.command,
+            status,
+        });
+        if at.frame_id == 0 {
+            return;
+        }
+        let response = RemoteAtResponseRepr {
+            frame_id: at.frame_id,
+            src64,
+            src16,
+            command: at.command,
+            status,
+            data: &value[..len],
+        };
+        self.send_to(from, &response, true);
+    }
+}
+
+/// The addressing fields of an Explicit Addressing Command, carried to the receiver.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Explicit {
+    src_endpoint: u8,
+    dst_endpoint: u8,
+    cluster_id: u16,
+    profile_id: u16,
 }
