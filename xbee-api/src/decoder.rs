@@ -37,9 +37,10 @@ enum State {
 /// A streaming decoder of XBee API frames in mode 1 or 2, with a fixed buffer of `N`
 /// bytes and no allocation.
 ///
-/// Feed it bytes one at a time ([`push`](Self::push), cheap enough for a UART interrupt)
-/// or a slice at a time ([`decode`](Self::decode), which copies runs without special
-/// bytes in bulk); it yields [`RawFrame`]s borrowed from its buffer, or a
+/// Feed it bytes one at a time ([`push`](Self::push), cheap enough for a UART interrupt:
+/// a byte of frame data is only stored, everything else is done once a frame) or a slice
+/// at a time ([`decode`](Self::decode), which decodes a frame lying whole in the slice in
+/// one pass, 8 bytes a step); it yields [`RawFrame`]s borrowed from its buffer, or a
 /// [`DecodeError`] for each candidate frame it drops, and counts both in
 /// [`stats`](Self::stats). At the end of input, call [`finish`](Self::finish) until it
 /// returns `None`.
