@@ -118,7 +118,12 @@ async fn print_events(
                 println!("{} link closed: {reason}", now());
                 return;
             }
-            Event::Link(e) => println!("{} link: {e:?}", now()),
+            Event::Link(LinkEvent::Connected { peer } | LinkEvent::Reconnected { peer }) => {
+                println!("{} link: connected ({peer})", now());
+            }
+            Event::Link(LinkEvent::Disconnected { reason }) => {
+                println!("{} link: disconnected: {reason}", now());
+            }
         }
     }
 }
