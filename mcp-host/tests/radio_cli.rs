@@ -168,6 +168,7 @@ fn bad_node_arguments_are_input_errors() {
             "coordinator=loss=2",
         ],
         &["sim", "--link", "pty", "--address", "0000000000000000"],
+        &["sim", "--link", "pty", "--mavs", "0"],
     ] {
         let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
             .args(args)

@@ -21,8 +21,8 @@ pub(crate) struct SimArgs {
     addresses: Vec<Address64>,
     /// Number of MAVs: the given addresses, then the known MAVs 0013A20040B599B9,
     /// 0013A20040B599BF, 0013A20040B599BD, 0013A20040B599B8, then made-up ones.
-    #[arg(long, value_name = "N")]
-    mavs: Option<usize>,
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..=4096))]
+    mavs: Option<u16>,
     /// API mode of the link (what the ground station's XBee would be set to).
     #[arg(long, default_value = "1", value_name = "1|2")]
     api_mode: ApiModeArg,
@@ -50,10 +50,7 @@ Example: mcp-gs sim --link pty --mavs 2   (then connect a ground station to the 
 /// Runs `sim`.
 pub(crate) async fn run(args: SimArgs) -> Result<(), Failure> {
     let mut addresses = args.addresses.clone();
-    let wanted = args.mavs.unwrap_or(addresses.len().max(1));
-    if wanted > 4096 {
-        return Err(Failure::input("--mavs must be at most 4096"));
-    }
+    let wanted = args.mavs.map_or(addresses.len().max(1), usize::from);
     for address in fleet_addresses(wanted + addresses.len()) {
         if addresses.len() >= wanted {
             break;

@@ -1,0 +1,46 @@
+//! One simulated MAV on an in-memory stream, under tokio's paused clock: telemetry
+//! timing and the frames it writes.
+
+use std::time::Duration;
+
+use futures::{SinkExt, StreamExt};
+use mcp_host::codec::{CodecItem, XBeeCodec};
+use mcp_host::sim::{SimMav, run_mav};
+use tokio::time::Instant;
+use tokio_util::codec::Framed;
+use xbee_api::{Address16, Address64, ApiMode, Frame, ReceivePacketRepr};
+
+#[tokio::test(start_paused = true)]
+async fn telemetry_comes_at_20_hz_as_transmit_requests_to_the_coordinator() {
+    let (radio, mav) = tokio::io::duplex(4096);
+    tokio::spawn(run_mav(mav, SimMav::new(1_000)));
+    let mut radio = Framed::new(radio, XBeeCodec::new(ApiMode::Unescaped));
+    let rx = ReceivePacketRepr {
+        src64: Address64::COORDINATOR,
+        src16: Address16::COORDINATOR,
+        options: 0x01,
+        data: b"c\x01\x01\x1a",
+    };
+    radio.send(&rx).await.unwrap();
+    let start = Instant::now();
+    let mut times = Vec::new();
+    while times.len() < 40 {
+        let Some(Ok(CodecItem::Frame(frame))) = radio.next().await else {
+            panic!("the MAV stopped")
+        };
+        let Ok(Frame::TransmitRequest(tx)) = frame.parse() else {
+            panic!("not a transmit request: {frame:?}")
+        };
+        assert_eq!(tx.frame_id, 0);
+        assert_eq!(tx.dst64, Address64::COORDINATOR);
+        assert_eq!(tx.dst16, Address16::UNKNOWN);
+        assert_eq!(tx.options, 0x01);
+        assert_eq!(tx.data.len(), 6);
+        assert_eq!(&tx.data[..2], b"t\x1a");
+        times.push(start.elapsed());
+    }
+    // Paused time: the ticks are exactly 50 ms apart.
+    for pair in times.windows(2) {
+        assert_eq!(pair[1] - pair[0], Duration::from_millis(50));
+    }
+}
