@@ -614,3 +614,206 @@ fn garbage_other_frames_and_invalid_packets_are_ignored() {
         Packet::Report(Report::Landing(LandingState::Flight))
     );
 }
+
+/// The whole chain: a ground station (`mcp_host::connect`, `CommandSender`) on the
+/// coordinator of the virtual XBee network, whose node 0013A20040B599B9 is the
+/// firmware's UART in QEMU.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn ground_station_commands_the_firmware_through_the_radio_network() {
+    use futures::StreamExt;
+    use mcp_host::radio::{Network, NetworkConfig, NodeOptions};
+    use mcp_host::{DeliveryReport, Event, LinkOptions, PacketStream};
+
+    if !qemu_available("ground_station_commands_the_firmware_through_the_radio_network") {
+        return;
+    }
+    const MAV: Address64 = Address64(0x0013_A200_40B5_99B9);
+
+    /// The next packet from the MAV for which `wanted` holds (other events skipped).
+    async fn next_from_mav(
+        stream: &mut PacketStream,
+        what: &str,
+        wanted: impl Fn(&Packet<bytes::Bytes>) -> bool,
+    ) -> Packet<bytes::Bytes> {
+        let deadline = tokio::time::Instant::now() + FRAME_TIMEOUT;
+        loop {
+            let event = tokio::time::timeout_at(deadline, stream.next())
+                .await
+                .unwrap_or_else(|_| panic!("no {what} from the MAV within {FRAME_TIMEOUT:?}"))
+                .expect("the packet stream stays open");
+            if let Event::Packet(received) = event {
+                if received.origin.src64 == MAV && wanted(&received.packet) {
+                    return received.packet;
+                }
+            }
+        }
+    }
+
+    let elf = tokio::task::spawn_blocking(firmware_elf).await.unwrap();
+    let qemu = tokio::task::spawn_blocking(move || Qemu::start(&elf))
+        .await
+        .unwrap();
+
+    // The coordinator's radio, and the ground station on it.
+    let network = Network::new(NetworkConfig::default());
+    let coordinator = network
+        .add_link(
+            Address64::COORDINATOR,
+            &"tcp-listen:127.0.0.1:0".parse().unwrap(),
+            NodeOptions::default(),
+        )
+        .await
+        .expect("coordinator link");
+    let gs_link = format!("tcp:{}", coordinator.local_addr.expect("bound address"));
+    let (mut stream, sender) = mcp_host::connect(&gs_link.parse().unwrap(), LinkOptions::default())
+        .await
+        .expect("ground station connects");
+    assert!(network.connected(Address64::COORDINATOR).await);
+
+    // The MAV's radio: its link is the firmware's UART; connecting starts QEMU's CPU.
+    let mav_link = format!("tcp:127.0.0.1:{}", qemu.port);
+    network
+        .add_link(
+            MAV,
+            &mav_link.parse().unwrap(),
+            NodeOptions::with_mode(ApiMode::Unescaped),
+        )
+        .await
+        .expect("MAV link");
+    let started = next_from_mav(&mut stream, "start-up message", |p| {
+        matches!(p, Packet::Message(_))
+    })
+    .await;
+    let Packet::Message(text) = started else {
+        unreachable!()
+    };
+    assert_eq!(text.as_bytes(), &STARTUP_MESSAGE[1..]);
+
+    // Status requests, answered through the network.
+    let landing = sender.request(MAV, StatusRequest::Landing).await.unwrap();
+    assert_eq!(landing, Report::Landing(LandingState::Flight));
+    let controllers = sender
+        .request(MAV, StatusRequest::Controllers)
+        .await
+        .unwrap();
+    assert_eq!(controllers, Report::Controllers(Controller::Altitude));
+
+    // A set command is delivered (Transmit Status from the radio) and takes effect.
+    let delivery = sender
+        .send(MAV, &McpCommand::<&[u8]>::Time(1_800_000_000))
+        .await
+        .unwrap();
+    assert!(
+        matches!(delivery, DeliveryReport::Delivered { .. }),
+        "{delivery:?}"
+    );
+    let Report::Time(t) = sender.request(MAV, StatusRequest::Time).await.unwrap() else {
+        unreachable!()
+    };
+    assert!((1_800_000_000..1_800_000_000 + 60).contains(&t), "time {t}");
+
+    // Trajectory set: the trajectory report comes back on the stream.
+    let waypoints = [waypoint(4_000_000_000, 1.0), waypoint(4_000_000_001, 2.0)];
+    let mut buf = [0; MAX_PAYLOAD];
+    let mut builder = TrajectoryBuilder::command(&mut buf).unwrap();
+    for w in waypoints {
+        builder.push(w).unwrap();
+    }
+    let n = builder.finish();
+    let Ok(Packet::Command(set)) = parse(&buf[..n]) else {
+        unreachable!()
+    };
+    sender.send(MAV, &set).await.unwrap();
+    let report = next_from_mav(&mut stream, "trajectory report", |p| {
+        matches!(p, Packet::Report(Report::TrajectorySet(_)))
+    })
+    .await;
+    let Packet::Report(Report::TrajectorySet(got)) = report else {
+        unreachable!()
+    };
+    assert_eq!(got.iter().collect::<Vec<_>>(), waypoints);
+
+    // Telemetry: exactly the enabled ids, ascending.
+    for id in [TelemetryId::PitchAngle, TelemetryId::Altitude] {
+        sender
+            .send(
+                MAV,
+                &McpCommand::<&[u8]>::TelemetryToCoordinator { on: true, id },
+            )
+            .await
+            .unwrap();
+    }
+    sender
+        .request(
+            MAV,
+            StatusRequest::TelemetryToCoordinator(TelemetryId::Altitude),
+        )
+        .await
+        .unwrap();
+    let telemetry = next_from_mav(
+        &mut stream,
+        "telemetry",
+        |p| matches!(p, Packet::Telemetry(t) if t.len() == 2),
+    )
+    .await;
+    let Packet::Telemetry(t) = telemetry else {
+        unreachable!()
+    };
+    let ids: Vec<TelemetryId> = t.iter().map(|r| r.id).collect();
+    assert_eq!(ids, [TelemetryId::Altitude, TelemetryId::PitchAngle]);
+
+    // Landing: the unsolicited reports reach the ground station.
+    sender
+        .send(MAV, &McpCommand::<&[u8]>::Landing { on: true })
+        .await
+        .unwrap();
+    for state in [LandingState::Landing, LandingState::OnGround] {
+        let report = next_from_mav(&mut stream, "landing report", |p| {
+            matches!(p, Packet::Report(Report::Landing(_)))
+        })
+        .await;
+        assert_eq!(report, Packet::Report(Report::Landing(state)));
+    }
+    network.shutdown();
+    drop(qemu);
+}
+
+#[test]
+fn a_burst_of_requests_is_answered_in_full_and_in_order() {
+    if !qemu_available("a_burst_of_requests_is_answered_in_full_and_in_order") {
+        return;
+    }
+    let mut xbee = Xbee::boot();
+    // 60 requests in one write: far more than the firmware queues at once, arriving
+    // faster than it handles them (QEMU's UART has no baud-rate pacing).
+    let ids: Vec<u8> = (0..60).map(|i| i * 4).collect();
+    let mut burst = Vec::new();
+    for &id in &ids {
+        let request = McpCommand::<&[u8]>::StatusRequest(StatusRequest::TelemetryToCoordinator(
+            TelemetryId::from(id),
+        ));
+        let mut payload = [0; MAX_PAYLOAD];
+        let n = request.encode(&mut payload).unwrap();
+        let frame = ReceivePacketRepr {
+            src64: Address64::COORDINATOR,
+            src16: Address16::COORDINATOR,
+            options: 0x01,
+            data: &payload[..n],
+        };
+        let start = burst.len();
+        burst.resize(start + frame.encoded_len(ApiMode::Unescaped), 0);
+        frame
+            .encode(ApiMode::Unescaped, &mut burst[start..])
+            .unwrap();
+    }
+    xbee.stream.write_all(&burst).unwrap();
+    for &id in &ids {
+        assert_eq!(
+            xbee.next_report(),
+            Report::TelemetryToCoordinator {
+                on: false,
+                id: TelemetryId::from(id)
+            }
+        );
+    }
+}

@@ -158,6 +158,11 @@ pub fn init_uart0() {
 pub struct RxError;
 
 /// Takes the next received byte from the RX FIFO; `None` when it is empty.
+///
+/// The receive interrupts clear themselves as the FIFO is read (receive: below the
+/// trigger level; receive timeout: empty), so an interrupt handler that stops before
+/// the FIFO is empty leaves its interrupt pending, as it should. (Clearing it through
+/// `UARTICR` then would lose the bytes left: no new edge comes while they wait.)
 pub fn uart0_read() -> Option<Result<u8, RxError>> {
     if uart0::FR.read() & uart0::RXFE != 0 {
         return None;
@@ -168,11 +173,6 @@ pub fn uart0_read() -> Option<Result<u8, RxError>> {
     } else {
         Ok(dr as u8)
     })
-}
-
-/// Clears the UART0 receive interrupts (after draining the FIFO).
-pub fn uart0_clear_rx_interrupts() {
-    uart0::ICR.write(uart0::RX_INTERRUPTS);
 }
 
 /// Turns the UART0 receive interrupts on or off. While they are off, received bytes

@@ -156,7 +156,6 @@ pub fn on_uart0_interrupt() {
             let Some(byte) = hw::uart0_read() else { break };
             inbox.push(&mut decoder, byte);
         }
-        hw::uart0_clear_rx_interrupts();
         if !inbox.has_room() {
             hw::uart0_rx_interrupts(false);
         }

@@ -31,6 +31,5 @@ fn UART0() {
                 BYTES.fetch_add(1, Ordering::Relaxed);
             }
         }
-        hw::uart0_clear_rx_interrupts();
     });
 }
