@@ -9,7 +9,6 @@ use mcp_core::{
     Address, Command, Controller, LandingState, Packet, Report, SlaveAddresses, Slot,
     StatusRequest, TelemetryId, TrajectoryBuilder, Waypoint,
 };
-use mcp_host::radio::NetworkConfig;
 use mcp_host::sim::{Simulator, fleet_addresses};
 use mcp_host::{CommandSender, DeliveryReport, Event, Link, LinkOptions, PacketStream, SendError};
 use xbee_api::{Address64, ApiMode, DeliveryStatus};
@@ -30,7 +29,7 @@ async fn over_tcp(addresses: &[Address64]) -> Ground {
         &link,
         ApiMode::Unescaped,
         addresses,
-        NetworkConfig::default(),
+        Simulator::network_config(),
     )
     .await
     .unwrap();
@@ -47,7 +46,7 @@ async fn over_tcp(addresses: &[Address64]) -> Ground {
 }
 
 async fn over_pty(addresses: &[Address64], mode: ApiMode) -> Ground {
-    let sim = Simulator::start(&Link::Pty, mode, addresses, NetworkConfig::default())
+    let sim = Simulator::start(&Link::Pty, mode, addresses, Simulator::network_config())
         .await
         .unwrap();
     let path = sim.coordinator().pty_path.clone().unwrap();
@@ -400,4 +399,26 @@ async fn a_fleet_on_a_pseudo_terminal_in_api_mode_2() {
         g.report(fleet[2]).await,
         Report::Landing(LandingState::Landing)
     );
+}
+
+#[tokio::test]
+async fn every_table_id_fits_one_packet_with_fragmentation() {
+    let mut g = over_tcp(&[MAV]).await;
+    for &id in TelemetryId::ALL.iter().rev() {
+        g.send(MAV, telemetry(true, id)).await;
+    }
+    let last = Report::TelemetryToCoordinator {
+        on: true,
+        id: TelemetryId::EstimatedAltitude,
+    };
+    let answer = g
+        .request(
+            MAV,
+            StatusRequest::TelemetryToCoordinator(TelemetryId::EstimatedAltitude),
+        )
+        .await;
+    assert_eq!(answer, last);
+    g.until_report(MAV, &last).await;
+    let records = g.telemetry_ids(MAV).await;
+    assert_eq!(ids(&records), TelemetryId::ALL);
 }

@@ -13,12 +13,11 @@
 //!
 //! ```no_run
 //! use mcp_host::sim::{Simulator, fleet_addresses};
-//! use mcp_host::radio::NetworkConfig;
 //! use xbee_api::ApiMode;
 //!
 //! # async fn run() -> Result<(), Box<dyn std::error::Error>> {
 //! let sim = Simulator::start(&"pty".parse()?, ApiMode::Unescaped, &fleet_addresses(2),
-//!                            NetworkConfig::default()).await?;
+//!                            Simulator::network_config()).await?;
 //! println!("ground station: serial:{}", sim.coordinator().pty_path.as_ref().unwrap().display());
 //! # Ok(())
 //! # }
@@ -241,6 +240,16 @@ impl Simulator {
             coordinator,
             mavs,
         })
+    }
+
+    /// The network settings a simulator should use unless it emulates something else:
+    /// defaults, with unicast payloads up to 255 bytes (fragmentation), since MCP packets
+    /// (telemetry of many ids, trajectories) go up to 255 bytes.
+    pub fn network_config() -> NetworkConfig {
+        NetworkConfig {
+            max_unicast: crate::radio::MAX_UNICAST_FRAGMENTED,
+            ..NetworkConfig::default()
+        }
     }
 
     /// The network.

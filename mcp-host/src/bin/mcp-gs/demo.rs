@@ -10,7 +10,6 @@ use mcp_core::{
     Address, Command, Controller, LandingState, Packet, Report, Slot, StatusRequest, TelemetryId,
     TrajectoryBuilder, Waypoint,
 };
-use mcp_host::radio::NetworkConfig;
 use mcp_host::sim::{Simulator, posix_now};
 use mcp_host::{
     CommandSender, DeliveryReport, Event, Link, LinkEvent, LinkOptions, PacketStream, RequestError,
@@ -238,7 +237,7 @@ pub(crate) async fn run(args: DemoArgs) -> Result<(), Failure> {
         &sim_link,
         ApiMode::Unescaped,
         &[MAV],
-        NetworkConfig::default(),
+        Simulator::network_config(),
     )
     .await
     .map_err(|e| Failure::link(e.to_string()))?;

@@ -57,7 +57,8 @@ pub(crate) struct NetArgs {
     /// Seed of the fault generators (default: from the clock; printed at start).
     #[arg(long, value_name = "N")]
     seed: Option<u64>,
-    /// Largest unicast payload (84 without fragmentation, at most 255).
+    /// Largest unicast payload (84 without fragmentation, at most 255). Default: 84 for
+    /// `radio`, 255 for `sim` (MCP packets go up to 255 bytes).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..=255))]
     max_unicast: Option<u16>,
     /// Assume fragmentation: unicast payloads up to 255 bytes.
@@ -87,7 +88,8 @@ pub(crate) struct NetArgs {
 }
 
 impl NetArgs {
-    pub(crate) fn config(&self) -> Result<NetworkConfig, Failure> {
+    /// The network settings; `default_max_unicast` unless given.
+    pub(crate) fn config(&self, default_max_unicast: usize) -> Result<NetworkConfig, Failure> {
         for (name, p) in [
             ("loss", self.loss),
             ("duplicate", self.duplicate),
@@ -109,7 +111,7 @@ impl NetArgs {
         let max_unicast = match (self.fragmentation, self.max_unicast) {
             (true, _) => MAX_UNICAST_FRAGMENTED,
             (false, Some(n)) => usize::from(n),
-            (false, None) => MAX_UNICAST,
+            (false, None) => default_max_unicast,
         };
         Ok(NetworkConfig {
             seed,
@@ -361,7 +363,7 @@ pub(crate) async fn watch(
 
 /// Runs `radio`.
 pub(crate) async fn run(args: RadioArgs) -> Result<(), Failure> {
-    let config = args.net.config()?;
+    let config = args.net.config(MAX_UNICAST)?;
     args.net.describe(&config);
     let network = Network::new(config);
     let events = network.subscribe();

@@ -2,6 +2,7 @@
 
 use clap::Args;
 use mcp_host::Link;
+use mcp_host::radio::MAX_UNICAST_FRAGMENTED;
 use mcp_host::sim::{Simulator, fleet_addresses};
 use xbee_api::Address64;
 
@@ -43,7 +44,9 @@ telemetry of the enabled ids, and flies a small model: landing on -> landing -> 
 landing off -> take_off -> stabilization -> flight, the mpc controller follows the \
 trajectory by MAV time. The MAVs are XBee nodes in API mode 1 behind a virtual network \
 whose coordinator is --link: the ground station sees Transmit Statuses and Receive \
-Packets as from its own XBee. Faults options as in `mcp-gs radio`.
+Packets as from its own XBee. Unicast payloads go up to 255 bytes (fragmentation, as MCP \
+packets need; --max-unicast 84 emulates radios without it). Faults options as in \
+`mcp-gs radio`.
 
 Example: mcp-gs sim --link pty --mavs 2   (then connect a ground station to the printed path)";
 
@@ -65,7 +68,7 @@ pub(crate) async fn run(args: SimArgs) -> Result<(), Failure> {
             "a MAV cannot have the coordinator's or the broadcast address",
         ));
     }
-    let config = args.net.config()?;
+    let config = args.net.config(MAX_UNICAST_FRAGMENTED)?;
     args.net.describe(&config);
     let sim = Simulator::start(&args.link, args.api_mode.0, &addresses, config)
         .await
