@@ -40,12 +40,15 @@ const STARTUP_MESSAGE: &[u8] = b"mMAV started";
 /// Largest MCP payload the firmware takes (unicast, unfragmented).
 const MAX_PAYLOAD: usize = 84;
 
-/// `true` if QEMU can run; otherwise prints why the test is skipped.
+/// `true` if QEMU can run; otherwise prints why the test is skipped. The message goes
+/// straight to the process's stderr, past the test harness's output capture, so it
+/// shows in every run.
 fn qemu_available(test: &str) -> bool {
     match Command::new(QEMU).arg("--version").output() {
         Ok(out) if out.status.success() => true,
         _ => {
-            eprintln!(
+            let _ = writeln!(
+                std::io::stderr(),
                 "SKIPPED {test}: `{QEMU}` not found; install it (Debian: \
                  `apt-get install qemu-system-arm`) to run the firmware end-to-end tests"
             );
@@ -349,7 +352,7 @@ fn waypoint(time: u32, n: f32) -> Waypoint {
 
 #[test]
 fn every_status_request_gets_its_report_and_set_commands_take_effect() {
-    if !qemu_available("every_status_request_gets_its_report") {
+    if !qemu_available("every_status_request_gets_its_report_and_set_commands_take_effect") {
         return;
     }
     let mut xbee = Xbee::boot();
@@ -452,7 +455,7 @@ fn every_status_request_gets_its_report_and_set_commands_take_effect() {
 
 #[test]
 fn telemetry_carries_exactly_the_enabled_ids_in_ascending_order() {
-    if !qemu_available("telemetry_carries_exactly_the_enabled_ids") {
+    if !qemu_available("telemetry_carries_exactly_the_enabled_ids_in_ascending_order") {
         return;
     }
     let mut xbee = Xbee::boot();
