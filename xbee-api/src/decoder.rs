@@ -384,8 +384,14 @@ impl<const N: usize> Decoder<N> {
         self.fill_to = 0;
     }
 
-    /// One raw byte of a mode 2 stream.
+    /// [`step2`](Self::step2) out of line, for the slice path's bytes between bulk runs.
     #[inline(never)]
+    fn step2_cold(&mut self, raw: u8) -> Option<Outcome> {
+        self.step2(raw)
+    }
+
+    /// One raw byte of a mode 2 stream.
+    #[inline(always)]
     fn step2(&mut self, raw: u8) -> Option<Outcome> {
         if raw == START_DELIMITER {
             let cut = match self.state {
@@ -533,7 +539,7 @@ impl<const N: usize> Decoder<N> {
             }
             let byte = input.get(i).copied().unwrap_or(0);
             i += 1;
-            if let Some(outcome) = self.step2(byte) {
+            if let Some(outcome) = self.step2_cold(byte) {
                 return (i, Some(outcome));
             }
         }
