@@ -214,9 +214,9 @@ impl<const N: usize> Decoder<N> {
     /// until it returns `None` before pushing the next byte.
     ///
     /// A byte of frame data that is neither 0x7D nor 0x7E is only stored: one compare
-    /// of two cursors, one of the byte, a bounds check and the store. Everything else
-    /// (delimiters, length, escapes, checksum, and the sum of the frame data) is done
-    /// out of line, once a frame.
+    /// of two cursors, one of the byte, a bounds check (none when `N` is a power of two)
+    /// and the store. Delimiters, length bytes, escapes and the checksum byte go out of
+    /// line, where the frame data is summed once, with the checksum.
     #[inline]
     pub fn push(&mut self, byte: u8) -> Option<Event<'_>> {
         let end = self.end;
