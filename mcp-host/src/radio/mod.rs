@@ -477,9 +477,10 @@ impl Network {
         }
     }
 
-    /// Takes a node out of radio range: nothing reaches it, nothing it sends gets
-    /// through (its transmissions fail with 0x21 network ACK failure), though its local
-    /// radio still answers it. Returns `false` if the node is unknown.
+    /// Takes a node out of radio range: nothing reaches it (unicasts to it fail with
+    /// 0x21 network ACK failure), nothing it sends gets through (its unicasts fail with
+    /// 0x21, its broadcasts reach no one), though its local radio still answers it.
+    /// Returns `false` if the node is unknown.
     pub fn cut(&self, address: Address64) -> bool {
         self.set_cut(address, true)
     }

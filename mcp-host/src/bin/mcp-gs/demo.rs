@@ -212,6 +212,18 @@ pub(crate) async fn run(args: DemoArgs) -> Result<(), Failure> {
     }
     let started = Instant::now();
     let deadline = (args.duration > 0.0).then(|| started + Duration::from_secs_f64(args.duration));
+    // Set when the time is up, or at Ctrl-C (which then no longer ends the process
+    // at once: the demo finishes its step and prints the summary).
+    let (stop_tx, mut stop) = watch::channel(false);
+    tokio::spawn(async move {
+        match deadline {
+            Some(d) => tokio::time::sleep_until(d).await,
+            None => {
+                let _ = tokio::signal::ctrl_c().await;
+            }
+        }
+        stop_tx.send_replace(true);
+    });
 
     println!("MCP demo: a ground station talking to a simulated MAV. No hardware needed.");
     // The ground station's end: a pseudo-terminal, as if its XBee were on a serial port.
@@ -353,17 +365,9 @@ pub(crate) async fn run(args: DemoArgs) -> Result<(), Failure> {
         .await;
     script.request(StatusRequest::Landing).await;
 
-    let until = |d: Option<Instant>| async move {
-        match d {
-            Some(d) => tokio::time::sleep_until(d).await,
-            None => {
-                let _ = tokio::signal::ctrl_c().await;
-            }
-        }
-    };
     let landed = tokio::select! {
         r = landing.wait_for(|s| *s == Some(LandingState::OnGround)) => r.is_ok(),
-        () = until(deadline) => false,
+        _ = stop.wait_for(|stop| *stop) => false,
     };
     if landed {
         heading("Take-off: landing off on the ground");
@@ -372,7 +376,7 @@ pub(crate) async fn run(args: DemoArgs) -> Result<(), Failure> {
             .await;
         let _ = tokio::select! {
             r = landing.wait_for(|s| *s == Some(LandingState::Flight)) => r.is_ok(),
-            () = until(deadline) => false,
+            _ = stop.wait_for(|stop| *stop) => false,
         };
         script.request(StatusRequest::Landing).await;
     }
@@ -380,7 +384,7 @@ pub(crate) async fn run(args: DemoArgs) -> Result<(), Failure> {
         Some(_) => "Watching telemetry until the time is up",
         None => "Watching telemetry until Ctrl-C",
     });
-    until(deadline).await;
+    let _ = stop.wait_for(|stop| *stop).await;
 
     sim.shutdown();
     printer.abort();
