@@ -169,11 +169,63 @@ fn bad_node_arguments_are_input_errors() {
         ],
         &["sim", "--link", "pty", "--address", "0000000000000000"],
         &["sim", "--link", "pty", "--mavs", "0"],
+        &[
+            "radio",
+            "--coordinator",
+            "pty",
+            "--cut",
+            "0013A20040B599B9@x+1",
+        ],
     ] {
         let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
             .args(args)
             .output()
             .unwrap();
         assert_eq!(out.status.code(), Some(2), "{args:?}");
+    }
+}
+
+#[tokio::test]
+async fn radio_cuts_a_node_on_schedule() {
+    let radio = Running::start(&[
+        "radio",
+        "--coordinator",
+        "tcp-listen:127.0.0.1:0",
+        "--node",
+        "0013A20040B599B9=tcp-listen:127.0.0.1:0",
+        "--cut",
+        "0013A20040B599B9@0+600",
+        "--duration",
+        "120",
+    ]);
+    let coordinator = radio.listening("coordinator ");
+    let node = radio.listening("node 0013a20040b599b9/");
+    radio.line(|l| l.contains("0013a20040b599b9 out of range (cut)"));
+    // Both links up: only the cut stands in the way.
+    let mut ground = device(coordinator, ApiMode::Unescaped).await;
+    assert!(matches!(
+        next_frame(&mut ground).await.parse(),
+        Ok(Frame::ModemStatus(_))
+    ));
+    let mut mav = device(node, ApiMode::Unescaped).await;
+    assert!(matches!(
+        next_frame(&mut mav).await.parse(),
+        Ok(Frame::ModemStatus(_))
+    ));
+    let tx = TransmitRequestRepr {
+        frame_id: 5,
+        dst64: Address64::COORDINATOR,
+        dst16: Address16::UNKNOWN,
+        radius: 0,
+        options: 0,
+        data: b"r\x02\x04",
+    };
+    mav.send(&tx).await.unwrap();
+    match next_frame(&mut mav).await.parse() {
+        Ok(Frame::TransmitStatus(st)) => {
+            assert_eq!(st.frame_id, 5);
+            assert_eq!(st.delivery, xbee_api::DeliveryStatus::NetworkAckFailure);
+        }
+        other => panic!("{other:?}"),
     }
 }

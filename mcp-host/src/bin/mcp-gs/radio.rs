@@ -9,6 +9,7 @@ use mcp_host::radio::{
     NodeOptions,
 };
 use tokio::sync::broadcast;
+use tokio::time::Instant;
 use xbee_api::{Address64, ApiMode};
 
 use crate::{ApiModeArg, Failure};
@@ -46,7 +47,9 @@ back), pty (the path to open is printed). A link's API mode is given after an @ 
 Faults apply to the frames the network writes to a link: --loss, --latency, --jitter, \
 --duplicate, --reorder and --corrupt for every link, --faults ADDR=SPEC for one (SPEC: \
 comma-separated loss=P, latency=MS, jitter=MS, duplicate=P, reorder=P, corrupt=P; ADDR \
-`coordinator` or a 64-bit address). The seed is printed at start; --seed replays a run.
+`coordinator` or a 64-bit address). The seed is printed at start; --seed replays a run. \
+--cut ADDR@START+LENGTH takes a node out of range for a while (its transmissions and the \
+ones to it fail with 0x21 network ACK failure).
 
 Example: a ground station on a pty, a MAV firmware's UART on TCP port 5000:
   mcp-gs radio --coordinator pty --node 0013A20040B599B9=tcp:127.0.0.1:5000";
@@ -85,6 +88,10 @@ pub(crate) struct NetArgs {
     /// Faults of one link, ADDR=SPEC (see below). Repeat for more.
     #[arg(long = "faults", value_name = "ADDR=SPEC")]
     link_faults: Vec<LinkFaults>,
+    /// Take a node out of radio range for a while: ADDR@START+LENGTH, seconds from
+    /// start (e.g. `0013A20040B599B9@5+2.5`). Repeat for more.
+    #[arg(long = "cut", value_name = "ADDR@S+S")]
+    cuts: Vec<CutArg>,
 }
 
 impl NetArgs {
@@ -150,6 +157,30 @@ impl NetArgs {
         for f in &self.link_faults {
             println!("faults on {}: {}", f.address, describe_faults(&f.faults));
         }
+        for c in &self.cuts {
+            println!(
+                "{} out of range from {:?} to {:?} after start",
+                c.address,
+                c.start,
+                c.start + c.length
+            );
+        }
+    }
+
+    /// The cuts and restores, in time order from `start`: (when, node, cut).
+    pub(crate) fn timeline(&self, start: Instant) -> Vec<(Instant, Address64, bool)> {
+        let mut steps: Vec<_> = self
+            .cuts
+            .iter()
+            .flat_map(|c| {
+                [
+                    (start + c.start, c.address, true),
+                    (start + c.start + c.length, c.address, false),
+                ]
+            })
+            .collect();
+        steps.sort_by_key(|s| s.0);
+        steps
     }
 }
 
@@ -163,6 +194,35 @@ fn describe_faults(f: &Faults) -> String {
         f.reorder,
         f.corrupt
     )
+}
+
+/// `ADDR@START+LENGTH`.
+#[derive(Debug, Clone)]
+pub(crate) struct CutArg {
+    address: Address64,
+    start: Duration,
+    length: Duration,
+}
+
+impl std::str::FromStr for CutArg {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let bad = || format!("expected ADDR@START+LENGTH (seconds), got `{s}`");
+        let (address, times) = s.split_once('@').ok_or_else(bad)?;
+        let (start, length) = times.split_once('+').ok_or_else(bad)?;
+        let secs = |t: &str| {
+            t.parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite() && *x >= 0.0 && *x < 1e9)
+                .map(Duration::from_secs_f64)
+                .ok_or_else(bad)
+        };
+        Ok(CutArg {
+            address: parse_address(address)?,
+            start: secs(start)?,
+            length: secs(length)?,
+        })
+    }
 }
 
 /// `LINK` or `LINK@MODE`.
@@ -323,16 +383,17 @@ pub(crate) fn event_line(event: &NetEvent, verbose: bool) -> Option<String> {
     Some(format!("{now} {text}"))
 }
 
-/// Prints network events until Ctrl-C or `duration`.
+/// Prints network events and carries out the cuts until Ctrl-C or `duration`.
 pub(crate) async fn watch(
+    network: &Network,
     mut events: broadcast::Receiver<NetEvent>,
+    net: &NetArgs,
     verbose: bool,
     duration: Option<f64>,
 ) -> Result<(), Failure> {
+    let mut timeline = net.timeline(Instant::now()).into_iter().peekable();
     let deadline = match duration {
-        Some(s) if s.is_finite() && s >= 0.0 => {
-            Some(tokio::time::Instant::now() + Duration::from_secs_f64(s))
-        }
+        Some(s) if s.is_finite() && s >= 0.0 => Some(Instant::now() + Duration::from_secs_f64(s)),
         Some(s) => return Err(Failure::input(format!("bad --duration {s}"))),
         None => None,
     };
@@ -346,8 +407,20 @@ pub(crate) async fn watch(
     };
     tokio::pin!(stop);
     loop {
+        let next = timeline.peek().map(|step| step.0);
         tokio::select! {
             () = &mut stop => return Ok(()),
+            () = tokio::time::sleep_until(next.unwrap_or_else(Instant::now)), if next.is_some() => {
+                if let Some((_, node, cut)) = timeline.next() {
+                    let known = if cut { network.cut(node) } else { network.restore(node) };
+                    let what = if cut { "out of range (cut)" } else { "back in range" };
+                    let now = mcp_host::render::text::time(SystemTime::now());
+                    match known {
+                        true => println!("{now} {node} {what}"),
+                        false => println!("{now} {node}: no such node to cut"),
+                    }
+                }
+            },
             event = events.recv() => match event {
                 Ok(event) => {
                     if let Some(line) = event_line(&event, verbose) {
@@ -391,5 +464,5 @@ pub(crate) async fn run(args: RadioArgs) -> Result<(), Failure> {
         println!("{}", describe_node(name, &info, &link.link));
     }
     println!("running; Ctrl-C stops");
-    watch(events, args.verbose, args.duration).await
+    watch(&network, events, &args.net, args.verbose, args.duration).await
 }

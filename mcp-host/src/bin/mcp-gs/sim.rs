@@ -73,6 +73,7 @@ pub(crate) async fn run(args: SimArgs) -> Result<(), Failure> {
     let sim = Simulator::start(&args.link, args.api_mode.0, &addresses, config)
         .await
         .map_err(|e| Failure::link(e.to_string()))?;
+    let events = sim.network().subscribe();
     for mav in sim.mavs() {
         if let Some(faults) = args.net.faults_of(mav.address) {
             sim.network().set_faults(mav.address, Some(faults));
@@ -82,7 +83,6 @@ pub(crate) async fn run(args: SimArgs) -> Result<(), Failure> {
         sim.network()
             .set_faults(Address64::COORDINATOR, Some(faults));
     }
-    let events = sim.network().subscribe();
     println!(
         "{}",
         describe_node(
@@ -98,5 +98,12 @@ pub(crate) async fn run(args: SimArgs) -> Result<(), Failure> {
         .collect();
     println!("simulating {} MAV(s): {}", list.len(), list.join(", "));
     println!("running; Ctrl-C stops");
-    watch(events, args.verbose, args.duration).await
+    watch(
+        sim.network(),
+        events,
+        &args.net,
+        args.verbose,
+        args.duration,
+    )
+    .await
 }
