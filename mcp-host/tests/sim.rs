@@ -422,3 +422,55 @@ async fn every_table_id_fits_one_packet_with_fragmentation() {
     let records = g.telemetry_ids(MAV).await;
     assert_eq!(ids(&records), TelemetryId::ALL);
 }
+
+#[tokio::test]
+async fn a_receive_buffer_limit_drops_long_commands() {
+    use mcp_host::sim::{MAV_RX_BUFFER, SimOptions};
+    let link: Link = "tcp-listen:127.0.0.1:0".parse().unwrap();
+    let options = SimOptions {
+        rx_buffer: Some(MAV_RX_BUFFER),
+    };
+    let sim = Simulator::start_with(
+        &link,
+        ApiMode::Unescaped,
+        &[MAV],
+        Simulator::network_config(),
+        options,
+    )
+    .await
+    .unwrap();
+    let addr = sim.coordinator().local_addr.unwrap();
+    let link: Link = format!("tcp:{addr}").parse().unwrap();
+    let (stream, sender) = mcp_host::connect(&link, LinkOptions::default())
+        .await
+        .unwrap();
+    let g = Ground {
+        stream,
+        sender,
+        sim,
+    };
+    // Two waypoints: a 35-byte payload, a 51-byte frame: kept.
+    // Three waypoints: a 51-byte payload, a 67-byte frame: dropped by the MAV.
+    for (count, kept) in [(2u32, 2usize), (3, 2)] {
+        let mut buf = [0u8; mcp_core::MAX_PAYLOAD];
+        let mut builder = TrajectoryBuilder::command(&mut buf).unwrap();
+        for i in 0..count {
+            let w = Waypoint {
+                time: i,
+                elevator: 0.0,
+                aileron: 0.0,
+                altitude: 1.0,
+            };
+            builder.push(w).unwrap();
+        }
+        let len = builder.finish();
+        let Ok(Packet::Command(command)) = mcp_core::parse(&buf[..len]) else {
+            panic!()
+        };
+        g.send(MAV, command).await;
+        let Report::TrajectorySet(w) = g.request(MAV, StatusRequest::TrajectorySet).await else {
+            panic!()
+        };
+        assert_eq!(w.len(), kept);
+    }
+}

@@ -157,13 +157,34 @@ impl SimMav {
     }
 }
 
+/// Size of the deployed MAV's UART receive buffer, bytes.
+pub const MAV_RX_BUFFER: usize = 60;
+
+/// Options of simulated MAVs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct SimOptions {
+    /// Drop received frames longer than this many bytes on the wire (start delimiter,
+    /// length, frame data and checksum), as a firmware with a fixed receive buffer
+    /// would ([`MAV_RX_BUFFER`] for the deployed MAV). `None`: no limit.
+    pub rx_buffer: Option<usize>,
+}
+
 /// Runs a simulated MAV on `io`, the UART to its XBee in API mode 1, until the stream
 /// ends. Commands arrive as Receive Packets; answers, reports and 20 Hz telemetry leave as
 /// Transmit Requests to the coordinator.
-pub async fn run_mav<S>(io: S, mut mav: SimMav) -> std::io::Result<()>
+pub async fn run_mav<S>(io: S, mav: SimMav) -> std::io::Result<()>
 where
     S: AsyncRead + AsyncWrite + Unpin,
 {
+    run_mav_with(io, mav, SimOptions::default()).await
+}
+
+/// [`run_mav`] with options.
+pub async fn run_mav_with<S>(io: S, mut mav: SimMav, options: SimOptions) -> std::io::Result<()>
+where
+    S: AsyncRead + AsyncWrite + Unpin,
+{
+    let fits = |len: usize| options.rx_buffer.is_none_or(|max| len + 4 <= max);
     let mut framed = Framed::new(io, XBeeCodec::new(ApiMode::Unescaped));
     let mut ticks = tokio::time::interval(TELEMETRY_PERIOD);
     ticks.set_missed_tick_behavior(MissedTickBehavior::Delay);
@@ -171,6 +192,10 @@ where
     loop {
         let out = tokio::select! {
             item = framed.next() => match item {
+                Some(Ok(CodecItem::Frame(frame))) if !fits(frame.data().len()) => {
+                    tracing::debug!(len = frame.data().len(), "MAV UART: frame over the receive buffer dropped");
+                    Vec::new()
+                }
                 Some(Ok(CodecItem::Frame(frame))) => match frame.parse() {
                     Ok(Frame::ReceivePacket(rx)) => mav.handle_payload(rx.data),
                     _ => Vec::new(),
@@ -220,6 +245,17 @@ impl Simulator {
         addresses: &[Address64],
         config: NetworkConfig,
     ) -> Result<Self, NetworkError> {
+        Self::start_with(link, mode, addresses, config, SimOptions::default()).await
+    }
+
+    /// [`Simulator::start`] with MAV options.
+    pub async fn start_with(
+        link: &Link,
+        mode: ApiMode,
+        addresses: &[Address64],
+        config: NetworkConfig,
+        options: SimOptions,
+    ) -> Result<Self, NetworkError> {
         let network = Network::new(config);
         let coordinator = network
             .add_link(Address64::COORDINATOR, link, NodeOptions::with_mode(mode))
@@ -229,7 +265,7 @@ impl Simulator {
             let (info, io) =
                 network.add_in_process(address, NodeOptions::with_mode(ApiMode::Unescaped))?;
             tokio::spawn(async move {
-                if let Err(error) = run_mav(io, SimMav::new(posix_now())).await {
+                if let Err(error) = run_mav_with(io, SimMav::new(posix_now()), options).await {
                     tracing::warn!(mav = %address, %error, "simulated MAV stopped");
                 }
             });

@@ -3,7 +3,7 @@
 use clap::Args;
 use mcp_host::Link;
 use mcp_host::radio::MAX_UNICAST_FRAGMENTED;
-use mcp_host::sim::{Simulator, fleet_addresses};
+use mcp_host::sim::{SimOptions, Simulator, fleet_addresses};
 use xbee_api::Address64;
 
 use crate::radio::{NetArgs, describe_node, parse_address, watch};
@@ -27,6 +27,10 @@ pub(crate) struct SimArgs {
     /// API mode of the link (what the ground station's XBee would be set to).
     #[arg(long, default_value = "1", value_name = "1|2")]
     api_mode: ApiModeArg,
+    /// Drop commands whose frame is longer than N bytes, as the deployed MAV's 60-byte
+    /// UART receive buffer does (default: no limit).
+    #[arg(long, value_name = "N")]
+    rx_buffer: Option<usize>,
     #[command(flatten)]
     net: NetArgs,
     /// Print every delivery, not only connections and failures.
@@ -70,7 +74,10 @@ pub(crate) async fn run(args: SimArgs) -> Result<(), Failure> {
     }
     let config = args.net.config(MAX_UNICAST_FRAGMENTED)?;
     args.net.describe(&config);
-    let sim = Simulator::start(&args.link, args.api_mode.0, &addresses, config)
+    let options = SimOptions {
+        rx_buffer: args.rx_buffer,
+    };
+    let sim = Simulator::start_with(&args.link, args.api_mode.0, &addresses, config, options)
         .await
         .map_err(|e| Failure::link(e.to_string()))?;
     let events = sim.network().subscribe();
