@@ -330,6 +330,8 @@ async fn local_at_commands_are_answered() {
     let (_, io) = network
         .add_in_process(MAV_A, NodeOptions::with_mode(ApiMode::Escaped))
         .unwrap();
+    // An in-process node is reachable as soon as it is added.
+    assert!(network.is_connected(MAV_A));
     let a16 = network.addr16(MAV_A).unwrap();
     let mut dev = Dev::new(io, ApiMode::Escaped);
     assert_eq!(dev.modem_status().await, ModemStatus::JoinedNetwork);

@@ -357,8 +357,9 @@ impl Network {
         Ok(info)
     }
 
-    /// Adds a node whose device is at the other end of `stream`. The node stays in the
-    /// network when the stream ends, unreachable.
+    /// Adds a node whose device is at the other end of `stream`: reachable as soon as
+    /// this returns (its modem status is queued). The node stays in the network when the
+    /// stream ends, unreachable.
     pub fn add_stream<S>(
         &self,
         address: Address64,
@@ -401,6 +402,7 @@ impl Network {
         source: Source,
     ) -> Result<NodeInfo, NetworkError> {
         let (tx, rx) = mpsc::channel(OUT_CAPACITY);
+        let up_already = matches!(source, Source::Once(_));
         let info = {
             let mut state = lock(&self.state);
             if state.nodes.contains_key(&address) {
@@ -421,6 +423,10 @@ impl Network {
                     stats: NodeStats::default(),
                 },
             );
+            if up_already {
+                // A stream is there at once: the node is reachable as soon as it is added.
+                state.connected(address, port::IN_PROCESS.to_owned());
+            }
             NodeInfo {
                 address,
                 addr16,

@@ -18,6 +18,9 @@ use crate::codec::{CodecItem, XBeeCodec};
 use crate::options::ReconnectPolicy;
 use crate::transport::Connector;
 
+/// The peer of a node added as a byte stream.
+pub(crate) const IN_PROCESS: &str = "in-process";
+
 /// A byte stream to a device.
 pub(crate) trait Io: AsyncRead + AsyncWrite + Send + Unpin {}
 impl<T: AsyncRead + AsyncWrite + Send + Unpin> Io for T {}
@@ -38,7 +41,7 @@ impl Source {
     /// The next stream and a description of the peer, or `None` when there will be none.
     async fn next(&mut self, node: Address64) -> Option<(Box<dyn Io>, String)> {
         match self {
-            Source::Once(io) => io.take().map(|io| (io, "in-process".to_owned())),
+            Source::Once(io) => io.take().map(|io| (io, IN_PROCESS.to_owned())),
             Source::Link {
                 connector,
                 policy,
@@ -96,10 +99,15 @@ async fn run_node(
     mut source: Source,
     mut out: mpsc::Receiver<Out>,
 ) {
+    // A single stream is up from the start: the network marked the node connected
+    // when it was added.
+    let mut up_already = matches!(source, Source::Once(_));
     while let Some((io, peer)) = source.next(addr).await {
-        // Frames queued while the link was down are stale.
-        while out.try_recv().is_ok() {}
-        lock(&state).connected(addr, peer);
+        if !std::mem::take(&mut up_already) {
+            // Frames queued while the link was down are stale.
+            while out.try_recv().is_ok() {}
+            lock(&state).connected(addr, peer);
+        }
         let reason = serve(&state, addr, mode, io, &mut out, &mut source).await;
         let ended = matches!(reason, End::NetworkGone);
         lock(&state).disconnected(addr, reason.to_string());
