@@ -22,7 +22,7 @@ pub enum ConnectError {
 pub enum SendError {
     /// The radio reported a delivery failure in its Transmit Status.
     #[error(
-        "delivery to {to} failed: {status:?} (Digi status 0x{code:02X}, retries {retries}, discovery {discovery:?})",
+        "delivery to {to} failed: {status} (Digi status 0x{code:02X}, retries {retries}, discovery {discovery})",
         code = u8::from(*.status)
     )]
     Delivery {

@@ -145,13 +145,13 @@ fn decode_reports_bad_frames_and_goes_on() {
     assert_eq!(lines.len(), 3, "{out}");
     assert_eq!(
         lines[0],
-        serde_json::json!({"frame": "modem_status", "status": 6})
+        serde_json::json!({"frame": "modem_status", "status": 6, "status_name": "coordinator_started"})
     );
     assert_eq!(lines[1]["error"], "checksum");
     assert_eq!(lines[1]["offset"], 12);
     assert_eq!(
         lines[2],
-        serde_json::json!({"frame": "modem_status", "status": 2})
+        serde_json::json!({"frame": "modem_status", "status": 2, "status_name": "joined_network"})
     );
 
     let text = stdout(&run(&["decode", path.to_str().unwrap()]));

@@ -70,12 +70,17 @@ pub fn frame(frame: &Frame<'_>) -> Value {
             m.insert("id".into(), st.frame_id.into());
             m.insert("dst16".into(), st.dst16.to_string().into());
             m.insert("retries".into(), st.retries.into());
-            m.insert("delivery".into(), u8::from(st.delivery).into());
-            m.insert("discovery".into(), u8::from(st.discovery).into());
+            named(&mut m, "delivery", st.delivery.into(), st.delivery.name());
+            named(
+                &mut m,
+                "discovery",
+                st.discovery.into(),
+                st.discovery.name(),
+            );
         }
         Frame::ModemStatus(ms) => {
             m.insert("frame".into(), "modem_status".into());
-            m.insert("status".into(), u8::from(ms.status).into());
+            named(&mut m, "status", ms.status.into(), ms.status.name());
         }
         Frame::AtCommand(at) => {
             m.insert("frame".into(), "at".into());
@@ -87,7 +92,7 @@ pub fn frame(frame: &Frame<'_>) -> Value {
             m.insert("frame".into(), "at_response".into());
             m.insert("id".into(), at.frame_id.into());
             m.insert("command".into(), at_name(at.command).into());
-            m.insert("status".into(), u8::from(at.status).into());
+            named(&mut m, "status", at.status.into(), at.status.name());
             m.insert("data".into(), hex(at.data).into());
         }
         Frame::RemoteAtCommand(at) => {
@@ -105,7 +110,7 @@ pub fn frame(frame: &Frame<'_>) -> Value {
             m.insert("src64".into(), at.src64.to_string().into());
             m.insert("src16".into(), at.src16.to_string().into());
             m.insert("command".into(), at_name(at.command).into());
-            m.insert("status".into(), u8::from(at.status).into());
+            named(&mut m, "status", at.status.into(), at.status.name());
             m.insert("data".into(), hex(at.data).into());
         }
         Frame::ExplicitAddressingCommand(tx) => {

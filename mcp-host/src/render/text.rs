@@ -38,7 +38,7 @@ pub fn frame(frame: &Frame<'_>) -> String {
         ),
         Frame::TransmitStatus(st) => write!(
             s,
-            "transmit status id {} to {}: delivery {:?} (0x{:02x}), retries {}, discovery {:?} (0x{:02x})",
+            "transmit status id {} to {}: delivery {} (0x{:02x}), retries {}, discovery {} (0x{:02x})",
             st.frame_id,
             st.dst16,
             st.delivery,
@@ -49,7 +49,7 @@ pub fn frame(frame: &Frame<'_>) -> String {
         ),
         Frame::ModemStatus(ms) => write!(
             s,
-            "modem status {:?} (0x{:02x})",
+            "modem status {} (0x{:02x})",
             ms.status,
             u8::from(ms.status)
         ),
@@ -62,7 +62,7 @@ pub fn frame(frame: &Frame<'_>) -> String {
         ),
         Frame::AtCommandResponse(at) => write!(
             s,
-            "at response id {} {} {:?}{}",
+            "at response id {} {} {}{}",
             at.frame_id,
             at_name(at.command),
             at.status,
@@ -80,7 +80,7 @@ pub fn frame(frame: &Frame<'_>) -> String {
         ),
         Frame::RemoteAtResponse(at) => write!(
             s,
-            "remote at response id {} from {}/{} {} {:?}{}",
+            "remote at response id {} from {}/{} {} {}{}",
             at.frame_id,
             at.src64,
             at.src16,

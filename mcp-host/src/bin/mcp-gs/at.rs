@@ -91,7 +91,7 @@ pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
         return Err(Failure::new(
             Failure::OTHER,
             format!(
-                "{name}: the radio answered {status:?} (0x{:02x})",
+                "{name}: the radio answered {status} (0x{:02x})",
                 u8::from(status)
             ),
         ));

@@ -49,7 +49,7 @@ pub(crate) async fn run(args: SendArgs) -> Result<(), Failure> {
             retries,
             discovery,
         } => println!(
-            "delivered to {}/{dst16} (frame id {frame_id}, retries {retries}, discovery {discovery:?}): {what}",
+            "delivered to {}/{dst16} (frame id {frame_id}, retries {retries}, discovery {discovery}): {what}",
             args.to
         ),
         DeliveryReport::Written => println!("written, no status asked (frame id 0): {what}"),
