@@ -508,6 +508,8 @@ async fn reorder_one_swaps_each_pair() {
     let (seen, _) = faulty(
         Faults {
             reorder: 1.0,
+            // Failure guard only: every held frame is released by the next one.
+            reorder_window: GUARD,
             ..Faults::default()
         },
         3,
@@ -515,6 +517,23 @@ async fn reorder_one_swaps_each_pair() {
     )
     .await;
     assert_eq!(seen, numbered([2, 1, 4, 3, 6, 5]));
+}
+
+#[tokio::test]
+async fn a_held_back_frame_is_written_when_nothing_overtakes_it() {
+    let (network, mut devs) = in_process(NetworkConfig::default(), &[COORD, MAV_A]).await;
+    let faults = Faults {
+        reorder: 1.0,
+        reorder_window: Duration::from_millis(10),
+        ..Faults::default()
+    };
+    network.set_faults(COORD, Some(faults));
+    let [ground, dev_a] = &mut devs[..] else {
+        unreachable!()
+    };
+    dev_a.tx(0, COORD, b"alone").await;
+    assert_eq!(ground.rx().await.3, b"alone");
+    assert_eq!(network.stats(COORD).unwrap().reordered, 1);
 }
 
 #[tokio::test]

@@ -19,7 +19,7 @@ use xbee_api::Address64;
 /// assert!(!faults.is_none());
 /// assert!(Faults::default().is_none());
 /// ```
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Faults {
     /// Probability that a frame is dropped.
     pub loss: f64,
@@ -31,20 +31,42 @@ pub struct Faults {
     /// Probability that a frame is written twice.
     pub duplicate: f64,
     /// Probability that a frame is held back and written after the next frame to the
-    /// same link (or after [`REORDER_WINDOW`] if none comes).
+    /// same link (or after `reorder_window` if none comes).
     pub reorder: f64,
+    /// How long a held-back frame waits for a next frame to overtake it
+    /// ([`REORDER_WINDOW`] by default).
+    pub reorder_window: Duration,
     /// Probability that one byte of the frame data is changed while the checksum is
     /// kept, so that the receiver's decoder reports a bad checksum.
     pub corrupt: f64,
 }
 
-/// How long a frame held back by [`Faults::reorder`] waits for a next frame to overtake it.
+/// How long a frame held back by [`Faults::reorder`] waits by default for a next frame
+/// to overtake it.
 pub const REORDER_WINDOW: Duration = Duration::from_millis(250);
+
+impl Default for Faults {
+    /// No faults.
+    fn default() -> Self {
+        Faults {
+            loss: 0.0,
+            latency: Duration::ZERO,
+            jitter: Duration::ZERO,
+            duplicate: 0.0,
+            reorder: 0.0,
+            reorder_window: REORDER_WINDOW,
+            corrupt: 0.0,
+        }
+    }
+}
 
 impl Faults {
     /// `true` when no fault is configured.
     pub fn is_none(&self) -> bool {
-        *self == Faults::default()
+        Faults {
+            reorder_window: REORDER_WINDOW,
+            ..*self
+        } == Faults::default()
     }
 }
 

@@ -12,7 +12,6 @@ use tokio::time::{Instant, sleep_until};
 use tokio_util::codec::FramedRead;
 use xbee_api::{Address64, ApiMode};
 
-use super::faults::REORDER_WINDOW;
 use super::router::{OUT_CAPACITY, Out, State};
 use crate::codec::{CodecItem, XBeeCodec};
 use crate::options::ReconnectPolicy;
@@ -171,8 +170,8 @@ async fn serve(
             },
             () = sleep_until(next_at.unwrap_or_else(Instant::now)), if next_at.is_some() => {
                 let Some(item) = pending.pop_front() else { continue };
-                if item.reorder && held.is_none() {
-                    held = Some((item.bytes, Instant::now() + REORDER_WINDOW));
+                if let (Some(window), None) = (item.reorder, &held) {
+                    held = Some((item.bytes, Instant::now() + window));
                     continue;
                 }
                 if let Err(e) = write(&mut writer, &item.bytes).await {

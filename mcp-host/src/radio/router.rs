@@ -1,6 +1,7 @@
 //! The network's shared state and routing: what a frame from one node turns into.
 
 use std::collections::BTreeMap;
+use std::time::Duration;
 
 use bytes::Bytes;
 use tokio::sync::{broadcast, mpsc};
@@ -29,7 +30,8 @@ const ADDRESS64_UNKNOWN: Address64 = Address64(0xFFFF_FFFF_FFFF_FFFF);
 pub(crate) struct Out {
     pub(crate) at: Instant,
     pub(crate) bytes: Bytes,
-    pub(crate) reorder: bool,
+    /// Held back behind the next frame for at most this long.
+    pub(crate) reorder: Option<Duration>,
 }
 
 /// One radio of the network.
@@ -95,7 +97,7 @@ impl State {
         let fate = with_faults.then(|| node.rng.decide(&faults));
         let mut copies = 1;
         let mut at = now;
-        let mut reorder = false;
+        let mut reorder = None;
         let bytes = match fate {
             Some(fate) => {
                 if fate.lost {
@@ -108,7 +110,7 @@ impl State {
                 }
                 if fate.reorder {
                     node.stats.reordered += 1;
-                    reorder = true;
+                    reorder = Some(faults.reorder_window);
                 }
                 at = now + fate.delay;
                 match fate.corrupt {
@@ -128,7 +130,7 @@ impl State {
             let out = Out {
                 at,
                 bytes: bytes.clone(),
-                reorder: reorder && i == 0,
+                reorder: reorder.filter(|_| i == 0),
             };
             if node.out.try_send(out).is_err() {
                 node.stats.overflow += 1;

@@ -129,6 +129,7 @@ impl NetArgs {
                 duplicate: self.duplicate,
                 reorder: self.reorder,
                 corrupt: self.corrupt,
+                ..Faults::default()
             },
             max_unicast,
             ..NetworkConfig::default()
