@@ -1,0 +1,212 @@
+//! End to end with processes: `mcp-gs sim` on one end of a real TCP connection or
+//! pseudo-terminal; `mcp-gs send`, `status` and `monitor` on the other, for every
+//! command type.
+
+use std::io::{BufRead, BufReader};
+use std::process::{Child, Command, Output, Stdio};
+use std::sync::mpsc;
+use std::time::Duration;
+
+use serde_json::Value;
+
+const MAV: &str = "0013a20040b599b9";
+const SLAVE: &str = "0013a20040b599bf";
+/// Failure guard only.
+const GUARD: Duration = Duration::from_secs(30);
+
+/// `mcp-gs sim`, killed when dropped.
+struct Sim {
+    child: Child,
+    link: String,
+}
+
+impl Sim {
+    /// Starts the simulator on `link` and reads the link a ground station opens.
+    fn start(link: &str) -> Self {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+            .args(["sim", "--link", link, "--duration", "300"])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::inherit())
+            .spawn()
+            .expect("start mcp-gs sim");
+        let stdout = child.stdout.take().expect("stdout");
+        let (tx, rx) = mpsc::channel();
+        std::thread::spawn(move || {
+            // Keep reading to the end, so the simulator never writes into a closed pipe.
+            for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+                let _ = tx.send(line);
+            }
+        });
+        let link = loop {
+            let line = rx.recv_timeout(GUARD).expect("sim prints its link");
+            if let Some(rest) = line
+                .split("(open it as ")
+                .nth(1)
+                .or_else(|| line.split("(connect with ").nth(1))
+            {
+                break rest.split(')').next().unwrap().to_string();
+            }
+        };
+        Sim { child, link }
+    }
+
+    fn gs(&self, args: &[&str]) -> Output {
+        let (sub, rest) = args.split_first().unwrap();
+        Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+            .arg(sub)
+            .args(["--link", &self.link, "--timeout", "10"])
+            .args(rest)
+            .output()
+            .expect("run mcp-gs")
+    }
+
+    fn ok(&self, args: &[&str]) -> String {
+        let out = self.gs(args);
+        assert!(
+            out.status.success(),
+            "mcp-gs {args:?}: {}\n{}",
+            out.status,
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8(out.stdout).unwrap()
+    }
+
+    fn send(&self, command: &[&str]) {
+        let mut args = vec!["send", "--to", MAV];
+        args.extend_from_slice(command);
+        let out = self.ok(&args);
+        assert!(
+            out.starts_with(&format!("delivered to {MAV}/")),
+            "{command:?}: {out}"
+        );
+    }
+
+    fn status(&self, kind: &[&str]) -> Value {
+        let mut args = vec!["status", "--to", MAV, "--format", "json"];
+        args.extend_from_slice(kind);
+        let out = self.ok(&args);
+        let report: Value = serde_json::from_str(out.trim()).expect("one JSON report");
+        assert_eq!(report["category"], "report", "{out}");
+        report
+    }
+}
+
+impl Drop for Sim {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn every_command_and_report(sim: &Sim) {
+    // Time.
+    sim.send(&["time", "1763683200"]);
+    let time = sim.status(&["time"]);
+    assert_eq!(time["type"], "time");
+    let t = time["time"].as_u64().unwrap();
+    assert!((1_763_683_200..1_763_683_200 + 60).contains(&t), "{time}");
+
+    // Controllers: set by name, then by number.
+    sim.send(&["controller", "mpc"]);
+    assert_eq!(sim.status(&["controllers"])["controller_name"], "mpc");
+    sim.send(&["controller", "2"]);
+    assert_eq!(sim.status(&["controllers"])["controller"], 2);
+
+    // Trajectory set.
+    sim.send(&[
+        "trajectory",
+        "--waypoint",
+        "1763683300,1.5,-2.25,3",
+        "--waypoint",
+        "1763683310,0.5,0.25,2",
+    ]);
+    let trajectory = sim.status(&["trajectory_set"]);
+    assert_eq!(
+        trajectory["waypoints"],
+        serde_json::json!([
+            {"time": 1763683300u32, "elevator": 1.5, "aileron": -2.25, "altitude": 3.0},
+            {"time": 1763683310u32, "elevator": 0.5, "aileron": 0.25, "altitude": 2.0},
+        ])
+    );
+
+    // Position slave set, in the firmware's slot form and in the specification's form.
+    sim.send(&["slave-set", SLAVE, "--slot", "2"]);
+    sim.send(&["slave-set", "0013a20040b599bd"]);
+    let slaves = sim.status(&["position_slave_set"]);
+    let addresses = slaves["addresses"].as_array().expect("four slots");
+    assert_eq!(addresses[0], "0013a20040b599bd", "{slaves}");
+    assert_eq!(addresses[2], SLAVE, "{slaves}");
+
+    // Position set (no status request: it moves the setpoints seen in telemetry).
+    sim.send(&["position-set", "0.5", "-0.5"]);
+    assert_eq!(
+        sim.gs(&["status", "--to", MAV, "position_set"])
+            .status
+            .code(),
+        Some(2)
+    );
+
+    // Telemetry to coordinator: on for one id, then only that id arrives.
+    sim.send(&["telemetry", "on", "altitude"]);
+    let report = sim.status(&["telemetry_to_coordinator", "altitude"]);
+    assert_eq!(
+        (report["on"].as_bool(), report["telemetry"].as_u64()),
+        (Some(true), Some(1))
+    );
+    let report = sim.status(&["telemetry_to_coordinator", "0x19"]);
+    assert_eq!(report["on"], false);
+    let out = sim.ok(&["monitor", "--format", "json", "--count", "3"]);
+    let telemetry: Vec<Value> = out
+        .lines()
+        .map(|l| serde_json::from_str::<Value>(l).unwrap())
+        .filter(|v| v["mcp"]["category"] == "telemetry")
+        .collect();
+    assert!(!telemetry.is_empty(), "{out}");
+    for packet in &telemetry {
+        assert_eq!(packet["src64"], MAV);
+        let values = packet["mcp"]["values"].as_array().unwrap();
+        assert_eq!(values.len(), 1, "{packet}");
+        assert_eq!(values[0]["name"], "altitude");
+    }
+    sim.send(&["telemetry", "off", "altitude"]);
+
+    // Landing: on, and the state leaves flight.
+    assert_eq!(sim.status(&["landing"])["state_name"], "flight");
+    sim.send(&["landing", "on"]);
+    let state = sim.status(&["landing"]);
+    assert!(
+        ["landing", "on_ground"].contains(&state["state_name"].as_str().unwrap()),
+        "{state}"
+    );
+
+    // A message is delivered too.
+    sim.send(&["message", "hello MAV"]);
+}
+
+#[test]
+fn sim_and_ground_station_over_tcp() {
+    let sim = Sim::start("tcp-listen:127.0.0.1:0");
+    assert!(sim.link.starts_with("tcp:127.0.0.1:"), "{}", sim.link);
+    every_command_and_report(&sim);
+}
+
+#[test]
+fn sim_and_ground_station_over_a_pseudo_terminal() {
+    let sim = Sim::start("pty");
+    assert!(sim.link.starts_with("serial:/dev/"), "{}", sim.link);
+    every_command_and_report(&sim);
+}
+
+#[test]
+fn unknown_mav_is_a_delivery_failure() {
+    let sim = Sim::start("tcp-listen:127.0.0.1:0");
+    let out = sim.gs(&["send", "--to", "0013a200deadbeef", "landing", "on"]);
+    assert_eq!(
+        out.status.code(),
+        Some(5),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("address_not_found"), "{stderr}");
+}
