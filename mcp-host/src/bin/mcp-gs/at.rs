@@ -97,16 +97,16 @@ pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
         ));
     }
     if data.is_empty() {
-        println!("{name}: ok");
+        out!("{name}: ok");
     } else if data.iter().all(|b| b.is_ascii_graphic() || *b == b' ') && data.len() > 2 {
-        println!(
+        out!(
             "{name} = \"{}\" (hex {})",
             String::from_utf8_lossy(data),
             hex(data)
         );
     } else {
         let number = data.iter().fold(0u128, |n, &b| (n << 8) | u128::from(b));
-        println!(
+        out!(
             "{name} = {} (0x{}, {number})",
             hex(data).to_uppercase(),
             hex(data)

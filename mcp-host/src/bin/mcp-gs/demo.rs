@@ -71,25 +71,25 @@ async fn print_events(
                         seen.telemetry += 1;
                         if (seen.telemetry - 1) % every == 0 {
                             seen.shown += 1;
-                            println!("{time} {from} {} (#{})", rx.packet, seen.telemetry);
+                            out!("{time} {from} {} (#{})", rx.packet, seen.telemetry);
                         }
                     }
                     Packet::Report(report) => {
                         seen.reports += 1;
-                        println!("{time} {from} <- {}", rx.packet);
+                        out!("{time} {from} <- {}", rx.packet);
                         if let Report::Landing(state) = report {
                             landing.send_replace(Some(*state));
                         }
                     }
                     _ => {
                         seen.other += 1;
-                        println!("{time} {from} {}", rx.packet);
+                        out!("{time} {from} {}", rx.packet);
                     }
                 }
             }
             Event::Frame(frame) => match frame.parse() {
                 Ok(Frame::ModemStatus(ms)) => {
-                    println!(
+                    out!(
                         "{} radio: modem status {:?} (0x{:02x})",
                         now(),
                         ms.status,
@@ -97,12 +97,12 @@ async fn print_events(
                     );
                     radio_up.send_replace(true);
                 }
-                Ok(f) => println!("{} radio: {}", now(), mcp_host::render::text::frame(&f)),
-                Err(e) => println!("{} radio: malformed frame: {e}", now()),
+                Ok(f) => out!("{} radio: {}", now(), mcp_host::render::text::frame(&f)),
+                Err(e) => out!("{} radio: malformed frame: {e}", now()),
             },
             Event::InvalidPacket(bad) => {
                 seen.other += 1;
-                println!(
+                out!(
                     "{} {} invalid packet: {}",
                     now(),
                     bad.origin.src64,
@@ -111,17 +111,17 @@ async fn print_events(
             }
             Event::DecodeError(e) => {
                 seen.decode_errors += 1;
-                println!("{} link: frame dropped: {e}", now());
+                out!("{} link: frame dropped: {e}", now());
             }
             Event::Link(LinkEvent::Closed { reason }) => {
-                println!("{} link closed: {reason}", now());
+                out!("{} link closed: {reason}", now());
                 return;
             }
             Event::Link(LinkEvent::Connected { peer } | LinkEvent::Reconnected { peer }) => {
-                println!("{} link: connected ({peer})", now());
+                out!("{} link: connected ({peer})", now());
             }
             Event::Link(LinkEvent::Disconnected { reason }) => {
-                println!("{} link: disconnected: {reason}", now());
+                out!("{} link: disconnected: {reason}", now());
             }
         }
     }
@@ -151,7 +151,7 @@ impl Script {
     }
 
     async fn send(&mut self, what: &str, command: &Command<&[u8]>) {
-        println!("{} {MAV} -> {command}   ({what})", now());
+        out!("{} {MAV} -> {command}   ({what})", now());
         match self.sender.send(MAV, command).await {
             Ok(DeliveryReport::Delivered {
                 frame_id,
@@ -160,14 +160,14 @@ impl Script {
                 ..
             }) => {
                 self.delivered += 1;
-                println!(
+                out!(
                     "{}                  delivered (transmit status id {frame_id}: success, to {dst16}, {retries} retries)",
                     now()
                 );
             }
             Ok(DeliveryReport::Written) => self.delivered += 1,
             Err(e) => {
-                println!("{}                  NOT delivered: {e}", now());
+                out!("{}                  NOT delivered: {e}", now());
                 self.failures.push(send_failure(&e));
             }
         }
@@ -176,15 +176,15 @@ impl Script {
 
     async fn request(&mut self, request: StatusRequest) {
         let command: Command<&[u8]> = Command::StatusRequest(request);
-        println!("{} {MAV} -> {command}", now());
+        out!("{} {MAV} -> {command}", now());
         match self.sender.request(MAV, request).await {
             Ok(_) => self.answered += 1,
             Err(RequestError::Send(e)) => {
-                println!("{}                  NOT delivered: {e}", now());
+                out!("{}                  NOT delivered: {e}", now());
                 self.failures.push(send_failure(&e));
             }
             Err(e) => {
-                println!("{}                  no answer: {e}", now());
+                out!("{}                  no answer: {e}", now());
                 self.failures
                     .push(Failure::new(Failure::TIMEOUT, e.to_string()));
             }
@@ -202,7 +202,7 @@ fn send_failure(e: &SendError) -> Failure {
 }
 
 fn heading(text: &str) {
-    println!("\n== {text}");
+    out!("\n== {text}");
 }
 
 /// Runs `demo`.
@@ -225,7 +225,7 @@ pub(crate) async fn run(args: DemoArgs) -> Result<(), Failure> {
         stop_tx.send_replace(true);
     });
 
-    println!("MCP demo: a ground station talking to a simulated MAV. No hardware needed.");
+    out!("MCP demo: a ground station talking to a simulated MAV. No hardware needed.");
     // The ground station's end: a pseudo-terminal, as if its XBee were on a serial port.
     let options = LinkOptions {
         api_mode: ApiMode::Unescaped,
@@ -253,20 +253,20 @@ pub(crate) async fn run(args: DemoArgs) -> Result<(), Failure> {
     )
     .await
     .map_err(|e| Failure::link(e.to_string()))?;
-    println!(
+    out!(
         "  ground station <-> pseudo-terminal {} <-> virtual XBee coordinator <-> radio <-> MAV {MAV} (XBee API mode 1)",
         path.display()
     );
-    println!(
+    out!(
         "  Lines: time (UTC), MAV address, what happened. `->` is a command sent, `<-` a report received."
     );
-    println!(
+    out!(
         "  Telemetry arrives at 20 Hz: every {}th packet is shown (#n counts them all).",
         args.telemetry_every
     );
     match deadline {
-        Some(_) => println!("  Runs for {} s, then prints a summary.", args.duration),
-        None => println!("  Runs until Ctrl-C, then prints a summary."),
+        Some(_) => out!("  Runs for {} s, then prints a summary.", args.duration),
+        None => out!("  Runs until Ctrl-C, then prints a summary."),
     }
 
     let seen = Arc::new(Mutex::new(Seen::default()));
@@ -390,18 +390,22 @@ pub(crate) async fn run(args: DemoArgs) -> Result<(), Failure> {
     printer.abort();
     let seen = seen.lock().unwrap_or_else(|p| p.into_inner());
     heading("Summary");
-    println!(
+    out!(
         "  {:.1} s, MAV {MAV}: {} commands delivered, {} status requests answered, {} failures",
         started.elapsed().as_secs_f64(),
         script.delivered,
         script.answered,
         script.failures.len()
     );
-    println!(
+    out!(
         "  received {} telemetry packets ({} shown), {} reports, {} other packets, {} frames dropped",
-        seen.telemetry, seen.shown, seen.reports, seen.other, seen.decode_errors
+        seen.telemetry,
+        seen.shown,
+        seen.reports,
+        seen.other,
+        seen.decode_errors
     );
-    println!(
+    out!(
         "  Next: `mcp-gs sim --link pty` runs the simulated MAV alone for your own ground station."
     );
     match script.failures.into_iter().next() {

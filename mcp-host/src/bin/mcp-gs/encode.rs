@@ -50,6 +50,6 @@ pub(crate) fn run(args: EncodeArgs) -> Result<(), Failure> {
         .map_err(|e| Failure::input(e.to_string()))?;
     let hex = hex(&buf[..n]).to_uppercase();
     let spaced: Vec<&str> = (0..hex.len()).step_by(2).map(|i| &hex[i..i + 2]).collect();
-    println!("{}", spaced.join(" "));
+    out!("{}", spaced.join(" "));
     Ok(())
 }

@@ -34,9 +34,12 @@ impl std::str::FromStr for ApiModeChoice {
 /// `--link`, `--api-mode` and `--timeout`.
 #[derive(Debug, Clone, Args)]
 pub(crate) struct LinkArgs {
-    /// The local radio: serial:PATH[:BAUD] (default 115200 8N1), tcp:HOST:PORT,
-    /// tcp-listen:ADDR:PORT or pty.
-    #[arg(long, value_name = "LINK")]
+    #[arg(
+        long,
+        value_name = "LINK",
+        help = "The local radio: serial:PATH[:BAUD] (default 115200 8N1), tcp:HOST:PORT, \
+                tcp-listen:ADDR:PORT or pty"
+    )]
     pub(crate) link: Link,
     /// XBee API mode of the local radio (its AP setting): 1, 2, or auto to ask the radio.
     #[arg(long, value_name = "1|2|auto", default_value = "1")]

@@ -1,5 +1,13 @@
 //! `mcp-gs`: the MCP ground station.
 
+/// Prints a line to standard output; exits quietly (status 0) when standard output is
+/// closed, as when piped into `head`, instead of panicking like `println!`.
+macro_rules! out {
+    ($($arg:tt)*) => {
+        $crate::write_line(format_args!($($arg)*))
+    };
+}
+
 mod at;
 mod command;
 mod decode;
@@ -51,6 +59,18 @@ enum Sub {
     Sim(sim::SimArgs),
     /// A ground station and a simulated MAV in one process: no hardware needed.
     Demo(demo::DemoArgs),
+}
+
+/// Writes one line to standard output, exiting quietly if it is closed.
+pub(crate) fn write_line(line: std::fmt::Arguments<'_>) {
+    use std::io::Write;
+    let mut stdout = std::io::stdout().lock();
+    if writeln!(stdout, "{line}")
+        .and_then(|()| stdout.flush())
+        .is_err()
+    {
+        std::process::exit(0);
+    }
 }
 
 /// Output format of `monitor` and `decode`.

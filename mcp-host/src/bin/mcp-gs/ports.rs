@@ -14,7 +14,7 @@ pub(crate) fn run(_args: PortsArgs) -> Result<(), Failure> {
     let ports = serialport::available_ports()
         .map_err(|e| Failure::new(Failure::OTHER, format!("cannot list serial ports: {e}")))?;
     if ports.is_empty() {
-        println!("no serial ports found");
+        out!("no serial ports found");
     }
     for port in ports {
         let detail = match port.port_type {
@@ -37,7 +37,7 @@ pub(crate) fn run(_args: PortsArgs) -> Result<(), Failure> {
             SerialPortType::BluetoothPort => "bluetooth".into(),
             SerialPortType::Unknown => "unknown type".into(),
         };
-        println!("serial:{}\t{detail}", port.port_name);
+        out!("serial:{}\t{detail}", port.port_name);
     }
     Ok(())
 }

@@ -147,19 +147,20 @@ impl NetArgs {
 
     /// Prints the seed and the faults.
     pub(crate) fn describe(&self, config: &NetworkConfig) {
-        println!("seed {} (replay with --seed {})", config.seed, config.seed);
-        println!(
+        out!("seed {} (replay with --seed {})", config.seed, config.seed);
+        out!(
             "unicast payloads up to {} bytes, broadcast up to {}",
-            config.max_unicast, config.max_broadcast
+            config.max_unicast,
+            config.max_broadcast
         );
         if !config.faults.is_none() {
-            println!("faults on every link: {}", describe_faults(&config.faults));
+            out!("faults on every link: {}", describe_faults(&config.faults));
         }
         for f in &self.link_faults {
-            println!("faults on {}: {}", f.address, describe_faults(&f.faults));
+            out!("faults on {}: {}", f.address, describe_faults(&f.faults));
         }
         for c in &self.cuts {
-            println!(
+            out!(
                 "{} out of range from {:?} to {:?} after start",
                 c.address,
                 c.start,
@@ -417,18 +418,18 @@ pub(crate) async fn watch(
                     let what = if cut { "out of range (cut)" } else { "back in range" };
                     let now = mcp_host::render::text::time(SystemTime::now());
                     match known {
-                        true => println!("{now} {node} {what}"),
-                        false => println!("{now} {node}: no such node to cut"),
+                        true => out!("{now} {node} {what}"),
+                        false => out!("{now} {node}: no such node to cut"),
                     }
                 }
             },
             event = events.recv() => match event {
                 Ok(event) => {
                     if let Some(line) = event_line(&event, verbose) {
-                        println!("{line}");
+                        out!("{line}");
                     }
                 }
-                Err(broadcast::error::RecvError::Lagged(n)) => println!("({n} events not shown)"),
+                Err(broadcast::error::RecvError::Lagged(n)) => out!("({n} events not shown)"),
                 Err(broadcast::error::RecvError::Closed) => return Ok(()),
             },
         }
@@ -462,8 +463,8 @@ pub(crate) async fn run(args: RadioArgs) -> Result<(), Failure> {
         } else {
             "node"
         };
-        println!("{}", describe_node(name, &info, &link.link));
+        out!("{}", describe_node(name, &info, &link.link));
     }
-    println!("running; Ctrl-C stops");
+    out!("running; Ctrl-C stops");
     watch(&network, events, &args.net, args.verbose, args.duration).await
 }

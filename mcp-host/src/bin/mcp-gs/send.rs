@@ -48,11 +48,11 @@ pub(crate) async fn run(args: SendArgs) -> Result<(), Failure> {
             dst16,
             retries,
             discovery,
-        } => println!(
+        } => out!(
             "delivered to {}/{dst16} (frame id {frame_id}, retries {retries}, discovery {discovery}): {what}",
             args.to
         ),
-        DeliveryReport::Written => println!("written, no status asked (frame id 0): {what}"),
+        DeliveryReport::Written => out!("written, no status asked (frame id 0): {what}"),
     }
     Ok(())
 }

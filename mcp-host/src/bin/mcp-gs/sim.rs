@@ -90,7 +90,7 @@ pub(crate) async fn run(args: SimArgs) -> Result<(), Failure> {
         sim.network()
             .set_faults(Address64::COORDINATOR, Some(faults));
     }
-    println!(
+    out!(
         "{}",
         describe_node(
             "ground station link: coordinator",
@@ -103,8 +103,8 @@ pub(crate) async fn run(args: SimArgs) -> Result<(), Failure> {
         .iter()
         .map(|m| format!("{}/{}", m.address, m.addr16))
         .collect();
-    println!("simulating {} MAV(s): {}", list.len(), list.join(", "));
-    println!("running; Ctrl-C stops");
+    out!("simulating {} MAV(s): {}", list.len(), list.join(", "));
+    out!("running; Ctrl-C stops");
     watch(
         sim.network(),
         events,

@@ -42,8 +42,8 @@ pub(crate) async fn run(args: StatusArgs) -> Result<(), Failure> {
         })?;
     let packet = Packet::Report(report);
     match args.format {
-        Format::Text => println!("{}", packet.as_borrowed()),
-        Format::Json => println!("{}", mcp_host::render::json::packet_json(&packet)),
+        Format::Text => out!("{}", packet.as_borrowed()),
+        Format::Json => out!("{}", mcp_host::render::json::packet_json(&packet)),
     }
     Ok(())
 }
