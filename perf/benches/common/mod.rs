@@ -1,0 +1,3 @@
+//! What the bench shares with the callgrind example and the tests.
+
+pub(crate) mod mavlink_run;

@@ -1,0 +1,125 @@
+//! The measured loops, each over a whole stream with a fresh decoder.
+//!
+//! They are not inlined, so that instruction counters can collect exactly them
+//! (`callgrind.sh` toggles collection on `run_*`).
+
+use mcp_core::Packet;
+use xbee_api::{ApiMode, Decoder, ReceivePacket};
+
+use crate::Totals;
+
+/// Frame type of a Receive Packet.
+const RECEIVE_PACKET: u8 = 0x90;
+
+/// The XBee slice decoder alone ([`Decoder::decode`]): frames and frame data bytes.
+///
+/// # Panics
+///
+/// On a decode error: the streams hold none.
+#[inline(never)]
+pub fn run_slice(stream: &[u8], mode: ApiMode) -> Totals {
+    let mut decoder: Decoder = Decoder::new(mode);
+    let mut input = stream;
+    let mut totals = Totals::default();
+    loop {
+        let (consumed, event) = decoder.decode(input);
+        input = input.get(consumed..).unwrap_or_default();
+        match event {
+            Some(Ok(frame)) => {
+                totals.frames += 1;
+                totals.data_bytes += frame.len();
+            }
+            Some(Err(error)) => panic!("{error}"),
+            None => return totals,
+        }
+    }
+}
+
+/// The XBee byte-at-a-time decoder alone ([`Decoder::push`], the interrupt path):
+/// frames and frame data bytes.
+///
+/// # Panics
+///
+/// On a decode error: the streams hold none.
+#[inline(never)]
+pub fn run_push(stream: &[u8], mode: ApiMode) -> Totals {
+    let mut decoder: Decoder = Decoder::new(mode);
+    let mut totals = Totals::default();
+    for &byte in stream {
+        match decoder.push(byte) {
+            Some(Ok(frame)) => {
+                totals.frames += 1;
+                totals.data_bytes += frame.len();
+            }
+            Some(Err(error)) => panic!("{error}"),
+            None => {}
+        }
+    }
+    totals
+}
+
+/// Adds the telemetry values of one frame's data to `totals`: a Receive Packet view,
+/// its payload parsed as an MCP packet, each telemetry record's value.
+#[inline(always)]
+fn telemetry(data: &[u8], totals: &mut Totals) {
+    totals.frames += 1;
+    totals.data_bytes += data.len();
+    if data.first() != Some(&RECEIVE_PACKET) {
+        return;
+    }
+    let Ok(rx) = ReceivePacket::new_checked(data) else {
+        return;
+    };
+    if let Ok(Packet::Telemetry(telemetry)) = mcp_core::parse(rx.data()) {
+        for record in &telemetry {
+            totals.values += 1;
+            totals.sum += f64::from(record.value);
+        }
+    }
+}
+
+/// The whole receive path with the slice decoder: XBee frames, Receive Packet views,
+/// MCP packets, and every telemetry record's `f32` value, summed.
+///
+/// # Panics
+///
+/// On a decode error: the streams hold none.
+#[inline(never)]
+pub fn run_pipeline(stream: &[u8], mode: ApiMode) -> Totals {
+    let mut decoder: Decoder = Decoder::new(mode);
+    let mut input = stream;
+    let mut totals = Totals::default();
+    loop {
+        let (consumed, event) = decoder.decode(input);
+        input = input.get(consumed..).unwrap_or_default();
+        match event {
+            Some(Ok(frame)) => telemetry(frame.data(), &mut totals),
+            Some(Err(error)) => panic!("{error}"),
+            None => return totals,
+        }
+    }
+}
+
+/// [`run_pipeline`] with the byte-at-a-time decoder.
+///
+/// # Panics
+///
+/// On a decode error: the streams hold none.
+#[inline(never)]
+pub fn run_pipeline_push(stream: &[u8], mode: ApiMode) -> Totals {
+    let mut decoder: Decoder = Decoder::new(mode);
+    let mut totals = Totals::default();
+    for &byte in stream {
+        match decoder.push(byte) {
+            Some(Ok(frame)) => telemetry(frame.data(), &mut totals),
+            Some(Err(error)) => panic!("{error}"),
+            None => {}
+        }
+    }
+    totals
+}
+
+/// [`run_pipeline`] under a shorter name, for doc examples.
+pub fn pipeline(stream: &[u8], mode: ApiMode) -> Totals {
+    run_pipeline(stream, mode)
+}
