@@ -23,8 +23,14 @@ struct Sim {
 impl Sim {
     /// Starts the simulator on `link` and reads the link a ground station opens.
     fn start(link: &str) -> Self {
+        Self::start_with(&[], link)
+    }
+
+    /// The same, with more `sim` arguments.
+    fn start_with(extra: &[&str], link: &str) -> Self {
         let mut child = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
             .args(["sim", "--link", link, "--duration", "300"])
+            .args(extra)
             .stdout(Stdio::piped())
             .stderr(Stdio::inherit())
             .spawn()
@@ -209,4 +215,106 @@ fn unknown_mav_is_a_delivery_failure() {
     );
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("address_not_found"), "{stderr}");
+}
+
+#[test]
+fn at_commands_and_api_mode_detection() {
+    // The simulator's coordinator radio speaks API mode 2 here.
+    let sim = Sim::start_with(&["--api-mode", "2"], "tcp-listen:127.0.0.1:0");
+    let out = sim.ok(&["at", "--api-mode", "2", "AP"]);
+    assert!(out.starts_with("AP = 02"), "{out}");
+    let out = sim.ok(&["at", "--api-mode", "2", "NP"]);
+    assert!(out.starts_with("NP = "), "{out}");
+    // `auto` asks the radio first and then talks in its mode.
+    let report = {
+        let out = sim.ok(&[
+            "status",
+            "--api-mode",
+            "auto",
+            "--to",
+            MAV,
+            "--format",
+            "json",
+            "landing",
+        ]);
+        serde_json::from_str::<Value>(out.trim()).unwrap()
+    };
+    assert_eq!(report["state_name"], "flight");
+    // An unknown AT command is refused by the radio: a clear error, non-zero exit.
+    let out = sim.gs(&["at", "--api-mode", "2", "ZZ"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("ZZ"),
+        "{out:?}"
+    );
+}
+
+#[test]
+fn record_decode_and_replay() {
+    let sim = Sim::start("tcp-listen:127.0.0.1:0");
+    sim.send(&["telemetry", "on", "pitch_angle"]);
+    let dir = std::env::temp_dir().join(format!("mcp-gs-e2e-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("flight.mcprec");
+    let file = file.to_str().unwrap();
+    let live = sim.ok(&[
+        "monitor", "--format", "json", "--count", "5", "--record", file,
+    ]);
+    let live: Vec<Value> = live
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+
+    // The recording decodes to the same frames, with direction and time.
+    let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args(["decode", file, "--format", "json"])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let decoded: Vec<Value> = String::from_utf8(out.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let live_frames: Vec<&Value> = live.iter().filter(|v| v.get("frame").is_some()).collect();
+    assert_eq!(decoded.len(), live_frames.len());
+    for (d, l) in decoded.iter().zip(&live_frames) {
+        assert_eq!(d["direction"], "rx");
+        assert_eq!(d["frame"], l["frame"]);
+        assert_eq!(d["mcp"], l["mcp"]);
+    }
+
+    // Replayed as fast as possible onto a link, the same frames arrive.
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let link = format!("tcp:{}", listener.local_addr().unwrap());
+    let reader = std::thread::spawn(move || {
+        let (mut socket, _) = listener.accept().unwrap();
+        let mut bytes = Vec::new();
+        std::io::Read::read_to_end(&mut socket, &mut bytes).unwrap();
+        bytes
+    });
+    let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args(["replay", file, "--link", &link, "--speed", "0"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let wire = reader.join().unwrap();
+    let mut decoder: xbee_api::Decoder = xbee_api::Decoder::new(xbee_api::ApiMode::Unescaped);
+    let mut input = &wire[..];
+    let mut frames = 0;
+    loop {
+        let (consumed, event) = decoder.decode(input);
+        input = &input[consumed..];
+        match event {
+            Some(Ok(_)) => frames += 1,
+            Some(Err(e)) => panic!("replayed a bad frame: {e}"),
+            None => break,
+        }
+    }
+    assert_eq!(frames, decoded.len());
+    std::fs::remove_dir_all(&dir).unwrap();
 }
