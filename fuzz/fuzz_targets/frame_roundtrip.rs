@@ -340,7 +340,8 @@ fn build_mcp(spec: &McpSpec, buf: &mut [u8; MAX_PAYLOAD]) -> usize {
         }
         .into(),
         S::Landing { on } => Command::Landing { on: *on }.into(),
-        // Table 7 allows controller ids 0x00-0xFE: `c 03 FF` is the status request.
+        // Table 7 allows controller ids 0x00-0xFE: `c 03 FF` is the status request, and
+        // `Command::Controllers` documents that id 0xFF encodes as it.
         S::Controllers(0xFF) => return build_mcp(&S::StatusRequest { kind: 2, id: 0 }, buf),
         S::Controllers(c) => Command::Controllers(Controller::from(*c)).into(),
         S::PositionSlaveSet { slot, address } => Command::PositionSlaveSet {

