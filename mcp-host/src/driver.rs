@@ -453,6 +453,27 @@ impl Driver {
         self.emit(Event::Frame(frame));
     }
 
+    /// The reply channel of a request worth starting; `None` when its caller is gone,
+    /// or when its deadline has passed already (the caller then gets the error
+    /// `timed_out` makes).
+    fn live<T, E>(
+        &self,
+        reply: oneshot::Sender<Result<T, E>>,
+        deadline: Instant,
+        now: Instant,
+        timed_out: impl FnOnce() -> E,
+    ) -> Option<oneshot::Sender<Result<T, E>>> {
+        if reply.is_closed() {
+            return None;
+        }
+        if deadline <= now {
+            bump(&self.counters.timeouts);
+            let _ = reply.send(Err(timed_out()));
+            return None;
+        }
+        Some(reply)
+    }
+
     /// Starts a request: allocates a frame id where needed and queues its frame.
     fn start(&mut self, op: Op, out: &mut BytesMut) {
         let now = Instant::now();
@@ -465,17 +486,12 @@ impl Driver {
                 timeout,
                 reply,
             } => {
-                if reply.is_closed() {
+                let Some(reply) = self.live(reply, deadline, now, || SendError::Timeout {
+                    frame_id: 0,
+                    timeout,
+                }) else {
                     return;
-                }
-                if deadline <= now {
-                    bump(&self.counters.timeouts);
-                    let _ = reply.send(Err(SendError::Timeout {
-                        frame_id: 0,
-                        timeout,
-                    }));
-                    return;
-                }
+                };
                 if !with_status {
                     let result = write_transmit(self.options.api_mode, out, 0, to, &payload)
                         .map(|()| DeliveryReport::Written);
@@ -518,18 +534,13 @@ impl Driver {
                 timeout,
                 reply,
             } => {
-                if reply.is_closed() {
+                let Some(reply) = self.live(reply, deadline, now, || RequestError::Timeout {
+                    from: to,
+                    what: key.to_string(),
+                    timeout,
+                }) else {
                     return;
-                }
-                if deadline <= now {
-                    bump(&self.counters.timeouts);
-                    let _ = reply.send(Err(RequestError::Timeout {
-                        from: to,
-                        what: key.to_string(),
-                        timeout,
-                    }));
-                    return;
-                }
+                };
                 let waiter = self.next_waiter;
                 self.next_waiter += 1;
                 let pending = Pending {
@@ -560,17 +571,12 @@ impl Driver {
                 timeout,
                 reply,
             } => {
-                if reply.is_closed() {
+                let Some(reply) = self.live(reply, deadline, now, || SendError::Timeout {
+                    frame_id: 0,
+                    timeout,
+                }) else {
                     return;
-                }
-                if deadline <= now {
-                    bump(&self.counters.timeouts);
-                    let _ = reply.send(Err(SendError::Timeout {
-                        frame_id: 0,
-                        timeout,
-                    }));
-                    return;
-                }
+                };
                 let pending = Pending {
                     deadline,
                     timeout,
