@@ -467,16 +467,30 @@ impl<const N: usize> Decoder<N> {
     /// but the buffer's content, if the frame is not whole in `body` or has anything
     /// but a bad checksum wrong: [`step2`](Self::step2) then reads it byte by byte.
     fn whole2(&mut self, body: &[u8]) -> Option<(usize, Outcome)> {
-        let mut i = 0;
-        let hi = unescape_byte(body, &mut i)?;
-        let lo = unescape_byte(body, &mut i)?;
-        let len = usize::from(u16::from_be_bytes([hi, lo]));
+        // The length bytes, usually both plain: one test for the two.
+        let (len, mut i) = match body.first_chunk::<2>() {
+            Some(&[hi, lo]) if is_plain(hi) && is_plain(lo) => {
+                (usize::from(u16::from_be_bytes([hi, lo])), 2)
+            }
+            _ => {
+                let mut i = 0;
+                let hi = unescape_byte(body, &mut i)?;
+                let lo = unescape_byte(body, &mut i)?;
+                (usize::from(u16::from_be_bytes([hi, lo])), i)
+            }
+        };
         let rest = body.get(i..)?;
         if len == 0 || len > self.capacity() || rest.len() <= len {
             return None;
         }
         i += unescape(rest, &mut self.buf, len)?;
-        let got = unescape_byte(body, &mut i)?;
+        let got = match body.get(i) {
+            Some(&raw) if is_plain(raw) => {
+                i += 1;
+                raw
+            }
+            _ => unescape_byte(body, &mut i)?,
+        };
         self.len = len;
         self.end = len;
         self.hunt();
