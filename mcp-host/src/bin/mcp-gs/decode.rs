@@ -33,13 +33,29 @@ pub(crate) struct DecodeArgs {
     summary: bool,
 }
 
-/// Counts for `--summary`.
-#[derive(Debug, Default)]
+/// Counts for `--summary`, in arrays indexed by byte so counting costs no lookup.
+#[derive(Debug)]
 struct Summary {
     frames: u64,
-    frame_types: std::collections::BTreeMap<u8, u64>,
-    categories: std::collections::BTreeMap<&'static str, u64>,
+    /// Frames by frame type byte.
+    frame_types: [u64; 256],
+    /// Valid MCP packets by category byte.
+    categories: [u64; 256],
+    /// MCP payloads that failed to parse.
+    invalid_packets: u64,
     invalid_frames: u64,
+}
+
+impl Default for Summary {
+    fn default() -> Self {
+        Self {
+            frames: 0,
+            frame_types: [0; 256],
+            categories: [0; 256],
+            invalid_packets: 0,
+            invalid_frames: 0,
+        }
+    }
 }
 
 /// Runs `decode`.
@@ -95,7 +111,7 @@ impl<W: Write> Printer<'_, W> {
         let parsed = Frame::parse_bytes(data);
         if let Some(summary) = &mut self.summary {
             summary.frames += 1;
-            *summary.frame_types.entry(data[0]).or_default() += 1;
+            summary.frame_types[usize::from(data[0])] += 1;
             match parsed {
                 Ok(Frame::ReceivePacket(rx)) => summary.count_mcp(rx.data),
                 Ok(Frame::TransmitRequest(tx)) => summary.count_mcp(tx.data),
@@ -157,11 +173,34 @@ impl<W: Write> Printer<'_, W> {
 
 impl Summary {
     fn count_mcp(&mut self, payload: &[u8]) {
-        let name = match mcp_core::parse(payload) {
-            Ok(packet) => packet.category().name().unwrap_or("unknown"),
-            Err(_) => "invalid",
-        };
-        *self.categories.entry(name).or_default() += 1;
+        match mcp_core::parse(payload) {
+            Ok(packet) => self.categories[usize::from(u8::from(packet.category()))] += 1,
+            Err(_) => self.invalid_packets += 1,
+        }
+    }
+
+    /// Frame types seen, with their counts, in ascending order.
+    fn frame_types(&self) -> impl Iterator<Item = (u8, u64)> + '_ {
+        (0..=255u8)
+            .map(|t| (t, self.frame_types[usize::from(t)]))
+            .filter(|&(_, n)| n > 0)
+    }
+
+    /// MCP packet counts by category name, `invalid` last, in name order.
+    fn categories(&self) -> std::collections::BTreeMap<String, u64> {
+        let mut map: std::collections::BTreeMap<String, u64> = (0..=255u8)
+            .filter(|&c| self.categories[usize::from(c)] > 0)
+            .map(|c| {
+                (
+                    mcp_core::Category::from(c).to_string(),
+                    self.categories[usize::from(c)],
+                )
+            })
+            .collect();
+        if self.invalid_packets > 0 {
+            map.insert("invalid".into(), self.invalid_packets);
+        }
+        map
     }
 }
 
@@ -246,15 +285,14 @@ fn print_summary(
     match format {
         Format::Json => {
             let types: serde_json::Map<String, serde_json::Value> = summary
-                .frame_types
-                .iter()
-                .map(|(t, n)| (format!("0x{t:02x}"), (*n).into()))
+                .frame_types()
+                .map(|(t, n)| (format!("0x{t:02x}"), n.into()))
                 .collect();
             let value = serde_json::json!({
                 "bytes": bytes,
                 "frames": summary.frames,
                 "frame_types": types,
-                "mcp": summary.categories,
+                "mcp": summary.categories(),
                 "errors": errors,
             });
             writeln!(out, "{value}")
@@ -262,11 +300,11 @@ fn print_summary(
         Format::Text => {
             writeln!(out, "bytes: {bytes}")?;
             writeln!(out, "frames: {}", summary.frames)?;
-            for (t, n) in &summary.frame_types {
+            for (t, n) in summary.frame_types() {
                 writeln!(out, "  type 0x{t:02x}: {n}")?;
             }
             writeln!(out, "mcp packets:")?;
-            for (c, n) in &summary.categories {
+            for (c, n) in summary.categories() {
                 writeln!(out, "  {c}: {n}")?;
             }
             writeln!(out, "errors:")?;
