@@ -1,39 +1,21 @@
 #!/usr/bin/env bash
-# Instructions per byte of the slice decoder (`Decoder::decode`) and the byte-at-a-time
-# decoder (`Decoder::push`) in API modes 2 and 1, counted by valgrind's callgrind on the
-# benchmark stream (Receive Packets carrying MCP telemetry; 1 MiB unless given), only
-# inside the decoding loops of `examples/decode_stream.rs`.
+# The Cortex-M4 code of xbee-api's byte-at-a-time decoder (`Decoder::push`) as a UART
+# receive interrupt handler would call it: builds a tiny static library for
+# thumbv7em-none-eabihf and disassembles its handler. Needs that rustup target and an
+# ARM objdump (arm-none-eabi-objdump or llvm-objdump). Instructions per byte on the
+# host are counted by callgrind.sh beside this script.
 #
-# Then, if the thumbv7em-none-eabihf target and an ARM objdump are installed, the
-# Cortex-M4 code of `push` as a UART receive interrupt handler would call it.
-#
-# Usage: xbee-api/benches/callgrind.sh [bytes]
+# Usage: perf/push-thumbv7em.sh
 set -euo pipefail
 
-crate=$(cd "$(dirname "$0")/.." && pwd)
-bytes=${1:-1048576}
-target=${CARGO_TARGET_DIR:-$crate/../target}
+crate=$(cd "$(dirname "$0")/../xbee-api" && pwd)
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
-cargo build --quiet --release -p xbee-api --example decode_stream \
-    --manifest-path "$crate/Cargo.toml"
-bin=$target/release/examples/decode_stream
-for path in slice push; do
-    for mode in 2 1; do
-        valgrind --tool=callgrind --callgrind-out-file="$work/callgrind.out" \
-            --toggle-collect="*run_$path*" "$bin" "$path" "$mode" "$bytes" 1 \
-            >"$work/stdout" 2>"$work/stderr"
-        ir=$(sed -n 's/.*Collected : \([0-9]*\).*/\1/p' "$work/stderr")
-        n=$(sed -n 's/.*: \([0-9]*\) bytes,.*/\1/p' "$work/stdout")
-        awk -v p="$path" -v m="$mode" -v ir="$ir" -v n="$n" \
-            'BEGIN { printf "%-5s mode %s: %10d instructions, %8d bytes, %5.2f per byte\n", p, m, ir, n, ir / n }'
-    done
-done
-
 objdump=$(command -v arm-none-eabi-objdump || command -v llvm-objdump || true)
 if [ -z "$objdump" ] || ! rustup target list --installed 2>/dev/null | grep -q thumbv7em-none-eabihf; then
-    exit 0
+    echo "push-thumbv7em.sh: needs the thumbv7em-none-eabihf target and an ARM objdump" >&2
+    exit 1
 fi
 mkdir -p "$work/isr/src"
 cat >"$work/isr/Cargo.toml" <<TOML
@@ -76,7 +58,6 @@ RS
 cp "$crate/../Cargo.lock" "$work/isr/" 2>/dev/null || true
 CARGO_TARGET_DIR="$work/isr/target" cargo build --quiet --offline --release \
     --target thumbv7em-none-eabihf --manifest-path "$work/isr/Cargo.toml"
-echo
 echo "thumbv7em: push in a UART interrupt handler (Decoder<512>, mode 1 or 2)"
 "$objdump" -d --no-show-raw-insn "$work/isr/target/thumbv7em-none-eabihf/release/libisr.a" |
     awk '/<uart_rx>:/,/^$/'
