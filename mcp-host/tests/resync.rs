@@ -5,7 +5,7 @@ mod common;
 
 use common::*;
 use mcp_core::{Packet, TelemetryBuilder, TelemetryId};
-use mcp_host::{Event, Link, LinkEvent, LinkOptions};
+use mcp_host::Event;
 use xbee_api::{ApiMode, DecodeError};
 
 fn telemetry(k: u32) -> Vec<u8> {
@@ -39,16 +39,7 @@ fn garbage(seed: u32, len: usize) -> Vec<u8> {
 }
 
 async fn survives(mode: ApiMode) {
-    let options = LinkOptions {
-        api_mode: mode,
-        ..LinkOptions::default()
-    };
-    let (mut stream, _sender) = mcp_host::connect(&Link::Pty, options).await.unwrap();
-    let mut fake = FakeXBee::open_pty(stream.info().pty_path.as_ref().unwrap(), mode);
-    assert!(matches!(
-        next_link_event(&mut stream).await,
-        LinkEvent::Connected { .. }
-    ));
+    let (mut stream, _sender, mut fake) = pty_link(mode).await;
 
     const N: u32 = 40;
     let mut bytes = Vec::new();

@@ -11,31 +11,8 @@ use mcp_core::{
     Address, Command, Controller, LandingState, Packet, Report, SlaveAddresses, Slot,
     StatusRequest, TelemetryBuilder, TelemetryId, TrajectoryBuilder, Waypoint,
 };
-use mcp_host::{
-    CommandSender, DeliveryReport, Event, FrameId, Link, LinkOptions, PacketStream, RequestError,
-    SendError, SendOptions,
-};
+use mcp_host::{DeliveryReport, Event, FrameId, LinkOptions, RequestError, SendError, SendOptions};
 use xbee_api::{Address16, Address64, ApiMode, DeliveryStatus};
-
-async fn pty_link(mode: ApiMode) -> (PacketStream, CommandSender, FakeXBee) {
-    pty_link_with(LinkOptions {
-        api_mode: mode,
-        ..LinkOptions::default()
-    })
-    .await
-}
-
-async fn pty_link_with(options: LinkOptions) -> (PacketStream, CommandSender, FakeXBee) {
-    let mode = options.api_mode;
-    let (mut stream, sender) = mcp_host::connect(&Link::Pty, options).await.unwrap();
-    let path = stream.info().pty_path.clone().unwrap();
-    let fake = FakeXBee::open_pty(&path, mode);
-    assert!(matches!(
-        next_link_event(&mut stream).await,
-        mcp_host::LinkEvent::Connected { .. }
-    ));
-    (stream, sender, fake)
-}
 
 fn trajectory_bytes(report: bool, n: u32) -> Vec<u8> {
     let mut buf = [0u8; mcp_core::MAX_PAYLOAD];

@@ -4,7 +4,7 @@
 mod common;
 
 use common::*;
-use mcp_host::{Event, Link, LinkEvent, LinkOptions};
+use mcp_host::Event;
 use xbee_api::ApiMode;
 
 fn expected(name: &str) -> Vec<serde_json::Value> {
@@ -27,16 +27,7 @@ fn frame_kind(frame_type: u8) -> &'static str {
 }
 
 async fn replay(mode: ApiMode, bin: &str, jsonl: &str) {
-    let options = LinkOptions {
-        api_mode: mode,
-        ..LinkOptions::default()
-    };
-    let (mut stream, _sender) = mcp_host::connect(&Link::Pty, options).await.unwrap();
-    let mut fake = FakeXBee::open_pty(stream.info().pty_path.as_ref().unwrap(), mode);
-    assert!(matches!(
-        next_link_event(&mut stream).await,
-        LinkEvent::Connected { .. }
-    ));
+    let (mut stream, _sender, mut fake) = pty_link(mode).await;
     let bytes = std::fs::read(format!("{}/../testdata/{bin}", env!("CARGO_MANIFEST_DIR"))).unwrap();
     fake.write_raw(&bytes).await;
 

@@ -191,3 +191,30 @@ pub async fn next_packet(stream: &mut PacketStream) -> mcp_host::Received {
         }
     }
 }
+
+/// Connects a ground station to a fresh pseudo-terminal in `mode`, opens a fake radio
+/// on its far end and waits for the link to come up.
+pub async fn pty_link(mode: ApiMode) -> (PacketStream, mcp_host::CommandSender, FakeXBee) {
+    pty_link_with(mcp_host::LinkOptions {
+        api_mode: mode,
+        ..mcp_host::LinkOptions::default()
+    })
+    .await
+}
+
+/// The same with any link options.
+pub async fn pty_link_with(
+    options: mcp_host::LinkOptions,
+) -> (PacketStream, mcp_host::CommandSender, FakeXBee) {
+    let mode = options.api_mode;
+    let (mut stream, sender) = mcp_host::connect(&mcp_host::Link::Pty, options)
+        .await
+        .unwrap();
+    let path = stream.info().pty_path.clone().unwrap();
+    let fake = FakeXBee::open_pty(&path, mode);
+    assert!(matches!(
+        next_link_event(&mut stream).await,
+        LinkEvent::Connected { .. }
+    ));
+    (stream, sender, fake)
+}
