@@ -2,13 +2,13 @@
 //! `callgrind.sh`, which collects inside the `run_*` functions only) and quick timings.
 //!
 //! `cargo run --release -p perf --example receive -- <case> [bytes] [runs]`, where case
-//! is `slice2`, `slice1`, `push2`, `push1`, `pipeline2`, `pipeline1`, `pipeline_push2`
+//! is `slice2`, `slice1`, `calls2`, `calls1` (one `decode` call a frame), `push2`, `push1`, `pipeline2`, `pipeline1`, `pipeline_push2`
 //! or `mavlink` (a MAVLink stream carrying as many values as the mode 2 stream).
 
 use std::hint::black_box;
 use std::time::Instant;
 
-use perf::run::{run_pipeline, run_pipeline_push, run_push, run_slice};
+use perf::run::{run_pipeline, run_pipeline_push, run_push, run_slice, run_slice_calls};
 use perf::{Totals, mavlink_stream, mcp_stream};
 use xbee_api::ApiMode;
 
@@ -33,6 +33,7 @@ fn main() {
     };
     let run: fn(&[u8], ApiMode) -> Totals = match case.as_str() {
         "slice2" | "slice1" => run_slice,
+        "calls2" | "calls1" => run_slice_calls,
         "push2" | "push1" => run_push,
         "pipeline2" | "pipeline1" => run_pipeline,
         "pipeline_push2" => run_pipeline_push,

@@ -11,13 +11,34 @@ use crate::Totals;
 /// Frame type of a Receive Packet.
 const RECEIVE_PACKET: u8 = 0x90;
 
-/// The XBee slice decoder alone ([`Decoder::decode`]): frames and frame data bytes.
+/// The XBee slice decoder alone ([`Decoder::decode_each`] over the whole stream):
+/// frames and frame data bytes.
 ///
 /// # Panics
 ///
 /// On a decode error: the streams hold none.
 #[inline(never)]
 pub fn run_slice(stream: &[u8], mode: ApiMode) -> Totals {
+    let mut decoder: Decoder = Decoder::new(mode);
+    let mut totals = Totals::default();
+    decoder.decode_each(stream, |event| match event {
+        Ok(frame) => {
+            totals.frames += 1;
+            totals.data_bytes += frame.len();
+        }
+        Err(error) => panic!("{error}"),
+    });
+    finish(&mut decoder);
+    totals
+}
+
+/// [`run_slice`] with one [`Decoder::decode`] call per frame, as a tokio codec does.
+///
+/// # Panics
+///
+/// On a decode error: the streams hold none.
+#[inline(never)]
+pub fn run_slice_calls(stream: &[u8], mode: ApiMode) -> Totals {
     let mut decoder: Decoder = Decoder::new(mode);
     let mut input = stream;
     let mut totals = Totals::default();
@@ -32,6 +53,13 @@ pub fn run_slice(stream: &[u8], mode: ApiMode) -> Totals {
             Some(Err(error)) => panic!("{error}"),
             None => return totals,
         }
+    }
+}
+
+/// Ends a stream that holds no partial frame.
+fn finish(decoder: &mut Decoder) {
+    if let Some(event) = decoder.finish() {
+        panic!("stream ends inside a frame: {event:?}");
     }
 }
 
@@ -78,8 +106,9 @@ fn telemetry(data: &[u8], totals: &mut Totals) {
     }
 }
 
-/// The whole receive path with the slice decoder: XBee frames, Receive Packet views,
-/// MCP packets, and every telemetry record's `f32` value, summed.
+/// The whole receive path with the slice decoder ([`Decoder::decode_each`]): XBee
+/// frames, Receive Packet views, MCP packets, and every telemetry record's `f32` value,
+/// summed.
 ///
 /// # Panics
 ///
@@ -87,17 +116,13 @@ fn telemetry(data: &[u8], totals: &mut Totals) {
 #[inline(never)]
 pub fn run_pipeline(stream: &[u8], mode: ApiMode) -> Totals {
     let mut decoder: Decoder = Decoder::new(mode);
-    let mut input = stream;
     let mut totals = Totals::default();
-    loop {
-        let (consumed, event) = decoder.decode(input);
-        input = input.get(consumed..).unwrap_or_default();
-        match event {
-            Some(Ok(frame)) => telemetry(frame.data(), &mut totals),
-            Some(Err(error)) => panic!("{error}"),
-            None => return totals,
-        }
-    }
+    decoder.decode_each(stream, |event| match event {
+        Ok(frame) => telemetry(frame.data(), &mut totals),
+        Err(error) => panic!("{error}"),
+    });
+    finish(&mut decoder);
+    totals
 }
 
 /// [`run_pipeline`] with the byte-at-a-time decoder.

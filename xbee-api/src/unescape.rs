@@ -1,19 +1,9 @@
-//! API mode 2 unescaping of bytes that lie whole in one slice, a word of 8 bytes a step.
+//! API mode 2 unescaping of bytes that lie whole in one slice, 16 bytes a step.
 
 use crate::wire::{ESCAPE, ESCAPE_XOR, START_DELIMITER, needs_escape};
 
 const ONES: u64 = 0x0101_0101_0101_0101;
 const HIGHS: u64 = 0x8080_8080_8080_8080;
-
-/// Bit 7 set in each byte of `word` (little-endian) that is 0x7C..=0x7F, so that may be
-/// an escape or a start delimiter. The lowest flag is exact; a flag above a flagged byte
-/// may be spurious, which does not matter as only the lowest one is used.
-#[inline]
-fn flags(word: u64) -> u64 {
-    // Bytes 0x7C..=0x7F become 0..=3; those below 4 borrow into their bit 7.
-    let x = word ^ (0x7C * ONES);
-    x.wrapping_sub(4 * ONES) & !x & HIGHS
-}
 
 /// Whether a raw mode 2 byte stands for itself after a start delimiter.
 #[inline]
@@ -47,47 +37,81 @@ pub(crate) fn unescape_byte(src: &[u8], i: &mut usize) -> Option<u8> {
 /// Unescapes `len` bytes from the start of `src` into `dst[..len]`; returns how many
 /// bytes of `src` they took.
 ///
-/// Goes a word of 8 bytes a step, storing whole words even when fewer of their bytes
-/// count, so `dst[len..]` is scratch space that may be written to (a `dst` without room
-/// past `len` only makes the last bytes slower). `None` as for [`unescape_byte`], and
-/// `dst` may have been written to.
+/// Goes 16 bytes a step (a SIMD compare where the target has one), storing whole steps
+/// even when fewer of their bytes count, so `dst[len..]` is scratch space that may be
+/// written to (a `dst` without room past `len` only makes the last bytes slower). `None`
+/// as for [`unescape_byte`], and `dst` may have been written to.
 #[inline]
 pub(crate) fn unescape(src: &[u8], dst: &mut [u8], len: usize) -> Option<usize> {
     let mut i = 0;
     let mut o = 0;
     while o < len {
-        let n = copy_plain(src.get(i..)?, dst.get_mut(o..)?, len - o);
-        i += n;
-        o += n;
+        let step = src.get(i..).and_then(<[u8]>::first_chunk::<16>);
+        let out = dst.get_mut(o..).and_then(<[u8]>::first_chunk_mut::<16>);
+        let (Some(step), Some(out)) = (step, out) else {
+            // One of the last bytes, without room for a step.
+            *dst.get_mut(o)? = unescape_byte(src, &mut i)?;
+            o += 1;
+            continue;
+        };
+        *out = *step;
+        if !any_special(step) {
+            i += 16;
+            o += 16;
+            continue;
+        }
+        let plain = first_special(step);
+        i += plain;
+        o += plain;
         if o >= len {
-            // The last word held bytes beyond the frame data.
-            return Some(i - (o - len));
-        }
-        // A flagged byte, or one of the last bytes without room for a word.
-        *dst.get_mut(o)? = unescape_byte(src, &mut i)?;
-        o += 1;
-    }
-    Some(i)
-}
-
-/// Copies words of 8 bytes from `src` to `dst` until one holds a flagged byte or at
-/// least `len` bytes are copied; how many bytes come before the flagged one, or were
-/// copied (possibly more than `len`).
-#[inline]
-fn copy_plain(src: &[u8], dst: &mut [u8], len: usize) -> usize {
-    let mut n = 0;
-    for (s, d) in src.chunks_exact(8).zip(dst.chunks_exact_mut(8)) {
-        d.copy_from_slice(s);
-        let flags = s.try_into().map_or(HIGHS, |w| flags(u64::from_le_bytes(w)));
-        if flags != 0 {
-            return n + (flags.trailing_zeros() / 8) as usize;
-        }
-        n += 8;
-        if n >= len {
             break;
         }
+        // An escape (or a delimiter, which ends the fast path).
+        *dst.get_mut(o)? = unescape_pair(src, i)?;
+        i += 2;
+        o += 1;
     }
-    n
+    // The last step may have copied plain bytes beyond the frame data.
+    Some(i - (o - len))
+}
+
+/// The byte that the escape at `src[i]` stands for; `None` if `src[i]` is not an escape
+/// (a delimiter), the escape is cut off, or it does not escape a special byte.
+#[inline(always)]
+fn unescape_pair(src: &[u8], i: usize) -> Option<u8> {
+    match src.get(i..)?.first_chunk::<2>()? {
+        &[ESCAPE, raw] if needs_escape(raw ^ ESCAPE_XOR) => Some(raw ^ ESCAPE_XOR),
+        _ => None,
+    }
+}
+
+/// Whether any of 16 raw bytes is 0x7D or 0x7E: written so that compilers make it two
+/// SIMD compares and a mask test.
+#[inline(always)]
+fn any_special(step: &[u8; 16]) -> bool {
+    step.iter().fold(false, |any, &raw| {
+        any | (raw == ESCAPE) | (raw == START_DELIMITER)
+    })
+}
+
+/// Index of the first 0x7D or 0x7E in `step` (16 if none), a word of 8 bytes at a time.
+#[inline(always)]
+fn first_special(step: &[u8; 16]) -> usize {
+    let (lo, hi) = step.split_at(8);
+    let word = |half: &[u8]| half.try_into().map_or(0, u64::from_le_bytes);
+    match special_flags(word(lo)) {
+        0 => 8 + (special_flags(word(hi)).trailing_zeros() / 8) as usize,
+        flags => (flags.trailing_zeros() / 8) as usize,
+    }
+}
+
+/// Bit 7 set in the lowest byte of `word` (little-endian) that is 0x7D or 0x7E, and
+/// maybe in bytes above it, never below: only the lowest flag is exact.
+#[inline(always)]
+fn special_flags(word: u64) -> u64 {
+    let zero_byte = |x: u64| x.wrapping_sub(ONES) & !x & HIGHS;
+    zero_byte(word ^ (u64::from(ESCAPE) * ONES))
+        | zero_byte(word ^ (u64::from(START_DELIMITER) * ONES))
 }
 
 #[cfg(test)]
@@ -95,22 +119,23 @@ mod tests {
     use super::*;
 
     #[test]
-    fn flags_mark_the_first_special_byte_exactly() {
-        for special in 0x7C..=0x7F_u8 {
-            for at in 0..8 {
+    fn first_special_is_exact() {
+        for special in [ESCAPE, START_DELIMITER] {
+            for at in 0..16 {
                 for filler in [0x00, 0x7C, 0x7D, 0x7E, 0x7F, 0xFF, 0x5E] {
-                    let mut bytes = [0x41u8; 8];
-                    bytes[at] = special;
-                    for b in &mut bytes[at + 1..] {
+                    let mut step = [0x41u8; 16];
+                    step[at] = special;
+                    for b in &mut step[at + 1..] {
                         *b = filler;
                     }
-                    let f = flags(u64::from_le_bytes(bytes));
-                    assert_eq!(f.trailing_zeros() / 8, at as u32, "{bytes:02X?}");
+                    assert!(any_special(&step));
+                    assert_eq!(first_special(&step), at, "{step:02X?}");
                 }
             }
         }
-        for b in (0..=255u8).filter(|b| !(0x7C..=0x7F).contains(b)) {
-            assert_eq!(flags(u64::from_le_bytes([b; 8])), 0, "{b:02X}");
+        for b in (0..=255u8).filter(|&b| b != ESCAPE && b != START_DELIMITER) {
+            assert!(!any_special(&[b; 16]), "{b:02X}");
+            assert_eq!(first_special(&[b; 16]), 16, "{b:02X}");
         }
     }
 

@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{decode_bytes, decode_slices, frames};
+use common::{decode_bytes, decode_each_slices, decode_slices, frames};
 use proptest::prelude::*;
 use xbee_api::wire::{checksum, needs_escape};
 use xbee_api::{ApiMode, EncodeFrame, Frame, RawFrame};
@@ -217,8 +217,12 @@ proptest! {
         for data in frames(&events) {
             let _ = Frame::parse_bytes(&data);
         }
-        let (bytes_events, _) = decode_bytes::<64>(mode, &stream);
-        prop_assert_eq!(events, bytes_events);
+        let (bytes_events, bytes_stats) = decode_bytes::<64>(mode, &stream);
+        let (each_events, each_stats) = decode_each_slices::<64>(mode, &stream, &reads);
+        prop_assert_eq!(&events, &bytes_events);
+        prop_assert_eq!(&each_events, &bytes_events);
+        prop_assert_eq!(stats, bytes_stats);
+        prop_assert_eq!(each_stats, bytes_stats);
     }
 }
 
@@ -280,6 +284,12 @@ proptest! {
         prop_assert_eq!(&whole, &bytes);
         prop_assert_eq!(stats, bytes_stats);
         prop_assert_eq!(whole_stats, bytes_stats);
+        let (each, each_stats) = decode_each_slices::<N>(mode, &stream, &reads);
+        let (each_whole, each_whole_stats) = decode_each_slices::<N>(mode, &stream, &[1 << 20]);
+        prop_assert_eq!(&each, &bytes);
+        prop_assert_eq!(&each_whole, &bytes);
+        prop_assert_eq!(each_stats, bytes_stats);
+        prop_assert_eq!(each_whole_stats, bytes_stats);
     }
 
     /// Frames as long as the buffer (no room past the data in mode 2) and garbage around
@@ -303,7 +313,10 @@ proptest! {
         }
         let (whole, whole_stats) = decode_slices::<64>(mode, &stream, &[1 << 20]);
         let (bytes, bytes_stats) = decode_bytes::<64>(mode, &stream);
-        prop_assert_eq!(whole, bytes);
+        let (each, each_stats) = decode_each_slices::<64>(mode, &stream, &[1 << 20]);
+        prop_assert_eq!(&whole, &bytes);
         prop_assert_eq!(whole_stats, bytes_stats);
+        prop_assert_eq!(&each, &bytes);
+        prop_assert_eq!(each_stats, bytes_stats);
     }
 }

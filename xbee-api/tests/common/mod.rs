@@ -58,6 +58,39 @@ pub(crate) fn decode_slices<const N: usize>(
     (out, *decoder.stats())
 }
 
+/// Decodes `stream` with [`Decoder::decode_each`], fed in reads of the given sizes
+/// (cycled), then finishes.
+pub(crate) fn decode_each_slices<const N: usize>(
+    mode: ApiMode,
+    stream: &[u8],
+    reads: &[usize],
+) -> (Vec<Owned>, Stats) {
+    let mut decoder: Decoder<N> = Decoder::new(mode);
+    let mut out = Vec::new();
+    let to_owned = |event: Result<xbee_api::RawFrame<'_>, DecodeError>| match event {
+        Ok(frame) => Owned::Frame(frame.data().to_vec()),
+        Err(e) => Owned::Error(e),
+    };
+    let mut offset = 0;
+    let mut r = 0;
+    while offset < stream.len() {
+        let size = reads
+            .get(r % reads.len().max(1))
+            .copied()
+            .unwrap_or(1)
+            .max(1);
+        r += 1;
+        let input = &stream[offset..(offset + size).min(stream.len())];
+        offset += input.len();
+        decoder.decode_each(input, |event| out.push(to_owned(event)));
+    }
+    while let Some(event) = decoder.finish() {
+        out.push(to_owned(event));
+    }
+    assert!(decoder.is_idle());
+    (out, *decoder.stats())
+}
+
 /// Decodes `stream` one byte at a time with `push`/`poll`, then finishes.
 pub(crate) fn decode_bytes<const N: usize>(mode: ApiMode, stream: &[u8]) -> (Vec<Owned>, Stats) {
     let mut decoder: Decoder<N> = Decoder::new(mode);
