@@ -141,6 +141,16 @@ pub struct Decoder<const N: usize = DEFAULT_CAPACITY> {
     stats: Stats,
 }
 
+/// The length field at the start of `body` when it holds an escape: its value and how
+/// many bytes of `body` it takes; `None` if it is cut off or badly escaped.
+#[inline(never)]
+fn escaped_length(body: &[u8]) -> Option<(usize, usize)> {
+    let mut i = 0;
+    let hi = unescape_byte(body, &mut i)?;
+    let lo = unescape_byte(body, &mut i)?;
+    Some((usize::from(u16::from_be_bytes([hi, lo])), i))
+}
+
 impl<const N: usize> Decoder<N> {
     /// A decoder for `mode`, hunting for a start delimiter.
     ///
@@ -525,36 +535,32 @@ impl<const N: usize> Decoder<N> {
     /// how many bytes of `body` it took and the outcome. `None`, with nothing changed
     /// but the buffer's content, if the frame is not whole in `body` or has anything
     /// but a bad checksum wrong: [`step2`](Self::step2) then reads it byte by byte.
+    #[inline(always)]
     fn whole2(&mut self, body: &[u8]) -> Option<(usize, Outcome)> {
         // The length bytes, usually both plain: one test for the two.
-        let (len, mut i) = match body.first_chunk::<2>() {
+        let (len, header) = match body.first_chunk::<2>() {
             Some(&[hi, lo]) if is_plain(hi) && is_plain(lo) => {
                 (usize::from(u16::from_be_bytes([hi, lo])), 2)
             }
-            _ => {
-                let mut i = 0;
-                let hi = unescape_byte(body, &mut i)?;
-                let lo = unescape_byte(body, &mut i)?;
-                (usize::from(u16::from_be_bytes([hi, lo])), i)
-            }
+            _ => escaped_length(body)?,
         };
-        let rest = body.get(i..)?;
+        let rest = body.get(header..)?;
         if len == 0 || len > self.capacity() || rest.len() <= len {
             return None;
         }
-        i += unescape(rest, &mut self.buf, len)?;
-        let got = match body.get(i) {
+        let (mut i, sum) = unescape(rest, &mut self.buf, len)?;
+        let got = match rest.get(i) {
             Some(&raw) if is_plain(raw) => {
                 i += 1;
                 raw
             }
-            _ => unescape_byte(body, &mut i)?,
+            _ => unescape_byte(rest, &mut i)?,
         };
         self.len = len;
         self.end = len;
         self.hunt();
-        let outcome = self.check(0, got).map_err(|e| self.record(e));
-        Some((i, outcome))
+        let outcome = self.check_sum(sum, 0, got).map_err(|e| self.record(e));
+        Some((header + i, outcome))
     }
 
     fn decode2(&mut self, input: &[u8]) -> (usize, Option<Outcome>) {

@@ -1,9 +1,8 @@
 //! API mode 2 unescaping of bytes that lie whole in one slice, 16 bytes a step.
 
-use crate::wire::{ESCAPE, ESCAPE_XOR, START_DELIMITER, needs_escape};
+use wide::{CmpEq, u8x16};
 
-const ONES: u64 = 0x0101_0101_0101_0101;
-const HIGHS: u64 = 0x8080_8080_8080_8080;
+use crate::wire::{ESCAPE, ESCAPE_XOR, START_DELIMITER, needs_escape, sum};
 
 /// Whether a raw mode 2 byte stands for itself after a start delimiter.
 #[inline]
@@ -35,44 +34,97 @@ pub(crate) fn unescape_byte(src: &[u8], i: &mut usize) -> Option<u8> {
 }
 
 /// Unescapes `len` bytes from the start of `src` into `dst[..len]`; returns how many
-/// bytes of `src` they took.
+/// bytes of `src` they took and their sum (the running part of the checksum).
 ///
-/// Goes 16 bytes a step (a SIMD compare where the target has one), storing whole steps
-/// even when fewer of their bytes count, so `dst[len..]` is scratch space that may be
-/// written to (a `dst` without room past `len` only makes the last bytes slower). `None`
-/// as for [`unescape_byte`], and `dst` may have been written to.
-#[inline]
-pub(crate) fn unescape(src: &[u8], dst: &mut [u8], len: usize) -> Option<usize> {
-    let mut i = 0;
+/// Goes 16 bytes a step (SIMD compares, store and sum where the target has them),
+/// storing whole steps even when fewer of their bytes count, so it needs 16 bytes of
+/// scratch space past `len` in `dst` (without them, or near the end of `src`, it goes a
+/// byte at a time). `None` as for [`unescape_byte`], and `dst` may have been written to.
+#[inline(always)]
+pub(crate) fn unescape(src: &[u8], dst: &mut [u8], len: usize) -> Option<(usize, u8)> {
+    let Some(dst) = dst.get_mut(..len + 16) else {
+        return unescape_bytes(src, 0, dst, 0, len);
+    };
+    let mut rest = src;
     let mut o = 0;
+    // The sum of the plain bytes in 16 lanes, and of the escaped ones.
+    let mut lanes = u8x16::ZERO;
+    let mut escaped = 0u8;
     while o < len {
-        let step = src.get(i..).and_then(<[u8]>::first_chunk::<16>);
-        let out = dst.get_mut(o..).and_then(<[u8]>::first_chunk_mut::<16>);
-        let (Some(step), Some(out)) = (step, out) else {
-            // One of the last bytes, without room for a step.
-            *dst.get_mut(o)? = unescape_byte(src, &mut i)?;
-            o += 1;
-            continue;
+        let Some((step, _)) = rest.split_first_chunk::<16>() else {
+            return unescape_bytes(src, src.len() - rest.len(), dst, o, len);
         };
-        *out = *step;
-        if !any_special(step) {
-            i += 16;
+        let bytes = u8x16::new(*step);
+        let specials = special_mask(bytes);
+        if let Some(out) = dst.get_mut(o..o + 16) {
+            out.copy_from_slice(&bytes.to_array());
+        }
+        let room = len - o;
+        if specials == 0 && room > 16 {
+            lanes += bytes;
+            rest = rest.get(16..).unwrap_or_default();
             o += 16;
             continue;
         }
-        let plain = first_special(step);
-        i += plain;
+        // Plain bytes before the first special one, or up to the end of the frame data.
+        let plain = (specials.trailing_zeros() as usize).min(16).min(room);
+        lanes += bytes & first_lanes(plain);
         o += plain;
         if o >= len {
+            rest = rest.get(plain..).unwrap_or_default();
             break;
         }
         // An escape (or a delimiter, which ends the fast path).
-        *dst.get_mut(o)? = unescape_pair(src, i)?;
-        i += 2;
+        let byte = unescape_pair(rest, plain)?;
+        if let Some(slot) = dst.get_mut(o) {
+            *slot = byte;
+        }
+        escaped = escaped.wrapping_add(byte);
+        rest = rest.get(plain + 2..).unwrap_or_default();
         o += 1;
     }
-    // The last step may have copied plain bytes beyond the frame data.
-    Some(i - (o - len))
+    let sum = lanes
+        .to_array()
+        .iter()
+        .fold(escaped, |acc, b| acc.wrapping_add(*b));
+    Some((src.len() - rest.len(), sum))
+}
+
+/// Lane masks: the 16 bytes from `FIRST_LANES[16 - k]` keep the first `k` lanes.
+const FIRST_LANES: [u8; 32] = {
+    let mut mask = [0u8; 32];
+    let mut i = 0;
+    while i < 16 {
+        mask[i] = 0xFF;
+        i += 1;
+    }
+    mask
+};
+
+/// A mask keeping the first `k` (at most 16) of 16 lanes.
+#[inline(always)]
+fn first_lanes(k: usize) -> u8x16 {
+    let window = FIRST_LANES
+        .get(16 - k.min(16)..)
+        .and_then(<[u8]>::first_chunk::<16>);
+    u8x16::new(window.copied().unwrap_or([0; 16]))
+}
+
+/// [`unescape`] a byte at a time, from `src[i..]` into `dst[o..len]`.
+#[inline(never)]
+#[cold]
+fn unescape_bytes(
+    src: &[u8],
+    mut i: usize,
+    dst: &mut [u8],
+    mut o: usize,
+    len: usize,
+) -> Option<(usize, u8)> {
+    while o < len {
+        *dst.get_mut(o)? = unescape_byte(src, &mut i)?;
+        o += 1;
+    }
+    Some((i, sum(dst.get(..len)?)))
 }
 
 /// The byte that the escape at `src[i]` stands for; `None` if `src[i]` is not an escape
@@ -85,33 +137,11 @@ fn unescape_pair(src: &[u8], i: usize) -> Option<u8> {
     }
 }
 
-/// Whether any of 16 raw bytes is 0x7D or 0x7E: written so that compilers make it two
-/// SIMD compares and a mask test.
+/// Bit `k` set if `step[k]` is 0x7D or 0x7E: two SIMD compares and a mask move.
 #[inline(always)]
-fn any_special(step: &[u8; 16]) -> bool {
-    step.iter().fold(false, |any, &raw| {
-        any | (raw == ESCAPE) | (raw == START_DELIMITER)
-    })
-}
-
-/// Index of the first 0x7D or 0x7E in `step` (16 if none), a word of 8 bytes at a time.
-#[inline(always)]
-fn first_special(step: &[u8; 16]) -> usize {
-    let (lo, hi) = step.split_at(8);
-    let word = |half: &[u8]| half.try_into().map_or(0, u64::from_le_bytes);
-    match special_flags(word(lo)) {
-        0 => 8 + (special_flags(word(hi)).trailing_zeros() / 8) as usize,
-        flags => (flags.trailing_zeros() / 8) as usize,
-    }
-}
-
-/// Bit 7 set in the lowest byte of `word` (little-endian) that is 0x7D or 0x7E, and
-/// maybe in bytes above it, never below: only the lowest flag is exact.
-#[inline(always)]
-fn special_flags(word: u64) -> u64 {
-    let zero_byte = |x: u64| x.wrapping_sub(ONES) & !x & HIGHS;
-    zero_byte(word ^ (u64::from(ESCAPE) * ONES))
-        | zero_byte(word ^ (u64::from(START_DELIMITER) * ONES))
+fn special_mask(bytes: u8x16) -> u32 {
+    let specials = bytes.cmp_eq(u8x16::splat(ESCAPE)) | bytes.cmp_eq(u8x16::splat(START_DELIMITER));
+    specials.move_mask() as u32
 }
 
 #[cfg(test)]
@@ -119,24 +149,20 @@ mod tests {
     use super::*;
 
     #[test]
-    fn first_special_is_exact() {
-        for special in [ESCAPE, START_DELIMITER] {
-            for at in 0..16 {
-                for filler in [0x00, 0x7C, 0x7D, 0x7E, 0x7F, 0xFF, 0x5E] {
-                    let mut step = [0x41u8; 16];
-                    step[at] = special;
-                    for b in &mut step[at + 1..] {
-                        *b = filler;
-                    }
-                    assert!(any_special(&step));
-                    assert_eq!(first_special(&step), at, "{step:02X?}");
-                }
+    fn special_mask_marks_exactly_0x7d_and_0x7e() {
+        for at in 0..16 {
+            for b in 0..=255u8 {
+                let mut step = [0x41u8; 16];
+                step[at] = b;
+                let expected = if b == ESCAPE || b == START_DELIMITER {
+                    1 << at
+                } else {
+                    0
+                };
+                assert_eq!(special_mask(u8x16::new(step)), expected, "{step:02X?}");
             }
         }
-        for b in (0..=255u8).filter(|&b| b != ESCAPE && b != START_DELIMITER) {
-            assert!(!any_special(&[b; 16]), "{b:02X}");
-            assert_eq!(first_special(&[b; 16]), 16, "{b:02X}");
-        }
+        assert_eq!(special_mask(u8x16::new([ESCAPE; 16])), 0xFFFF);
     }
 
     #[test]
@@ -155,13 +181,14 @@ mod tests {
         expected[28] = 0x7F;
         for len in 0..=36 {
             let mut dst = [0u8; 40];
-            let taken = unescape(&src, &mut dst, len).unwrap();
+            let (taken, total) = unescape(&src, &mut dst, len).unwrap();
+            assert_eq!(total, sum(&expected[..len]), "len {len}");
             assert_eq!(dst[..len], expected[..len], "len {len}");
             let escapes = [3, 14].iter().filter(|&&e| e < len).count();
             assert_eq!(taken, len + escapes, "len {len}");
             // Without scratch space past `len`, the same.
             let mut exact = [0u8; 36];
-            assert_eq!(unescape(&src, &mut exact[..len], len), Some(taken));
+            assert_eq!(unescape(&src, &mut exact[..len], len), Some((taken, total)));
             assert_eq!(exact[..len], expected[..len]);
         }
     }
@@ -179,9 +206,9 @@ mod tests {
         // An escape cut at the end of the input.
         src[11] = 0x33;
         assert_eq!(unescape(&src[..11], &mut dst, 12), None);
-        assert_eq!(unescape(&src[..12], &mut dst, 11), Some(12));
+        assert_eq!(unescape(&src[..12], &mut dst, 11).map(|r| r.0), Some(12));
         assert_eq!(dst[10], 0x13);
-        assert_eq!(unescape(&src, &mut [], 0), Some(0));
+        assert_eq!(unescape(&src, &mut [], 0), Some((0, 0)));
         assert_eq!(unescape(&src, &mut [0; 4], 5), None);
     }
 }

@@ -55,7 +55,7 @@ const TAIL_MASK: [u8; 32] = {
 /// [`sum`] 16 bytes a step in 16 lanes of 8 bits, which compilers turn into one SIMD
 /// add a step; a partial last step sums the last 16 bytes with the lanes already summed
 /// masked off.
-#[inline]
+#[inline(always)]
 fn sum_lanes(bytes: &[u8]) -> u8 {
     let Some(last) = bytes.last_chunk::<16>() else {
         return bytes.iter().fold(0u8, |acc, b| acc.wrapping_add(*b));
