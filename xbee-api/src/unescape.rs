@@ -1,6 +1,6 @@
 //! API mode 2 unescaping of bytes that lie whole in one slice, 16 bytes a step.
 
-use wide::{CmpEq, u8x16};
+use wide::u8x16;
 
 use crate::wire::{ESCAPE, ESCAPE_XOR, START_DELIMITER, needs_escape, sum};
 
