@@ -108,18 +108,11 @@ impl<W: Write> Printer<'_, W> {
         data: &[u8],
         direction: Option<(Direction, std::time::SystemTime)>,
     ) -> io::Result<()> {
-        let parsed = Frame::parse_bytes(data);
         if let Some(summary) = &mut self.summary {
-            summary.frames += 1;
-            summary.frame_types[usize::from(data[0])] += 1;
-            match parsed {
-                Ok(Frame::ReceivePacket(rx)) => summary.count_mcp(rx.data),
-                Ok(Frame::TransmitRequest(tx)) => summary.count_mcp(tx.data),
-                Ok(_) => {}
-                Err(_) => summary.invalid_frames += 1,
-            }
+            summary.frame(data);
             return Ok(());
         }
+        let parsed = Frame::parse_bytes(data);
         match (self.format, parsed) {
             (Format::Json, Ok(frame)) => {
                 let mut value = render::json::frame(&frame);
@@ -172,6 +165,20 @@ impl<W: Write> Printer<'_, W> {
 }
 
 impl Summary {
+    /// Counts one frame and the MCP packet it carries.
+    fn frame(&mut self, data: &[u8]) {
+        self.frames += 1;
+        if let Some(&frame_type) = data.first() {
+            self.frame_types[usize::from(frame_type)] += 1;
+        }
+        match Frame::parse_bytes(data) {
+            Ok(Frame::ReceivePacket(rx)) => self.count_mcp(rx.data),
+            Ok(Frame::TransmitRequest(tx)) => self.count_mcp(tx.data),
+            Ok(_) => {}
+            Err(_) => self.invalid_frames += 1,
+        }
+    }
+
     fn count_mcp(&mut self, payload: &[u8]) {
         match mcp_core::parse(payload) {
             Ok(packet) => self.categories[usize::from(u8::from(packet.category()))] += 1,
@@ -219,6 +226,16 @@ fn decode_stream(
             Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
             Err(e) => return Err(e),
         };
+        if let Some(summary) = &mut printer.summary {
+            // Errors are counted by the decoder; no offsets are needed.
+            decoder.decode_each(&chunk[..n], |event| {
+                if let Ok(frame) = event {
+                    summary.frame(frame.data());
+                }
+            });
+            offset += n as u64;
+            continue;
+        }
         let mut rest = &chunk[..n];
         loop {
             let (consumed, event) = decoder.decode(rest);
