@@ -79,6 +79,19 @@ pub fn push_all<const N: usize>(
     assert!(decoder.poll().is_none(), "poll yielded after draining");
 }
 
+/// Feeds all of `input` through [`Decoder::decode_each`], collecting events, at most
+/// `bound` in all.
+pub fn decode_each_all<const N: usize>(
+    decoder: &mut Decoder<N>,
+    input: &[u8],
+    out: &mut Vec<Event>,
+    bound: usize,
+) {
+    decoder.decode_each(input, |event| {
+        push_bounded(out, Event::from_decoder(event), bound)
+    });
+}
+
 /// Ends the input: calls `finish` until it returns `None`, then checks the decoder is
 /// idle.
 pub fn finish_all<const N: usize>(decoder: &mut Decoder<N>, out: &mut Vec<Event>, bound: usize) {

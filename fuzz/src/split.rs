@@ -5,7 +5,9 @@
 
 use xbee_api::{ApiMode, Decoder, EncodeFrame, Frame, RawFrame};
 
-use crate::events::{Event, check_stats, decode_all, event_bound, finish_all, push_all};
+use crate::events::{
+    Event, check_stats, decode_all, decode_each_all, event_bound, finish_all, push_all,
+};
 use crate::reference;
 
 /// Chunk sizes from fuzzer bytes, cycled over the stream; an empty or all-zero list
@@ -80,6 +82,20 @@ pub fn check_stream<const N: usize>(mode: ApiMode, sizes: &[u8], stream: &[u8]) 
         *chunked.stats(),
         stats,
         "chunked counters differ from whole decode"
+    );
+
+    // The same chunks through the callback API.
+    let mut each = Decoder::<N>::new(mode);
+    let mut events = Vec::new();
+    for chunk in chunks(stream, sizes) {
+        decode_each_all(&mut each, chunk, &mut events, bound);
+    }
+    finish_all(&mut each, &mut events, bound);
+    assert_eq!(events, expected, "decode_each differs from whole decode");
+    assert_eq!(
+        *each.stats(),
+        stats,
+        "decode_each counters differ from whole decode"
     );
 
     // After `finish` the decoder reads a new stream as a new decoder would.
