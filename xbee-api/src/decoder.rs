@@ -535,6 +535,7 @@ impl<const N: usize> Decoder<N> {
     /// how many bytes of `body` it took and the outcome. `None`, with nothing changed
     /// but the buffer's content, if the frame is not whole in `body` or has anything
     /// but a bad checksum wrong: [`step2`](Self::step2) then reads it byte by byte.
+    /// The state is left as it was: the caller goes back to hunting.
     #[inline(always)]
     fn whole2(&mut self, body: &[u8]) -> Option<(usize, Outcome)> {
         // The length bytes, usually both plain: one test for the two.
@@ -557,8 +558,6 @@ impl<const N: usize> Decoder<N> {
             _ => unescape_byte(rest, &mut i)?,
         };
         self.len = len;
-        self.end = len;
-        self.hunt();
         let outcome = self.check_sum(sum, 0, got).map_err(|e| self.record(e));
         Some((header + i, outcome))
     }
@@ -598,6 +597,7 @@ impl<const N: usize> Decoder<N> {
                 State::LenHi if !self.escaped && try_whole => {
                     try_whole = false;
                     if let Some((n, outcome)) = self.whole2(rest) {
+                        self.hunt();
                         return (i + n, Some(outcome));
                     }
                 }
