@@ -80,6 +80,7 @@ impl<T: AsRef<[u8]>> ReceivePacket<T> {
 
 impl<'a> ReceivePacket<&'a [u8]> {
     /// RF data (payload).
+    #[inline]
     pub fn data(&self) -> &'a [u8] {
         &self.buffer[field::DATA]
     }
