@@ -39,8 +39,10 @@ enum State {
 ///
 /// Feed it bytes one at a time ([`push`](Self::push), cheap enough for a UART interrupt:
 /// a byte of frame data is only stored, everything else is done once a frame) or a slice
-/// at a time ([`decode`](Self::decode), which decodes a frame lying whole in the slice in
-/// one pass, 8 bytes a step); it yields [`RawFrame`]s borrowed from its buffer, or a
+/// at a time ([`decode`](Self::decode) for one event a call, as a codec wants it, or
+/// [`decode_each`](Self::decode_each) for a callback per event, the fastest; both decode
+/// a frame lying whole in the slice in one pass, 16 bytes a step); it yields
+/// [`RawFrame`]s borrowed from its buffer (or, from `decode_each`, from the input), or a
 /// [`DecodeError`] for each candidate frame it drops, and counts both in
 /// [`stats`](Self::stats). At the end of input, call [`finish`](Self::finish) until it
 /// returns `None`.
@@ -271,9 +273,9 @@ impl<const N: usize> Decoder<N> {
     /// event. Pending events are delivered first, with 0 bytes taken. `None` means all of
     /// `input` was taken and nothing is pending: feed more, or [`finish`](Self::finish).
     ///
-    /// A frame that lies whole in `input` is decoded in one go: unescaped 8 bytes a step,
-    /// copied to the buffer and summed a word at a time. Frames split across calls go
-    /// through the buffer and come out the same.
+    /// A frame that lies whole in `input` is decoded in one go: unescaped, copied to the
+    /// buffer and summed 16 bytes a step. Frames split across calls go through the
+    /// buffer and come out the same.
     ///
     /// The bytes taken are the decoder's from then on (a caller holding a `BytesMut` can
     /// advance past them at once).
@@ -289,9 +291,9 @@ impl<const N: usize> Decoder<N> {
     /// through a slice holding many frames (a capture, a large read).
     ///
     /// The same events as [`decode`](Self::decode) in a loop, without a call and a
-    /// returned event per frame. Frames that lie whole and valid in `input` and need no
-    /// unescaping are passed to `f` borrowed from `input`, without a copy (in mode 1,
-    /// all of them); the rest come from the decoder's buffer. A frame cut off at the end
+    /// returned event per frame. In mode 1, frames that lie whole and valid in `input`
+    /// are passed to `f` borrowed from `input`, without a copy; the rest (and every
+    /// frame in mode 2, which must be unescaped) come from the decoder's buffer. A frame cut off at the end
     /// of `input` stays in the decoder for the next call; at the end of the stream call
     /// [`finish`](Self::finish).
     ///
