@@ -462,40 +462,29 @@ impl<const N: usize> Decoder<N> {
     }
 
     /// One raw byte of a mode 2 stream.
+    ///
+    /// The common bytes first, each with few tests: an escape inside a frame, the byte
+    /// after it, frame data, the length bytes and the checksum; errors go out of line.
     #[inline(always)]
     fn step2(&mut self, raw: u8) -> Option<Outcome> {
-        if raw == START_DELIMITER {
-            let cut = match self.state {
-                State::Hunt => None,
-                _ if self.escaped => Some(DecodeError::BadEscape {
-                    byte: raw,
-                    received: self.end,
-                }),
-                _ => Some(self.truncated(self.end)),
-            };
-            self.begin2();
-            return cut.map(|e| Err(self.record(e)));
-        }
-        if self.state == State::Hunt {
-            self.skipped(1);
-            return None;
-        }
         let byte = if self.escaped {
+            // Only ever set inside a frame. An escaped start delimiter is no special byte.
             self.escaped = false;
             let byte = raw ^ ESCAPE_XOR;
             if !needs_escape(byte) {
-                self.hunt();
-                let error = DecodeError::BadEscape {
-                    byte: raw,
-                    received: self.end,
-                };
-                return Some(Err(self.record(error)));
+                return Some(Err(self.fail2(raw, true)));
             }
             byte
         } else if raw == ESCAPE {
-            self.escaped = true;
-            self.fill_to = 0;
+            if self.state != State::Hunt {
+                self.escaped = true;
+                self.fill_to = 0;
+            } else {
+                self.skipped(1);
+            }
             return None;
+        } else if raw == START_DELIMITER {
+            return self.delimiter2();
         } else {
             raw
         };
@@ -512,7 +501,8 @@ impl<const N: usize> Decoder<N> {
             }
             State::Data | State::Checksum => {
                 self.hunt();
-                Some(self.check(0, byte).map_err(|e| self.record(e)))
+                let total = sum(self.buf.get(..self.len).unwrap_or_default());
+                Some(self.check_sum(total, 0, byte).map_err(|e| self.record(e)))
             }
             State::LenHi => {
                 self.len = usize::from(byte) << 8;
@@ -521,16 +511,55 @@ impl<const N: usize> Decoder<N> {
             }
             State::LenLo => {
                 self.len |= usize::from(byte);
-                if let Some(error) = self.check_len() {
-                    self.hunt();
-                    return Some(Err(self.record(error)));
+                if self.len == 0 || self.len > self.capacity() {
+                    return Some(Err(self.fail2(raw, false)));
                 }
                 self.state = State::Data;
                 self.fill_to = self.len;
                 None
             }
-            State::Hunt => None,
+            State::Hunt => {
+                self.skipped(1);
+                None
+            }
         }
+    }
+
+    /// A raw start delimiter in mode 2: a new frame, and the error of the one it cuts
+    /// off, if any.
+    #[inline(always)]
+    fn delimiter2(&mut self) -> Option<Outcome> {
+        if self.state == State::Hunt {
+            self.begin2();
+            return None;
+        }
+        Some(Err(self.fail2(START_DELIMITER, false)))
+    }
+
+    /// A candidate frame fails in mode 2 at `raw`: the error, counted. After an escape
+    /// (cleared by the caller, `escaped` tells) `raw` is not an escaped special byte;
+    /// otherwise a start delimiter cuts the frame off, or else the length field just
+    /// completed is 0 or over the capacity. A raw start delimiter begins a new frame;
+    /// anything else goes back to hunting.
+    #[cold]
+    #[inline(never)]
+    fn fail2(&mut self, raw: u8, escaped: bool) -> DecodeError {
+        let error = if escaped {
+            DecodeError::BadEscape {
+                byte: raw,
+                received: self.end,
+            }
+        } else if raw == START_DELIMITER {
+            self.truncated(self.end)
+        } else {
+            self.check_len().unwrap_or(DecodeError::EmptyFrame)
+        };
+        if raw == START_DELIMITER {
+            self.begin2();
+        } else {
+            self.hunt();
+        }
+        self.record(error)
     }
 
     /// Decodes a frame that lies whole in `body`, the bytes after its start delimiter;
