@@ -227,9 +227,10 @@ impl<const N: usize> Decoder<N> {
     ///
     /// A byte of frame data that is neither 0x7D nor 0x7E is only stored: one compare
     /// of two cursors, one of the byte, a bounds check (none when `N` is a power of two)
-    /// and the store. Delimiters, length bytes, escapes and the checksum byte go out of
-    /// line, where the frame data is summed once, with the checksum.
-    #[inline]
+    /// and the store. Delimiters, length bytes, escapes and the checksum byte take one
+    /// step of the state machine, in line in mode 2 (a few tests each) and out of line
+    /// in mode 1; the frame data is summed once, with the checksum.
+    #[inline(always)]
     pub fn push(&mut self, byte: u8) -> Option<Event<'_>> {
         let end = self.end;
         if end < self.fill_to && is_plain(byte) {
@@ -242,21 +243,20 @@ impl<const N: usize> Decoder<N> {
             };
             if let Some(slot) = self.buf.get_mut(at) {
                 *slot = byte;
-                self.end = end + 1;
+                self.end = at + 1;
                 return None;
             }
         }
-        self.push_slow(byte)
+        match self.mode {
+            ApiMode::Escaped => self.step2(byte).map(|o| self.event(o)),
+            ApiMode::Unescaped => self.push_slow(byte),
+        }
     }
 
-    /// [`push`](Self::push) for every byte but plain frame data.
+    /// [`push`](Self::push) in mode 1 for every byte but plain frame data.
     #[inline(never)]
     fn push_slow(&mut self, byte: u8) -> Option<Event<'_>> {
-        let outcome = match self.mode {
-            ApiMode::Escaped => self.step2(byte),
-            ApiMode::Unescaped => self.push1(byte),
-        };
-        outcome.map(|o| self.event(o))
+        self.push1(byte).map(|o| self.event(o))
     }
 
     /// Delivers the next pending event (mode 1 rescans of buffered bytes) without new
