@@ -13,6 +13,30 @@ use crate::{ApiMode, DecodeError, RawFrame, Stats};
 /// sends, with margin, in both modes (mode 1 also buffers the 4 framing bytes).
 pub const DEFAULT_CAPACITY: usize = 512;
 
+/// All ones for 0x7D and 0x7E, 0 for every other byte: [`Decoder::push`] ORs it into
+/// its cursor, so that one compare tests both the room left and the byte (64-bit
+/// targets only, where 256 bytes of table are nothing; elsewhere two compares).
+#[cfg(target_pointer_width = "64")]
+static SPECIAL: [i8; 256] = {
+    let mut table = [0; 256];
+    table[ESCAPE as usize] = -1;
+    table[START_DELIMITER as usize] = -1;
+    table
+};
+
+/// `end`, or `usize::MAX` (never below `fill_to`) if `byte` is 0x7D or 0x7E.
+#[inline(always)]
+fn plain_or_max(end: usize, byte: u8) -> usize {
+    #[cfg(target_pointer_width = "64")]
+    {
+        end | SPECIAL[usize::from(byte)] as isize as usize
+    }
+    #[cfg(not(target_pointer_width = "64"))]
+    {
+        if is_plain(byte) { end } else { usize::MAX }
+    }
+}
+
 /// What the decoder yields: a frame borrowed from its buffer, or why a candidate frame
 /// was dropped. The frame stays valid until the decoder is called again.
 pub type Event<'a> = Result<RawFrame<'a>, DecodeError>;
@@ -226,14 +250,15 @@ impl<const N: usize> Decoder<N> {
     /// until it returns `None` before pushing the next byte.
     ///
     /// A byte of frame data that is neither 0x7D nor 0x7E is only stored: one compare
-    /// of two cursors, one of the byte, a bounds check (none when `N` is a power of two)
-    /// and the store. Delimiters, length bytes, escapes and the checksum byte take one
-    /// step of the state machine, in line in mode 2 (a few tests each) and out of line
-    /// in mode 1; the frame data is summed once, with the checksum.
+    /// of two cursors, one of the byte (on 64-bit targets a table lookup ORed into the
+    /// cursor makes the two compares one), a bounds check (none when `N` is a power of
+    /// two) and the store. Delimiters, length bytes, escapes and the checksum byte take
+    /// one step of the state machine, in line in mode 2 (a few tests each) and out of
+    /// line in mode 1; the frame data is summed once, with the checksum.
     #[inline(always)]
     pub fn push(&mut self, byte: u8) -> Option<Event<'_>> {
-        let end = self.end;
-        if end < self.fill_to && is_plain(byte) {
+        let end = plain_or_max(self.end, byte);
+        if end < self.fill_to {
             // `fill_to <= N`, so the mask changes nothing; it shows the compiler that the
             // index is in bounds when `N` is a power of two.
             let at = if N.is_power_of_two() {
