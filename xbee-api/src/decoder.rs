@@ -273,7 +273,7 @@ impl<const N: usize> Decoder<N> {
             }
         }
         match self.mode {
-            ApiMode::Escaped => self.step2(byte).map(|o| self.event(o)),
+            ApiMode::Escaped => self.step2_at(byte, end).map(|o| self.event(o)),
             ApiMode::Unescaped => self.push_slow(byte),
         }
     }
@@ -492,6 +492,15 @@ impl<const N: usize> Decoder<N> {
     /// after it, frame data, the length bytes and the checksum; errors go out of line.
     #[inline(always)]
     fn step2(&mut self, raw: u8) -> Option<Outcome> {
+        self.step2_at(raw, self.end)
+    }
+
+    /// [`step2`](Self::step2) with the cursor already read: `end` is `self.end`
+    /// wherever it is used, for a byte of frame data, which is never a raw 0x7D or
+    /// 0x7E. [`push`](Self::push) passes its cursor, which is `usize::MAX` for those two
+    /// bytes, so that it reads `self.end` once.
+    #[inline(always)]
+    fn step2_at(&mut self, raw: u8, end: usize) -> Option<Outcome> {
         let byte = if self.escaped {
             // Only ever set inside a frame. An escaped start delimiter is no special byte.
             self.escaped = false;
@@ -513,26 +522,29 @@ impl<const N: usize> Decoder<N> {
         } else {
             raw
         };
-        match self.state {
+        // Tests in the order of how often they hold: frame data (after an escape) and
+        // the checksum, then the length bytes. `Checksum` is a mode 1 state, never
+        // entered here; it only makes the test one compare.
+        if let State::Data | State::Checksum = self.state {
             // Once `end` reaches the length, frame data is complete and this byte is the
             // checksum.
-            State::Data if self.end < self.len => {
-                if let Some(slot) = self.buf.get_mut(self.end) {
+            if end < self.len {
+                debug_assert_eq!(end, self.end);
+                if let Some(slot) = self.buf.get_mut(end) {
                     *slot = byte;
                 }
-                self.end += 1;
+                self.end = end + 1;
                 self.fill_to = self.len;
-                None
+                return None;
             }
-            State::Data | State::Checksum => {
-                self.hunt();
-                let total = sum(self.buf.get(..self.len).unwrap_or_default());
-                Some(self.check_sum(total, 0, byte).map_err(|e| self.record(e)))
-            }
+            self.hunt();
+            let total = sum(self.buf.get(..self.len).unwrap_or_default());
+            return Some(self.check_sum(total, 0, byte).map_err(|e| self.record(e)));
+        }
+        match self.state {
             State::LenHi => {
                 self.len = usize::from(byte) << 8;
                 self.state = State::LenLo;
-                None
             }
             State::LenLo => {
                 self.len |= usize::from(byte);
@@ -541,13 +553,10 @@ impl<const N: usize> Decoder<N> {
                 }
                 self.state = State::Data;
                 self.fill_to = self.len;
-                None
             }
-            State::Hunt => {
-                self.skipped(1);
-                None
-            }
+            _ => self.skipped(1),
         }
+        None
     }
 
     /// A raw start delimiter in mode 2: a new frame, and the error of the one it cuts
