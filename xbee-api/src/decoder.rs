@@ -272,16 +272,17 @@ impl<const N: usize> Decoder<N> {
                 return None;
             }
         }
-        match self.mode {
-            ApiMode::Escaped => self.step2_at(byte, end).map(|o| self.event(o)),
+        let outcome = match self.mode {
+            ApiMode::Escaped => self.step2_at(byte, end),
             ApiMode::Unescaped => self.push_slow(byte),
-        }
+        };
+        outcome.map(|o| self.event(o))
     }
 
     /// [`push`](Self::push) in mode 1 for every byte but plain frame data.
     #[inline(never)]
-    fn push_slow(&mut self, byte: u8) -> Option<Event<'_>> {
-        self.push1(byte).map(|o| self.event(o))
+    fn push_slow(&mut self, byte: u8) -> Option<Outcome> {
+        self.push1(byte)
     }
 
     /// Delivers the next pending event (mode 1 rescans of buffered bytes) without new
@@ -538,8 +539,15 @@ impl<const N: usize> Decoder<N> {
                 return None;
             }
             self.hunt();
-            let total = sum(self.buf.get(..self.len).unwrap_or_default());
-            return Some(self.check_sum(total, 0, byte).map_err(|e| self.record(e)));
+            // On 64-bit targets the sum in line, SIMD in the caller's loop; elsewhere
+            // the call that mode 1 shares, for flash.
+            let outcome = if cfg!(target_pointer_width = "64") {
+                let total = sum(self.buf.get(..self.len).unwrap_or_default());
+                self.check_sum(total, 0, byte)
+            } else {
+                self.check(0, byte)
+            };
+            return Some(outcome.map_err(|e| self.record(e)));
         }
         match self.state {
             State::LenHi => {
