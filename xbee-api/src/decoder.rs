@@ -538,16 +538,14 @@ impl<const N: usize> Decoder<N> {
                 self.fill_to = self.len;
                 return None;
             }
-            self.hunt();
             // On 64-bit targets the sum in line, SIMD in the caller's loop; elsewhere
-            // the call that mode 1 shares, for flash.
-            let outcome = if cfg!(target_pointer_width = "64") {
+            // out of line, with the check that mode 1 shares, for flash.
+            if cfg!(target_pointer_width = "64") {
+                self.hunt();
                 let total = sum(self.buf.get(..self.len).unwrap_or_default());
-                self.check_sum(total, 0, byte)
-            } else {
-                self.check(0, byte)
-            };
-            return Some(outcome.map_err(|e| self.record(e)));
+                return Some(self.check_sum(total, 0, byte).map_err(|e| self.record(e)));
+            }
+            return Some(self.checksum2(byte));
         }
         match self.state {
             State::LenHi => {
@@ -565,6 +563,14 @@ impl<const N: usize> Decoder<N> {
             _ => self.skipped(1),
         }
         None
+    }
+
+    /// The checksum byte `got` of a mode 2 frame: the frame, or the error, counted; back
+    /// to hunting.
+    #[inline(never)]
+    fn checksum2(&mut self, got: u8) -> Outcome {
+        self.hunt();
+        self.check(0, got).map_err(|e| self.record(e))
     }
 
     /// A raw start delimiter in mode 2: a new frame, and the error of the one it cuts
@@ -593,8 +599,13 @@ impl<const N: usize> Decoder<N> {
             }
         } else if raw == START_DELIMITER {
             self.truncated(self.end)
+        } else if self.len == 0 {
+            DecodeError::EmptyFrame
         } else {
-            self.check_len().unwrap_or(DecodeError::EmptyFrame)
+            DecodeError::Oversize {
+                length: self.len as u16,
+                capacity: N,
+            }
         };
         if raw == START_DELIMITER {
             self.begin2();
