@@ -13,6 +13,30 @@ use crate::{ApiMode, DecodeError, RawFrame, Stats};
 /// sends, with margin, in both modes (mode 1 also buffers the 4 framing bytes).
 pub const DEFAULT_CAPACITY: usize = 512;
 
+/// All ones for 0x7D and 0x7E, 0 for every other byte: [`Decoder::push`] ORs it into
+/// its cursor, so that one compare tests both the room left and the byte (64-bit
+/// targets only, where 256 bytes of table are nothing; elsewhere two compares).
+#[cfg(target_pointer_width = "64")]
+static SPECIAL: [i8; 256] = {
+    let mut table = [0; 256];
+    table[ESCAPE as usize] = -1;
+    table[START_DELIMITER as usize] = -1;
+    table
+};
+
+/// `end`, or `usize::MAX` (never below `fill_to`) if `byte` is 0x7D or 0x7E.
+#[inline(always)]
+fn plain_or_max(end: usize, byte: u8) -> usize {
+    #[cfg(target_pointer_width = "64")]
+    {
+        end | SPECIAL[usize::from(byte)] as isize as usize
+    }
+    #[cfg(not(target_pointer_width = "64"))]
+    {
+        if is_plain(byte) { end } else { usize::MAX }
+    }
+}
+
 /// What the decoder yields: a frame borrowed from its buffer, or why a candidate frame
 /// was dropped. The frame stays valid until the decoder is called again.
 pub type Event<'a> = Result<RawFrame<'a>, DecodeError>;
@@ -226,13 +250,15 @@ impl<const N: usize> Decoder<N> {
     /// until it returns `None` before pushing the next byte.
     ///
     /// A byte of frame data that is neither 0x7D nor 0x7E is only stored: one compare
-    /// of two cursors, one of the byte, a bounds check (none when `N` is a power of two)
-    /// and the store. Delimiters, length bytes, escapes and the checksum byte go out of
-    /// line, where the frame data is summed once, with the checksum.
-    #[inline]
+    /// of two cursors, one of the byte (on 64-bit targets a table lookup ORed into the
+    /// cursor makes the two compares one), a bounds check (none when `N` is a power of
+    /// two) and the store. Delimiters, length bytes, escapes and the checksum byte take
+    /// one step of the state machine, in line in mode 2 (a few tests each) and out of
+    /// line in mode 1; the frame data is summed once, with the checksum.
+    #[inline(always)]
     pub fn push(&mut self, byte: u8) -> Option<Event<'_>> {
-        let end = self.end;
-        if end < self.fill_to && is_plain(byte) {
+        let end = plain_or_max(self.end, byte);
+        if end < self.fill_to {
             // `fill_to <= N`, so the mask changes nothing; it shows the compiler that the
             // index is in bounds when `N` is a power of two.
             let at = if N.is_power_of_two() {
@@ -242,21 +268,21 @@ impl<const N: usize> Decoder<N> {
             };
             if let Some(slot) = self.buf.get_mut(at) {
                 *slot = byte;
-                self.end = end + 1;
+                self.end = at + 1;
                 return None;
             }
         }
-        self.push_slow(byte)
-    }
-
-    /// [`push`](Self::push) for every byte but plain frame data.
-    #[inline(never)]
-    fn push_slow(&mut self, byte: u8) -> Option<Event<'_>> {
         let outcome = match self.mode {
-            ApiMode::Escaped => self.step2(byte),
-            ApiMode::Unescaped => self.push1(byte),
+            ApiMode::Escaped => self.step2_at(byte, end),
+            ApiMode::Unescaped => self.push_slow(byte),
         };
         outcome.map(|o| self.event(o))
+    }
+
+    /// [`push`](Self::push) in mode 1 for every byte but plain frame data.
+    #[inline(never)]
+    fn push_slow(&mut self, byte: u8) -> Option<Outcome> {
+        self.push1(byte)
     }
 
     /// Delivers the next pending event (mode 1 rescans of buffered bytes) without new
@@ -462,75 +488,131 @@ impl<const N: usize> Decoder<N> {
     }
 
     /// One raw byte of a mode 2 stream.
+    ///
+    /// The common bytes first, each with few tests: an escape inside a frame, the byte
+    /// after it, frame data, the length bytes and the checksum; errors go out of line.
     #[inline(always)]
     fn step2(&mut self, raw: u8) -> Option<Outcome> {
-        if raw == START_DELIMITER {
-            let cut = match self.state {
-                State::Hunt => None,
-                _ if self.escaped => Some(DecodeError::BadEscape {
-                    byte: raw,
-                    received: self.end,
-                }),
-                _ => Some(self.truncated(self.end)),
-            };
-            self.begin2();
-            return cut.map(|e| Err(self.record(e)));
-        }
-        if self.state == State::Hunt {
-            self.skipped(1);
-            return None;
-        }
+        self.step2_at(raw, self.end)
+    }
+
+    /// [`step2`](Self::step2) with the cursor already read: `end` is `self.end`
+    /// wherever it is used, for a byte of frame data, which is never a raw 0x7D or
+    /// 0x7E. [`push`](Self::push) passes its cursor, which is `usize::MAX` for those two
+    /// bytes, so that it reads `self.end` once.
+    #[inline(always)]
+    fn step2_at(&mut self, raw: u8, end: usize) -> Option<Outcome> {
         let byte = if self.escaped {
+            // Only ever set inside a frame. An escaped start delimiter is no special byte.
             self.escaped = false;
             let byte = raw ^ ESCAPE_XOR;
             if !needs_escape(byte) {
-                self.hunt();
-                let error = DecodeError::BadEscape {
-                    byte: raw,
-                    received: self.end,
-                };
-                return Some(Err(self.record(error)));
+                return Some(Err(self.fail2(raw, true)));
             }
             byte
         } else if raw == ESCAPE {
-            self.escaped = true;
-            self.fill_to = 0;
+            if self.state != State::Hunt {
+                self.escaped = true;
+                self.fill_to = 0;
+            } else {
+                self.skipped(1);
+            }
             return None;
+        } else if raw == START_DELIMITER {
+            return self.delimiter2();
         } else {
             raw
         };
-        match self.state {
+        // Tests in the order of how often they hold: frame data (after an escape) and
+        // the checksum, then the length bytes. `Checksum` is a mode 1 state, never
+        // entered here; it only makes the test one compare.
+        if let State::Data | State::Checksum = self.state {
             // Once `end` reaches the length, frame data is complete and this byte is the
             // checksum.
-            State::Data if self.end < self.len => {
-                if let Some(slot) = self.buf.get_mut(self.end) {
+            if end < self.len {
+                debug_assert_eq!(end, self.end);
+                if let Some(slot) = self.buf.get_mut(end) {
                     *slot = byte;
                 }
-                self.end += 1;
+                self.end = end + 1;
                 self.fill_to = self.len;
-                None
+                return None;
             }
-            State::Data | State::Checksum => {
+            // On 64-bit targets the sum in line, SIMD in the caller's loop; elsewhere
+            // out of line, with the check that mode 1 shares, for flash.
+            if cfg!(target_pointer_width = "64") {
                 self.hunt();
-                Some(self.check(0, byte).map_err(|e| self.record(e)))
+                let total = sum(self.buf.get(..self.len).unwrap_or_default());
+                return Some(self.check_sum(total, 0, byte).map_err(|e| self.record(e)));
             }
+            return Some(self.checksum2(byte));
+        }
+        match self.state {
             State::LenHi => {
                 self.len = usize::from(byte) << 8;
                 self.state = State::LenLo;
-                None
             }
             State::LenLo => {
                 self.len |= usize::from(byte);
-                if let Some(error) = self.check_len() {
-                    self.hunt();
-                    return Some(Err(self.record(error)));
+                if self.len == 0 || self.len > self.capacity() {
+                    return Some(Err(self.fail2(raw, false)));
                 }
                 self.state = State::Data;
                 self.fill_to = self.len;
-                None
             }
-            State::Hunt => None,
+            _ => self.skipped(1),
         }
+        None
+    }
+
+    /// The checksum byte `got` of a mode 2 frame: the frame, or the error, counted; back
+    /// to hunting.
+    #[inline(never)]
+    fn checksum2(&mut self, got: u8) -> Outcome {
+        self.hunt();
+        self.check(0, got).map_err(|e| self.record(e))
+    }
+
+    /// A raw start delimiter in mode 2: a new frame, and the error of the one it cuts
+    /// off, if any.
+    #[inline(always)]
+    fn delimiter2(&mut self) -> Option<Outcome> {
+        if self.state == State::Hunt {
+            self.begin2();
+            return None;
+        }
+        Some(Err(self.fail2(START_DELIMITER, false)))
+    }
+
+    /// A candidate frame fails in mode 2 at `raw`: the error, counted. After an escape
+    /// (cleared by the caller, `escaped` tells) `raw` is not an escaped special byte;
+    /// otherwise a start delimiter cuts the frame off, or else the length field just
+    /// completed is 0 or over the capacity. A raw start delimiter begins a new frame;
+    /// anything else goes back to hunting.
+    #[cold]
+    #[inline(never)]
+    fn fail2(&mut self, raw: u8, escaped: bool) -> DecodeError {
+        let error = if escaped {
+            DecodeError::BadEscape {
+                byte: raw,
+                received: self.end,
+            }
+        } else if raw == START_DELIMITER {
+            self.truncated(self.end)
+        } else if self.len == 0 {
+            DecodeError::EmptyFrame
+        } else {
+            DecodeError::Oversize {
+                length: self.len as u16,
+                capacity: N,
+            }
+        };
+        if raw == START_DELIMITER {
+            self.begin2();
+        } else {
+            self.hunt();
+        }
+        self.record(error)
     }
 
     /// Decodes a frame that lies whole in `body`, the bytes after its start delimiter;
