@@ -21,10 +21,17 @@ trap 'rm -rf "$work"' EXIT
 
 cargo build --quiet --release -p perf --example receive --manifest-path "$crate/Cargo.toml"
 bin=$target/release/examples/receive
+# Collection toggles on entry to and exit from each measured loop. The names are exact
+# (no trailing `*`): a closure such as `run_pipeline::{{closure}}` must not match, or
+# entering it would toggle collection off and leave its cost out.
+toggles=()
+for f in run_slice run_slice_calls run_push run_pipeline run_pipeline_push run_fifo run_mavlink; do
+    toggles+=("--toggle-collect=*::$f")
+done
 printf "%-15s %12s %9s %8s %9s %12s\n" case instructions bytes values "per byte" "per value"
 for case in "${cases[@]}"; do
     valgrind --tool=callgrind --callgrind-out-file="$work/callgrind.out" \
-        --toggle-collect="*run_*" "$bin" "$case" "$bytes" 1 \
+        "${toggles[@]}" "$bin" "$case" "$bytes" 1 \
         >"$work/stdout" 2>"$work/stderr"
     ir=$(sed -n 's/.*Collected : \([0-9]*\).*/\1/p' "$work/stderr")
     n=$(sed -n 's/.*: \([0-9]*\) bytes,.*/\1/p' "$work/stdout")
