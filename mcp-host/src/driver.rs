@@ -331,7 +331,7 @@ impl Driver {
                         received_at,
                     };
                     let payload = data.slice_ref(rx.data);
-                    self.on_payload(origin, payload);
+                    self.on_payload(origin, payload, data.clone());
                 }
                 Err(error) => self.malformed(frame, &error),
             },
@@ -344,7 +344,7 @@ impl Driver {
                         received_at,
                     };
                     let payload = data.slice_ref(rx.data);
-                    self.on_payload(origin, payload);
+                    self.on_payload(origin, payload, data.clone());
                 }
                 Err(error) => self.malformed(frame, &error),
             },
@@ -359,7 +359,8 @@ impl Driver {
         self.emit(Event::Frame(frame));
     }
 
-    fn on_payload(&mut self, origin: Origin, payload: Bytes) {
+    /// An MCP payload that came in `frame` (frame data, type byte first).
+    fn on_payload(&mut self, origin: Origin, payload: Bytes, frame: Bytes) {
         match mcp_core::parse(&payload) {
             Ok(packet) => {
                 let packet = packet.map_bytes(|s| payload.slice_ref(s));
@@ -370,6 +371,7 @@ impl Driver {
                     origin,
                     packet,
                     payload,
+                    frame,
                 }));
             }
             Err(error) => {
@@ -379,6 +381,7 @@ impl Driver {
                     origin,
                     error,
                     payload,
+                    frame,
                 }));
             }
         }

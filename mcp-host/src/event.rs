@@ -48,6 +48,9 @@ pub struct Received {
     pub packet: OwnedPacket,
     /// The raw MCP payload.
     pub payload: Bytes,
+    /// The API frame it came in, as received: its frame data, type byte first (a
+    /// Receive Packet, 0x90, or an Explicit Rx Indicator, 0x91). `payload` is part of it.
+    pub frame: Bytes,
 }
 
 /// A Receive Packet whose payload failed to parse as MCP.
@@ -59,6 +62,9 @@ pub struct InvalidPacket {
     pub error: mcp_core::Error,
     /// The payload as received.
     pub payload: Bytes,
+    /// The API frame it came in, as received: its frame data, type byte first (0x90 or
+    /// 0x91). `payload` is part of it.
+    pub frame: Bytes,
 }
 
 /// A transport state change.

@@ -318,3 +318,80 @@ fn record_decode_and_replay() {
     assert_eq!(frames, decoded.len());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_recording_keeps_each_frame_as_it_came() {
+    use xbee_api::{
+        Address16, Address64, ApiMode, EncodeFrame, ExplicitRxIndicatorRepr, ReceivePacketRepr,
+    };
+    let explicit = ExplicitRxIndicatorRepr {
+        src64: Address64(0x0013_A200_4000_0001),
+        src16: Address16(0x0102),
+        src_endpoint: 0xE8,
+        dst_endpoint: 0xE8,
+        cluster_id: 0x0011,
+        profile_id: 0xC105,
+        options: 0x02,
+        data: b"r\x03\x03",
+    };
+    let plain = ReceivePacketRepr {
+        src64: Address64(0x0013_A200_4000_0002),
+        src16: Address16(0xFFFE),
+        options: 0x01,
+        data: b"mhello",
+    };
+    fn frame_data(frame: &impl EncodeFrame) -> Vec<u8> {
+        let mut data = vec![0u8; frame.frame_data_len()];
+        frame.emit_frame_data(&mut data).unwrap();
+        data
+    }
+    let frames = vec![frame_data(&explicit), frame_data(&plain)];
+    let mut wire = vec![0u8; 256];
+    let mut n = explicit.encode(ApiMode::Unescaped, &mut wire).unwrap();
+    n += plain.encode(ApiMode::Unescaped, &mut wire[n..]).unwrap();
+    wire.truncate(n);
+
+    // A radio on TCP that sends the two frames, then waits for the monitor to leave
+    // (after 3 events: the link coming up and the two packets).
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let link = format!("tcp:{}", listener.local_addr().unwrap());
+    let radio = std::thread::spawn(move || {
+        let (mut socket, _) = listener.accept().unwrap();
+        std::io::Write::write_all(&mut socket, &wire).unwrap();
+        let _ = std::io::Read::read_to_end(&mut socket, &mut Vec::new());
+    });
+    let dir = std::env::temp_dir().join(format!("mcp-gs-rec-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("frames.mcprec");
+    let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args([
+            "monitor",
+            "--link",
+            &link,
+            "--api-mode",
+            "1",
+            "--count",
+            "3",
+        ])
+        .args(["--format", "json", "--record", file.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    radio.join().unwrap();
+
+    let mut reader =
+        mcp_host::record::RecordReader::new(std::fs::File::open(&file).unwrap()).unwrap();
+    let mut recorded = Vec::new();
+    while let Some(record) = reader.next_record().unwrap() {
+        assert_eq!(record.direction, mcp_host::record::Direction::Received);
+        recorded.push(record.frame);
+    }
+    // The Explicit Rx Indicator stays one (0x91, with its endpoints and cluster).
+    assert_eq!(recorded, frames);
+    assert_eq!(recorded[0][0], 0x91);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -257,6 +257,10 @@ async fn invalid_mcp_payloads_and_other_frames_are_events() {
     let rx = next_packet(&mut stream).await;
     assert_eq!(rx.origin.src64, OTHER_MAV);
     assert_eq!(rx.origin.options, 0x02);
+    // The frame it came in, endpoints and cluster included, with the payload at its end.
+    assert_eq!(rx.frame[0], 0x91);
+    assert_eq!(rx.frame[11..17], [0xE8, 0xE8, 0x00, 0x11, 0xC1, 0x05]);
+    assert!(rx.frame.ends_with(&rx.payload));
     assert_eq!(
         rx.packet.as_borrowed(),
         Packet::Report(Report::Controllers(Controller::Mpc))

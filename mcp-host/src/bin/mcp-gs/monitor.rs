@@ -10,7 +10,7 @@ use futures::StreamExt;
 use mcp_host::record::{Direction, RecordWriter};
 use mcp_host::render;
 use mcp_host::{Event, LinkEvent};
-use xbee_api::{ApiMode, EncodeFrame, ReceivePacketRepr};
+use xbee_api::ApiMode;
 
 use crate::link_args::{ApiModeChoice, LinkArgs, check_mode};
 use crate::{Failure, Format};
@@ -74,7 +74,7 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
         if let Some(recorder) = &mut recorder {
             if let Some(frame) = frame_data(&event) {
                 recorder
-                    .write(SystemTime::now(), Direction::Received, &frame)
+                    .write(SystemTime::now(), Direction::Received, frame)
                     .and_then(|()| recorder.flush())
                     .map_err(|e| Failure::input(format!("cannot write the recording: {e}")))?;
             }
@@ -118,22 +118,13 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-/// The frame data of an event, for the recording: received packets are written back as
-/// the Receive Packet (0x90) frame they came in.
-fn frame_data(event: &Event) -> Option<Vec<u8>> {
-    let (origin, payload) = match event {
-        Event::Packet(rx) => (&rx.origin, &rx.payload),
-        Event::InvalidPacket(rx) => (&rx.origin, &rx.payload),
-        Event::Frame(frame) => return Some(frame.data().to_vec()),
-        Event::DecodeError(_) | Event::Link(_) => return None,
-    };
-    let repr = ReceivePacketRepr {
-        src64: origin.src64,
-        src16: origin.src16,
-        options: origin.options,
-        data: payload,
-    };
-    let mut data = vec![0u8; repr.frame_data_len()];
-    repr.emit_frame_data(&mut data).ok()?;
-    Some(data)
+/// The frame data of an event, for the recording: received packets as the frame they
+/// came in (a Receive Packet or an Explicit Rx Indicator), other frames as they are.
+fn frame_data(event: &Event) -> Option<&[u8]> {
+    match event {
+        Event::Packet(rx) => Some(&rx.frame),
+        Event::InvalidPacket(rx) => Some(&rx.frame),
+        Event::Frame(frame) => Some(frame.data()),
+        Event::DecodeError(_) | Event::Link(_) => None,
+    }
 }
