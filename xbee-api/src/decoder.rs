@@ -1,6 +1,8 @@
 //! Streaming decoder of API frames with a fixed buffer.
 
 use memchr::{memchr, memchr2};
+#[cfg(target_pointer_width = "64")]
+use wide::u8x16;
 
 use crate::unescape::{is_plain, unescape, unescape_byte};
 use crate::wire::{ESCAPE, ESCAPE_XOR, START_DELIMITER, checksum_of_sum, needs_escape, sum};
@@ -35,6 +37,14 @@ fn plain_or_max(end: usize, byte: u8) -> usize {
     {
         if is_plain(byte) { end } else { usize::MAX }
     }
+}
+
+/// Bit `k` set if `bytes[k]` is 0x7D or 0x7E.
+#[cfg(target_pointer_width = "64")]
+#[inline(always)]
+fn special_mask(bytes: u8x16) -> u32 {
+    let specials = bytes.cmp_eq(u8x16::splat(ESCAPE)) | bytes.cmp_eq(u8x16::splat(START_DELIMITER));
+    specials.move_mask() as u32
 }
 
 /// What the decoder yields: a frame borrowed from its buffer, or why a candidate frame
@@ -340,27 +350,142 @@ impl<const N: usize> Decoder<N> {
     /// assert_eq!(statuses, [0x06, 0x00]);
     /// assert_eq!(decoder.stats().bad_checksum, 1);
     /// ```
-    pub fn decode_each<F: FnMut(Event<'_>)>(&mut self, input: &[u8], mut f: F) {
+    pub fn decode_each<F: FnMut(Event<'_>)>(&mut self, input: &[u8], f: F) {
+        match self.mode {
+            ApiMode::Escaped => self.each2(input, f),
+            ApiMode::Unescaped => self.each1(input, f),
+        }
+    }
+
+    /// [`decode_each`](Self::decode_each) in mode 2: whole frames at once where they
+    /// lie in `input`, the rest through [`feed2`](Self::feed2).
+    fn each2<F: FnMut(Event<'_>)>(&mut self, input: &[u8], mut f: F) {
         let mut input = input;
         loop {
-            if self.state == State::Hunt {
-                match self.mode {
-                    ApiMode::Escaped if !self.escaped => {
-                        while let Some((&START_DELIMITER, body)) = input.split_first() {
-                            let Some((n, outcome)) = self.whole2(body) else {
+            // Between frames (`escaped` is only ever set inside one).
+            if self.state == State::Hunt && !self.escaped {
+                while let Some((&START_DELIMITER, body)) = input.split_first() {
+                    let Some((n, outcome)) = self.whole2(body) else {
+                        break;
+                    };
+                    input = body.get(n..).unwrap_or_default();
+                    f(self.event(outcome));
+                }
+                match input.split_first() {
+                    None => return,
+                    // A frame that is not whole here (or not valid): byte by byte.
+                    Some((&START_DELIMITER, body)) => {
+                        self.begin2();
+                        input = body;
+                    }
+                    Some(_) => {
+                        // Garbage: skip to the next start delimiter and try the frame
+                        // there whole.
+                        let k = memchr(START_DELIMITER, input).unwrap_or(input.len());
+                        self.skipped(k);
+                        input = input.get(k..).unwrap_or_default();
+                        continue;
+                    }
+                }
+            }
+            let (consumed, outcome) = self.feed2(input);
+            input = input.get(consumed..).unwrap_or_default();
+            match outcome {
+                Some(outcome) => f(self.event(outcome)),
+                None => return,
+            }
+        }
+    }
+
+    /// Mode 2 bytes, as [`push`](Self::push) takes them one at a time but with the
+    /// cursors held for the whole of `input`: a byte of frame data that is neither 0x7D
+    /// nor 0x7E is only stored; any other byte takes a step of the state machine. On
+    /// 64-bit targets frame data goes 16 bytes a step while `input` has them. Stops
+    /// after the first event; how many bytes it took and the event.
+    #[inline(always)]
+    fn feed2(&mut self, input: &[u8]) -> (usize, Option<Outcome>) {
+        let mut rest = input;
+        let mut end = self.end;
+        let mut fill_to = self.fill_to;
+        loop {
+            // Frame data 16 bytes a step: stored whole (bytes past the frame data are
+            // scratch), counted up to the first special byte or the end of the frame
+            // data.
+            #[cfg(target_pointer_width = "64")]
+            while let Some(step) = rest.first_chunk::<16>() {
+                let Some(dst) = self
+                    .buf
+                    .get_mut(end..end + 16)
+                    .and_then(<[u8]>::first_chunk_mut::<16>)
+                    .filter(|_| end < fill_to)
+                else {
+                    break;
+                };
+                *dst = *step;
+                let specials = special_mask(u8x16::new(*step));
+                let plain = ((specials | 1 << 16).trailing_zeros() as usize).min(fill_to - end);
+                end += plain;
+                rest = rest.get(plain..).unwrap_or_default();
+                if plain < 16 {
+                    break;
+                }
+            }
+            loop {
+                let Some((&byte, tail)) = rest.split_first() else {
+                    self.end = end;
+                    return (input.len(), None);
+                };
+                rest = tail;
+                let at = plain_or_max(end, byte);
+                if at < fill_to {
+                    // `fill_to <= N`: as in `push`, the mask only shows the compiler
+                    // that the index is in bounds when `N` is a power of two.
+                    let at = if N.is_power_of_two() {
+                        at & (N - 1)
+                    } else {
+                        at
+                    };
+                    if let Some(slot) = self.buf.get_mut(at) {
+                        *slot = byte;
+                        end = at + 1;
+                        continue;
+                    }
+                }
+                // An escaped byte of frame data, whole in `rest`: stored at once. The
+                // test is the one `step2_at` makes after the escape; a bad escape goes
+                // there and is reported by it.
+                if byte == ESCAPE && end < fill_to {
+                    if let Some((&raw, tail)) = rest.split_first() {
+                        let unescaped = raw ^ ESCAPE_XOR;
+                        if needs_escape(unescaped) {
+                            if let Some(slot) = self.buf.get_mut(end) {
+                                *slot = unescaped;
+                                end += 1;
+                                rest = tail;
                                 break;
-                            };
-                            input = body.get(n..).unwrap_or_default();
-                            f(self.event(outcome));
+                            }
                         }
                     }
-                    ApiMode::Unescaped if self.pos == self.end => {
-                        while let Some((n, data)) = self.valid1(input) {
-                            f(Ok(RawFrame::from_data(data)));
-                            input = input.get(n..).unwrap_or_default();
-                        }
-                    }
-                    _ => {}
+                }
+                self.end = end;
+                if let Some(outcome) = self.step2_at(byte, at) {
+                    return (input.len() - rest.len(), Some(outcome));
+                }
+                end = self.end;
+                fill_to = self.fill_to;
+                break;
+            }
+        }
+    }
+
+    /// [`decode_each`](Self::decode_each) in mode 1.
+    fn each1<F: FnMut(Event<'_>)>(&mut self, input: &[u8], mut f: F) {
+        let mut input = input;
+        loop {
+            if self.state == State::Hunt && self.pos == self.end {
+                while let Some((n, data)) = self.valid1(input) {
+                    f(Ok(RawFrame::from_data(data)));
+                    input = input.get(n..).unwrap_or_default();
                 }
             }
             let (consumed, event) = self.decode(input);
