@@ -350,11 +350,67 @@ impl<const N: usize> Decoder<N> {
     /// assert_eq!(statuses, [0x06, 0x00]);
     /// assert_eq!(decoder.stats().bad_checksum, 1);
     /// ```
+    #[inline(always)]
     pub fn decode_each<F: FnMut(Event<'_>)>(&mut self, input: &[u8], f: F) {
+        // Most chunks from a UART FIFO or a DMA buffer are frame data of the frame in
+        // progress: stored here, in line in the caller, without a call.
+        if self.fill(input) {
+            return;
+        }
         match self.mode {
             ApiMode::Escaped => self.each2(input, f),
             ApiMode::Unescaped => self.each1(input, f),
         }
+    }
+
+    /// Stores `input` if it is all frame data of the frame in progress (in mode 2,
+    /// without 0x7D or 0x7E): `true` if it did, as [`push`](Self::push) would have for
+    /// each byte. `false`, with nothing changed but the buffer's content, for anything
+    /// else, and for fewer than 16 bytes.
+    #[inline(always)]
+    fn fill(&mut self, input: &[u8]) -> bool {
+        let end = self.end;
+        // `fill_to` is 0 outside frame data and after an escape.
+        if input.len() < 16 || end + input.len() > self.fill_to {
+            return false;
+        }
+        let Some(dst) = self.buf.get_mut(end..end + input.len()) else {
+            return false;
+        };
+        #[cfg(target_pointer_width = "64")]
+        {
+            // 16 bytes a step, the last step ending at the end of `input` (overlapping
+            // the one before it, which stored the same bytes).
+            let last = input.len() - 16;
+            let mut specials = 0;
+            let mut i = 0;
+            loop {
+                let at = i.min(last);
+                if let (Some(step), Some(out)) = (
+                    input.get(at..).and_then(<[u8]>::first_chunk::<16>),
+                    dst.get_mut(at..).and_then(<[u8]>::first_chunk_mut::<16>),
+                ) {
+                    *out = *step;
+                    specials |= special_mask(u8x16::new(*step));
+                }
+                if at == last {
+                    break;
+                }
+                i += 16;
+            }
+            if specials != 0 && self.mode == ApiMode::Escaped {
+                return false;
+            }
+        }
+        #[cfg(not(target_pointer_width = "64"))]
+        {
+            if self.mode == ApiMode::Escaped {
+                return false;
+            }
+            dst.copy_from_slice(input);
+        }
+        self.end = end + input.len();
+        true
     }
 
     /// [`decode_each`](Self::decode_each) in mode 2: whole frames at once where they
