@@ -421,6 +421,14 @@ impl<const N: usize> Decoder<N> {
             // Between frames (`escaped` is only ever set inside one).
             if self.state == State::Hunt && !self.escaped {
                 while let Some((&START_DELIMITER, body)) = input.split_first() {
+                    // A frame is not whole in fewer bytes than its length field asks for
+                    // (read raw: an escape there only makes the frame longer, but for
+                    // lengths from 0x1100 on, which take the byte path).
+                    if !matches!(body.first_chunk::<2>(),
+                        Some(&[hi, lo]) if usize::from(u16::from_be_bytes([hi, lo])) + 2 < body.len())
+                    {
+                        break;
+                    }
                     let Some((n, outcome)) = self.whole2(body) else {
                         break;
                     };
@@ -429,10 +437,20 @@ impl<const N: usize> Decoder<N> {
                 }
                 match input.split_first() {
                     None => return,
-                    // A frame that is not whole here (or not valid): byte by byte.
+                    // A frame that is not whole here (or not valid): byte by byte, but
+                    // for a plain length field that the buffer can take, read here.
                     Some((&START_DELIMITER, body)) => {
                         self.begin2();
                         input = body;
+                        if let Some((&[hi, lo], data)) = body.split_first_chunk::<2>() {
+                            let len = usize::from(u16::from_be_bytes([hi, lo]));
+                            if is_plain(hi) && is_plain(lo) && len != 0 && len <= self.capacity() {
+                                self.len = len;
+                                self.state = State::Data;
+                                self.fill_to = len;
+                                input = data;
+                            }
+                        }
                     }
                     Some(_) => {
                         // Garbage: skip to the next start delimiter and try the frame
