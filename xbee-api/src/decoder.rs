@@ -561,6 +561,54 @@ impl<const N: usize> Decoder<N> {
                     f(Ok(RawFrame::from_data(data)));
                     input = input.get(n..).unwrap_or_default();
                 }
+                // A frame that is not whole (or not valid) here, with a length the
+                // buffer can take: its header buffered at once, as `begin1` and `drain1`
+                // would.
+                if let Some((&[START_DELIMITER, hi, lo], data)) = input.split_first_chunk::<3>() {
+                    let len = usize::from(u16::from_be_bytes([hi, lo]));
+                    if let (true, Some(header)) = (
+                        len != 0 && len <= self.capacity(),
+                        self.buf.first_chunk_mut::<3>(),
+                    ) {
+                        *header = [START_DELIMITER, hi, lo];
+                        self.start = 0;
+                        self.pos = 3;
+                        self.end = 3;
+                        self.len = len;
+                        self.state = State::Data;
+                        self.fill_to = 3 + len;
+                        input = data;
+                    }
+                }
+            }
+            // Frame data of the frame in progress (bytes pending, if any, are frame data
+            // too): buffered at once; then the checksum byte, and the frame's event.
+            if self.state == State::Data && self.end <= self.fill_to {
+                let end = self.end;
+                let take = (self.fill_to - end).min(input.len());
+                if let (Some(dst), Some((src, rest))) = (
+                    self.buf.get_mut(end..end + take),
+                    input.split_at_checked(take),
+                ) {
+                    dst.copy_from_slice(src);
+                    self.end = end + take;
+                    input = rest;
+                }
+                if self.end < self.fill_to {
+                    return;
+                }
+                // `fill_to < N` in mode 1: the checksum byte has its place.
+                if let (Some((&got, rest)), Some(slot)) =
+                    (input.split_first(), self.buf.get_mut(self.end))
+                {
+                    *slot = got;
+                    self.end += 1;
+                    input = rest;
+                    if let Some(outcome) = self.drain1() {
+                        f(self.event(outcome));
+                        continue;
+                    }
+                }
             }
             let (consumed, event) = self.decode(input);
             input = input.get(consumed..).unwrap_or_default();
