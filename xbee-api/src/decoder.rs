@@ -354,63 +354,95 @@ impl<const N: usize> Decoder<N> {
     pub fn decode_each<F: FnMut(Event<'_>)>(&mut self, input: &[u8], f: F) {
         // Most chunks from a UART FIFO or a DMA buffer are frame data of the frame in
         // progress: stored here, in line in the caller, without a call.
-        if self.fill(input) {
+        let rest = self.fill(input);
+        if rest.is_empty() && !input.is_empty() {
             return;
         }
         match self.mode {
-            ApiMode::Escaped => self.each2(input, f),
-            ApiMode::Unescaped => self.each1(input, f),
+            ApiMode::Escaped => self.each2(rest, f),
+            ApiMode::Unescaped => self.each1(rest, f),
         }
     }
 
-    /// Stores `input` if it is all frame data of the frame in progress (in mode 2,
-    /// without 0x7D or 0x7E): `true` if it did, as [`push`](Self::push) would have for
-    /// each byte. `false`, with nothing changed but the buffer's content, for anything
-    /// else, and for fewer than 16 bytes.
+    /// Stores the frame data of the frame in progress at the start of `input`, as
+    /// [`push`](Self::push) would byte by byte; returns the rest. 16 bytes or more are
+    /// taken all at once or not at all: all if they are frame data (in mode 2, without
+    /// 0x7D or 0x7E), 16 bytes a step on 64-bit targets. Fewer go a byte at a time,
+    /// up to the first byte that is not frame data (in mode 2, or is 0x7D or 0x7E).
     #[inline(always)]
-    fn fill(&mut self, input: &[u8]) -> bool {
-        let end = self.end;
+    fn fill<'i>(&mut self, input: &'i [u8]) -> &'i [u8] {
+        let mut end = self.end;
         // `fill_to` is 0 outside frame data and after an escape.
-        if input.len() < 16 || end + input.len() > self.fill_to {
-            return false;
-        }
-        let Some(dst) = self.buf.get_mut(end..end + input.len()) else {
-            return false;
-        };
-        #[cfg(target_pointer_width = "64")]
-        {
-            // 16 bytes a step, the last step ending at the end of `input` (overlapping
-            // the one before it, which stored the same bytes).
-            let last = input.len() - 16;
-            let mut specials = 0;
-            let mut i = 0;
-            loop {
-                let at = i.min(last);
-                if let (Some(step), Some(out)) = (
-                    input.get(at..).and_then(<[u8]>::first_chunk::<16>),
-                    dst.get_mut(at..).and_then(<[u8]>::first_chunk_mut::<16>),
-                ) {
-                    *out = *step;
-                    specials |= special_mask(u8x16::new(*step));
+        let fill_to = self.fill_to;
+        if input.len() >= 16 {
+            if end + input.len() > fill_to {
+                return input;
+            }
+            let Some(dst) = self.buf.get_mut(end..end + input.len()) else {
+                return input;
+            };
+            #[cfg(target_pointer_width = "64")]
+            {
+                // 16 bytes a step, the last step ending at the end of `input`
+                // (overlapping the one before it, which stored the same bytes).
+                let last = input.len() - 16;
+                let mut specials = 0;
+                let mut i = 0;
+                loop {
+                    let at = i.min(last);
+                    if let (Some(step), Some(out)) = (
+                        input.get(at..).and_then(<[u8]>::first_chunk::<16>),
+                        dst.get_mut(at..).and_then(<[u8]>::first_chunk_mut::<16>),
+                    ) {
+                        *out = *step;
+                        specials |= special_mask(u8x16::new(*step));
+                    }
+                    if at == last {
+                        break;
+                    }
+                    i += 16;
                 }
-                if at == last {
-                    break;
+                if specials != 0 && self.mode == ApiMode::Escaped {
+                    return input;
                 }
-                i += 16;
             }
-            if specials != 0 && self.mode == ApiMode::Escaped {
-                return false;
+            #[cfg(not(target_pointer_width = "64"))]
+            {
+                if self.mode == ApiMode::Escaped {
+                    return input;
+                }
+                dst.copy_from_slice(input);
             }
+            self.end = end + input.len();
+            return &[];
         }
-        #[cfg(not(target_pointer_width = "64"))]
-        {
-            if self.mode == ApiMode::Escaped {
-                return false;
+        // Mode 1 stores 0x7D and 0x7E here too.
+        let escaped = self.mode == ApiMode::Escaped;
+        let mut rest = input;
+        while let Some((&byte, tail)) = rest.split_first() {
+            let at = if escaped {
+                plain_or_max(end, byte)
+            } else {
+                end
+            };
+            if at >= fill_to {
+                break;
             }
-            dst.copy_from_slice(input);
+            // As in `push`: `fill_to <= N`, the mask changes nothing.
+            let at = if N.is_power_of_two() {
+                at & (N - 1)
+            } else {
+                at
+            };
+            let Some(slot) = self.buf.get_mut(at) else {
+                break;
+            };
+            *slot = byte;
+            end = at + 1;
+            rest = tail;
         }
-        self.end = end + input.len();
-        true
+        self.end = end;
+        rest
     }
 
     /// [`decode_each`](Self::decode_each) in mode 2: whole frames at once where they
@@ -561,62 +593,73 @@ impl<const N: usize> Decoder<N> {
                     f(Ok(RawFrame::from_data(data)));
                     input = input.get(n..).unwrap_or_default();
                 }
-                // A frame that is not whole (or not valid) here, with a length the
-                // buffer can take: its header buffered at once, as `begin1` and `drain1`
-                // would.
-                if let Some((&[START_DELIMITER, hi, lo], data)) = input.split_first_chunk::<3>() {
-                    let len = usize::from(u16::from_be_bytes([hi, lo]));
-                    if let (true, Some(header)) = (
-                        len != 0 && len <= self.capacity(),
-                        self.buf.first_chunk_mut::<3>(),
-                    ) {
-                        *header = [START_DELIMITER, hi, lo];
-                        self.start = 0;
-                        self.pos = 3;
-                        self.end = 3;
-                        self.len = len;
-                        self.state = State::Data;
-                        self.fill_to = 3 + len;
-                        input = data;
-                    }
-                }
             }
-            // Frame data of the frame in progress (bytes pending, if any, are frame data
-            // too): buffered at once; then the checksum byte, and the frame's event.
-            if self.state == State::Data && self.end <= self.fill_to {
-                let end = self.end;
-                let take = (self.fill_to - end).min(input.len());
-                if let (Some(dst), Some((src, rest))) = (
-                    self.buf.get_mut(end..end + take),
-                    input.split_at_checked(take),
-                ) {
-                    dst.copy_from_slice(src);
-                    self.end = end + take;
-                    input = rest;
-                }
-                if self.end < self.fill_to {
-                    return;
-                }
-                // `fill_to < N` in mode 1: the checksum byte has its place.
-                if let (Some((&got, rest)), Some(slot)) =
-                    (input.split_first(), self.buf.get_mut(self.end))
-                {
-                    *slot = got;
-                    self.end += 1;
-                    input = rest;
-                    if let Some(outcome) = self.drain1() {
-                        f(self.event(outcome));
-                        continue;
-                    }
-                }
-            }
-            let (consumed, event) = self.decode(input);
+            let (consumed, event) = self.feed1(input);
             input = input.get(consumed..).unwrap_or_default();
             match event {
                 Some(event) => f(event),
                 None => return,
             }
         }
+    }
+
+    /// [`decode`](Self::decode) in mode 1 for input that does not start with a whole valid
+    /// frame, with the common steps of a frame split across inputs in line: its header
+    /// (if its length is one the buffer can take), its frame data and its checksum byte
+    /// buffered at once.
+    #[inline(always)]
+    fn feed1(&mut self, input: &[u8]) -> (usize, Option<Event<'_>>) {
+        let mut rest = input;
+        if self.state == State::Hunt && self.pos == self.end {
+            // As `begin1` and `drain1` would.
+            if let Some((&[START_DELIMITER, hi, lo], data)) = rest.split_first_chunk::<3>() {
+                let len = usize::from(u16::from_be_bytes([hi, lo]));
+                if let (true, Some(header)) = (
+                    len != 0 && len <= self.capacity(),
+                    self.buf.first_chunk_mut::<3>(),
+                ) {
+                    *header = [START_DELIMITER, hi, lo];
+                    self.start = 0;
+                    self.pos = 3;
+                    self.end = 3;
+                    self.len = len;
+                    self.state = State::Data;
+                    self.fill_to = 3 + len;
+                    rest = data;
+                }
+            }
+        }
+        // Frame data of the frame in progress (bytes pending, if any, are frame data
+        // too), then the checksum byte.
+        if self.state == State::Data && self.end <= self.fill_to {
+            let end = self.end;
+            let take = (self.fill_to - end).min(rest.len());
+            if let (Some(dst), Some((src, tail))) = (
+                self.buf.get_mut(end..end + take),
+                rest.split_at_checked(take),
+            ) {
+                dst.copy_from_slice(src);
+                self.end = end + take;
+                rest = tail;
+            }
+            if self.end < self.fill_to {
+                return (input.len(), None);
+            }
+            // `fill_to < N` in mode 1: the checksum byte has its place.
+            if let (Some((&got, tail)), Some(slot)) =
+                (rest.split_first(), self.buf.get_mut(self.end))
+            {
+                *slot = got;
+                self.end += 1;
+                rest = tail;
+                if let Some(outcome) = self.drain1() {
+                    return (input.len() - rest.len(), Some(self.event(outcome)));
+                }
+            }
+        }
+        let taken = input.len() - rest.len();
+        let (consumed, event) = self.decode(rest);
+        (taken + consumed, event)
     }
 
     /// Ends the input: delivers pending events, then reports a partial frame as
