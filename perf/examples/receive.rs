@@ -17,6 +17,9 @@ use xbee_api::ApiMode;
 #[path = "../benches/common/mavlink_run.rs"]
 mod mavlink_run;
 
+/// A measured loop over a stream.
+type Run = Box<dyn Fn(&[u8], ApiMode) -> Totals>;
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let arg = |i: usize, default: &str| args.get(i).cloned().unwrap_or_else(|| default.into());
@@ -36,7 +39,7 @@ fn main() {
     let chunk: usize = std::env::var("CHUNK")
         .map_or(16, |c| c.parse().expect("CHUNK"))
         .max(1);
-    let run: Box<dyn Fn(&[u8], ApiMode) -> Totals> = match case.as_str() {
+    let run: Run = match case.as_str() {
         "slice2" | "slice1" => Box::new(run_slice),
         "calls2" | "calls1" => Box::new(run_slice_calls),
         "push2" | "push1" => Box::new(run_push),
