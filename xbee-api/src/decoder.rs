@@ -350,6 +350,31 @@ impl<const N: usize> Decoder<N> {
     /// assert_eq!(statuses, [0x06, 0x00]);
     /// assert_eq!(decoder.stats().bad_checksum, 1);
     /// ```
+    ///
+    /// In an interrupt handler, feed it what the UART's FIFO or the DMA buffer holds (on
+    /// an idle line, a half or a full buffer) rather than pushing byte by byte: the same
+    /// events come out however the input is split, and a chunk that is all frame data
+    /// of the frame in progress (most of them) is stored in line in the caller, 16 bytes
+    /// a step on 64-bit targets; the rest of a frame split across chunks is stepped with
+    /// its cursors in registers. From 16-byte chunks on it costs less a byte than
+    /// [`push`](Self::push) (about 11 instructions a byte in mode 2 at 16 bytes, 8.4 at
+    /// 64, against 15 for `push`); single bytes cost more than with `push`.
+    ///
+    /// ```
+    /// use xbee_api::{ApiMode, Decoder};
+    /// let stream = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F, 0x7E, 0x00, 0x02, 0x8A, 0x00, 0x75];
+    /// let mut decoder: Decoder<64> = Decoder::new(ApiMode::Escaped);
+    /// let mut frames = 0;
+    /// // What the RX FIFO held at each interrupt.
+    /// for fifo in stream.chunks(4) {
+    ///     decoder.decode_each(fifo, |event| {
+    ///         if event.is_ok() {
+    ///             frames += 1;
+    ///         }
+    ///     });
+    /// }
+    /// assert_eq!(frames, 2);
+    /// ```
     #[inline(always)]
     pub fn decode_each<F: FnMut(Event<'_>)>(&mut self, input: &[u8], f: F) {
         // Most chunks from a UART FIFO or a DMA buffer are frame data of the frame in
