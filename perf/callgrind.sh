@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # Instructions per input byte of each receive-path case, counted by valgrind's
 # callgrind inside the measured `run_*` loop only (stream generation is not counted):
-# the XBee slice decoder, the byte-at-a-time decoder, the pipeline to typed MCP
-# telemetry values, and the `mavlink` crate on a MAVLink v2 stream carrying as many
-# values. Streams are 1 MiB unless given.
+# the XBee slice decoder, the byte-at-a-time decoder, the slice decoder fed in chunks
+# of CHUNK bytes (fifo2/fifo1; default 16, a UART FIFO or DMA buffer), the pipeline to
+# typed MCP telemetry values, and the `mavlink` crate on a MAVLink v2 stream carrying as
+# many values. Streams are 1 MiB unless given.
 #
-# Usage: perf/callgrind.sh [bytes] [case...]
+# Usage: [CHUNK=n] perf/callgrind.sh [bytes] [case...]
 set -euo pipefail
 
 crate=$(cd "$(dirname "$0")" && pwd)
@@ -13,7 +14,7 @@ bytes=${1:-1048576}
 shift || true
 cases=("$@")
 if [ ${#cases[@]} -eq 0 ]; then
-    cases=(slice2 slice1 push2 push1 pipeline2 pipeline1 pipeline_push2 mavlink)
+    cases=(slice2 slice1 push2 push1 fifo2 fifo1 pipeline2 pipeline1 pipeline_push2 mavlink)
 fi
 target=${CARGO_TARGET_DIR:-$crate/../target}
 work=$(mktemp -d)

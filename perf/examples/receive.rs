@@ -2,18 +2,23 @@
 //! `callgrind.sh`, which collects inside the `run_*` functions only) and quick timings.
 //!
 //! `cargo run --release -p perf --example receive -- <case> [bytes] [runs]`, where case
-//! is `slice2`, `slice1`, `calls2`, `calls1` (one `decode` call a frame), `push2`, `push1`, `pipeline2`, `pipeline1`, `pipeline_push2`
-//! or `mavlink` (a MAVLink stream carrying as many values as the mode 2 stream).
+//! is `slice2`, `slice1`, `calls2`, `calls1` (one `decode` call a frame), `push2`, `push1`,
+//! `fifo2`, `fifo1` (`decode_each` on chunks of `CHUNK` bytes, default 16, as a UART FIFO
+//! or DMA buffer hands them over), `pipeline2`, `pipeline1`, `pipeline_push2` or `mavlink`
+//! (a MAVLink stream carrying as many values as the mode 2 stream).
 
 use std::hint::black_box;
 use std::time::Instant;
 
-use perf::run::{run_pipeline, run_pipeline_push, run_push, run_slice, run_slice_calls};
+use perf::run::{run_fifo, run_pipeline, run_pipeline_push, run_push, run_slice, run_slice_calls};
 use perf::{Totals, mavlink_stream, mcp_stream};
 use xbee_api::ApiMode;
 
 #[path = "../benches/common/mavlink_run.rs"]
 mod mavlink_run;
+
+/// A measured loop over a stream.
+type Run = Box<dyn Fn(&[u8], ApiMode) -> Totals>;
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -31,13 +36,17 @@ fn main() {
         "mavlink" => mavlink_stream(xbee.totals.values),
         _ => xbee,
     };
-    let run: fn(&[u8], ApiMode) -> Totals = match case.as_str() {
-        "slice2" | "slice1" => run_slice,
-        "calls2" | "calls1" => run_slice_calls,
-        "push2" | "push1" => run_push,
-        "pipeline2" | "pipeline1" => run_pipeline,
-        "pipeline_push2" => run_pipeline_push,
-        "mavlink" => |s, _| mavlink_run::run_mavlink(s),
+    let chunk: usize = std::env::var("CHUNK")
+        .map_or(16, |c| c.parse().expect("CHUNK"))
+        .max(1);
+    let run: Run = match case.as_str() {
+        "slice2" | "slice1" => Box::new(run_slice),
+        "calls2" | "calls1" => Box::new(run_slice_calls),
+        "push2" | "push1" => Box::new(run_push),
+        "fifo2" | "fifo1" => Box::new(move |s, m| run_fifo(s, m, chunk)),
+        "pipeline2" | "pipeline1" => Box::new(run_pipeline),
+        "pipeline_push2" => Box::new(run_pipeline_push),
+        "mavlink" => Box::new(|s, _| mavlink_run::run_mavlink(s)),
         other => panic!("unknown case {other}"),
     };
     let mut best = f64::INFINITY;

@@ -56,6 +56,30 @@ pub fn run_slice_calls(stream: &[u8], mode: ApiMode) -> Totals {
     }
 }
 
+/// [`run_slice`] with the stream fed in chunks of `chunk` bytes, as a UART FIFO or a DMA
+/// buffer with idle-line detection hands them over in an interrupt handler: frames and
+/// frame data bytes.
+///
+/// # Panics
+///
+/// On a decode error: the streams hold none.
+#[inline(never)]
+pub fn run_fifo(stream: &[u8], mode: ApiMode, chunk: usize) -> Totals {
+    let mut decoder: Decoder = Decoder::new(mode);
+    let mut totals = Totals::default();
+    for input in stream.chunks(chunk.max(1)) {
+        decoder.decode_each(input, |event| match event {
+            Ok(frame) => {
+                totals.frames += 1;
+                totals.data_bytes += frame.len();
+            }
+            Err(error) => panic!("{error}"),
+        });
+    }
+    finish(&mut decoder);
+    totals
+}
+
 /// Ends a stream that holds no partial frame.
 fn finish(decoder: &mut Decoder) {
     if let Some(event) = decoder.finish() {

@@ -1,7 +1,7 @@
 //! Every measured loop finds in its stream exactly what the generator put there, and
 //! the MAVLink stream is what the `mavlink` crate reads.
 
-use perf::run::{run_pipeline, run_pipeline_push, run_push, run_slice};
+use perf::run::{run_fifo, run_pipeline, run_pipeline_push, run_push, run_slice};
 use perf::{Totals, VALUES_PER_PACKET, mavlink_stream, mcp_stream};
 use xbee_api::ApiMode;
 
@@ -35,6 +35,13 @@ fn decoders_find_every_frame_and_value() {
             frames_only(expected),
             "{mode:?}"
         );
+        for chunk in [1, 3, 8, 16, 17, 64] {
+            assert_eq!(
+                run_fifo(&stream.bytes, mode, chunk),
+                frames_only(expected),
+                "{mode:?} in chunks of {chunk}"
+            );
+        }
         assert_eq!(run_pipeline(&stream.bytes, mode), expected, "{mode:?}");
         assert_eq!(run_pipeline_push(&stream.bytes, mode), expected, "{mode:?}");
     }

@@ -320,3 +320,65 @@ proptest! {
         prop_assert_eq!(each_stats, bytes_stats);
     }
 }
+
+/// Read sizes as a UART FIFO or a DMA buffer hands them over: one size throughout (1 to
+/// 64 bytes), or a mix of them.
+fn fifo_reads() -> impl Strategy<Value = Vec<usize>> {
+    prop_oneof![
+        (1..=64usize).prop_map(|n| vec![n]),
+        proptest::collection::vec(1..=64usize, 1..8),
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(512))]
+
+    /// Small chunks, so that frames are split across calls at every place: `decode_each`
+    /// and `decode` yield exactly the events and counters of the byte-at-a-time path.
+    #[test]
+    fn fifo_chunks_decode_as_byte_at_a_time(
+        mode in mode(),
+        items in proptest::collection::vec(rich_item(), 0..24),
+        reads in fifo_reads(),
+    ) {
+        let (stream, valid, ranges) = build(&items, mode);
+        prop_assume!(plausible(&stream, &ranges, mode));
+        let (bytes, bytes_stats) = decode_bytes::<N>(mode, &stream);
+        let (each, each_stats) = decode_each_slices::<N>(mode, &stream, &reads);
+        let (events, stats) = decode_slices::<N>(mode, &stream, &reads);
+        prop_assert_eq!(&frames(&bytes), &valid);
+        prop_assert_eq!(&each, &bytes);
+        prop_assert_eq!(each_stats, bytes_stats);
+        prop_assert_eq!(&events, &bytes);
+        prop_assert_eq!(stats, bytes_stats);
+    }
+
+    /// Frames up to the buffer's capacity among garbage, in small chunks: no room past
+    /// the frame data for whole steps near the end of the buffer.
+    #[test]
+    fn fifo_chunks_near_capacity_decode_as_byte_at_a_time(
+        mode in mode(),
+        frames_data in proptest::collection::vec(
+            proptest::collection::vec(
+                prop_oneof![3 => any::<u8>(), 1 => Just(0x7Du8), 1 => Just(0x7Eu8)],
+                1..=64,
+            ),
+            1..6,
+        ),
+        garbage in proptest::collection::vec(any::<u8>(), 0..6),
+        reads in fifo_reads(),
+    ) {
+        let mut stream = Vec::new();
+        for data in &frames_data {
+            stream.extend(wire(data, checksum(data), mode));
+            stream.extend_from_slice(&garbage);
+        }
+        let (bytes, bytes_stats) = decode_bytes::<64>(mode, &stream);
+        let (each, each_stats) = decode_each_slices::<64>(mode, &stream, &reads);
+        let (events, stats) = decode_slices::<64>(mode, &stream, &reads);
+        prop_assert_eq!(&each, &bytes);
+        prop_assert_eq!(each_stats, bytes_stats);
+        prop_assert_eq!(&events, &bytes);
+        prop_assert_eq!(stats, bytes_stats);
+    }
+}
