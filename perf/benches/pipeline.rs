@@ -11,7 +11,7 @@ use std::hint::black_box;
 use std::time::{Duration, Instant};
 
 use criterion::{Criterion, Throughput};
-use perf::run::{run_pipeline, run_pipeline_push, run_push, run_slice};
+use perf::run::{run_fifo, run_pipeline, run_pipeline_push, run_push, run_slice};
 use perf::{Stream, Totals, mavlink_stream, mcp_stream};
 use xbee_api::ApiMode;
 
@@ -65,6 +65,16 @@ fn cases<'a>(escaped: &'a Stream, plain: &'a Stream, mavlink: &'a Stream) -> Vec
             "xbee push mode 1",
             plain,
             Box::new(move |s: &[u8]| run_push(s, mode1)),
+        ),
+        case(
+            "xbee fifo 16 mode 2",
+            escaped,
+            Box::new(move |s: &[u8]| run_fifo(s, mode2, 16)),
+        ),
+        case(
+            "xbee fifo 16 mode 1",
+            plain,
+            Box::new(move |s: &[u8]| run_fifo(s, mode1, 16)),
         ),
         case(
             "pipeline slice mode 2",
