@@ -15,30 +15,6 @@ use crate::{ApiMode, DecodeError, RawFrame, Stats};
 /// sends, with margin, in both modes (mode 1 also buffers the 4 framing bytes).
 pub const DEFAULT_CAPACITY: usize = 512;
 
-/// All ones for 0x7D and 0x7E, 0 for every other byte: [`Decoder::push`] ORs it into
-/// its cursor, so that one compare tests both the room left and the byte (64-bit
-/// targets only, where 256 bytes of table are nothing; elsewhere two compares).
-#[cfg(target_pointer_width = "64")]
-static SPECIAL: [i8; 256] = {
-    let mut table = [0; 256];
-    table[ESCAPE as usize] = -1;
-    table[START_DELIMITER as usize] = -1;
-    table
-};
-
-/// `end`, or `usize::MAX` (never below `fill_to`) if `byte` is 0x7D or 0x7E.
-#[inline(always)]
-fn plain_or_max(end: usize, byte: u8) -> usize {
-    #[cfg(target_pointer_width = "64")]
-    {
-        end | SPECIAL[usize::from(byte)] as isize as usize
-    }
-    #[cfg(not(target_pointer_width = "64"))]
-    {
-        if is_plain(byte) { end } else { usize::MAX }
-    }
-}
-
 /// Bit `k` set if `bytes[k]` is 0x7D or 0x7E.
 #[cfg(target_pointer_width = "64")]
 #[inline(always)]
@@ -260,15 +236,14 @@ impl<const N: usize> Decoder<N> {
     /// until it returns `None` before pushing the next byte.
     ///
     /// A byte of frame data that is neither 0x7D nor 0x7E is only stored: one compare
-    /// of two cursors, one of the byte (on 64-bit targets a table lookup ORed into the
-    /// cursor makes the two compares one), a bounds check (none when `N` is a power of
-    /// two) and the store. Delimiters, length bytes, escapes and the checksum byte take
+    /// of two cursors, one of the byte, a bounds check (none when `N` is a power of two)
+    /// and the store. Delimiters, length bytes, escapes and the checksum byte take
     /// one step of the state machine, in line in mode 2 (a few tests each) and out of
     /// line in mode 1; the frame data is summed once, with the checksum.
     #[inline(always)]
     pub fn push(&mut self, byte: u8) -> Option<Event<'_>> {
-        let end = plain_or_max(self.end, byte);
-        if end < self.fill_to {
+        let end = self.end;
+        if end < self.fill_to && is_plain(byte) {
             // `fill_to <= N`, so the mask changes nothing; it shows the compiler that the
             // index is in bounds when `N` is a power of two.
             let at = if N.is_power_of_two() {
@@ -283,7 +258,7 @@ impl<const N: usize> Decoder<N> {
             }
         }
         let outcome = match self.mode {
-            ApiMode::Escaped => self.step2_at(byte, end),
+            ApiMode::Escaped => self.step2(byte),
             ApiMode::Unescaped => self.push_slow(byte),
         };
         outcome.map(|o| self.event(o))
@@ -445,14 +420,10 @@ impl<const N: usize> Decoder<N> {
         let escaped = self.mode == ApiMode::Escaped;
         let mut rest = input;
         while let Some((&byte, tail)) = rest.split_first() {
-            let at = if escaped {
-                plain_or_max(end, byte)
-            } else {
-                end
-            };
-            if at >= fill_to {
+            if end >= fill_to || (escaped && !is_plain(byte)) {
                 break;
             }
+            let at = end;
             // As in `push`: `fill_to <= N`, the mask changes nothing.
             let at = if N.is_power_of_two() {
                 at & (N - 1)
@@ -567,14 +538,13 @@ impl<const N: usize> Decoder<N> {
                     return (input.len(), None);
                 };
                 rest = tail;
-                let at = plain_or_max(end, byte);
-                if at < fill_to {
+                if end < fill_to && is_plain(byte) {
                     // `fill_to <= N`: as in `push`, the mask only shows the compiler
                     // that the index is in bounds when `N` is a power of two.
                     let at = if N.is_power_of_two() {
-                        at & (N - 1)
+                        end & (N - 1)
                     } else {
-                        at
+                        end
                     };
                     if let Some(slot) = self.buf.get_mut(at) {
                         *slot = byte;
@@ -583,7 +553,7 @@ impl<const N: usize> Decoder<N> {
                     }
                 }
                 // An escaped byte of frame data, whole in `rest`: stored at once. The
-                // test is the one `step2_at` makes after the escape; a bad escape goes
+                // test is the one `step2` makes after the escape; a bad escape goes
                 // there and is reported by it.
                 if byte == ESCAPE && end < fill_to {
                     if let Some((&raw, tail)) = rest.split_first() {
@@ -599,7 +569,7 @@ impl<const N: usize> Decoder<N> {
                     }
                 }
                 self.end = end;
-                if let Some(outcome) = self.step2_at(byte, at) {
+                if let Some(outcome) = self.step2(byte) {
                     return (input.len() - rest.len(), Some(outcome));
                 }
                 end = self.end;
@@ -806,17 +776,10 @@ impl<const N: usize> Decoder<N> {
     ///
     /// The common bytes first, each with few tests: an escape inside a frame, the byte
     /// after it, frame data, the length bytes and the checksum; errors go out of line.
+    /// (Its state tests stay a `match` on purpose: testing frame data first with an
+    /// `if`, as one compare, cost `push` a third of its bytes a second on x86-64.)
     #[inline(always)]
     fn step2(&mut self, raw: u8) -> Option<Outcome> {
-        self.step2_at(raw, self.end)
-    }
-
-    /// [`step2`](Self::step2) with the cursor already read: `end` is `self.end`
-    /// wherever it is used, for a byte of frame data, which is never a raw 0x7D or
-    /// 0x7E. [`push`](Self::push) passes its cursor, which is `usize::MAX` for those two
-    /// bytes, so that it reads `self.end` once.
-    #[inline(always)]
-    fn step2_at(&mut self, raw: u8, end: usize) -> Option<Outcome> {
         let byte = if self.escaped {
             // Only ever set inside a frame. An escaped start delimiter is no special byte.
             self.escaped = false;
@@ -838,34 +801,29 @@ impl<const N: usize> Decoder<N> {
         } else {
             raw
         };
-        // Tests in the order of how often they hold: frame data (after an escape) and
-        // the checksum, then the length bytes. `Checksum` is a mode 1 state, never
-        // entered here; it only makes the test one compare.
-        if let State::Data | State::Checksum = self.state {
+        match self.state {
             // Once `end` reaches the length, frame data is complete and this byte is the
             // checksum.
-            if end < self.len {
-                debug_assert_eq!(end, self.end);
-                if let Some(slot) = self.buf.get_mut(end) {
+            State::Data if self.end < self.len => {
+                if let Some(slot) = self.buf.get_mut(self.end) {
                     *slot = byte;
                 }
-                self.end = end + 1;
+                self.end += 1;
                 self.fill_to = self.len;
-                return None;
+                None
             }
             // On 64-bit targets the sum in line, SIMD in the caller's loop; elsewhere
             // out of line, with the check that mode 1 shares, for flash.
-            if cfg!(target_pointer_width = "64") {
+            State::Data | State::Checksum if cfg!(target_pointer_width = "64") => {
                 self.hunt();
                 let total = sum(self.buf.get(..self.len).unwrap_or_default());
-                return Some(self.check_sum(total, 0, byte).map_err(|e| self.record(e)));
+                Some(self.check_sum(total, 0, byte).map_err(|e| self.record(e)))
             }
-            return Some(self.checksum2(byte));
-        }
-        match self.state {
+            State::Data | State::Checksum => Some(self.checksum2(byte)),
             State::LenHi => {
                 self.len = usize::from(byte) << 8;
                 self.state = State::LenLo;
+                None
             }
             State::LenLo => {
                 self.len |= usize::from(byte);
@@ -874,10 +832,13 @@ impl<const N: usize> Decoder<N> {
                 }
                 self.state = State::Data;
                 self.fill_to = self.len;
+                None
             }
-            _ => self.skipped(1),
+            State::Hunt => {
+                self.skipped(1);
+                None
+            }
         }
-        None
     }
 
     /// The checksum byte `got` of a mode 2 frame: the frame, or the error, counted; back
