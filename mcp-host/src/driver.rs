@@ -2,6 +2,7 @@
 //! frames, matches statuses, responses and reports to the requests in flight, and
 //! reconnects.
 
+use std::collections::VecDeque;
 use std::fmt;
 use std::sync::Arc;
 use std::time::{Duration, SystemTime};
@@ -25,6 +26,10 @@ use crate::transport::{Connector, Transport};
 
 /// Stop accepting new requests while this many bytes wait to be written.
 const HIGH_WATER: usize = 16 * 1024;
+
+/// Requests that need a frame id, taken while all 255 are in flight, wait in the order
+/// they came, at most this many; beyond that no request is taken until ids free up.
+const PARKED_MAX: usize = 64;
 
 /// A request from a [`crate::CommandSender`] to the background task.
 #[derive(Debug)]
@@ -55,6 +60,60 @@ pub(crate) enum Op {
         data: Bytes,
         reply: oneshot::Sender<Result<(), SendError>>,
     },
+}
+
+impl Op {
+    /// Whether the request needs a frame id of its own (it awaits a status or response).
+    fn needs_id(&self) -> bool {
+        match self {
+            Op::Transmit { with_status, .. } => *with_status,
+            Op::Request { .. } | Op::Frame { .. } => true,
+            Op::Write { .. } => false,
+        }
+    }
+
+    /// When the request times out (`None` for raw writes, which do not wait).
+    fn deadline(&self) -> Option<Instant> {
+        match self {
+            Op::Transmit { deadline, .. }
+            | Op::Request { deadline, .. }
+            | Op::Frame { deadline, .. } => Some(*deadline),
+            Op::Write { .. } => None,
+        }
+    }
+
+    /// Answers the request with its timeout error.
+    fn time_out(self) {
+        match self {
+            Op::Transmit { timeout, reply, .. } => {
+                let _ = reply.send(Err(SendError::Timeout {
+                    frame_id: 0,
+                    timeout,
+                }));
+            }
+            Op::Request {
+                to,
+                key,
+                timeout,
+                reply,
+                ..
+            } => {
+                let _ = reply.send(Err(RequestError::Timeout {
+                    from: to,
+                    what: key.to_string(),
+                    timeout,
+                }));
+            }
+            Op::Frame { timeout, reply, .. } => {
+                let _ = reply.send(Err(SendError::Timeout {
+                    frame_id: 0,
+                    timeout,
+                }));
+            }
+            // Never parked nor timed out: it needs no frame id and waits for nothing.
+            Op::Write { .. } => {}
+        }
+    }
 }
 
 /// Which report answers a status request: its type, and for telemetry to coordinator
@@ -150,6 +209,8 @@ pub(crate) struct Driver {
     pub(crate) counters: Arc<Counters>,
     ops_open: bool,
     ids: IdTable<Pending>,
+    /// Requests that need a frame id, taken while none was free.
+    parked: VecDeque<Op>,
     waiters: Vec<Waiter>,
     next_waiter: u64,
     healthy: bool,
@@ -171,6 +232,7 @@ impl Driver {
             counters,
             ops_open: true,
             ids: IdTable::new(),
+            parked: VecDeque::new(),
             waiters: Vec::new(),
             next_waiter: 0,
             healthy: false,
@@ -266,8 +328,10 @@ impl Driver {
         let mut out = BytesMut::new();
         self.healthy = false;
         loop {
+            self.unpark(&mut out);
             let deadline = self.next_deadline();
-            let accept_ops = self.ops_open && self.ids.has_free() && out.len() < HIGH_WATER;
+            let accept_ops =
+                self.ops_open && self.parked.len() < PARKED_MAX && out.len() < HIGH_WATER;
             tokio::select! {
                 item = reader.next() => match item {
                     Some(Ok(item)) => self.handle_item(item),
@@ -477,8 +541,29 @@ impl Driver {
         Some(reply)
     }
 
-    /// Starts a request: allocates a frame id where needed and queues its frame.
+    /// Takes a request: starts it, or parks it when it needs a frame id and none is free
+    /// (or requests parked before it still wait). Requests that need no id (raw writes,
+    /// transmits without status) start at once even while all ids are in flight.
     fn start(&mut self, op: Op, out: &mut BytesMut) {
+        if op.needs_id() && (!self.ids.has_free() || !self.parked.is_empty()) {
+            self.parked.push_back(op);
+            return;
+        }
+        self.begin(op, out);
+    }
+
+    /// Starts parked requests, in order, while frame ids are free.
+    fn unpark(&mut self, out: &mut BytesMut) {
+        while self.ids.has_free() {
+            let Some(op) = self.parked.pop_front() else {
+                return;
+            };
+            self.begin(op, out);
+        }
+    }
+
+    /// Starts a request: allocates a frame id where needed and queues its frame.
+    fn begin(&mut self, op: Op, out: &mut BytesMut) {
         let now = Instant::now();
         match op {
             Op::Transmit {
@@ -551,8 +636,8 @@ impl Driver {
                     timeout,
                     kind: PendingKind::Request { to, waiter },
                 };
-                // Without a free id (cannot happen: requests are accepted only when one is
-                // free) the request still goes out, without a delivery status.
+                // Without a free id (cannot happen: requests that need one are parked
+                // until one is free) the request still goes out, without a delivery status.
                 let id = self.ids.insert(pending).unwrap_or(0);
                 if let Err(e) = write_transmit(self.options.api_mode, out, id, to, &payload) {
                     self.ids.remove(id);
@@ -618,11 +703,21 @@ impl Driver {
     fn next_deadline(&self) -> Option<Instant> {
         let ids = self.ids.values().map(|p| p.deadline);
         let waiters = self.waiters.iter().map(|w| w.deadline);
-        ids.chain(waiters).min()
+        let parked = self.parked.iter().filter_map(Op::deadline);
+        ids.chain(waiters).chain(parked).min()
     }
 
-    /// Fails every request whose deadline has passed, freeing its frame id.
+    /// Fails every request whose deadline has passed, freeing its frame id, and every
+    /// parked one whose deadline has passed.
     fn expire(&mut self, now: Instant) {
+        let (expired, parked): (VecDeque<Op>, VecDeque<Op>) = std::mem::take(&mut self.parked)
+            .into_iter()
+            .partition(|op| op.deadline().is_some_and(|d| d <= now));
+        self.parked = parked;
+        for op in expired {
+            bump(&self.counters.timeouts);
+            op.time_out();
+        }
         let counters = &self.counters;
         self.ids.remove_where(
             |p| p.deadline <= now,
@@ -677,6 +772,9 @@ impl Driver {
         });
         for w in self.waiters.drain(..) {
             let _ = w.reply.send(Err(error.clone().into()));
+        }
+        for op in self.parked.drain(..) {
+            refuse(op, reason);
         }
     }
 

@@ -19,7 +19,11 @@
 //! [`LinkOptions`] sets the XBee API mode (1, as the deployed MAVs use, or 2), the frame
 //! size limit, timeouts and the [`ReconnectPolicy`] (exponential backoff, or none).
 //! While the transport is down, requests fail at once with [`SendError::Disconnected`];
-//! requests in flight when it goes down fail with the same error.
+//! requests in flight when it goes down fail with the same error. A request that awaits a
+//! status or response takes one of the 255 XBee frame ids until it is answered or times
+//! out; while all are taken (a radio that leaves statuses unanswered), such requests wait
+//! in order for the first free id (or their deadline), and raw writes and transmits
+//! without status still go out at once.
 //!
 //! # Example
 //!
