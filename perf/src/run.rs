@@ -4,7 +4,7 @@
 //! (`callgrind.sh` toggles collection on `run_*`).
 
 use mcp_core::Packet;
-use xbee_api::{ApiMode, Decoder, ReceivePacket};
+use xbee_api::{ApiMode, Decoder, Event, ReceivePacket};
 
 use crate::Totals;
 
@@ -21,13 +21,7 @@ const RECEIVE_PACKET: u8 = 0x90;
 pub fn run_slice(stream: &[u8], mode: ApiMode) -> Totals {
     let mut decoder: Decoder = Decoder::new(mode);
     let mut totals = Totals::default();
-    decoder.decode_each(stream, |event| match event {
-        Ok(frame) => {
-            totals.frames += 1;
-            totals.data_bytes += frame.len();
-        }
-        Err(error) => panic!("{error}"),
-    });
+    decoder.decode_each(stream, |event| count(event, &mut totals));
     finish(&mut decoder);
     totals
 }
@@ -68,16 +62,26 @@ pub fn run_fifo(stream: &[u8], mode: ApiMode, chunk: usize) -> Totals {
     let mut decoder: Decoder = Decoder::new(mode);
     let mut totals = Totals::default();
     for input in stream.chunks(chunk.max(1)) {
-        decoder.decode_each(input, |event| match event {
-            Ok(frame) => {
-                totals.frames += 1;
-                totals.data_bytes += frame.len();
-            }
-            Err(error) => panic!("{error}"),
-        });
+        decoder.decode_each(input, |event| count(event, &mut totals));
     }
     finish(&mut decoder);
     totals
+}
+
+/// Counts a frame and its data bytes.
+///
+/// # Panics
+///
+/// On a decode error: the streams hold none.
+#[inline(always)]
+fn count(event: Event<'_>, totals: &mut Totals) {
+    match event {
+        Ok(frame) => {
+            totals.frames += 1;
+            totals.data_bytes += frame.len();
+        }
+        Err(error) => panic!("{error}"),
+    }
 }
 
 /// Ends a stream that holds no partial frame.
