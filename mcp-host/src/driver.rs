@@ -82,6 +82,17 @@ impl Op {
         }
     }
 
+    /// Whether the caller stopped waiting for the answer (a raw write is written all the
+    /// same).
+    fn caller_gone(&self) -> bool {
+        match self {
+            Op::Transmit { reply, .. } => reply.is_closed(),
+            Op::Request { reply, .. } => reply.is_closed(),
+            Op::Frame { reply, .. } => reply.is_closed(),
+            Op::Write { .. } => false,
+        }
+    }
+
     /// Answers the request with its timeout error.
     fn time_out(self) {
         match self {
@@ -520,27 +531,6 @@ impl Driver {
         self.emit(Event::Frame(frame));
     }
 
-    /// The reply channel of a request worth starting; `None` when its caller is gone,
-    /// or when its deadline has passed already (the caller then gets the error
-    /// `timed_out` makes).
-    fn live<T, E>(
-        &self,
-        reply: oneshot::Sender<Result<T, E>>,
-        deadline: Instant,
-        now: Instant,
-        timed_out: impl FnOnce() -> E,
-    ) -> Option<oneshot::Sender<Result<T, E>>> {
-        if reply.is_closed() {
-            return None;
-        }
-        if deadline <= now {
-            bump(&self.counters.timeouts);
-            let _ = reply.send(Err(timed_out()));
-            return None;
-        }
-        Some(reply)
-    }
-
     /// Takes a request: starts it, or parks it when it needs a frame id and none is free
     /// (or requests parked before it still wait). Requests that need no id (raw writes,
     /// transmits without status) start at once even while all ids are in flight.
@@ -562,9 +552,18 @@ impl Driver {
         }
     }
 
-    /// Starts a request: allocates a frame id where needed and queues its frame.
+    /// Starts a request: allocates a frame id where needed and queues its frame. A
+    /// request whose caller is gone is dropped; one whose deadline has passed already is
+    /// answered with its timeout error.
     fn begin(&mut self, op: Op, out: &mut BytesMut) {
-        let now = Instant::now();
+        if op.caller_gone() {
+            return;
+        }
+        if op.deadline().is_some_and(|d| d <= Instant::now()) {
+            bump(&self.counters.timeouts);
+            op.time_out();
+            return;
+        }
         match op {
             Op::Transmit {
                 to,
@@ -574,12 +573,6 @@ impl Driver {
                 timeout,
                 reply,
             } => {
-                let Some(reply) = self.live(reply, deadline, now, || SendError::Timeout {
-                    frame_id: 0,
-                    timeout,
-                }) else {
-                    return;
-                };
                 if !with_status {
                     let result = write_transmit(self.options.api_mode, out, 0, to, &payload)
                         .map(|()| DeliveryReport::Written);
@@ -622,13 +615,6 @@ impl Driver {
                 timeout,
                 reply,
             } => {
-                let Some(reply) = self.live(reply, deadline, now, || RequestError::Timeout {
-                    from: to,
-                    what: key.to_string(),
-                    timeout,
-                }) else {
-                    return;
-                };
                 let waiter = self.next_waiter;
                 self.next_waiter += 1;
                 let pending = Pending {
@@ -659,12 +645,6 @@ impl Driver {
                 timeout,
                 reply,
             } => {
-                let Some(reply) = self.live(reply, deadline, now, || SendError::Timeout {
-                    frame_id: 0,
-                    timeout,
-                }) else {
-                    return;
-                };
                 let pending = Pending {
                     deadline,
                     timeout,
