@@ -4,6 +4,9 @@ use memchr::{memchr, memchr2};
 #[cfg(target_pointer_width = "64")]
 use wide::u8x16;
 
+#[cfg(target_pointer_width = "64")]
+use crate::unescape::special_mask;
+
 use crate::unescape::{is_plain, unescape, unescape_byte};
 use crate::wire::{ESCAPE, ESCAPE_XOR, START_DELIMITER, checksum_of_sum, needs_escape, sum};
 use crate::{ApiMode, DecodeError, RawFrame, Stats};
@@ -14,14 +17,6 @@ use crate::{ApiMode, DecodeError, RawFrame, Stats};
 /// Explicit Rx Indicator's 18-byte header), so 512 leaves room for every frame a radio
 /// sends, with margin, in both modes (mode 1 also buffers the 4 framing bytes).
 pub const DEFAULT_CAPACITY: usize = 512;
-
-/// Bit `k` set if `bytes[k]` is 0x7D or 0x7E.
-#[cfg(target_pointer_width = "64")]
-#[inline(always)]
-fn special_mask(bytes: u8x16) -> u32 {
-    let specials = bytes.cmp_eq(u8x16::splat(ESCAPE)) | bytes.cmp_eq(u8x16::splat(START_DELIMITER));
-    specials.move_mask() as u32
-}
 
 /// What the decoder yields: a frame borrowed from its buffer, or why a candidate frame
 /// was dropped. The frame stays valid until the decoder is called again.

@@ -139,7 +139,7 @@ fn unescape_pair(src: &[u8], i: usize) -> Option<u8> {
 
 /// Bit `k` set if `step[k]` is 0x7D or 0x7E: two SIMD compares and a mask move.
 #[inline(always)]
-fn special_mask(bytes: u8x16) -> u32 {
+pub(crate) fn special_mask(bytes: u8x16) -> u32 {
     let specials = bytes.cmp_eq(u8x16::splat(ESCAPE)) | bytes.cmp_eq(u8x16::splat(START_DELIMITER));
     specials.move_mask() as u32
 }
