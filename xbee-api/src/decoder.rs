@@ -239,16 +239,8 @@ impl<const N: usize> Decoder<N> {
     pub fn push(&mut self, byte: u8) -> Option<Event<'_>> {
         let end = self.end;
         if end < self.fill_to && is_plain(byte) {
-            // `fill_to <= N`, so the mask changes nothing; it shows the compiler that the
-            // index is in bounds when `N` is a power of two.
-            let at = if N.is_power_of_two() {
-                end & (N - 1)
-            } else {
-                end
-            };
-            if let Some(slot) = self.buf.get_mut(at) {
-                *slot = byte;
-                self.end = at + 1;
+            if let Some(next) = self.store(end, byte) {
+                self.end = next;
                 return None;
             }
         }
@@ -257,6 +249,21 @@ impl<const N: usize> Decoder<N> {
             ApiMode::Unescaped => self.push_slow(byte),
         };
         outcome.map(|o| self.event(o))
+    }
+
+    /// Stores a byte of frame data at `at`, below `fill_to`; the cursor after it (`None`
+    /// only if `at` were past the buffer, which `fill_to <= N` rules out).
+    #[inline(always)]
+    fn store(&mut self, at: usize, byte: u8) -> Option<usize> {
+        // `at < fill_to <= N`, so the mask changes nothing; it shows the compiler that
+        // the index is in bounds when `N` is a power of two.
+        let at = if N.is_power_of_two() {
+            at & (N - 1)
+        } else {
+            at
+        };
+        *self.buf.get_mut(at)? = byte;
+        Some(at + 1)
     }
 
     /// [`push`](Self::push) in mode 1 for every byte but plain frame data.
@@ -418,18 +425,10 @@ impl<const N: usize> Decoder<N> {
             if end >= fill_to || (escaped && !is_plain(byte)) {
                 break;
             }
-            let at = end;
-            // As in `push`: `fill_to <= N`, the mask changes nothing.
-            let at = if N.is_power_of_two() {
-                at & (N - 1)
-            } else {
-                at
-            };
-            let Some(slot) = self.buf.get_mut(at) else {
+            let Some(next) = self.store(end, byte) else {
                 break;
             };
-            *slot = byte;
-            end = at + 1;
+            end = next;
             rest = tail;
         }
         self.end = end;
@@ -534,16 +533,8 @@ impl<const N: usize> Decoder<N> {
                 };
                 rest = tail;
                 if end < fill_to && is_plain(byte) {
-                    // `fill_to <= N`: as in `push`, the mask only shows the compiler
-                    // that the index is in bounds when `N` is a power of two.
-                    let at = if N.is_power_of_two() {
-                        end & (N - 1)
-                    } else {
-                        end
-                    };
-                    if let Some(slot) = self.buf.get_mut(at) {
-                        *slot = byte;
-                        end = at + 1;
+                    if let Some(next) = self.store(end, byte) {
+                        end = next;
                         continue;
                     }
                 }
@@ -554,9 +545,8 @@ impl<const N: usize> Decoder<N> {
                     if let Some((&raw, tail)) = rest.split_first() {
                         let unescaped = raw ^ ESCAPE_XOR;
                         if needs_escape(unescaped) {
-                            if let Some(slot) = self.buf.get_mut(end) {
-                                *slot = unescaped;
-                                end += 1;
+                            if let Some(next) = self.store(end, unescaped) {
+                                end = next;
                                 rest = tail;
                                 break;
                             }
