@@ -9,6 +9,8 @@ use std::time::Duration;
 
 use serde_json::Value;
 
+mod common;
+
 const MAV: &str = "0013a20040b599b9";
 const SLAVE: &str = "0013a20040b599bf";
 /// Failure guard only.
@@ -67,14 +69,7 @@ impl Sim {
     }
 
     fn ok(&self, args: &[&str]) -> String {
-        let out = self.gs(args);
-        assert!(
-            out.status.success(),
-            "mcp-gs {args:?}: {}\n{}",
-            out.status,
-            String::from_utf8_lossy(&out.stderr)
-        );
-        String::from_utf8(out.stdout).unwrap()
+        String::from_utf8(succeeded(self.gs(args), args).stdout).unwrap()
     }
 
     fn send(&self, command: &[&str]) {
@@ -95,6 +90,26 @@ impl Sim {
         assert_eq!(report["category"], "report", "{out}");
         report
     }
+}
+
+/// `out`, after checking that the `mcp-gs` run it came from (with `args`) succeeded.
+fn succeeded(out: Output, args: &[&str]) -> Output {
+    assert!(
+        out.status.success(),
+        "mcp-gs {args:?}: {}\n{}",
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// Runs `mcp-gs` with `args` away from any simulator; it must succeed.
+fn mcp_gs_ok(args: &[&str]) -> Output {
+    let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args(args)
+        .output()
+        .expect("run mcp-gs");
+    succeeded(out, args)
 }
 
 impl Drop for Sim {
@@ -266,11 +281,7 @@ fn record_decode_and_replay() {
         .collect();
 
     // The recording decodes to the same frames, with direction and time.
-    let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
-        .args(["decode", file, "--format", "json"])
-        .output()
-        .unwrap();
-    assert!(out.status.success());
+    let out = mcp_gs_ok(&["decode", file, "--format", "json"]);
     let decoded: Vec<Value> = String::from_utf8(out.stdout)
         .unwrap()
         .lines()
@@ -293,15 +304,7 @@ fn record_decode_and_replay() {
         std::io::Read::read_to_end(&mut socket, &mut bytes).unwrap();
         bytes
     });
-    let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
-        .args(["replay", file, "--link", &link, "--speed", "0"])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    mcp_gs_ok(&["replay", file, "--link", &link, "--speed", "0"]);
     let wire = reader.join().unwrap();
     let mut decoder: xbee_api::Decoder = xbee_api::Decoder::new(xbee_api::ApiMode::Unescaped);
     let mut input = &wire[..];
@@ -321,19 +324,8 @@ fn record_decode_and_replay() {
 
 #[test]
 fn a_recording_keeps_each_frame_as_it_came() {
-    use xbee_api::{
-        Address16, Address64, ApiMode, EncodeFrame, ExplicitRxIndicatorRepr, ReceivePacketRepr,
-    };
-    let explicit = ExplicitRxIndicatorRepr {
-        src64: Address64(0x0013_A200_4000_0001),
-        src16: Address16(0x0102),
-        src_endpoint: 0xE8,
-        dst_endpoint: 0xE8,
-        cluster_id: 0x0011,
-        profile_id: 0xC105,
-        options: 0x02,
-        data: b"r\x03\x03",
-    };
+    use xbee_api::{Address16, Address64, ApiMode, EncodeFrame, ReceivePacketRepr};
+    let explicit = common::explicit_rx(Address64(0x0013_A200_4000_0001), b"r\x03\x03");
     let plain = ReceivePacketRepr {
         src64: Address64(0x0013_A200_4000_0002),
         src16: Address16(0xFFFE),
@@ -363,24 +355,19 @@ fn a_recording_keeps_each_frame_as_it_came() {
     let dir = std::env::temp_dir().join(format!("mcp-gs-rec-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let file = dir.join("frames.mcprec");
-    let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
-        .args([
-            "monitor",
-            "--link",
-            &link,
-            "--api-mode",
-            "1",
-            "--count",
-            "3",
-        ])
-        .args(["--format", "json", "--record", file.to_str().unwrap()])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    mcp_gs_ok(&[
+        "monitor",
+        "--link",
+        &link,
+        "--api-mode",
+        "1",
+        "--count",
+        "3",
+        "--format",
+        "json",
+        "--record",
+        file.to_str().unwrap(),
+    ]);
     radio.join().unwrap();
 
     let mut reader =

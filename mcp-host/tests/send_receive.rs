@@ -243,17 +243,7 @@ async fn invalid_mcp_payloads_and_other_frames_are_events() {
     .collect();
     assert_eq!(types, [(0x8A, None), (0x8B, Some(77)), (0x23, None)]);
     // An MCP packet in an Explicit Rx Indicator (radio in AO=1) is a packet too.
-    fake.send(&xbee_api::ExplicitRxIndicatorRepr {
-        src64: OTHER_MAV,
-        src16: Address16(0x0102),
-        src_endpoint: 0xE8,
-        dst_endpoint: 0xE8,
-        cluster_id: 0x0011,
-        profile_id: 0xC105,
-        options: 0x02,
-        data: b"r\x03\x03",
-    })
-    .await;
+    fake.send(&explicit_rx(OTHER_MAV, b"r\x03\x03")).await;
     let rx = next_packet(&mut stream).await;
     assert_eq!(rx.origin.src64, OTHER_MAV);
     assert_eq!(rx.origin.options, 0x02);

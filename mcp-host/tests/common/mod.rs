@@ -10,8 +10,8 @@ use futures::StreamExt;
 use mcp_host::{Event, LinkEvent, PacketStream};
 use tokio::io::{AsyncRead, AsyncReadExt, AsyncWrite, AsyncWriteExt};
 use xbee_api::{
-    Address16, Address64, ApiMode, DeliveryStatus, DiscoveryStatus, EncodeFrame, ReceivePacketRepr,
-    TransmitRequestRepr, TransmitStatusRepr,
+    Address16, Address64, ApiMode, DeliveryStatus, DiscoveryStatus, EncodeFrame,
+    ExplicitRxIndicatorRepr, ReceivePacketRepr, TransmitRequestRepr, TransmitStatusRepr,
 };
 
 /// Failure guard only: every wait ends on an event long before this.
@@ -19,6 +19,22 @@ pub const GUARD: Duration = Duration::from_secs(20);
 
 pub const MAV: Address64 = Address64(0x0013_A200_40B5_99B9);
 pub const OTHER_MAV: Address64 = Address64(0x0013_A200_40B5_99BF);
+
+/// An Explicit Rx Indicator (0x91) as a radio in AO=1 hands over `data` from `src64`:
+/// Digi's data endpoints (0xE8), the transparent-data cluster (0x0011) and profile
+/// (0xC105), acknowledged.
+pub fn explicit_rx(src64: Address64, data: &[u8]) -> ExplicitRxIndicatorRepr<'_> {
+    ExplicitRxIndicatorRepr {
+        src64,
+        src16: Address16(0x0102),
+        src_endpoint: 0xE8,
+        dst_endpoint: 0xE8,
+        cluster_id: 0x0011,
+        profile_id: 0xC105,
+        options: 0x02,
+        data,
+    }
+}
 
 /// Byte stream of the far side.
 pub trait Io: AsyncRead + AsyncWrite + Unpin + Send {}
