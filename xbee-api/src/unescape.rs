@@ -36,58 +36,87 @@ pub(crate) fn unescape_byte(src: &[u8], i: &mut usize) -> Option<u8> {
 /// Unescapes `len` bytes from the start of `src` into `dst[..len]`; returns how many
 /// bytes of `src` they took and their sum (the running part of the checksum).
 ///
-/// Goes 16 bytes a step (SIMD compares, store and sum where the target has them),
-/// storing whole steps even when fewer of their bytes count, so it needs 16 bytes of
-/// scratch space past `len` in `dst` (without them, or near the end of `src`, it goes a
-/// byte at a time). `None` as for [`unescape_byte`], and `dst` may have been written to.
+/// Goes 16 bytes a step (SIMD compares and stores where the target has them), storing
+/// whole steps even when fewer of their bytes count, so it needs 16 bytes of scratch
+/// space past `len` in `dst` (without them, or near the end of `src`, it goes a byte at
+/// a time). The sum is taken afterwards, 16 bytes a step, from `dst`. `None` as for
+/// [`unescape_byte`], and `dst` may have been written to.
 #[inline(always)]
 pub(crate) fn unescape(src: &[u8], dst: &mut [u8], len: usize) -> Option<(usize, u8)> {
-    let Some(dst) = dst.get_mut(..len + 16) else {
+    let Some(out) = dst.get_mut(..len + 16) else {
         return unescape_bytes(src, 0, dst, 0, len);
     };
-    let mut rest = src;
+    // `i` in `src`, `o` in `out`: a whole plain step may take `o` past `len`, and `i`
+    // as far past its end; the two are taken back together at the end.
+    let mut i = 0;
     let mut o = 0;
-    // The sum of the plain bytes in 16 lanes, and of the escaped ones.
-    let mut lanes = u8x16::ZERO;
-    let mut escaped = 0u8;
     while o < len {
-        let Some((step, _)) = rest.split_first_chunk::<16>() else {
-            return unescape_bytes(src, src.len() - rest.len(), dst, o, len);
+        let Some(step) = src.get(i..i + 16).and_then(<[u8]>::first_chunk::<16>) else {
+            return unescape_bytes(src, i, out, o, len);
         };
-        let bytes = u8x16::new(*step);
-        let specials = special_mask(bytes);
-        if let Some(out) = dst.get_mut(o..o + 16) {
-            out.copy_from_slice(&bytes.to_array());
+        if let Some(to) = out.get_mut(o..o + 16) {
+            to.copy_from_slice(step);
         }
-        let room = len - o;
-        if specials == 0 && room > 16 {
-            lanes += bytes;
-            rest = rest.get(16..).unwrap_or_default();
+        let specials = special_mask(u8x16::new(*step));
+        if specials == 0 {
+            i += 16;
             o += 16;
             continue;
         }
-        // Plain bytes before the first special one, or up to the end of the frame data.
-        let plain = (specials.trailing_zeros() as usize).min(16).min(room);
-        lanes += bytes & first_lanes(plain);
-        o += plain;
-        if o >= len {
-            rest = rest.get(plain..).unwrap_or_default();
+        // Plain bytes before the first special one; it may lie past the frame data.
+        let plain = specials.trailing_zeros() as usize;
+        if o + plain >= len {
+            i += len - o;
+            o = len;
             break;
         }
         // An escape (or a delimiter, which ends the fast path).
-        let byte = unescape_pair(rest, plain)?;
-        if let Some(slot) = dst.get_mut(o) {
+        let byte = unescape_pair(src, i + plain)?;
+        if let Some(slot) = out.get_mut(o + plain) {
             *slot = byte;
         }
-        escaped = escaped.wrapping_add(byte);
-        rest = rest.get(plain + 2..).unwrap_or_default();
-        o += 1;
+        i += plain + 2;
+        o += plain + 1;
     }
-    let sum = lanes
-        .to_array()
-        .iter()
-        .fold(escaped, |acc, b| acc.wrapping_add(*b));
-    Some((src.len() - rest.len(), sum))
+    let i = i - (o - len);
+    Some((i, sum_with_scratch(out, len)))
+}
+
+/// The wrapping sum of `bytes[..len]`, 16 bytes a step, when `bytes` holds at least 16
+/// bytes past `len`.
+#[inline(always)]
+fn sum_with_scratch(bytes: &[u8], len: usize) -> u8 {
+    let mut lanes = u8x16::ZERO;
+    let whole = bytes.get(..len).unwrap_or_default().chunks_exact(16);
+    let k = len - whole.remainder().len();
+    for step in whole {
+        if let Ok(step) = <[u8; 16]>::try_from(step) {
+            lanes += u8x16::new(step);
+        }
+    }
+    if let Some(step) = bytes.get(k..k + 16).and_then(|s| s.first_chunk::<16>()) {
+        lanes += u8x16::new(*step) & first_lanes(len - k);
+    }
+    lane_sum(lanes)
+}
+
+/// The sum of 16 lanes, modulo 256: one `psadbw` against zero where SSE2 has it.
+#[inline(always)]
+fn lane_sum(lanes: u8x16) -> u8 {
+    #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
+    {
+        use safe_arch::{m128i, sum_of_u8_abs_diff_m128i};
+        let halves: [u64; 2] =
+            sum_of_u8_abs_diff_m128i(m128i::from(lanes.to_array()), m128i::default()).into();
+        halves[0].wrapping_add(halves[1]) as u8
+    }
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "sse2")))]
+    {
+        lanes
+            .to_array()
+            .iter()
+            .fold(0, |acc: u8, b| acc.wrapping_add(*b))
+    }
 }
 
 /// Lane masks: the 16 bytes from `FIRST_LANES[16 - k]` keep the first `k` lanes.
@@ -210,5 +239,31 @@ mod tests {
         assert_eq!(dst[10], 0x13);
         assert_eq!(unescape(&src, &mut [], 0), Some((0, 0)));
         assert_eq!(unescape(&src, &mut [0; 4], 5), None);
+    }
+
+    proptest::proptest! {
+        /// The 16-byte steps agree with the byte-at-a-time reference on any input:
+        /// escapes (valid or not) and delimiters anywhere, before, at and past `len`,
+        /// with and without scratch space, and inputs cut short.
+        #[test]
+        fn steps_agree_with_bytes(
+            src in proptest::collection::vec(
+                proptest::prop_oneof![
+                    4 => proptest::prelude::any::<u8>(),
+                    1 => proptest::sample::select(&[ESCAPE, START_DELIMITER, 0x5E, 0x31, 0x33][..]),
+                ],
+                0..80,
+            ),
+            len in 0usize..70,
+        ) {
+            let mut expected = [0u8; 70];
+            let reference = unescape_bytes(&src, 0, &mut expected, 0, len);
+            let mut scratch = [0u8; 86];
+            let got = unescape(&src, &mut scratch, len);
+            proptest::prop_assert_eq!(got, reference);
+            if got.is_some() {
+                proptest::prop_assert_eq!(&scratch[..len], &expected[..len]);
+            }
+        }
     }
 }
