@@ -466,7 +466,8 @@ impl<const N: usize> Decoder<N> {
                         input = body;
                         if let Some((&[hi, lo], data)) = body.split_first_chunk::<2>() {
                             let len = usize::from(u16::from_be_bytes([hi, lo]));
-                            if is_plain(hi) && is_plain(lo) && len != 0 && len <= self.capacity() {
+                            // `N`: mode 2's capacity.
+                            if is_plain(hi) && is_plain(lo) && len != 0 && len <= N {
                                 self.len = len;
                                 self.state = State::Data;
                                 self.fill_to = len;
@@ -891,7 +892,8 @@ impl<const N: usize> Decoder<N> {
             _ => escaped_length(body)?,
         };
         let rest = body.get(header..)?;
-        if len == 0 || len > self.capacity() || rest.len() <= len {
+        // Mode 2 takes frame data of up to `N` bytes (its `capacity()`).
+        if len == 0 || len > N || rest.len() <= len {
             return None;
         }
         let (mut i, sum) = unescape(rest, &mut self.buf, len)?;

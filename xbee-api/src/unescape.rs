@@ -52,7 +52,12 @@ pub(crate) fn unescape(src: &[u8], dst: &mut [u8], len: usize) -> Option<(usize,
     let mut o = 0;
     while o < len {
         let Some(step) = src.get(i..i + 16).and_then(<[u8]>::first_chunk::<16>) else {
-            return unescape_bytes(src, i, out, o, len);
+            // Near the end of `src`: the rest a byte at a time.
+            while o < len {
+                *out.get_mut(o)? = unescape_byte(src, &mut i)?;
+                o += 1;
+            }
+            break;
         };
         if let Some(to) = out.get_mut(o..o + 16) {
             to.copy_from_slice(step);
