@@ -1,7 +1,9 @@
 //! `mcp-gs ports`: list the serial ports present.
 
+use std::path::Path;
+
 use clap::Args;
-use serialport::SerialPortType;
+use serialport::{SerialPortInfo, SerialPortType};
 
 use crate::Failure;
 
@@ -9,9 +11,12 @@ use crate::Failure;
 #[derive(Debug, Args)]
 pub(crate) struct PortsArgs {}
 
+/// Where Linux lists its terminal devices, which `serialport` scans.
+const SYS_TTY: &str = "/sys/class/tty";
+
 /// Runs `ports`.
 pub(crate) fn run(_args: PortsArgs) -> Result<(), Failure> {
-    let ports = serialport::available_ports()
+    let ports = available_ports(Path::new(SYS_TTY))
         .map_err(|e| Failure::new(Failure::OTHER, format!("cannot list serial ports: {e}")))?;
     if ports.is_empty() {
         out!("no serial ports found");
@@ -40,4 +45,31 @@ pub(crate) fn run(_args: PortsArgs) -> Result<(), Failure> {
         out!("serial:{}\t{detail}", port.port_name);
     }
     Ok(())
+}
+
+/// The serial ports present. On Linux, `serialport` panics where `sys_tty` is missing
+/// (a container without sysfs): that is an error here instead.
+fn available_ports(sys_tty: &Path) -> Result<Vec<SerialPortInfo>, String> {
+    if cfg!(target_os = "linux") && !sys_tty.is_dir() {
+        return Err(format!(
+            "{} is missing (is sysfs mounted?)",
+            sys_tty.display()
+        ));
+    }
+    serialport::available_ports().map_err(|e| e.to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    #[cfg(target_os = "linux")]
+    fn a_missing_sysfs_is_an_error_not_a_panic() {
+        let err = available_ports(Path::new("/nonexistent/sys/class/tty")).unwrap_err();
+        assert_eq!(
+            err,
+            "/nonexistent/sys/class/tty is missing (is sysfs mounted?)"
+        );
+    }
 }
