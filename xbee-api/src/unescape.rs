@@ -39,7 +39,7 @@ pub(crate) fn unescape_byte(src: &[u8], i: &mut usize) -> Option<u8> {
 /// Goes 16 bytes a step (SIMD compares and stores where the target has them), storing
 /// whole steps even when fewer of their bytes count, so it needs 16 bytes of scratch
 /// space past `len` in `dst` (without them, or near the end of `src`, it goes a byte at
-/// a time). The sum is taken afterwards, 16 bytes a step, from `dst`. `None` as for
+/// a time). The sum is taken afterwards from `dst[..len]` ([`sum`]). `None` as for
 /// [`unescape_byte`], and `dst` may have been written to.
 #[inline(always)]
 pub(crate) fn unescape(src: &[u8], dst: &mut [u8], len: usize) -> Option<(usize, u8)> {
@@ -84,64 +84,7 @@ pub(crate) fn unescape(src: &[u8], dst: &mut [u8], len: usize) -> Option<(usize,
         o += plain + 1;
     }
     let i = i - (o - len);
-    Some((i, sum_with_scratch(out, len)))
-}
-
-/// The wrapping sum of `bytes[..len]`, 16 bytes a step, when `bytes` holds at least 16
-/// bytes past `len`.
-#[inline(always)]
-fn sum_with_scratch(bytes: &[u8], len: usize) -> u8 {
-    let mut lanes = u8x16::ZERO;
-    let whole = bytes.get(..len).unwrap_or_default().chunks_exact(16);
-    let k = len - whole.remainder().len();
-    for step in whole {
-        if let Ok(step) = <[u8; 16]>::try_from(step) {
-            lanes += u8x16::new(step);
-        }
-    }
-    if let Some(step) = bytes.get(k..k + 16).and_then(|s| s.first_chunk::<16>()) {
-        lanes += u8x16::new(*step) & first_lanes(len - k);
-    }
-    lane_sum(lanes)
-}
-
-/// The sum of 16 lanes, modulo 256: one `psadbw` against zero where SSE2 has it.
-#[inline(always)]
-fn lane_sum(lanes: u8x16) -> u8 {
-    #[cfg(all(target_arch = "x86_64", target_feature = "sse2"))]
-    {
-        use safe_arch::{m128i, sum_of_u8_abs_diff_m128i};
-        let halves: [u64; 2] =
-            sum_of_u8_abs_diff_m128i(m128i::from(lanes.to_array()), m128i::default()).into();
-        halves[0].wrapping_add(halves[1]) as u8
-    }
-    #[cfg(not(all(target_arch = "x86_64", target_feature = "sse2")))]
-    {
-        lanes
-            .to_array()
-            .iter()
-            .fold(0, |acc: u8, b| acc.wrapping_add(*b))
-    }
-}
-
-/// Lane masks: the 16 bytes from `FIRST_LANES[16 - k]` keep the first `k` lanes.
-const FIRST_LANES: [u8; 32] = {
-    let mut mask = [0u8; 32];
-    let mut i = 0;
-    while i < 16 {
-        mask[i] = 0xFF;
-        i += 1;
-    }
-    mask
-};
-
-/// A mask keeping the first `k` (at most 16) of 16 lanes.
-#[inline(always)]
-fn first_lanes(k: usize) -> u8x16 {
-    let window = FIRST_LANES
-        .get(16 - k.min(16)..)
-        .and_then(<[u8]>::first_chunk::<16>);
-    u8x16::new(window.copied().unwrap_or([0; 16]))
+    Some((i, sum(out.get(..len)?)))
 }
 
 /// [`unescape`] a byte at a time, from `src[i..]` into `dst[o..len]`.
