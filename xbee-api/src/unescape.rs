@@ -157,7 +157,7 @@ mod tests {
         expected[14] = 0x11;
         expected[28] = 0x7F;
         for len in 0..=36 {
-            let mut dst = [0u8; 40];
+            let mut dst = [0u8; 52];
             let (taken, total) = unescape(&src, &mut dst, len).unwrap();
             assert_eq!(total, sum(&expected[..len]), "len {len}");
             assert_eq!(dst[..len], expected[..len], "len {len}");
@@ -167,6 +167,18 @@ mod tests {
             let mut exact = [0u8; 36];
             assert_eq!(unescape(&src, &mut exact[..len], len), Some((taken, total)));
             assert_eq!(exact[..len], expected[..len]);
+        }
+    }
+
+    #[test]
+    fn a_plain_step_past_the_frame_data_is_taken_back() {
+        // Every overshoot of the last whole step, 0 to 15 bytes.
+        let src: [u8; 48] = core::array::from_fn(|i| 0x80 + i as u8);
+        for len in 0..=40 {
+            let mut dst = [0u8; 56];
+            let got = unescape(&src, &mut dst[..len + 16], len);
+            assert_eq!(got, Some((len, sum(&src[..len]))), "len {len}");
+            assert_eq!(dst[..len], src[..len]);
         }
     }
 
@@ -203,11 +215,12 @@ mod tests {
                 0..80,
             ),
             len in 0usize..70,
+            extra in 0usize..18,
         ) {
             let mut expected = [0u8; 70];
             let reference = unescape_bytes(&src, 0, &mut expected, 0, len);
-            let mut scratch = [0u8; 86];
-            let got = unescape(&src, &mut scratch, len);
+            let mut scratch = [0u8; 87];
+            let got = unescape(&src, &mut scratch[..len + extra], len);
             proptest::prop_assert_eq!(got, reference);
             if got.is_some() {
                 proptest::prop_assert_eq!(&scratch[..len], &expected[..len]);

@@ -47,14 +47,12 @@ pub(crate) fn run(_args: PortsArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-/// The serial ports present. On Linux, `serialport` panics where `sys_tty` is missing
-/// (a container without sysfs): that is an error here instead.
+/// The serial ports present. On Linux, `serialport` panics where `sys_tty` cannot be
+/// read (a container without sysfs): that is an error here instead, with its cause.
 fn available_ports(sys_tty: &Path) -> Result<Vec<SerialPortInfo>, String> {
-    if cfg!(target_os = "linux") && !sys_tty.is_dir() {
-        return Err(format!(
-            "{} is missing (is sysfs mounted?)",
-            sys_tty.display()
-        ));
+    if cfg!(target_os = "linux") {
+        std::fs::read_dir(sys_tty)
+            .map_err(|e| format!("cannot read {}: {e} (is sysfs mounted?)", sys_tty.display()))?;
     }
     serialport::available_ports().map_err(|e| e.to_string())
 }
@@ -69,7 +67,8 @@ mod tests {
         let err = available_ports(Path::new("/nonexistent/sys/class/tty")).unwrap_err();
         assert_eq!(
             err,
-            "/nonexistent/sys/class/tty is missing (is sysfs mounted?)"
+            "cannot read /nonexistent/sys/class/tty: No such file or directory (os error 2) \
+             (is sysfs mounted?)"
         );
     }
 }
