@@ -52,7 +52,9 @@ pub(crate) fn unescape(src: &[u8], dst: &mut [u8], len: usize) -> Option<(usize,
     let mut o = 0;
     while o < len {
         let Some(step) = src.get(i..i + 16).and_then(<[u8]>::first_chunk::<16>) else {
-            // Near the end of `src`: the rest a byte at a time.
+            // Near the end of `src`: the rest a byte at a time. In line rather than a
+            // call of `unescape_bytes`, whose result came back through memory on every
+            // frame; the sum below then covers these bytes too.
             while o < len {
                 *out.get_mut(o)? = unescape_byte(src, &mut i)?;
                 o += 1;
