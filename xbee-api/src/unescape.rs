@@ -46,46 +46,51 @@ pub(crate) fn unescape(src: &[u8], dst: &mut [u8], len: usize) -> Option<(usize,
     let Some(out) = dst.get_mut(..len + 16) else {
         return unescape_bytes(src, 0, dst, 0, len);
     };
-    // `i` in `src`, `o` in `out`: a whole plain step may take `o` past `len`, and `i`
-    // as far past its end; the two are taken back together at the end.
-    let mut i = 0;
+    // `rest` is what is left of `src`, `o` the offset in `out`: a whole plain step may
+    // take `o` past `len`, and the end of `rest` as far past the frame data; the two
+    // are taken back together at the end.
+    let mut rest = src;
     let mut o = 0;
     while o < len {
-        let Some(step) = src.get(i..i + 16).and_then(<[u8]>::first_chunk::<16>) else {
+        let Some((step, after)) = rest.split_first_chunk::<16>() else {
             // Near the end of `src`: the rest a byte at a time. In line rather than a
             // call of `unescape_bytes`, whose result came back through memory on every
             // frame; the sum below then covers these bytes too.
+            let mut i = src.len() - rest.len();
             while o < len {
                 *out.get_mut(o)? = unescape_byte(src, &mut i)?;
                 o += 1;
             }
+            rest = src.get(i..)?;
             break;
         };
+        // Loaded once, then stored and compared from the register.
+        let bytes = u8x16::new(*step);
         if let Some(to) = out.get_mut(o..o + 16) {
-            to.copy_from_slice(step);
+            to.copy_from_slice(bytes.as_array_ref());
         }
-        let specials = special_mask(u8x16::new(*step));
+        let specials = special_mask(bytes);
         if specials == 0 {
-            i += 16;
+            rest = after;
             o += 16;
             continue;
         }
         // Plain bytes before the first special one; it may lie past the frame data.
         let plain = specials.trailing_zeros() as usize;
         if o + plain >= len {
-            i += len - o;
+            rest = rest.get(len - o..)?;
             o = len;
             break;
         }
         // An escape (or a delimiter, which ends the fast path).
-        let byte = unescape_pair(src, i + plain)?;
+        let byte = unescape_pair(rest, plain)?;
         if let Some(slot) = out.get_mut(o + plain) {
             *slot = byte;
         }
-        i += plain + 2;
+        rest = rest.get(plain + 2..)?;
         o += plain + 1;
     }
-    let i = i - (o - len);
+    let i = src.len() - rest.len() - (o - len);
     Some((i, sum(out.get(..len)?)))
 }
 
