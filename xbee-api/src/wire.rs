@@ -61,13 +61,12 @@ fn sum_lanes(bytes: &[u8]) -> u8 {
         return bytes.iter().fold(0u8, |acc, b| acc.wrapping_add(*b));
     };
     let mut lanes = [0u8; 16];
-    let mut steps = bytes.chunks_exact(16);
-    for step in &mut steps {
-        if let Ok(step) = <&[u8; 16]>::try_from(step) {
-            add_lanes(&mut lanes, step, &[0xFF; 16]);
-        }
+    let mut steps = bytes;
+    while let Some((step, after)) = steps.split_first_chunk::<16>() {
+        add_lanes(&mut lanes, step, &[0xFF; 16]);
+        steps = after;
     }
-    let rest = steps.remainder().len();
+    let rest = steps.len();
     if let Some(mask) = TAIL_MASK.get(rest..rest + 16).and_then(|m| m.first_chunk()) {
         add_lanes(&mut lanes, last, mask);
     }
