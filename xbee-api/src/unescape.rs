@@ -47,8 +47,8 @@ pub(crate) fn unescape(src: &[u8], dst: &mut [u8], len: usize) -> Option<(usize,
         return unescape_bytes(src, 0, dst, 0, len);
     };
     // `rest` is what is left of `src`, `o` the offset in `out`: a whole plain step may
-    // take `o` past `len`, and the end of `rest` as far past the frame data; the two
-    // are taken back together at the end.
+    // take `o` past `len`, and the start of `rest` as far past the end of the frame
+    // data; the two are taken back together at the end.
     let mut rest = src;
     let mut o = 0;
     while o < len {
