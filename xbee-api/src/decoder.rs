@@ -451,10 +451,10 @@ impl<const N: usize> Decoder<N> {
                     {
                         break;
                     }
-                    let Some((n, outcome)) = self.whole2(body) else {
+                    let Some((after, outcome)) = self.whole2(body) else {
                         break;
                     };
-                    input = body.get(n..).unwrap_or_default();
+                    input = after;
                     f(self.event(outcome));
                 }
                 match input.split_first() {
@@ -878,12 +878,12 @@ impl<const N: usize> Decoder<N> {
     }
 
     /// Decodes a frame that lies whole in `body`, the bytes after its start delimiter;
-    /// how many bytes of `body` it took and the outcome. `None`, with nothing changed
+    /// the rest of `body` after the frame and the outcome. `None`, with nothing changed
     /// but the buffer's content, if the frame is not whole in `body` or has anything
     /// but a bad checksum wrong: [`step2`](Self::step2) then reads it byte by byte.
     /// The state is left as it was: the caller goes back to hunting.
     #[inline(always)]
-    fn whole2(&mut self, body: &[u8]) -> Option<(usize, Outcome)> {
+    fn whole2<'a>(&mut self, body: &'a [u8]) -> Option<(&'a [u8], Outcome)> {
         // The length bytes, usually both plain: one test for the two.
         let (len, header) = match body.first_chunk::<2>() {
             Some(&[hi, lo]) if is_plain(hi) && is_plain(lo) => {
@@ -897,16 +897,18 @@ impl<const N: usize> Decoder<N> {
             return None;
         }
         let (mut i, sum) = unescape(rest, &mut self.buf, len)?;
-        let got = match rest.get(i) {
-            Some(&raw) if is_plain(raw) => {
-                i += 1;
-                raw
+        // The checksum byte, usually plain; what follows it is handed back as a slice,
+        // so that the caller goes on without a bounds test of its own.
+        let (got, after) = match rest.get(i..).and_then(<[u8]>::split_first) {
+            Some((&raw, after)) if is_plain(raw) => (raw, after),
+            _ => {
+                let got = unescape_byte(rest, &mut i)?;
+                (got, rest.get(i..)?)
             }
-            _ => unescape_byte(rest, &mut i)?,
         };
         self.len = len;
         let outcome = self.check_sum(sum, 0, got).map_err(|e| self.record(e));
-        Some((header + i, outcome))
+        Some((after, outcome))
     }
 
     fn decode2(&mut self, input: &[u8]) -> (usize, Option<Outcome>) {
@@ -914,8 +916,8 @@ impl<const N: usize> Decoder<N> {
         let mut try_whole = true;
         if self.state == State::Hunt {
             if let Some((&START_DELIMITER, body)) = input.split_first() {
-                if let Some((n, outcome)) = self.whole2(body) {
-                    return (1 + n, Some(outcome));
+                if let Some((after, outcome)) = self.whole2(body) {
+                    return (input.len() - after.len(), Some(outcome));
                 }
                 try_whole = false;
             }
@@ -943,9 +945,9 @@ impl<const N: usize> Decoder<N> {
                 // Right after a start delimiter: try the whole frame at once.
                 State::LenHi if !self.escaped && try_whole => {
                     try_whole = false;
-                    if let Some((n, outcome)) = self.whole2(rest) {
+                    if let Some((after, outcome)) = self.whole2(rest) {
                         self.hunt();
-                        return (i + n, Some(outcome));
+                        return (input.len() - after.len(), Some(outcome));
                     }
                 }
                 State::Data if !self.escaped && self.end < self.len => {
