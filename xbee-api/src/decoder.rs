@@ -334,8 +334,8 @@ impl<const N: usize> Decoder<N> {
     /// of the frame in progress (most of them) is stored in line in the caller, 16 bytes
     /// a step on 64-bit targets; the rest of a frame split across chunks is stepped with
     /// its cursors in registers. From 16-byte chunks on it costs less a byte than
-    /// [`push`](Self::push) (about 11 instructions a byte in mode 2 at 16 bytes, 8 at
-    /// 64, against 17 for `push`); single bytes cost more than with `push`.
+    /// [`push`](Self::push) (about 11.5 instructions a byte in mode 2 at 16 bytes, 8.4 at
+    /// 64, against 17.7 for `push`); single bytes cost more than with `push`.
     ///
     /// ```
     /// use xbee_api::{ApiMode, Decoder};
