@@ -91,7 +91,7 @@ impl<B: AsRef<[u8]>> fmt::Display for Text<B> {
         for (i, &b) in bytes.iter().enumerate() {
             if b == b'\\' || !(0x20..0x7F).contains(&b) {
                 // Everything before `i` is printable ASCII, hence valid UTF-8.
-                f.write_str(core::str::from_utf8(&bytes[start..i]).unwrap_or_default())?;
+                f.write_str(printable(bytes.get(start..i)))?;
                 if b == b'\\' {
                     f.write_str("\\\\")?;
                 } else {
@@ -100,6 +100,12 @@ impl<B: AsRef<[u8]>> fmt::Display for Text<B> {
                 start = i + 1;
             }
         }
-        f.write_str(core::str::from_utf8(&bytes[start..]).unwrap_or_default())
+        f.write_str(printable(bytes.get(start..)))
     }
+}
+
+/// A run of printable ASCII as text (empty for `None`, which the caller never passes).
+fn printable(run: Option<&[u8]>) -> &str {
+    run.and_then(|run| core::str::from_utf8(run).ok())
+        .unwrap_or_default()
 }

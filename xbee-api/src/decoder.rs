@@ -947,11 +947,12 @@ impl<const N: usize> Decoder<N> {
                 }
                 State::Data if !self.escaped && self.end < self.len => {
                     let want = (self.len - self.end).min(rest.len());
-                    let chunk = &rest[..want];
+                    let chunk = rest.get(..want).unwrap_or_default();
                     let run = memchr2(ESCAPE, START_DELIMITER, chunk).unwrap_or(want);
                     if run > 0 {
-                        if let Some(dst) = self.buf.get_mut(self.end..self.end + run) {
-                            dst.copy_from_slice(&chunk[..run]);
+                        let dst = self.buf.get_mut(self.end..self.end + run);
+                        if let (Some(dst), Some(src)) = (dst, chunk.get(..run)) {
+                            dst.copy_from_slice(src);
                         }
                         self.end += run;
                         i += run;
@@ -978,7 +979,10 @@ impl<const N: usize> Decoder<N> {
         // it is correct, and it keeps `memmove` (1.6 KiB of flash on a Cortex-M) out of
         // firmware that has no other use for it.
         for i in 0..self.end - self.start {
-            self.buf[i] = self.buf[self.start + i];
+            let byte = self.buf.get(self.start + i).copied();
+            if let (Some(byte), Some(slot)) = (byte, self.buf.get_mut(i)) {
+                *slot = byte;
+            }
         }
         self.pos -= self.start;
         self.end -= self.start;
@@ -1013,13 +1017,17 @@ impl<const N: usize> Decoder<N> {
                         }
                     }
                 }
+                // `pos < end <= N` here: the bytes read below are always in the buffer
+                // (the defaults are never taken).
                 State::LenHi => {
-                    self.len = usize::from(self.buf[self.pos]) << 8;
+                    let hi = self.buf.get(self.pos).copied().unwrap_or_default();
+                    self.len = usize::from(hi) << 8;
                     self.pos += 1;
                     self.state = State::LenLo;
                 }
                 State::LenLo => {
-                    self.len |= usize::from(self.buf[self.pos]);
+                    let lo = self.buf.get(self.pos).copied().unwrap_or_default();
+                    self.len |= usize::from(lo);
                     self.pos += 1;
                     if let Some(error) = self.check_len() {
                         return Some(Err(self.fail1(error)));
@@ -1042,7 +1050,7 @@ impl<const N: usize> Decoder<N> {
                     }
                 }
                 State::Checksum => {
-                    let got = self.buf[self.pos];
+                    let got = self.buf.get(self.pos).copied().unwrap_or_default();
                     self.pos += 1;
                     let outcome = self.check(self.start + 3, got);
                     return Some(match outcome {
@@ -1153,7 +1161,8 @@ impl<const N: usize> Decoder<N> {
                     Some(k) => {
                         self.skipped(k);
                         i += k;
-                        if let Some((n, outcome)) = self.whole1(&rest[k..]) {
+                        let candidate = rest.get(k..).unwrap_or_default();
+                        if let Some((n, outcome)) = self.whole1(candidate) {
                             return (i + n, Some(outcome));
                         }
                         i += 1;
@@ -1170,10 +1179,13 @@ impl<const N: usize> Decoder<N> {
             if self.end + take > N {
                 self.compact();
             }
-            match self.buf.get_mut(self.end..self.end + take) {
-                Some(dst) => dst.copy_from_slice(&rest[..take]),
+            match (
+                self.buf.get_mut(self.end..self.end + take),
+                rest.get(..take),
+            ) {
+                (Some(dst), Some(src)) => dst.copy_from_slice(src),
                 // Unreachable: a candidate always fits once compacted (N >= 8).
-                None => {
+                _ => {
                     self.skipped(take);
                     self.reset();
                     i += take;

@@ -73,7 +73,9 @@ pub trait EncodeFrame {
             escape: mode == ApiMode::Escaped,
             overflow: false,
         };
-        w.buf[0] = START_DELIMITER;
+        if let Some(first) = w.buf.first_mut() {
+            *first = START_DELIMITER;
+        }
         w.put(&(len as u16).to_be_bytes());
         let mut s = 0u8;
         let mut written = 0usize;

@@ -37,12 +37,26 @@
 #![no_std]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
+// Nothing on the decoding path may panic, whatever the input: no indexing or slicing
+// that could go out of bounds, no unwrap, no panic. The frame views in `frame` index
+// their fields as smoltcp's do: in bounds once `check_len` passed (`new_checked`).
+#![cfg_attr(
+    not(test),
+    deny(
+        clippy::indexing_slicing,
+        clippy::unwrap_used,
+        clippy::expect_used,
+        clippy::panic,
+        clippy::unreachable
+    )
+)]
 
 mod address;
 mod decode_error;
 mod decoder;
 mod encode;
 mod error;
+#[allow(clippy::indexing_slicing)]
 pub mod frame;
 mod mode;
 mod raw;
