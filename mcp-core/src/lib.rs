@@ -84,8 +84,9 @@
 #![no_std]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
-// Nothing here may panic, whatever the bytes: no indexing or slicing that could go out
-// of bounds, no unwrap, no panic.
+// No indexing or slicing that could go out of bounds, no unwrap, no panic, whatever the
+// bytes (the lints below). Arithmetic keeps to invariants that the fuzz targets check
+// with overflow checks on.
 #![cfg_attr(
     not(test),
     deny(

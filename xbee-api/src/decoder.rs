@@ -948,7 +948,7 @@ impl<const N: usize> Decoder<N> {
                 State::Data if !self.escaped && self.end < self.len => {
                     let want = (self.len - self.end).min(rest.len());
                     let chunk = rest.get(..want).unwrap_or_default();
-                    let run = memchr2(ESCAPE, START_DELIMITER, chunk).unwrap_or(want);
+                    let run = memchr2(ESCAPE, START_DELIMITER, chunk).unwrap_or(chunk.len());
                     if run > 0 {
                         let dst = self.buf.get_mut(self.end..self.end + run);
                         if let (Some(dst), Some(src)) = (dst, chunk.get(..run)) {

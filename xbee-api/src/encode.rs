@@ -73,6 +73,7 @@ pub trait EncodeFrame {
             escape: mode == ApiMode::Escaped,
             overflow: false,
         };
+        // Always there: the length check above found room for the whole frame.
         if let Some(first) = w.buf.first_mut() {
             *first = START_DELIMITER;
         }

@@ -37,9 +37,10 @@
 #![no_std]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
-// Nothing on the decoding path may panic, whatever the input: no indexing or slicing
-// that could go out of bounds, no unwrap, no panic. The frame views in `frame` index
-// their fields as smoltcp's do: in bounds once `check_len` passed (`new_checked`).
+// No indexing or slicing that could go out of bounds, no unwrap, no panic, whatever the
+// input (the lints below). Arithmetic keeps to invariants that the fuzz targets check
+// with overflow checks on. The frame views in `frame` index their fields as smoltcp's
+// do: in bounds once `check_len` passed (`new_checked`).
 #![cfg_attr(
     not(test),
     deny(
