@@ -10,7 +10,7 @@ use std::time::{Duration, SystemTime};
 use bytes::{Bytes, BytesMut};
 use futures::StreamExt;
 use tokio::io::AsyncWriteExt;
-use tokio::sync::{mpsc, oneshot};
+use tokio::sync::{Notify, mpsc, oneshot};
 use tokio::time::Instant;
 use tokio_util::codec::FramedRead;
 use xbee_api::{Address16, Address64, EncodeFrame};
@@ -203,9 +203,14 @@ struct Waiter {
 enum Served {
     /// Every sender and the stream are gone.
     Shutdown,
+    /// A sender asked to close the link ([`CommandSender::close`](crate::CommandSender::close)).
+    Closed,
     /// The transport failed.
     Failed(String),
 }
+
+/// The reason of [`LinkEvent::Closed`] after [`CommandSender::close`](crate::CommandSender::close).
+const CLOSED_BY_APPLICATION: &str = "closed by the application";
 
 enum Stop {
     Shutdown,
@@ -218,6 +223,8 @@ pub(crate) struct Driver {
     pub(crate) ops: mpsc::Receiver<Op>,
     pub(crate) events: mpsc::Sender<Event>,
     pub(crate) counters: Arc<Counters>,
+    /// Notified by [`CommandSender::close`](crate::CommandSender::close).
+    close_requested: Arc<Notify>,
     ops_open: bool,
     ids: IdTable<Pending>,
     /// Requests that need a frame id, taken while none was free.
@@ -234,6 +241,7 @@ impl Driver {
         ops: mpsc::Receiver<Op>,
         events: mpsc::Sender<Event>,
         counters: Arc<Counters>,
+        close_requested: Arc<Notify>,
     ) -> Self {
         Driver {
             connector,
@@ -241,6 +249,7 @@ impl Driver {
             ops,
             events,
             counters,
+            close_requested,
             ops_open: true,
             ids: IdTable::new(),
             parked: VecDeque::new(),
@@ -277,6 +286,11 @@ impl Driver {
             ever_connected = true;
             match self.serve(current).await {
                 Served::Shutdown => return,
+                // The transport is closed by now (`serve` owned it): say so last.
+                Served::Closed => {
+                    self.close(CLOSED_BY_APPLICATION.to_owned());
+                    return;
+                }
                 Served::Failed(reason) => {
                     bump(&self.counters.disconnects);
                     tracing::warn!(link = %self.connector.link(), %reason, "disconnected");
@@ -323,6 +337,9 @@ impl Driver {
                     None => self.ops_open = false,
                 },
                 _ = self.events.closed(), if !self.ops_open => return Err(Stop::Shutdown),
+                () = self.close_requested.notified() => {
+                    return Err(Stop::Fatal(CLOSED_BY_APPLICATION.to_owned()));
+                }
             }
         }
     }
@@ -362,6 +379,7 @@ impl Driver {
                     self.expire(Instant::now());
                 }
                 _ = self.events.closed(), if !self.ops_open => return Served::Shutdown,
+                () = self.close_requested.notified() => return Served::Closed,
             }
         }
     }

@@ -86,8 +86,9 @@ pub enum LinkEvent {
         /// What is at the other end now.
         peer: String,
     },
-    /// The link ended for good (reconnection disabled or impossible); the stream ends
-    /// after this event.
+    /// The link ended for good (reconnection disabled or impossible, or
+    /// [`CommandSender::close`](crate::CommandSender::close)); the stream ends after this
+    /// event.
     Closed {
         /// Why.
         reason: String,

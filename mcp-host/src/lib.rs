@@ -137,13 +137,22 @@ pub async fn connect(
     let counters = Arc::new(stats::Counters::default());
     let (ops_tx, ops_rx) = mpsc::channel(OPS_CAPACITY);
     let (events_tx, events_rx) = mpsc::channel(options.event_capacity);
+    let close_requested = Arc::new(tokio::sync::Notify::new());
     let sender = CommandSender {
         ops: ops_tx,
         default_timeout: options.send_timeout,
         counters: counters.clone(),
         info: info.clone(),
+        close_requested: close_requested.clone(),
     };
-    let driver = driver::Driver::new(connector, options, ops_rx, events_tx, counters.clone());
+    let driver = driver::Driver::new(
+        connector,
+        options,
+        ops_rx,
+        events_tx,
+        counters.clone(),
+        close_requested,
+    );
     tokio::spawn(driver.run(transport));
     let stream = PacketStream {
         events: events_rx,

@@ -4,7 +4,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use bytes::Bytes;
-use tokio::sync::{mpsc, oneshot};
+use tokio::sync::{Notify, mpsc, oneshot};
 use tokio::time::Instant;
 use xbee_api::{Address16, Address64, DiscoveryStatus};
 
@@ -67,6 +67,7 @@ pub struct CommandSender {
     pub(crate) default_timeout: Duration,
     pub(crate) counters: Arc<Counters>,
     pub(crate) info: Arc<LinkInfo>,
+    pub(crate) close_requested: Arc<Notify>,
 }
 
 impl CommandSender {
@@ -281,6 +282,34 @@ impl CommandSender {
     /// What the link is connected to.
     pub fn info(&self) -> &LinkInfo {
         &self.info
+    }
+
+    /// Ends the link for good, for every holder of it: the transport (serial port,
+    /// socket, pseudo-terminal) is closed, requests in flight and later ones fail, and
+    /// the [`PacketStream`](crate::PacketStream) yields
+    /// [`LinkEvent::Closed`](crate::LinkEvent::Closed) and ends. Returns at once.
+    ///
+    /// The transport is closed before that event, so once the stream has yielded it (or
+    /// ended) the same device can be opened again at once: a serial port is opened for
+    /// exclusive use, and merely dropping the handles closes it a moment later, in the
+    /// background.
+    ///
+    /// ```no_run
+    /// # async fn f() -> Result<(), Box<dyn std::error::Error>> {
+    /// use futures::StreamExt;
+    /// use mcp_host::{Link, LinkOptions};
+    ///
+    /// let link: Link = "serial:/dev/ttyUSB0:115200".parse()?;
+    /// let (mut stream, sender) = mcp_host::connect(&link, LinkOptions::default()).await?;
+    /// // ... use the link, then hand the port to someone else:
+    /// sender.close();
+    /// while stream.next().await.is_some() {}
+    /// let (_stream, _sender) = mcp_host::connect(&link, LinkOptions::default()).await?;
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub fn close(&self) {
+        self.close_requested.notify_one();
     }
 
     async fn call<T>(

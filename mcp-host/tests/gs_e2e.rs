@@ -265,6 +265,28 @@ fn at_commands_and_api_mode_detection() {
 }
 
 #[test]
+fn api_mode_detection_over_a_serial_port() {
+    // A serial port is opened for exclusive use: the link that asks the radio its mode
+    // must have let go of the port before the link in that mode opens it.
+    let sim = Sim::start_with(&["--api-mode", "2"], "pty");
+    assert!(sim.link.starts_with("serial:/dev/"), "{}", sim.link);
+    for _ in 0..3 {
+        let out = sim.ok(&[
+            "status",
+            "--api-mode",
+            "auto",
+            "--to",
+            MAV,
+            "--format",
+            "json",
+            "landing",
+        ]);
+        let report = serde_json::from_str::<Value>(out.trim()).unwrap();
+        assert_eq!(report["state_name"], "flight");
+    }
+}
+
+#[test]
 fn record_decode_and_replay() {
     let sim = Sim::start("tcp-listen:127.0.0.1:0");
     sim.send(&["telemetry", "on", "pitch_angle"]);

@@ -270,6 +270,41 @@ async fn serial_link_reports_the_device_going_away() {
     }
 }
 
+#[tokio::test]
+async fn a_closed_serial_link_frees_its_port_at_once() {
+    // Serial ports are opened for exclusive use: each round opens the device again
+    // right after the link before it was closed, which fails while the port is held.
+    let (radio, device) = tokio_serial::SerialStream::pair().unwrap();
+    let path = tokio_serial::SerialPort::name(&device).unwrap();
+    drop(device);
+    let link = format!("serial:{path}:115200").parse().unwrap();
+    let mut fake = FakeXBee::new(radio, ApiMode::Unescaped);
+    for round in 0..3 {
+        let (mut stream, sender) = mcp_host::connect(&link, options(ApiMode::Unescaped, true))
+            .await
+            .unwrap_or_else(|e| panic!("round {round}: {e}"));
+        assert!(matches!(
+            next_link_event(&mut stream).await,
+            LinkEvent::Connected { .. }
+        ));
+        fake.receive(MAV, &time_report(round)).await;
+        expect_time_report(&mut stream, round).await;
+
+        sender.close();
+        match next_link_event(&mut stream).await {
+            LinkEvent::Closed { reason } => assert_eq!(reason, "closed by the application"),
+            other => panic!("round {round}: {other:?}"),
+        }
+        let end = tokio::time::timeout(GUARD, futures::StreamExt::next(&mut stream)).await;
+        assert!(end.expect("the stream did not end").is_none());
+        let err = sender
+            .send(MAV, &Command::<&[u8]>::Time(round))
+            .await
+            .unwrap_err();
+        assert!(matches!(err, SendError::Closed), "{err}");
+    }
+}
+
 #[test]
 fn handles_are_send_and_sync() {
     fn check<T: Send + Sync + 'static>() {}

@@ -3,6 +3,7 @@
 use std::time::Duration;
 
 use clap::Args;
+use futures::StreamExt;
 use mcp_host::{
     CommandSender, ConnectError, Link, LinkOptions, PacketStream, ReconnectPolicy, SendError,
 };
@@ -106,22 +107,24 @@ impl LinkArgs {
                 "--api-mode auto needs a link to a radio (serial: or tcp:); give 1 or 2",
             ));
         }
-        let (_stream, sender) = self.connect(ApiMode::Unescaped, false).await?;
+        let (mut stream, sender) = self.connect(ApiMode::Unescaped, false).await?;
         let timeout = self.timeout().min(Duration::from_secs(3));
-        let response = sender
-            .at(*b"AP", &[], Some(timeout))
-            .await
-            .map_err(|e| match e {
-                SendError::Timeout { .. } => Failure::new(
-                    Failure::TIMEOUT,
-                    format!(
-                        "the radio on {} did not answer AT AP within {timeout:?}: it may be in \
+        let response = sender.at(*b"AP", &[], Some(timeout)).await;
+        // Closed and waited for, so that the port (opened for exclusive use) is free
+        // for the link in the mode found.
+        sender.close();
+        while stream.next().await.is_some() {}
+        let response = response.map_err(|e| match e {
+            SendError::Timeout { .. } => Failure::new(
+                Failure::TIMEOUT,
+                format!(
+                    "the radio on {} did not answer AT AP within {timeout:?}: it may be in \
                      transparent mode (AP=0) or at another baud rate",
-                        self.link
-                    ),
+                    self.link
                 ),
-                other => send_failure(other),
-            })?;
+            ),
+            other => send_failure(other),
+        })?;
         let mode = match response.parse() {
             Ok(Frame::AtCommandResponse(at)) if at.status == AtStatus::Ok => {
                 at.data.last().copied()
