@@ -316,6 +316,22 @@ fn record_decode_and_replay() {
         assert_eq!(d["frame"], l["frame"]);
         assert_eq!(d["mcp"], l["mcp"]);
     }
+    // As text: the time, then `rx` once (packets say it themselves, other frames get
+    // it in front).
+    let out = mcp_gs_ok(&["decode", file]);
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert_eq!(text.lines().count(), live_frames.len());
+    let mut packets = 0;
+    for line in text.lines() {
+        let (time, frame) = line.split_once(' ').unwrap();
+        assert_eq!(time.len(), "12:00:00.000".len(), "{line}");
+        assert!(
+            frame.starts_with("rx ") && !frame.contains("rx rx"),
+            "{line}"
+        );
+        packets += usize::from(frame.starts_with(&format!("rx  {MAV}/")));
+    }
+    assert!(packets > 0, "{text}");
 
     // Replayed as fast as possible onto a link, the same frames arrive.
     let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();

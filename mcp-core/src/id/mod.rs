@@ -20,11 +20,21 @@ pub use landing_state::LandingState;
 pub use telemetry_id::TelemetryId;
 
 /// The text given to an identifier's `FromStr` was neither one of its names nor a
-/// number from 0 to 255.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
-#[error("not a {what} name or a number from 0 to 255 (decimal or 0x-hex)")]
+/// number from 0 to 255. Its message lists the names.
+///
+/// ```
+/// use mcp_core::Controller;
+/// let err = "fast".parse::<Controller>().unwrap_err();
+/// assert_eq!(
+///     err.to_string(),
+///     "not a controller: give a name (manual, altitude, mpc) or a number from 0 to 255 \
+///      (decimal or 0x-hex)"
+/// );
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ParseIdError {
     what: &'static str,
+    names: &'static [&'static str],
 }
 
 impl ParseIdError {
@@ -32,7 +42,27 @@ impl ParseIdError {
     pub fn what(&self) -> &'static str {
         self.what
     }
+
+    /// The names it takes, in ascending byte order.
+    pub fn names(&self) -> &'static [&'static str] {
+        self.names
+    }
 }
+
+impl core::fmt::Display for ParseIdError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "not a {}: give a name (", self.what)?;
+        for (i, name) in self.names.iter().enumerate() {
+            if i > 0 {
+                f.write_str(", ")?;
+            }
+            f.write_str(name)?;
+        }
+        f.write_str(") or a number from 0 to 255 (decimal or 0x-hex)")
+    }
+}
+
+impl core::error::Error for ParseIdError {}
 
 /// Parses `123`, `0x7b` / `0X7B`, or the `unknown(0x7b)` form that `Display` writes.
 fn parse_number(s: &str) -> Option<u8> {
@@ -158,7 +188,10 @@ macro_rules! id_enum {
             fn from_str(s: &str) -> Result<Self, Self::Err> {
                 Self::from_name(s.trim())
                     .or_else(|| $crate::id::parse_number(s).map(Self::from))
-                    .ok_or($crate::id::ParseIdError { what: $what })
+                    .ok_or($crate::id::ParseIdError {
+                        what: $what,
+                        names: &[$($text),*],
+                    })
             }
         }
     };

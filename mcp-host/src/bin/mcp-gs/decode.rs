@@ -122,15 +122,16 @@ impl<W: Write> Printer<'_, W> {
                 writeln!(self.out, "{value}")
             }
             (Format::Text, Ok(frame)) => {
+                let line = render::text::frame(&frame);
                 if let Some((direction, time)) = direction {
-                    write!(
-                        self.out,
-                        "{} {} ",
-                        render::text::time(time),
-                        render::text::direction(direction)
-                    )?;
+                    write!(self.out, "{} ", render::text::time(time))?;
+                    // Packets say `rx`/`tx` themselves; other frames get it here.
+                    let direction = render::text::direction(direction);
+                    if !line.starts_with(direction) {
+                        write!(self.out, "{direction} ")?;
+                    }
                 }
-                writeln!(self.out, "{}", render::text::frame(&frame))
+                writeln!(self.out, "{line}")
             }
             (Format::Json, Err(e)) => writeln!(
                 self.out,

@@ -1,6 +1,7 @@
 //! `mcp-gs demo`: a ground station and a simulated MAV in one process, over a
 //! pseudo-terminal, showing every command, delivery status, report and some telemetry.
 
+use std::num::NonZeroU64;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, SystemTime};
 
@@ -27,10 +28,9 @@ pub(crate) struct DemoArgs {
     /// How long the demo runs, seconds; 0 runs until Ctrl-C.
     #[arg(long, default_value_t = 10.0, value_name = "S")]
     duration: f64,
-    /// Show every Nth telemetry packet (they arrive at 20 Hz).
-    #[arg(long, default_value_t = 10, value_name = "N",
-          value_parser = clap::value_parser!(u64).range(1..))]
-    telemetry_every: u64,
+    /// Show every Nth telemetry packet (they arrive at 20 Hz); at least 1.
+    #[arg(long, default_value_t = NonZeroU64::new(10).unwrap_or(NonZeroU64::MIN), value_name = "N")]
+    telemetry_every: NonZeroU64,
 }
 
 /// The simulated MAV.
@@ -275,7 +275,7 @@ pub(crate) async fn run(args: DemoArgs) -> Result<(), Failure> {
     let printer = tokio::spawn(print_events(
         stream,
         seen.clone(),
-        args.telemetry_every,
+        args.telemetry_every.get(),
         landing_tx,
         radio_tx,
     ));
