@@ -383,3 +383,16 @@ fn closed_standard_output_ends_quietly() {
     assert!(!stderr.contains("panicked"), "{stderr}");
     assert_eq!(output.status.code(), Some(0), "{stderr}");
 }
+
+#[test]
+fn log_lines_into_a_pipe_carry_no_colour_codes() {
+    let output = gs()
+        .args(["sim", "--link", "pty", "--duration", "0.1"])
+        .env("MCP_LOG", "debug")
+        .output()
+        .expect("mcp-gs runs");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(0), "{stderr}");
+    assert!(stderr.contains("DEBUG"), "{stderr}");
+    assert!(!stderr.contains('\u{1b}'), "{stderr:?}");
+}
