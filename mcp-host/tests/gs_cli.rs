@@ -264,10 +264,39 @@ fn encode_every_command() {
 fn bad_arguments_exit_2_with_one_line() {
     for args in [
         &["encode", "--to", "xyz", "landing", "on"][..],
-        &["encode", "--to", "1", "controller", "fast"],
-        &["encode", "--to", "1", "trajectory", "--waypoint", "1,2,3"],
-        &["encode", "--to", "1", "status", "position_set"],
-        &["encode", "--to", "1", "status", "telemetry_to_coordinator"],
+        // A 64-bit address is all 16 digits: one left out is not another address.
+        &["encode", "--to", "0013a20040b599", "landing", "on"],
+        &["encode", "--to", "ffff", "landing", "on"],
+        &[
+            "encode",
+            "--to",
+            "0013a20040b599b9",
+            "slave-set",
+            "0013a200",
+        ],
+        &["encode", "--to", "0013a20040b599b9", "controller", "fast"],
+        &[
+            "encode",
+            "--to",
+            "0013a20040b599b9",
+            "trajectory",
+            "--waypoint",
+            "1,2,3",
+        ],
+        &[
+            "encode",
+            "--to",
+            "0013a20040b599b9",
+            "status",
+            "position_set",
+        ],
+        &[
+            "encode",
+            "--to",
+            "0013a20040b599b9",
+            "status",
+            "telemetry_to_coordinator",
+        ],
         &["decode", "/nonexistent/capture.bin"],
         &["decode", "--api-mode", "3", "-"],
         &[
@@ -275,7 +304,7 @@ fn bad_arguments_exit_2_with_one_line() {
             "--link",
             "bogus:thing",
             "--to",
-            "1",
+            "0013a20040b599b9",
             "landing",
             "on",
         ],

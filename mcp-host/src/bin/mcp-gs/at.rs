@@ -13,7 +13,7 @@ pub(crate) struct AtArgs {
     #[command(flatten)]
     link: LinkArgs,
     /// Ask a remote radio (Remote AT Command, 0x17) instead of the local one.
-    #[arg(long)]
+    #[arg(long, value_name = "ADDR", value_parser = crate::link_args::parse_address64)]
     to: Option<Address64>,
     /// VALUE is text (e.g. for NI), not hex.
     #[arg(long)]

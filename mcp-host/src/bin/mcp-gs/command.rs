@@ -107,6 +107,7 @@ pub(crate) enum CommandArgs {
     /// Position slave set: the slave MAV for coordinate system distribution.
     SlaveSet {
         /// The slave's 64-bit address (16 hex digits).
+        #[arg(value_parser = parse_slave_address)]
         address: Address,
         /// Use the deployed firmware's form, with this slot (0-3).
         #[arg(long, value_parser = parse_slot)]
@@ -279,4 +280,9 @@ fn now() -> Result<u32, String> {
         .as_secs();
     u32::try_from(secs)
         .map_err(|_| "this machine's clock is past 2106: time does not fit u32".into())
+}
+
+/// The slave address of `slave-set`: 16 hex digits, as every 64-bit address here.
+fn parse_slave_address(s: &str) -> Result<Address, String> {
+    crate::link_args::parse_address64(s).map(|a| Address::from(a.0))
 }

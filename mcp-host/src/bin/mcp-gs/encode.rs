@@ -11,7 +11,7 @@ use mcp_host::render::json::hex;
 #[derive(Debug, Args)]
 pub(crate) struct EncodeArgs {
     /// Destination 64-bit address (16 hex digits; 000000000000FFFF broadcasts).
-    #[arg(long)]
+    #[arg(long, value_name = "ADDR", value_parser = crate::link_args::parse_address64)]
     to: Address64,
     /// Destination 16-bit address (FFFE when unknown).
     #[arg(long, default_value = "fffe")]

@@ -7,7 +7,7 @@ use futures::StreamExt;
 use mcp_host::{
     CommandSender, ConnectError, Link, LinkOptions, PacketStream, ReconnectPolicy, SendError,
 };
-use xbee_api::{ApiMode, AtStatus, Frame};
+use xbee_api::{Address64, ApiMode, AtStatus, Frame};
 
 use crate::Failure;
 
@@ -48,6 +48,24 @@ pub(crate) struct LinkArgs {
     /// Seconds to wait for a transmit status, response or report (and to connect).
     #[arg(long, value_name = "SECONDS", default_value_t = 12.0, value_parser = parse_seconds)]
     pub(crate) timeout: f64,
+}
+
+/// A 64-bit address on the command line: exactly 16 hex digits (an optional `0x`), so
+/// that a digit left out is an error rather than another address.
+pub(crate) fn parse_address64(s: &str) -> Result<Address64, String> {
+    let digits = s
+        .strip_prefix("0x")
+        .or_else(|| s.strip_prefix("0X"))
+        .unwrap_or(s);
+    if digits.len() != 16 || !digits.bytes().all(|b| b.is_ascii_hexdigit()) {
+        return Err(format!(
+            "a 64-bit address is 16 hex digits (e.g. 0013a20040b599b9; 000000000000ffff \
+             broadcasts), got `{s}`"
+        ));
+    }
+    u64::from_str_radix(digits, 16)
+        .map(Address64)
+        .map_err(|e| format!("`{s}`: {e}"))
 }
 
 fn parse_seconds(s: &str) -> Result<f64, String> {

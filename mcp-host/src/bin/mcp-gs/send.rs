@@ -15,7 +15,7 @@ pub(crate) struct SendArgs {
     link: LinkArgs,
     /// Destination: a MAV's 64-bit address (16 hex digits), or 000000000000FFFF to
     /// broadcast.
-    #[arg(long)]
+    #[arg(long, value_name = "ADDR", value_parser = crate::link_args::parse_address64)]
     to: Address64,
     /// Fire and forget: frame id 0, the radio sends no transmit status.
     #[arg(long)]

@@ -15,7 +15,7 @@ pub(crate) struct StatusArgs {
     #[command(flatten)]
     link: LinkArgs,
     /// The MAV's 64-bit address (16 hex digits).
-    #[arg(long)]
+    #[arg(long, value_name = "ADDR", value_parser = crate::link_args::parse_address64)]
     to: Address64,
     /// Output format.
     #[arg(long, value_enum, default_value_t = Format::Text)]
