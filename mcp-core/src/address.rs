@@ -6,14 +6,14 @@ use core::{fmt, str::FromStr};
 ///
 /// The bytes are kept in wire order. The `u64` conversions read them big-endian, the
 /// order in which XBee addresses are written (`0013A20040B599B9`), and `Display`
-/// writes 16 upper-case hex digits in that order.
+/// writes 16 lower-case hex digits in that order, as `xbee_api::Address64` does.
 ///
 /// ```
 /// use mcp_core::Address;
 /// let a: Address = "0013A20040B599B9".parse().unwrap();
 /// assert_eq!(a.0, [0x00, 0x13, 0xA2, 0x00, 0x40, 0xB5, 0x99, 0xB9]);
 /// assert_eq!(u64::from(a), 0x0013_A200_40B5_99B9);
-/// assert_eq!(a.to_string(), "0013A20040B599B9");
+/// assert_eq!(a.to_string(), "0013a20040b599b9");
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
 pub struct Address(pub [u8; 8]);
@@ -32,7 +32,7 @@ impl From<Address> for u64 {
 
 impl fmt::Display for Address {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        self.0.iter().try_for_each(|b| write!(f, "{b:02X}"))
+        self.0.iter().try_for_each(|b| write!(f, "{b:02x}"))
     }
 }
 

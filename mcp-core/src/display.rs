@@ -138,7 +138,7 @@ mod tests {
         assert_eq!(show(b"r\x06\x78\x56\x34\x12"), "report time 305419896");
         assert_eq!(
             show(b"c\x05\x01\x00\x13\xa2\x00\x40\xb5\x99\xb9"),
-            "command position_slave_set slot 1 0013A20040B599B9"
+            "command position_slave_set slot 1 0013a20040b599b9"
         );
         assert_eq!(
             show(b"c\x04\x01\x01\x00\x00\x00\x00\x00\x80\x3f\x00\x00\x00\x40\x00\x00\x40\x40"),

@@ -88,13 +88,8 @@ async fn print_events(
                 }
             }
             Event::Frame(frame) => match frame.parse() {
-                Ok(Frame::ModemStatus(ms)) => {
-                    out!(
-                        "{} radio: modem status {:?} (0x{:02x})",
-                        now(),
-                        ms.status,
-                        u8::from(ms.status)
-                    );
+                Ok(f @ Frame::ModemStatus(_)) => {
+                    out!("{} radio: {}", now(), mcp_host::render::text::frame(&f));
                     radio_up.send_replace(true);
                 }
                 Ok(f) => out!("{} radio: {}", now(), mcp_host::render::text::frame(&f)),
