@@ -425,3 +425,55 @@ fn log_lines_into_a_pipe_carry_no_colour_codes() {
     assert!(stderr.contains("DEBUG"), "{stderr}");
     assert!(!stderr.contains('\u{1b}'), "{stderr:?}");
 }
+
+#[test]
+fn decoding_in_the_wrong_api_mode_hints_at_the_other() {
+    let capture = testdata("ap2.bin");
+    let capture = capture.to_str().unwrap();
+    for summary in [false, true] {
+        let mut args = vec!["decode", capture, "--api-mode", "1"];
+        args.extend(summary.then_some("--summary"));
+        let output = run(&args);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(0), "{stderr}");
+        assert!(stderr.contains("decode it with --api-mode 2"), "{stderr}");
+    }
+    // In the right mode, no hint.
+    let output = run(&["decode", capture, "--api-mode", "2"]);
+    assert_eq!(output.status.code(), Some(0));
+    assert_eq!(String::from_utf8_lossy(&output.stderr), "");
+}
+
+#[test]
+fn a_cut_off_recording_is_summed_up_to_the_cut_then_an_error() {
+    let path = std::env::temp_dir().join(format!("mcp-gs-cut-{}.mcprec", std::process::id()));
+    let mut bytes = Vec::new();
+    let mut writer = mcp_host::record::RecordWriter::new(&mut bytes).unwrap();
+    // Modem status "coordinator started", three times.
+    for _ in 0..3 {
+        writer
+            .write(
+                std::time::SystemTime::now(),
+                mcp_host::record::Direction::Received,
+                &[0x8A, 0x06],
+            )
+            .unwrap();
+    }
+    drop(writer);
+    bytes.truncate(bytes.len() - 1);
+    std::fs::write(&path, &bytes).unwrap();
+    let file = path.to_str().unwrap();
+
+    let output = run(&["decode", file, "--summary", "--format", "json"]);
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(!stderr.trim().is_empty());
+    let summary: Value = serde_json::from_str(stdout.trim()).unwrap();
+    assert_eq!(summary["frames"], 2, "{stdout}");
+    // Without --summary, the frames before the cut as well.
+    let output = run(&["decode", file]);
+    assert_eq!(output.status.code(), Some(2));
+    assert_eq!(String::from_utf8_lossy(&output.stdout).lines().count(), 2);
+    std::fs::remove_file(&path).unwrap();
+}

@@ -264,14 +264,43 @@ fn decode_stream(
             decoder.stats(),
         )?;
     }
+    if let Some(hint) = mode_hint(mode, decoder.stats()) {
+        eprintln!("mcp-gs: {hint}");
+    }
     Ok(())
+}
+
+/// A hint when most frames failed in a way that reading the stream in the other API
+/// mode explains: checksums (mode 2 escapes read as data, or the reverse) and escapes.
+fn mode_hint(mode: ApiMode, stats: &xbee_api::Stats) -> Option<String> {
+    let failed = u64::from(stats.bad_checksum) + u64::from(stats.bad_escape);
+    if failed < 8 || failed <= u64::from(stats.frames_ok) {
+        return None;
+    }
+    let other = match mode {
+        ApiMode::Unescaped => 2,
+        ApiMode::Escaped => 1,
+    };
+    Some(format!(
+        "hint: {failed} frames failed their checksum or escapes and {} passed: if the \
+         stream is in API mode {other}, decode it with --api-mode {other}",
+        stats.frames_ok
+    ))
 }
 
 fn decode_recording(input: impl Read, printer: &mut Printer<'_, impl Write>) -> io::Result<()> {
     let mut reader = RecordReader::new(input)?;
-    while let Some(record) = reader.next_record()? {
-        printer.frame(&record.frame, Some((record.direction, record.time)))?;
-    }
+    // A recording cut off or damaged part way: what came before it is still decoded and
+    // counted, then the error is reported.
+    let result = loop {
+        match reader.next_record() {
+            Ok(Some(record)) => {
+                printer.frame(&record.frame, Some((record.direction, record.time)))?;
+            }
+            Ok(None) => break Ok(()),
+            Err(e) => break Err(e),
+        }
+    };
     if let Some(summary) = &printer.summary {
         print_summary(
             printer.out,
@@ -281,7 +310,7 @@ fn decode_recording(input: impl Read, printer: &mut Printer<'_, impl Write>) -> 
             &xbee_api::Stats::default(),
         )?;
     }
-    Ok(())
+    result
 }
 
 fn print_summary(
