@@ -448,18 +448,19 @@ fn decoding_in_the_wrong_api_mode_hints_at_the_other() {
 fn a_cut_off_recording_is_summed_up_to_the_cut_then_an_error() {
     let path = std::env::temp_dir().join(format!("mcp-gs-cut-{}.mcprec", std::process::id()));
     let mut bytes = Vec::new();
-    let mut writer = mcp_host::record::RecordWriter::new(&mut bytes).unwrap();
-    // Modem status "coordinator started", three times.
-    for _ in 0..3 {
-        writer
-            .write(
-                std::time::SystemTime::now(),
-                mcp_host::record::Direction::Received,
-                &[0x8A, 0x06],
-            )
-            .unwrap();
+    {
+        let mut writer = mcp_host::record::RecordWriter::new(&mut bytes).unwrap();
+        // Modem status "coordinator started", three times.
+        for _ in 0..3 {
+            writer
+                .write(
+                    std::time::SystemTime::now(),
+                    mcp_host::record::Direction::Received,
+                    &[0x8A, 0x06],
+                )
+                .unwrap();
+        }
     }
-    drop(writer);
     bytes.truncate(bytes.len() - 1);
     std::fs::write(&path, &bytes).unwrap();
     let file = path.to_str().unwrap();
