@@ -298,6 +298,16 @@ fn bad_arguments_exit_2_with_one_line() {
             "telemetry_to_coordinator",
         ],
         &["decode", "/nonexistent/capture.bin"],
+        // A one-shot subcommand on a new pseudo-terminal would wait for nobody.
+        &[
+            "send",
+            "--link",
+            "pty",
+            "--to",
+            "0013a20040b599b9",
+            "landing",
+            "on",
+        ],
         &["decode", "--api-mode", "3", "-"],
         &[
             "send",

@@ -89,6 +89,13 @@ impl LinkArgs {
         &self,
         reconnect: bool,
     ) -> Result<(PacketStream, CommandSender), Failure> {
+        if !reconnect && matches!(self.link, Link::Pty) {
+            return Err(Failure::input(
+                "--link pty makes a new pseudo-terminal, with no radio on it yet: this \
+                 subcommand needs one that is there, serial:PATH (e.g. the path `mcp-gs sim \
+                 --link pty` prints) or tcp:HOST:PORT",
+            ));
+        }
         let mode = match self.api_mode {
             ApiModeChoice::Fixed(mode) => mode,
             ApiModeChoice::Auto => self.detect_mode().await?,
