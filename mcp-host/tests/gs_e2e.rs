@@ -265,6 +265,31 @@ fn at_commands_and_api_mode_detection() {
 }
 
 #[test]
+fn monitor_in_the_wrong_api_mode_says_so_over_tcp() {
+    let sim = Sim::start_with(&["--api-mode", "2"], "tcp-listen:127.0.0.1:0");
+    let out = sim.ok(&[
+        "send",
+        "--api-mode",
+        "2",
+        "--to",
+        MAV,
+        "telemetry",
+        "on",
+        "pitch_angle",
+    ]);
+    assert!(out.starts_with("delivered"), "{out}");
+    let out = sim.gs(&["monitor", "--api-mode", "1", "--count", "20"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    // The radio's answer to AT AP, and the checksum errors of its escaped frames.
+    assert!(
+        stderr.contains("the radio is in API mode 2 (AP=2) but --api-mode is 1"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("try --api-mode 2"), "{stderr}");
+}
+
+#[test]
 fn api_mode_detection_over_a_serial_port() {
     // A serial port is opened for exclusive use: the link that asks the radio its mode
     // must have let go of the port before the link in that mode opens it.

@@ -54,8 +54,10 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
             path.display()
         );
     }
-    if let (ApiModeChoice::Fixed(mode), mcp_host::Link::Serial { .. }) =
-        (args.link.api_mode, &args.link.link)
+    if let (
+        ApiModeChoice::Fixed(mode),
+        mcp_host::Link::Serial { .. } | mcp_host::Link::Tcp { .. },
+    ) = (args.link.api_mode, &args.link.link)
     {
         let sender = sender.clone();
         tokio::spawn(async move { check_mode(&sender, mode).await });
@@ -96,16 +98,21 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
         if writeln!(out, "{line}").and_then(|()| out.flush()).is_err() {
             break; // stdout closed (e.g. piped into `head`)
         }
-        if !hinted
-            && good == 0
-            && checksum_errors >= MODE_HINT_ERRORS
-            && args.link.api_mode == ApiModeChoice::Fixed(ApiMode::Unescaped)
-        {
-            hinted = true;
-            eprintln!(
-                "mcp-gs: hint: only checksum errors so far: the radio may be in API mode 2 (AP=2); \
-                 try --api-mode 2 or --api-mode auto"
-            );
+        if let ApiModeChoice::Fixed(mode) = args.link.api_mode {
+            // A frame with no byte to escape passes in either mode (a modem status,
+            // say): the hint counts on most frames failing, not on all of them.
+            if !hinted && checksum_errors >= MODE_HINT_ERRORS && checksum_errors > good {
+                hinted = true;
+                let other = match mode {
+                    ApiMode::Unescaped => 2,
+                    ApiMode::Escaped => 1,
+                };
+                eprintln!(
+                    "mcp-gs: hint: {checksum_errors} checksum errors and {good} good frames so \
+                     far: the radio may be in API mode {other} (AP={other}); try --api-mode \
+                     {other} or --api-mode auto"
+                );
+            }
         }
         if let Event::Link(LinkEvent::Closed { reason }) = &event {
             return Err(Failure::link(format!("link closed: {reason}")));
