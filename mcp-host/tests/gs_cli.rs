@@ -298,6 +298,15 @@ fn bad_arguments_exit_2_with_one_line() {
             "telemetry_to_coordinator",
         ],
         &["decode", "/nonexistent/capture.bin"],
+        // `status` prints one MAV's report: a broadcast would print the first of many.
+        &[
+            "status",
+            "--link",
+            "tcp:127.0.0.1:9",
+            "--to",
+            "000000000000ffff",
+            "landing",
+        ],
         // A one-shot subcommand on a new pseudo-terminal would wait for nobody.
         &[
             "send",

@@ -29,6 +29,12 @@ pub(crate) struct StatusArgs {
 
 /// Runs `status`.
 pub(crate) async fn run(args: StatusArgs) -> Result<(), Failure> {
+    if args.to == Address64::BROADCAST {
+        return Err(Failure::input(
+            "status asks one MAV and prints its report: give the MAV's address (to ask every \
+             MAV, `send --to 000000000000ffff status ...` and watch the reports with `monitor`)",
+        ));
+    }
     let request = status_request(args.kind, args.id).map_err(Failure::input)?;
     let (_stream, sender) = args.link.open(false).await?;
     let report = sender
