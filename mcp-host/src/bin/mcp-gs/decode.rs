@@ -20,7 +20,7 @@ pub(crate) struct DecodeArgs {
     #[arg(default_value = "-")]
     input: PathBuf,
     /// API mode of a raw capture (recordings are stored unescaped).
-    #[arg(long, default_value = "1")]
+    #[arg(long, value_name = "1|2", default_value = "1")]
     api_mode: ApiModeArg,
     /// The input is hex text (whitespace, `:` and `,` between bytes are ignored).
     #[arg(long)]

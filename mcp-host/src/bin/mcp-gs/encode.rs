@@ -20,7 +20,7 @@ pub(crate) struct EncodeArgs {
     #[arg(long, default_value_t = 1)]
     frame_id: u8,
     /// API mode (2 escapes special bytes).
-    #[arg(long, default_value = "1")]
+    #[arg(long, value_name = "1|2", default_value = "1")]
     api_mode: ApiModeArg,
     /// Transmit options byte.
     #[arg(long, default_value_t = 0)]

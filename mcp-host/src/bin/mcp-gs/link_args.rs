@@ -45,7 +45,8 @@ pub(crate) struct LinkArgs {
     /// XBee API mode of the local radio (its AP setting): 1, 2, or auto to ask the radio.
     #[arg(long, value_name = "1|2|auto", default_value = "1")]
     pub(crate) api_mode: ApiModeChoice,
-    /// Seconds to wait for a transmit status, response or report (and to connect).
+    /// Seconds to wait to connect, and for each transmit status, response or report a
+    /// subcommand waits for.
     #[arg(long, value_name = "SECONDS", default_value_t = 12.0, value_parser = parse_seconds)]
     pub(crate) timeout: f64,
 }
