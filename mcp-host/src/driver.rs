@@ -398,7 +398,8 @@ impl Driver {
     fn handle_item(&mut self, item: CodecItem) {
         match item {
             CodecItem::Error(error) => {
-                tracing::warn!(link = %self.connector.link(), %error, "dropped a corrupt frame");
+                // The event is how it is reported; the log only traces it.
+                tracing::debug!(link = %self.connector.link(), %error, "dropped a corrupt frame");
                 self.emit(Event::DecodeError(error));
             }
             CodecItem::Frame(frame) => {

@@ -359,11 +359,12 @@ impl Connector {
         loop {
             let delay = *self.delay.get_or_insert(policy.initial_delay);
             tokio::time::sleep(delay).await;
-            self.delay = Some(policy.next_delay(delay));
+            let next = policy.next_delay(delay);
+            self.delay = Some(next);
             match self.open().await {
                 Ok(transport) => return Ok(transport),
                 Err(e) if e.is_retryable() => {
-                    tracing::warn!(link = %self.link, error = %e, retry_in = ?self.delay, "reconnect attempt failed");
+                    tracing::warn!(link = %self.link, error = %e, retry_in = ?next, "reconnect attempt failed");
                 }
                 Err(e) => return Err(e),
             }
