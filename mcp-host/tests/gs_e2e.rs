@@ -83,7 +83,13 @@ impl Sim {
     }
 
     fn status(&self, kind: &[&str]) -> Value {
+        self.status_with(&[], kind)
+    }
+
+    /// [`Sim::status`] with more options (e.g. `--api-mode auto`).
+    fn status_with(&self, options: &[&str], kind: &[&str]) -> Value {
         let mut args = vec!["status", "--to", MAV, "--format", "json"];
+        args.extend_from_slice(options);
         args.extend_from_slice(kind);
         let out = self.ok(&args);
         let report: Value = serde_json::from_str(out.trim()).expect("one JSON report");
@@ -241,19 +247,7 @@ fn at_commands_and_api_mode_detection() {
     let out = sim.ok(&["at", "--api-mode", "2", "NP"]);
     assert!(out.starts_with("NP = "), "{out}");
     // `auto` asks the radio first and then talks in its mode.
-    let report = {
-        let out = sim.ok(&[
-            "status",
-            "--api-mode",
-            "auto",
-            "--to",
-            MAV,
-            "--format",
-            "json",
-            "landing",
-        ]);
-        serde_json::from_str::<Value>(out.trim()).unwrap()
-    };
+    let report = sim.status_with(&["--api-mode", "auto"], &["landing"]);
     assert_eq!(report["state_name"], "flight");
     // An unknown AT command is refused by the radio: a clear error, non-zero exit.
     let out = sim.gs(&["at", "--api-mode", "2", "ZZ"]);
@@ -296,17 +290,7 @@ fn api_mode_detection_over_a_serial_port() {
     let sim = Sim::start_with(&["--api-mode", "2"], "pty");
     assert!(sim.link.starts_with("serial:/dev/"), "{}", sim.link);
     for _ in 0..3 {
-        let out = sim.ok(&[
-            "status",
-            "--api-mode",
-            "auto",
-            "--to",
-            MAV,
-            "--format",
-            "json",
-            "landing",
-        ]);
-        let report = serde_json::from_str::<Value>(out.trim()).unwrap();
+        let report = sim.status_with(&["--api-mode", "auto"], &["landing"]);
         assert_eq!(report["state_name"], "flight");
     }
 }
