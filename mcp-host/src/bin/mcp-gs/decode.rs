@@ -277,10 +277,7 @@ fn mode_hint(mode: ApiMode, stats: &xbee_api::Stats) -> Option<String> {
     if failed < 8 || failed <= u64::from(stats.frames_ok) {
         return None;
     }
-    let other = match mode {
-        ApiMode::Unescaped => 2,
-        ApiMode::Escaped => 1,
-    };
+    let other = crate::link_args::other_mode(mode);
     Some(format!(
         "hint: {failed} frames failed their checksum or escapes and {} passed: if the \
          stream is in API mode {other}, decode it with --api-mode {other}",

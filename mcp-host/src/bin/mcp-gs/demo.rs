@@ -29,7 +29,7 @@ pub(crate) struct DemoArgs {
     #[arg(long, default_value_t = 10.0, value_name = "S")]
     duration: f64,
     /// Show every Nth telemetry packet (they arrive at 20 Hz); at least 1.
-    #[arg(long, default_value_t = NonZeroU64::new(10).unwrap_or(NonZeroU64::MIN), value_name = "N")]
+    #[arg(long, default_value = "10", value_name = "N")]
     telemetry_every: NonZeroU64,
 }
 
@@ -88,11 +88,12 @@ async fn print_events(
                 }
             }
             Event::Frame(frame) => match frame.parse() {
-                Ok(f @ Frame::ModemStatus(_)) => {
+                Ok(f) => {
                     out!("{} radio: {}", now(), mcp_host::render::text::frame(&f));
-                    radio_up.send_replace(true);
+                    if matches!(f, Frame::ModemStatus(_)) {
+                        radio_up.send_replace(true);
+                    }
                 }
-                Ok(f) => out!("{} radio: {}", now(), mcp_host::render::text::frame(&f)),
                 Err(e) => out!("{} radio: malformed frame: {e}", now()),
             },
             Event::InvalidPacket(bad) => {

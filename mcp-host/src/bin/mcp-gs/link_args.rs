@@ -58,15 +58,23 @@ pub(crate) fn parse_address64(s: &str) -> Result<Address64, String> {
         .strip_prefix("0x")
         .or_else(|| s.strip_prefix("0X"))
         .unwrap_or(s);
-    if digits.len() != 16 || !digits.bytes().all(|b| b.is_ascii_hexdigit()) {
+    if digits.len() != 16 {
         return Err(format!(
             "a 64-bit address is 16 hex digits (e.g. 0013a20040b599b9; 000000000000ffff \
              broadcasts), got `{s}`"
         ));
     }
-    u64::from_str_radix(digits, 16)
-        .map(Address64)
-        .map_err(|e| format!("`{s}`: {e}"))
+    s.parse()
+        .map_err(|e| format!("bad 64-bit address `{s}`: {e}"))
+}
+
+/// The number of the API mode that is not `mode`, for hints that the radio or the
+/// stream may be in it.
+pub(crate) fn other_mode(mode: ApiMode) -> u8 {
+    match mode {
+        ApiMode::Unescaped => 2,
+        ApiMode::Escaped => 1,
+    }
 }
 
 fn parse_seconds(s: &str) -> Result<f64, String> {

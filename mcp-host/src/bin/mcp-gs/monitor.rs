@@ -10,7 +10,6 @@ use futures::StreamExt;
 use mcp_host::record::{Direction, RecordWriter};
 use mcp_host::render;
 use mcp_host::{Event, LinkEvent};
-use xbee_api::ApiMode;
 
 use crate::link_args::{ApiModeChoice, LinkArgs, check_mode};
 use crate::{Failure, Format};
@@ -103,10 +102,7 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
             // say): the hint counts on most frames failing, not on all of them.
             if !hinted && checksum_errors >= MODE_HINT_ERRORS && checksum_errors > good {
                 hinted = true;
-                let other = match mode {
-                    ApiMode::Unescaped => 2,
-                    ApiMode::Escaped => 1,
-                };
+                let other = crate::link_args::other_mode(mode);
                 eprintln!(
                     "mcp-gs: hint: {checksum_errors} checksum errors and {good} good frames so \
                      far: the radio may be in API mode {other} (AP={other}); try --api-mode \
