@@ -29,6 +29,21 @@ fn demo_runs_for_two_seconds_and_exits_0() {
         "{stdout}"
     );
     assert!(!stdout.contains("NOT delivered"), "{stdout}");
+    answers_print_under_their_requests_heading(&stdout);
+}
+
+/// A status request's answer prints before the next step's heading.
+fn answers_print_under_their_requests_heading(stdout: &str) {
+    let mut waiting = None;
+    for line in stdout.lines() {
+        if line.contains(" -> ") && line.contains("status request") {
+            waiting = Some(line);
+        } else if line.contains(" <- report ") {
+            waiting = None;
+        } else if line.starts_with("== ") {
+            assert_eq!(waiting, None, "unanswered before {line:?}:\n{stdout}");
+        }
+    }
 }
 
 #[test]

@@ -59,6 +59,7 @@ async fn print_events(
     every: u64,
     landing: watch::Sender<Option<LandingState>>,
     radio_up: watch::Sender<bool>,
+    reports_printed: watch::Sender<u64>,
 ) {
     while let Some(event) = stream.next().await {
         let mut seen = seen.lock().unwrap_or_else(|p| p.into_inner());
@@ -77,6 +78,7 @@ async fn print_events(
                     Packet::Report(report) => {
                         seen.reports += 1;
                         out!("{time} {from} <- {}", rx.packet);
+                        reports_printed.send_replace(seen.reports);
                         if let Report::Landing(state) = report {
                             landing.send_replace(Some(*state));
                         }
@@ -127,9 +129,14 @@ async fn print_events(
 /// unsolicited reports print before the next step; skipped once the time is up.
 const STEP_PAUSE: Duration = Duration::from_millis(150);
 
+/// How long a request waits for its answer to be printed, after the sender has it.
+const PRINT_WAIT: Duration = Duration::from_secs(1);
+
 /// Sends the commands and tallies the outcomes.
 struct Script {
     sender: CommandSender,
+    /// How many reports the printer has printed.
+    reports_printed: watch::Receiver<u64>,
     deadline: Option<Instant>,
     delivered: u64,
     answered: u64,
@@ -173,8 +180,15 @@ impl Script {
     async fn request(&mut self, request: StatusRequest) {
         let command: Command<&[u8]> = Command::StatusRequest(request);
         out!("{} {MAV} -> {command}", now());
+        let printed_before = *self.reports_printed.borrow_and_update();
         match self.sender.request(MAV, request).await {
-            Ok(_) => self.answered += 1,
+            Ok(_) => {
+                self.answered += 1;
+                // The sender has the answer; the printer prints it from the stream.
+                // Wait for that, so that it shows under this step's heading.
+                let printed = self.reports_printed.wait_for(|n| *n > printed_before);
+                let _ = tokio::time::timeout(PRINT_WAIT, printed).await;
+            }
             Err(RequestError::Send(e)) => {
                 out!("{}                  NOT delivered: {e}", now());
                 self.failures.push(send_failure(&e));
@@ -185,6 +199,7 @@ impl Script {
                     .push(Failure::new(Failure::TIMEOUT, e.to_string()));
             }
         }
+        self.pause().await;
     }
 }
 
@@ -268,12 +283,14 @@ pub(crate) async fn run(args: DemoArgs) -> Result<(), Failure> {
     let seen = Arc::new(Mutex::new(Seen::default()));
     let (landing_tx, mut landing) = watch::channel(None);
     let (radio_tx, mut radio_up) = watch::channel(false);
+    let (printed_tx, reports_printed) = watch::channel(0);
     let printer = tokio::spawn(print_events(
         stream,
         seen.clone(),
         args.telemetry_every.get(),
         landing_tx,
         radio_tx,
+        printed_tx,
     ));
 
     heading("Starting the radio");
@@ -281,6 +298,7 @@ pub(crate) async fn run(args: DemoArgs) -> Result<(), Failure> {
 
     let mut script = Script {
         sender,
+        reports_printed,
         deadline,
         delivered: 0,
         answered: 0,
