@@ -60,6 +60,7 @@ enum FrameSpec {
         discovery: u8,
     },
     AtCommand {
+        queued: bool,
         frame_id: u8,
         command: [u8; 2],
         parameter: Vec<u8>,
@@ -205,10 +206,12 @@ fn build_frame(spec: &FrameSpec) -> Option<Frame<'_>> {
             discovery: (*discovery).into(),
         }),
         S::AtCommand {
+            queued,
             frame_id,
             command,
             parameter,
         } => Frame::AtCommand(AtCommandRepr {
+            queued: *queued,
             frame_id: *frame_id,
             command: *command,
             parameter: clip(parameter),
@@ -315,6 +318,7 @@ fn is_known(t: u8) -> bool {
     use frame_type::*;
     [
         AT_COMMAND,
+        AT_COMMAND_QUEUE,
         TRANSMIT_REQUEST,
         EXPLICIT_ADDRESSING_COMMAND,
         REMOTE_AT_COMMAND,

@@ -244,6 +244,7 @@ impl CommandSender {
         timeout: Option<Duration>,
     ) -> Result<OwnedFrame, SendError> {
         let frame = xbee_api::AtCommandRepr {
+            queued: false,
             frame_id: 0,
             command,
             parameter,

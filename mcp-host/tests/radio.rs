@@ -117,7 +117,28 @@ impl Dev {
         command: &[u8; 2],
         parameter: &[u8],
     ) -> (AtStatus, Vec<u8>) {
+        self.at_frame(false, frame_id, command, parameter).await
+    }
+
+    /// [`Dev::at`] as AT Command - Queue Parameter Value (0x09).
+    async fn at_queued(
+        &mut self,
+        frame_id: u8,
+        command: &[u8; 2],
+        parameter: &[u8],
+    ) -> (AtStatus, Vec<u8>) {
+        self.at_frame(true, frame_id, command, parameter).await
+    }
+
+    async fn at_frame(
+        &mut self,
+        queued: bool,
+        frame_id: u8,
+        command: &[u8; 2],
+        parameter: &[u8],
+    ) -> (AtStatus, Vec<u8>) {
         self.send(&Frame::AtCommand(AtCommandRepr {
+            queued,
             frame_id,
             command: *command,
             parameter,
@@ -353,6 +374,19 @@ async fn local_at_commands_are_answered() {
         (AtStatus::Ok, a16.to_bytes().to_vec())
     );
     assert_eq!(dev.at(6, b"CE", &[]).await, (AtStatus::Ok, vec![0]));
+    assert_eq!(dev.at(9, b"SM", &[]).await, (AtStatus::Ok, vec![0]));
+    assert_eq!(dev.at(10, b"HV", &[]).await, (AtStatus::Ok, vec![0x2E, 0]));
+    assert_eq!(
+        dev.at(11, b"VR", &[]).await,
+        (AtStatus::Ok, vec![0x40, 0x60])
+    );
+    assert_eq!(dev.at(12, b"NI", &[]).await, (AtStatus::Ok, b" ".to_vec()));
+    assert_eq!(
+        dev.at(13, b"HV", &[1, 2]).await,
+        (AtStatus::InvalidParameter, vec![])
+    );
+    // A queued query (0x09) is answered as an immediate one.
+    assert_eq!(dev.at_queued(14, b"AP", &[]).await, (AtStatus::Ok, vec![2]));
     assert_eq!(
         dev.at(7, b"ZZ", &[]).await,
         (AtStatus::InvalidCommand, vec![])

@@ -63,9 +63,16 @@ fn expected() -> Vec<Frame<'static>> {
             discovery: DiscoveryStatus::AddressDiscovery,
         }),
         Frame::AtCommand(AtCommandRepr {
+            queued: false,
             frame_id: 0x52,
             command: *b"NJ",
             parameter: &[],
+        }),
+        Frame::AtCommand(AtCommandRepr {
+            queued: true,
+            frame_id: 0x01,
+            command: *b"BD",
+            parameter: &[0x07],
         }),
         Frame::AtCommandResponse(AtCommandResponseRepr {
             frame_id: 0x01,

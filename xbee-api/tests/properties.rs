@@ -12,11 +12,12 @@ use xbee_api::{ApiMode, EncodeFrame, Frame, RawFrame};
 const N: usize = 512;
 
 /// Frame types with the least frame data length of each; 0x23 stands for unknown types.
-const TYPES: [(u8, usize); 11] = [
+const TYPES: [(u8, usize); 12] = [
     (0x10, 14),
     (0x90, 12),
     (0x8B, 7),
     (0x08, 4),
+    (0x09, 4),
     (0x88, 5),
     (0x8A, 2),
     (0x11, 20),

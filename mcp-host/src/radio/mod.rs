@@ -20,11 +20,16 @@
 //!   is known but its link is down or cut, 0x23 to itself. Explicit Addressing Commands
 //!   (0x11) are delivered the same way, as Explicit Rx Indicators (0x91) carrying their
 //!   endpoints, cluster and profile.
-//! - Local AT commands are answered: `AP` (the node's API mode), `NP` (the unicast
-//!   payload limit), `SH`/`SL` (the 64-bit address), `MY` (the 16-bit address), `AI` (0,
-//!   joined), `CE` (1 on the coordinator); any other command gets status 2, invalid
-//!   command. Remote AT commands (0x17) get the same answers from the destination's
-//!   radio (0x97), or status 4, transmission failure, when it cannot be reached.
+//! - Local AT commands (0x08, and 0x09, queued) are answered as an XBee S2C module with
+//!   Zigbee firmware would: `AP` (the node's API mode), `NP` (the unicast payload
+//!   limit), `SH`/`SL` (the 64-bit address), `MY` (the 16-bit address), `AI` (0,
+//!   joined), `CE` (1 on the coordinator), `SM` (0, no sleep), `HV` (2E00: an S2C
+//!   through-hole module), `VR` (4060: Zigbee 3.0 firmware) and `NI` (a space, the
+//!   default). They are read-only: a value gets status 3, invalid parameter (but `AP`
+//!   set to the node's own mode, a no-op). Any other command gets status 2, invalid
+//!   command. These are what Digi's xbee-python library reads when it opens a device. Remote AT commands (0x17) get the
+//!   same answers from the destination's radio (0x97), or status 4, transmission
+//!   failure, when it cannot be reached.
 //! - When a link comes up its device gets a Modem Status: 0x06 coordinator started on the
 //!   coordinator, 0x02 joined network on other nodes. Links that go down are reopened
 //!   (a `tcp-listen` node's next peer is the node back); frames for a node whose link is

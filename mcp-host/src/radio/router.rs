@@ -16,6 +16,15 @@ use super::faults::{FaultRng, Faults};
 use super::wire;
 use super::{NetEvent, NetworkConfig, NodeStats};
 
+/// The longest AT command value the emulated radios answer with (`NI`, 20 characters).
+const AT_VALUE_MAX: usize = 20;
+/// `HV`: the hardware id of an XBee S2C through-hole module (0x2E), revision 0.
+const HARDWARE_VERSION: [u8; 2] = [0x2E, 0x00];
+/// `VR`: a Zigbee 3.0 firmware version (API, 0x4060).
+const FIRMWARE_VERSION: [u8; 2] = [0x40, 0x60];
+/// `NI`: a module's default node identifier, one space.
+const NODE_IDENTIFIER: &[u8] = b" ";
+
 /// Receive option of a unicast: acknowledged.
 pub(crate) const RX_ACKNOWLEDGED: u8 = 0x01;
 /// Receive option of a broadcast.
@@ -401,7 +410,7 @@ impl State {
         node: Address64,
         command: [u8; 2],
         parameter: &[u8],
-        value: &mut [u8; 8],
+        value: &mut [u8; AT_VALUE_MAX],
     ) -> (AtStatus, usize) {
         let Some(radio) = self.nodes.get(&node) else {
             return (AtStatus::Error, 0);
@@ -434,16 +443,31 @@ impl State {
                 value[0] = u8::from(node == Address64::COORDINATOR);
                 (AtStatus::Ok, 1)
             }
-            (b"AP" | b"NP" | b"SH" | b"SL" | b"MY" | b"AI" | b"CE", _) => {
-                (AtStatus::InvalidParameter, 0)
+            (b"SM", []) => (AtStatus::Ok, 1),
+            (b"HV", []) => {
+                value[..2].copy_from_slice(&HARDWARE_VERSION);
+                (AtStatus::Ok, 2)
             }
+            (b"VR", []) => {
+                value[..2].copy_from_slice(&FIRMWARE_VERSION);
+                (AtStatus::Ok, 2)
+            }
+            (b"NI", []) => {
+                value[..NODE_IDENTIFIER.len()].copy_from_slice(NODE_IDENTIFIER);
+                (AtStatus::Ok, NODE_IDENTIFIER.len())
+            }
+            (
+                b"AP" | b"NP" | b"SH" | b"SL" | b"MY" | b"AI" | b"CE" | b"SM" | b"HV" | b"VR"
+                | b"NI",
+                _,
+            ) => (AtStatus::InvalidParameter, 0),
             _ => (AtStatus::InvalidCommand, 0),
         }
     }
 
     /// Answers a local AT command.
     fn at_command(&mut self, from: Address64, at: &AtCommandRepr<'_>) {
-        let mut value = [0u8; 8];
+        let mut value = [0u8; AT_VALUE_MAX];
         let (status, len) = self.at_value(from, at.command, at.parameter, &mut value);
         self.emit(NetEvent::AtCommand {
             node: from,
@@ -470,7 +494,7 @@ impl State {
                 |a: &Address64| self.nodes.get(a).is_some_and(|n| n.connected && !n.cut);
             reachable(t) && reachable(&from)
         });
-        let mut value = [0u8; 8];
+        let mut value = [0u8; AT_VALUE_MAX];
         let (src64, src16, status, len) = match target {
             Some(t) => {
                 let (status, len) = self.at_value(t, at.command, at.parameter, &mut value);

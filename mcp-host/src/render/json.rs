@@ -84,6 +84,9 @@ pub fn frame(frame: &Frame<'_>) -> Value {
         }
         Frame::AtCommand(at) => {
             m.insert("frame".into(), "at".into());
+            if at.queued {
+                m.insert("queued".into(), true.into());
+            }
             m.insert("id".into(), at.frame_id.into());
             m.insert("command".into(), at_name(at.command).into());
             m.insert("parameter".into(), hex(at.parameter).into());

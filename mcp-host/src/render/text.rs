@@ -55,7 +55,8 @@ pub fn frame(frame: &Frame<'_>) -> String {
         ),
         Frame::AtCommand(at) => write!(
             s,
-            "at id {} {}{}",
+            "at{} id {} {}{}",
+            if at.queued { " queued" } else { "" },
             at.frame_id,
             at_name(at.command),
             data_suffix(at.parameter)

@@ -1,4 +1,6 @@
-//! AT Command (0x08): queries or sets a parameter of the local radio.
+//! AT Command (0x08): queries or sets a parameter of the local radio; and AT Command -
+//! Queue Parameter Value (0x09), the same fields, whose setting waits until an `AC`
+//! command or the next 0x08 frame applies the queue.
 
 use crate::frame::{be, check_frame, frame_type};
 use crate::{EncodeFrame, FrameError};
@@ -18,7 +20,8 @@ pub mod field {
     pub const HEADER_LEN: usize = 4;
 }
 
-/// A read-only view of AT Command (0x08) frame data, type byte included.
+/// A read-only view of AT Command (0x08) or AT Command - Queue Parameter Value (0x09)
+/// frame data, type byte included.
 ///
 /// Build it with [`new_checked`](Self::new_checked); the accessors of a checked view
 /// cannot panic. Turn it into owned fields with
@@ -42,18 +45,26 @@ impl<T: AsRef<[u8]>> AtCommand<T> {
         Ok(frame)
     }
 
-    /// Checks the frame type byte (0x08) and that the fixed fields are present.
+    /// Checks the frame type byte (0x08 or 0x09) and that the fixed fields are
+    /// present. A wrong type is reported as expecting 0x08.
     pub fn check_len(&self) -> Result<(), FrameError> {
-        check_frame(
-            self.buffer.as_ref(),
-            frame_type::AT_COMMAND,
-            field::HEADER_LEN,
-        )
+        let data = self.buffer.as_ref();
+        let expected = match data.first() {
+            Some(&frame_type::AT_COMMAND_QUEUE) => frame_type::AT_COMMAND_QUEUE,
+            _ => frame_type::AT_COMMAND,
+        };
+        check_frame(data, expected, field::HEADER_LEN)
     }
 
     /// The wrapped buffer.
     pub fn into_inner(self) -> T {
         self.buffer
+    }
+
+    /// Whether this is a 0x09 frame: a setting is queued, not applied.
+    pub fn queued(&self) -> bool {
+        let d = self.buffer.as_ref();
+        d[field::FRAME_TYPE] == frame_type::AT_COMMAND_QUEUE
     }
 
     /// Frame id: 0 asks for no response.
@@ -76,10 +87,22 @@ impl<'a> AtCommand<&'a [u8]> {
     }
 }
 
-/// The fields of a AT Command (0x08) frame: parse one from a view, or fill one
-/// in and encode it with [`EncodeFrame`].
+/// The fields of an AT Command (0x08) or AT Command - Queue Parameter Value (0x09)
+/// frame: parse one from a view, or fill one in and encode it with [`EncodeFrame`].
+///
+/// ```
+/// use xbee_api::{AtCommandRepr, EncodeFrame};
+/// // Queue a baud rate of 115200 (BD = 7), from Digi's manual.
+/// let queue = AtCommandRepr { queued: true, frame_id: 1, command: *b"BD", parameter: &[7] };
+/// let mut wire = [0u8; 16];
+/// let n = queue.encode(xbee_api::ApiMode::Unescaped, &mut wire).unwrap();
+/// assert_eq!(wire[..n], [0x7E, 0x00, 0x05, 0x09, 0x01, 0x42, 0x44, 0x07, 0x68]);
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct AtCommandRepr<'a> {
+    /// A 0x09 frame: the setting is queued until `AC` (or the next 0x08 frame)
+    /// applies it; a query is answered as by 0x08.
+    pub queued: bool,
     /// Frame id: 0 asks for no response.
     pub frame_id: u8,
     /// Two-character AT command, e.g. `*b"NJ"`.
@@ -89,13 +112,25 @@ pub struct AtCommandRepr<'a> {
 }
 
 impl<'a> AtCommandRepr<'a> {
-    /// The frame type, 0x08.
+    /// The frame type of a command applied at once, 0x08.
     pub const FRAME_TYPE: u8 = frame_type::AT_COMMAND;
+    /// The frame type of a queued command, 0x09.
+    pub const QUEUE_FRAME_TYPE: u8 = frame_type::AT_COMMAND_QUEUE;
+
+    /// The frame type: 0x09 if [`queued`](Self::queued), else 0x08.
+    pub const fn frame_type(&self) -> u8 {
+        if self.queued {
+            Self::QUEUE_FRAME_TYPE
+        } else {
+            Self::FRAME_TYPE
+        }
+    }
 
     /// Reads the fields of `frame`, checking it first.
     pub fn parse(frame: &AtCommand<&'a [u8]>) -> Result<Self, FrameError> {
         frame.check_len()?;
         Ok(Self {
+            queued: frame.queued(),
             frame_id: frame.frame_id(),
             command: frame.command(),
             parameter: frame.parameter(),
@@ -115,7 +150,7 @@ impl EncodeFrame for AtCommandRepr<'_> {
 
     fn write_frame_data<F: FnMut(&[u8])>(&self, out: &mut F) {
         let mut h = [0u8; field::HEADER_LEN];
-        h[field::FRAME_TYPE] = Self::FRAME_TYPE;
+        h[field::FRAME_TYPE] = self.frame_type();
         h[field::FRAME_ID] = self.frame_id;
         h[field::COMMAND].copy_from_slice(&self.command);
         out(&h);

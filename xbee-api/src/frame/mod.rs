@@ -20,6 +20,8 @@ pub mod transmit_status;
 pub mod frame_type {
     /// AT Command.
     pub const AT_COMMAND: u8 = 0x08;
+    /// AT Command - Queue Parameter Value.
+    pub const AT_COMMAND_QUEUE: u8 = 0x09;
     /// Transmit Request.
     pub const TRANSMIT_REQUEST: u8 = 0x10;
     /// Explicit Addressing Command.
@@ -102,7 +104,8 @@ pub enum Frame<'a> {
     ReceivePacket(ReceivePacketRepr<'a>),
     /// 0x8B Transmit Status.
     TransmitStatus(TransmitStatusRepr),
-    /// 0x08 AT Command.
+    /// 0x08 AT Command, or 0x09 AT Command - Queue Parameter Value when
+    /// [`queued`](AtCommandRepr::queued).
     AtCommand(AtCommandRepr<'a>),
     /// 0x88 AT Command Response.
     AtCommandResponse(AtCommandResponseRepr<'a>),
@@ -140,7 +143,9 @@ impl<'a> Frame<'a> {
             frame_type::TRANSMIT_STATUS => {
                 Self::TransmitStatus(TransmitStatusRepr::parse_bytes(data)?)
             }
-            frame_type::AT_COMMAND => Self::AtCommand(AtCommandRepr::parse_bytes(data)?),
+            frame_type::AT_COMMAND | frame_type::AT_COMMAND_QUEUE => {
+                Self::AtCommand(AtCommandRepr::parse_bytes(data)?)
+            }
             frame_type::AT_COMMAND_RESPONSE => {
                 Self::AtCommandResponse(AtCommandResponseRepr::parse_bytes(data)?)
             }
@@ -175,7 +180,7 @@ impl<'a> Frame<'a> {
             Self::TransmitRequest(_) => frame_type::TRANSMIT_REQUEST,
             Self::ReceivePacket(_) => frame_type::RECEIVE_PACKET,
             Self::TransmitStatus(_) => frame_type::TRANSMIT_STATUS,
-            Self::AtCommand(_) => frame_type::AT_COMMAND,
+            Self::AtCommand(f) => f.frame_type(),
             Self::AtCommandResponse(_) => frame_type::AT_COMMAND_RESPONSE,
             Self::ModemStatus(_) => frame_type::MODEM_STATUS,
             Self::ExplicitAddressingCommand(_) => frame_type::EXPLICIT_ADDRESSING_COMMAND,
@@ -235,6 +240,7 @@ mod tests {
             (frame_type::RECEIVE_PACKET, 12),
             (frame_type::TRANSMIT_STATUS, 7),
             (frame_type::AT_COMMAND, 4),
+            (frame_type::AT_COMMAND_QUEUE, 4),
             (frame_type::AT_COMMAND_RESPONSE, 5),
             (frame_type::MODEM_STATUS, 2),
             (frame_type::EXPLICIT_ADDRESSING_COMMAND, 20),
