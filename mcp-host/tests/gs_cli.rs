@@ -96,19 +96,7 @@ fn decode_names_ids_and_escapes_text() {
     // message with a byte >= 0x80.
     let hex = "7E 00 12 90 00 13 A2 00 40 52 2B AA 7D 84 01 74 01 00 00 C0 3F DD\n\
                7E 00 0F 90 00 13 A2 00 40 52 2B AA 7D 84 01 6D 68 E9 93\n";
-    let mut child = gs()
-        .args(["decode", "--hex", "--format", "json"])
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .spawn()
-        .unwrap();
-    child
-        .stdin
-        .take()
-        .unwrap()
-        .write_all(hex.as_bytes())
-        .unwrap();
-    let out = stdout(&child.wait_with_output().unwrap());
+    let out = decode_hex(hex, "json");
     let lines: Vec<Value> = out
         .lines()
         .map(|l| serde_json::from_str(l).unwrap())
@@ -119,6 +107,41 @@ fn decode_names_ids_and_escapes_text() {
         serde_json::json!({"category": "telemetry", "values": [{"id": 1, "name": "altitude", "value": 1.5}]})
     );
     assert_eq!(lines[1]["mcp"]["text"], "h\\xe9");
+}
+
+/// `mcp-gs decode --hex` of `hex` in `format`.
+fn decode_hex(hex: &str, format: &str) -> String {
+    let mut child = gs()
+        .args(["decode", "--hex", "--format", format])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(hex.as_bytes())
+        .unwrap();
+    stdout(&child.wait_with_output().unwrap())
+}
+
+#[test]
+fn decode_tells_queued_at_commands_apart() {
+    // Digi's manual: BD = 7 queued (0x09), then NJ queried (0x08).
+    let hex = "7E 00 05 09 01 42 44 07 68 7E 00 04 08 52 4E 4A 0D";
+    assert_eq!(
+        decode_hex(hex, "text"),
+        "at queued id 1 BD 07\nat id 82 NJ\n"
+    );
+    let json: Vec<Value> = decode_hex(hex, "json")
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(json.len(), 2);
+    assert_eq!(json[0]["queued"], true);
+    assert_eq!(json[0]["command"], "BD");
+    assert_eq!(json[1].get("queued"), None);
 }
 
 #[test]
