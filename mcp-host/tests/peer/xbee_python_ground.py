@@ -1,0 +1,71 @@
+"""A ground station written with Digi's xbee-python library (digi-xbee 1.5.0).
+
+Opens the XBee on PORT as xbee-python opens a real module (it asks the API mode, then
+HV, VR, SH, SL, NI, MY and CE), then runs the steps given, printing one line a step:
+
+    send HEX      send the bytes to MAV; prints `delivered STATUS` or `failed STATUS`
+    send-to ADDR HEX
+                  the same to another 64-bit address
+    read N        read N messages; prints `rx SRC64 HEX` for each
+
+Usage: xbee_python_ground.py PORT MAV STEP...
+"""
+
+import sys
+
+from digi.xbee.devices import ZigBeeDevice
+from digi.xbee.exception import TimeoutException, TransmitException
+from digi.xbee.models.address import XBee16BitAddress, XBee64BitAddress
+
+READ_TIMEOUT_S = 20
+
+
+def main(port, mav, steps):
+    device = ZigBeeDevice(port, 9600)
+    device.open()
+    try:
+        print(
+            "open",
+            device.get_64bit_addr(),
+            device.get_protocol().name,
+            device.get_role().name,
+            device.operating_mode.name,
+            flush=True,
+        )
+        while steps:
+            step = steps.pop(0)
+            if step in ("send", "send-to"):
+                to = steps.pop(0) if step == "send-to" else mav
+                send(device, to, bytes.fromhex(steps.pop(0)))
+            elif step == "read":
+                for _ in range(int(steps.pop(0))):
+                    try:
+                        message = device.read_data(READ_TIMEOUT_S)
+                    except TimeoutException:
+                        print("timeout", flush=True)
+                        return 1
+                    print(
+                        "rx",
+                        message.remote_device.get_64bit_addr(),
+                        message.data.hex(),
+                        flush=True,
+                    )
+            else:
+                raise ValueError(f"unknown step {step!r}")
+    finally:
+        device.close()
+    return 0
+
+
+def send(device, to, data):
+    try:
+        status = device.send_data_64_16(
+            XBee64BitAddress.from_hex_string(to), XBee16BitAddress.UNKNOWN_ADDRESS, data
+        )
+        print("delivered", status.transmit_status.name, flush=True)
+    except TransmitException as error:
+        print("failed", error.status.name, flush=True)
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1], sys.argv[2], sys.argv[3:]))
