@@ -65,15 +65,8 @@ fn check_decode_json(stream: &str, expected: &str, mode: &str) {
         "--format",
         "json",
     ]));
-    let expected = std::fs::read_to_string(testdata(expected)).unwrap();
-    let got: Vec<Value> = out
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
-    let expected: Vec<Value> = expected
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
+    let got = json_lines(&out);
+    let expected = json_lines(&std::fs::read_to_string(testdata(expected)).unwrap());
     assert_eq!(got.len(), expected.len(), "number of frames");
     for (i, (g, e)) in got.iter().zip(&expected).enumerate() {
         assert_subset(g, e, &format!("frame {i}"));
@@ -97,16 +90,20 @@ fn decode_names_ids_and_escapes_text() {
     let hex = "7E 00 12 90 00 13 A2 00 40 52 2B AA 7D 84 01 74 01 00 00 C0 3F DD\n\
                7E 00 0F 90 00 13 A2 00 40 52 2B AA 7D 84 01 6D 68 E9 93\n";
     let out = decode_hex(hex, "json");
-    let lines: Vec<Value> = out
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
+    let lines = json_lines(&out);
     assert_eq!(lines.len(), 2, "{out}");
     assert_eq!(
         lines[0]["mcp"],
         serde_json::json!({"category": "telemetry", "values": [{"id": 1, "name": "altitude", "value": 1.5}]})
     );
     assert_eq!(lines[1]["mcp"]["text"], "h\\xe9");
+}
+
+/// Each line of `out` as JSON.
+fn json_lines(out: &str) -> Vec<Value> {
+    out.lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect()
 }
 
 /// `mcp-gs decode --hex` of `hex` in `format`.
@@ -134,10 +131,7 @@ fn decode_tells_queued_at_commands_apart() {
         decode_hex(hex, "text"),
         "at queued id 1 BD 07\nat id 82 NJ\n"
     );
-    let json: Vec<Value> = decode_hex(hex, "json")
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
+    let json = json_lines(&decode_hex(hex, "json"));
     assert_eq!(json.len(), 2);
     assert_eq!(json[0]["queued"], true);
     assert_eq!(json[0]["command"], "BD");
@@ -161,10 +155,7 @@ fn decode_reports_bad_frames_and_goes_on() {
         "--format",
         "json",
     ]));
-    let lines: Vec<Value> = out
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
+    let lines = json_lines(&out);
     assert_eq!(lines.len(), 3, "{out}");
     assert_eq!(
         lines[0],

@@ -120,16 +120,7 @@ impl Dev {
         self.at_frame(false, frame_id, command, parameter).await
     }
 
-    /// [`Dev::at`] as AT Command - Queue Parameter Value (0x09).
-    async fn at_queued(
-        &mut self,
-        frame_id: u8,
-        command: &[u8; 2],
-        parameter: &[u8],
-    ) -> (AtStatus, Vec<u8>) {
-        self.at_frame(true, frame_id, command, parameter).await
-    }
-
+    /// [`Dev::at`], as AT Command - Queue Parameter Value (0x09) if `queued`.
     async fn at_frame(
         &mut self,
         queued: bool,
@@ -386,7 +377,10 @@ async fn local_at_commands_are_answered() {
         (AtStatus::InvalidParameter, vec![])
     );
     // A queued query (0x09) is answered as an immediate one.
-    assert_eq!(dev.at_queued(14, b"AP", &[]).await, (AtStatus::Ok, vec![2]));
+    assert_eq!(
+        dev.at_frame(true, 14, b"AP", &[]).await,
+        (AtStatus::Ok, vec![2])
+    );
     assert_eq!(
         dev.at(7, b"ZZ", &[]).await,
         (AtStatus::InvalidCommand, vec![])
