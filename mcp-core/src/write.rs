@@ -27,11 +27,17 @@ impl<'a> Writer<'a> {
 
     /// Appends bytes.
     pub(crate) fn bytes(&mut self, data: &[u8]) -> &mut Self {
-        let end = self.pos.saturating_add(data.len());
-        match self.buf.get_mut(self.pos..end) {
+        // Sliced as `[pos..][..len]` so that the compiler sees the destination is exactly
+        // `data.len()` long: `copy_from_slice` then keeps no panic path (a range ending
+        // at `pos + len` did, behind the saturating add).
+        let dst = self
+            .buf
+            .get_mut(self.pos..)
+            .and_then(|rest| rest.get_mut(..data.len()));
+        match dst {
             Some(dst) => {
                 dst.copy_from_slice(data);
-                self.pos = end;
+                self.pos += data.len();
             }
             None => self.overflow = true,
         }

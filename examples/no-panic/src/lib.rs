@@ -1,0 +1,258 @@
+//! Every path a MAV firmware takes through `xbee-api` and `mcp-core`, as `extern "C"`
+//! entry points of a static library, with a panic handler that calls a function no one
+//! defines. Once optimised (release: `opt-level = "s"`, LTO, as the firmware is built),
+//! the library refers to that function only if some panic is still reachable: a bounds
+//! check, an `unwrap` or an overflow the compiler could not prove away. `check.sh`
+//! builds it and fails if the reference is there.
+//!
+//! The entry points take the decoder and MAV state by pointer, as an interrupt handler
+//! and a main loop sharing them would, and hand what they produce to `sink`, which is
+//! left undefined too, so that nothing is optimised away.
+#![no_std]
+
+use mcp_core::mav::{Mav, Vehicle};
+use mcp_core::{
+    Command, Controller, LandingState, Packet, Report, StatusRequest, TelemetryBuilder,
+    TelemetryId, Text, Waypoint, Waypoints, parse,
+};
+use xbee_api::{
+    Address16, Address64, ApiMode, Decoder, EncodeFrame, Event, Frame, ReceivePacket,
+    TransmitRequestRepr,
+};
+
+unsafe extern "C" {
+    /// Called by the panic handler; defined nowhere, so that a reachable panic shows
+    /// up as a reference to it.
+    fn no_panic_path_may_remain() -> !;
+    /// Where the entry points put what they produce.
+    fn sink(bytes: *const u8, len: usize);
+}
+
+#[panic_handler]
+fn panic(_: &core::panic::PanicInfo<'_>) -> ! {
+    // SAFETY: never defined; the check is that nothing calls this.
+    unsafe { no_panic_path_may_remain() }
+}
+
+fn out(bytes: &[u8]) {
+    // SAFETY: `sink` reads `len` bytes from `bytes`, which are valid for that long.
+    unsafe { sink(bytes.as_ptr(), bytes.len()) }
+}
+
+/// A vehicle that answers every query.
+struct Craft {
+    time: u32,
+    landing: LandingState,
+    controller: Controller,
+    position: [f32; 2],
+    trajectory: [Option<Waypoint>; 4],
+}
+
+impl Vehicle for Craft {
+    fn landing_state(&self) -> LandingState {
+        self.landing
+    }
+    fn set_landing(&mut self, on: bool) {
+        self.landing = if on {
+            LandingState::Landing
+        } else {
+            LandingState::TakeOff
+        };
+    }
+    fn controller(&self) -> Controller {
+        self.controller
+    }
+    fn set_controller(&mut self, controller: Controller) {
+        self.controller = controller;
+    }
+    fn time(&self) -> u32 {
+        self.time
+    }
+    fn set_time(&mut self, time: u32) {
+        self.time = time;
+    }
+    fn set_position(&mut self, elevator: f32, aileron: f32) {
+        self.position = [elevator, aileron];
+    }
+    fn telemetry(&self, id: TelemetryId) -> f32 {
+        f32::from(u8::from(id)) + self.position[0]
+    }
+    fn set_trajectory(&mut self, waypoints: Waypoints<&[u8]>) {
+        self.trajectory = [None; 4];
+        for (slot, waypoint) in self.trajectory.iter_mut().zip(waypoints.iter()) {
+            *slot = Some(waypoint);
+        }
+    }
+    fn waypoint(&self, index: usize) -> Option<Waypoint> {
+        self.trajectory.get(index).copied().flatten()
+    }
+}
+
+/// What a firmware keeps: the decoder, the MAV and the vehicle, and buffers.
+pub struct State {
+    decoder: Decoder<100>,
+    mav: Mav,
+    craft: Craft,
+    payload: [u8; 84],
+    frame: [u8; 200],
+}
+
+/// Sends `payload` to the coordinator in a Transmit Request, in `mode`.
+fn transmit(mode: ApiMode, payload: &[u8], frame: &mut [u8]) {
+    let request = TransmitRequestRepr {
+        frame_id: 0,
+        dst64: Address64::COORDINATOR,
+        dst16: Address16::UNKNOWN,
+        radius: 0,
+        options: 0,
+        data: payload,
+    };
+    if let Ok(n) = request.encode(mode, frame) {
+        out(frame.get(..n).unwrap_or_default());
+    }
+}
+
+/// Handles one decoded frame: a command in a Receive Packet is carried out and answered.
+fn receive(
+    event: Event<'_>,
+    mode: ApiMode,
+    mav: &mut Mav,
+    craft: &mut Craft,
+    payload: &mut [u8],
+    frame: &mut [u8],
+) {
+    let Ok(raw) = event else { return };
+    let Ok(rx) = ReceivePacket::new_checked(raw.data()) else {
+        return;
+    };
+    let Ok(packet) = parse(rx.data()) else { return };
+    if let Ok(Some(n)) = mav.handle_packet(craft, &packet, payload) {
+        transmit(mode, payload.get(..n).unwrap_or_default(), frame);
+    }
+}
+
+/// Creates the state in `mode` (1 or 2) at `state`.
+#[unsafe(no_mangle)]
+pub extern "C" fn mav_init(state: &mut core::mem::MaybeUninit<State>, mode: u8) {
+    let craft = Craft {
+        time: 0,
+        landing: LandingState::OnGround,
+        controller: Controller::Manual,
+        position: [0.0; 2],
+        trajectory: [None; 4],
+    };
+    state.write(State {
+        decoder: Decoder::new(ApiMode::try_from(mode).unwrap_or(ApiMode::Unescaped)),
+        mav: Mav::new(&craft),
+        craft,
+        payload: [0; 84],
+        frame: [0; 200],
+    });
+}
+
+/// A UART receive interrupt: one byte, then every event it completes.
+#[unsafe(no_mangle)]
+pub extern "C" fn mav_rx_byte(state: &mut State, byte: u8) {
+    let State {
+        decoder,
+        mav,
+        craft,
+        payload,
+        frame,
+    } = state;
+    let mode = decoder.mode();
+    let mut event = decoder.push(byte);
+    while let Some(e) = event {
+        receive(e, mode, mav, craft, payload, frame);
+        event = decoder.poll();
+    }
+}
+
+/// A UART FIFO or DMA buffer drained at once.
+///
+/// # Safety
+///
+/// `bytes` points to `len` readable bytes.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn mav_rx_chunk(state: &mut State, bytes: *const u8, len: usize) {
+    // SAFETY: the caller passes `len` readable bytes.
+    let input = unsafe { core::slice::from_raw_parts(bytes, len) };
+    let State {
+        decoder,
+        mav,
+        craft,
+        payload,
+        frame,
+    } = state;
+    let mode = decoder.mode();
+    decoder.decode_each(input, |e| receive(e, mode, mav, craft, payload, frame));
+}
+
+/// The same with one `decode` call a frame, and every frame typed.
+///
+/// # Safety
+///
+/// `bytes` points to `len` readable bytes.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn mav_rx_frames(state: &mut State, bytes: *const u8, len: usize) {
+    // SAFETY: the caller passes `len` readable bytes.
+    let mut input = unsafe { core::slice::from_raw_parts(bytes, len) };
+    while !input.is_empty() {
+        let (used, event) = state.decoder.decode(input);
+        if let Some(Ok(raw)) = event {
+            if let Ok(Frame::ReceivePacket(rx)) = Frame::parse(raw) {
+                out(rx.data);
+            }
+        }
+        input = input.get(used..).unwrap_or_default();
+        if used == 0 {
+            break;
+        }
+    }
+}
+
+/// The main loop's tick: unsolicited reports, then the telemetry packet.
+#[unsafe(no_mangle)]
+pub extern "C" fn mav_tick(state: &mut State) {
+    let mode = state.decoder.mode();
+    while let Ok(Some(n)) = state.mav.poll_changes(&state.craft, &mut state.payload) {
+        transmit(
+            mode,
+            state.payload.get(..n).unwrap_or_default(),
+            &mut state.frame,
+        );
+    }
+    if let Ok(Some(n)) = state.mav.telemetry(&state.craft, &mut state.payload) {
+        transmit(
+            mode,
+            state.payload.get(..n).unwrap_or_default(),
+            &mut state.frame,
+        );
+    }
+}
+
+/// Packets a firmware writes itself: a telemetry packet of up to four values, a text
+/// message, a time report and a status request.
+#[unsafe(no_mangle)]
+pub extern "C" fn mav_encode(values: &[f32; 4], buf: &mut [u8; 84]) {
+    let mut telemetry = [0u8; 21];
+    if let Ok(mut builder) = TelemetryBuilder::new(&mut telemetry) {
+        for (id, value) in (1..).zip(values) {
+            if builder.push(TelemetryId::from(id), *value).is_err() {
+                break;
+            }
+        }
+        let n = builder.finish();
+        out(telemetry.get(..n).unwrap_or_default());
+    }
+    let packets: [Packet<&[u8]>; 3] = [
+        Packet::Message(Text::new(b"MAV started")),
+        Packet::Report(Report::Time(1_700_000_000)),
+        Packet::Command(Command::StatusRequest(StatusRequest::Landing)),
+    ];
+    for packet in packets {
+        if let Ok(n) = packet.encode(buf) {
+            out(buf.get(..n).unwrap_or_default());
+        }
+    }
+}
