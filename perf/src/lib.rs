@@ -11,6 +11,9 @@
 //!   to typed telemetry values), each returning [`Totals`] so that nothing is
 //!   optimised away and every result can be checked.
 //!
+//! Without its default `std` feature (the generators) the crate is `no_std`: `run` and
+//! [`Totals`] are the same code on a microcontroller (`cortex-m/`).
+//!
 //! ```
 //! use perf::{mcp_stream, run};
 //! use xbee_api::ApiMode;
@@ -19,18 +22,25 @@
 //! let totals = run::pipeline(&stream.bytes, ApiMode::Escaped);
 //! assert_eq!(totals, stream.totals);
 //! ```
+#![cfg_attr(not(feature = "std"), no_std)]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
+#[cfg(feature = "std")]
 mod mavlink_stream;
+#[cfg(feature = "std")]
 mod mcp_stream;
 mod rng;
 pub mod run;
 mod totals;
 
+#[cfg(feature = "std")]
 pub use mavlink_stream::{
     ATTITUDE_CRC_EXTRA, ATTITUDE_ID, ATTITUDE_VALUES, crc_x25, mavlink_stream,
 };
+#[cfg(feature = "std")]
 pub use mcp_stream::{VALUES_PER_PACKET, mcp_stream};
 pub use rng::Rng;
-pub use totals::{Stream, Totals};
+#[cfg(feature = "std")]
+pub use totals::Stream;
+pub use totals::Totals;

@@ -15,6 +15,7 @@ pub struct Totals {
 }
 
 /// A generated stream and the totals a decoder must find in it.
+#[cfg(feature = "std")]
 #[derive(Debug, Clone)]
 pub struct Stream {
     /// The wire bytes.
