@@ -4,6 +4,8 @@ use memchr::{memchr, memchr2};
 #[cfg(target_pointer_width = "64")]
 use wide::u8x16;
 
+#[cfg(not(target_pointer_width = "64"))]
+use crate::unescape::special_in_word;
 #[cfg(target_pointer_width = "64")]
 use crate::unescape::special_mask;
 
@@ -367,15 +369,18 @@ impl<const N: usize> Decoder<N> {
     }
 
     /// Stores the frame data of the frame in progress at the start of `input`, as
-    /// [`push`](Self::push) would byte by byte; returns the rest. 16 bytes or more are
-    /// taken all at once or not at all: all if they are frame data (in mode 2, without
-    /// 0x7D or 0x7E), 16 bytes a step on 64-bit targets. Fewer go a byte at a time,
-    /// up to the first byte that is not frame data (in mode 2, or is 0x7D or 0x7E).
+    /// [`push`](Self::push) would byte by byte; returns the rest. On 64-bit targets 16
+    /// bytes or more are taken all at once or not at all: all if they are frame data
+    /// (in mode 2, without 0x7D or 0x7E), 16 bytes a step. Elsewhere (microcontrollers)
+    /// they go 4 a step up to the first word that is not all frame data. The last
+    /// bytes go one at a time, up to the first that is not frame data (in mode 2, or
+    /// is 0x7D or 0x7E).
     #[inline(always)]
     fn fill<'i>(&mut self, input: &'i [u8]) -> &'i [u8] {
         let mut end = self.end;
         // `fill_to` is 0 outside frame data and after an escape.
         let fill_to = self.fill_to;
+        #[cfg(target_pointer_width = "64")]
         if input.len() >= 16 {
             if end + input.len() > fill_to {
                 return input;
@@ -383,7 +388,6 @@ impl<const N: usize> Decoder<N> {
             let Some(dst) = self.buf.get_mut(end..end + input.len()) else {
                 return input;
             };
-            #[cfg(target_pointer_width = "64")]
             {
                 // 16 bytes a step, the last step ending at the end of `input`
                 // (overlapping the one before it, which stored the same bytes).
@@ -408,19 +412,27 @@ impl<const N: usize> Decoder<N> {
                     return input;
                 }
             }
-            #[cfg(not(target_pointer_width = "64"))]
-            {
-                if self.mode == ApiMode::Escaped {
-                    return input;
-                }
-                dst.copy_from_slice(input);
-            }
             self.end = end + input.len();
             return &[];
         }
         // Mode 1 stores 0x7D and 0x7E here too.
         let escaped = self.mode == ApiMode::Escaped;
         let mut rest = input;
+        // Without 16-byte steps: 4 bytes a step while they are frame data (in mode 2,
+        // one word tested for 0x7D and 0x7E at once), loaded and stored whole: ARMv7-M
+        // takes unaligned words. A call of `memcpy` cost more for such short runs.
+        #[cfg(not(target_pointer_width = "64"))]
+        while let Some((word, tail)) = rest.split_first_chunk::<4>() {
+            let Some(dst) = self.buf.get_mut(end..).and_then(<[u8]>::first_chunk_mut) else {
+                break;
+            };
+            if end + 4 > fill_to || (escaped && special_in_word(u32::from_le_bytes(*word))) {
+                break;
+            }
+            *dst = *word;
+            end += 4;
+            rest = tail;
+        }
         while let Some((&byte, tail)) = rest.split_first() {
             if end >= fill_to || (escaped && !is_plain(byte)) {
                 break;

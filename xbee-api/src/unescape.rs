@@ -128,6 +128,21 @@ pub(crate) fn special_mask(bytes: u8x16) -> u32 {
     specials.move_mask() as u32
 }
 
+/// Whether any of the 4 bytes of `word` is 0x7D or 0x7E: each compared at once, word
+/// at a time (a byte of `word ^ 0x7D7D7D7D` is zero exactly where `word` holds 0x7D,
+/// and `(x - 0x01..) & !x & 0x80..` is non-zero exactly when `x` has a zero byte).
+#[inline(always)]
+#[cfg(any(test, not(target_pointer_width = "64")))]
+pub(crate) const fn special_in_word(word: u32) -> bool {
+    const ONES: u32 = 0x0101_0101;
+    const HIGHS: u32 = 0x8080_8080;
+    let escapes = word ^ (ONES * ESCAPE as u32);
+    let delimiters = word ^ (ONES * START_DELIMITER as u32);
+    let zero_bytes =
+        (escapes.wrapping_sub(ONES) & !escapes) | (delimiters.wrapping_sub(ONES) & !delimiters);
+    zero_bytes & HIGHS != 0
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -147,6 +162,24 @@ mod tests {
             }
         }
         assert_eq!(special_mask(u8x16::new([ESCAPE; 16])), 0xFFFF);
+    }
+
+    #[test]
+    fn special_in_word_finds_exactly_0x7d_and_0x7e() {
+        for at in 0..4 {
+            for b in 0..=255u8 {
+                for fill in [0x00, 0x41, 0x7C, 0x7F, 0xFD, 0xFE, 0xFF] {
+                    let mut word = [fill; 4];
+                    word[at] = b;
+                    let expected = word.iter().any(|&x| x == ESCAPE || x == START_DELIMITER);
+                    assert_eq!(
+                        special_in_word(u32::from_le_bytes(word)),
+                        expected,
+                        "{word:02X?}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]
