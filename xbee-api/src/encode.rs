@@ -8,6 +8,29 @@ use crate::{ApiMode, EncodeError};
 /// encoder only enforces what the wire format can express.
 pub const MAX_FRAME_DATA_LEN: usize = 0xFFFF;
 
+/// The most bytes a frame with `frame_data_len` bytes of frame data takes on the wire
+/// in `mode`: exact in mode 1; in mode 2 as if every byte after the delimiter were
+/// escaped. For buffers sized at compile time; [`EncodeFrame::encoded_len`] is exact.
+///
+/// ```
+/// use xbee_api::{ApiMode, TransmitRequestRepr, max_encoded_len};
+/// // A buffer for any Transmit Request of an unfragmented unicast, in API mode 2.
+/// const LEN: usize = max_encoded_len(
+///     TransmitRequestRepr::HEADER_LEN + TransmitRequestRepr::MAX_UNICAST_DATA,
+///     ApiMode::Escaped,
+/// );
+/// let buffer = [0u8; LEN];
+/// assert_eq!(buffer.len(), 1 + 2 * (2 + 98 + 1));
+/// assert_eq!(max_encoded_len(98, ApiMode::Unescaped), 102);
+/// ```
+pub const fn max_encoded_len(frame_data_len: usize, mode: ApiMode) -> usize {
+    // Delimiter, length (2), frame data, checksum.
+    match mode {
+        ApiMode::Unescaped => 4 + frame_data_len,
+        ApiMode::Escaped => 1 + 2 * (3 + frame_data_len),
+    }
+}
+
 /// Anything that can be written as the frame data of an API frame: typed `*Repr`s,
 /// [`Frame`](crate::Frame) and [`RawFrame`](crate::RawFrame).
 ///

@@ -69,7 +69,7 @@ pub mod wire;
 pub use address::{Address16, Address64, ParseAddressError};
 pub use decode_error::DecodeError;
 pub use decoder::{DEFAULT_CAPACITY, Decoder, Event};
-pub use encode::{EncodeFrame, MAX_FRAME_DATA_LEN};
+pub use encode::{EncodeFrame, MAX_FRAME_DATA_LEN, max_encoded_len};
 pub use error::{EncodeError, FrameError};
 pub use frame::Frame;
 pub use frame::at_command::{AtCommand, AtCommandRepr};

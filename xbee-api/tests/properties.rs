@@ -7,7 +7,7 @@ mod common;
 use common::{decode_bytes, decode_each_slices, decode_slices, frames};
 use proptest::prelude::*;
 use xbee_api::wire::{checksum, needs_escape};
-use xbee_api::{ApiMode, EncodeFrame, Frame, RawFrame};
+use xbee_api::{ApiMode, EncodeFrame, Frame, RawFrame, max_encoded_len};
 
 const N: usize = 512;
 
@@ -197,6 +197,8 @@ proptest! {
         let mut wire_bytes = vec![0u8; frame.encoded_len(mode)];
         let n = frame.encode(mode, &mut wire_bytes).unwrap();
         prop_assert_eq!(n, wire_bytes.len());
+        let bound = max_encoded_len(data.len(), mode);
+        prop_assert!(n <= bound && (mode == ApiMode::Escaped || n == bound));
         prop_assert_eq!(&wire_bytes, &wire(&data, checksum(&data), mode));
         prop_assert!(frame.encode(mode, &mut vec![0u8; n - 1]).is_err());
         let (events, stats) = decode_slices::<N>(mode, &wire_bytes, &[n]);

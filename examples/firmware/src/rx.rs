@@ -10,17 +10,17 @@ use core::cell::RefCell;
 
 use critical_section::{CriticalSection, Mutex};
 use heapless::{Deque, Vec};
-use xbee_api::{ApiMode, Decoder, RawFrame, ReceivePacket};
+use xbee_api::{ApiMode, Decoder, RawFrame, ReceivePacket, ReceivePacketRepr, TransmitRequestRepr};
 
 use crate::hw::{self, RxError};
 
 /// Largest MCP payload taken: the XBee RF payload limit for unicast without
 /// fragmentation. Longer frames are dropped by the decoder as oversize.
-pub const MAX_PAYLOAD: usize = 84;
+pub const MAX_PAYLOAD: usize = TransmitRequestRepr::MAX_UNICAST_DATA;
 
 /// Receive Packet frame data before the payload: type, 64-bit and 16-bit source
 /// addresses, options.
-pub const RECEIVE_HEADER_LEN: usize = 12;
+pub const RECEIVE_HEADER_LEN: usize = ReceivePacketRepr::HEADER_LEN;
 
 /// Decoder buffer: in API mode 1 it holds the whole frame, delimiter, length and
 /// checksum (4 bytes) included, so frame data of `DECODER_CAPACITY - 4` = 96 bytes,

@@ -1,20 +1,20 @@
 //! The transmit path: MCP payloads to the coordinator in Transmit Requests (0x10).
 
-use xbee_api::{Address16, Address64, ApiMode, EncodeFrame, TransmitRequestRepr};
+use xbee_api::frame::transmit_request::options::DISABLE_RETRIES;
+use xbee_api::{Address16, Address64, ApiMode, EncodeFrame, TransmitRequestRepr, max_encoded_len};
 
 use crate::hw;
 use crate::rx::MAX_PAYLOAD;
 
-/// Transmit Request frame data before the payload: type, frame id, 64-bit and 16-bit
-/// destination addresses, radius, options.
-pub const TRANSMIT_HEADER_LEN: usize = 14;
-
 /// The longest frame written: delimiter, length, frame data and checksum around an
 /// 84-byte payload.
-pub const MAX_FRAME_LEN: usize = 4 + TRANSMIT_HEADER_LEN + MAX_PAYLOAD;
+pub const MAX_FRAME_LEN: usize = max_encoded_len(
+    TransmitRequestRepr::HEADER_LEN + MAX_PAYLOAD,
+    ApiMode::Unescaped,
+);
 
 /// Transmit option 0x01: disable retries, as the deployed MAV sends.
-pub const TRANSMIT_OPTIONS: u8 = 0x01;
+pub const TRANSMIT_OPTIONS: u8 = DISABLE_RETRIES;
 
 /// Sends `payload` to the coordinator (64-bit 0000000000000000, 16-bit FFFE), frame
 /// id 0 (no transmit status), API mode 1. A payload longer than [`MAX_PAYLOAD`] is not

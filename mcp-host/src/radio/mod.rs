@@ -97,11 +97,12 @@ use port::{Source, lock};
 use router::{Node, OUT_CAPACITY, State};
 
 /// Largest unicast RF payload without fragmentation (`NP` = 0x54).
-pub const MAX_UNICAST: usize = 84;
+pub const MAX_UNICAST: usize = xbee_api::TransmitRequestRepr::MAX_UNICAST_DATA;
 /// Largest unicast RF payload with fragmentation.
-pub const MAX_UNICAST_FRAGMENTED: usize = 255;
+pub const MAX_UNICAST_FRAGMENTED: usize =
+    xbee_api::TransmitRequestRepr::MAX_UNICAST_DATA_FRAGMENTED;
 /// Largest broadcast RF payload.
-pub const MAX_BROADCAST: usize = 92;
+pub const MAX_BROADCAST: usize = xbee_api::TransmitRequestRepr::MAX_BROADCAST_DATA;
 /// Size of an in-process node's byte stream buffer, each way.
 pub const IN_PROCESS_BUFFER: usize = 64 * 1024;
 

@@ -6,6 +6,9 @@ use std::time::Duration;
 use bytes::Bytes;
 use tokio::sync::{broadcast, mpsc};
 use tokio::time::Instant;
+use xbee_api::frame::receive_packet::options::{
+    ACKNOWLEDGED as RX_ACKNOWLEDGED, BROADCAST as RX_BROADCAST,
+};
 use xbee_api::{
     Address16, Address64, ApiMode, AtCommandRepr, AtCommandResponseRepr, AtStatus, DeliveryStatus,
     DiscoveryStatus, EncodeFrame, ExplicitRxIndicatorRepr, Frame, ModemStatus, ModemStatusRepr,
@@ -25,10 +28,6 @@ const FIRMWARE_VERSION: [u8; 2] = [0x40, 0x60];
 /// `NI`: a module's default node identifier, one space.
 const NODE_IDENTIFIER: &[u8] = b" ";
 
-/// Receive option of a unicast: acknowledged.
-pub(crate) const RX_ACKNOWLEDGED: u8 = 0x01;
-/// Receive option of a broadcast.
-pub(crate) const RX_BROADCAST: u8 = 0x02;
 /// Capacity of the queue of frames waiting to be written to one link.
 pub(crate) const OUT_CAPACITY: usize = 1024;
 /// The 64-bit address that means "use the 16-bit address".

@@ -21,6 +21,18 @@ pub mod field {
     pub const HEADER_LEN: usize = 12;
 }
 
+/// Bits of the receive options field of a Zigbee XBee.
+pub mod options {
+    /// The packet was acknowledged (a unicast).
+    pub const ACKNOWLEDGED: u8 = 0x01;
+    /// The packet was a broadcast.
+    pub const BROADCAST: u8 = 0x02;
+    /// The packet was encrypted with APS encryption.
+    pub const APS_ENCRYPTED: u8 = 0x20;
+    /// The packet came from an end device.
+    pub const FROM_END_DEVICE: u8 = 0x40;
+}
+
 /// A read-only view of Receive Packet (0x90) frame data, type byte included.
 ///
 /// Build it with [`new_checked`](Self::new_checked); the accessors of a checked view
@@ -103,6 +115,8 @@ pub struct ReceivePacketRepr<'a> {
 impl<'a> ReceivePacketRepr<'a> {
     /// The frame type, 0x90.
     pub const FRAME_TYPE: u8 = frame_type::RECEIVE_PACKET;
+    /// Frame data before the RF data: type, addresses, options.
+    pub const HEADER_LEN: usize = field::HEADER_LEN;
 
     /// Reads the fields of `frame`, checking it first.
     pub fn parse(frame: &ReceivePacket<&'a [u8]>) -> Result<Self, FrameError> {

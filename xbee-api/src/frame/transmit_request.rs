@@ -25,6 +25,16 @@ pub mod field {
     pub const HEADER_LEN: usize = 14;
 }
 
+/// Bits of the transmit options field of a Zigbee XBee.
+pub mod options {
+    /// Disable retries and route repair (what the deployed MAV sends).
+    pub const DISABLE_RETRIES: u8 = 0x01;
+    /// Enable APS end-to-end encryption (shortens the largest payload by 4 bytes).
+    pub const APS_ENCRYPTION: u8 = 0x20;
+    /// Use the extended transmission timeout.
+    pub const EXTENDED_TIMEOUT: u8 = 0x40;
+}
+
 /// A read-only view of Transmit Request (0x10) frame data, type byte included.
 ///
 /// Build it with [`new_checked`](Self::new_checked); the accessors of a checked view
@@ -122,6 +132,16 @@ pub struct TransmitRequestRepr<'a> {
 impl<'a> TransmitRequestRepr<'a> {
     /// The frame type, 0x10.
     pub const FRAME_TYPE: u8 = frame_type::TRANSMIT_REQUEST;
+    /// Frame data before the RF data: type, frame id, addresses, radius, options.
+    pub const HEADER_LEN: usize = field::HEADER_LEN;
+    /// The most RF data a unicast carries without fragmentation: `NP` of a Zigbee
+    /// XBee (84 bytes; less with APS encryption or source routing). Longer unicasts
+    /// fail with delivery status 0x74, payload too large.
+    pub const MAX_UNICAST_DATA: usize = 84;
+    /// The most RF data a unicast carries with fragmentation.
+    pub const MAX_UNICAST_DATA_FRAGMENTED: usize = 255;
+    /// The most RF data a broadcast carries.
+    pub const MAX_BROADCAST_DATA: usize = 92;
 
     /// Reads the fields of `frame`, checking it first.
     pub fn parse(frame: &TransmitRequest<&'a [u8]>) -> Result<Self, FrameError> {
