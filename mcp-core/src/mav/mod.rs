@@ -85,11 +85,29 @@ impl Mav {
     /// A MAV with no telemetry enabled and all slave addresses zero, taking the
     /// vehicle's current landing state and controller as already reported.
     pub fn new<V: Vehicle + ?Sized>(vehicle: &V) -> Self {
+        Self::with_state(vehicle.landing_state(), vehicle.controller())
+    }
+
+    /// [`Mav::new`] from the landing state and controller themselves, in a `const`
+    /// context: for a `Mav` in a `static` that an interrupt handler shares.
+    ///
+    /// ```
+    /// use core::cell::RefCell;
+    /// use mcp_core::mav::Mav;
+    /// use mcp_core::{Controller, LandingState};
+    ///
+    /// // With a critical-section mutex around it on a microcontroller.
+    /// static MAV: std::sync::Mutex<RefCell<Mav>> = std::sync::Mutex::new(RefCell::new(
+    ///     Mav::with_state(LandingState::OnGround, Controller::Manual),
+    /// ));
+    /// assert!(MAV.lock().unwrap().borrow().enabled().is_empty());
+    /// ```
+    pub const fn with_state(landing: LandingState, controller: Controller) -> Self {
         Mav {
             enabled: TelemetrySet::new(),
-            slaves: [Address::default(); 4],
-            landing: vehicle.landing_state(),
-            controller: vehicle.controller(),
+            slaves: [Address([0; 8]); 4],
+            landing,
+            controller,
         }
     }
 
