@@ -13,18 +13,18 @@ use crate::id::{Category, CommandType};
 /// assert_eq!(err.offset(), 3);
 /// assert_eq!(
 ///     err.to_string(),
-///     "wrong length for landing command: expected 3 bytes, got 4 (at byte 3)"
+///     "wrong length for landing command: expected 3 bytes, got 4 (at offset 3)"
 /// );
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
-#[error("{kind} (at byte {offset})")]
+#[error("{kind} (at offset {offset})")]
 pub struct Error {
     kind: ErrorKind,
     offset: usize,
 }
 
 impl Error {
-    /// An error of `kind` found at byte `offset` of the packet.
+    /// An error of `kind` found at byte `offset` of the packet (0: the category byte).
     pub fn new(kind: ErrorKind, offset: usize) -> Self {
         Error { kind, offset }
     }
@@ -34,7 +34,8 @@ impl Error {
         &self.kind
     }
 
-    /// The byte offset in the packet at which the problem was found. For a length
+    /// The byte offset in the packet at which the problem was found, counted from 0 (the
+    /// category byte; the specification's tables count from 1). For a length
     /// error this is the first missing or the first extra byte.
     pub fn offset(&self) -> usize {
         self.offset

@@ -59,7 +59,7 @@
 //!
 //! // Errors say what and where.
 //! let err = parse(b"x").unwrap_err();
-//! assert_eq!(err.to_string(), "unknown packet category 0x78 (at byte 0)");
+//! assert_eq!(err.to_string(), "unknown packet category 0x78 (at offset 0)");
 //! # Ok::<(), mcp_core::Error>(())
 //! ```
 //!
@@ -124,4 +124,8 @@ pub use text::Text;
 pub use trajectory::{MAX_WAYPOINTS, TrajectoryBuilder, Waypoint, WaypointIter, Waypoints};
 
 /// The largest MCP packet: the XBee RF payload limit (unicast, API mode, fragmented).
+///
+/// Without fragmentation a Zigbee XBee carries at most 84 bytes in a unicast
+/// (`xbee_api::TransmitRequestRepr::MAX_UNICAST_DATA`), as the deployed MAV's radios
+/// do; a firmware that only talks to such radios can size its buffers by that.
 pub const MAX_PAYLOAD: usize = 255;

@@ -402,22 +402,22 @@ fn text_with_high_bytes_is_kept_and_escaped() {
 
 #[test]
 fn error_display_says_what_and_where() {
-    assert_eq!(err(&[]).to_string(), "empty packet (at byte 0)");
+    assert_eq!(err(&[]).to_string(), "empty packet (at offset 0)");
     assert_eq!(
         err(b"c\x09").to_string(),
-        "unknown command type 0x09 (at byte 1)"
+        "unknown command type 0x09 (at offset 1)"
     );
     assert_eq!(
         err(b"c\x04\x02").to_string(),
-        "trajectory size byte 2 does not match the 0 waypoints in the packet length (at byte 2)"
+        "trajectory size byte 2 does not match the 0 waypoints in the packet length (at offset 2)"
     );
     assert_eq!(
         err(b"c\x05\x07\x00\x00\x00\x00\x00\x00\x00\x00").to_string(),
-        "position slave slot 7 is not 0-3 (at byte 2)"
+        "position slave slot 7 is not 0-3 (at offset 2)"
     );
     assert_eq!(
         err(b"c\x01\xff").to_string(),
-        "wrong length for telemetry_to_coordinator command status request: expected 4 bytes, got 3 (at byte 3)"
+        "wrong length for telemetry_to_coordinator command status request: expected 4 bytes, got 3 (at offset 3)"
     );
     let e: &dyn core::error::Error = &err(b"x");
     assert!(e.to_string().starts_with("unknown packet category 0x78"));

@@ -149,7 +149,7 @@ impl<R: Read> RecordReader<R> {
         }
         if got < head.len() {
             return Err(invalid(&format!(
-                "record at byte {} is cut off in its header",
+                "record at offset {} is cut off in its header",
                 self.offset
             )));
         }
@@ -159,7 +159,7 @@ impl<R: Read> RecordReader<R> {
             1 => Direction::Sent,
             other => {
                 return Err(invalid(&format!(
-                    "record at byte {}: direction byte {other} is neither 0 nor 1",
+                    "record at offset {}: direction byte {other} is neither 0 nor 1",
                     self.offset
                 )));
             }
@@ -167,14 +167,14 @@ impl<R: Read> RecordReader<R> {
         let len = usize::from(u16::from_le_bytes([head[9], head[10]]));
         if len == 0 {
             return Err(invalid(&format!(
-                "record at byte {}: empty frame",
+                "record at offset {}: empty frame",
                 self.offset
             )));
         }
         let mut frame = vec![0u8; len];
         if read_full(&mut self.input, &mut frame)? < len {
             return Err(invalid(&format!(
-                "record at byte {} is cut off: {len} frame bytes announced",
+                "record at offset {} is cut off: {len} frame bytes announced",
                 self.offset
             )));
         }

@@ -135,7 +135,7 @@ fn data_suffix(data: &[u8]) -> String {
 /// A dropped frame as a line of text, with its byte offset in the input when known.
 pub fn decode_error(error: &DecodeError, offset: Option<u64>) -> String {
     match offset {
-        Some(offset) => format!("error at byte {offset}: {error}"),
+        Some(offset) => format!("error at offset {offset}: {error}"),
         None => format!("error: {error}"),
     }
 }
