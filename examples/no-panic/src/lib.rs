@@ -88,9 +88,14 @@ impl Vehicle for Craft {
     }
 }
 
-/// What a firmware keeps: the decoder, the MAV and the vehicle, and buffers.
+/// What a firmware keeps: the decoder, and what answers the commands.
 pub struct State {
     decoder: Decoder<100>,
+    mav: MavSide,
+}
+
+/// The MAV and its vehicle, and buffers for the answers.
+struct MavSide {
     mav: Mav,
     craft: Craft,
     payload: [u8; 84],
@@ -112,22 +117,43 @@ fn transmit(mode: ApiMode, payload: &[u8], frame: &mut [u8]) {
     }
 }
 
-/// Handles one decoded frame: a command in a Receive Packet is carried out and answered.
-fn receive(
-    event: Event<'_>,
-    mode: ApiMode,
-    mav: &mut Mav,
-    craft: &mut Craft,
-    payload: &mut [u8],
-    frame: &mut [u8],
-) {
-    let Ok(raw) = event else { return };
-    let Ok(rx) = ReceivePacket::new_checked(raw.data()) else {
-        return;
-    };
-    let Ok(packet) = parse(rx.data()) else { return };
-    if let Ok(Some(n)) = mav.handle_packet(craft, &packet, payload) {
-        transmit(mode, payload.get(..n).unwrap_or_default(), frame);
+impl MavSide {
+    /// Handles one decoded frame: a command in a Receive Packet is carried out and
+    /// answered.
+    fn receive(&mut self, event: Event<'_>, mode: ApiMode) {
+        let Ok(raw) = event else { return };
+        let Ok(rx) = ReceivePacket::new_checked(raw.data()) else {
+            return;
+        };
+        let Ok(packet) = parse(rx.data()) else { return };
+        if let Ok(Some(n)) = self
+            .mav
+            .handle_packet(&mut self.craft, &packet, &mut self.payload)
+        {
+            transmit(
+                mode,
+                self.payload.get(..n).unwrap_or_default(),
+                &mut self.frame,
+            );
+        }
+    }
+
+    /// Unsolicited reports, then the telemetry packet.
+    fn tick(&mut self, mode: ApiMode) {
+        while let Ok(Some(n)) = self.mav.poll_changes(&self.craft, &mut self.payload) {
+            transmit(
+                mode,
+                self.payload.get(..n).unwrap_or_default(),
+                &mut self.frame,
+            );
+        }
+        if let Ok(Some(n)) = self.mav.telemetry(&self.craft, &mut self.payload) {
+            transmit(
+                mode,
+                self.payload.get(..n).unwrap_or_default(),
+                &mut self.frame,
+            );
+        }
     }
 }
 
@@ -143,27 +169,23 @@ pub extern "C" fn mav_init(state: &mut core::mem::MaybeUninit<State>, mode: u8) 
     };
     state.write(State {
         decoder: Decoder::new(ApiMode::try_from(mode).unwrap_or(ApiMode::Unescaped)),
-        mav: Mav::new(&craft),
-        craft,
-        payload: [0; 84],
-        frame: [0; 200],
+        mav: MavSide {
+            mav: Mav::new(&craft),
+            craft,
+            payload: [0; 84],
+            frame: [0; 200],
+        },
     });
 }
 
 /// A UART receive interrupt: one byte, then every event it completes.
 #[unsafe(no_mangle)]
 pub extern "C" fn mav_rx_byte(state: &mut State, byte: u8) {
-    let State {
-        decoder,
-        mav,
-        craft,
-        payload,
-        frame,
-    } = state;
+    let State { decoder, mav } = state;
     let mode = decoder.mode();
     let mut event = decoder.push(byte);
     while let Some(e) = event {
-        receive(e, mode, mav, craft, payload, frame);
+        mav.receive(e, mode);
         event = decoder.poll();
     }
 }
@@ -177,15 +199,9 @@ pub extern "C" fn mav_rx_byte(state: &mut State, byte: u8) {
 pub unsafe extern "C" fn mav_rx_chunk(state: &mut State, bytes: *const u8, len: usize) {
     // SAFETY: the caller passes `len` readable bytes.
     let input = unsafe { core::slice::from_raw_parts(bytes, len) };
-    let State {
-        decoder,
-        mav,
-        craft,
-        payload,
-        frame,
-    } = state;
+    let State { decoder, mav } = state;
     let mode = decoder.mode();
-    decoder.decode_each(input, |e| receive(e, mode, mav, craft, payload, frame));
+    decoder.decode_each(input, |e| mav.receive(e, mode));
 }
 
 /// The same with one `decode` call a frame, and every frame typed.
@@ -215,20 +231,7 @@ pub unsafe extern "C" fn mav_rx_frames(state: &mut State, bytes: *const u8, len:
 #[unsafe(no_mangle)]
 pub extern "C" fn mav_tick(state: &mut State) {
     let mode = state.decoder.mode();
-    while let Ok(Some(n)) = state.mav.poll_changes(&state.craft, &mut state.payload) {
-        transmit(
-            mode,
-            state.payload.get(..n).unwrap_or_default(),
-            &mut state.frame,
-        );
-    }
-    if let Ok(Some(n)) = state.mav.telemetry(&state.craft, &mut state.payload) {
-        transmit(
-            mode,
-            state.payload.get(..n).unwrap_or_default(),
-            &mut state.frame,
-        );
-    }
+    state.mav.tick(mode);
 }
 
 /// Packets a firmware writes itself: a telemetry packet of up to four values, a text
