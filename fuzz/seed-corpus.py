@@ -13,7 +13,8 @@ Each target's directory is emptied and written again. Input formats:
   sizes, then the stream bytes.
 - mcp_parse: one MCP payload.
 - frame_roundtrip: structured input read by `arbitrary`; seeded with frame data and
-  payloads so that its first inputs are not all zeros.
+  payloads (padded with zeros to 64 bytes, which `arbitrary` needs at least) so that
+  its first inputs are not all zeros.
 """
 
 import pathlib
@@ -146,7 +147,14 @@ def stream_seed(stream, sizes=()):
     return bytes([len(sizes)]) + bytes(sizes) + stream
 
 
+# libFuzzer skips inputs shorter than `arbitrary`'s least size of frame_roundtrip's
+# `Input`; its seeds are padded with zeros to this length so that all of them are read.
+ROUNDTRIP_MIN_LEN = 64
+
+
 def write(target, name, data, seen):
+    if target == "frame_roundtrip":
+        data = data + bytes(max(0, ROUNDTRIP_MIN_LEN - len(data)))
     if data in seen[target]:
         return
     seen[target].add(data)
