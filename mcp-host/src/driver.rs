@@ -232,7 +232,18 @@ pub(crate) struct Driver {
     waiters: Vec<Waiter>,
     next_waiter: u64,
     healthy: bool,
+    /// Link events that found the event queue full, delivered (in order, before any
+    /// other event) as soon as it has room: a slow consumer loses packets, never link
+    /// state.
+    pending_links: VecDeque<Event>,
 }
+
+/// Link events held back for a full event queue, at most: a consumer that has not read
+/// for this many connects and disconnects loses the oldest ones.
+const PENDING_LINKS_MAX: usize = 64;
+
+/// How long closing a link may take to write out the frames already queued.
+const CLOSE_FLUSH: Duration = Duration::from_secs(1);
 
 impl Driver {
     pub(crate) fn new(
@@ -256,20 +267,25 @@ impl Driver {
             waiters: Vec::new(),
             next_waiter: 0,
             healthy: false,
+            pending_links: VecDeque::new(),
         }
     }
 
     /// Runs until the link ends for good or nobody holds a sender or the stream.
     pub(crate) async fn run(mut self, mut transport: Option<Transport>) {
         let mut ever_connected = false;
+        let mut last_failure = None;
         loop {
             let current = match transport.take() {
                 Some(t) => t,
-                None => match self.wait_for_transport(ever_connected).await {
+                None => match self
+                    .wait_for_transport(ever_connected, last_failure.as_deref())
+                    .await
+                {
                     Ok(t) => t,
                     Err(Stop::Shutdown) => return,
                     Err(Stop::Fatal(reason)) => {
-                        self.close(reason);
+                        self.close(reason).await;
                         return;
                     }
                 },
@@ -288,7 +304,7 @@ impl Driver {
                 Served::Shutdown => return,
                 // The transport is closed by now (`serve` owned it): say so last.
                 Served::Closed => {
-                    self.close(CLOSED_BY_APPLICATION.to_owned());
+                    self.close(CLOSED_BY_APPLICATION.to_owned()).await;
                     return;
                 }
                 Served::Failed(reason) => {
@@ -299,18 +315,28 @@ impl Driver {
                     }));
                     self.fail_all(&reason);
                     if !self.options.reconnect.enabled {
-                        self.close(format!("{reason}; reconnection is disabled"));
+                        self.close(format!("{reason}; reconnection is disabled"))
+                            .await;
                         return;
                     }
+                    last_failure = Some(reason);
                 }
             }
         }
     }
 
-    /// Waits for a transport while failing requests at once.
-    async fn wait_for_transport(&mut self, ever_connected: bool) -> Result<Transport, Stop> {
+    /// Waits for a transport while failing requests at once (saying why the link went
+    /// down, `last_failure`, when it was up before).
+    async fn wait_for_transport(
+        &mut self,
+        ever_connected: bool,
+        last_failure: Option<&str>,
+    ) -> Result<Transport, Stop> {
         let down = if ever_connected {
-            format!("reconnecting to {}", self.connector.link())
+            match last_failure {
+                Some(reason) => format!("{reason}; reconnecting to {}", self.connector.link()),
+                None => format!("reconnecting to {}", self.connector.link()),
+            }
         } else {
             format!("not connected yet to {}", self.connector.link())
         };
@@ -336,6 +362,9 @@ impl Driver {
                     Some(op) => refuse(op, &down),
                     None => self.ops_open = false,
                 },
+                permit = self.events.clone().reserve_owned(), if !self.pending_links.is_empty() => {
+                    deliver_pending_link(&mut self.pending_links, permit);
+                }
                 _ = self.events.closed(), if !self.ops_open => return Err(Stop::Shutdown),
                 () = self.close_requested.notified() => {
                     return Err(Stop::Fatal(CLOSED_BY_APPLICATION.to_owned()));
@@ -378,20 +407,52 @@ impl Driver {
                 _ = tokio::time::sleep_until(deadline.unwrap_or_else(Instant::now)), if deadline.is_some() => {
                     self.expire(Instant::now());
                 }
+                permit = self.events.clone().reserve_owned(), if !self.pending_links.is_empty() => {
+                    deliver_pending_link(&mut self.pending_links, permit);
+                }
                 _ = self.events.closed(), if !self.ops_open => return Served::Shutdown,
-                () = self.close_requested.notified() => return Served::Closed,
+                () = self.close_requested.notified() => {
+                    // What was already reported written goes out first (`Written`,
+                    // raw writes), within a bound.
+                    let flush = async {
+                        wr.write_all_buf(&mut out).await?;
+                        wr.flush().await
+                    };
+                    if let Err(error) = tokio::time::timeout(CLOSE_FLUSH, flush)
+                        .await
+                        .unwrap_or_else(|_| Err(std::io::ErrorKind::TimedOut.into()))
+                    {
+                        tracing::warn!(link = %self.connector.link(), %error,
+                            "closing: queued frames not all written");
+                    }
+                    return Served::Closed;
+                }
             }
         }
     }
 
-    fn emit(&self, event: Event) {
-        match self.events.try_send(event) {
-            Ok(()) => {}
-            Err(mpsc::error::TrySendError::Full(event)) => {
-                bump(&self.counters.events_dropped);
-                tracing::debug!(?event, "event queue full, event dropped");
+
+    /// Queues `event` for the stream. When the queue is full, a link event is held back
+    /// and delivered once there is room; any other event is dropped and counted (as is
+    /// every event while link events are held back, so that none overtakes them).
+    fn emit(&mut self, event: Event) {
+        let event = if self.pending_links.is_empty() {
+            match self.events.try_send(event) {
+                Ok(()) | Err(mpsc::error::TrySendError::Closed(_)) => return,
+                Err(mpsc::error::TrySendError::Full(event)) => event,
             }
-            Err(mpsc::error::TrySendError::Closed(_)) => {}
+        } else {
+            event
+        };
+        if matches!(event, Event::Link(_)) {
+            if self.pending_links.len() == PENDING_LINKS_MAX {
+                self.pending_links.pop_front();
+                bump(&self.counters.events_dropped);
+            }
+            self.pending_links.push_back(event);
+        } else {
+            bump(&self.counters.events_dropped);
+            tracing::debug!(?event, "event queue full, event dropped");
         }
     }
 
@@ -447,7 +508,7 @@ impl Driver {
         }
     }
 
-    fn malformed(&self, frame: OwnedFrame, error: &dyn fmt::Display) {
+    fn malformed(&mut self, frame: OwnedFrame, error: &dyn fmt::Display) {
         bump(&self.counters.malformed_frames);
         tracing::warn!(?frame, %error, "malformed frame");
         self.emit(Event::Frame(frame));
@@ -545,7 +606,7 @@ impl Driver {
         }
     }
 
-    fn unclaimed(&self, frame: OwnedFrame) {
+    fn unclaimed(&mut self, frame: OwnedFrame) {
         bump(&self.counters.unclaimed_responses);
         self.emit(Event::Frame(frame));
     }
@@ -777,14 +838,39 @@ impl Driver {
         }
     }
 
-    fn close(&mut self, reason: String) {
+    /// Ends the link for good: fails what is in flight, refuses what comes, then
+    /// delivers the held-back link events and [`LinkEvent::Closed`], waiting for room
+    /// in the event queue (until the stream is dropped) so that the stream always ends
+    /// with it.
+    async fn close(&mut self, reason: String) {
         tracing::warn!(link = %self.connector.link(), %reason, "link closed");
         self.fail_all(&reason);
-        self.emit(Event::Link(LinkEvent::Closed { reason }));
         self.ops.close();
         while let Ok(op) = self.ops.try_recv() {
             refuse_closed(op);
         }
+        let held = std::mem::take(&mut self.pending_links);
+        for event in held.into_iter().chain([Event::Link(LinkEvent::Closed { reason })]) {
+            if self.events.send(event).await.is_err() {
+                return;
+            }
+        }
+    }
+}
+
+/// Sends the oldest held-back link event of `pending` into the room `permit` holds.
+fn deliver_pending_link(
+    pending: &mut VecDeque<Event>,
+    permit: Result<mpsc::OwnedPermit<Event>, mpsc::error::SendError<()>>,
+) {
+    match permit {
+        Ok(permit) => {
+            if let Some(event) = pending.pop_front() {
+                permit.send(event);
+            }
+        }
+        // Nobody reads any more.
+        Err(_) => pending.clear(),
     }
 }
 

@@ -9,6 +9,7 @@ use mcp_core::{Command, Packet, Report, StatusRequest};
 use mcp_host::{
     Event, LinkEvent, LinkOptions, PacketStream, ReconnectPolicy, RequestError, SendError,
 };
+use futures::StreamExt;
 use tokio::net::{TcpListener, TcpStream};
 use xbee_api::{ApiMode, DecodeError, DeliveryStatus};
 
@@ -313,4 +314,117 @@ fn handles_are_send_and_sync() {
     check::<mcp_host::Event>();
     check::<mcp_host::SendError>();
     check::<mcp_host::RequestError>();
+}
+
+/// A round trip through the link (an `AT AP` answered by the fake radio): every frame
+/// the radio wrote before its answer has been taken by the background task when it
+/// returns.
+async fn round_trip(sender: &mcp_host::CommandSender, fake: &mut FakeXBee) {
+    let at = tokio::spawn({
+        let sender = sender.clone();
+        async move { sender.at(*b"AP", &[], Some(GUARD)).await }
+    });
+    let command = fake.next_frame().await;
+    assert_eq!(command[0], 0x08, "{command:02X?}");
+    fake.send(&xbee_api::AtCommandResponseRepr {
+        frame_id: command[1],
+        command: *b"AP",
+        status: xbee_api::AtStatus::Ok,
+        data: &[1],
+    })
+    .await;
+    at.await.unwrap().unwrap();
+}
+
+/// A consumer that does not read loses packets, never link state: with the event queue
+/// full, the disconnection, the reconnection and the close still come, in order, and
+/// the stream ends after `Closed`.
+#[tokio::test]
+async fn link_events_survive_a_full_event_queue() {
+    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let port = listener.local_addr().unwrap().port();
+    let link = format!("tcp:127.0.0.1:{port}").parse().unwrap();
+    let options = LinkOptions {
+        event_capacity: 2,
+        ..options(ApiMode::Unescaped, true)
+    };
+    let (mut stream, sender) = mcp_host::connect(&link, options).await.unwrap();
+    let mut fake = accept(&listener, ApiMode::Unescaped).await;
+    for t in 0..10 {
+        fake.receive(MAV, &time_report(t)).await;
+    }
+    round_trip(&sender, &mut fake).await;
+    fake.close().await;
+    // The reconnection: the background task has seen the disconnection.
+    let mut fake = accept(&listener, ApiMode::Unescaped).await;
+    round_trip(&sender, &mut fake).await;
+    sender.close();
+
+    let mut links = Vec::new();
+    let mut packets = 0;
+    while let Some(event) = tokio::time::timeout(GUARD, stream.next())
+        .await
+        .expect("the stream did not end")
+    {
+        match event {
+            Event::Link(link) => links.push(link),
+            Event::Packet(_) => packets += 1,
+            other => panic!("{other:?}"),
+        }
+    }
+    let kinds: Vec<&str> = links
+        .iter()
+        .map(|l| match l {
+            LinkEvent::Connected { .. } => "connected",
+            LinkEvent::Disconnected { .. } => "disconnected",
+            LinkEvent::Reconnected { .. } => "reconnected",
+            LinkEvent::Closed { .. } => "closed",
+        })
+        .collect();
+    assert_eq!(
+        kinds,
+        ["connected", "disconnected", "reconnected", "closed"],
+        "{links:?}"
+    );
+    // The queue held `Connected` and one report; the other nine were dropped.
+    assert_eq!(packets, 1);
+    assert_eq!(stream.stats().events_dropped, 9);
+}
+
+/// `close` writes out what was already reported written before it closes the transport:
+/// here the radio reads nothing until the link is closed, so that written frames are
+/// still queued in the background task when `close` comes.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn close_writes_out_frames_already_written() {
+    let socket = tokio::net::TcpSocket::new_v4().unwrap();
+    socket.set_recv_buffer_size(4096).unwrap();
+    socket.bind("127.0.0.1:0".parse().unwrap()).unwrap();
+    let listener = socket.listen(1).unwrap();
+    let port = listener.local_addr().unwrap().port();
+    let link = format!("tcp:127.0.0.1:{port}").parse().unwrap();
+    let (mut stream, sender) = mcp_host::connect(&link, options(ApiMode::Unescaped, true))
+        .await
+        .unwrap();
+    let mut fake = accept(&listener, ApiMode::Unescaped).await;
+    // Frames of 400 bytes until one is not taken within 100 ms: the socket and the
+    // background task's queue are full.
+    let mut frame = vec![0x23u8; 400];
+    let mut written = 0u32;
+    loop {
+        frame[1..5].copy_from_slice(&written.to_be_bytes());
+        let write = sender.write_frame(&frame);
+        match tokio::time::timeout(Duration::from_millis(100), write).await {
+            Ok(result) => result.unwrap(),
+            Err(_) => break,
+        }
+        written += 1;
+        assert!(written < 10_000, "the link never filled up");
+    }
+    sender.close();
+    // Every frame reported written arrives, in order.
+    for n in 0..written {
+        let data = fake.next_frame().await;
+        assert_eq!(data[1..5], n.to_be_bytes(), "frame {n} of {written}");
+    }
+    while stream.next().await.is_some() {}
 }
