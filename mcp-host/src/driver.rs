@@ -431,7 +431,6 @@ impl Driver {
         }
     }
 
-
     /// Queues `event` for the stream. When the queue is full, a link event is held back
     /// and delivered once there is room; any other event is dropped and counted (as is
     /// every event while link events are held back, so that none overtakes them).
@@ -850,7 +849,10 @@ impl Driver {
             refuse_closed(op);
         }
         let held = std::mem::take(&mut self.pending_links);
-        for event in held.into_iter().chain([Event::Link(LinkEvent::Closed { reason })]) {
+        for event in held
+            .into_iter()
+            .chain([Event::Link(LinkEvent::Closed { reason })])
+        {
             if self.events.send(event).await.is_err() {
                 return;
             }

@@ -165,8 +165,10 @@ pub async fn connect(
 /// The [`Event`]s of a link, as a [`futures::Stream`]. Ends after [`LinkEvent::Closed`].
 ///
 /// Reading it is optional: requests are matched inside the background task. If the
-/// consumer falls behind by [`LinkOptions::event_capacity`] events, newer events are
-/// dropped and counted ([`Stats::events_dropped`]).
+/// consumer falls behind by [`LinkOptions::event_capacity`] events, newer packets and
+/// frames are dropped and counted ([`Stats::events_dropped`]); link events are held back
+/// and delivered first once there is room (up to 64 of them), so the link's state is
+/// never lost and the stream always ends with [`LinkEvent::Closed`].
 #[derive(Debug)]
 pub struct PacketStream {
     events: mpsc::Receiver<Event>,

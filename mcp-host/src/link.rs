@@ -48,7 +48,8 @@ pub enum Link {
         /// TCP port (0 picks a free port; see [`crate::Connector::local_addr`]).
         port: u16,
     },
-    /// A fresh pseudo-terminal pair (`pty`); the far end's path is reported once opened.
+    /// A fresh pseudo-terminal pair (`pty`), made when the link is opened; the far end's
+    /// path is in [`LinkInfo::pty_path`](crate::LinkInfo::pty_path) at once.
     Pty,
 }
 

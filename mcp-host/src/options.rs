@@ -73,7 +73,8 @@ pub struct LinkOptions {
     pub reconnect: ReconnectPolicy,
     /// Capacity of the event queue between the background task and the
     /// [`crate::PacketStream`]; when the consumer falls behind by this many events, newer
-    /// events are dropped and counted ([`crate::Stats::events_dropped`]).
+    /// packets and frames are dropped and counted ([`crate::Stats::events_dropped`]);
+    /// link events are held back, never dropped.
     pub event_capacity: usize,
 }
 

@@ -51,16 +51,22 @@ pub enum DeliveryReport {
         /// Route discovery overhead.
         discovery: DiscoveryStatus,
     },
-    /// Sent with frame id 0: queued for the transport, no status asked for (a
-    /// disconnection before the bytes leave loses it silently).
+    /// Sent with frame id 0: queued for the transport, no status asked for. A
+    /// disconnection before the bytes leave loses it silently; [`CommandSender::close`]
+    /// writes it out first (waiting at most a second for the transport).
     Written,
 }
 
 /// Sends MCP packets and XBee frames over a link. Cheap to clone; usable from many tasks
 /// at once.
 ///
-/// Every method waits at most its timeout and fails with a clear [`SendError`] when the
-/// link goes down while the request is in flight, or is down when it is made.
+/// Every method waits at most its timeout (and half a second's grace for the background
+/// task's answer) and fails with a clear [`SendError`] when the link goes down while the
+/// request is in flight, or is down when it is made.
+///
+/// Dropping a method's future before it resolves does not take the request back: once
+/// queued, its frame may still go out; a dropped [`request`](Self::request) stops
+/// waiting for its report at its deadline.
 #[derive(Debug, Clone)]
 pub struct CommandSender {
     pub(crate) ops: mpsc::Sender<Op>,
@@ -141,7 +147,11 @@ impl CommandSender {
     /// timeout. To [`Address64::BROADCAST`], the first matching report from anyone.
     ///
     /// Reports are matched inside the background task: this works whether or not the
-    /// [`crate::PacketStream`] is read. The report also appears on the stream.
+    /// [`crate::PacketStream`] is read. The report also appears on the stream. Any
+    /// report of the matching kind from `to` that arrives after the request is sent
+    /// answers it, so one the MAV sent by itself just before it got the request (the
+    /// report that follows a trajectory set or a landing change) may be the answer; it
+    /// carries the same state.
     pub async fn request(
         &self,
         to: Address64,

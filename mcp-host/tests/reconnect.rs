@@ -5,11 +5,11 @@ mod common;
 use std::time::Duration;
 
 use common::*;
+use futures::StreamExt;
 use mcp_core::{Command, Packet, Report, StatusRequest};
 use mcp_host::{
     Event, LinkEvent, LinkOptions, PacketStream, ReconnectPolicy, RequestError, SendError,
 };
-use futures::StreamExt;
 use tokio::net::{TcpListener, TcpStream};
 use xbee_api::{ApiMode, DecodeError, DeliveryStatus};
 

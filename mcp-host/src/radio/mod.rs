@@ -535,7 +535,9 @@ impl Network {
         lock(&self.state).events.subscribe()
     }
 
-    /// Stops every node and closes their links.
+    /// Tells every node to stop, and returns at once: each node's task then closes its
+    /// link as it ends, shortly after. A listening port is free again once its task has
+    /// ended, not when this returns.
     pub fn shutdown(&self) {
         self.shutdown.cancel();
     }

@@ -304,7 +304,8 @@ impl Simulator {
         &self.mavs
     }
 
-    /// Stops the MAVs and the network.
+    /// Tells the MAVs and the network to stop, and returns at once; the links close
+    /// as their tasks end, shortly after (see [`Network::shutdown`]).
     pub fn shutdown(&self) {
         self.network.shutdown();
     }
