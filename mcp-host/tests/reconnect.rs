@@ -428,3 +428,37 @@ async fn close_writes_out_frames_already_written() {
     }
     while stream.next().await.is_some() {}
 }
+
+/// A send refused while the link is down says why it went down.
+#[tokio::test]
+async fn a_send_during_an_outage_says_why_the_link_went_down() {
+    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let port = listener.local_addr().unwrap().port();
+    let link = format!("tcp:127.0.0.1:{port}").parse().unwrap();
+    let (mut stream, sender) = mcp_host::connect(&link, options(ApiMode::Escaped, true))
+        .await
+        .unwrap();
+    let fake = accept(&listener, ApiMode::Escaped).await;
+    assert!(matches!(
+        next_link_event(&mut stream).await,
+        LinkEvent::Connected { .. }
+    ));
+    // Nothing listens any more: the link stays down.
+    drop(listener);
+    fake.close().await;
+    assert!(matches!(
+        next_link_event(&mut stream).await,
+        LinkEvent::Disconnected { .. }
+    ));
+    let err = sender
+        .send(MAV, &Command::<&[u8]>::Time(1))
+        .await
+        .unwrap_err();
+    assert!(matches!(err, SendError::Disconnected { .. }), "{err}");
+    let message = err.to_string();
+    assert!(
+        message.contains("end of stream")
+            && message.contains(&format!("reconnecting to tcp:127.0.0.1:{port}")),
+        "{message}"
+    );
+}
