@@ -86,6 +86,7 @@ use std::time::Duration;
 use tokio::io::{AsyncRead, AsyncWrite, DuplexStream};
 use tokio::sync::{broadcast, mpsc};
 use tokio_util::sync::CancellationToken;
+use tokio_util::task::TaskTracker;
 use xbee_api::{Address16, Address64, ApiMode, AtStatus, DecodeError, DeliveryStatus};
 
 pub use faults::{Faults, REORDER_WINDOW};
@@ -300,11 +301,14 @@ pub enum NetworkError {
 const EVENT_CAPACITY: usize = 1024;
 
 /// A running virtual XBee network. Dropping it (or [`Network::shutdown`]) stops every
-/// node. See the [module docs](self).
+/// node; [`Network::stop`] also waits until they have stopped. See the
+/// [module docs](self).
 #[derive(Debug)]
 pub struct Network {
     state: Arc<Mutex<State>>,
     shutdown: CancellationToken,
+    /// The nodes' tasks.
+    tasks: TaskTracker,
 }
 
 impl Network {
@@ -319,6 +323,7 @@ impl Network {
                 events,
             })),
             shutdown: CancellationToken::new(),
+            tasks: TaskTracker::new(),
         }
     }
 
@@ -441,7 +446,7 @@ impl Network {
                 local_addr: None,
             }
         };
-        tokio::spawn(port::run(
+        self.tasks.spawn(port::run(
             self.shutdown.clone(),
             self.state.clone(),
             address,
@@ -537,9 +542,36 @@ impl Network {
 
     /// Tells every node to stop, and returns at once: each node's task then closes its
     /// link as it ends, shortly after. A listening port is free again once its task has
-    /// ended, not when this returns.
+    /// ended, not when this returns: [`Network::stop`] waits for that.
     pub fn shutdown(&self) {
         self.shutdown.cancel();
+    }
+
+    /// Stops every node and waits until all of them have ended: their links are closed
+    /// and their ports free (a `tcp-listen` port can be listened on again at once).
+    ///
+    /// ```
+    /// # #[tokio::main(flavor = "current_thread")]
+    /// # async fn main() {
+    /// use mcp_host::radio::{Network, NetworkConfig, NodeOptions};
+    /// let network = Network::new(NetworkConfig::default());
+    /// let link = "tcp-listen:127.0.0.1:0".parse().unwrap();
+    /// let node = network.add_link(xbee_api::Address64::COORDINATOR, &link, NodeOptions::default())
+    ///     .await
+    ///     .unwrap();
+    /// network.stop().await;
+    /// // The same port again, straight away.
+    /// let again = format!("tcp-listen:{}", node.local_addr.unwrap()).parse().unwrap();
+    /// let network = Network::new(NetworkConfig::default());
+    /// network.add_link(xbee_api::Address64::COORDINATOR, &again, NodeOptions::default())
+    ///     .await
+    ///     .unwrap();
+    /// # }
+    /// ```
+    pub async fn stop(&self) {
+        self.shutdown.cancel();
+        self.tasks.close();
+        self.tasks.wait().await;
     }
 }
 

@@ -309,4 +309,10 @@ impl Simulator {
     pub fn shutdown(&self) {
         self.network.shutdown();
     }
+
+    /// Stops the MAVs and the network and waits until the coordinator's link is closed
+    /// and its port free ([`Network::stop`]).
+    pub async fn stop(&self) {
+        self.network.stop().await;
+    }
 }
