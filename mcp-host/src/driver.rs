@@ -10,14 +10,16 @@ use std::time::{Duration, SystemTime};
 use bytes::{Bytes, BytesMut};
 use futures::StreamExt;
 use tokio::io::AsyncWriteExt;
-use tokio::sync::{Notify, mpsc, oneshot};
+use tokio::sync::{Notify, mpsc, oneshot, watch};
 use tokio::time::Instant;
 use tokio_util::codec::FramedRead;
 use xbee_api::{Address16, Address64, EncodeFrame};
 
 use crate::codec::{CodecItem, XBeeCodec, encode_frame};
 use crate::error::{RequestError, SendError};
-use crate::event::{Event, InvalidPacket, LinkEvent, Origin, OwnedFrame, Received, is_response};
+use crate::event::{
+    Event, InvalidPacket, LinkEvent, LinkState, Origin, OwnedFrame, Received, is_response,
+};
 use crate::ids::IdTable;
 use crate::options::LinkOptions;
 use crate::sender::DeliveryReport;
@@ -225,6 +227,8 @@ pub(crate) struct Driver {
     pub(crate) counters: Arc<Counters>,
     /// Notified by [`CommandSender::close`](crate::CommandSender::close).
     close_requested: Arc<Notify>,
+    /// The link's state, for the handles to read at any time.
+    state: watch::Sender<LinkState>,
     ops_open: bool,
     ids: IdTable<Pending>,
     /// Requests that need a frame id, taken while none was free.
@@ -253,6 +257,7 @@ impl Driver {
         events: mpsc::Sender<Event>,
         counters: Arc<Counters>,
         close_requested: Arc<Notify>,
+        state: watch::Sender<LinkState>,
     ) -> Self {
         Driver {
             connector,
@@ -261,6 +266,7 @@ impl Driver {
             events,
             counters,
             close_requested,
+            state,
             ops_open: true,
             ids: IdTable::new(),
             parked: VecDeque::new(),
@@ -291,6 +297,7 @@ impl Driver {
                 },
             };
             let peer = current.peer().to_owned();
+            self.state.send_replace(LinkState::Connected);
             if ever_connected {
                 bump(&self.counters.reconnects);
                 tracing::info!(link = %self.connector.link(), %peer, "reconnected");
@@ -308,6 +315,7 @@ impl Driver {
                     return;
                 }
                 Served::Failed(reason) => {
+                    self.state.send_replace(LinkState::Reconnecting);
                     bump(&self.counters.disconnects);
                     tracing::warn!(link = %self.connector.link(), %reason, "disconnected");
                     self.emit(Event::Link(LinkEvent::Disconnected {
@@ -842,6 +850,8 @@ impl Driver {
     /// in the event queue (until the stream is dropped) so that the stream always ends
     /// with it.
     async fn close(&mut self, reason: String) {
+        // The transport is closed by now.
+        self.state.send_replace(LinkState::Closed);
         tracing::warn!(link = %self.connector.link(), %reason, "link closed");
         self.fail_all(&reason);
         self.ops.close();

@@ -67,6 +67,22 @@ pub struct InvalidPacket {
     pub frame: Bytes,
 }
 
+/// Where a link is, as [`CommandSender::link_state`](crate::CommandSender::link_state)
+/// and [`PacketStream::link_state`](crate::PacketStream::link_state) tell at any time
+/// (the [`LinkEvent`]s tell each change).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum LinkState {
+    /// Not connected yet (a `tcp-listen` link waiting for its first peer, or the first
+    /// moments of any link).
+    Connecting,
+    /// The transport is up.
+    Connected,
+    /// The transport went away; the link is reconnecting.
+    Reconnecting,
+    /// The link ended for good; its transport is closed.
+    Closed,
+}
+
 /// A transport state change.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum LinkEvent {

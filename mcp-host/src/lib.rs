@@ -82,7 +82,9 @@ use std::task::{Context, Poll};
 use tokio::sync::mpsc;
 
 pub use error::{ConnectError, RequestError, SendError};
-pub use event::{Event, InvalidPacket, LinkEvent, Origin, OwnedFrame, OwnedPacket, Received};
+pub use event::{
+    Event, InvalidPacket, LinkEvent, LinkState, Origin, OwnedFrame, OwnedPacket, Received,
+};
 pub use link::{Link, LinkParseError};
 pub use options::{LinkOptions, ReconnectPolicy};
 pub use sender::{CommandSender, DeliveryReport, FrameId, SendOptions};
@@ -138,12 +140,14 @@ pub async fn connect(
     let (ops_tx, ops_rx) = mpsc::channel(OPS_CAPACITY);
     let (events_tx, events_rx) = mpsc::channel(options.event_capacity);
     let close_requested = Arc::new(tokio::sync::Notify::new());
+    let (state_tx, state) = tokio::sync::watch::channel(LinkState::Connecting);
     let sender = CommandSender {
         ops: ops_tx,
         default_timeout: options.send_timeout,
         counters: counters.clone(),
         info: info.clone(),
         close_requested: close_requested.clone(),
+        state: state.clone(),
     };
     let driver = driver::Driver::new(
         connector,
@@ -152,12 +156,14 @@ pub async fn connect(
         events_tx,
         counters.clone(),
         close_requested,
+        state_tx,
     );
     tokio::spawn(driver.run(transport));
     let stream = PacketStream {
         events: events_rx,
         counters,
         info,
+        state,
     };
     Ok((stream, sender))
 }
@@ -174,12 +180,18 @@ pub struct PacketStream {
     events: mpsc::Receiver<Event>,
     counters: Arc<stats::Counters>,
     info: Arc<LinkInfo>,
+    state: tokio::sync::watch::Receiver<LinkState>,
 }
 
 impl PacketStream {
     /// The link's counters.
     pub fn stats(&self) -> Stats {
         self.counters.snapshot()
+    }
+
+    /// Where the link is now (the stream's [`LinkEvent`]s may lag behind it).
+    pub fn link_state(&self) -> LinkState {
+        *self.state.borrow()
     }
 
     /// What the link is attached to.

@@ -4,14 +4,14 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use bytes::Bytes;
-use tokio::sync::{Notify, mpsc, oneshot};
+use tokio::sync::{Notify, mpsc, oneshot, watch};
 use tokio::time::Instant;
 use xbee_api::{Address16, Address64, DiscoveryStatus};
 
 use crate::LinkInfo;
 use crate::driver::{Op, ReportKey};
 use crate::error::{RequestError, SendError};
-use crate::event::{OwnedFrame, carries_frame_id};
+use crate::event::{LinkState, OwnedFrame, carries_frame_id};
 use crate::stats::{Counters, Stats};
 
 /// How long a caller waits past its deadline for the background task's answer.
@@ -74,6 +74,7 @@ pub struct CommandSender {
     pub(crate) counters: Arc<Counters>,
     pub(crate) info: Arc<LinkInfo>,
     pub(crate) close_requested: Arc<Notify>,
+    pub(crate) state: watch::Receiver<LinkState>,
 }
 
 impl CommandSender {
@@ -321,6 +322,33 @@ impl CommandSender {
     /// ```
     pub fn close(&self) {
         self.close_requested.notify_one();
+    }
+
+    /// Where the link is now.
+    pub fn link_state(&self) -> LinkState {
+        *self.state.borrow()
+    }
+
+    /// Waits until the link has ended for good ([`LinkState::Closed`]: after
+    /// [`close`](Self::close), or when reconnection gave up) and its transport is closed,
+    /// so that the same device can be opened again; or until every handle but this one
+    /// is gone and the background task has stopped.
+    ///
+    /// ```
+    /// # #[tokio::main(flavor = "current_thread")]
+    /// # async fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// use mcp_host::{Link, LinkOptions, LinkState};
+    ///
+    /// let (_stream, sender) = mcp_host::connect(&Link::Pty, LinkOptions::default()).await?;
+    /// sender.close();
+    /// sender.closed().await;
+    /// assert_eq!(sender.link_state(), LinkState::Closed);
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub async fn closed(&self) {
+        let mut state = self.state.clone();
+        let _ = state.wait_for(|s| *s == LinkState::Closed).await;
     }
 
     async fn call<T>(

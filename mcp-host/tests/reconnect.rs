@@ -8,7 +8,8 @@ use common::*;
 use futures::StreamExt;
 use mcp_core::{Command, Packet, Report, StatusRequest};
 use mcp_host::{
-    Event, LinkEvent, LinkOptions, PacketStream, ReconnectPolicy, RequestError, SendError,
+    Event, LinkEvent, LinkOptions, LinkState, PacketStream, ReconnectPolicy, RequestError,
+    SendError,
 };
 use tokio::net::{TcpListener, TcpStream};
 use xbee_api::{ApiMode, DecodeError, DeliveryStatus};
@@ -461,4 +462,35 @@ async fn a_send_during_an_outage_says_why_the_link_went_down() {
             && message.contains(&format!("reconnecting to tcp:127.0.0.1:{port}")),
         "{message}"
     );
+}
+
+/// The link's state can be read at any time, and `closed` waits for the end.
+#[tokio::test]
+async fn link_state_follows_the_transport() {
+    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let port = listener.local_addr().unwrap().port();
+    let link = format!("tcp:127.0.0.1:{port}").parse().unwrap();
+    let (mut stream, sender) = mcp_host::connect(&link, options(ApiMode::Escaped, true))
+        .await
+        .unwrap();
+    let fake = accept(&listener, ApiMode::Escaped).await;
+    assert!(matches!(
+        next_link_event(&mut stream).await,
+        LinkEvent::Connected { .. }
+    ));
+    assert_eq!(sender.link_state(), LinkState::Connected);
+    assert_eq!(stream.link_state(), LinkState::Connected);
+    drop(listener);
+    fake.close().await;
+    assert!(matches!(
+        next_link_event(&mut stream).await,
+        LinkEvent::Disconnected { .. }
+    ));
+    assert_eq!(sender.link_state(), LinkState::Reconnecting);
+    sender.close();
+    tokio::time::timeout(GUARD, sender.closed())
+        .await
+        .expect("the link did not close");
+    assert_eq!(sender.link_state(), LinkState::Closed);
+    assert_eq!(stream.link_state(), LinkState::Closed);
 }
