@@ -43,19 +43,27 @@ async fn accept(listener: &TcpListener, mode: ApiMode) -> FakeXBee {
     FakeXBee::new(socket, mode)
 }
 
-#[tokio::test]
-async fn tcp_link_reconnects_and_fails_requests_in_flight() {
+/// A link to a fake radio on TCP, its `Connected` event taken: the listener (for the
+/// reconnections), the stream, the sender and the radio.
+async fn tcp_radio(
+    options: LinkOptions,
+) -> (TcpListener, PacketStream, mcp_host::CommandSender, FakeXBee) {
     let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
     let port = listener.local_addr().unwrap().port();
     let link = format!("tcp:127.0.0.1:{port}").parse().unwrap();
-    let (mut stream, sender) = mcp_host::connect(&link, options(ApiMode::Escaped, true))
-        .await
-        .unwrap();
-    let mut fake = accept(&listener, ApiMode::Escaped).await;
+    let mode = options.api_mode;
+    let (mut stream, sender) = mcp_host::connect(&link, options).await.unwrap();
+    let fake = accept(&listener, mode).await;
     assert!(matches!(
         next_link_event(&mut stream).await,
         LinkEvent::Connected { .. }
     ));
+    (listener, stream, sender, fake)
+}
+
+#[tokio::test]
+async fn tcp_link_reconnects_and_fails_requests_in_flight() {
+    let (listener, mut stream, sender, mut fake) = tcp_radio(options(ApiMode::Escaped, true)).await;
 
     fake.receive(MAV, &time_report(1)).await;
     expect_time_report(&mut stream, 1).await;
@@ -182,17 +190,7 @@ async fn tcp_listen_waits_for_the_next_peer() {
 
 #[tokio::test]
 async fn without_reconnection_the_link_closes_and_the_stream_ends() {
-    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let port = listener.local_addr().unwrap().port();
-    let link = format!("tcp:127.0.0.1:{port}").parse().unwrap();
-    let (mut stream, sender) = mcp_host::connect(&link, options(ApiMode::Unescaped, false))
-        .await
-        .unwrap();
-    let fake = accept(&listener, ApiMode::Unescaped).await;
-    assert!(matches!(
-        next_link_event(&mut stream).await,
-        LinkEvent::Connected { .. }
-    ));
+    let (_listener, mut stream, sender, fake) = tcp_radio(options(ApiMode::Unescaped, false)).await;
     fake.close().await;
     assert!(matches!(
         next_link_event(&mut stream).await,
@@ -433,17 +431,8 @@ async fn close_writes_out_frames_already_written() {
 /// A send refused while the link is down says why it went down.
 #[tokio::test]
 async fn a_send_during_an_outage_says_why_the_link_went_down() {
-    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let (listener, mut stream, sender, fake) = tcp_radio(options(ApiMode::Escaped, true)).await;
     let port = listener.local_addr().unwrap().port();
-    let link = format!("tcp:127.0.0.1:{port}").parse().unwrap();
-    let (mut stream, sender) = mcp_host::connect(&link, options(ApiMode::Escaped, true))
-        .await
-        .unwrap();
-    let fake = accept(&listener, ApiMode::Escaped).await;
-    assert!(matches!(
-        next_link_event(&mut stream).await,
-        LinkEvent::Connected { .. }
-    ));
     // Nothing listens any more: the link stays down.
     drop(listener);
     fake.close().await;
@@ -467,17 +456,7 @@ async fn a_send_during_an_outage_says_why_the_link_went_down() {
 /// The link's state can be read at any time, and `closed` waits for the end.
 #[tokio::test]
 async fn link_state_follows_the_transport() {
-    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let port = listener.local_addr().unwrap().port();
-    let link = format!("tcp:127.0.0.1:{port}").parse().unwrap();
-    let (mut stream, sender) = mcp_host::connect(&link, options(ApiMode::Escaped, true))
-        .await
-        .unwrap();
-    let fake = accept(&listener, ApiMode::Escaped).await;
-    assert!(matches!(
-        next_link_event(&mut stream).await,
-        LinkEvent::Connected { .. }
-    ));
+    let (listener, mut stream, sender, fake) = tcp_radio(options(ApiMode::Escaped, true)).await;
     assert_eq!(sender.link_state(), LinkState::Connected);
     assert_eq!(stream.link_state(), LinkState::Connected);
     drop(listener);
