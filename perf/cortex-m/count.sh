@@ -21,7 +21,8 @@ if [ ${#cases[@]} -eq 0 ]; then
 fi
 cargo build --release --quiet
 dir=target/thumbv7m-none-eabi/release
-out=$(ls -d target/thumbv7m-none-eabi/release/build/perf-cortex-m-*/out | head -1)
+# The newest build script output (older ones stay behind after rebuilds).
+out=$(ls -td target/thumbv7m-none-eabi/release/build/perf-cortex-m-*/out | head -1)
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
