@@ -370,7 +370,9 @@ impl Driver {
                     Some(op) => refuse(op, &down),
                     None => self.ops_open = false,
                 },
-                permit = self.events.clone().reserve_owned(), if !self.pending_links.is_empty() => {
+                // In an async block, so that the sender is cloned only while link events
+                // wait, not on every turn of the loop.
+                permit = async { self.events.clone().reserve_owned().await }, if !self.pending_links.is_empty() => {
                     deliver_pending_link(&mut self.pending_links, permit);
                 }
                 _ = self.events.closed(), if !self.ops_open => return Err(Stop::Shutdown),
@@ -415,7 +417,9 @@ impl Driver {
                 _ = tokio::time::sleep_until(deadline.unwrap_or_else(Instant::now)), if deadline.is_some() => {
                     self.expire(Instant::now());
                 }
-                permit = self.events.clone().reserve_owned(), if !self.pending_links.is_empty() => {
+                // In an async block, so that the sender is cloned only while link events
+                // wait, not on every turn of the loop.
+                permit = async { self.events.clone().reserve_owned().await }, if !self.pending_links.is_empty() => {
                     deliver_pending_link(&mut self.pending_links, permit);
                 }
                 _ = self.events.closed(), if !self.ops_open => return Served::Shutdown,
