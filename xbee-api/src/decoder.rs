@@ -127,8 +127,9 @@ enum State {
 ///
 /// `size_of::<Decoder<N>>()` is `N` rounded up to a multiple of the pointer size, plus
 /// the cursors and counters: 52 bytes on a 32-bit target, 72 on a 64-bit one (so
-/// `Decoder<100>` takes 152 bytes on a Cortex-M, 176 on x86-64). Mode 2 holds frame data of up to `N` bytes; mode 1 holds
-/// the whole frame, so frame data of up to `N - 4` bytes ([`capacity`](Self::capacity)).
+/// `Decoder<100>` takes 152 bytes on a Cortex-M, 176 on x86-64). Mode 2 holds frame
+/// data of up to `N` bytes; mode 1 holds the whole frame, so frame data of up to
+/// `N - 4` bytes ([`capacity`](Self::capacity)).
 #[derive(Debug, Clone)]
 pub struct Decoder<const N: usize = DEFAULT_CAPACITY> {
     buf: [u8; N],

@@ -27,9 +27,9 @@
 //!   through-hole module), `VR` (4060: Zigbee 3.0 firmware) and `NI` (a space, the
 //!   default). They are read-only: a value gets status 3, invalid parameter (but `AP`
 //!   set to the node's own mode, a no-op). Any other command gets status 2, invalid
-//!   command. These are what Digi's xbee-python library reads when it opens a device. Remote AT commands (0x17) get the
-//!   same answers from the destination's radio (0x97), or status 4, transmission
-//!   failure, when it cannot be reached.
+//!   command. These are what Digi's xbee-python library reads when it opens a device.
+//!   Remote AT commands (0x17) get the same answers from the destination's radio
+//!   (0x97), or status 4, transmission failure, when it cannot be reached.
 //! - When a link comes up its device gets a Modem Status: 0x06 coordinator started on the
 //!   coordinator, 0x02 joined network on other nodes. Links that go down are reopened
 //!   (a `tcp-listen` node's next peer is the node back); frames for a node whose link is

@@ -414,47 +414,30 @@ impl State {
         let Some(radio) = self.nodes.get(&node) else {
             return (AtStatus::Error, 0);
         };
-        match (&command, parameter) {
-            (b"AP", []) => {
-                value[0] = u8::from(radio.mode);
-                (AtStatus::Ok, 1)
+        // A read: `bytes` are the value (at most `AT_VALUE_MAX` of them).
+        let mut read = |bytes: &[u8]| match value.get_mut(..bytes.len()) {
+            Some(out) => {
+                out.copy_from_slice(bytes);
+                (AtStatus::Ok, bytes.len())
             }
+            None => (AtStatus::Error, 0),
+        };
+        match (&command, parameter) {
+            (b"AP", []) => read(&[u8::from(radio.mode)]),
             (b"AP", [mode]) if *mode == u8::from(radio.mode) => (AtStatus::Ok, 0),
             (b"NP", []) => {
                 let np = u16::try_from(self.config.max_unicast).unwrap_or(u16::MAX);
-                value[..2].copy_from_slice(&np.to_be_bytes());
-                (AtStatus::Ok, 2)
+                read(&np.to_be_bytes())
             }
-            (b"SH", []) => {
-                value[..4].copy_from_slice(&node.to_bytes()[..4]);
-                (AtStatus::Ok, 4)
-            }
-            (b"SL", []) => {
-                value[..4].copy_from_slice(&node.to_bytes()[4..]);
-                (AtStatus::Ok, 4)
-            }
-            (b"MY", []) => {
-                value[..2].copy_from_slice(&radio.addr16.to_bytes());
-                (AtStatus::Ok, 2)
-            }
-            (b"AI", []) => (AtStatus::Ok, 1),
-            (b"CE", []) => {
-                value[0] = u8::from(node == Address64::COORDINATOR);
-                (AtStatus::Ok, 1)
-            }
-            (b"SM", []) => (AtStatus::Ok, 1),
-            (b"HV", []) => {
-                value[..2].copy_from_slice(&HARDWARE_VERSION);
-                (AtStatus::Ok, 2)
-            }
-            (b"VR", []) => {
-                value[..2].copy_from_slice(&FIRMWARE_VERSION);
-                (AtStatus::Ok, 2)
-            }
-            (b"NI", []) => {
-                value[..NODE_IDENTIFIER.len()].copy_from_slice(NODE_IDENTIFIER);
-                (AtStatus::Ok, NODE_IDENTIFIER.len())
-            }
+            (b"SH", []) => read(&node.to_bytes()[..4]),
+            (b"SL", []) => read(&node.to_bytes()[4..]),
+            (b"MY", []) => read(&radio.addr16.to_bytes()),
+            (b"AI", []) => read(&[0]),
+            (b"CE", []) => read(&[u8::from(node == Address64::COORDINATOR)]),
+            (b"SM", []) => read(&[0]),
+            (b"HV", []) => read(&HARDWARE_VERSION),
+            (b"VR", []) => read(&FIRMWARE_VERSION),
+            (b"NI", []) => read(NODE_IDENTIFIER),
             (
                 b"AP" | b"NP" | b"SH" | b"SL" | b"MY" | b"AI" | b"CE" | b"SM" | b"HV" | b"VR"
                 | b"NI",
