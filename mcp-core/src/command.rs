@@ -124,6 +124,67 @@ fn wrong_length(t: CommandType, status_request: bool, expected: Expected, got: u
     )
 }
 
+/// Commands that carry no bytes, built without naming `B`: `Command::Time(5)` alone
+/// leaves the type of the trajectory bytes open (`Command::<&[u8]>::Time(5)` names
+/// it), `Command::time(5)` does not.
+///
+/// ```
+/// use mcp_core::{Command, Controller, StatusRequest, TelemetryId};
+/// let mut buf = [0u8; mcp_core::MAX_PAYLOAD];
+///
+/// let len = Command::telemetry_to_coordinator(true, TelemetryId::Altitude).encode(&mut buf)?;
+/// assert_eq!(&buf[..len], b"c\x01\x01\x01");
+/// let len = Command::time(1_700_000_000).encode(&mut buf)?;
+/// assert_eq!(&buf[..len], b"c\x06\x00\xf1\x53\x65");
+/// let len = Command::status_request(StatusRequest::Landing).encode(&mut buf)?;
+/// assert_eq!(&buf[..len], b"c\x02\xff");
+/// assert_eq!(Command::controllers(Controller::Mpc), Command::Controllers(Controller::Mpc));
+/// # Ok::<(), mcp_core::BufferTooSmall>(())
+/// ```
+impl Command<&'static [u8]> {
+    /// [`Command::TelemetryToCoordinator`]: start (`on`) or stop sending telemetry `id`.
+    pub const fn telemetry_to_coordinator(on: bool, id: TelemetryId) -> Self {
+        Command::TelemetryToCoordinator { on, id }
+    }
+
+    /// [`Command::Landing`]: turn autonomous landing on or off.
+    pub const fn landing(on: bool) -> Self {
+        Command::Landing { on }
+    }
+
+    /// [`Command::Controllers`]: switch to `controller`.
+    pub const fn controllers(controller: Controller) -> Self {
+        Command::Controllers(controller)
+    }
+
+    /// [`Command::PositionSlaveSet`]: the slave MAV, in the spec form (`slot` `None`)
+    /// or the firmware form.
+    pub const fn position_slave_set(slot: Option<Slot>, address: Address) -> Self {
+        Command::PositionSlaveSet { slot, address }
+    }
+
+    /// [`Command::Time`]: set the MAV time (POSIX seconds).
+    pub const fn time(seconds: u32) -> Self {
+        Command::Time(seconds)
+    }
+
+    /// [`Command::PositionSet`]: set the MAV position.
+    pub const fn position_set(elevator: f32, aileron: f32) -> Self {
+        Command::PositionSet { elevator, aileron }
+    }
+
+    /// [`Command::StatusRequest`]: ask for a status report.
+    pub const fn status_request(request: StatusRequest) -> Self {
+        Command::StatusRequest(request)
+    }
+}
+
+impl<B> From<StatusRequest> for Command<B> {
+    fn from(request: StatusRequest) -> Self {
+        Command::StatusRequest(request)
+    }
+}
+
 impl<'a> Command<&'a [u8]> {
     /// Parses a command packet (`bytes` starts with the `c`).
     pub fn parse(bytes: &'a [u8]) -> Result<Self, Error> {

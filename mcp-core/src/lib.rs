@@ -76,7 +76,7 @@
 //! let len = command.encode(&mut buf)?;
 //! assert_eq!(&buf[..len], b"c\x01\x01\x19");
 //!
-//! let request = Command::<&[u8]>::StatusRequest(StatusRequest::Time);
+//! let request = Command::status_request(StatusRequest::Time);
 //! let len = request.encode(&mut buf)?;
 //! assert_eq!(&buf[..len], b"c\x06\xff");
 //! # Ok::<(), mcp_core::BufferTooSmall>(())

@@ -325,7 +325,7 @@ fn a_reply_that_does_not_fit_is_an_error_but_the_command_is_done() {
     let mut small = [0u8; 2];
     assert!(mav.handle(&mut sim, &command, &mut small).is_err());
     assert_eq!(sim.trajectory.len(), 1);
-    let status = Command::<&[u8]>::StatusRequest(StatusRequest::Time);
+    let status = Command::status_request(StatusRequest::Time);
     assert!(mav.handle(&mut sim, &status, &mut small).is_err());
 }
 
@@ -335,7 +335,7 @@ fn the_vehicle_trait_is_object_safe() {
     let vehicle: &mut dyn Vehicle = &mut sim;
     let mut mav = Mav::new(vehicle);
     let mut buf = [0u8; 8];
-    let command = Command::<&[u8]>::Landing { on: true };
+    let command = Command::landing(true);
     assert_eq!(mav.handle(vehicle, &command, &mut buf), Ok(None));
     assert_eq!(mav.poll_changes(vehicle, &mut buf), Ok(Some(3)));
 }

@@ -39,7 +39,7 @@
 //! let mav: Address64 = "0013A20040B599B9".parse()?;
 //!
 //! // Ask for altitude telemetry; wait for the radio's delivery status.
-//! let on = Command::<&[u8]>::TelemetryToCoordinator { on: true, id: TelemetryId::Altitude };
+//! let on = Command::telemetry_to_coordinator(true, TelemetryId::Altitude);
 //! sender.send(mav, &on).await?;
 //!
 //! // Ask the landing state and wait for the MAV's report.

@@ -703,7 +703,7 @@ async fn ground_station_commands_the_firmware_through_the_radio_network() {
 
     // A set command is delivered (Transmit Status from the radio) and takes effect.
     let delivery = sender
-        .send(MAV, &McpCommand::<&[u8]>::Time(1_800_000_000))
+        .send(MAV, &McpCommand::time(1_800_000_000))
         .await
         .unwrap();
     assert!(
@@ -739,10 +739,7 @@ async fn ground_station_commands_the_firmware_through_the_radio_network() {
     // Telemetry: exactly the enabled ids, ascending.
     for id in [TelemetryId::PitchAngle, TelemetryId::Altitude] {
         sender
-            .send(
-                MAV,
-                &McpCommand::<&[u8]>::TelemetryToCoordinator { on: true, id },
-            )
+            .send(MAV, &McpCommand::telemetry_to_coordinator(true, id))
             .await
             .unwrap();
     }
@@ -766,10 +763,7 @@ async fn ground_station_commands_the_firmware_through_the_radio_network() {
     assert_eq!(ids, [TelemetryId::Altitude, TelemetryId::PitchAngle]);
 
     // Landing: the unsolicited reports reach the ground station.
-    sender
-        .send(MAV, &McpCommand::<&[u8]>::Landing { on: true })
-        .await
-        .unwrap();
+    sender.send(MAV, &McpCommand::landing(true)).await.unwrap();
     for state in [LandingState::Landing, LandingState::OnGround] {
         let report = next_from_mav(&mut stream, "landing report", |p| {
             matches!(p, Packet::Report(Report::Landing(_)))
@@ -792,7 +786,7 @@ fn a_burst_of_requests_is_answered_in_full_and_in_order() {
     let ids: Vec<u8> = (0..60).map(|i| i * 4).collect();
     let mut burst = Vec::new();
     for &id in &ids {
-        let request = McpCommand::<&[u8]>::StatusRequest(StatusRequest::TelemetryToCoordinator(
+        let request = McpCommand::status_request(StatusRequest::TelemetryToCoordinator(
             TelemetryId::from(id),
         ));
         let mut payload = [0; MAX_PAYLOAD];

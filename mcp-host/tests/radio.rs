@@ -418,7 +418,7 @@ async fn a_ground_station_reads_the_coordinator_through_mcp_host() {
         Frame::AtCommandResponse(r) => assert_eq!((r.status, r.data), (AtStatus::Ok, &[1][..])),
         other => panic!("{other:?}"),
     }
-    let command = mcp_core::Command::<&[u8]>::Time(1_700_000_000);
+    let command = mcp_core::Command::time(1_700_000_000);
     let report = sender.send(MAV_A, &command).await.unwrap();
     assert!(matches!(
         report,

@@ -71,7 +71,7 @@ async fn tcp_link_reconnects_and_fails_requests_in_flight() {
     // A send and a request are in flight when the peer goes away mid-frame.
     let send = tokio::spawn({
         let sender = sender.clone();
-        async move { sender.send(MAV, &Command::<&[u8]>::Time(5)).await }
+        async move { sender.send(MAV, &Command::time(5)).await }
     });
     let request = tokio::spawn({
         let sender = sender.clone();
@@ -111,7 +111,7 @@ async fn tcp_link_reconnects_and_fails_requests_in_flight() {
     expect_time_report(&mut stream, 3).await;
     let send = tokio::spawn({
         let sender = sender.clone();
-        async move { sender.send(MAV, &Command::<&[u8]>::Time(6)).await }
+        async move { sender.send(MAV, &Command::time(6)).await }
     });
     let tx = fake.next_tx().await;
     fake.status(tx.frame_id, DeliveryStatus::Success).await;
@@ -130,10 +130,7 @@ async fn tcp_listen_waits_for_the_next_peer() {
     let addr = stream.info().local_addr.unwrap();
 
     // Before any peer, requests fail at once with a clear error.
-    let err = sender
-        .send(MAV, &Command::<&[u8]>::Landing { on: true })
-        .await
-        .unwrap_err();
+    let err = sender.send(MAV, &Command::landing(true)).await.unwrap_err();
     match &err {
         SendError::Disconnected { reason } => assert!(reason.contains("not connected"), "{err}"),
         other => panic!("{other}"),
@@ -163,10 +160,7 @@ async fn tcp_listen_waits_for_the_next_peer() {
         "{err}"
     );
     // While no peer is connected, sends fail at once.
-    let err = sender
-        .send(MAV, &Command::<&[u8]>::Time(1))
-        .await
-        .unwrap_err();
+    let err = sender.send(MAV, &Command::time(1)).await.unwrap_err();
     assert!(matches!(err, SendError::Disconnected { .. }), "{err}");
 
     // The next peer is served.
@@ -202,10 +196,7 @@ async fn without_reconnection_the_link_closes_and_the_stream_ends() {
     }
     let end = tokio::time::timeout(GUARD, futures::StreamExt::next(&mut stream)).await;
     assert!(end.unwrap().is_none(), "the stream ends after Closed");
-    let err = sender
-        .send(MAV, &Command::<&[u8]>::Time(1))
-        .await
-        .unwrap_err();
+    let err = sender.send(MAV, &Command::time(1)).await.unwrap_err();
     assert_eq!(err, SendError::Closed);
 }
 
@@ -249,7 +240,7 @@ async fn serial_link_reports_the_device_going_away() {
 
     let send = tokio::spawn({
         let sender = sender.clone();
-        async move { sender.send(MAV, &Command::<&[u8]>::Time(8)).await }
+        async move { sender.send(MAV, &Command::time(8)).await }
     });
     fake.next_tx().await;
     drop(fake); // "unplugged"
@@ -260,10 +251,7 @@ async fn serial_link_reports_the_device_going_away() {
     let err = send.await.unwrap().unwrap_err();
     assert!(matches!(err, SendError::Disconnected { .. }), "{err}");
     // While the device is gone, the link keeps retrying and requests fail at once.
-    let err = sender
-        .send(MAV, &Command::<&[u8]>::Time(9))
-        .await
-        .unwrap_err();
+    let err = sender.send(MAV, &Command::time(9)).await.unwrap_err();
     match &err {
         SendError::Disconnected { reason } => assert!(reason.contains("reconnecting"), "{err}"),
         other => panic!("{other}"),
@@ -297,10 +285,7 @@ async fn a_closed_serial_link_frees_its_port_at_once() {
         }
         let end = tokio::time::timeout(GUARD, futures::StreamExt::next(&mut stream)).await;
         assert!(end.expect("the stream did not end").is_none());
-        let err = sender
-            .send(MAV, &Command::<&[u8]>::Time(round))
-            .await
-            .unwrap_err();
+        let err = sender.send(MAV, &Command::time(round)).await.unwrap_err();
         assert!(matches!(err, SendError::Closed), "{err}");
     }
 }
@@ -440,10 +425,7 @@ async fn a_send_during_an_outage_says_why_the_link_went_down() {
         next_link_event(&mut stream).await,
         LinkEvent::Disconnected { .. }
     ));
-    let err = sender
-        .send(MAV, &Command::<&[u8]>::Time(1))
-        .await
-        .unwrap_err();
+    let err = sender.send(MAV, &Command::time(1)).await.unwrap_err();
     assert!(matches!(err, SendError::Disconnected { .. }), "{err}");
     let message = err.to_string();
     assert!(

@@ -284,7 +284,7 @@ async fn concurrent_sends_get_their_own_status_and_failures_are_typed() {
     for i in 0..N {
         let sender = sender.clone();
         tasks.push(tokio::spawn(async move {
-            sender.send(MAV, &Command::<&[u8]>::Time(i)).await
+            sender.send(MAV, &Command::time(i)).await
         }));
     }
     // Collect every request, then answer in reverse order; every third fails.
@@ -349,11 +349,9 @@ async fn frame_ids_are_reused_and_no_send_is_lost_when_statuses_never_come() {
             .map(|k| {
                 let sender = sender.clone();
                 let value = batch * BATCH + k;
-                tokio::spawn(async move {
-                    sender
-                        .send_with(MAV, &Command::<&[u8]>::Time(value), short)
-                        .await
-                })
+                tokio::spawn(
+                    async move { sender.send_with(MAV, &Command::time(value), short).await },
+                )
             })
             .collect();
         let mut unanswered = HashSet::new();

@@ -361,7 +361,7 @@ async fn unknown_mav_gets_address_not_found() {
         .sender
         .send(
             Address64(0x0013_A200_0000_0001),
-            &Command::<&[u8]>::StatusRequest(StatusRequest::Time),
+            &Command::status_request(StatusRequest::Time),
         )
         .await
         .unwrap_err();
