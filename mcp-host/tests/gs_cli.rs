@@ -511,3 +511,25 @@ fn a_cut_off_recording_is_summed_up_to_the_cut_then_an_error() {
     assert_eq!(String::from_utf8_lossy(&output.stdout).lines().count(), 2);
     std::fs::remove_file(&path).unwrap();
 }
+
+#[test]
+fn monitor_keeps_an_existing_recording() {
+    let dir = tempdir();
+    let file = dir.join("flight.mcprec");
+    std::fs::write(&file, b"yesterday's flight").unwrap();
+    let path = file.to_str().unwrap();
+    let missing = "serial:/dev/mcp-gs-test-no-such-device";
+    // Without --force: refused before the link is opened.
+    let output = run(&["monitor", "--link", missing, "--record", path]);
+    assert_eq!(output.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("exists") && stderr.contains("--force"),
+        "{stderr}"
+    );
+    // With --force, a link that cannot be opened still leaves the file alone.
+    let output = run(&["monitor", "--link", missing, "--record", path, "--force"]);
+    assert_eq!(output.status.code(), Some(3));
+    assert_eq!(std::fs::read(&file).unwrap(), b"yesterday's flight");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -2,7 +2,7 @@
 
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::SystemTime;
 
 use clap::Args;
@@ -22,9 +22,13 @@ pub(crate) struct MonitorArgs {
     /// Output format.
     #[arg(long, value_enum, default_value_t = Format::Text)]
     format: Format,
-    /// Also record every received frame to FILE (see `decode` and `replay`).
+    /// Also record every received frame to FILE (see `decode` and `replay`). An
+    /// existing FILE is kept unless `--force` is given.
     #[arg(long, value_name = "FILE")]
     record: Option<PathBuf>,
+    /// Overwrite the `--record` file if it exists.
+    #[arg(long, requires = "record")]
+    force: bool,
     /// Stop after this many events (default: run until the link closes or Ctrl-C).
     #[arg(long, value_name = "N")]
     count: Option<u64>,
@@ -35,18 +39,18 @@ const MODE_HINT_ERRORS: u64 = 5;
 
 /// Runs `monitor`.
 pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
-    let mut recorder = match &args.record {
-        Some(path) => {
-            let file = File::create(path)
-                .map_err(|e| Failure::input(format!("cannot create {}: {e}", path.display())))?;
-            Some(
-                RecordWriter::new(BufWriter::new(file))
-                    .map_err(|e| Failure::input(format!("cannot write {}: {e}", path.display())))?,
-            )
+    // A recording is never lost to a mistyped link: refuse to overwrite it before the
+    // link is opened, and create the file only once the link is up.
+    if let Some(path) = &args.record {
+        if !args.force && path.exists() {
+            return Err(exists(path));
         }
+    }
+    let (mut stream, sender) = args.link.open(true).await?;
+    let mut recorder = match &args.record {
+        Some(path) => Some(create_recording(path, args.force)?),
         None => None,
     };
-    let (mut stream, sender) = args.link.open(true).await?;
     if let Some(path) = &stream.info().pty_path {
         eprintln!(
             "mcp-gs: pseudo-terminal for the radio side: {}",
@@ -119,6 +123,29 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
         }
     }
     Ok(())
+}
+
+/// The recording at `path`, created (truncated with `force`, else it must not exist).
+fn create_recording(path: &Path, force: bool) -> Result<RecordWriter<BufWriter<File>>, Failure> {
+    let file = if force {
+        File::create(path)
+    } else {
+        File::create_new(path)
+    };
+    let file = file.map_err(|e| match e.kind() {
+        io::ErrorKind::AlreadyExists => exists(path),
+        _ => Failure::input(format!("cannot create {}: {e}", path.display())),
+    })?;
+    RecordWriter::new(BufWriter::new(file))
+        .map_err(|e| Failure::input(format!("cannot write {}: {e}", path.display())))
+}
+
+/// The failure of a `--record` file that exists.
+fn exists(path: &Path) -> Failure {
+    Failure::input(format!(
+        "{} exists: choose another file, or add --force to overwrite it",
+        path.display()
+    ))
 }
 
 /// The frame data of an event, for the recording: received packets as the frame they
