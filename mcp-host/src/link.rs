@@ -62,7 +62,7 @@ pub enum LinkParseError {
     )]
     Empty,
     /// The part before the first `:` is not a known link kind.
-    #[error("unknown link kind {0:?} (expected serial, tcp, tcp-listen or pty)")]
+    #[error("unknown link kind {0:?} (expected serial, tcp, tcp-listen or pty){hint}", hint = bare_path_hint(.0))]
     UnknownKind(String),
     /// `serial:` without a device path.
     #[error("serial link without a device path (expected serial:PATH[:BAUD])")]
@@ -82,6 +82,19 @@ pub enum LinkParseError {
     /// `pty` followed by anything.
     #[error("unexpected text after pty: {0:?}")]
     TrailingPty(String),
+}
+
+/// For a link string that is a bare device path: the `serial:` link meant.
+fn bare_path_hint(kind: &str) -> String {
+    let com_port = kind
+        .strip_prefix("COM")
+        .is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()));
+    let is_path = kind.starts_with('/') || com_port;
+    if is_path {
+        format!("; for a serial port, write serial:{kind}")
+    } else {
+        String::new()
+    }
 }
 
 impl FromStr for Link {
@@ -243,6 +256,7 @@ mod tests {
             ("", Empty),
             ("udp:1.2.3.4:5", UnknownKind("udp".into())),
             ("ttyUSB0", UnknownKind("ttyUSB0".into())),
+            ("/dev/ttyUSB0", UnknownKind("/dev/ttyUSB0".into())),
             ("serial", MissingPath),
             ("serial:", MissingPath),
             ("serial::9600", MissingPath),
@@ -265,6 +279,19 @@ mod tests {
             // Every error has a message that names the problem.
             assert!(!expected.to_string().is_empty());
         }
+    }
+
+    #[test]
+    fn a_bare_device_path_is_pointed_to_serial() {
+        for (text, hint) in [
+            ("/dev/ttyUSB0", "serial:/dev/ttyUSB0"),
+            ("COM3", "serial:COM3"),
+        ] {
+            let message = text.parse::<Link>().unwrap_err().to_string();
+            assert!(message.contains(&format!("write {hint}")), "{message}");
+        }
+        let message = "udp:1.2.3.4:5".parse::<Link>().unwrap_err().to_string();
+        assert!(!message.contains("write serial:"), "{message}");
     }
 
     #[test]

@@ -368,6 +368,23 @@ fn missing_device_exits_3() {
         stderr.contains("/dev/mcp-gs-test-no-such-device"),
         "{stderr}"
     );
+    assert!(stderr.contains("`mcp-gs ports` lists"), "{stderr}");
+    // Nothing listening on a TCP port: said so.
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let link = format!("tcp:{}", listener.local_addr().unwrap());
+    drop(listener);
+    let output = run(&[
+        "send",
+        "--link",
+        &link,
+        "--to",
+        "0013A20040B599B9",
+        "landing",
+        "on",
+    ]);
+    assert_eq!(output.status.code(), Some(3));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("nothing listens there"), "{stderr}");
 }
 
 #[test]

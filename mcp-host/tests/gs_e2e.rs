@@ -429,3 +429,33 @@ fn a_recording_keeps_each_frame_as_it_came() {
     assert_eq!(recorded[0][0], 0x91);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_port_another_program_holds_is_named_as_busy() {
+    let sim = Sim::start("pty");
+    let mut monitor = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args(["monitor", "--link", &sim.link])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("start mcp-gs monitor");
+    let stdout = monitor.stdout.take().expect("stdout");
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+            let _ = tx.send(line);
+        }
+    });
+    // Its first line is printed once it has the port.
+    let first = rx.recv_timeout(GUARD).expect("monitor prints a line");
+    assert!(first.contains("connected"), "{first}");
+    let out = sim.gs(&["send", "--to", MAV, "landing", "on"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(3), "{stderr}");
+    assert!(
+        stderr.contains("another program has the port open"),
+        "{stderr}"
+    );
+    monitor.kill().unwrap();
+    monitor.wait().unwrap();
+}

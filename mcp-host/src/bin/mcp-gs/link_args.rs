@@ -5,7 +5,8 @@ use std::time::Duration;
 use clap::Args;
 use futures::StreamExt;
 use mcp_host::{
-    CommandSender, ConnectError, Link, LinkOptions, PacketStream, ReconnectPolicy, SendError,
+    CommandSender, ConnectError, Link, LinkError, LinkOptions, PacketStream, ReconnectPolicy,
+    SendError,
 };
 use xbee_api::{Address64, ApiMode, AtStatus, Frame};
 
@@ -204,7 +205,38 @@ pub(crate) async fn check_mode(sender: &CommandSender, configured: ApiMode) {
 pub(crate) fn connect_failure(link: &Link, error: ConnectError) -> Failure {
     match error {
         ConnectError::Options(what) => Failure::input(format!("invalid link options: {what}")),
-        ConnectError::Link(e) => Failure::link(format!("cannot open {link}: {e}")),
+        ConnectError::Link(e) => {
+            let hint = link_hint(&e).map(|h| format!(" ({h})")).unwrap_or_default();
+            Failure::link(format!("cannot open {link}: {e}{hint}"))
+        }
+    }
+}
+
+/// What an operator can do about a link that cannot be opened, where the cause is
+/// a common one.
+fn link_hint(error: &LinkError) -> Option<&'static str> {
+    use std::io::ErrorKind as Io;
+    use tokio_serial::ErrorKind as Serial;
+    match error {
+        LinkError::Serial { source, .. } => match source.kind {
+            Serial::Io(Io::NotFound) => {
+                Some("no such device: `mcp-gs ports` lists the serial ports present")
+            }
+            Serial::Io(Io::PermissionDenied) => Some(
+                "this user may not open the device: on Linux, add the user to the group that \
+                 owns it (often dialout: `sudo usermod -aG dialout $USER`, then log in again)",
+            ),
+            // The port is open for exclusive use elsewhere (TIOCEXCL or flock).
+            Serial::NoDevice => Some(
+                "another program has the port open, perhaps another mcp-gs: one program at a \
+                 time can use a serial port",
+            ),
+            _ => None,
+        },
+        LinkError::Connect { source, .. } if source.kind() == Io::ConnectionRefused => {
+            Some("nothing listens there: is the radio bridge or `mcp-gs sim` running?")
+        }
+        _ => None,
     }
 }
 
