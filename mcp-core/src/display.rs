@@ -28,7 +28,10 @@ impl fmt::Display for Waypoint {
 impl<B: AsRef<[u8]>> fmt::Display for Waypoints<B> {
     /// `N waypoints` followed by each waypoint.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{} waypoints", self.len())?;
+        match self.len() {
+            1 => f.write_str("1 waypoint")?,
+            n => write!(f, "{n} waypoints")?,
+        }
         self.iter().try_for_each(|w| write!(f, " {w}"))
     }
 }
@@ -142,7 +145,7 @@ mod tests {
         );
         assert_eq!(
             show(b"c\x04\x01\x01\x00\x00\x00\x00\x00\x80\x3f\x00\x00\x00\x40\x00\x00\x40\x40"),
-            "command trajectory_set 1 waypoints (time=1 elevator=1 aileron=2 altitude=3)"
+            "command trajectory_set 1 waypoint (time=1 elevator=1 aileron=2 altitude=3)"
         );
         assert_eq!(
             show(b"c\x07\x00\x00\xc0\x3f\x00\x00\x10\xc0"),
