@@ -260,6 +260,12 @@ fn encode_every_command() {
             "63 01 FF 19",
         ),
         (&["message", "Hi"], "6D 48 69"),
+        // The words of `send`'s commands name status requests too; on/off in any case.
+        (&["status", "controller"], "63 03 FF"),
+        (&["status", "trajectory"], "63 04 FF"),
+        (&["status", "slave-set"], "63 05 FF"),
+        (&["status", "telemetry", "altitude"], "63 01 FF 01"),
+        (&["landing", "ON"], "63 02 01"),
     ];
     for (args, payload) in cases {
         let mut argv = vec!["encode", "--to", to, "--frame-id", "0"];
@@ -272,6 +278,23 @@ fn encode_every_command() {
         let len = usize::from_str_radix(&(bytes[1].to_string() + bytes[2]), 16).unwrap();
         assert_eq!(len, bytes.len() - 4, "{args:?}: length field");
     }
+    // Frame id, options and radius take 0x-hex as every byte on the command line does.
+    let out = stdout(&run(&[
+        "encode",
+        "--to",
+        to,
+        "--frame-id",
+        "0x11",
+        "--options",
+        "0x01",
+        "--radius",
+        "0x02",
+        "landing",
+        "on",
+    ]));
+    let bytes: Vec<&str> = out.split_whitespace().collect();
+    assert_eq!(bytes[4], "11", "{out}");
+    assert_eq!(bytes[15..17], ["02", "01"], "{out}");
 }
 
 #[test]
@@ -332,6 +355,49 @@ fn bad_arguments_exit_2_with_one_line() {
             "on",
         ],
         &["decode", "--api-mode", "3", "-"],
+        // No position a MAV can fly to (`raw` sends any bytes).
+        &[
+            "encode",
+            "--to",
+            "0013a20040b599b9",
+            "position-set",
+            "nan",
+            "0",
+        ],
+        &[
+            "encode",
+            "--to",
+            "0013a20040b599b9",
+            "position-set",
+            "0",
+            "inf",
+        ],
+        &[
+            "encode",
+            "--to",
+            "0013a20040b599b9",
+            "trajectory",
+            "--waypoint",
+            "1,0,-inf,2",
+        ],
+        &[
+            "encode",
+            "--to",
+            "0013a20040b599b9",
+            "--frame-id",
+            "0x100",
+            "landing",
+            "on",
+        ],
+        &["monitor", "--link", "tcp:127.0.0.1:9", "--count", "0"],
+        &[
+            "status",
+            "--link",
+            "tcp:127.0.0.1:9",
+            "--to",
+            "0013a20040b599b9",
+            "position_set",
+        ],
         &[
             "send",
             "--link",

@@ -56,10 +56,7 @@ fn parse_waypoint(s: &str) -> Result<Waypoint, String> {
             parts.len()
         ));
     };
-    let float = |name: &str, v: &str| {
-        v.parse::<f32>()
-            .map_err(|_| format!("{name} `{v}` is not a number"))
-    };
+    let float = |name: &str, v: &str| parse_finite(v).map_err(|e| format!("{name} {e}"));
     Ok(Waypoint {
         time: time
             .parse()
@@ -69,6 +66,53 @@ fn parse_waypoint(s: &str) -> Result<Waypoint, String> {
         altitude: float("altitude", altitude)?,
     })
 }
+
+/// A finite `f32`: NaN and infinities are no position a MAV can fly to (`raw` sends any
+/// bytes, for testing firmware).
+pub(crate) fn parse_finite(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        Ok(_) => Err(format!(
+            "`{s}` is not a finite number (to send any bytes, use `raw`)"
+        )),
+        Err(_) => Err(format!("`{s}` is not a number")),
+    }
+}
+
+/// A byte: decimal or `0x` hex.
+pub(crate) fn parse_byte(s: &str) -> Result<u8, String> {
+    let t = s.trim();
+    match t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) {
+        Some(hex) => u8::from_str_radix(hex, 16),
+        None => t.parse(),
+    }
+    .map_err(|_| format!("expected a byte, 0 to 255 (decimal or 0x-hex), got `{s}`"))
+}
+
+/// The KIND of a status request: a command type with a status request, by its name,
+/// by the word `send` uses for the command, or by its number.
+pub(crate) fn parse_status_kind(s: &str) -> Result<CommandType, String> {
+    let kind = match s.trim().to_ascii_lowercase().replace('-', "_").as_str() {
+        "telemetry" => CommandType::TelemetryToCoordinator,
+        "controller" => CommandType::Controllers,
+        "trajectory" => CommandType::TrajectorySet,
+        "slave_set" => CommandType::PositionSlaveSet,
+        other => other
+            .parse::<CommandType>()
+            .map_err(|_| format!("not a status request kind: {STATUS_KINDS}"))?,
+    };
+    if kind == CommandType::PositionSet {
+        return Err(format!(
+            "{kind} has no status request (the position is in the telemetry): {STATUS_KINDS}"
+        ));
+    }
+    Ok(kind)
+}
+
+/// The kinds [`parse_status_kind`] takes, for its errors.
+const STATUS_KINDS: &str = "give telemetry_to_coordinator (or telemetry), landing, \
+    controllers (controller), trajectory_set (trajectory), position_slave_set (slave-set), \
+    time, or a command type number";
 
 fn parse_slot(s: &str) -> Result<Slot, String> {
     s.parse::<u8>()
@@ -84,6 +128,7 @@ pub(crate) enum CommandArgs {
     /// (e.g. `telemetry on altitude`, `telemetry off 0x11`).
     Telemetry {
         /// on or off.
+        #[arg(ignore_case = true)]
         state: OnOff,
         /// Telemetry id: a name (e.g. `estimated_altitude`) or a number (0-255).
         id: TelemetryId,
@@ -91,6 +136,7 @@ pub(crate) enum CommandArgs {
     /// Landing: turn autonomous landing on or off.
     Landing {
         /// on or off.
+        #[arg(ignore_case = true)]
         state: OnOff,
     },
     /// Controllers: switch the active controller (`manual`, `altitude`, `mpc` or a number).
@@ -122,14 +168,18 @@ pub(crate) enum CommandArgs {
     #[command(allow_negative_numbers = true)]
     PositionSet {
         /// New elevator position.
+        #[arg(value_parser = parse_finite)]
         elevator: f32,
         /// New aileron position.
+        #[arg(value_parser = parse_finite)]
         aileron: f32,
     },
     /// A status request (the MAV answers with the matching report).
     Status {
-        /// What to ask: `telemetry_to_coordinator`, `landing`, `controllers`,
-        /// `trajectory_set`, `position_slave_set`, `time`, or a number.
+        /// What to ask: `telemetry_to_coordinator` (or `telemetry`), `landing`,
+        /// `controllers` (`controller`), `trajectory_set` (`trajectory`),
+        /// `position_slave_set` (`slave-set`), `time`, or a number.
+        #[arg(value_parser = parse_status_kind)]
         kind: CommandType,
         /// For `telemetry_to_coordinator`: the telemetry id.
         id: Option<TelemetryId>,

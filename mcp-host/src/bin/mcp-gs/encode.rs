@@ -16,17 +16,17 @@ pub(crate) struct EncodeArgs {
     /// Destination 16-bit address (FFFE when unknown).
     #[arg(long, default_value = "fffe")]
     to16: Address16,
-    /// Frame id (0 asks the radio for no transmit status).
-    #[arg(long, default_value_t = 1)]
+    /// Frame id (0 asks the radio for no transmit status; decimal or 0x-hex).
+    #[arg(long, default_value = "1", value_parser = crate::command::parse_byte)]
     frame_id: u8,
     /// API mode (2 escapes special bytes).
     #[arg(long, value_name = "1|2", default_value = "1")]
     api_mode: ApiModeArg,
-    /// Transmit options byte.
-    #[arg(long, default_value_t = 0)]
+    /// Transmit options byte (decimal or 0x-hex, e.g. 0x01 disables retries).
+    #[arg(long, default_value = "0", value_parser = crate::command::parse_byte)]
     options: u8,
-    /// Broadcast radius (0: the maximum).
-    #[arg(long, default_value_t = 0)]
+    /// Broadcast radius (0: the maximum; decimal or 0x-hex).
+    #[arg(long, default_value = "0", value_parser = crate::command::parse_byte)]
     radius: u8,
     /// The command.
     #[command(subcommand)]

@@ -29,8 +29,9 @@ pub(crate) struct MonitorArgs {
     /// Overwrite the `--record` file if it exists.
     #[arg(long, requires = "record")]
     force: bool,
-    /// Stop after this many events (default: run until the link closes or Ctrl-C).
-    #[arg(long, value_name = "N")]
+    /// Stop after this many events, 1 or more (default: run until the link closes or
+    /// Ctrl-C).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
     count: Option<u64>,
 }
 

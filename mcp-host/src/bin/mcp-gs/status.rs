@@ -20,8 +20,10 @@ pub(crate) struct StatusArgs {
     /// Output format.
     #[arg(long, value_enum, default_value_t = Format::Text)]
     format: Format,
-    /// What to ask: telemetry_to_coordinator, landing, controllers, trajectory_set,
-    /// position_slave_set or time (or the type number).
+    /// What to ask: telemetry_to_coordinator (or telemetry), landing, controllers
+    /// (controller), trajectory_set (trajectory), position_slave_set (slave-set) or time
+    /// (or the type number).
+    #[arg(value_parser = crate::command::parse_status_kind)]
     kind: CommandType,
     /// For telemetry_to_coordinator: the telemetry id (a name or a number).
     id: Option<TelemetryId>,
