@@ -459,3 +459,55 @@ fn a_port_another_program_holds_is_named_as_busy() {
     monitor.kill().unwrap();
     monitor.wait().unwrap();
 }
+
+#[test]
+fn send_trajectory_checks_the_mavs_report() {
+    // The deployed MAV's 60-byte receive buffer takes two waypoints, not three.
+    let sim = Sim::start_with(&["--rx-buffer", "60"], "tcp-listen:127.0.0.1:0");
+    let waypoint = |i: u32| format!("{},0.5,-0.25,{i}", 1_763_683_300 + i);
+    let (w1, w2, w3) = (waypoint(1), waypoint(2), waypoint(3));
+    let two = [
+        "send",
+        "--to",
+        MAV,
+        "trajectory",
+        "--waypoint",
+        &w1,
+        "--waypoint",
+        &w2,
+    ];
+    let out = succeeded(sim.gs(&two), &two);
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    assert!(
+        stdout.contains("the MAV reports the trajectory as sent"),
+        "{stdout}"
+    );
+    assert_eq!(String::from_utf8_lossy(&out.stderr), "");
+
+    let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args(["send", "--link", &sim.link, "--timeout", "1", "--to", MAV])
+        .args([
+            "trajectory",
+            "--waypoint",
+            &w1,
+            "--waypoint",
+            &w2,
+            "--waypoint",
+            &w3,
+        ])
+        .output()
+        .expect("run mcp-gs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("drops frames over 60 bytes"), "{stderr}");
+    assert!(stderr.contains("no trajectory report"), "{stderr}");
+    assert_eq!(out.status.code(), Some(4), "{stderr}");
+    // The MAV kept the two waypoints it took before.
+    let report = sim.status(&["trajectory"]);
+    assert_eq!(report["waypoints"].as_array().unwrap().len(), 2, "{report}");
+
+    // A status request sent with `send` points to `status`, which prints the report.
+    let args = ["send", "--to", MAV, "status", "landing"];
+    let out = succeeded(sim.gs(&args), &args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("`mcp-gs status` waits for it"), "{stderr}");
+}

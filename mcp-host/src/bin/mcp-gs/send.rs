@@ -1,8 +1,10 @@
 //! `mcp-gs send`: send one command and print the delivery status.
 
 use clap::Args;
-use mcp_host::{DeliveryReport, FrameId, SendOptions};
-use xbee_api::Address64;
+use futures::StreamExt;
+use mcp_core::{Packet, Report, Waypoint};
+use mcp_host::{DeliveryReport, Event, FrameId, PacketStream, SendOptions};
+use xbee_api::{Address64, ReceivePacketRepr};
 
 use crate::Failure;
 use crate::command::CommandArgs;
@@ -25,10 +27,25 @@ pub(crate) struct SendArgs {
     command: CommandArgs,
 }
 
+/// The receive buffer of the deployed MAV firmware, in bytes of API frame: it drops
+/// longer frames.
+const DEPLOYED_MAV_FRAME: usize = 60;
+
 /// Runs `send`.
 pub(crate) async fn run(args: SendArgs) -> Result<(), Failure> {
     let payload = args.command.payload().map_err(Failure::input)?;
-    let (_stream, sender) = args.link.open(false).await?;
+    // The MAV receives the payload in a Receive Packet: 4 framing bytes and 12 of header.
+    let frame = payload.len() + 4 + ReceivePacketRepr::HEADER_LEN;
+    if frame > DEPLOYED_MAV_FRAME {
+        eprintln!(
+            "mcp-gs: warning: this {}-byte packet reaches the MAV in a {frame}-byte frame; the \
+             deployed MAV firmware drops frames over {DEPLOYED_MAV_FRAME} bytes (packets over \
+             {} bytes: a trajectory of more than 2 waypoints)",
+            payload.len(),
+            DEPLOYED_MAV_FRAME - 4 - ReceivePacketRepr::HEADER_LEN,
+        );
+    }
+    let (mut stream, sender) = args.link.open(false).await?;
     let options = SendOptions {
         timeout: Some(args.link.timeout()),
         frame_id: if args.no_status {
@@ -54,5 +71,56 @@ pub(crate) async fn run(args: SendArgs) -> Result<(), Failure> {
         ),
         DeliveryReport::Written => out!("written, no status asked (frame id 0): {what}"),
     }
+    match &args.command {
+        // The MAV answers a trajectory set at once with the trajectory it took.
+        CommandArgs::Trajectory { waypoints } if args.to != Address64::BROADCAST => {
+            let timeout = args.link.timeout();
+            let report = tokio::time::timeout(timeout, trajectory_report(&mut stream, args.to))
+                .await
+                .ok()
+                .flatten()
+                .ok_or_else(|| {
+                    Failure::new(
+                        Failure::TIMEOUT,
+                        format!(
+                            "no trajectory report from {} within {timeout:?}: the MAV did not \
+                             take the trajectory",
+                            args.to
+                        ),
+                    )
+                })?;
+            if report != *waypoints {
+                return Err(Failure::new(
+                    Failure::DELIVERY,
+                    format!(
+                        "the MAV reports a trajectory of {} waypoint(s), not the {} sent",
+                        report.len(),
+                        waypoints.len()
+                    ),
+                ));
+            }
+            out!("the MAV reports the trajectory as sent");
+        }
+        CommandArgs::Status { .. } => eprintln!(
+            "mcp-gs: the MAV answers with a report on the link; `mcp-gs status` waits for it \
+             and prints it"
+        ),
+        _ => {}
+    }
     Ok(())
+}
+
+/// The waypoints of the next trajectory report from `from` on the stream; `None` if
+/// the stream ends first.
+async fn trajectory_report(stream: &mut PacketStream, from: Address64) -> Option<Vec<Waypoint>> {
+    while let Some(event) = stream.next().await {
+        if let Event::Packet(rx) = event {
+            if let (true, Packet::Report(Report::TrajectorySet(w))) =
+                (rx.origin.src64 == from, &rx.packet)
+            {
+                return Some(w.iter().collect());
+            }
+        }
+    }
+    None
 }
