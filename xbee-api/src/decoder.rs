@@ -126,8 +126,8 @@ enum State {
 /// # Memory
 ///
 /// `size_of::<Decoder<N>>()` is `N` rounded up to a multiple of the pointer size, plus
-/// the cursors and counters: 52 bytes on a 32-bit target, 72 on a 64-bit one (so
-/// `Decoder<100>` takes 152 bytes on a Cortex-M, 176 on x86-64). Mode 2 holds frame
+/// the cursors and counters: 56 bytes on a 32-bit target, 80 on a 64-bit one (so
+/// `Decoder<100>` takes 156 bytes on a Cortex-M, 184 on x86-64). Mode 2 holds frame
 /// data of up to `N` bytes; mode 1 holds the whole frame, so frame data of up to
 /// `N - 4` bytes ([`capacity`](Self::capacity)).
 #[derive(Debug, Clone)]
@@ -145,6 +145,11 @@ pub struct Decoder<const N: usize = DEFAULT_CAPACITY> {
     fill_to: usize,
     /// Length field of the current candidate.
     len: usize,
+    /// How far the largest length field taken ([`capacity`](Self::capacity)) is below
+    /// what the buffer holds: 0 unless set by [`with_max_len`](Self::with_max_len), so
+    /// that a new decoder is all zeros but for its mode (a `static` one needs no
+    /// initialiser in flash).
+    cut: usize,
     state: State,
     /// Mode 2: the previous byte was 0x7D.
     escaped: bool,
@@ -175,6 +180,7 @@ impl<const N: usize> Decoder<N> {
             end: 0,
             fill_to: 0,
             len: 0,
+            cut: 0,
             state: State::Hunt,
             escaped: false,
             mode,
@@ -195,13 +201,50 @@ impl<const N: usize> Decoder<N> {
         self.mode
     }
 
-    /// Largest frame data length (the length field) this decoder accepts: `N` in mode 2,
-    /// `N - 4` in mode 1. Longer frames are [`DecodeError::Oversize`].
-    pub const fn capacity(&self) -> usize {
-        match self.mode {
-            ApiMode::Unescaped => N.saturating_sub(4),
+    /// A decoder for `mode` that takes frame data of at most `max_len` bytes (the
+    /// length field), fewer than its buffer could hold: longer frames are
+    /// [`DecodeError::Oversize`] as soon as their length field is read, and in mode 1
+    /// they are scanned again from the byte after their start delimiter like any other
+    /// failed candidate, so no frame inside one is lost. A `max_len` above what the
+    /// buffer holds is the buffer's limit.
+    ///
+    /// ```
+    /// use xbee_api::{ApiMode, DecodeError, Decoder};
+    /// // A 12-byte frame (valid, but over the limit) holding a 2-byte one.
+    /// let stream = [0x7E, 0x00, 0x0C, 0x23, 0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F,
+    ///               0x00, 0x00, 0x00, 0x00, 0x00, 0x5D];
+    /// let mut decoder: Decoder = Decoder::with_max_len(ApiMode::Unescaped, 8);
+    /// assert_eq!(decoder.capacity(), 8);
+    /// let mut events = Vec::new();
+    /// decoder.decode_each(&stream, |event| events.push(event.map(|f| f.data().to_vec())));
+    /// while let Some(event) = decoder.finish() {
+    ///     events.push(event.map(|f| f.data().to_vec()));
+    /// }
+    /// assert_eq!(events[0], Err(DecodeError::Oversize { length: 12, capacity: 8 }));
+    /// assert_eq!(events[1], Ok(vec![0x8A, 0x06]));
+    /// ```
+    pub const fn with_max_len(mode: ApiMode, max_len: usize) -> Self {
+        let mut decoder = Self::new(mode);
+        let full = Self::buffer_capacity(mode);
+        if max_len < full {
+            decoder.cut = full - max_len;
+        }
+        decoder
+    }
+
+    /// The largest frame data a buffer of `N` bytes holds in `mode`.
+    const fn buffer_capacity(mode: ApiMode) -> usize {
+        match mode {
+            ApiMode::Unescaped => N - 4,
             ApiMode::Escaped => N,
         }
+    }
+
+    /// Largest frame data length (the length field) this decoder accepts: `N` in mode 2,
+    /// `N - 4` in mode 1, or less if set by [`with_max_len`](Self::with_max_len).
+    /// Longer frames are [`DecodeError::Oversize`].
+    pub const fn capacity(&self) -> usize {
+        Self::buffer_capacity(self.mode) - self.cut
     }
 
     /// Counters of frames, errors and skipped bytes so far.
@@ -458,6 +501,8 @@ impl<const N: usize> Decoder<N> {
         loop {
             // Between frames (`escaped` is only ever set inside one).
             if self.state == State::Hunt && !self.escaped {
+                // Mode 2's capacity.
+                let limit = N - self.cut;
                 while let Some((&START_DELIMITER, body)) = input.split_first() {
                     // A frame is not whole in fewer bytes than its length field asks for
                     // (read raw: an escape there only makes the frame longer, but for
@@ -467,7 +512,7 @@ impl<const N: usize> Decoder<N> {
                     {
                         break;
                     }
-                    let Some((after, outcome)) = self.whole2(body) else {
+                    let Some((after, outcome)) = self.whole2(body, limit) else {
                         break;
                     };
                     input = after;
@@ -482,8 +527,7 @@ impl<const N: usize> Decoder<N> {
                         input = body;
                         if let Some((&[hi, lo], data)) = body.split_first_chunk::<2>() {
                             let len = usize::from(u16::from_be_bytes([hi, lo]));
-                            // `N`: mode 2's capacity.
-                            if is_plain(hi) && is_plain(lo) && len != 0 && len <= N {
+                            if is_plain(hi) && is_plain(lo) && len != 0 && len <= limit {
                                 self.len = len;
                                 self.state = State::Data;
                                 self.fill_to = len;
@@ -877,7 +921,7 @@ impl<const N: usize> Decoder<N> {
         } else {
             DecodeError::Oversize {
                 length: self.len as u16,
-                capacity: N,
+                capacity: N - self.cut,
             }
         };
         if raw == START_DELIMITER {
@@ -892,9 +936,10 @@ impl<const N: usize> Decoder<N> {
     /// the rest of `body` after the frame and the outcome. `None`, with nothing changed
     /// but the buffer's content, if the frame is not whole in `body` or has anything
     /// but a bad checksum wrong: [`step2`](Self::step2) then reads it byte by byte.
-    /// The state is left as it was: the caller goes back to hunting.
+    /// The state is left as it was: the caller goes back to hunting. `limit` is
+    /// [`capacity`](Self::capacity), read once by a caller that loops.
     #[inline(always)]
-    fn whole2<'a>(&mut self, body: &'a [u8]) -> Option<(&'a [u8], Outcome)> {
+    fn whole2<'a>(&mut self, body: &'a [u8], limit: usize) -> Option<(&'a [u8], Outcome)> {
         // The length bytes, usually both plain: one test for the two.
         let (len, header) = match body.first_chunk::<2>() {
             Some(&[hi, lo]) if is_plain(hi) && is_plain(lo) => {
@@ -903,8 +948,8 @@ impl<const N: usize> Decoder<N> {
             _ => escaped_length(body)?,
         };
         let rest = body.get(header..)?;
-        // Mode 2 takes frame data of up to `N` bytes (its `capacity()`).
-        if len == 0 || len > N || rest.len() <= len {
+        // Mode 2 takes frame data of up to `N` bytes (its `capacity()`, or less if set).
+        if len == 0 || len > limit || rest.len() <= len {
             return None;
         }
         let (mut i, sum) = unescape(rest, &mut self.buf, len)?;
@@ -927,7 +972,7 @@ impl<const N: usize> Decoder<N> {
         let mut try_whole = true;
         if self.state == State::Hunt {
             if let Some((&START_DELIMITER, body)) = input.split_first() {
-                if let Some((after, outcome)) = self.whole2(body) {
+                if let Some((after, outcome)) = self.whole2(body, self.capacity()) {
                     return (input.len() - after.len(), Some(outcome));
                 }
                 try_whole = false;
@@ -956,7 +1001,7 @@ impl<const N: usize> Decoder<N> {
                 // Right after a start delimiter: try the whole frame at once.
                 State::LenHi if !self.escaped && try_whole => {
                     try_whole = false;
-                    if let Some((after, outcome)) = self.whole2(rest) {
+                    if let Some((after, outcome)) = self.whole2(rest, self.capacity()) {
                         self.hunt();
                         return (input.len() - after.len(), Some(outcome));
                     }
@@ -1154,7 +1199,8 @@ impl<const N: usize> Decoder<N> {
             return None;
         };
         let len = usize::from(u16::from_be_bytes([hi, lo]));
-        if len == 0 || len > self.capacity() {
+        // Mode 1's capacity.
+        if len == 0 || len + self.cut > N - 4 {
             return None;
         }
         let data = rest.get(..len)?;

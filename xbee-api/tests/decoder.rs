@@ -264,5 +264,5 @@ fn reset_drops_partial_frame() {
 fn decoder_ram_is_buffer_plus_a_few_words() {
     let overhead = std::mem::size_of::<Decoder>() - xbee_api::DEFAULT_CAPACITY;
     println!("size_of::<Decoder>() = {}", std::mem::size_of::<Decoder>());
-    assert!(overhead <= 72, "overhead {overhead}");
+    assert!(overhead <= 80, "overhead {overhead}");
 }

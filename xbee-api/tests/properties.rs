@@ -4,10 +4,13 @@
 
 mod common;
 
-use common::{decode_bytes, decode_each_slices, decode_slices, frames};
+use common::{
+    decode_bytes, decode_bytes_with, decode_each_slices, decode_each_slices_with, decode_slices,
+    decode_slices_with, frames,
+};
 use proptest::prelude::*;
 use xbee_api::wire::{checksum, needs_escape};
-use xbee_api::{ApiMode, EncodeFrame, Frame, RawFrame, max_encoded_len};
+use xbee_api::{ApiMode, Decoder, EncodeFrame, Frame, RawFrame, max_encoded_len};
 
 const N: usize = 512;
 
@@ -383,5 +386,65 @@ proptest! {
         prop_assert_eq!(each_stats, bytes_stats);
         prop_assert_eq!(&events, &bytes);
         prop_assert_eq!(stats, bytes_stats);
+    }
+}
+
+/// Frame data around a limit of 12 to 16 bytes: plain, or a frame type byte, a whole
+/// frame on the wire (valid or not) and padding, so that a frame over the limit holds
+/// another.
+fn data_near_limit(mode: ApiMode) -> impl Strategy<Value = Vec<u8>> {
+    let byte = prop_oneof![3 => any::<u8>(), 1 => Just(0x7Du8), 1 => Just(0x7Eu8)];
+    let plain = proptest::collection::vec(byte.clone(), 1..=24);
+    let nested = (
+        proptest::collection::vec(byte.clone(), 1..=8),
+        any::<bool>(),
+        proptest::collection::vec(byte, 0..=8),
+    )
+        .prop_map(move |(inner, good, pad)| {
+            let check = checksum(&inner).wrapping_add(u8::from(!good));
+            let mut data = vec![0x23];
+            data.extend(wire(&inner, check, mode));
+            data.extend(pad);
+            data
+        });
+    prop_oneof![plain, nested]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(512))]
+
+    /// A decoder limited to fewer bytes than its buffer holds decodes exactly as a
+    /// decoder whose buffer is that small: frames over the limit are errors at their
+    /// length field and, in mode 1, are scanned again, so frames inside them come out.
+    #[test]
+    fn a_length_limit_decodes_as_a_smaller_buffer(
+        (mode, frames_data) in mode().prop_flat_map(|mode| (
+            Just(mode),
+            proptest::collection::vec((data_near_limit(mode), any::<bool>()), 1..8),
+        )),
+        garbage in proptest::collection::vec(any::<u8>(), 0..4),
+        reads in fifo_reads(),
+    ) {
+        let mut stream = Vec::new();
+        for (data, good) in &frames_data {
+            let check = checksum(data).wrapping_add(u8::from(!good));
+            stream.extend(wire(data, check, mode));
+            stream.extend_from_slice(&garbage);
+        }
+        // 16 bytes of frame data in mode 2, 12 in mode 1 (the frame's 4 other bytes).
+        let limited = || Decoder::<64>::with_max_len(mode, 16 - 4 * usize::from(mode == ApiMode::Unescaped));
+        let (expected, expected_stats) = decode_bytes::<16>(mode, &stream);
+        let (bytes, bytes_stats) = decode_bytes_with(limited(), &stream);
+        let (each, each_stats) = decode_each_slices_with(limited(), &stream, &reads);
+        let (whole, whole_stats) = decode_each_slices_with(limited(), &stream, &[1 << 20]);
+        let (events, stats) = decode_slices_with(limited(), &stream, &reads);
+        prop_assert_eq!(&bytes, &expected);
+        prop_assert_eq!(bytes_stats, expected_stats);
+        prop_assert_eq!(&each, &expected);
+        prop_assert_eq!(each_stats, expected_stats);
+        prop_assert_eq!(&whole, &expected);
+        prop_assert_eq!(whole_stats, expected_stats);
+        prop_assert_eq!(&events, &expected);
+        prop_assert_eq!(stats, expected_stats);
     }
 }

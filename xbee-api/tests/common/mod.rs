@@ -23,7 +23,15 @@ pub(crate) fn decode_slices<const N: usize>(
     stream: &[u8],
     reads: &[usize],
 ) -> (Vec<Owned>, Stats) {
-    let mut decoder: Decoder<N> = Decoder::new(mode);
+    decode_slices_with(Decoder::<N>::new(mode), stream, reads)
+}
+
+/// [`decode_slices`] with a decoder made by the caller.
+pub(crate) fn decode_slices_with<const N: usize>(
+    mut decoder: Decoder<N>,
+    stream: &[u8],
+    reads: &[usize],
+) -> (Vec<Owned>, Stats) {
     let mut out = Vec::new();
     let mut offset = 0;
     let mut r = 0;
@@ -65,7 +73,15 @@ pub(crate) fn decode_each_slices<const N: usize>(
     stream: &[u8],
     reads: &[usize],
 ) -> (Vec<Owned>, Stats) {
-    let mut decoder: Decoder<N> = Decoder::new(mode);
+    decode_each_slices_with(Decoder::<N>::new(mode), stream, reads)
+}
+
+/// [`decode_each_slices`] with a decoder made by the caller.
+pub(crate) fn decode_each_slices_with<const N: usize>(
+    mut decoder: Decoder<N>,
+    stream: &[u8],
+    reads: &[usize],
+) -> (Vec<Owned>, Stats) {
     let mut out = Vec::new();
     let to_owned = |event: Result<xbee_api::RawFrame<'_>, DecodeError>| match event {
         Ok(frame) => Owned::Frame(frame.data().to_vec()),
@@ -93,7 +109,14 @@ pub(crate) fn decode_each_slices<const N: usize>(
 
 /// Decodes `stream` one byte at a time with `push`/`poll`, then finishes.
 pub(crate) fn decode_bytes<const N: usize>(mode: ApiMode, stream: &[u8]) -> (Vec<Owned>, Stats) {
-    let mut decoder: Decoder<N> = Decoder::new(mode);
+    decode_bytes_with(Decoder::<N>::new(mode), stream)
+}
+
+/// [`decode_bytes`] with a decoder made by the caller.
+pub(crate) fn decode_bytes_with<const N: usize>(
+    mut decoder: Decoder<N>,
+    stream: &[u8],
+) -> (Vec<Owned>, Stats) {
     let mut out = Vec::new();
     let to_owned = |event: Result<xbee_api::RawFrame<'_>, DecodeError>| match event {
         Ok(frame) => Owned::Frame(frame.data().to_vec()),
