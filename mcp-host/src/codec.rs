@@ -54,7 +54,6 @@ pub enum CodecItem {
 pub struct XBeeCodec {
     decoder: Box<xbee_api::Decoder>,
     mode: ApiMode,
-    max_frame_len: usize,
     counters: Arc<Counters>,
     seen: xbee_api::Stats,
 }
@@ -71,9 +70,10 @@ impl XBeeCodec {
         counters: Arc<Counters>,
     ) -> Self {
         XBeeCodec {
-            decoder: Box::new(xbee_api::Decoder::new(mode)),
+            // The limit applies at the length field, so that in mode 1 a frame over it is
+            // scanned again like any failed candidate and no frame inside it is lost.
+            decoder: Box::new(xbee_api::Decoder::with_max_len(mode, max_frame_len)),
             mode,
-            max_frame_len,
             counters,
             seen: xbee_api::Stats::default(),
         }
@@ -111,42 +111,23 @@ impl XBeeCodec {
     }
 
     /// Updates the counters for `item` and logs it.
-    fn account(&mut self, item: Converted) -> Option<CodecItem> {
+    fn account(&mut self, item: Option<CodecItem>) -> Option<CodecItem> {
         self.sync_counters();
-        let (item, over_limit) = item?;
-        if over_limit {
-            // The decoder counted it as a good frame.
-            self.counters
-                .frames
-                .fetch_sub(1, std::sync::atomic::Ordering::Relaxed);
-            add(&self.counters.oversize, 1);
-        }
-        if let CodecItem::Error(error) = &item {
+        if let Some(CodecItem::Error(error)) = &item {
             tracing::debug!(%error, "frame dropped");
         }
-        Some(item)
+        item
     }
 }
 
-/// An owned item, and whether it is a frame beyond the configured limit.
-type Converted = Option<(CodecItem, bool)>;
-
-fn convert(event: Option<xbee_api::Event<'_>>, max: usize) -> Converted {
-    let item = match event? {
-        Ok(frame) if frame.len() > max => {
-            let error = DecodeError::Oversize {
-                length: u16::try_from(frame.len()).unwrap_or(u16::MAX),
-                capacity: max,
-            };
-            return Some((CodecItem::Error(error), true));
-        }
+fn convert(event: Option<xbee_api::Event<'_>>) -> Option<CodecItem> {
+    Some(match event? {
         Ok(frame) => match OwnedFrame::new(Bytes::copy_from_slice(frame.data())) {
             Some(frame) => CodecItem::Frame(frame),
             None => CodecItem::Error(DecodeError::EmptyFrame),
         },
         Err(error) => CodecItem::Error(error),
-    };
-    Some((item, false))
+    })
 }
 
 impl Decoder for XBeeCodec {
@@ -155,7 +136,7 @@ impl Decoder for XBeeCodec {
 
     fn decode(&mut self, src: &mut BytesMut) -> Result<Option<CodecItem>, std::io::Error> {
         let (consumed, event) = self.decoder.decode(&src[..]);
-        let item = convert(event, self.max_frame_len);
+        let item = convert(event);
         src.advance(consumed);
         Ok(self.account(item))
     }
@@ -164,7 +145,7 @@ impl Decoder for XBeeCodec {
         if let Some(item) = self.decode(src)? {
             return Ok(Some(item));
         }
-        let item = convert(self.decoder.finish(), self.max_frame_len);
+        let item = convert(self.decoder.finish());
         Ok(self.account(item))
     }
 }

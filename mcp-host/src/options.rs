@@ -60,8 +60,10 @@ pub struct LinkOptions {
     /// MAVs use) or 2 (escaped).
     pub api_mode: xbee_api::ApiMode,
     /// Largest frame data length (frame type byte included) accepted from the radio;
-    /// longer frames are dropped and counted as oversize. At most
-    /// [`crate::codec::MAX_FRAME_DATA`] (4 less in API mode 1), the decoder's capacity.
+    /// longer frames are dropped as soon as their length field is read and counted as
+    /// oversize (in API mode 1 the bytes after their start delimiter are scanned again,
+    /// so that no frame inside one is lost). At most [`crate::codec::MAX_FRAME_DATA`]
+    /// (4 less in API mode 1), the decoder's capacity.
     pub max_frame_len: usize,
     /// Timeout for opening a TCP connection (serial ports and pseudo-terminals open at
     /// once or fail).

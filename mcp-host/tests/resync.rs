@@ -121,3 +121,44 @@ async fn survives_garbage_and_corrupt_frames_in_api_mode_1() {
 async fn survives_garbage_and_corrupt_frames_in_api_mode_2() {
     survives(ApiMode::Escaped).await;
 }
+
+/// A frame over `LinkOptions::max_frame_len` is dropped at its length field: in mode 1
+/// a valid frame inside it still comes out, and one with a bad checksum is oversize too.
+#[tokio::test]
+async fn a_frame_over_the_length_limit_hides_no_frame_inside_it() {
+    let mode = ApiMode::Unescaped;
+    let (mut stream, _sender, mut fake) = pty_link_with(mcp_host::LinkOptions {
+        api_mode: mode,
+        max_frame_len: 20,
+        ..mcp_host::LinkOptions::default()
+    })
+    .await;
+    // A 30-byte frame (an unknown type) whose data holds a whole Receive Packet.
+    let inner = fake.encode(&rx(MAV, b"m1"));
+    let mut outer_data = vec![0x23];
+    outer_data.extend(&inner);
+    outer_data.resize(30, 0);
+    let outer = fake.encode(&xbee_api::RawFrame::new(&outer_data).unwrap());
+    let mut corrupt = outer.clone();
+    *corrupt.last_mut().unwrap() ^= 0x01;
+    let mut bytes = outer;
+    bytes.extend(corrupt);
+    bytes.extend(fake.encode(&rx(MAV, b"m2")));
+    fake.write_raw(&bytes).await;
+
+    let oversize = DecodeError::Oversize {
+        length: 30,
+        capacity: 20,
+    };
+    let mut texts = Vec::new();
+    for _ in 0..5 {
+        match next_event(&mut stream).await {
+            Event::DecodeError(e) => assert_eq!(e, oversize),
+            Event::Packet(rx) => texts.push(rx.payload.to_vec()),
+            other => panic!("unexpected {other:?}"),
+        }
+    }
+    assert_eq!(texts, [b"m1".to_vec(), b"m1".to_vec(), b"m2".to_vec()]);
+    let stats = stream.stats();
+    assert_eq!((stats.frames, stats.oversize), (3, 2));
+}
