@@ -108,10 +108,7 @@ impl StatusRequest {
 
 /// A length error for a command of type `t`.
 fn wrong_length(t: CommandType, status_request: bool, expected: Expected, got: usize) -> Error {
-    let offset = match expected {
-        Expected::Exactly(n) if got > n => n,
-        _ => got,
-    };
+    let offset = expected.offset(got);
     Error::new(
         ErrorKind::WrongLength {
             category: Category::Command,

@@ -102,6 +102,18 @@ pub enum Expected {
     },
 }
 
+impl Expected {
+    /// The offset of the first byte in the way of a packet of `got` bytes: the first
+    /// extra one when it is longer than every allowed length, else the first missing one.
+    pub(crate) fn offset(self, got: usize) -> usize {
+        match self {
+            Expected::Exactly(n) if got > n => n,
+            Expected::Either(a, b) if got > a.max(b) => a.max(b),
+            _ => got,
+        }
+    }
+}
+
 impl fmt::Display for Expected {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {

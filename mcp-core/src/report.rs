@@ -48,10 +48,7 @@ pub enum SlaveAddresses {
 
 /// A length error for a report of type `t`.
 fn wrong_length(t: CommandType, expected: Expected, got: usize) -> Error {
-    let offset = match expected {
-        Expected::Exactly(n) if got > n => n,
-        _ => got,
-    };
+    let offset = expected.offset(got);
     Error::new(
         ErrorKind::WrongLength {
             category: Category::Report,

@@ -336,6 +336,12 @@ fn time_with_0xff_first_byte_is_a_set() {
 
 #[test]
 fn wrong_lengths_are_errors_with_offsets() {
+    // A slaves report one byte longer than its longer form.
+    const LONG_SLAVES: [u8; 35] = {
+        let mut b = [0x42u8; 35];
+        (b[0], b[1], b[2]) = (b'r', 5, 0);
+        b
+    };
     // (packet, expected, status request, offset)
     let cases: &[(&[u8], Expected, bool, usize)] = &[
         (b"c\x01\x01", Expected::Exactly(4), false, 3),
@@ -347,6 +353,14 @@ fn wrong_lengths_are_errors_with_offsets() {
         (b"c\x03\x01\x00", Expected::Exactly(3), false, 3),
         (b"c\x05\x01", Expected::Either(10, 11), false, 3),
         (b"c\x05\xff\x00", Expected::Either(10, 11), false, 4),
+        // Longer than both forms: the first byte past the longer one.
+        (
+            b"c\x05\x00\x13\xa2\x00\x40\xb5\x99\xbf\x00\x00",
+            Expected::Either(10, 11),
+            false,
+            11,
+        ),
+        (&LONG_SLAVES, Expected::Either(10, 34), false, 34),
         (b"c\x06\x01\x02\x03", Expected::Exactly(6), false, 5),
         (b"c\x06\x01\x02\x03\x04\x05", Expected::Exactly(6), false, 6),
         (b"c\x07\x00\x00\x00\x00", Expected::Exactly(10), false, 6),
