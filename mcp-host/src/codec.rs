@@ -7,6 +7,8 @@
 
 use std::sync::Arc;
 
+use tokio::time::Instant;
+
 use bytes::{Buf, Bytes, BytesMut};
 use tokio_util::codec::{Decoder, Encoder};
 use xbee_api::{ApiMode, DecodeError, EncodeFrame};
@@ -56,6 +58,8 @@ pub struct XBeeCodec {
     mode: ApiMode,
     counters: Arc<Counters>,
     seen: xbee_api::Stats,
+    /// When `decode` last got bytes.
+    last_input: Instant,
 }
 
 impl XBeeCodec {
@@ -76,7 +80,49 @@ impl XBeeCodec {
             mode,
             counters,
             seen: xbee_api::Stats::default(),
+            last_input: Instant::now(),
         }
+    }
+
+    /// When the bytes of a partial frame last came in; `None` between frames. (After
+    /// `decode` returns `None`, nothing but a partial frame can be pending.)
+    pub fn partial_since(&self) -> Option<Instant> {
+        (!self.decoder.is_idle()).then_some(self.last_input)
+    }
+
+    /// Gives up on the partial frame, as at the end of input: its error (truncated)
+    /// and, in API mode 1, what the bytes after its start delimiter hold (frames,
+    /// errors; a new partial frame among them stays pending). For a link that has gone
+    /// quiet: in mode 1 a stray 0x7E can hold back the frames behind it until its
+    /// length is reached.
+    ///
+    /// ```
+    /// use bytes::BytesMut;
+    /// use mcp_host::codec::{CodecItem, XBeeCodec};
+    /// use tokio_util::codec::Decoder;
+    /// use xbee_api::ApiMode;
+    ///
+    /// let mut codec = XBeeCodec::new(ApiMode::Unescaped);
+    /// // A stray 0x7E and length, then a whole Modem Status frame.
+    /// let mut buf = BytesMut::from(&[0x7E, 0x00, 0xFF, 0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F][..]);
+    /// assert_eq!(codec.decode(&mut buf)?, None);
+    /// assert!(codec.partial_since().is_some());
+    /// let items = codec.drop_partial();
+    /// assert!(matches!(items[0], CodecItem::Error(xbee_api::DecodeError::Truncated { .. })));
+    /// assert!(matches!(&items[1], CodecItem::Frame(f) if f.data()[..] == [0x8A, 0x06]));
+    /// assert_eq!(codec.partial_since(), None);
+    /// # Ok::<(), std::io::Error>(())
+    /// ```
+    pub fn drop_partial(&mut self) -> Vec<CodecItem> {
+        let mut items = Vec::new();
+        // `finish` once drops the partial frame; `poll` then delivers the rescan
+        // without ending a new partial frame as `finish` would.
+        let mut next = convert(self.decoder.finish());
+        while let Some(item) = self.account(next) {
+            items.push(item);
+            next = convert(self.decoder.poll());
+        }
+        items
     }
 
     /// The API mode.
@@ -135,6 +181,9 @@ impl Decoder for XBeeCodec {
     type Error = std::io::Error;
 
     fn decode(&mut self, src: &mut BytesMut) -> Result<Option<CodecItem>, std::io::Error> {
+        if !src.is_empty() {
+            self.last_input = Instant::now();
+        }
         let (consumed, event) = self.decoder.decode(&src[..]);
         let item = convert(event);
         src.advance(consumed);

@@ -399,6 +399,14 @@ impl Driver {
             let deadline = self.next_deadline();
             let accept_ops =
                 self.ops_open && self.parked.len() < PARKED_MAX && out.len() < HIGH_WATER;
+            // Bytes of a partial frame come in without waking the loop (no item): while
+            // no partial frame is there, look again every timeout.
+            let check_stale_at = self.options.partial_frame_timeout.and_then(|timeout| {
+                (self.options.api_mode == xbee_api::ApiMode::Unescaped).then(|| {
+                    self.stale_at(reader.decoder())
+                        .unwrap_or_else(|| Instant::now() + timeout)
+                })
+            });
             tokio::select! {
                 item = reader.next() => match item {
                     Some(Ok(item)) => self.handle_item(item),
@@ -416,6 +424,14 @@ impl Driver {
                 },
                 _ = tokio::time::sleep_until(deadline.unwrap_or_else(Instant::now)), if deadline.is_some() => {
                     self.expire(Instant::now());
+                }
+                _ = tokio::time::sleep_until(check_stale_at.unwrap_or_else(Instant::now)), if check_stale_at.is_some() => {
+                    // Unless bytes came in meanwhile (the next turn waits again).
+                    if self.stale_at(reader.decoder()).is_some_and(|at| at <= Instant::now()) {
+                        for item in reader.decoder_mut().drop_partial() {
+                            self.handle_item(item);
+                        }
+                    }
                 }
                 // In an async block, so that the sender is cloned only while link events
                 // wait, not on every turn of the loop.
@@ -441,6 +457,16 @@ impl Driver {
                 }
             }
         }
+    }
+
+    /// When the partial frame the codec holds is to be given up (API mode 1 only, see
+    /// [`LinkOptions::partial_frame_timeout`]).
+    fn stale_at(&self, codec: &XBeeCodec) -> Option<Instant> {
+        let timeout = self.options.partial_frame_timeout?;
+        if self.options.api_mode != xbee_api::ApiMode::Unescaped {
+            return None;
+        }
+        Some(codec.partial_since()? + timeout)
     }
 
     /// Queues `event` for the stream. When the queue is full, a link event is held back
@@ -856,7 +882,11 @@ impl Driver {
     async fn close(&mut self, reason: String) {
         // The transport is closed by now.
         self.state.send_replace(LinkState::Closed);
-        tracing::warn!(link = %self.connector.link(), %reason, "link closed");
+        if reason == CLOSED_BY_APPLICATION {
+            tracing::debug!(link = %self.connector.link(), %reason, "link closed");
+        } else {
+            tracing::warn!(link = %self.connector.link(), %reason, "link closed");
+        }
         self.fail_all(&reason);
         self.ops.close();
         while let Ok(op) = self.ops.try_recv() {

@@ -4,6 +4,8 @@ use std::time::Duration;
 
 /// Default timeout for a delivery status: longer than a Zigbee route discovery (10 s).
 pub const DEFAULT_SEND_TIMEOUT: Duration = Duration::from_secs(12);
+/// Default of [`LinkOptions::partial_frame_timeout`].
+pub const DEFAULT_PARTIAL_FRAME_TIMEOUT: Duration = Duration::from_secs(1);
 /// Default timeout for opening a TCP connection.
 pub const DEFAULT_CONNECT_TIMEOUT: Duration = Duration::from_secs(5);
 
@@ -73,6 +75,14 @@ pub struct LinkOptions {
     pub send_timeout: Duration,
     /// Reconnection after the transport goes away.
     pub reconnect: ReconnectPolicy,
+    /// API mode 1 only: a partial frame that gets no new byte for this long is dropped
+    /// (an [`crate::Event::DecodeError`], truncated) and the bytes after its start
+    /// delimiter are scanned again. In mode 1 a 0x7E in noise or in the tail of a frame
+    /// cut off when the port was opened starts a candidate frame that holds back every
+    /// frame behind it until its length is reached; on a quiet link that could be never.
+    /// `None` waits for more bytes however long it takes. Default 1 s (a radio sends a
+    /// frame's bytes back to back: at 9600 baud, 273 bytes take 0.3 s).
+    pub partial_frame_timeout: Option<Duration>,
     /// Capacity of the event queue between the background task and the
     /// [`crate::PacketStream`]; when the consumer falls behind by this many events, newer
     /// packets and frames are dropped and counted ([`crate::Stats::events_dropped`]);
@@ -88,6 +98,7 @@ impl Default for LinkOptions {
             connect_timeout: DEFAULT_CONNECT_TIMEOUT,
             send_timeout: DEFAULT_SEND_TIMEOUT,
             reconnect: ReconnectPolicy::default(),
+            partial_frame_timeout: Some(DEFAULT_PARTIAL_FRAME_TIMEOUT),
             event_capacity: 1024,
         }
     }

@@ -162,3 +162,36 @@ async fn a_frame_over_the_length_limit_hides_no_frame_inside_it() {
     let stats = stream.stats();
     assert_eq!((stats.frames, stats.oversize), (3, 2));
 }
+
+/// API mode 1 on a quiet link: a stray 0x7E and a long length before a frame would
+/// hold the frame back until 255 more bytes came; the partial frame is given up once
+/// no byte has come for `partial_frame_timeout`, and the frame behind it comes out.
+#[tokio::test]
+async fn a_stray_delimiter_on_a_quiet_link_holds_back_no_frame() {
+    let (mut stream, _sender, mut fake) = pty_link_with(mcp_host::LinkOptions {
+        api_mode: ApiMode::Unescaped,
+        partial_frame_timeout: Some(std::time::Duration::from_millis(50)),
+        ..mcp_host::LinkOptions::default()
+    })
+    .await;
+    let mut bytes = vec![0x7E, 0x00, 0xFF];
+    bytes.extend(fake.encode(&rx(MAV, b"m1")));
+    fake.write_raw(&bytes).await;
+    assert!(matches!(
+        next_event(&mut stream).await,
+        Event::DecodeError(DecodeError::Truncated {
+            length: Some(255),
+            ..
+        })
+    ));
+    match next_event(&mut stream).await {
+        Event::Packet(rx) => assert_eq!(&rx.payload[..], b"m1"),
+        other => panic!("unexpected {other:?}"),
+    }
+    // The link goes on as before.
+    fake.write_raw(&fake.encode(&rx(MAV, b"m2"))).await;
+    match next_event(&mut stream).await {
+        Event::Packet(rx) => assert_eq!(&rx.payload[..], b"m2"),
+        other => panic!("unexpected {other:?}"),
+    }
+}
