@@ -346,7 +346,7 @@ impl Connector {
     /// backoff delay before each attempt and doubles it after each failure (capped at
     /// `max_delay`). Returns the first error that no retry can fix, and
     /// [`LinkError::ReconnectDisabled`] at once when reconnection is disabled. Failed
-    /// attempts are logged.
+    /// attempts are logged at debug level.
     ///
     /// The delay carries over between calls until [`Connector::mark_healthy`] resets it,
     /// so a transport that opens and fails at once keeps backing off.
@@ -363,8 +363,10 @@ impl Connector {
             self.delay = Some(next);
             match self.open().await {
                 Ok(transport) => return Ok(transport),
+                // The outage was logged when it began (a warning); each attempt only
+                // at debug level, so that a long outage is one line.
                 Err(e) if e.is_retryable() => {
-                    tracing::warn!(link = %self.link, error = %e, retry_in = ?next, "reconnect attempt failed");
+                    tracing::debug!(link = %self.link, error = %e, retry_in = ?next, "reconnect attempt failed");
                 }
                 Err(e) => return Err(e),
             }

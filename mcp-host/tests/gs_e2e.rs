@@ -293,6 +293,10 @@ fn api_mode_detection_over_a_serial_port() {
         let report = sim.status_with(&["--api-mode", "auto"], &["landing"]);
         assert_eq!(report["state_name"], "flight");
     }
+    // Closing the link that asked is no warning.
+    let args = ["status", "--api-mode", "auto", "--to", MAV, "landing"];
+    let out = succeeded(sim.gs(&args), &args);
+    assert_eq!(String::from_utf8_lossy(&out.stderr), "");
 }
 
 #[test]
