@@ -15,7 +15,7 @@ pub(crate) struct AtArgs {
     /// Ask a remote radio (Remote AT Command, 0x17) instead of the local one.
     #[arg(long, value_name = "ADDR", value_parser = crate::link_args::parse_address64)]
     to: Option<Address64>,
-    /// VALUE is text (e.g. for NI), not hex.
+    /// VALUE is text, not hex (the default for the text parameters NI, DN, BI and VL).
     #[arg(long)]
     text: bool,
     /// For a remote radio: do not apply the change at once (queue it until AC).
@@ -23,8 +23,73 @@ pub(crate) struct AtArgs {
     no_apply: bool,
     /// The two-letter AT command, e.g. AP, NP, NI, SH, SL, MY, ID, CH.
     command: String,
-    /// The value to set, in hex (e.g. `2` for AP=2) or text with --text; omit to read.
+    /// The value to set, in hex (e.g. `2` for AP=2), or text for a text parameter (NI)
+    /// or with --text; omit to read.
     value: Option<String>,
+}
+
+/// The AT parameters Digi defines as text (printable ASCII) rather than numbers: the
+/// node identifier, the destination node (a node identifier to look up), the Bluetooth
+/// identifier and the long firmware version. Every other parameter is a number, printed
+/// as such even when its bytes happen to be printable.
+const TEXT_PARAMETERS: [&[u8; 2]; 4] = [b"NI", b"DN", b"BI", b"VL"];
+
+/// Whether `command`'s value is text.
+fn is_text(command: &[u8; 2]) -> bool {
+    TEXT_PARAMETERS.contains(&command)
+}
+
+/// What a status other than ok means, for the one-line error; tx_failure means the
+/// remote command was not delivered.
+fn explain(status: AtStatus, name: &str, to: Option<Address64>, set: bool) -> String {
+    let code = u8::from(status);
+    match (status, to) {
+        (AtStatus::Error, _) => format!(
+            "{name}: the radio answered error (0x{code:02x}): it could not carry out the command"
+        ),
+        (AtStatus::InvalidCommand, _) => format!(
+            "{name}: the radio answered invalid_command (0x{code:02x}): it does not know this \
+             AT command"
+        ),
+        (AtStatus::InvalidParameter, _) if set => format!(
+            "{name}: the radio answered invalid_parameter (0x{code:02x}): it refused the value \
+             (out of range, or a parameter it does not let be set)"
+        ),
+        (AtStatus::InvalidParameter, _) => format!(
+            "{name}: the radio answered invalid_parameter (0x{code:02x}): it refused the command"
+        ),
+        (AtStatus::TxFailure, Some(to)) => format!(
+            "{name}: the remote AT command was not delivered to {to}: the local radio answered \
+             tx_failure (0x{code:02x}); the remote radio is off, out of range or in another network"
+        ),
+        (status, _) => format!("{name}: the radio answered {status} (0x{code:02x})"),
+    }
+}
+
+/// The exit code of an AT status other than ok: a remote command the radio could not
+/// deliver is a delivery failure, anything else a plain failure.
+fn exit_code(status: AtStatus) -> u8 {
+    match status {
+        AtStatus::TxFailure => Failure::DELIVERY,
+        _ => Failure::OTHER,
+    }
+}
+
+/// The line that shows a value read (or echoed) by the radio.
+fn value_line(name: &str, command: &[u8; 2], data: &[u8]) -> String {
+    if is_text(command) {
+        return format!("{name} = {:?}", String::from_utf8_lossy(data));
+    }
+    if data.len() <= 16 {
+        let number = data.iter().fold(0u128, |n, &b| (n << 8) | u128::from(b));
+        format!(
+            "{name} = {} (0x{}, {number})",
+            hex(data).to_uppercase(),
+            hex(data)
+        )
+    } else {
+        format!("{name} = {}", hex(data).to_uppercase())
+    }
 }
 
 fn parse_value(value: &str, text: bool) -> Result<Vec<u8>, String> {
@@ -62,7 +127,9 @@ pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
             Failure::input(format!("`{}` is not a two-letter AT command", args.command))
         })?;
     let parameter = match &args.value {
-        Some(value) => parse_value(value, args.text).map_err(Failure::input)?,
+        Some(value) => {
+            parse_value(value, args.text || is_text(&command)).map_err(Failure::input)?
+        }
         None => Vec::new(),
     };
     let (_stream, sender) = args.link.open(false).await?;
@@ -89,28 +156,38 @@ pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
     let name = String::from_utf8_lossy(&command).into_owned();
     if status != AtStatus::Ok {
         return Err(Failure::new(
-            Failure::OTHER,
-            format!(
-                "{name}: the radio answered {status} (0x{:02x})",
-                u8::from(status)
-            ),
+            exit_code(status),
+            explain(status, &name, args.to, args.value.is_some()),
         ));
     }
-    if data.is_empty() {
+    if data.is_empty() && args.value.is_some() {
         out!("{name}: ok");
-    } else if data.iter().all(|b| b.is_ascii_graphic() || *b == b' ') && data.len() > 2 {
-        out!(
-            "{name} = \"{}\" (hex {})",
-            String::from_utf8_lossy(data),
-            hex(data)
-        );
+    } else if data.is_empty() && !is_text(&command) {
+        out!("{name}: ok (no value)");
     } else {
-        let number = data.iter().fold(0u128, |n, &b| (n << 8) | u128::from(b));
-        out!(
-            "{name} = {} (0x{}, {number})",
-            hex(data).to_uppercase(),
-            hex(data)
-        );
+        out!("{}", value_line(&name, &command, data));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_print_as_numbers_even_when_printable() {
+        assert_eq!(
+            value_line("DD", b"DD", b"ABCD"),
+            "DD = 41424344 (0x41424344, 1094861636)"
+        );
+        assert_eq!(value_line("NI", b"NI", b"MAV \"1\""), r#"NI = "MAV \"1\"""#);
+        assert_eq!(value_line("NI", b"NI", b""), r#"NI = """#);
+    }
+
+    #[test]
+    fn text_parameters_take_text_values() {
+        assert!(is_text(b"NI") && !is_text(b"ID"));
+        assert_eq!(parse_value("20", true).unwrap(), b"20");
+        assert_eq!(parse_value("20", false).unwrap(), [0x20]);
+    }
 }

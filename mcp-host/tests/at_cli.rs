@@ -1,0 +1,159 @@
+//! `mcp-gs at` as a process against `mcp-gs sim` (its emulated radios) over TCP: how
+//! values print, what the radio's refusals say and which exit codes they give.
+
+use std::io::{BufRead, BufReader};
+use std::process::{Child, Command, Output, Stdio};
+use std::sync::mpsc;
+use std::time::Duration;
+
+const MAV: &str = "0013a20040b599b9";
+/// An address no node of the simulated network has.
+const NOBODY: &str = "0013a200deadbeef";
+/// Failure guard only.
+const GUARD: Duration = Duration::from_secs(30);
+
+/// `mcp-gs sim` listening on TCP, killed when dropped.
+struct Sim {
+    child: Child,
+    link: String,
+}
+
+impl Sim {
+    fn start() -> Self {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+            .args([
+                "sim",
+                "--link",
+                "tcp-listen:127.0.0.1:0",
+                "--duration",
+                "300",
+            ])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::inherit())
+            .spawn()
+            .expect("start mcp-gs sim");
+        let stdout = child.stdout.take().expect("stdout");
+        let (tx, rx) = mpsc::channel();
+        std::thread::spawn(move || {
+            for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+                let _ = tx.send(line);
+            }
+        });
+        let link = loop {
+            let line = rx.recv_timeout(GUARD).expect("sim prints its link");
+            if let Some(rest) = line.split("(connect with ").nth(1) {
+                break rest.split(')').next().unwrap().to_string();
+            }
+        };
+        Sim { child, link }
+    }
+
+    /// `mcp-gs at --link LINK ARGS...`.
+    fn at(&self, args: &[&str]) -> Output {
+        Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+            .args(["at", "--link", &self.link, "--timeout", "10"])
+            .args(args)
+            .output()
+            .expect("run mcp-gs at")
+    }
+
+    /// The standard output of a successful `at`.
+    fn ok(&self, args: &[&str]) -> String {
+        let out = self.at(args);
+        assert!(
+            out.status.success(),
+            "at {args:?}: {}\n{}",
+            out.status,
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8(out.stdout).unwrap()
+    }
+}
+
+impl Drop for Sim {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+#[test]
+fn text_parameters_print_as_text_and_numbers_as_numbers() {
+    let sim = Sim::start();
+    // NI is text: one space by default, quoted, not the number 0x20.
+    assert_eq!(sim.ok(&["NI"]), "NI = \" \"\n");
+    assert_eq!(sim.ok(&["--to", MAV, "NI"]), "NI = \" \"\n");
+    // HV and VR are numbers.
+    assert_eq!(sim.ok(&["HV"]), "HV = 2E00 (0x2e00, 11776)\n");
+    assert_eq!(sim.ok(&["VR"]), "VR = 4060 (0x4060, 16480)\n");
+}
+
+#[test]
+fn a_remote_command_that_is_not_delivered_exits_5() {
+    let sim = Sim::start();
+    let out = sim.at(&["--to", NOBODY, "NI"]);
+    assert_eq!(out.status.code(), Some(5), "{out:?}");
+    let message = stderr(&out);
+    assert_eq!(message.lines().count(), 1, "{message}");
+    assert!(
+        message.contains("not delivered to") && message.contains("tx_failure (0x04)"),
+        "{message}"
+    );
+    assert!(out.stdout.is_empty());
+}
+
+#[test]
+fn an_at_command_without_answer_exits_4() {
+    // A peer that reads everything and never answers, for two ground stations in turn.
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let port = listener.local_addr().unwrap().port();
+    let peer = std::thread::spawn(move || {
+        for _ in 0..2 {
+            let (mut socket, _) = listener.accept().unwrap();
+            let mut buf = [0u8; 64];
+            while let Ok(n) = std::io::Read::read(&mut socket, &mut buf) {
+                if n == 0 {
+                    break;
+                }
+            }
+        }
+    });
+    let link = format!("tcp:127.0.0.1:{port}");
+    for to in [None, Some(MAV)] {
+        let mut args = vec!["at", "--link", &link, "--timeout", "0.5"];
+        if let Some(to) = to {
+            args.extend(["--to", to]);
+        }
+        args.push("NI");
+        let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+            .args(&args)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(4), "{args:?}: {out:?}");
+        assert!(stderr(&out).contains("within"), "{out:?}");
+    }
+    peer.join().unwrap();
+}
+
+#[test]
+fn refusals_say_what_the_radio_answered() {
+    let sim = Sim::start();
+    let out = sim.at(&["HV", "1"]);
+    assert_eq!(out.status.code(), Some(1), "{out:?}");
+    let message = stderr(&out);
+    assert!(
+        message.contains("invalid_parameter (0x03)") && message.contains("refused the value"),
+        "{message}"
+    );
+    let out = sim.at(&["ZZ"]);
+    assert_eq!(out.status.code(), Some(1), "{out:?}");
+    let message = stderr(&out);
+    assert!(
+        message.contains("invalid_command (0x02)") && message.contains("does not know"),
+        "{message}"
+    );
+}
