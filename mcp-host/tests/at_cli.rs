@@ -157,3 +157,27 @@ fn refusals_say_what_the_radio_answered() {
         "{message}"
     );
 }
+
+#[test]
+fn network_parameters_read_and_the_node_identifier_is_set_as_text() {
+    let sim = Sim::start();
+    assert_eq!(
+        sim.ok(&["ID"]),
+        "ID = 0000000000000000 (0x0000000000000000, 0)\n"
+    );
+    assert!(sim.ok(&["OP"]).starts_with("OP = "));
+    let ch = sim.ok(&["CH"]);
+    assert!(
+        ch.starts_with("CH = ") && ch.len() == "CH = 17 (0x17, 23)\n".len(),
+        "{ch}"
+    );
+    // NI takes text without --text, locally and remotely.
+    assert_eq!(sim.ok(&["NI", "Ground 1"]), "NI: ok\n");
+    assert_eq!(sim.ok(&["NI"]), "NI = \"Ground 1\"\n");
+    assert_eq!(sim.ok(&["--to", MAV, "NI", "Left wing"]), "NI: ok\n");
+    assert_eq!(sim.ok(&["--to", MAV, "NI"]), "NI = \"Left wing\"\n");
+    // Too long: the radio refuses it.
+    let out = sim.at(&["NI", "twenty-one characters"]);
+    assert_eq!(out.status.code(), Some(1), "{out:?}");
+    assert!(stderr(&out).contains("refused the value"), "{out:?}");
+}

@@ -791,3 +791,88 @@ async fn explicit_addressing_and_remote_at_commands() {
         }
     }
 }
+
+#[tokio::test]
+async fn network_parameters_read_and_the_node_identifier_can_be_set() {
+    use xbee_api::RemoteAtCommandRepr;
+    let (_network, mut devs) = in_process(NetworkConfig::default(), &[COORD, MAV_A]).await;
+    let [ground, dev_a] = &mut devs[..] else {
+        unreachable!()
+    };
+    // ID (the configured extended PAN ID, 0: any) and OP (the one in use): 8 bytes.
+    let (status, id) = dev_a.at(1, b"ID", &[]).await;
+    assert_eq!((status, id), (AtStatus::Ok, vec![0; 8]));
+    let (status, op) = dev_a.at(2, b"OP", &[]).await;
+    assert_eq!((status, op.len()), (AtStatus::Ok, 8));
+    assert_ne!(op, vec![0; 8]);
+    // Every node of the network operates on the same PAN and channel.
+    assert_eq!(ground.at(3, b"OP", &[]).await, (AtStatus::Ok, op));
+    let (status, oi) = dev_a.at(4, b"OI", &[]).await;
+    assert_eq!((status, oi.len()), (AtStatus::Ok, 2));
+    let (status, ch) = dev_a.at(5, b"CH", &[]).await;
+    assert_eq!(status, AtStatus::Ok);
+    assert!(matches!(ch[..], [0x0C..=0x1A]), "{ch:?}");
+    assert_eq!(ground.at(6, b"CH", &[]).await, (AtStatus::Ok, ch));
+    // Read-only ones refuse a value.
+    assert_eq!(
+        dev_a.at(7, b"CH", &[0x0C]).await,
+        (AtStatus::InvalidParameter, vec![])
+    );
+    assert_eq!(
+        dev_a.at(8, b"ID", &[0; 8]).await,
+        (AtStatus::InvalidParameter, vec![])
+    );
+
+    // NI: set, then read back; other nodes keep theirs.
+    assert_eq!(dev_a.at(9, b"NI", b"MAV one").await, (AtStatus::Ok, vec![]));
+    assert_eq!(
+        dev_a.at(10, b"NI", &[]).await,
+        (AtStatus::Ok, b"MAV one".to_vec())
+    );
+    assert_eq!(
+        ground.at(11, b"NI", &[]).await,
+        (AtStatus::Ok, b" ".to_vec())
+    );
+    // At most 20 printable ASCII characters.
+    let twenty = [b'x'; 20];
+    assert_eq!(dev_a.at(12, b"NI", &twenty).await, (AtStatus::Ok, vec![]));
+    assert_eq!(
+        dev_a.at(13, b"NI", &[b'x'; 21]).await,
+        (AtStatus::InvalidParameter, vec![])
+    );
+    assert_eq!(
+        dev_a.at(14, b"NI", b"tab\there").await,
+        (AtStatus::InvalidParameter, vec![])
+    );
+    assert_eq!(
+        dev_a.at(15, b"NI", &[]).await,
+        (AtStatus::Ok, twenty.to_vec())
+    );
+
+    // A remote NI write sets the destination's name.
+    let mut remote = async |frame_id: u8, parameter: &[u8]| {
+        ground
+            .send(&Frame::RemoteAtCommand(RemoteAtCommandRepr {
+                frame_id,
+                dst64: MAV_A,
+                dst16: Address16::UNKNOWN,
+                options: 0x02,
+                command: *b"NI",
+                parameter,
+            }))
+            .await;
+        match ground.frame().await.parse() {
+            Ok(Frame::RemoteAtResponse(r)) => {
+                assert_eq!((r.frame_id, r.src64), (frame_id, MAV_A));
+                (r.status, r.data.to_vec())
+            }
+            other => panic!("{other:?}"),
+        }
+    };
+    assert_eq!(remote(16, b"Left wing").await, (AtStatus::Ok, vec![]));
+    assert_eq!(remote(17, b"").await, (AtStatus::Ok, b"Left wing".to_vec()));
+    assert_eq!(
+        dev_a.at(18, b"NI", &[]).await,
+        (AtStatus::Ok, b"Left wing".to_vec())
+    );
+}

@@ -24,10 +24,15 @@
 //!   Zigbee firmware would: `AP` (the node's API mode), `NP` (the unicast payload
 //!   limit), `SH`/`SL` (the 64-bit address), `MY` (the 16-bit address), `AI` (0,
 //!   joined), `CE` (1 on the coordinator), `SM` (0, no sleep), `HV` (2E00: an S2C
-//!   through-hole module), `VR` (4060: Zigbee 3.0 firmware) and `NI` (a space, the
-//!   default). They are read-only: a value gets status 3, invalid parameter (but `AP`
-//!   set to the node's own mode, a no-op). Any other command gets status 2, invalid
-//!   command. These are what Digi's xbee-python library reads when it opens a device.
+//!   through-hole module), `VR` (4060: Zigbee 3.0 firmware), `ID` (0, the configured
+//!   extended PAN ID: any), `OP` (the operating extended PAN ID, 0013A2004D435000),
+//!   `OI` (the operating 16-bit PAN ID, 4D43), `CH` (the operating channel, 0x17) and
+//!   `NI` (the node identifier: a space, the default, until set). `NI` can be set to 1
+//!   to 20 printable ASCII characters (at once, even when queued with 0x09 or sent
+//!   without the apply option), and later reads answer the new name; the others are
+//!   read-only: a value gets status 3, invalid parameter (but `AP` set to the node's own
+//!   mode, a no-op). Any other command gets status 2, invalid command. These are what
+//!   Digi's xbee-python library reads when it opens a device.
 //!   Remote AT commands (0x17) get the same answers from the destination's radio
 //!   (0x97), or status 4, transmission failure, when it cannot be reached.
 //! - When a link comes up its device gets a Modem Status: 0x06 coordinator started on the
@@ -432,6 +437,7 @@ impl Network {
                     connected: false,
                     cut: false,
                     stats: NodeStats::default(),
+                    name: router::NODE_IDENTIFIER.to_vec(),
                 },
             );
             if up_already {

@@ -26,7 +26,16 @@ const HARDWARE_VERSION: [u8; 2] = [0x2E, 0x00];
 /// `VR`: a Zigbee 3.0 firmware version (API, 0x4060).
 const FIRMWARE_VERSION: [u8; 2] = [0x40, 0x60];
 /// `NI`: a module's default node identifier, one space.
-const NODE_IDENTIFIER: &[u8] = b" ";
+pub(crate) const NODE_IDENTIFIER: &[u8] = b" ";
+/// `ID`: the configured 64-bit extended PAN ID, 0 (Digi's default: the coordinator
+/// picks one when it forms the network).
+const EXTENDED_PAN_ID: u64 = 0;
+/// `OP`: the 64-bit extended PAN ID the network operates on.
+const OPERATING_PAN_ID: u64 = 0x0013_A200_4D43_5000;
+/// `OI`: the 16-bit PAN ID the network operates on.
+const OPERATING_PAN_ID_16: u16 = 0x4D43;
+/// `CH`: the operating channel (one of 0x0B..=0x1A; an S2C uses 0x0C..=0x1A).
+const OPERATING_CHANNEL: u8 = 0x17;
 
 /// Capacity of the queue of frames waiting to be written to one link.
 pub(crate) const OUT_CAPACITY: usize = 1024;
@@ -53,6 +62,8 @@ pub(crate) struct Node {
     pub(crate) connected: bool,
     pub(crate) cut: bool,
     pub(crate) stats: NodeStats,
+    /// Its node identifier (`NI`): at most [`AT_VALUE_MAX`] printable ASCII characters.
+    pub(crate) name: Vec<u8>,
 }
 
 /// Everything the nodes share, behind one mutex; no lock is held across an await.
@@ -403,15 +414,18 @@ impl State {
     }
 
     /// Executes an AT command on `node`'s radio: its status and the value, written into
-    /// `value`, of length returned.
+    /// `value`, of length returned. Reads answer as an S2C with Zigbee firmware would;
+    /// `NI` can be set, `AP` set to the node's own mode (a no-op); any other value gets
+    /// invalid parameter, and a command the radio does not emulate invalid command.
     fn at_value(
-        &self,
+        &mut self,
         node: Address64,
         command: [u8; 2],
         parameter: &[u8],
         value: &mut [u8; AT_VALUE_MAX],
     ) -> (AtStatus, usize) {
-        let Some(radio) = self.nodes.get(&node) else {
+        let max_unicast = self.config.max_unicast;
+        let Some(radio) = self.nodes.get_mut(&node) else {
             return (AtStatus::Error, 0);
         };
         // A read: `bytes` are the value (at most `AT_VALUE_MAX` of them).
@@ -426,7 +440,7 @@ impl State {
             (b"AP", []) => read(&[u8::from(radio.mode)]),
             (b"AP", [mode]) if *mode == u8::from(radio.mode) => (AtStatus::Ok, 0),
             (b"NP", []) => {
-                let np = u16::try_from(self.config.max_unicast).unwrap_or(u16::MAX);
+                let np = u16::try_from(max_unicast).unwrap_or(u16::MAX);
                 read(&np.to_be_bytes())
             }
             (b"SH", []) => read(&node.to_bytes()[..4]),
@@ -437,10 +451,21 @@ impl State {
             (b"SM", []) => read(&[0]),
             (b"HV", []) => read(&HARDWARE_VERSION),
             (b"VR", []) => read(&FIRMWARE_VERSION),
-            (b"NI", []) => read(NODE_IDENTIFIER),
+            (b"ID", []) => read(&EXTENDED_PAN_ID.to_be_bytes()),
+            (b"OP", []) => read(&OPERATING_PAN_ID.to_be_bytes()),
+            (b"OI", []) => read(&OPERATING_PAN_ID_16.to_be_bytes()),
+            (b"CH", []) => read(&[OPERATING_CHANNEL]),
+            (b"NI", []) => {
+                let name = radio.name.clone();
+                read(&name)
+            }
+            (b"NI", name) if is_node_identifier(name) => {
+                radio.name = name.to_vec();
+                (AtStatus::Ok, 0)
+            }
             (
                 b"AP" | b"NP" | b"SH" | b"SL" | b"MY" | b"AI" | b"CE" | b"SM" | b"HV" | b"VR"
-                | b"NI",
+                | b"NI" | b"ID" | b"OP" | b"OI" | b"CH",
                 _,
             ) => (AtStatus::InvalidParameter, 0),
             _ => (AtStatus::InvalidCommand, 0),
@@ -503,6 +528,12 @@ impl State {
         };
         self.send_to(from, &response, true);
     }
+}
+
+/// Whether `name` is a node identifier a radio accepts: 1 to 20 printable ASCII
+/// characters.
+fn is_node_identifier(name: &[u8]) -> bool {
+    (1..=AT_VALUE_MAX).contains(&name.len()) && name.iter().all(|b| (0x20..0x7F).contains(b))
 }
 
 /// The addressing fields of an Explicit Addressing Command, carried to the receiver.
