@@ -229,3 +229,47 @@ async fn radio_cuts_a_node_on_schedule() {
         other => panic!("{other:?}"),
     }
 }
+
+#[tokio::test]
+async fn radio_logs_statuses_by_their_snake_case_names() {
+    let radio = Running::start(&[
+        "radio",
+        "--coordinator",
+        "tcp-listen:127.0.0.1:0",
+        "--verbose",
+        "--duration",
+        "120",
+    ]);
+    let coordinator = radio.listening("coordinator ");
+    let mut ground = device(coordinator, ApiMode::Unescaped).await;
+    assert!(matches!(
+        next_frame(&mut ground).await.parse(),
+        Ok(Frame::ModemStatus(_))
+    ));
+    let tx = TransmitRequestRepr {
+        frame_id: 1,
+        dst64: Address64(0x0013_A200_DEAD_BEEF),
+        dst16: Address16::UNKNOWN,
+        radius: 0,
+        options: 0,
+        data: b"c\x02\xff",
+    };
+    ground.send(&tx).await.unwrap();
+    let line = radio.line(|l| l.contains("not delivered"));
+    assert!(
+        line.ends_with("0013a200deadbeef: 3 bytes not delivered: address_not_found (0x24)"),
+        "{line}"
+    );
+    let at = xbee_api::AtCommandRepr {
+        queued: false,
+        frame_id: 2,
+        command: *b"ZZ",
+        parameter: &[],
+    };
+    ground.send(&at).await.unwrap();
+    let line = radio.line(|l| l.contains("AT ZZ"));
+    assert!(
+        line.ends_with("AT ZZ answered invalid_command (0x02)"),
+        "{line}"
+    );
+}

@@ -357,7 +357,7 @@ pub(crate) fn event_line(event: &NetEvent, verbose: bool) -> Option<String> {
             len,
             status,
         } => format!(
-            "{from} -> {to}: {len} bytes not delivered: {status:?} (0x{:02x})",
+            "{from} -> {to}: {len} bytes not delivered: {status} (0x{:02x})",
             u8::from(*status)
         ),
         NetEvent::DecodeError { node, error } => format!("{node}: frame dropped: {error}"),
@@ -374,8 +374,9 @@ pub(crate) fn event_line(event: &NetEvent, verbose: bool) -> Option<String> {
             command,
             status,
         } if verbose => format!(
-            "{node}: AT {} answered {status:?}",
-            String::from_utf8_lossy(command)
+            "{node}: AT {} answered {status} (0x{:02x})",
+            String::from_utf8_lossy(command),
+            u8::from(*status)
         ),
         NetEvent::Ignored { node, frame_type } if verbose => {
             format!("{node}: frame type 0x{frame_type:02x} ignored")
