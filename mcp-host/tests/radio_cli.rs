@@ -185,6 +185,69 @@ fn bad_node_arguments_are_input_errors() {
     }
 }
 
+#[test]
+fn nonsense_numbers_are_refused_with_a_reason() {
+    for (args, reason) in [
+        (
+            &["sim", "--link", "pty", "--rx-buffer", "0"][..],
+            "drops every command",
+        ),
+        (
+            &["sim", "--link", "pty", "--rx-buffer", "18"],
+            "drops every command",
+        ),
+        (
+            &["sim", "--link", "pty", "--rx-buffer=-1"],
+            "number of bytes",
+        ),
+        (&["sim", "--link", "pty", "--duration=-1"], "seconds"),
+        (&["sim", "--link", "pty", "--duration", "1e300"], "seconds"),
+        (
+            &["radio", "--coordinator", "pty", "--duration", "NaN"],
+            "seconds",
+        ),
+        (
+            &["sim", "--link", "pty", "--latency", "18446744073709551615"],
+            "3600000",
+        ),
+        (
+            &["radio", "--coordinator", "pty", "--jitter", "3600001"],
+            "3600000",
+        ),
+        (
+            &[
+                "radio",
+                "--coordinator",
+                "pty",
+                "--faults",
+                "coordinator=latency=1e300",
+            ],
+            "milliseconds",
+        ),
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+            .args(args)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(stderr.contains(reason), "{args:?}: {stderr}");
+    }
+    // The smallest receive buffer that lets a command through is accepted.
+    let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args([
+            "sim",
+            "--link",
+            "tcp-listen:127.0.0.1:0",
+            "--rx-buffer",
+            "19",
+        ])
+        .args(["--duration", "0"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{out:?}");
+}
+
 #[tokio::test]
 async fn radio_cuts_a_node_on_schedule() {
     let radio = Running::start(&[

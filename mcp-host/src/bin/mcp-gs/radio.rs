@@ -35,8 +35,8 @@ pub(crate) struct RadioArgs {
     #[arg(long, short)]
     verbose: bool,
     /// Stop after this many seconds (default: run until Ctrl-C).
-    #[arg(long, value_name = "S")]
-    duration: Option<f64>,
+    #[arg(long, value_name = "S", value_parser = parse_duration)]
+    duration: Option<Duration>,
 }
 
 const RADIO_HELP: &str = "\
@@ -54,6 +54,22 @@ ones to it fail with 0x21 network ACK failure).
 Example: a ground station on a pty, a MAV firmware's UART on TCP port 5000:
   mcp-gs radio --coordinator pty --node 0013A20040B599B9=tcp:127.0.0.1:5000";
 
+/// The longest latency or jitter, milliseconds: an hour.
+const MAX_DELAY_MS: u64 = 3_600_000;
+/// The longest `--duration`, seconds (about 31 years).
+const MAX_DURATION_S: f64 = 1e9;
+
+/// `--duration`: a number of seconds, 0 or more.
+pub(crate) fn parse_duration(s: &str) -> Result<Duration, String> {
+    s.parse::<f64>()
+        .ok()
+        .filter(|x| (0.0..=MAX_DURATION_S).contains(x))
+        .map(Duration::from_secs_f64)
+        .ok_or_else(|| {
+            format!("expected a number of seconds from 0 to {MAX_DURATION_S}, got `{s}`")
+        })
+}
+
 /// Network-wide settings shared by `radio` and `sim`.
 #[derive(Debug, Args)]
 pub(crate) struct NetArgs {
@@ -70,11 +86,13 @@ pub(crate) struct NetArgs {
     /// Probability that a frame to a link is lost.
     #[arg(long, value_name = "P", default_value_t = 0.0)]
     loss: f64,
-    /// Delay before a frame is written to a link, milliseconds.
-    #[arg(long, value_name = "MS", default_value_t = 0)]
+    /// Delay before a frame is written to a link, milliseconds (at most an hour).
+    #[arg(long, value_name = "MS", default_value_t = 0,
+          value_parser = clap::value_parser!(u64).range(0..=MAX_DELAY_MS))]
     latency: u64,
-    /// Random extra delay, up to this many milliseconds.
-    #[arg(long, value_name = "MS", default_value_t = 0)]
+    /// Random extra delay, up to this many milliseconds (at most an hour).
+    #[arg(long, value_name = "MS", default_value_t = 0,
+          value_parser = clap::value_parser!(u64).range(0..=MAX_DELAY_MS))]
     jitter: u64,
     /// Probability that a frame is written twice.
     #[arg(long, value_name = "P", default_value_t = 0.0)]
@@ -294,9 +312,12 @@ impl std::str::FromStr for LinkFaults {
                     .ok_or_else(|| format!("{key} must be in 0..=1, got {number}"))
             };
             let millis = || {
-                (number >= 0.0 && number.is_finite())
+                (0.0..=MAX_DELAY_MS as f64)
+                    .contains(&number)
                     .then(|| Duration::from_secs_f64(number / 1000.0))
-                    .ok_or_else(|| format!("{key} must be a number of milliseconds"))
+                    .ok_or_else(|| {
+                        format!("{key} must be a number of milliseconds from 0 to {MAX_DELAY_MS}")
+                    })
             };
             match key {
                 "loss" => faults.loss = probability()?,
@@ -392,14 +413,10 @@ pub(crate) async fn watch(
     mut events: broadcast::Receiver<NetEvent>,
     net: &NetArgs,
     verbose: bool,
-    duration: Option<f64>,
+    duration: Option<Duration>,
 ) -> Result<(), Failure> {
     let mut timeline = net.timeline(Instant::now()).into_iter().peekable();
-    let deadline = match duration {
-        Some(s) if s.is_finite() && s >= 0.0 => Some(Instant::now() + Duration::from_secs_f64(s)),
-        Some(s) => return Err(Failure::input(format!("bad --duration {s}"))),
-        None => None,
-    };
+    let deadline = duration.map(|d| Instant::now() + d);
     let stop = async {
         match deadline {
             Some(d) => tokio::time::sleep_until(d).await,

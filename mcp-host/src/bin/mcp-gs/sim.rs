@@ -1,12 +1,14 @@
 //! `mcp-gs sim`: simulated MAVs behind a virtual XBee network on a link.
 
+use std::time::Duration;
+
 use clap::Args;
 use mcp_host::Link;
 use mcp_host::radio::MAX_UNICAST_FRAGMENTED;
 use mcp_host::sim::{SimOptions, Simulator, fleet_addresses};
 use xbee_api::Address64;
 
-use crate::radio::{NetArgs, describe_node, parse_address, watch};
+use crate::radio::{NetArgs, describe_node, parse_address, parse_duration, watch};
 use crate::{ApiModeArg, Failure};
 
 /// Arguments of `sim`.
@@ -28,8 +30,9 @@ pub(crate) struct SimArgs {
     #[arg(long, default_value = "1", value_name = "1|2")]
     api_mode: ApiModeArg,
     /// Drop commands whose frame is longer than N bytes, as the deployed MAV's 60-byte
-    /// UART receive buffer does (default: no limit).
-    #[arg(long, value_name = "N")]
+    /// UART receive buffer does (default: no limit). At least 19, the smallest command's
+    /// frame.
+    #[arg(long, value_name = "N", value_parser = parse_rx_buffer)]
     rx_buffer: Option<usize>,
     #[command(flatten)]
     net: NetArgs,
@@ -37,8 +40,29 @@ pub(crate) struct SimArgs {
     #[arg(long, short)]
     verbose: bool,
     /// Stop after this many seconds (default: run until Ctrl-C).
-    #[arg(long, value_name = "S")]
-    duration: Option<f64>,
+    #[arg(long, value_name = "S", value_parser = parse_duration)]
+    duration: Option<Duration>,
+}
+
+/// The wire length of the smallest command frame a MAV receives: a Receive Packet (frame
+/// data 12 bytes and the payload) carrying a 3-byte command (a status request, landing
+/// or controllers), with the start delimiter, the length and the checksum. A receive
+/// buffer smaller than this drops every command.
+const SMALLEST_COMMAND_FRAME: usize = 4 + 12 + 3;
+
+/// `--rx-buffer`: a number of bytes no smaller than the smallest command's frame.
+fn parse_rx_buffer(s: &str) -> Result<usize, String> {
+    let n: usize = s
+        .parse()
+        .map_err(|_| format!("expected a number of bytes, got `{s}`"))?;
+    if n < SMALLEST_COMMAND_FRAME {
+        return Err(format!(
+            "a receive buffer of {n} bytes drops every command: the smallest command's \
+             frame takes {SMALLEST_COMMAND_FRAME} bytes (the deployed MAV's buffer is {})",
+            mcp_host::sim::MAV_RX_BUFFER
+        ));
+    }
+    Ok(n)
 }
 
 const SIM_HELP: &str = "\
