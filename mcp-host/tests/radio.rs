@@ -876,3 +876,117 @@ async fn network_parameters_read_and_the_node_identifier_can_be_set() {
         (AtStatus::Ok, b"Left wing".to_vec())
     );
 }
+
+/// A peer on the far end of a pseudo-terminal, opened as a ground station would.
+fn open_far_end(path: &std::path::Path) -> tokio_serial::SerialStream {
+    tokio_serial::SerialStream::open(&tokio_serial::new(
+        path.to_str().expect("utf-8 path"),
+        115_200,
+    ))
+    .expect("open the pty")
+}
+
+#[tokio::test]
+async fn a_pty_node_is_up_only_while_a_peer_has_it_open() {
+    use tokio_serial::SerialPort;
+    let network = Network::new(NetworkConfig::default());
+    let mut events = network.subscribe();
+    let coord = network
+        .add_link(COORD, &Link::Pty, NodeOptions::default())
+        .await
+        .unwrap();
+    let path = coord.pty_path.clone().unwrap();
+    let (_, io) = network
+        .add_in_process(MAV_A, NodeOptions::default())
+        .unwrap();
+    let mut mav = Dev::new(io, ApiMode::Unescaped);
+    assert_eq!(mav.modem_status().await, ModemStatus::JoinedNetwork);
+    let connected = |e: &NetEvent| matches!(e, NetEvent::Connected { node, .. } if *node == COORD);
+    let disconnected =
+        |e: &NetEvent| matches!(e, NetEvent::Disconnected { node, .. } if *node == COORD);
+
+    // Nobody has the pty open: the coordinator is down, what is sent to it fails and
+    // nothing is kept for a ground station that opens it later.
+    for id in 1..=40 {
+        mav.tx(id, COORD, b"stale").await;
+        assert_eq!(
+            mav.status().await,
+            (
+                id,
+                Address16::COORDINATOR,
+                DeliveryStatus::NetworkAckFailure,
+                OK
+            )
+        );
+    }
+    assert!(!network.is_connected(COORD));
+    assert_eq!(network.stats(COORD).unwrap().connections, 0);
+
+    // A ground station opens it: the link comes up, and the first frame it reads is
+    // the modem status, then what is sent from now on.
+    let mut ground = Dev::new(open_far_end(&path), ApiMode::Unescaped);
+    wait_for(&mut events, connected).await;
+    assert!(network.is_connected(COORD));
+    assert_eq!(ground.modem_status().await, ModemStatus::CoordinatorStarted);
+    mav.tx(41, COORD, b"fresh").await;
+    assert_eq!(ground.rx().await.3, b"fresh");
+    assert_eq!(
+        mav.status().await,
+        (41, Address16::COORDINATOR, DeliveryStatus::Success, OK)
+    );
+    drop(ground);
+    wait_for(&mut events, disconnected).await;
+    assert!(!network.is_connected(COORD));
+
+    // A ground station that leaves with frames unread: the next one does not get them.
+    let far = open_far_end(&path);
+    wait_for(&mut events, connected).await;
+    mav.tx(42, COORD, b"unread").await;
+    assert_eq!(
+        mav.status().await,
+        (42, Address16::COORDINATOR, DeliveryStatus::Success, OK)
+    );
+    // Until both frames (modem status, receive packet: 6 + 22 bytes) wait on the far end.
+    let deadline = tokio::time::Instant::now() + GUARD;
+    while far.bytes_to_read().unwrap() < 28 {
+        assert!(tokio::time::Instant::now() < deadline, "frames in time");
+        tokio::time::sleep(Duration::from_millis(5)).await;
+    }
+    drop(far);
+    wait_for(&mut events, disconnected).await;
+    mav.tx(43, COORD, b"lost").await;
+    assert_eq!(mav.status().await.2, DeliveryStatus::NetworkAckFailure);
+    let mut ground = Dev::new(open_far_end(&path), ApiMode::Unescaped);
+    wait_for(&mut events, connected).await;
+    assert_eq!(ground.modem_status().await, ModemStatus::CoordinatorStarted);
+    mav.tx(44, COORD, b"again").await;
+    assert_eq!(ground.rx().await.3, b"again");
+    assert_eq!(network.stats(COORD).unwrap().connections, 3);
+}
+
+#[tokio::test]
+async fn a_pty_peer_that_writes_at_once_is_answered() {
+    // The peer's first frame may arrive before the radio has seen it open the far end.
+    let network = Network::new(NetworkConfig::default());
+    let coord = network
+        .add_link(COORD, &Link::Pty, NodeOptions::default())
+        .await
+        .unwrap();
+    let mut ground = Dev::new(
+        open_far_end(coord.pty_path.as_deref().unwrap()),
+        ApiMode::Unescaped,
+    );
+    ground
+        .send(&Frame::AtCommand(AtCommandRepr {
+            queued: false,
+            frame_id: 1,
+            command: *b"AP",
+            parameter: &[],
+        }))
+        .await;
+    assert_eq!(ground.modem_status().await, ModemStatus::CoordinatorStarted);
+    match ground.frame().await.parse() {
+        Ok(Frame::AtCommandResponse(r)) => assert_eq!((r.status, r.data), (AtStatus::Ok, &[1][..])),
+        other => panic!("{other:?}"),
+    }
+}

@@ -336,3 +336,24 @@ async fn radio_logs_statuses_by_their_snake_case_names() {
         "{line}"
     );
 }
+
+#[test]
+fn sim_on_a_pty_is_connected_while_a_ground_station_has_it_open() {
+    let sim = Running::start(&["sim", "--link", "pty", "--duration", "120"]);
+    let line = sim.line(|l| l.starts_with("ground station link"));
+    let path = line
+        .split("(open it as serial:")
+        .nth(1)
+        .and_then(|rest| rest.split(')').next())
+        .expect("the pty's path")
+        .to_owned();
+    let connected = format!("0000000000000000 connected ({path})");
+    for _ in 0..2 {
+        let port = tokio_serial::new(&path, 115_200)
+            .open_native()
+            .expect("open the pty");
+        sim.line(|l| l.ends_with(&connected));
+        drop(port);
+        sim.line(|l| l.contains("0000000000000000 disconnected: the peer closed the link"));
+    }
+}

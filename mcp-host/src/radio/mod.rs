@@ -39,6 +39,11 @@
 //!   coordinator, 0x02 joined network on other nodes. Links that go down are reopened
 //!   (a `tcp-listen` node's next peer is the node back); frames for a node whose link is
 //!   down are not queued.
+//! - A `pty` node's link is up only while a device has the far end of its
+//!   pseudo-terminal open (the radio looks every 20 ms while nobody has): until then,
+//!   and after the device closes it, the node is down and nothing is written for it, and
+//!   what a device leaves unread when it closes the far end is dropped, so that the
+//!   next device starts with its modem status, not with stale frames.
 //! - [`Faults`] (loss, latency, jitter, duplication, reordering, corruption) apply to the
 //!   frames written to a link, network-wide or per node, drawn from a generator seeded
 //!   with [`NetworkConfig::seed`] and the node's address, so that a run replays.
@@ -79,6 +84,7 @@
 
 mod faults;
 mod port;
+mod pty;
 mod router;
 mod wire;
 
@@ -339,9 +345,10 @@ impl Network {
 
     /// Adds a node whose device is at the other end of `link`: a serial port, a TCP
     /// connection, a TCP listener (each new peer is the device back) or a
-    /// pseudo-terminal (its path is in the returned [`NodeInfo::pty_path`]). The link is
-    /// opened in the background and reopened after each disconnection; a `serial` or
-    /// `tcp` link that is not there yet is retried.
+    /// pseudo-terminal (its path is in the returned [`NodeInfo::pty_path`]; the link is
+    /// up while a device has that path open). The link is opened in the background and
+    /// reopened after each disconnection; a `serial` or `tcp` link that is not there yet
+    /// is retried.
     pub async fn add_link(
         &self,
         address: Address64,
@@ -349,6 +356,16 @@ impl Network {
         options: NodeOptions,
     ) -> Result<NodeInfo, NetworkError> {
         self.check_new(address)?;
+        if matches!(link, Link::Pty) {
+            let port = pty::PtyPort::new().map_err(|source| NetworkError::Link {
+                node: address,
+                source,
+            })?;
+            let pty_path = port.path().to_owned();
+            let mut info = self.insert(address, options, Source::Pty(port))?;
+            info.pty_path = Some(pty_path);
+            return Ok(info);
+        }
         let link_options = LinkOptions {
             api_mode: options.api_mode,
             connect_timeout: options.connect_timeout,

@@ -2,16 +2,19 @@
 //! decodes the frames its device writes and writes the frames the network sends it.
 
 use std::collections::VecDeque;
+use std::pin::Pin;
 use std::sync::{Arc, Mutex};
+use std::task::{Context, Poll};
 
 use bytes::Bytes;
 use futures::StreamExt;
-use tokio::io::{AsyncRead, AsyncWrite, AsyncWriteExt};
+use tokio::io::{AsyncRead, AsyncWrite, AsyncWriteExt, ReadBuf};
 use tokio::sync::mpsc;
 use tokio::time::{Instant, sleep_until};
 use tokio_util::codec::FramedRead;
 use xbee_api::{Address64, ApiMode};
 
+use super::pty::{PtyPort, PtyStream};
 use super::router::{OUT_CAPACITY, Out, State};
 use crate::codec::{CodecItem, XBeeCodec};
 use crate::options::ReconnectPolicy;
@@ -32,15 +35,72 @@ pub(crate) enum Source {
         policy: ReconnectPolicy,
         opened: bool,
     },
+    /// A pseudo-terminal: up while a peer has its far end open.
+    Pty(PtyPort),
     /// One stream; the node is gone when it ends.
     Once(Option<Box<dyn Io>>),
 }
 
+/// An open byte stream to a device.
+enum Stream {
+    /// A link's transport or a stream given to the network.
+    Boxed(Box<dyn Io>),
+    /// A pseudo-terminal's master side, given back to its [`PtyPort`] when its peer
+    /// leaves.
+    Pty(PtyStream),
+}
+
+impl AsyncRead for Stream {
+    fn poll_read(
+        self: Pin<&mut Self>,
+        cx: &mut Context<'_>,
+        buf: &mut ReadBuf<'_>,
+    ) -> Poll<std::io::Result<()>> {
+        match self.get_mut() {
+            Stream::Boxed(io) => Pin::new(io).poll_read(cx, buf),
+            Stream::Pty(io) => Pin::new(io).poll_read(cx, buf),
+        }
+    }
+}
+
+impl AsyncWrite for Stream {
+    fn poll_write(
+        self: Pin<&mut Self>,
+        cx: &mut Context<'_>,
+        buf: &[u8],
+    ) -> Poll<std::io::Result<usize>> {
+        match self.get_mut() {
+            Stream::Boxed(io) => Pin::new(io).poll_write(cx, buf),
+            Stream::Pty(io) => Pin::new(io).poll_write(cx, buf),
+        }
+    }
+
+    fn poll_flush(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<std::io::Result<()>> {
+        match self.get_mut() {
+            Stream::Boxed(io) => Pin::new(io).poll_flush(cx),
+            Stream::Pty(io) => Pin::new(io).poll_flush(cx),
+        }
+    }
+
+    fn poll_shutdown(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<std::io::Result<()>> {
+        match self.get_mut() {
+            Stream::Boxed(io) => Pin::new(io).poll_shutdown(cx),
+            Stream::Pty(io) => Pin::new(io).poll_shutdown(cx),
+        }
+    }
+}
+
 impl Source {
     /// The next stream and a description of the peer, or `None` when there will be none.
-    async fn next(&mut self, node: Address64) -> Option<(Box<dyn Io>, String)> {
+    async fn next(&mut self, node: Address64) -> Option<(Stream, String)> {
         match self {
-            Source::Once(io) => io.take().map(|io| (io, IN_PROCESS.to_owned())),
+            Source::Once(io) => io
+                .take()
+                .map(|io| (Stream::Boxed(io), IN_PROCESS.to_owned())),
+            Source::Pty(port) => {
+                let peer = port.path().display().to_string();
+                port.peer().await.map(|io| (Stream::Pty(io), peer))
+            }
             Source::Link {
                 connector,
                 policy,
@@ -55,7 +115,7 @@ impl Source {
                 match result {
                     Ok(t) => {
                         let peer = t.peer().to_owned();
-                        return Some((Box::new(t), peer));
+                        return Some((Stream::Boxed(Box::new(t)), peer));
                     }
                     Err(e) if e.is_retryable() => {
                         tracing::warn!(%node, error = %e, "node link not available yet");
@@ -72,6 +132,13 @@ impl Source {
     fn mark_healthy(&mut self) {
         if let Source::Link { connector, .. } = self {
             connector.mark_healthy();
+        }
+    }
+
+    /// Takes back a stream that ended.
+    fn give_back(&mut self, stream: Stream) {
+        if let (Source::Pty(port), Stream::Pty(io)) = (self, stream) {
+            port.give_back(io);
         }
     }
 }
@@ -101,13 +168,17 @@ async fn run_node(
     // A single stream is up from the start: the network marked the node connected
     // when it was added.
     let mut up_already = matches!(source, Source::Once(_));
-    while let Some((io, peer)) = source.next(addr).await {
+    while let Some((mut io, peer)) = source.next(addr).await {
         if !std::mem::take(&mut up_already) {
             // Frames queued while the link was down are stale.
             while out.try_recv().is_ok() {}
             lock(&state).connected(addr, peer);
         }
-        let reason = serve(&state, addr, mode, io, &mut out, &mut source).await;
+        let (reason, healthy) = serve(&state, addr, mode, &mut io, &mut out).await;
+        if healthy {
+            source.mark_healthy();
+        }
+        source.give_back(io);
         let ended = matches!(reason, End::NetworkGone);
         lock(&state).disconnected(addr, reason.to_string());
         if ended {
@@ -138,13 +209,26 @@ impl std::fmt::Display for End {
     }
 }
 
+/// Serves one stream until it ends: why, and whether it carried a frame from the device.
 async fn serve(
     state: &Mutex<State>,
     addr: Address64,
     mode: ApiMode,
-    io: Box<dyn Io>,
+    io: &mut Stream,
     out: &mut mpsc::Receiver<Out>,
-    source: &mut Source,
+) -> (End, bool) {
+    let mut healthy = false;
+    let end = serve_until_end(state, addr, mode, io, out, &mut healthy).await;
+    (end, healthy)
+}
+
+async fn serve_until_end(
+    state: &Mutex<State>,
+    addr: Address64,
+    mode: ApiMode,
+    io: &mut Stream,
+    out: &mut mpsc::Receiver<Out>,
+    healthy: &mut bool,
 ) -> End {
     let (reader, mut writer) = tokio::io::split(io);
     let mut frames = FramedRead::new(reader, XBeeCodec::new(mode));
@@ -156,7 +240,7 @@ async fn serve(
         tokio::select! {
             item = frames.next() => match item {
                 Some(Ok(CodecItem::Frame(frame))) => {
-                    source.mark_healthy();
+                    *healthy = true;
                     lock(state).handle(addr, frame.data());
                 }
                 Some(Ok(CodecItem::Error(error))) => lock(state).decode_error(addr, error),
