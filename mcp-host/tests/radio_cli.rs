@@ -323,9 +323,23 @@ async fn radio_logs_statuses_by_their_snake_case_names() {
         line.ends_with("0013a200deadbeef: 3 bytes not delivered: address_not_found (0x24)"),
         "{line}"
     );
+    // The same failure again and again is not printed again at once; another one is.
+    for frame_id in 2..12 {
+        ground
+            .send(&TransmitRequestRepr { frame_id, ..tx })
+            .await
+            .unwrap();
+    }
+    let other = TransmitRequestRepr {
+        dst64: Address64(0x0013_A200_DEAD_BEE0),
+        ..tx
+    };
+    ground.send(&other).await.unwrap();
+    let line = radio.line(|l| l.contains("not delivered"));
+    assert!(line.contains("0013a200deadbee0: 3 bytes"), "{line}");
     let at = xbee_api::AtCommandRepr {
         queued: false,
-        frame_id: 2,
+        frame_id: 20,
         command: *b"ZZ",
         parameter: &[],
     };

@@ -1,5 +1,6 @@
 //! `mcp-gs radio`: a virtual XBee network between links.
 
+use std::collections::HashMap;
 use std::time::{Duration, SystemTime};
 
 use clap::Args;
@@ -10,7 +11,7 @@ use mcp_host::radio::{
 };
 use tokio::sync::broadcast;
 use tokio::time::Instant;
-use xbee_api::{Address64, ApiMode};
+use xbee_api::{Address64, ApiMode, DeliveryStatus};
 
 use crate::{ApiModeArg, Failure};
 
@@ -407,7 +408,41 @@ pub(crate) fn event_line(event: &NetEvent, verbose: bool) -> Option<String> {
     Some(format!("{now} {text}"))
 }
 
-/// Prints network events and carries out the cuts until Ctrl-C or `duration`.
+/// How long a failed delivery from one node to another with one status is not printed
+/// again after it was: a MAV's 20 Hz telemetry to a coordinator with no ground station
+/// would otherwise print 20 lines a second.
+const REPEAT_QUIET: Duration = Duration::from_secs(5);
+
+/// Failed deliveries printed lately, by sender, destination and status, with how many
+/// like each were not printed since.
+#[derive(Default)]
+struct Repeats {
+    seen: HashMap<(Address64, Address64, DeliveryStatus), (Instant, u64)>,
+}
+
+impl Repeats {
+    /// Whether to print a failure with `key` at `now`: `Some(n)` with the number of
+    /// failures like it not printed since the last one, or `None` to stay quiet.
+    fn admit(&mut self, key: (Address64, Address64, DeliveryStatus), now: Instant) -> Option<u64> {
+        match self.seen.get_mut(&key) {
+            Some((printed, quiet)) if now.duration_since(*printed) < REPEAT_QUIET => {
+                *quiet += 1;
+                None
+            }
+            Some((printed, quiet)) => {
+                *printed = now;
+                Some(std::mem::take(quiet))
+            }
+            None => {
+                self.seen.insert(key, (now, 0));
+                Some(0)
+            }
+        }
+    }
+}
+
+/// Prints network events and carries out the cuts until Ctrl-C or `duration`. A failed
+/// delivery like one printed less than five seconds before is counted, not printed.
 pub(crate) async fn watch(
     network: &Network,
     mut events: broadcast::Receiver<NetEvent>,
@@ -426,6 +461,7 @@ pub(crate) async fn watch(
         }
     };
     tokio::pin!(stop);
+    let mut failures = Repeats::default();
     loop {
         let next = timeline.peek().map(|step| step.0);
         tokio::select! {
@@ -443,8 +479,20 @@ pub(crate) async fn watch(
             },
             event = events.recv() => match event {
                 Ok(event) => {
+                    let repeats = match &event {
+                        NetEvent::Failed { from, to, status, .. } => {
+                            match failures.admit((*from, *to, *status), Instant::now()) {
+                                Some(n) => n,
+                                None => continue,
+                            }
+                        }
+                        _ => 0,
+                    };
                     if let Some(line) = event_line(&event, verbose) {
-                        out!("{line}");
+                        match repeats {
+                            0 => out!("{line}"),
+                            n => out!("{line} (and {n} more like it not shown)"),
+                        }
                     }
                 }
                 Err(broadcast::error::RecvError::Lagged(n)) => out!("({n} events not shown)"),
@@ -485,4 +533,33 @@ pub(crate) async fn run(args: RadioArgs) -> Result<(), Failure> {
     }
     out!("running; Ctrl-C stops");
     watch(&network, events, &args.net, args.verbose, args.duration).await
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn repeated_failures_are_counted_then_printed_again() {
+        let mav = Address64(0x0013_A200_40B5_99B9);
+        let key = (
+            mav,
+            Address64::COORDINATOR,
+            DeliveryStatus::NetworkAckFailure,
+        );
+        let other = (mav, Address64::COORDINATOR, DeliveryStatus::AddressNotFound);
+        let start = Instant::now();
+        let mut repeats = Repeats::default();
+        assert_eq!(repeats.admit(key, start), Some(0));
+        for i in 1..=99 {
+            assert_eq!(
+                repeats.admit(key, start + Duration::from_millis(50 * i)),
+                None
+            );
+        }
+        // Another status is news.
+        assert_eq!(repeats.admit(other, start), Some(0));
+        assert_eq!(repeats.admit(key, start + REPEAT_QUIET), Some(99));
+        assert_eq!(repeats.admit(key, start + REPEAT_QUIET), None);
+    }
 }
