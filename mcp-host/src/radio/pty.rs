@@ -97,23 +97,32 @@ impl PtyPort {
         self.drop_unread();
     }
 
-    /// Empties the far end's input: opens it for a moment and flushes it. Does nothing
-    /// if it cannot be opened (a new peer already has it, exclusively).
+    /// Empties the far end's input: opens it for a moment, without blocking and
+    /// without a lock (a serial port library's shared lock would make a new peer's
+    /// exclusive open fail if it came at that moment), and reads what is there. Does
+    /// nothing if it cannot be opened (a new peer already has it, exclusively).
     fn drop_unread(&self) {
-        let Some(path) = self.path.to_str() else {
-            return;
-        };
-        match tokio_serial::new(path, 115_200)
-            .exclusive(false)
-            .open_native()
-        {
-            Ok(far) => {
-                if let Err(e) = far.clear(tokio_serial::ClearBuffer::Input) {
-                    tracing::debug!(path, error = %e, "pseudo-terminal: unread bytes not dropped");
-                }
-            }
+        use std::io::Read;
+        use std::os::unix::fs::OpenOptionsExt;
+        let far = std::fs::OpenOptions::new()
+            .read(true)
+            .custom_flags(libc::O_NONBLOCK | libc::O_NOCTTY)
+            .open(&self.path);
+        let mut far = match far {
+            Ok(far) => far,
             Err(e) => {
-                tracing::debug!(path, error = %e, "pseudo-terminal: far end not opened to drop unread bytes")
+                tracing::debug!(path = %self.path.display(), error = %e,
+                    "pseudo-terminal: far end not opened to drop unread bytes");
+                return;
+            }
+        };
+        // The far end is in raw mode: a read returns what is queued, WouldBlock once
+        // nothing is. Bounded: a pseudo-terminal queues a few KiB.
+        let mut buf = [0u8; 4096];
+        for _ in 0..64 {
+            match far.read(&mut buf) {
+                Ok(n) if n > 0 => {}
+                _ => break,
             }
         }
     }
