@@ -174,7 +174,7 @@ fn decode_reports_bad_frames_and_goes_on() {
         text.lines()
             .nth(1)
             .unwrap()
-            .starts_with("error at offset 12: bad checksum"),
+            .starts_with("error, found at input offset 12: bad checksum"),
         "{text}"
     );
 }

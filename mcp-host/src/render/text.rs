@@ -132,10 +132,11 @@ fn data_suffix(data: &[u8]) -> String {
     }
 }
 
-/// A dropped frame as a line of text, with its byte offset in the input when known.
+/// A dropped frame as a line of text, with the input offset at which the decoder
+/// dropped it when known (the frame started before it).
 pub fn decode_error(error: &DecodeError, offset: Option<u64>) -> String {
     match offset {
-        Some(offset) => format!("error at offset {offset}: {error}"),
+        Some(offset) => format!("error, found at input offset {offset}: {error}"),
         None => format!("error: {error}"),
     }
 }
