@@ -1,5 +1,7 @@
-//! API mode 2 unescaping of bytes that lie whole in one slice, 16 bytes a step.
+//! API mode 2 unescaping of bytes that lie whole in one slice, 16 bytes a step (8 on
+//! 32-bit targets).
 
+#[cfg(any(test, target_pointer_width = "64"))]
 use wide::u8x16;
 
 use crate::wire::{ESCAPE, ESCAPE_XOR, START_DELIMITER, needs_escape, sum};
@@ -36,14 +38,58 @@ pub(crate) fn unescape_byte(src: &[u8], i: &mut usize) -> Option<u8> {
 /// Unescapes `len` bytes from the start of `src` into `dst[..len]`; returns how many
 /// bytes of `src` they took and their sum (the running part of the checksum).
 ///
-/// Goes 16 bytes a step (SIMD compares and stores where the target has them), storing
-/// whole steps even when fewer of their bytes count, so it needs 16 bytes of scratch
-/// space past `len` in `dst` (without them, or near the end of `src`, it goes a byte at
-/// a time). The sum is taken afterwards from `dst[..len]` ([`sum`]). `None` as for
+/// Goes a step of [`STEP`] bytes at a time (16 with SIMD compares on 64-bit targets; 8,
+/// two words each tested for special bytes at once, on 32-bit ones such as a Cortex-M),
+/// storing whole steps even when fewer of their bytes count, so it needs `STEP` bytes of
+/// scratch space past `len` in `dst` (without them, or near the end of `src`, it goes a
+/// byte at a time). The sum is taken afterwards from `dst[..len]` ([`sum`]). `None` as for
 /// [`unescape_byte`], and `dst` may have been written to.
 #[inline(always)]
 pub(crate) fn unescape(src: &[u8], dst: &mut [u8], len: usize) -> Option<(usize, u8)> {
-    let Some(out) = dst.get_mut(..len + 16) else {
+    #[cfg(target_pointer_width = "64")]
+    let scan = |step: &[u8; STEP], to: &mut [u8]| {
+        // Loaded once, then stored and compared from the register.
+        let bytes = u8x16::new(*step);
+        to.copy_from_slice(bytes.as_array_ref());
+        let specials = special_mask(bytes);
+        (specials != 0).then(|| specials.trailing_zeros() as usize)
+    };
+    // Two words a step: the fewest instructions a byte on a Cortex-M3 (one word a
+    // step costs more loop, four spill registers).
+    #[cfg(not(target_pointer_width = "64"))]
+    let scan = |step: &[u8; STEP], to: &mut [u8]| {
+        to.copy_from_slice(step);
+        let [a, b, c, d, e, f, g, h] = *step;
+        let lo = special_lanes(u32::from_le_bytes([a, b, c, d]));
+        let hi = special_lanes(u32::from_le_bytes([e, f, g, h]));
+        if lo != 0 {
+            Some((lo.trailing_zeros() / 8) as usize)
+        } else if hi != 0 {
+            Some(4 + (hi.trailing_zeros() / 8) as usize)
+        } else {
+            None
+        }
+    };
+    unescape_steps(src, dst, len, scan)
+}
+
+/// Bytes [`unescape`] takes a step.
+#[cfg(target_pointer_width = "64")]
+pub(crate) const STEP: usize = 16;
+/// Bytes [`unescape`] takes a step.
+#[cfg(not(target_pointer_width = "64"))]
+pub(crate) const STEP: usize = 8;
+
+/// [`unescape`] with the step's `scan`: it stores the step's bytes into `to` (`STEP`
+/// bytes) and returns the index of its first special byte (0x7D or 0x7E), if any.
+#[inline(always)]
+fn unescape_steps(
+    src: &[u8],
+    dst: &mut [u8],
+    len: usize,
+    scan: impl Fn(&[u8; STEP], &mut [u8]) -> Option<usize>,
+) -> Option<(usize, u8)> {
+    let Some(out) = dst.get_mut(..len + STEP) else {
         return unescape_bytes(src, 0, dst, 0, len);
     };
     // `rest` is what is left of `src`, `o` the offset in `out`: a whole plain step may
@@ -52,7 +98,7 @@ pub(crate) fn unescape(src: &[u8], dst: &mut [u8], len: usize) -> Option<(usize,
     let mut rest = src;
     let mut o = 0;
     while o < len {
-        let Some((step, after)) = rest.split_first_chunk::<16>() else {
+        let Some((step, after)) = rest.split_first_chunk::<STEP>() else {
             // Near the end of `src`: the rest a byte at a time. In line rather than a
             // call of `unescape_bytes`, whose result came back through memory on every
             // frame; the sum below then covers these bytes too.
@@ -64,19 +110,12 @@ pub(crate) fn unescape(src: &[u8], dst: &mut [u8], len: usize) -> Option<(usize,
             rest = src.get(i..)?;
             break;
         };
-        // Loaded once, then stored and compared from the register.
-        let bytes = u8x16::new(*step);
-        if let Some(to) = out.get_mut(o..o + 16) {
-            to.copy_from_slice(bytes.as_array_ref());
-        }
-        let specials = special_mask(bytes);
-        if specials == 0 {
+        let Some(plain) = scan(step, out.get_mut(o..o + STEP)?) else {
             rest = after;
-            o += 16;
+            o += STEP;
             continue;
-        }
+        };
         // Plain bytes before the first special one; it may lie past the frame data.
-        let plain = specials.trailing_zeros() as usize;
         if o + plain >= len {
             rest = rest.get(len - o..)?;
             o = len;
@@ -123,6 +162,7 @@ fn unescape_pair(src: &[u8], i: usize) -> Option<u8> {
 
 /// Bit `k` set if `step[k]` is 0x7D or 0x7E: two SIMD compares and a mask move.
 #[inline(always)]
+#[cfg(any(test, target_pointer_width = "64"))]
 pub(crate) fn special_mask(bytes: u8x16) -> u32 {
     let specials = bytes.cmp_eq(u8x16::splat(ESCAPE)) | bytes.cmp_eq(u8x16::splat(START_DELIMITER));
     specials.move_mask() as u32
@@ -134,13 +174,23 @@ pub(crate) fn special_mask(bytes: u8x16) -> u32 {
 #[inline(always)]
 #[cfg(any(test, not(target_pointer_width = "64")))]
 pub(crate) const fn special_in_word(word: u32) -> bool {
+    special_lanes(word) != 0
+}
+
+/// The high bit of each byte of `word` that is 0x7D or 0x7E, and maybe of bytes above
+/// (more significant than) such a byte, where the subtraction borrowed: the lowest bit
+/// set always marks the first special byte (little-endian order), and none is set if
+/// there is none.
+#[inline(always)]
+#[cfg(any(test, not(target_pointer_width = "64")))]
+pub(crate) const fn special_lanes(word: u32) -> u32 {
     const ONES: u32 = 0x0101_0101;
     const HIGHS: u32 = 0x8080_8080;
     let escapes = word ^ (ONES * ESCAPE as u32);
     let delimiters = word ^ (ONES * START_DELIMITER as u32);
     let zero_bytes =
         (escapes.wrapping_sub(ONES) & !escapes) | (delimiters.wrapping_sub(ONES) & !delimiters);
-    zero_bytes & HIGHS != 0
+    zero_bytes & HIGHS
 }
 
 #[cfg(test)]
@@ -180,6 +230,31 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn special_lanes_mark_the_first_special_byte() {
+        for at in 0..4 {
+            for b in [ESCAPE, START_DELIMITER] {
+                for fill in [0x00, 0x41, 0x7C, 0x7D, 0x7E, 0x7F, 0xFF] {
+                    let mut word = [fill; 4];
+                    word[at] = b;
+                    let first = word
+                        .iter()
+                        .position(|&x| x == ESCAPE || x == START_DELIMITER);
+                    let lanes = special_lanes(u32::from_le_bytes(word));
+                    assert_eq!(
+                        Some((lanes.trailing_zeros() / 8) as usize),
+                        first,
+                        "{word:02X?}"
+                    );
+                }
+            }
+        }
+        assert_eq!(
+            special_lanes(u32::from_le_bytes([0x7C, 0x7F, 0x00, 0xFF])),
+            0
+        );
     }
 
     #[test]
