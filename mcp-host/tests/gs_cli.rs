@@ -355,6 +355,8 @@ fn bad_arguments_exit_2_with_one_line() {
             "on",
         ],
         &["decode", "--api-mode", "3", "-"],
+        // Past what a clock can add (it used to panic).
+        &["demo", "--duration", "1e300"],
         // No position a MAV can fly to (`raw` sends any bytes).
         &[
             "encode",

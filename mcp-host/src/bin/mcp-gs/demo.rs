@@ -26,8 +26,8 @@ use crate::Failure;
 #[derive(Debug, Args)]
 pub(crate) struct DemoArgs {
     /// How long the demo runs, seconds; 0 runs until Ctrl-C.
-    #[arg(long, default_value_t = 10.0, value_name = "S")]
-    duration: f64,
+    #[arg(long, default_value = "10", value_name = "S", value_parser = crate::radio::parse_duration)]
+    duration: Duration,
     /// Show every Nth telemetry packet (they arrive at 20 Hz); at least 1.
     #[arg(long, default_value = "10", value_name = "N")]
     telemetry_every: NonZeroU64,
@@ -218,11 +218,8 @@ fn heading(text: &str) {
 
 /// Runs `demo`.
 pub(crate) async fn run(args: DemoArgs) -> Result<(), Failure> {
-    if !args.duration.is_finite() || args.duration < 0.0 {
-        return Err(Failure::input(format!("bad --duration {}", args.duration)));
-    }
     let started = Instant::now();
-    let deadline = (args.duration > 0.0).then(|| started + Duration::from_secs_f64(args.duration));
+    let deadline = (!args.duration.is_zero()).then(|| started + args.duration);
     // Set when the time is up, or at Ctrl-C (which then no longer ends the process
     // at once: the demo finishes its step and prints the summary).
     let (stop_tx, mut stop) = watch::channel(false);
@@ -276,7 +273,10 @@ pub(crate) async fn run(args: DemoArgs) -> Result<(), Failure> {
         args.telemetry_every
     );
     match deadline {
-        Some(_) => out!("  Runs for {} s, then prints a summary.", args.duration),
+        Some(_) => out!(
+            "  Runs for {} s, then prints a summary.",
+            args.duration.as_secs_f64()
+        ),
         None => out!("  Runs until Ctrl-C, then prints a summary."),
     }
 
