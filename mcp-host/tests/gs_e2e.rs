@@ -281,6 +281,24 @@ fn monitor_in_the_wrong_api_mode_says_so_over_tcp() {
         "{stderr}"
     );
     assert!(stderr.contains("try --api-mode 2"), "{stderr}");
+
+    // A request that times out in the wrong mode says why it may have.
+    let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args([
+            "status",
+            "--link",
+            &sim.link,
+            "--api-mode",
+            "1",
+            "--timeout",
+            "1",
+        ])
+        .args(["--to", MAV, "landing"])
+        .output()
+        .expect("run mcp-gs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(4), "{stderr}");
+    assert!(stderr.contains("try --api-mode 2"), "{stderr}");
 }
 
 #[test]

@@ -6,7 +6,7 @@ use clap::Args;
 use futures::StreamExt;
 use mcp_host::{
     CommandSender, ConnectError, Link, LinkError, LinkOptions, PacketStream, ReconnectPolicy,
-    SendError,
+    SendError, Stats,
 };
 use xbee_api::{Address64, ApiMode, AtStatus, Frame};
 
@@ -198,6 +198,47 @@ pub(crate) async fn check_mode(sender: &CommandSender, configured: ApiMode) {
                 radio.unwrap_or(0),
             );
         }
+    }
+}
+
+/// What the link's counters say is wrong with the radio's settings, if anything: frames
+/// that fail their checksum (another API mode), or only frames of impossible lengths and
+/// bytes that were no frames (another baud rate, or transparent mode). `min_errors`:
+/// how many failed frames it takes (a one-shot command that timed out sees few).
+pub(crate) fn diagnosis(mode: ApiMode, stats: &Stats, min_errors: u64) -> Option<String> {
+    let other = other_mode(mode);
+    let checksum = stats.bad_checksum + stats.bad_escape;
+    if checksum >= min_errors && checksum > stats.frames {
+        return Some(format!(
+            "hint: {checksum} frames failed their checksum and {} passed: the radio may be in \
+             API mode {other} (AP={other}); try --api-mode {other} or --api-mode auto",
+            stats.frames
+        ));
+    }
+    let nonsense = stats.oversize + stats.empty + stats.truncated;
+    if nonsense >= min_errors && stats.frames == 0 {
+        return Some(format!(
+            "hint: {nonsense} frames of impossible lengths, {} bytes that were no frames, and \
+             no good frame: the link's baud rate may differ from the radio's (give it as \
+             serial:PATH:BAUD; XBee modules ship at 9600), or the radio may be in transparent \
+             mode (AP=0)",
+            stats.bytes_skipped
+        ));
+    }
+    None
+}
+
+/// `failure`, with the [`diagnosis`] of the link's counters when it is a timeout and
+/// the API mode was given (one found by asking the radio is right).
+pub(crate) fn diagnosed(failure: Failure, link: &LinkArgs, stats: &Stats) -> Failure {
+    match link.api_mode {
+        ApiModeChoice::Fixed(mode) if failure.code() == Failure::TIMEOUT => {
+            match diagnosis(mode, stats, 1) {
+                Some(hint) => failure.with_hint(hint),
+                None => failure,
+            }
+        }
+        _ => failure,
     }
 }
 

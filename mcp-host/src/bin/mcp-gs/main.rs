@@ -133,6 +133,17 @@ impl Failure {
     pub(crate) fn link(message: impl Into<String>) -> Self {
         Self::new(Self::LINK, message)
     }
+
+    /// The exit code.
+    pub(crate) fn code(&self) -> u8 {
+        self.code
+    }
+
+    /// The same failure with a hint line after its message.
+    pub(crate) fn with_hint(mut self, hint: String) -> Self {
+        self.message = format!("{}\nmcp-gs: {hint}", self.message);
+        self
+    }
 }
 
 #[tokio::main]

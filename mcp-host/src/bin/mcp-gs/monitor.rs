@@ -11,7 +11,7 @@ use mcp_host::record::{Direction, RecordWriter};
 use mcp_host::render;
 use mcp_host::{Event, LinkEvent};
 
-use crate::link_args::{ApiModeChoice, LinkArgs, check_mode};
+use crate::link_args::{ApiModeChoice, LinkArgs, check_mode, diagnosis};
 use crate::{Failure, Format};
 
 /// Arguments of `monitor`.
@@ -35,8 +35,9 @@ pub(crate) struct MonitorArgs {
     count: Option<u64>,
 }
 
-/// After this many checksum errors in API mode 1 without a good frame, suggest mode 2.
-const MODE_HINT_ERRORS: u64 = 5;
+/// After this many failed frames, more than the good ones, suggest what may be wrong
+/// with the radio's settings.
+const HINT_ERRORS: u64 = 5;
 
 /// Runs `monitor`.
 pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
@@ -68,7 +69,7 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
     }
     let stdout = io::stdout();
     let mut seen = 0u64;
-    let (mut good, mut checksum_errors, mut hinted) = (0u64, 0u64, false);
+    let mut hinted = false;
     let ctrl_c = tokio::signal::ctrl_c();
     tokio::pin!(ctrl_c);
     loop {
@@ -85,11 +86,6 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
                     .map_err(|e| Failure::input(format!("cannot write the recording: {e}")))?;
             }
         }
-        match &event {
-            Event::DecodeError(xbee_api::DecodeError::BadChecksum { .. }) => checksum_errors += 1,
-            Event::DecodeError(_) | Event::Link(_) => {}
-            _ => good += 1,
-        }
         let line = match args.format {
             Format::Json => render::json::event(&event).to_string(),
             Format::Text => format!(
@@ -102,17 +98,14 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
         if writeln!(out, "{line}").and_then(|()| out.flush()).is_err() {
             break; // stdout closed (e.g. piped into `head`)
         }
-        if let ApiModeChoice::Fixed(mode) = args.link.api_mode {
+        if let (ApiModeChoice::Fixed(mode), false, Event::DecodeError(_)) =
+            (args.link.api_mode, hinted, &event)
+        {
             // A frame with no byte to escape passes in either mode (a modem status,
             // say): the hint counts on most frames failing, not on all of them.
-            if !hinted && checksum_errors >= MODE_HINT_ERRORS && checksum_errors > good {
+            if let Some(hint) = diagnosis(mode, &stream.stats(), HINT_ERRORS) {
                 hinted = true;
-                let other = crate::link_args::other_mode(mode);
-                eprintln!(
-                    "mcp-gs: hint: {checksum_errors} checksum errors and {good} good frames so \
-                     far: the radio may be in API mode {other} (AP={other}); try --api-mode \
-                     {other} or --api-mode auto"
-                );
+                eprintln!("mcp-gs: {hint}");
             }
         }
         if let Event::Link(LinkEvent::Closed { reason }) = &event {

@@ -8,7 +8,7 @@ use xbee_api::{Address64, ReceivePacketRepr};
 
 use crate::Failure;
 use crate::command::CommandArgs;
-use crate::link_args::{LinkArgs, send_failure};
+use crate::link_args::{LinkArgs, diagnosed, send_failure};
 
 /// Arguments of `send`.
 #[derive(Debug, Args)]
@@ -57,7 +57,7 @@ pub(crate) async fn run(args: SendArgs) -> Result<(), Failure> {
     let report = sender
         .send_payload(args.to, payload.clone(), options)
         .await
-        .map_err(send_failure)?;
+        .map_err(|e| diagnosed(send_failure(e), &args.link, &sender.stats()))?;
     let what = mcp_host::render::text::mcp(&payload);
     match report {
         DeliveryReport::Delivered {
@@ -80,14 +80,15 @@ pub(crate) async fn run(args: SendArgs) -> Result<(), Failure> {
                 .ok()
                 .flatten()
                 .ok_or_else(|| {
-                    Failure::new(
+                    let failure = Failure::new(
                         Failure::TIMEOUT,
                         format!(
                             "no trajectory report from {} within {timeout:?}: the MAV did not \
                              take the trajectory",
                             args.to
                         ),
-                    )
+                    );
+                    diagnosed(failure, &args.link, &sender.stats())
                 })?;
             if report != *waypoints {
                 return Err(Failure::new(

@@ -6,7 +6,7 @@ use mcp_host::RequestError;
 use xbee_api::Address64;
 
 use crate::command::status_request;
-use crate::link_args::{LinkArgs, send_failure};
+use crate::link_args::{LinkArgs, diagnosed, send_failure};
 use crate::{Failure, Format};
 
 /// Arguments of `status`.
@@ -47,7 +47,8 @@ pub(crate) async fn run(args: StatusArgs) -> Result<(), Failure> {
             timeout @ RequestError::Timeout { .. } => {
                 Failure::new(Failure::TIMEOUT, timeout.to_string())
             }
-        })?;
+        })
+        .map_err(|failure| diagnosed(failure, &args.link, &sender.stats()))?;
     let packet = Packet::Report(report);
     match args.format {
         Format::Text => out!("{}", packet.as_borrowed()),
