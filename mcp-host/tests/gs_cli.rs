@@ -278,6 +278,15 @@ fn encode_every_command() {
         let len = usize::from_str_radix(&(bytes[1].to_string() + bytes[2]), 16).unwrap();
         assert_eq!(len, bytes.len() - 4, "{args:?}: length field");
     }
+    // An address as XCTU shows it, SH and SL apart, is the same address.
+    let xctu = stdout(&run(&[
+        "encode",
+        "--to",
+        "0013A200 40B599B9",
+        "landing",
+        "on",
+    ]));
+    assert_eq!(xctu, stdout(&run(&["encode", "--to", to, "landing", "on"])));
     // Frame id, options and radius take 0x-hex as every byte on the command line does.
     let out = stdout(&run(&[
         "encode",

@@ -29,8 +29,13 @@ pub(crate) struct DemoArgs {
     #[arg(long, default_value = "10", value_name = "S", value_parser = crate::radio::parse_duration)]
     duration: Duration,
     /// Show every Nth telemetry packet (they arrive at 20 Hz); at least 1.
-    #[arg(long, default_value = "10", value_name = "N")]
+    #[arg(long, default_value = "10", value_name = "N", value_parser = parse_every)]
     telemetry_every: NonZeroU64,
+}
+
+fn parse_every(s: &str) -> Result<NonZeroU64, String> {
+    s.parse()
+        .map_err(|_| format!("expected a whole number of packets, 1 or more, got `{s}`"))
 }
 
 /// The simulated MAV.

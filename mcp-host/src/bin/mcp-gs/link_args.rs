@@ -52,20 +52,23 @@ pub(crate) struct LinkArgs {
     pub(crate) timeout: f64,
 }
 
-/// A 64-bit address on the command line: exactly 16 hex digits (an optional `0x`), so
-/// that a digit left out is an error rather than another address.
+/// A 64-bit address on the command line: exactly 16 hex digits (an optional `0x`; spaces
+/// between them, as XCTU shows SH and SL, are allowed), so that a digit left out is an
+/// error rather than another address.
 pub(crate) fn parse_address64(s: &str) -> Result<Address64, String> {
-    let digits = s
+    let joined: String = s.split_whitespace().collect();
+    let digits = joined
         .strip_prefix("0x")
-        .or_else(|| s.strip_prefix("0X"))
-        .unwrap_or(s);
+        .or_else(|| joined.strip_prefix("0X"))
+        .unwrap_or(&joined);
     if digits.len() != 16 {
         return Err(format!(
             "a 64-bit address is 16 hex digits (e.g. 0013a20040b599b9; 000000000000ffff \
              broadcasts), got `{s}`"
         ));
     }
-    s.parse()
+    digits
+        .parse()
         .map_err(|e| format!("bad 64-bit address `{s}`: {e}"))
 }
 
