@@ -648,3 +648,25 @@ fn monitor_hints_at_the_baud_rate_when_nothing_makes_sense() {
     assert!(stderr.contains("baud rate may differ"), "{stderr}");
     peer.join().unwrap();
 }
+
+#[test]
+fn decode_says_what_input_it_cannot_read() {
+    let dir = tempdir();
+    // A recording given as hex text.
+    let recording = dir.join("flight.mcprec");
+    let mut bytes = Vec::new();
+    mcp_host::record::RecordWriter::new(&mut bytes).unwrap();
+    std::fs::write(&recording, &bytes).unwrap();
+    let output = run(&["decode", "--hex", recording.to_str().unwrap()]);
+    assert_eq!(output.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("decode it without --hex"), "{stderr}");
+    // Bytes with no frame in them: said so, and exit 0 (nothing failed).
+    let noise = dir.join("noise.bin");
+    std::fs::write(&noise, b"hello, this is no capture\n").unwrap();
+    let output = run(&["decode", noise.to_str().unwrap()]);
+    assert_eq!(output.status.code(), Some(0));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("no XBee frame in 26 bytes"), "{stderr}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

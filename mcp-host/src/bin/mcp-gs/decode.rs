@@ -80,6 +80,12 @@ pub(crate) fn run(args: DecodeArgs) -> Result<(), Failure> {
     let head = input
         .fill_buf()
         .map_err(|e| Failure::input(format!("cannot read input: {e}")))?;
+    if args.hex && record::is_recording(head) {
+        return Err(Failure::input(format!(
+            "{} is a recording (made by monitor --record), not hex text: decode it without --hex",
+            args.input.display()
+        )));
+    }
     let result = if !args.hex && record::is_recording(head) {
         decode_recording(input, &mut printer)
     } else if args.hex {
@@ -266,6 +272,15 @@ fn decode_stream(
     }
     if let Some(hint) = mode_hint(mode, decoder.stats()) {
         eprintln!("mcp-gs: {hint}");
+    } else if offset > 0 && decoder.stats().frames_ok == 0 {
+        let stats = decoder.stats();
+        let errors =
+            stats.bad_checksum + stats.oversize + stats.empty + stats.truncated + stats.bad_escape;
+        eprintln!(
+            "mcp-gs: no XBee frame in {offset} bytes ({errors} candidate frames dropped): \
+             not a capture of an XBee in API mode (a recording starts with MCPREC; hex text \
+             needs --hex)"
+        );
     }
     Ok(())
 }
