@@ -25,6 +25,10 @@
 //! in order for the first free id (or their deadline), and raw writes and transmits
 //! without status still go out at once.
 //!
+//! A serial port serves one program at a time: [`hub::Hub`] holds the link to the radio
+//! and serves it on a TCP port to any number of programs (`tcp:HOST:PORT` links), each
+//! getting every received frame and the answers to its own requests.
+//!
 //! # Example
 //!
 //! ```no_run
@@ -62,6 +66,7 @@ pub mod codec;
 mod driver;
 mod error;
 mod event;
+pub mod hub;
 mod ids;
 pub mod link;
 pub mod options;
