@@ -503,7 +503,7 @@ fn status_timeout_exits_4() {
 fn every_subcommand_has_help() {
     for sub in [
         "monitor", "send", "status", "decode", "encode", "replay", "at", "ports", "radio", "sim",
-        "demo",
+        "demo", "hub",
     ] {
         let out = stdout(&run(&[sub, "--help"]));
         assert!(out.contains("Usage: mcp-gs"), "{sub}: {out}");

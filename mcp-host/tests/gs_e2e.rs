@@ -30,21 +30,9 @@ impl Sim {
 
     /// The same, with more `sim` arguments.
     fn start_with(extra: &[&str], link: &str) -> Self {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
-            .args(["sim", "--link", link, "--duration", "300"])
-            .args(extra)
-            .stdout(Stdio::piped())
-            .stderr(Stdio::inherit())
-            .spawn()
-            .expect("start mcp-gs sim");
-        let stdout = child.stdout.take().expect("stdout");
-        let (tx, rx) = mpsc::channel();
-        std::thread::spawn(move || {
-            // Keep reading to the end, so the simulator never writes into a closed pipe.
-            for line in BufReader::new(stdout).lines().map_while(Result::ok) {
-                let _ = tx.send(line);
-            }
-        });
+        let mut args = vec!["sim", "--link", link, "--duration", "300"];
+        args.extend_from_slice(extra);
+        let (child, rx) = spawn_lines(&args);
         let link = loop {
             let line = rx.recv_timeout(GUARD).expect("sim prints its link");
             if let Some(rest) = line
@@ -96,6 +84,25 @@ impl Sim {
         assert_eq!(report["category"], "report", "{out}");
         report
     }
+}
+
+/// Starts `mcp-gs` with `args`; its standard output comes line by line on the channel.
+fn spawn_lines(args: &[&str]) -> (Child, mpsc::Receiver<String>) {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::inherit())
+        .spawn()
+        .expect("start mcp-gs");
+    let stdout = child.stdout.take().expect("stdout");
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        // Keep reading to the end, so the process never writes into a closed pipe.
+        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+            let _ = tx.send(line);
+        }
+    });
+    (child, rx)
 }
 
 /// `out`, after checking that the `mcp-gs` run it came from (with `args`) succeeded.
@@ -455,19 +462,7 @@ fn a_recording_keeps_each_frame_as_it_came() {
 #[test]
 fn a_port_another_program_holds_is_named_as_busy() {
     let sim = Sim::start("pty");
-    let mut monitor = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
-        .args(["monitor", "--link", &sim.link])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("start mcp-gs monitor");
-    let stdout = monitor.stdout.take().expect("stdout");
-    let (tx, rx) = mpsc::channel();
-    std::thread::spawn(move || {
-        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
-            let _ = tx.send(line);
-        }
-    });
+    let (mut monitor, rx) = spawn_lines(&["monitor", "--link", &sim.link]);
     // Its first line is printed once it has the port.
     let first = rx.recv_timeout(GUARD).expect("monitor prints a line");
     assert!(first.contains("connected"), "{first}");
@@ -532,4 +527,62 @@ fn send_trajectory_checks_the_mavs_report() {
     let out = succeeded(sim.gs(&args), &args);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("`mcp-gs status` waits for it"), "{stderr}");
+}
+
+#[test]
+fn a_hub_lets_monitor_and_send_share_the_radio() {
+    let sim = Sim::start_with(&["--api-mode", "2"], "pty");
+    let (mut hub, hub_out) = spawn_lines(&[
+        "hub",
+        "--link",
+        &sim.link,
+        "--api-mode",
+        "2",
+        "--listen",
+        "127.0.0.1:0",
+    ]);
+    let first = hub_out.recv_timeout(GUARD).expect("hub prints its address");
+    let link = first
+        .split("--link ")
+        .nth(1)
+        .and_then(|rest| rest.split_whitespace().next())
+        .unwrap_or_else(|| panic!("{first}"))
+        .to_string();
+    let (mut monitor, lines) = spawn_lines(&[
+        "monitor",
+        "--link",
+        &link,
+        "--api-mode",
+        "2",
+        "--format",
+        "json",
+    ]);
+    let first = lines.recv_timeout(GUARD).expect("monitor connects");
+    assert!(first.contains("connected"), "{first}");
+    // While monitor has the hub, send and status go through it too.
+    let gs = |args: &[&str]| {
+        let (sub, rest) = args.split_first().unwrap();
+        let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+            .args([sub, "--link", &link, "--api-mode", "2"])
+            .args(rest)
+            .output()
+            .expect("run mcp-gs");
+        String::from_utf8(succeeded(out, args).stdout).unwrap()
+    };
+    let sent = gs(&["send", "--to", MAV, "telemetry", "on", "pitch_angle"]);
+    assert!(sent.starts_with("delivered"), "{sent}");
+    let report = gs(&["status", "--to", MAV, "landing"]);
+    assert!(report.contains("landing"), "{report}");
+    // The telemetry the send turned on reaches the monitor.
+    let telemetry = loop {
+        let line = lines.recv_timeout(GUARD).expect("telemetry on the monitor");
+        if line.contains("\"telemetry\"") {
+            break line;
+        }
+    };
+    assert!(telemetry.contains("pitch_angle"), "{telemetry}");
+    monitor.kill().unwrap();
+    monitor.wait().unwrap();
+    hub.kill().unwrap();
+    hub.wait().unwrap();
 }

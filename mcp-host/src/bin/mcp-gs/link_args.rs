@@ -109,19 +109,24 @@ impl LinkArgs {
                  --link pty` prints) or tcp:HOST:PORT",
             ));
         }
+        let options = self.options(reconnect).await?;
+        mcp_host::connect(&self.link, options)
+            .await
+            .map_err(|e| connect_failure(&self.link, e))
+    }
+
+    /// The link options these arguments give, the API mode asked of the radio for
+    /// `--api-mode auto`. `reconnect` as for [`open`](Self::open).
+    pub(crate) async fn options(&self, reconnect: bool) -> Result<LinkOptions, Failure> {
         let mode = match self.api_mode {
             ApiModeChoice::Fixed(mode) => mode,
             ApiModeChoice::Auto => self.detect_mode().await?,
         };
-        self.connect(mode, reconnect).await
+        Ok(self.options_in(mode, reconnect))
     }
 
-    async fn connect(
-        &self,
-        mode: ApiMode,
-        reconnect: bool,
-    ) -> Result<(PacketStream, CommandSender), Failure> {
-        let options = LinkOptions {
+    fn options_in(&self, mode: ApiMode, reconnect: bool) -> LinkOptions {
+        LinkOptions {
             api_mode: mode,
             connect_timeout: self.timeout(),
             send_timeout: self.timeout(),
@@ -131,8 +136,15 @@ impl LinkArgs {
                 ReconnectPolicy::disabled()
             },
             ..LinkOptions::default()
-        };
-        mcp_host::connect(&self.link, options)
+        }
+    }
+
+    async fn connect(
+        &self,
+        mode: ApiMode,
+        reconnect: bool,
+    ) -> Result<(PacketStream, CommandSender), Failure> {
+        mcp_host::connect(&self.link, self.options_in(mode, reconnect))
             .await
             .map_err(|e| connect_failure(&self.link, e))
     }
@@ -273,7 +285,8 @@ fn link_hint(error: &LinkError) -> Option<&'static str> {
             // The port is open for exclusive use elsewhere (TIOCEXCL or flock).
             Serial::NoDevice => Some(
                 "another program has the port open, perhaps another mcp-gs: one program at a \
-                 time can use a serial port",
+                 time can use a serial port; to share the radio, run `mcp-gs hub --link \
+                 serial:PATH` and give the other commands --link tcp:127.0.0.1:9750",
             ),
             _ => None,
         },

@@ -13,6 +13,7 @@ mod command;
 mod decode;
 mod demo;
 mod encode;
+mod hub;
 mod link_args;
 mod monitor;
 mod ports;
@@ -57,6 +58,8 @@ enum Sub {
     Radio(radio::RadioArgs),
     /// Run simulated MAVs behind a virtual XBee network on a link.
     Sim(sim::SimArgs),
+    /// Share one radio with other commands through a TCP port (monitor and send at once).
+    Hub(hub::HubArgs),
     /// A ground station and a simulated MAV in one process: no hardware needed.
     Demo(demo::DemoArgs),
 }
@@ -169,6 +172,7 @@ async fn main() -> ExitCode {
         Sub::Encode(args) => encode::run(args),
         Sub::Radio(args) => radio::run(args).await,
         Sub::Sim(args) => sim::run(args).await,
+        Sub::Hub(args) => hub::run(args).await,
         Sub::Demo(args) => demo::run(args).await,
     };
     match result {

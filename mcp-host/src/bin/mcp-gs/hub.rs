@@ -1,0 +1,50 @@
+//! `mcp-gs hub`: one radio shared by several `mcp-gs` commands (or other programs)
+//! through a TCP port.
+
+use clap::Args;
+
+use mcp_host::hub::{Hub, HubError};
+
+use crate::Failure;
+use crate::link_args::{LinkArgs, connect_failure};
+
+/// Arguments of `hub`.
+#[derive(Debug, Args)]
+pub(crate) struct HubArgs {
+    #[command(flatten)]
+    link: LinkArgs,
+    /// Where to serve the radio: other commands then take `--link tcp:ADDR:PORT`.
+    #[arg(long, value_name = "ADDR:PORT", default_value = "127.0.0.1:9750")]
+    listen: String,
+}
+
+/// Runs `hub` until Ctrl-C, or until the link to the radio ends.
+pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
+    let options = args.link.options(true).await?;
+    let radio = &args.link.link;
+    let hub = Hub::start(radio, options, &args.listen)
+        .await
+        .map_err(|e| match e {
+            HubError::Connect(e) => connect_failure(radio, e),
+            listen @ HubError::Listen { .. } => Failure::link(listen.to_string()),
+        })?;
+    let addr = hub.local_addr();
+    out!("serving {radio} on {addr}: give other commands --link tcp:{addr} (Ctrl-C stops)");
+    tokio::select! {
+        _ = tokio::signal::ctrl_c() => {}
+        () = hub.finished() => {
+            hub.stop().await;
+            return Err(Failure::link(format!("the link to {radio} closed")));
+        }
+    }
+    let stats = hub.stats();
+    hub.stop().await;
+    out!(
+        "stopped: {} clients, {} frames from the radio, {} from clients, {} dropped for slow clients",
+        stats.clients,
+        stats.frames_from_radio,
+        stats.frames_from_clients,
+        stats.frames_dropped
+    );
+    Ok(())
+}
