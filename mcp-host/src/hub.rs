@@ -40,7 +40,7 @@ use bytes::{Bytes, BytesMut};
 use futures::StreamExt;
 use tokio::io::AsyncWriteExt;
 use tokio::net::{TcpListener, TcpStream};
-use tokio::sync::mpsc;
+use tokio::sync::{Semaphore, mpsc};
 use tokio_util::codec::FramedRead;
 use tokio_util::sync::CancellationToken;
 use tokio_util::task::TaskTracker;
@@ -52,6 +52,10 @@ use crate::{CommandSender, ConnectError, Event, Link, LinkOptions, PacketStream}
 
 /// Frames from the radio waiting for one client, at most; more are dropped for it.
 pub const CLIENT_QUEUE: usize = 1024;
+
+/// Requests of one client waiting for their answers, at most: the hub reads no more of
+/// its frames until one is answered (or times out).
+pub const CLIENT_IN_FLIGHT: usize = 64;
 
 /// How long the hub waits for the radio's answer to a client's request. Clients have
 /// their own timeouts; this only frees the frame id of an answer that never comes.
@@ -222,6 +226,7 @@ impl Serve {
             mode: self.mode,
             sender: self.sender.clone(),
             queue,
+            in_flight: Arc::new(Semaphore::new(CLIENT_IN_FLIGHT)),
             tasks: self.tasks.clone(),
             counters: self.counters.clone(),
         };
@@ -263,6 +268,8 @@ struct Client {
     sender: CommandSender,
     /// Its own queue, for the answers to its requests.
     queue: mpsc::Sender<Bytes>,
+    /// Permits for its requests in flight ([`CLIENT_IN_FLIGHT`]).
+    in_flight: Arc<Semaphore>,
     tasks: TaskTracker,
     counters: Arc<Counters>,
 }
@@ -313,10 +320,17 @@ impl Client {
                 return;
             }
         };
+        let Ok(permit) = self.in_flight.clone().acquire_owned().await else {
+            return;
+        };
         let sender = self.sender.clone();
         let (mode, queue) = (self.mode, self.queue.clone());
         self.tasks.spawn(async move {
-            let answer = match sender.send_frame(&data, Some(ANSWER_TIMEOUT)).await {
+            let answer = sender.send_frame(&data, Some(ANSWER_TIMEOUT)).await;
+            // Answered: the client's loop may read its next frame while this one waits
+            // for room in its queue (which that loop empties).
+            drop(permit);
+            let answer = match answer {
                 Ok(answer) => answer,
                 Err(error) => {
                     tracing::debug!(%error, "hub: no answer to a client's frame");

@@ -151,3 +151,55 @@ async fn a_client_that_leaves_does_not_disturb_the_others() {
     std::net::TcpListener::bind(port).expect("the hub's port is free");
     sim.stop().await;
 }
+
+#[tokio::test]
+async fn a_client_with_more_requests_in_flight_than_the_hub_takes_gets_every_answer() {
+    use futures::SinkExt;
+    use mcp_host::codec::{CodecItem, XBeeCodec};
+    use xbee_api::{AtCommandRepr, Frame};
+
+    let mode = ApiMode::Unescaped;
+    let (sim, hub) = sim_and_hub(mode).await;
+    let socket = tokio::net::TcpStream::connect(hub.local_addr())
+        .await
+        .unwrap();
+    let mut framed = tokio_util::codec::Framed::new(socket, XBeeCodec::new(mode));
+    // 200 AT commands at once, frame ids 1 to 200: more than the hub has in flight for
+    // one client (mcp_host::hub::CLIENT_IN_FLIGHT).
+    for id in 1..=200u8 {
+        let at = AtCommandRepr {
+            queued: false,
+            frame_id: id,
+            command: *b"SH",
+            parameter: &[],
+        };
+        framed.feed(&at).await.unwrap();
+    }
+    SinkExt::<&AtCommandRepr<'_>>::flush(&mut framed)
+        .await
+        .unwrap();
+    let mut answered = [false; 256];
+    let mut count = 0;
+    while count < 200 {
+        let item = tokio::time::timeout(GUARD, framed.next())
+            .await
+            .expect("every answer")
+            .expect("the hub stays")
+            .unwrap();
+        if let CodecItem::Frame(frame) = item {
+            if let Ok(Frame::AtCommandResponse(at)) = frame.parse() {
+                assert_eq!(at.command, *b"SH");
+                assert!(
+                    !answered[usize::from(at.frame_id)],
+                    "id {} twice",
+                    at.frame_id
+                );
+                answered[usize::from(at.frame_id)] = true;
+                count += 1;
+            }
+        }
+    }
+    assert!(answered[1..=200].iter().all(|&a| a));
+    hub.stop().await;
+    sim.stop().await;
+}
