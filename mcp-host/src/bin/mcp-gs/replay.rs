@@ -57,7 +57,12 @@ pub(crate) async fn run(args: ReplayArgs) -> Result<(), Failure> {
     let mut first = None;
     let mut played = 0u64;
     for record in reader {
-        let record = record.map_err(|e| Failure::input(format!("{}: {e}", args.file.display())))?;
+        let record = record.map_err(|e| {
+            Failure::input(format!(
+                "{}: {e} (replayed {played} frames before it)",
+                args.file.display()
+            ))
+        })?;
         let wanted = matches!(
             (args.frames, record.direction),
             (Which::Both, _) | (Which::Rx, Direction::Received) | (Which::Tx, Direction::Sent)
