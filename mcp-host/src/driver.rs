@@ -438,24 +438,35 @@ impl Driver {
                 permit = async { self.events.clone().reserve_owned().await }, if !self.pending_links.is_empty() => {
                     deliver_pending_link(&mut self.pending_links, permit);
                 }
-                _ = self.events.closed(), if !self.ops_open => return Served::Shutdown,
+                _ = self.events.closed(), if !self.ops_open => {
+                    self.flush_before_end(&mut wr, &mut out).await;
+                    return Served::Shutdown;
+                }
                 () = self.close_requested.notified() => {
-                    // What was already reported written goes out first (`Written`,
-                    // raw writes), within a bound.
-                    let flush = async {
-                        wr.write_all_buf(&mut out).await?;
-                        wr.flush().await
-                    };
-                    if let Err(error) = tokio::time::timeout(CLOSE_FLUSH, flush)
-                        .await
-                        .unwrap_or_else(|_| Err(std::io::ErrorKind::TimedOut.into()))
-                    {
-                        tracing::warn!(link = %self.connector.link(), %error,
-                            "closing: queued frames not all written");
-                    }
+                    self.flush_before_end(&mut wr, &mut out).await;
                     return Served::Closed;
                 }
             }
+        }
+    }
+
+    /// Writes out what was already reported written (`Written` transmits, raw writes)
+    /// before the link ends, within [`CLOSE_FLUSH`].
+    async fn flush_before_end(
+        &self,
+        wr: &mut (impl tokio::io::AsyncWrite + Unpin),
+        out: &mut BytesMut,
+    ) {
+        let flush = async {
+            wr.write_all_buf(out).await?;
+            wr.flush().await
+        };
+        if let Err(error) = tokio::time::timeout(CLOSE_FLUSH, flush)
+            .await
+            .unwrap_or_else(|_| Err(std::io::ErrorKind::TimedOut.into()))
+        {
+            tracing::warn!(link = %self.connector.link(), %error,
+                "closing: queued frames not all written");
         }
     }
 

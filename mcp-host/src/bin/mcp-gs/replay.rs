@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use clap::{Args, ValueEnum};
+use mcp_host::CommandSender;
 use mcp_host::record::{Direction, RecordReader};
 
 use crate::Failure;
@@ -54,8 +55,28 @@ pub(crate) async fn run(args: ReplayArgs) -> Result<(), Failure> {
         eprintln!("mcp-gs: pseudo-terminal: {}", path.display());
     }
     let start = tokio::time::Instant::now();
-    let mut first = None;
     let mut played = 0u64;
+    let result = play(&args, reader, &sender, start, &mut played).await;
+    // What was written goes out before the process ends, also after an error. (The
+    // stream is dropped first: its queue, full of what nobody read, would hold up the
+    // last event of the link.)
+    drop(stream);
+    sender.close();
+    sender.closed().await;
+    result?;
+    eprintln!("mcp-gs: replayed {played} frames");
+    Ok(())
+}
+
+/// Writes the wanted records of `reader` at their pace; counts them in `played`.
+async fn play(
+    args: &ReplayArgs,
+    reader: RecordReader<BufReader<File>>,
+    sender: &CommandSender,
+    start: tokio::time::Instant,
+    played: &mut u64,
+) -> Result<(), Failure> {
+    let mut first = None;
     for record in reader {
         let record = record.map_err(|e| {
             Failure::input(format!(
@@ -80,8 +101,7 @@ pub(crate) async fn run(args: ReplayArgs) -> Result<(), Failure> {
             .write_frame(&record.frame)
             .await
             .map_err(send_failure)?;
-        played += 1;
+        *played += 1;
     }
-    eprintln!("mcp-gs: replayed {played} frames");
     Ok(())
 }

@@ -108,6 +108,12 @@ pub(crate) async fn run(args: SendArgs) -> Result<(), Failure> {
         ),
         _ => {}
     }
+    // A frame sent without a status is written out before the process ends. (The
+    // stream is dropped first: its queue, full of what nobody read, would hold up the
+    // last event of the link.)
+    drop(stream);
+    sender.close();
+    sender.closed().await;
     Ok(())
 }
 
