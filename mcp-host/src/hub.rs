@@ -10,11 +10,14 @@
 //!   (received packets, modem status, unclaimed responses) goes to every client. A
 //!   client that falls behind by [`CLIENT_QUEUE`] frames loses the newest ones (counted
 //!   in [`HubStats::frames_dropped`]); the others are not held up.
-//! - **From a client:** a frame with a frame id (AT command, Transmit Request, ...) goes
-//!   to the radio under an id the hub allocates, and the answer (AT response, Transmit
-//!   Status, ...) goes back to that client alone, under the client's own id: clients
-//!   that each count their ids from 1 never get each other's answers. Frames with id 0
-//!   and frames of other types are written as they are.
+//! - **From a client:** frames go to the radio in the order the client sent them. A
+//!   frame with a frame id (AT command, Transmit Request, ...) goes under an id the hub
+//!   allocates, and its answers (AT response, Transmit Status, ...) go back to that
+//!   client alone, under the client's own id, in their place among the radio's other
+//!   frames: clients that each count their ids from 1 never get each other's answers.
+//!   A request is answered once, but for node discovery (`ND`) and active scan (`AS`),
+//!   whose answers keep coming for [`ANSWER_WINDOW`]. Frames with id 0 and frames of
+//!   other types are written as they are.
 //!
 //! ```no_run
 //! use mcp_host::hub::Hub;
@@ -32,34 +35,36 @@
 //! ```
 
 use std::net::SocketAddr;
-use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex, PoisonError};
 use std::time::Duration;
 
 use bytes::{Bytes, BytesMut};
 use futures::StreamExt;
 use tokio::io::AsyncWriteExt;
+use tokio::net::tcp::{OwnedReadHalf, OwnedWriteHalf};
 use tokio::net::{TcpListener, TcpStream};
-use tokio::sync::{Semaphore, mpsc};
+use tokio::sync::mpsc;
+use tokio::time::Instant;
 use tokio_util::codec::FramedRead;
 use tokio_util::sync::CancellationToken;
 use tokio_util::task::TaskTracker;
 use xbee_api::{ApiMode, RawFrame};
 
 use crate::codec::{CodecItem, XBeeCodec, encode_frame};
-use crate::event::carries_frame_id;
+use crate::event::{carries_frame_id, is_response};
 use crate::{CommandSender, ConnectError, Event, Link, LinkOptions, PacketStream};
 
 /// Frames from the radio waiting for one client, at most; more are dropped for it.
 pub const CLIENT_QUEUE: usize = 1024;
 
-/// Requests of one client waiting for their answers, at most: the hub reads no more of
-/// its frames until one is answered (or times out).
-pub const CLIENT_IN_FLIGHT: usize = 64;
+/// Clients served at once, at most; more are turned away.
+pub const MAX_CLIENTS: usize = 64;
 
-/// How long the hub waits for the radio's answer to a client's request. Clients have
-/// their own timeouts; this only frees the frame id of an answer that never comes.
-const ANSWER_TIMEOUT: Duration = Duration::from_secs(60);
+/// How long the hub routes answers to a request: the first answer ends it, but for node
+/// discovery and active scan. A request still unanswered then gives its id back (its
+/// client has given up long before: `mcp-gs` waits 12 s by default).
+pub const ANSWER_WINDOW: Duration = Duration::from_secs(30);
 
 /// Why a hub could not start.
 #[derive(Debug, thiserror::Error)]
@@ -83,13 +88,16 @@ pub enum HubError {
 pub struct HubStats {
     /// Clients connected so far.
     pub clients: u64,
-    /// Frames from the radio passed to clients (counted once a frame, whatever the
-    /// number of clients).
+    /// Frames from the radio passed on (counted once a frame, whatever the number of
+    /// clients).
     pub frames_from_radio: u64,
-    /// Frames from clients passed to the radio.
+    /// Frames from clients written to the radio.
     pub frames_from_clients: u64,
     /// Frames from the radio not given to a client that had fallen behind.
     pub frames_dropped: u64,
+    /// Frames of clients not written: all 255 frame ids were waiting for answers, or
+    /// the link to the radio was down.
+    pub frames_refused: u64,
 }
 
 #[derive(Debug, Default)]
@@ -98,6 +106,7 @@ struct Counters {
     frames_from_radio: AtomicU64,
     frames_from_clients: AtomicU64,
     frames_dropped: AtomicU64,
+    frames_refused: AtomicU64,
 }
 
 fn bump(counter: &AtomicU64) {
@@ -105,7 +114,7 @@ fn bump(counter: &AtomicU64) {
 }
 
 /// A radio served to TCP clients (see the [module](self) docs). Runs until
-/// [`stop`](Self::stop)ped or until the link to the radio ends for good.
+/// [`stop`](Self::stop)ped, dropped, or the link to the radio ends for good.
 #[derive(Debug)]
 pub struct Hub {
     local_addr: SocketAddr,
@@ -143,6 +152,7 @@ impl Hub {
             stop: hub.stop.clone(),
             tasks: hub.tasks.clone(),
             counters: hub.counters.clone(),
+            routes: Arc::new(Mutex::new(Routes::new())),
             clients: Vec::new(),
         };
         hub.tasks.spawn(serve.run(stream, listener));
@@ -162,6 +172,7 @@ impl Hub {
             frames_from_radio: c.frames_from_radio.load(Ordering::Relaxed),
             frames_from_clients: c.frames_from_clients.load(Ordering::Relaxed),
             frames_dropped: c.frames_dropped.load(Ordering::Relaxed),
+            frames_refused: c.frames_refused.load(Ordering::Relaxed),
         }
     }
 
@@ -184,6 +195,75 @@ impl Hub {
     }
 }
 
+impl Drop for Hub {
+    /// Ends the hub's tasks (without waiting for them: [`Hub::stop`] waits).
+    fn drop(&mut self) {
+        self.stop.cancel();
+    }
+}
+
+/// Where the answers under each of the hub's frame ids go.
+struct Routes {
+    /// By hub frame id - 1.
+    slots: Vec<Option<Route>>,
+    /// Index to try first: ids go round, so that a late answer rarely meets a new
+    /// request under the same id.
+    cursor: usize,
+}
+
+struct Route {
+    client: mpsc::Sender<Bytes>,
+    own_id: u8,
+    until: Instant,
+    /// Answers keep coming until `until` (node discovery, active scan).
+    many: bool,
+}
+
+impl Routes {
+    fn new() -> Self {
+        Routes {
+            slots: (0..255).map(|_| None).collect(),
+            cursor: 0,
+        }
+    }
+
+    /// A hub id for `route`; `None` while all 255 wait for answers.
+    fn insert(&mut self, route: Route, now: Instant) -> Option<u8> {
+        let n = self.slots.len();
+        for step in 0..n {
+            let index = (self.cursor + step) % n;
+            let slot = self.slots.get_mut(index)?;
+            if slot.as_ref().is_none_or(|r| r.until <= now) {
+                *slot = Some(route);
+                self.cursor = (index + 1) % n;
+                return u8::try_from(index + 1).ok();
+            }
+        }
+        None
+    }
+
+    /// Where an answer under hub id `id` goes, and the client's own id; the route ends
+    /// with it unless more answers are due.
+    fn answer(&mut self, id: u8, now: Instant) -> Option<(mpsc::Sender<Bytes>, u8)> {
+        let slot = self.slots.get_mut(usize::from(id).checked_sub(1)?)?;
+        let route = slot.take().filter(|r| r.until > now)?;
+        let to = (route.client.clone(), route.own_id);
+        if route.many {
+            *slot = Some(route);
+        }
+        Some(to)
+    }
+}
+
+/// Whether a request gets several answers under its id: AT (or queued AT) node
+/// discovery and active scan.
+fn answered_many_times(data: &[u8]) -> bool {
+    matches!(
+        data,
+        [0x08 | 0x09, _, b'N', b'D', ..] | [0x08 | 0x09, _, b'A', b'S', ..]
+    )
+}
+
 /// The hub's main task: frames from the radio to the clients, new clients accepted.
 struct Serve {
     mode: ApiMode,
@@ -191,6 +271,7 @@ struct Serve {
     stop: CancellationToken,
     tasks: TaskTracker,
     counters: Arc<Counters>,
+    routes: Arc<Mutex<Routes>>,
     /// Each client's queue of encoded frames.
     clients: Vec<mpsc::Sender<Bytes>>,
 }
@@ -202,7 +283,11 @@ impl Serve {
                 () = self.stop.cancelled() => break,
                 accepted = listener.accept() => match accepted {
                     Ok((socket, peer)) => self.accept(socket, peer),
-                    Err(error) => tracing::warn!(%error, "hub: accepting a client failed"),
+                    Err(error) => {
+                        // Out of file descriptors, say: not again at once.
+                        tracing::warn!(%error, "hub: accepting a client failed");
+                        tokio::time::sleep(Duration::from_millis(100)).await;
+                    }
                 },
                 event = stream.next() => match event {
                     Some(event) => self.broadcast(&event),
@@ -213,27 +298,35 @@ impl Serve {
         // Ends the clients' tasks too, if the link ended first.
         self.stop.cancel();
         self.sender.close();
+        drop(stream);
         // Until the radio's device is free.
         self.sender.closed().await;
     }
 
     fn accept(&mut self, socket: TcpStream, peer: SocketAddr) {
+        self.clients.retain(|client| !client.is_closed());
+        if self.clients.len() >= MAX_CLIENTS {
+            tracing::warn!(%peer, "hub: client turned away ({MAX_CLIENTS} connected)");
+            return;
+        }
         tracing::info!(%peer, "hub: client connected");
         bump(&self.counters.clients);
+        // Frames one at a time, as the radio writes them.
+        let _ = socket.set_nodelay(true);
         let (queue, frames) = mpsc::channel(CLIENT_QUEUE);
         self.clients.push(queue.clone());
         let client = Client {
             mode: self.mode,
             sender: self.sender.clone(),
             queue,
-            in_flight: Arc::new(Semaphore::new(CLIENT_IN_FLIGHT)),
-            tasks: self.tasks.clone(),
+            routes: self.routes.clone(),
             counters: self.counters.clone(),
         };
         self.tasks
             .spawn(client.run(socket, peer, frames, self.stop.clone()));
     }
 
+    /// A frame from the radio: an answer to its client, anything else to every client.
     fn broadcast(&mut self, event: &Event) {
         let data = match event {
             Event::Packet(rx) => &rx.frame,
@@ -245,10 +338,16 @@ impl Serve {
             }
             Event::DecodeError(_) => return,
         };
+        bump(&self.counters.frames_from_radio);
+        if let [frame_type, id, ..] = data[..] {
+            if is_response(frame_type) && id != 0 {
+                self.answer(data, id);
+                return;
+            }
+        }
         let Some(bytes) = encode(data, self.mode) else {
             return;
         };
-        bump(&self.counters.frames_from_radio);
         let counters = &self.counters;
         self.clients
             .retain(|client| match client.try_send(bytes.clone()) {
@@ -260,6 +359,30 @@ impl Serve {
                 Err(mpsc::error::TrySendError::Closed(_)) => false,
             });
     }
+
+    /// An answer under hub id `id`: to the client that asked, under its own id; dropped
+    /// if nobody asked (every id on the hub's link is the hub's).
+    fn answer(&self, data: &[u8], id: u8) {
+        let to = lock(&self.routes).answer(id, Instant::now());
+        let Some((client, own_id)) = to else {
+            tracing::debug!(id, "hub: an answer nobody waits for dropped");
+            return;
+        };
+        let mut data = data.to_vec();
+        if let Some(slot) = data.get_mut(1) {
+            *slot = own_id;
+        }
+        if let Some(bytes) = encode(&data, self.mode) {
+            if client.try_send(bytes).is_err() {
+                bump(&self.counters.frames_dropped);
+            }
+        }
+    }
+}
+
+fn lock(routes: &Mutex<Routes>) -> std::sync::MutexGuard<'_, Routes> {
+    // A panic elsewhere leaves the table as consistent as ever.
+    routes.lock().unwrap_or_else(PoisonError::into_inner)
 }
 
 /// One client's connection.
@@ -268,9 +391,7 @@ struct Client {
     sender: CommandSender,
     /// Its own queue, for the answers to its requests.
     queue: mpsc::Sender<Bytes>,
-    /// Permits for its requests in flight ([`CLIENT_IN_FLIGHT`]).
-    in_flight: Arc<Semaphore>,
-    tasks: TaskTracker,
+    routes: Arc<Mutex<Routes>>,
     counters: Arc<Counters>,
 }
 
@@ -283,21 +404,16 @@ impl Client {
         stop: CancellationToken,
     ) {
         let (rd, mut wr) = socket.into_split();
-        let mut reader = FramedRead::new(rd, XBeeCodec::new(self.mode));
+        let mut reader = Some(FramedRead::new(rd, XBeeCodec::new(self.mode)));
         let reason = loop {
+            // Each step (a frame read and written to the radio, or a frame written to
+            // the client) as a whole, but never past a stop: a client that reads
+            // nothing does not hold the hub up.
             tokio::select! {
                 () = stop.cancelled() => break "the hub stopped".to_owned(),
-                item = reader.next() => match item {
-                    Some(Ok(CodecItem::Frame(frame))) => self.forward(frame.data().clone()).await,
-                    Some(Ok(CodecItem::Error(error))) => {
-                        tracing::debug!(%peer, %error, "hub: a client's frame dropped");
-                    }
-                    Some(Err(error)) => break error.to_string(),
-                    None => break "disconnected".to_owned(),
-                },
-                Some(bytes) = frames.recv() => {
-                    if let Err(error) = wr.write_all(&bytes).await {
-                        break error.to_string();
+                ended = self.step(&mut reader, &mut wr, &mut frames) => {
+                    if let Some(reason) = ended {
+                        break reason;
                     }
                 }
             }
@@ -305,47 +421,68 @@ impl Client {
         tracing::info!(%peer, %reason, "hub: client gone");
     }
 
-    /// A client's frame to the radio: under an id of the hub's if it carries one, the
-    /// answer then back to this client under its own id (in a task of its own, so that
-    /// the client's next frames go on meanwhile); any other frame written at once, in
-    /// the order the client sent it.
-    async fn forward(&self, data: Bytes) {
-        bump(&self.counters.frames_from_clients);
-        let own_id = match (data.first(), data.get(1)) {
-            (Some(&frame_type), Some(&id)) if carries_frame_id(frame_type) && id != 0 => id,
-            _ => {
-                if let Err(error) = self.sender.write_frame(&data).await {
-                    tracing::debug!(%error, "hub: a client's frame not written");
-                }
-                return;
+    /// Reads a frame and writes it to the radio, or writes a frame to the client; why
+    /// the client is done, if it is. A client that stops sending (its write side shut)
+    /// still gets its answers and the radio's frames.
+    async fn step(
+        &self,
+        reader: &mut Option<FramedRead<OwnedReadHalf, XBeeCodec>>,
+        wr: &mut OwnedWriteHalf,
+        frames: &mut mpsc::Receiver<Bytes>,
+    ) -> Option<String> {
+        let read = async {
+            match reader.as_mut() {
+                Some(reader) => reader.next().await,
+                None => std::future::pending().await,
             }
         };
-        let Ok(permit) = self.in_flight.clone().acquire_owned().await else {
-            return;
-        };
-        let sender = self.sender.clone();
-        let (mode, queue) = (self.mode, self.queue.clone());
-        self.tasks.spawn(async move {
-            let answer = sender.send_frame(&data, Some(ANSWER_TIMEOUT)).await;
-            // Answered: the client's loop may read its next frame while this one waits
-            // for room in its queue (which that loop empties).
-            drop(permit);
-            let answer = match answer {
-                Ok(answer) => answer,
-                Err(error) => {
-                    tracing::debug!(%error, "hub: no answer to a client's frame");
+        tokio::select! {
+            item = read => match item {
+                Some(Ok(CodecItem::Frame(frame))) => self.forward(frame.data()).await,
+                Some(Ok(CodecItem::Error(error))) => {
+                    tracing::debug!(%error, "hub: a client's frame dropped");
+                }
+                Some(Err(error)) => return Some(error.to_string()),
+                None => *reader = None,
+            },
+            Some(bytes) = frames.recv() => {
+                if let Err(error) = wr.write_all(&bytes).await {
+                    return Some(error.to_string());
+                }
+            }
+        }
+        None
+    }
+
+    /// A client's frame to the radio, in turn: under a hub id if it carries a frame id,
+    /// its answers then routed back to this client.
+    async fn forward(&self, data: &Bytes) {
+        let mut data = data.to_vec();
+        if let [frame_type, own_id, ..] = data[..] {
+            if carries_frame_id(frame_type) && !is_response(frame_type) && own_id != 0 {
+                let route = Route {
+                    client: self.queue.clone(),
+                    own_id,
+                    until: Instant::now() + ANSWER_WINDOW,
+                    many: answered_many_times(&data),
+                };
+                let Some(id) = lock(&self.routes).insert(route, Instant::now()) else {
+                    tracing::debug!("hub: every frame id waits for an answer; frame refused");
+                    bump(&self.counters.frames_refused);
                     return;
+                };
+                if let Some(slot) = data.get_mut(1) {
+                    *slot = id;
                 }
-            };
-            let mut answer = answer.data().to_vec();
-            if let Some(id) = answer.get_mut(1) {
-                *id = own_id;
             }
-            if let Some(bytes) = encode(&answer, mode) {
-                // The client may be gone by now.
-                let _ = queue.send(bytes).await;
+        }
+        match self.sender.write_frame(&data).await {
+            Ok(()) => bump(&self.counters.frames_from_clients),
+            Err(error) => {
+                tracing::debug!(%error, "hub: a client's frame not written");
+                bump(&self.counters.frames_refused);
             }
-        });
+        }
     }
 }
 

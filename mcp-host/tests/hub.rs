@@ -153,7 +153,7 @@ async fn a_client_that_leaves_does_not_disturb_the_others() {
 }
 
 #[tokio::test]
-async fn a_client_with_more_requests_in_flight_than_the_hub_takes_gets_every_answer() {
+async fn a_client_with_many_requests_in_flight_gets_every_answer() {
     use futures::SinkExt;
     use mcp_host::codec::{CodecItem, XBeeCodec};
     use xbee_api::{AtCommandRepr, Frame};
@@ -164,8 +164,7 @@ async fn a_client_with_more_requests_in_flight_than_the_hub_takes_gets_every_ans
         .await
         .unwrap();
     let mut framed = tokio_util::codec::Framed::new(socket, XBeeCodec::new(mode));
-    // 200 AT commands at once, frame ids 1 to 200: more than the hub has in flight for
-    // one client (mcp_host::hub::CLIENT_IN_FLIGHT).
+    // 200 AT commands at once, frame ids 1 to 200, all waiting for answers together.
     for id in 1..=200u8 {
         let at = AtCommandRepr {
             queued: false,
@@ -202,4 +201,173 @@ async fn a_client_with_more_requests_in_flight_than_the_hub_takes_gets_every_ans
     assert!(answered[1..=200].iter().all(|&a| a));
     hub.stop().await;
     sim.stop().await;
+}
+
+/// A radio played by the test on a TCP socket: the hub's link connects to it.
+struct FakeRadio {
+    framed: tokio_util::codec::Framed<tokio::net::TcpStream, mcp_host::codec::XBeeCodec>,
+}
+
+impl FakeRadio {
+    /// A hub on a fake radio: the radio's side once the hub has connected.
+    async fn with_hub() -> (FakeRadio, Hub) {
+        let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+        let radio: Link = format!("tcp:{}", listener.local_addr().unwrap())
+            .parse()
+            .unwrap();
+        let (hub, accepted) = tokio::join!(
+            Hub::start(&radio, LinkOptions::default(), "127.0.0.1:0"),
+            listener.accept()
+        );
+        let (socket, _) = accepted.unwrap();
+        let framed = tokio_util::codec::Framed::new(
+            socket,
+            mcp_host::codec::XBeeCodec::new(ApiMode::Unescaped),
+        );
+        (FakeRadio { framed }, hub.unwrap())
+    }
+
+    /// The next frame the hub writes to the radio (frame data).
+    async fn next_frame(&mut self) -> Vec<u8> {
+        loop {
+            let item = tokio::time::timeout(GUARD, self.framed.next())
+                .await
+                .expect("a frame for the radio")
+                .expect("the hub stays")
+                .unwrap();
+            if let mcp_host::codec::CodecItem::Frame(frame) = item {
+                return frame.data().to_vec();
+            }
+        }
+    }
+
+    /// `data` `n` times, in one go.
+    async fn send_many(&mut self, data: &[u8], n: usize) {
+        use futures::SinkExt;
+        let frame = xbee_api::RawFrame::new(data).unwrap();
+        for _ in 0..n {
+            self.framed.feed(&frame).await.unwrap();
+        }
+        SinkExt::<&xbee_api::RawFrame<'_>>::flush(&mut self.framed)
+            .await
+            .unwrap();
+    }
+
+    async fn send(&mut self, data: &[u8]) {
+        use futures::SinkExt;
+        let frame = xbee_api::RawFrame::new(data).unwrap();
+        self.framed.send(&frame).await.unwrap();
+    }
+}
+
+/// A client speaking frames on a raw TCP connection to the hub.
+async fn raw_client(
+    hub: &Hub,
+) -> tokio_util::codec::Framed<tokio::net::TcpStream, mcp_host::codec::XBeeCodec> {
+    let socket = tokio::net::TcpStream::connect(hub.local_addr())
+        .await
+        .unwrap();
+    tokio_util::codec::Framed::new(socket, mcp_host::codec::XBeeCodec::new(ApiMode::Unescaped))
+}
+
+async fn send_raw(
+    client: &mut tokio_util::codec::Framed<tokio::net::TcpStream, mcp_host::codec::XBeeCodec>,
+    data: &[u8],
+) {
+    use futures::SinkExt;
+    client
+        .send(&xbee_api::RawFrame::new(data).unwrap())
+        .await
+        .unwrap();
+}
+
+async fn next_raw(
+    client: &mut tokio_util::codec::Framed<tokio::net::TcpStream, mcp_host::codec::XBeeCodec>,
+) -> Vec<u8> {
+    loop {
+        let item = tokio::time::timeout(GUARD, client.next())
+            .await
+            .expect("a frame for the client")
+            .expect("the hub stays")
+            .unwrap();
+        if let mcp_host::codec::CodecItem::Frame(frame) = item {
+            return frame.data().to_vec();
+        }
+    }
+}
+
+#[tokio::test]
+async fn a_clients_frames_reach_the_radio_in_its_order() {
+    let (mut radio, hub) = FakeRadio::with_hub().await;
+    let mut client = raw_client(&hub).await;
+    // Set a name (id 1), save it (id 2), then apply without an answer (id 0).
+    send_raw(&mut client, &[0x08, 0x01, b'N', b'I', b'A']).await;
+    send_raw(&mut client, &[0x08, 0x02, b'W', b'R']).await;
+    send_raw(&mut client, &[0x08, 0x00, b'A', b'C']).await;
+    let commands: Vec<[u8; 2]> = [
+        radio.next_frame().await,
+        radio.next_frame().await,
+        radio.next_frame().await,
+    ]
+    .iter()
+    .map(|f| [f[2], f[3]])
+    .collect();
+    assert_eq!(commands, [*b"NI", *b"WR", *b"AC"]);
+    hub.stop().await;
+}
+
+#[tokio::test]
+async fn every_answer_to_a_discovery_goes_to_the_client_that_asked_alone() {
+    let (mut radio, hub) = FakeRadio::with_hub().await;
+    let mut a = raw_client(&hub).await;
+    let mut b = raw_client(&hub).await;
+    // Both count their frame ids from 1.
+    send_raw(&mut a, &[0x08, 0x01, b'N', b'D']).await;
+    let nd = radio.next_frame().await;
+    send_raw(&mut b, &[0x08, 0x01, b'N', b'I']).await;
+    let ni = radio.next_frame().await;
+    assert_ne!(nd[1], ni[1], "the hub gave them ids of its own");
+    // Two nodes found, then the name, then a received packet for everyone.
+    radio.send(&[0x88, nd[1], b'N', b'D', 0x00, 0xAA]).await;
+    radio
+        .send(&[0x88, ni[1], b'N', b'I', 0x00, b'G', b'S'])
+        .await;
+    radio.send(&[0x88, nd[1], b'N', b'D', 0x00, 0xBB]).await;
+    let packet = [
+        0x90, 0x00, 0x13, 0xA2, 0x00, 0x40, 0xB5, 0x99, 0xB9, 0xFF, 0xFE, 0x01, b'm', b'1',
+    ];
+    radio.send(&packet).await;
+    // Each in the radio's order, under the client's own id.
+    assert_eq!(next_raw(&mut a).await, [0x88, 0x01, b'N', b'D', 0x00, 0xAA]);
+    assert_eq!(next_raw(&mut a).await, [0x88, 0x01, b'N', b'D', 0x00, 0xBB]);
+    assert_eq!(next_raw(&mut a).await, packet);
+    assert_eq!(
+        next_raw(&mut b).await,
+        [0x88, 0x01, b'N', b'I', 0x00, b'G', b'S']
+    );
+    assert_eq!(next_raw(&mut b).await, packet);
+    hub.stop().await;
+}
+
+#[tokio::test]
+async fn a_client_that_reads_nothing_does_not_hold_up_stop() {
+    let (mut radio, hub) = FakeRadio::with_hub().await;
+    // Connected, never read from.
+    let _idle = tokio::net::TcpStream::connect(hub.local_addr())
+        .await
+        .unwrap();
+    // The radio sends until the client's socket buffers and queue have long been full
+    // (tens of MB): its task is then stuck writing to it.
+    let deadline = tokio::time::Instant::now() + GUARD;
+    let mut frame = vec![
+        0x90, 0x00, 0x13, 0xA2, 0x00, 0x40, 0xB5, 0x99, 0xB9, 0xFF, 0xFE, 0x01,
+    ];
+    frame.resize(250, b'w');
+    while hub.stats().frames_dropped < 100_000 {
+        assert!(tokio::time::Instant::now() < deadline, "{:?}", hub.stats());
+        radio.send_many(&frame, 1000).await;
+    }
+    tokio::time::timeout(GUARD, hub.stop())
+        .await
+        .expect("stop returns");
 }
