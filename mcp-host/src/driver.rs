@@ -408,10 +408,8 @@ impl Driver {
                 })
             });
             tokio::select! {
-                item = reader.next() => match item {
-                    Some(Ok(item)) => self.handle_item(item),
-                    Some(Err(e)) => return Served::Failed(format!("read error: {e}")),
-                    None => return Served::Failed("end of stream (peer closed or device gone)".into()),
+                item = reader.next() => if let Some(failed) = self.on_read(item) {
+                    return failed;
                 },
                 written = wr.write_buf(&mut out), if !out.is_empty() => match written {
                     Ok(0) => return Served::Failed("the transport accepts no more data".into()),
@@ -426,11 +424,18 @@ impl Driver {
                     self.expire(Instant::now());
                 }
                 _ = tokio::time::sleep_until(check_stale_at.unwrap_or_else(Instant::now)), if check_stale_at.is_some() => {
-                    // Unless bytes came in meanwhile (the next turn waits again).
-                    if self.stale_at(reader.decoder()).is_some_and(|at| at <= Instant::now()) {
-                        for item in reader.decoder_mut().drop_partial() {
-                            self.handle_item(item);
-                        }
+                    // Bytes may be waiting unread (this task ran late): they come first,
+                    // and the next turn looks again.
+                    match futures::FutureExt::now_or_never(reader.next()) {
+                        Some(item) => if let Some(failed) = self.on_read(item) {
+                            return failed;
+                        },
+                        // Unless bytes came in meanwhile (the next turn waits again).
+                        None => if self.stale_at(reader.decoder()).is_some_and(|at| at <= Instant::now()) {
+                            for item in reader.decoder_mut().drop_partial() {
+                                self.handle_item(item);
+                            }
+                        },
                     }
                 }
                 // In an async block, so that the sender is cloned only while link events
@@ -447,6 +452,20 @@ impl Driver {
                     return Served::Closed;
                 }
             }
+        }
+    }
+
+    /// What the transport's reader gave: handled, or how serving the transport ends.
+    fn on_read(&mut self, item: Option<std::io::Result<CodecItem>>) -> Option<Served> {
+        match item {
+            Some(Ok(item)) => {
+                self.handle_item(item);
+                None
+            }
+            Some(Err(e)) => Some(Served::Failed(format!("read error: {e}"))),
+            None => Some(Served::Failed(
+                "end of stream (peer closed or device gone)".into(),
+            )),
         }
     }
 
