@@ -18,6 +18,9 @@
 //!   A request is answered once, but for node discovery (`ND`) and active scan (`AS`),
 //!   whose answers keep coming for [`ANSWER_WINDOW`]. Frames with id 0 and frames of
 //!   other types are written as they are.
+//! - **Outages:** while the hub's link to the radio is down (a USB radio unplugged), the
+//!   hub disconnects its clients and turns new ones away, so that their links see the
+//!   outage and reconnect once the radio is back.
 //!
 //! ```no_run
 //! use mcp_host::hub::Hub;
@@ -53,7 +56,7 @@ use xbee_api::{ApiMode, RawFrame};
 
 use crate::codec::{CodecItem, XBeeCodec, encode_frame};
 use crate::event::{carries_frame_id, is_response};
-use crate::{CommandSender, ConnectError, Event, Link, LinkOptions, PacketStream};
+use crate::{CommandSender, ConnectError, Event, Link, LinkEvent, LinkOptions, PacketStream};
 
 /// Frames from the radio waiting for one client, at most; more are dropped for it.
 pub const CLIENT_QUEUE: usize = 1024;
@@ -154,6 +157,7 @@ impl Hub {
             counters: hub.counters.clone(),
             routes: Arc::new(Mutex::new(Routes::new())),
             clients: Vec::new(),
+            radio_up: true,
         };
         hub.tasks.spawn(serve.run(stream, listener));
         Ok(hub)
@@ -272,8 +276,10 @@ struct Serve {
     tasks: TaskTracker,
     counters: Arc<Counters>,
     routes: Arc<Mutex<Routes>>,
-    /// Each client's queue of encoded frames.
-    clients: Vec<mpsc::Sender<Bytes>>,
+    /// Each client's queue of encoded frames, and what ends it.
+    clients: Vec<(mpsc::Sender<Bytes>, CancellationToken)>,
+    /// Whether the link to the radio is up: clients are served only then.
+    radio_up: bool,
 }
 
 impl Serve {
@@ -304,7 +310,12 @@ impl Serve {
     }
 
     fn accept(&mut self, socket: TcpStream, peer: SocketAddr) {
-        self.clients.retain(|client| !client.is_closed());
+        self.clients.retain(|(client, _)| !client.is_closed());
+        if !self.radio_up {
+            // Its link reconnects once the radio is back.
+            tracing::info!(%peer, "hub: client turned away (the radio's link is down)");
+            return;
+        }
         if self.clients.len() >= MAX_CLIENTS {
             tracing::warn!(%peer, "hub: client turned away ({MAX_CLIENTS} connected)");
             return;
@@ -314,7 +325,8 @@ impl Serve {
         // Frames one at a time, as the radio writes them.
         let _ = socket.set_nodelay(true);
         let (queue, frames) = mpsc::channel(CLIENT_QUEUE);
-        self.clients.push(queue.clone());
+        let end = self.stop.child_token();
+        self.clients.push((queue.clone(), end.clone()));
         let client = Client {
             mode: self.mode,
             sender: self.sender.clone(),
@@ -322,8 +334,7 @@ impl Serve {
             routes: self.routes.clone(),
             counters: self.counters.clone(),
         };
-        self.tasks
-            .spawn(client.run(socket, peer, frames, self.stop.clone()));
+        self.tasks.spawn(client.run(socket, peer, frames, end));
     }
 
     /// A frame from the radio: an answer to its client, anything else to every client.
@@ -334,6 +345,17 @@ impl Serve {
             Event::Frame(frame) => frame.data(),
             Event::Link(link) => {
                 tracing::info!(?link, "hub: radio link");
+                self.radio_up = matches!(
+                    link,
+                    LinkEvent::Connected { .. } | LinkEvent::Reconnected { .. }
+                );
+                if !self.radio_up {
+                    // The clients' links see the outage as the hub's own link does (and
+                    // reconnect to the hub once the radio is back).
+                    for (_, end) in self.clients.drain(..) {
+                        end.cancel();
+                    }
+                }
                 return;
             }
             Event::DecodeError(_) => return,
@@ -350,7 +372,7 @@ impl Serve {
         };
         let counters = &self.counters;
         self.clients
-            .retain(|client| match client.try_send(bytes.clone()) {
+            .retain(|(client, _)| match client.try_send(bytes.clone()) {
                 Ok(()) => true,
                 Err(mpsc::error::TrySendError::Full(_)) => {
                     bump(&counters.frames_dropped);
@@ -410,7 +432,7 @@ impl Client {
             // the client) as a whole, but never past a stop: a client that reads
             // nothing does not hold the hub up.
             tokio::select! {
-                () = stop.cancelled() => break "the hub stopped".to_owned(),
+                () = stop.cancelled() => break "the hub stopped, or the radio's link went down".to_owned(),
                 ended = self.step(&mut reader, &mut wr, &mut frames) => {
                     if let Some(reason) = ended {
                         break reason;

@@ -371,3 +371,69 @@ async fn a_client_that_reads_nothing_does_not_hold_up_stop() {
         .await
         .expect("stop returns");
 }
+
+#[tokio::test]
+async fn clients_see_the_radios_outage_and_come_back_with_it() {
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let radio: Link = format!("tcp:{}", listener.local_addr().unwrap())
+        .parse()
+        .unwrap();
+    let (hub, accepted) = tokio::join!(
+        Hub::start(&radio, LinkOptions::default(), "127.0.0.1:0"),
+        listener.accept()
+    );
+    let hub = hub.unwrap();
+    let (mut client_stream, client) = client(&hub, ApiMode::Unescaped).await;
+    assert!(matches!(
+        next_link(&mut client_stream).await,
+        mcp_host::LinkEvent::Connected { .. }
+    ));
+    // The radio goes away: the client's link goes down with it.
+    drop(accepted.unwrap());
+    assert!(matches!(
+        next_link(&mut client_stream).await,
+        mcp_host::LinkEvent::Disconnected { .. }
+    ));
+    // The radio is back: the hub's link reconnects, and then the client's.
+    let (socket, _) = listener.accept().await.unwrap();
+    assert!(matches!(
+        next_link(&mut client_stream).await,
+        mcp_host::LinkEvent::Reconnected { .. }
+    ));
+    // And frames flow again.
+    let mut radio =
+        tokio_util::codec::Framed::new(socket, mcp_host::codec::XBeeCodec::new(ApiMode::Unescaped));
+    {
+        use futures::SinkExt;
+        let status = xbee_api::RawFrame::new(&[0x8A, 0x06]).unwrap();
+        radio.send(&status).await.unwrap();
+    }
+    loop {
+        let event = tokio::time::timeout(GUARD, client_stream.next())
+            .await
+            .unwrap()
+            .unwrap();
+        if let Event::Frame(frame) = event {
+            assert_eq!(&frame.data()[..], [0x8A, 0x06]);
+            break;
+        }
+    }
+    client.close();
+    hub.stop().await;
+}
+
+/// The next link event on `stream`.
+async fn next_link(stream: &mut PacketStream) -> mcp_host::LinkEvent {
+    let next = async {
+        loop {
+            match stream.next().await {
+                Some(Event::Link(link)) => return link,
+                Some(_) => {}
+                None => panic!("stream ended"),
+            }
+        }
+    };
+    tokio::time::timeout(GUARD, next)
+        .await
+        .expect("a link event")
+}
