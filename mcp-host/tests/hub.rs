@@ -400,7 +400,14 @@ async fn clients_see_the_radios_outage_and_come_back_with_it() {
         next_link(&mut client_stream).await,
         mcp_host::LinkEvent::Reconnected { .. }
     ));
-    // And frames flow again.
+    // And frames flow again, once the hub has taken the client back (its connection
+    // may be complete in the kernel before the hub accepts it, or be one the hub turned
+    // away while its own link was still down).
+    let deadline = tokio::time::Instant::now() + GUARD;
+    while hub.stats().clients < 2 {
+        assert!(tokio::time::Instant::now() < deadline, "{:?}", hub.stats());
+        tokio::time::sleep(Duration::from_millis(5)).await;
+    }
     let mut radio =
         tokio_util::codec::Framed::new(socket, mcp_host::codec::XBeeCodec::new(ApiMode::Unescaped));
     {
