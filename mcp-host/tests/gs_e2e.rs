@@ -2,14 +2,14 @@
 //! pseudo-terminal; `mcp-gs send`, `status` and `monitor` on the other, for every
 //! command type.
 
-use std::io::{BufRead, BufReader};
-use std::process::{Child, Command, Output, Stdio};
-use std::sync::mpsc;
+use std::process::{Child, Command, Output};
 use std::time::Duration;
 
 use serde_json::Value;
 
 mod common;
+
+use common::spawn_lines;
 
 const MAV: &str = "0013a20040b599b9";
 const SLAVE: &str = "0013a20040b599bf";
@@ -84,25 +84,6 @@ impl Sim {
         assert_eq!(report["category"], "report", "{out}");
         report
     }
-}
-
-/// Starts `mcp-gs` with `args`; its standard output comes line by line on the channel.
-fn spawn_lines(args: &[&str]) -> (Child, mpsc::Receiver<String>) {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
-        .args(args)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::inherit())
-        .spawn()
-        .expect("start mcp-gs");
-    let stdout = child.stdout.take().expect("stdout");
-    let (tx, rx) = mpsc::channel();
-    std::thread::spawn(move || {
-        // Keep reading to the end, so the process never writes into a closed pipe.
-        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
-            let _ = tx.send(line);
-        }
-    });
-    (child, rx)
 }
 
 /// `out`, after checking that the `mcp-gs` run it came from (with `args`) succeeded.

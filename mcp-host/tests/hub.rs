@@ -212,19 +212,16 @@ impl FakeRadio {
     /// A hub on a fake radio: the radio's side once the hub has connected.
     async fn with_hub() -> (FakeRadio, Hub) {
         let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-        let radio: Link = format!("tcp:{}", listener.local_addr().unwrap())
-            .parse()
-            .unwrap();
-        let (hub, accepted) = tokio::join!(
-            Hub::start(&radio, LinkOptions::default(), "127.0.0.1:0"),
-            listener.accept()
-        );
-        let (socket, _) = accepted.unwrap();
+        let (hub, socket) = hub_on(&listener).await;
+        (FakeRadio::on(socket), hub)
+    }
+
+    fn on(socket: tokio::net::TcpStream) -> FakeRadio {
         let framed = tokio_util::codec::Framed::new(
             socket,
             mcp_host::codec::XBeeCodec::new(ApiMode::Unescaped),
         );
-        (FakeRadio { framed }, hub.unwrap())
+        FakeRadio { framed }
     }
 
     /// The next frame the hub writes to the radio (frame data).
@@ -258,6 +255,18 @@ impl FakeRadio {
         let frame = xbee_api::RawFrame::new(data).unwrap();
         self.framed.send(&frame).await.unwrap();
     }
+}
+
+/// A hub whose radio link connects to `listener` (API mode 1), and the radio's socket.
+async fn hub_on(listener: &tokio::net::TcpListener) -> (Hub, tokio::net::TcpStream) {
+    let radio: Link = format!("tcp:{}", listener.local_addr().unwrap())
+        .parse()
+        .unwrap();
+    let (hub, accepted) = tokio::join!(
+        Hub::start(&radio, LinkOptions::default(), "127.0.0.1:0"),
+        listener.accept()
+    );
+    (hub.unwrap(), accepted.unwrap().0)
 }
 
 /// A client speaking frames on a raw TCP connection to the hub.
@@ -375,21 +384,14 @@ async fn a_client_that_reads_nothing_does_not_hold_up_stop() {
 #[tokio::test]
 async fn clients_see_the_radios_outage_and_come_back_with_it() {
     let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let radio: Link = format!("tcp:{}", listener.local_addr().unwrap())
-        .parse()
-        .unwrap();
-    let (hub, accepted) = tokio::join!(
-        Hub::start(&radio, LinkOptions::default(), "127.0.0.1:0"),
-        listener.accept()
-    );
-    let hub = hub.unwrap();
+    let (hub, radio) = hub_on(&listener).await;
     let (mut client_stream, client) = client(&hub, ApiMode::Unescaped).await;
     assert!(matches!(
         next_link(&mut client_stream).await,
         mcp_host::LinkEvent::Connected { .. }
     ));
     // The radio goes away: the client's link goes down with it.
-    drop(accepted.unwrap());
+    drop(radio);
     assert!(matches!(
         next_link(&mut client_stream).await,
         mcp_host::LinkEvent::Disconnected { .. }
@@ -408,13 +410,8 @@ async fn clients_see_the_radios_outage_and_come_back_with_it() {
         assert!(tokio::time::Instant::now() < deadline, "{:?}", hub.stats());
         tokio::time::sleep(Duration::from_millis(5)).await;
     }
-    let mut radio =
-        tokio_util::codec::Framed::new(socket, mcp_host::codec::XBeeCodec::new(ApiMode::Unescaped));
-    {
-        use futures::SinkExt;
-        let status = xbee_api::RawFrame::new(&[0x8A, 0x06]).unwrap();
-        radio.send(&status).await.unwrap();
-    }
+    let mut radio = FakeRadio::on(socket);
+    radio.send(&[0x8A, 0x06]).await;
     loop {
         let event = tokio::time::timeout(GUARD, client_stream.next())
             .await

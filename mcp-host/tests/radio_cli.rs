@@ -1,7 +1,6 @@
 //! `mcp-gs radio` and `mcp-gs sim` as processes: they print where to connect, and route.
 
-use std::io::{BufRead, BufReader};
-use std::process::{Child, Command, Stdio};
+use std::process::{Child, Command};
 use std::sync::mpsc;
 use std::time::Duration;
 
@@ -12,6 +11,8 @@ use mcp_host::{Link, LinkOptions};
 use tokio::net::TcpStream;
 use tokio_util::codec::Framed;
 use xbee_api::{Address16, Address64, ApiMode, Frame, ModemStatus, TransmitRequestRepr};
+
+mod common;
 
 /// Failure guard only.
 const GUARD: Duration = Duration::from_secs(20);
@@ -24,21 +25,7 @@ struct Running {
 
 impl Running {
     fn start(args: &[&str]) -> Self {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
-            .args(args)
-            .stdout(Stdio::piped())
-            .stderr(Stdio::inherit())
-            .spawn()
-            .expect("start mcp-gs");
-        let stdout = child.stdout.take().expect("stdout");
-        let (tx, lines) = mpsc::channel();
-        std::thread::spawn(move || {
-            for line in BufReader::new(stdout).lines().map_while(Result::ok) {
-                if tx.send(line).is_err() {
-                    return;
-                }
-            }
-        });
+        let (child, lines) = common::spawn_lines(args);
         Running { child, lines }
     }
 
