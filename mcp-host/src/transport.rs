@@ -231,13 +231,7 @@ impl Connector {
             Link::Pty => {
                 // The pair takes no lock (no TIOCEXCL, no flock) on the far end, so a
                 // simulator can open it, even exclusively, while this side holds it open.
-                let (master, slave) = SerialStream::pair().map_err(LinkError::Pty)?;
-                let path = slave.name().map(PathBuf::from).ok_or_else(|| {
-                    LinkError::Pty(tokio_serial::Error::new(
-                        tokio_serial::ErrorKind::Unknown,
-                        "the pseudo-terminal has no name",
-                    ))
-                })?;
+                let (master, slave, path) = pty_pair()?;
                 Kind::Pty(PtyPair {
                     master: Some(master),
                     _slave: slave,
@@ -378,4 +372,17 @@ impl Connector {
     pub fn mark_healthy(&mut self) {
         self.delay = None;
     }
+}
+
+/// A new pseudo-terminal pair: its master side, its far end (open, in raw mode) and the
+/// far end's path.
+pub(crate) fn pty_pair() -> Result<(SerialStream, SerialStream, PathBuf), LinkError> {
+    let (master, slave) = SerialStream::pair().map_err(LinkError::Pty)?;
+    let path = slave.name().map(PathBuf::from).ok_or_else(|| {
+        LinkError::Pty(tokio_serial::Error::new(
+            tokio_serial::ErrorKind::Unknown,
+            "the pseudo-terminal has no name",
+        ))
+    })?;
+    Ok((master, slave, path))
 }

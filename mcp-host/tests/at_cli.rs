@@ -1,10 +1,10 @@
 //! `mcp-gs at` as a process against `mcp-gs sim` (its emulated radios) over TCP: how
 //! values print, what the radio's refusals say and which exit codes they give.
 
-use std::io::{BufRead, BufReader};
-use std::process::{Child, Command, Output, Stdio};
-use std::sync::mpsc;
+use std::process::{Child, Command, Output};
 use std::time::Duration;
+
+mod common;
 
 const MAV: &str = "0013a20040b599b9";
 /// An address no node of the simulated network has.
@@ -20,25 +20,13 @@ struct Sim {
 
 impl Sim {
     fn start() -> Self {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
-            .args([
-                "sim",
-                "--link",
-                "tcp-listen:127.0.0.1:0",
-                "--duration",
-                "300",
-            ])
-            .stdout(Stdio::piped())
-            .stderr(Stdio::inherit())
-            .spawn()
-            .expect("start mcp-gs sim");
-        let stdout = child.stdout.take().expect("stdout");
-        let (tx, rx) = mpsc::channel();
-        std::thread::spawn(move || {
-            for line in BufReader::new(stdout).lines().map_while(Result::ok) {
-                let _ = tx.send(line);
-            }
-        });
+        let (child, rx) = common::spawn_lines(&[
+            "sim",
+            "--link",
+            "tcp-listen:127.0.0.1:0",
+            "--duration",
+            "300",
+        ]);
         let link = loop {
             let line = rx.recv_timeout(GUARD).expect("sim prints its link");
             if let Some(rest) = line.split("(connect with ").nth(1) {
@@ -109,20 +97,7 @@ fn a_remote_command_that_is_not_delivered_exits_5() {
 #[test]
 fn an_at_command_without_answer_exits_4() {
     // A peer that reads everything and never answers, for two ground stations in turn.
-    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
-    let port = listener.local_addr().unwrap().port();
-    let peer = std::thread::spawn(move || {
-        for _ in 0..2 {
-            let (mut socket, _) = listener.accept().unwrap();
-            let mut buf = [0u8; 64];
-            while let Ok(n) = std::io::Read::read(&mut socket, &mut buf) {
-                if n == 0 {
-                    break;
-                }
-            }
-        }
-    });
-    let link = format!("tcp:127.0.0.1:{port}");
+    let (link, peer) = common::silent_peer(2);
     for to in [None, Some(MAV)] {
         let mut args = vec!["at", "--link", &link, "--timeout", "0.5"];
         if let Some(to) = to {

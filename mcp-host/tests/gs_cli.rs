@@ -6,6 +6,8 @@ use std::process::{Command, Output, Stdio};
 
 use serde_json::Value;
 
+mod common;
+
 fn gs() -> Command {
     Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
 }
@@ -429,15 +431,18 @@ fn bad_arguments_exit_2_with_one_line() {
 
 #[test]
 fn missing_device_exits_3() {
-    let output = run(&[
-        "send",
-        "--link",
-        "serial:/dev/mcp-gs-test-no-such-device",
-        "--to",
-        "0013A20040B599B9",
-        "landing",
-        "on",
-    ]);
+    let send = |link: &str| {
+        run(&[
+            "send",
+            "--link",
+            link,
+            "--to",
+            "0013A20040B599B9",
+            "landing",
+            "on",
+        ])
+    };
+    let output = send("serial:/dev/mcp-gs-test-no-such-device");
     assert_eq!(output.status.code(), Some(3));
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert_eq!(stderr.lines().count(), 1, "{stderr}");
@@ -450,15 +455,7 @@ fn missing_device_exits_3() {
     let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
     let link = format!("tcp:{}", listener.local_addr().unwrap());
     drop(listener);
-    let output = run(&[
-        "send",
-        "--link",
-        &link,
-        "--to",
-        "0013A20040B599B9",
-        "landing",
-        "on",
-    ]);
+    let output = send(&link);
     assert_eq!(output.status.code(), Some(3));
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(stderr.contains("nothing listens there"), "{stderr}");
@@ -466,20 +463,8 @@ fn missing_device_exits_3() {
 
 #[test]
 fn status_timeout_exits_4() {
-    // A peer that accepts and acknowledges every Transmit Request but never reports.
-    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
-    let port = listener.local_addr().unwrap().port();
-    let peer = std::thread::spawn(move || {
-        let (mut socket, _) = listener.accept().unwrap();
-        let mut buf = [0u8; 64];
-        // Read until the ground station hangs up; never answer.
-        while let Ok(n) = std::io::Read::read(&mut socket, &mut buf) {
-            if n == 0 {
-                break;
-            }
-        }
-    });
-    let link = format!("tcp:127.0.0.1:{port}");
+    // A peer that reads every request but never answers.
+    let (link, peer) = common::silent_peer(1);
     let output = run(&[
         "status",
         "--link",

@@ -21,7 +21,7 @@ use std::time::Duration;
 
 use bytes::{Buf, Bytes};
 use tokio::io::{AsyncRead, AsyncWrite, ReadBuf};
-use tokio_serial::{SerialPort, SerialStream};
+use tokio_serial::SerialStream;
 
 use crate::transport::LinkError;
 
@@ -43,13 +43,7 @@ pub(crate) struct PtyPort {
 impl PtyPort {
     /// A new pair; its far end is closed (no peer) until a device opens [`Self::path`].
     pub(crate) fn new() -> Result<Self, LinkError> {
-        let (master, slave) = SerialStream::pair().map_err(LinkError::Pty)?;
-        let path = slave.name().map(PathBuf::from).ok_or_else(|| {
-            LinkError::Pty(tokio_serial::Error::new(
-                tokio_serial::ErrorKind::Unknown,
-                "the pseudo-terminal has no name",
-            ))
-        })?;
+        let (master, slave, path) = crate::transport::pty_pair()?;
         // The pair came with the far end open (and set to raw mode, which stays): closed
         // here so that only a peer's opening counts.
         drop(slave);

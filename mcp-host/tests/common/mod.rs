@@ -257,3 +257,19 @@ pub fn spawn_lines(args: &[&str]) -> (std::process::Child, std::sync::mpsc::Rece
     });
     (child, rx)
 }
+
+/// A TCP peer that takes `connections` connections in turn and reads each until the
+/// other side hangs up, never answering: a radio that is not there. Its `tcp:` link,
+/// and the thread to join.
+pub fn silent_peer(connections: usize) -> (String, std::thread::JoinHandle<()>) {
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let link = format!("tcp:{}", listener.local_addr().unwrap());
+    let peer = std::thread::spawn(move || {
+        for _ in 0..connections {
+            let (mut socket, _) = listener.accept().unwrap();
+            let mut buf = [0u8; 64];
+            while matches!(std::io::Read::read(&mut socket, &mut buf), Ok(n) if n > 0) {}
+        }
+    });
+    (link, peer)
+}
