@@ -590,14 +590,7 @@ fn a_cut_off_recording_is_summed_up_to_the_cut_then_an_error() {
     assert_eq!(String::from_utf8_lossy(&output.stdout).lines().count(), 2);
 
     // Replayed: the frames before the cut go out, and the error says how many.
-    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
-    let link = format!("tcp:{}", listener.local_addr().unwrap());
-    let reader = std::thread::spawn(move || {
-        let (mut socket, _) = listener.accept().unwrap();
-        let mut bytes = Vec::new();
-        std::io::Read::read_to_end(&mut socket, &mut bytes).unwrap();
-        bytes
-    });
+    let (link, reader) = common::recording_peer();
     let output = run(&["replay", file, "--link", &link, "--speed", "0"]);
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert_eq!(output.status.code(), Some(2), "{stderr}");

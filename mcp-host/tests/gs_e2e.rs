@@ -353,14 +353,7 @@ fn record_decode_and_replay() {
     assert!(packets > 0, "{text}");
 
     // Replayed as fast as possible onto a link, the same frames arrive.
-    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
-    let link = format!("tcp:{}", listener.local_addr().unwrap());
-    let reader = std::thread::spawn(move || {
-        let (mut socket, _) = listener.accept().unwrap();
-        let mut bytes = Vec::new();
-        std::io::Read::read_to_end(&mut socket, &mut bytes).unwrap();
-        bytes
-    });
+    let (link, reader) = common::recording_peer();
     mcp_gs_ok(&["replay", file, "--link", &link, "--speed", "0"]);
     let wire = reader.join().unwrap();
     let mut decoder: xbee_api::Decoder = xbee_api::Decoder::new(xbee_api::ApiMode::Unescaped);

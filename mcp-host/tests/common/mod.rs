@@ -273,3 +273,17 @@ pub fn silent_peer(connections: usize) -> (String, std::thread::JoinHandle<()>) 
     });
     (link, peer)
 }
+
+/// A TCP peer that takes one connection and keeps what it reads until the other side
+/// hangs up: where a replay goes. Its `tcp:` link, and the thread that gives the bytes.
+pub fn recording_peer() -> (String, std::thread::JoinHandle<Vec<u8>>) {
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let link = format!("tcp:{}", listener.local_addr().unwrap());
+    let peer = std::thread::spawn(move || {
+        let (mut socket, _) = listener.accept().unwrap();
+        let mut bytes = Vec::new();
+        std::io::Read::read_to_end(&mut socket, &mut bytes).unwrap();
+        bytes
+    });
+    (link, peer)
+}
