@@ -664,3 +664,55 @@ fn decode_says_what_input_it_cannot_read() {
     assert!(stderr.contains("no XBee frame in 26 bytes"), "{stderr}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn options_may_follow_the_command_word() {
+    let to = "0013A20040B599B9";
+    let canonical = stdout(&run(&[
+        "encode",
+        "--to",
+        to,
+        "--frame-id",
+        "5",
+        "--api-mode",
+        "2",
+        "landing",
+        "on",
+    ]));
+    for args in [
+        &[
+            "encode",
+            "landing",
+            "on",
+            "--to",
+            to,
+            "--frame-id",
+            "5",
+            "--api-mode",
+            "2",
+        ][..],
+        &[
+            "encode",
+            "--api-mode",
+            "2",
+            "landing",
+            "--frame-id=5",
+            "on",
+            "--to",
+            to,
+        ],
+    ] {
+        assert_eq!(stdout(&run(args)), canonical, "{args:?}");
+    }
+    // The command's own options stay with it.
+    let trajectory = &["trajectory", "--waypoint", "1,2,3,4"];
+    let mut first = vec!["encode", "--to", to];
+    first.extend_from_slice(trajectory);
+    let mut last = vec!["encode"];
+    last.extend_from_slice(trajectory);
+    last.extend(["--to", to]);
+    assert_eq!(stdout(&run(&last)), stdout(&run(&first)));
+    // After `--`, a word that looks like an option is text.
+    let out = stdout(&run(&["encode", "--to", to, "message", "--", "--to"]));
+    assert!(out.contains("6D 2D 2D 74 6F"), "{out}");
+}

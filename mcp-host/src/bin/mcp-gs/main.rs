@@ -25,7 +25,9 @@ mod status;
 
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use std::ffi::OsString;
+
+use clap::{CommandFactory, Parser, Subcommand};
 use xbee_api::ApiMode;
 
 /// MCP ground station: talk to MAVs through an XBee radio, or to a simulated one.
@@ -62,6 +64,64 @@ enum Sub {
     Hub(hub::HubArgs),
     /// A ground station and a simulated MAV in one process: no hardware needed.
     Demo(demo::DemoArgs),
+}
+
+/// The subcommands with a COMMAND word of their own (`send`, `encode`) take their options
+/// after it too, as operators type them (`send --link L landing on --to ADDR`): such
+/// options are moved before the word. Anything after `--` stays where it is.
+fn hoist_options(args: Vec<OsString>) -> Vec<OsString> {
+    let cli = Cli::command();
+    let sub = args
+        .get(1)
+        .and_then(|name| name.to_str())
+        .and_then(|name| cli.find_subcommand(name));
+    let Some(sub) = sub.filter(|sub| sub.has_subcommands()) else {
+        return args;
+    };
+    // The subcommand's own long options, and whether each takes a value.
+    let takes_value = |token: &OsString| -> Option<bool> {
+        let long = token.to_str()?.strip_prefix("--")?;
+        let (name, inline) = match long.split_once('=') {
+            Some((name, _)) => (name, true),
+            None => (long, false),
+        };
+        let arg = sub.get_arguments().find(|a| a.get_long() == Some(name))?;
+        Some(arg.get_action().takes_values() && !inline)
+    };
+    // The COMMAND word: the first token that is neither an option nor its value.
+    let mut word = 2;
+    while let Some(token) = args.get(word) {
+        if token == "--" {
+            return args;
+        }
+        match takes_value(token) {
+            Some(true) => word += 2,
+            Some(false) => word += 1,
+            None if token.to_str().is_some_and(|t| t.starts_with('-')) => word += 1,
+            None => break,
+        }
+    }
+    let mut before: Vec<OsString> = args.iter().take(word).cloned().collect();
+    let mut after = Vec::new();
+    let mut rest = args.iter().skip(word);
+    while let Some(token) = rest.next() {
+        if token == "--" {
+            after.push(token.clone());
+            after.extend(rest.cloned());
+            break;
+        }
+        match takes_value(token) {
+            Some(value) => {
+                before.push(token.clone());
+                if value {
+                    before.extend(rest.next().cloned());
+                }
+            }
+            None => after.push(token.clone()),
+        }
+    }
+    before.extend(after);
+    before
 }
 
 /// Writes one line to standard output, exiting quietly if it is closed.
@@ -151,7 +211,7 @@ impl Failure {
 
 #[tokio::main]
 async fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = Cli::parse_from(hoist_options(std::env::args_os().collect()));
     tracing_subscriber::fmt()
         .with_env_filter(
             tracing_subscriber::EnvFilter::try_from_env("MCP_LOG")
