@@ -436,7 +436,8 @@ fn a_recording_keeps_each_frame_as_it_came() {
 #[test]
 fn a_port_another_program_holds_is_named_as_busy() {
     let sim = Sim::start("pty");
-    let (mut monitor, rx) = spawn_lines(&["monitor", "--link", &sim.link]);
+    let (monitor, rx) = spawn_lines(&["monitor", "--link", &sim.link]);
+    let _monitor = common::Running(monitor);
     // Its first line is printed once it has the port.
     let first = rx.recv_timeout(GUARD).expect("monitor prints a line");
     assert!(first.contains("connected"), "{first}");
@@ -447,8 +448,6 @@ fn a_port_another_program_holds_is_named_as_busy() {
         stderr.contains("another program has the port open"),
         "{stderr}"
     );
-    monitor.kill().unwrap();
-    monitor.wait().unwrap();
 }
 
 #[test]
@@ -506,7 +505,7 @@ fn send_trajectory_checks_the_mavs_report() {
 #[test]
 fn a_hub_lets_monitor_and_send_share_the_radio() {
     let sim = Sim::start_with(&["--api-mode", "2"], "pty");
-    let (mut hub, hub_out) = spawn_lines(&[
+    let (hub, hub_out) = spawn_lines(&[
         "hub",
         "--link",
         &sim.link,
@@ -522,7 +521,8 @@ fn a_hub_lets_monitor_and_send_share_the_radio() {
         .and_then(|rest| rest.split_whitespace().next())
         .unwrap_or_else(|| panic!("{first}"))
         .to_string();
-    let (mut monitor, lines) = spawn_lines(&[
+    let _hub = common::Running(hub);
+    let (monitor, lines) = spawn_lines(&[
         "monitor",
         "--link",
         &link,
@@ -531,6 +531,7 @@ fn a_hub_lets_monitor_and_send_share_the_radio() {
         "--format",
         "json",
     ]);
+    let _monitor = common::Running(monitor);
     let first = lines.recv_timeout(GUARD).expect("monitor connects");
     assert!(first.contains("connected"), "{first}");
     // While monitor has the hub, send and status go through it too.
@@ -555,8 +556,34 @@ fn a_hub_lets_monitor_and_send_share_the_radio() {
         }
     };
     assert!(telemetry.contains("pitch_angle"), "{telemetry}");
-    monitor.kill().unwrap();
-    monitor.wait().unwrap();
-    hub.kill().unwrap();
-    hub.wait().unwrap();
+
+    // Ground stations setting trajectories at once each find the MAV's report of their
+    // own among the others'.
+    std::thread::scope(|scope| {
+        let sends: Vec<_> = (1..=4)
+            .map(|i| {
+                let gs = &gs;
+                scope.spawn(move || {
+                    let (w1, w2) = (format!("{i},0.5,0,{i}"), format!("{},0,0.5,1", i + 10));
+                    gs(&[
+                        "send",
+                        "--to",
+                        MAV,
+                        "trajectory",
+                        "--waypoint",
+                        &w1,
+                        "--waypoint",
+                        &w2,
+                    ])
+                })
+            })
+            .collect();
+        for send in sends {
+            let out = send.join().unwrap();
+            assert!(
+                out.contains("the MAV reports the trajectory as sent"),
+                "{out}"
+            );
+        }
+    });
 }

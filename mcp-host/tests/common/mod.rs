@@ -235,6 +235,17 @@ pub async fn pty_link_with(
     (stream, sender, fake)
 }
 
+/// A child process, killed when dropped (also when a test fails part way, so that no
+/// process outlives its test holding the test's standard error open).
+pub struct Running(pub std::process::Child);
+
+impl Drop for Running {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
 /// Starts `mcp-gs` with `args`; its standard output comes line by line on the channel
 /// (read to the end, so that the process never writes into a closed pipe).
 pub fn spawn_lines(args: &[&str]) -> (std::process::Child, std::sync::mpsc::Receiver<String>) {

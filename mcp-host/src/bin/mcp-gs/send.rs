@@ -72,39 +72,19 @@ pub(crate) async fn run(args: SendArgs) -> Result<(), Failure> {
         DeliveryReport::Written => out!("written, no status asked (frame id 0): {what}"),
     }
     match &args.command {
-        // The MAV answers a trajectory set at once with the trajectory it took.
-        CommandArgs::Trajectory { waypoints } if args.to != Address64::BROADCAST => {
-            let timeout = args.link.timeout();
-            let report = tokio::time::timeout(timeout, trajectory_report(&mut stream, args.to))
+        // The MAV answers a trajectory set at once with the trajectory it took (unless
+        // the command went out fire and forget).
+        CommandArgs::Trajectory { waypoints }
+            if args.to != Address64::BROADCAST && !args.no_status =>
+        {
+            check_trajectory(&mut stream, &args, waypoints)
                 .await
-                .ok()
-                .flatten()
-                .ok_or_else(|| {
-                    let failure = Failure::new(
-                        Failure::TIMEOUT,
-                        format!(
-                            "no trajectory report from {} within {timeout:?}: the MAV did not \
-                             take the trajectory",
-                            args.to
-                        ),
-                    );
-                    diagnosed(failure, &args.link, &sender.stats())
-                })?;
-            if report != *waypoints {
-                return Err(Failure::new(
-                    Failure::DELIVERY,
-                    format!(
-                        "the MAV reports a trajectory of {} waypoint(s), not the {} sent",
-                        report.len(),
-                        waypoints.len()
-                    ),
-                ));
-            }
+                .map_err(|failure| diagnosed(failure, &args.link, &sender.stats()))?;
             out!("the MAV reports the trajectory as sent");
         }
         CommandArgs::Status { .. } => eprintln!(
-            "mcp-gs: the MAV answers with a report on the link; `mcp-gs status` waits for it \
-             and prints it"
+            "mcp-gs: note: the MAV answers with a report on the link; `mcp-gs status` waits \
+             for it and prints it"
         ),
         _ => {}
     }
@@ -115,6 +95,58 @@ pub(crate) async fn run(args: SendArgs) -> Result<(), Failure> {
     sender.close();
     sender.closed().await;
     Ok(())
+}
+
+/// Waits for the MAV's trajectory report holding `sent`. Reports of other trajectories
+/// (another ground station may set one meanwhile, or the MAV kept fewer waypoints) are
+/// passed over until the timeout, then the last one is the failure.
+async fn check_trajectory(
+    stream: &mut PacketStream,
+    args: &SendArgs,
+    sent: &[Waypoint],
+) -> Result<(), Failure> {
+    let timeout = args.link.timeout();
+    let mut other = None;
+    let wait = async {
+        while let Some(report) = trajectory_report(stream, args.to).await {
+            if report == sent {
+                return true;
+            }
+            other = Some(report);
+        }
+        false
+    };
+    if tokio::time::timeout(timeout, wait).await == Ok(true) {
+        return Ok(());
+    }
+    let show = |w: &[Waypoint]| {
+        w.iter()
+            .map(|w| format!("{},{},{},{}", w.time, w.elevator, w.aileron, w.altitude))
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    Err(match other {
+        Some(report) => Failure::new(
+            Failure::OTHER,
+            format!(
+                "the MAV reports another trajectory than the one sent: {} waypoint(s) [{}], \
+                 sent {} [{}] (it may have kept fewer, or another ground station set one \
+                 meanwhile)",
+                report.len(),
+                show(&report),
+                sent.len(),
+                show(sent)
+            ),
+        ),
+        None => Failure::new(
+            Failure::TIMEOUT,
+            format!(
+                "no trajectory report from {} within {timeout:?}: the MAV did not take the \
+                 trajectory",
+                args.to
+            ),
+        ),
+    })
 }
 
 /// The waypoints of the next trajectory report from `from` on the stream; `None` if
