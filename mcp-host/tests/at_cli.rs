@@ -156,3 +156,19 @@ fn network_parameters_read_and_the_node_identifier_is_set_as_text() {
     assert_eq!(out.status.code(), Some(1), "{out:?}");
     assert!(stderr(&out).contains("refused the value"), "{out:?}");
 }
+
+#[test]
+fn reading_ap_in_another_api_mode_warns() {
+    let sim = Sim::start();
+    // The simulated radio is in mode 1; its AP answer reads the same in mode 2.
+    let out = sim.at(&["--api-mode", "2", "AP"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("the radio is in API mode 1 but --api-mode is 2"),
+        "{}",
+        stderr(&out)
+    );
+    // In its own mode, no warning.
+    let out = sim.at(&["AP"]);
+    assert_eq!(stderr(&out), "");
+}

@@ -481,6 +481,11 @@ fn status_timeout_exits_4() {
         stderr.contains("no ") && stderr.contains("within"),
         "{stderr}"
     );
+    // Nothing at all came back: what keeps a radio silent.
+    assert!(
+        stderr.contains("nothing at all came from the radio"),
+        "{stderr}"
+    );
     peer.join().unwrap();
 }
 

@@ -4,7 +4,7 @@ use clap::Args;
 use xbee_api::{Address64, AtStatus, Frame};
 
 use crate::Failure;
-use crate::link_args::{LinkArgs, send_failure};
+use crate::link_args::{ApiModeChoice, LinkArgs, diagnosed, send_failure};
 use mcp_host::render::json::hex;
 
 /// Arguments of `at`.
@@ -142,7 +142,7 @@ pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
                 .await
         }
     }
-    .map_err(send_failure)?;
+    .map_err(|e| diagnosed(send_failure(e), &args.link, &sender.stats()))?;
     let (status, data) = match response.parse() {
         Ok(Frame::AtCommandResponse(at)) => (at.status, at.data),
         Ok(Frame::RemoteAtResponse(at)) => (at.status, at.data),
@@ -166,6 +166,19 @@ pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
         out!("{name}: ok (no value)");
     } else {
         out!("{}", value_line(&name, &command, data));
+    }
+    // The local radio's API mode, read in another than --api-mode (the AP answer reads
+    // the same in both modes): the other frames will not.
+    if let (None, b"AP", ApiModeChoice::Fixed(mode), &[ap]) =
+        (args.to, &command, args.link.api_mode, data)
+    {
+        if ap != u8::from(mode) && (1..=2).contains(&ap) {
+            eprintln!(
+                "mcp-gs: warning: the radio is in API mode {ap} but --api-mode is {}: use \
+                 --api-mode {ap} or auto for the other commands",
+                u8::from(mode)
+            );
+        }
     }
     Ok(())
 }

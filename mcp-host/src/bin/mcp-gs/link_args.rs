@@ -219,11 +219,18 @@ pub(crate) async fn check_mode(sender: &CommandSender, configured: ApiMode) {
 /// What the link's counters say is wrong with the radio's settings, if anything: frames
 /// that fail their checksum (another API mode), or only frames of impossible lengths and
 /// bytes that were no frames (another baud rate, or transparent mode). `min_errors`:
-/// how many failed frames it takes (a one-shot command that timed out sees few).
-pub(crate) fn diagnosis(mode: ApiMode, stats: &Stats, min_errors: u64) -> Option<String> {
+/// how many failed frames it takes; with `majority`, also more failed frames than good
+/// ones (a frame with no byte to escape passes in either mode: a long-running command
+/// waits for most to fail, one that timed out has seen too few to count).
+pub(crate) fn diagnosis(
+    mode: ApiMode,
+    stats: &Stats,
+    min_errors: u64,
+    majority: bool,
+) -> Option<String> {
     let other = other_mode(mode);
     let checksum = stats.bad_checksum + stats.bad_escape;
-    if checksum >= min_errors && checksum > stats.frames {
+    if checksum >= min_errors && (!majority || checksum > stats.frames) {
         return Some(format!(
             "hint: {checksum} frames failed their checksum and {} passed: the radio may be in \
              API mode {other} (AP={other}); try --api-mode {other} or --api-mode auto",
@@ -243,17 +250,27 @@ pub(crate) fn diagnosis(mode: ApiMode, stats: &Stats, min_errors: u64) -> Option
     None
 }
 
-/// `failure`, with the [`diagnosis`] of the link's counters when it is a timeout and
-/// the API mode was given (one found by asking the radio is right).
+/// `failure`, with a hint when it is a timeout: the [`diagnosis`] of the link's
+/// counters if the API mode was given (one found by asking the radio is right), or, if
+/// nothing at all came from the radio, what keeps a radio silent.
 pub(crate) fn diagnosed(failure: Failure, link: &LinkArgs, stats: &Stats) -> Failure {
-    match link.api_mode {
-        ApiModeChoice::Fixed(mode) if failure.code() == Failure::TIMEOUT => {
-            match diagnosis(mode, stats, 1) {
-                Some(hint) => failure.with_hint(hint),
-                None => failure,
-            }
-        }
-        _ => failure,
+    if failure.code() != Failure::TIMEOUT {
+        return failure;
+    }
+    let from_counters = match link.api_mode {
+        ApiModeChoice::Fixed(mode) => diagnosis(mode, stats, 1, false),
+        ApiModeChoice::Auto => None,
+    };
+    let silent = stats.frames == 0 && stats.decode_errors() == 0 && stats.bytes_skipped == 0;
+    match from_counters {
+        Some(hint) => failure.with_hint(hint),
+        None if silent => failure.with_hint(
+            "hint: nothing at all came from the radio: check its API mode (--api-mode, or \
+             auto to ask it), the baud rate (serial:PATH:BAUD), and that no other program \
+             reads the port (to share it, use mcp-gs hub)"
+                .to_owned(),
+        ),
+        None => failure,
     }
 }
 

@@ -103,7 +103,7 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
         {
             // A frame with no byte to escape passes in either mode (a modem status,
             // say): the hint counts on most frames failing, not on all of them.
-            if let Some(hint) = diagnosis(mode, &stream.stats(), HINT_ERRORS) {
+            if let Some(hint) = diagnosis(mode, &stream.stats(), HINT_ERRORS, true) {
                 hinted = true;
                 eprintln!("mcp-gs: {hint}");
             }
