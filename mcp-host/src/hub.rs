@@ -56,7 +56,9 @@ use xbee_api::{ApiMode, RawFrame};
 
 use crate::codec::{CodecItem, XBeeCodec, encode_frame};
 use crate::event::{carries_frame_id, is_response};
-use crate::{CommandSender, ConnectError, Event, Link, LinkEvent, LinkOptions, PacketStream};
+use crate::{
+    CommandSender, ConnectError, Event, Link, LinkEvent, LinkInfo, LinkOptions, PacketStream,
+};
 
 /// Frames from the radio waiting for one client, at most; more are dropped for it.
 pub const CLIENT_QUEUE: usize = 1024;
@@ -121,6 +123,8 @@ fn bump(counter: &AtomicU64) {
 #[derive(Debug)]
 pub struct Hub {
     local_addr: SocketAddr,
+    radio: LinkInfo,
+    mode: ApiMode,
     stop: CancellationToken,
     tasks: TaskTracker,
     counters: Arc<Counters>,
@@ -145,6 +149,8 @@ impl Hub {
         let (stream, sender) = crate::connect(link, options).await?;
         let hub = Hub {
             local_addr,
+            radio: sender.info().clone(),
+            mode,
             stop: CancellationToken::new(),
             tasks: TaskTracker::new(),
             counters: Arc::default(),
@@ -166,6 +172,16 @@ impl Hub {
     /// The address clients connect to.
     pub fn local_addr(&self) -> SocketAddr {
         self.local_addr
+    }
+
+    /// The link to the radio (for `pty`, the path of its far end).
+    pub fn radio_link(&self) -> &LinkInfo {
+        &self.radio
+    }
+
+    /// The API mode the hub's clients speak: the radio's.
+    pub fn api_mode(&self) -> ApiMode {
+        self.mode
     }
 
     /// Counters so far.

@@ -515,6 +515,8 @@ fn a_hub_lets_monitor_and_send_share_the_radio() {
         "127.0.0.1:0",
     ]);
     let first = hub_out.recv_timeout(GUARD).expect("hub prints its address");
+    // With the API mode the other commands need.
+    assert!(first.contains("--api-mode 2"), "{first}");
     let link = first
         .split("--link ")
         .nth(1)

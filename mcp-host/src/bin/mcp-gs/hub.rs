@@ -26,10 +26,22 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
         .await
         .map_err(|e| match e {
             HubError::Connect(e) => connect_failure(radio, e),
-            listen @ HubError::Listen { .. } => Failure::link(listen.to_string()),
+            listen @ HubError::Listen { .. } => Failure::link(format!(
+                "{listen} (another hub may serve there: give it another --listen ADDR:PORT)"
+            )),
         })?;
+    if let Some(path) = &hub.radio_link().pty_path {
+        eprintln!(
+            "mcp-gs: pseudo-terminal for the radio side: {}",
+            path.display()
+        );
+    }
     let addr = hub.local_addr();
-    out!("serving {radio} on {addr}: give other commands --link tcp:{addr} (Ctrl-C stops)");
+    let mode = u8::from(hub.api_mode());
+    out!(
+        "serving {radio} on {addr}: give other commands --link tcp:{addr} --api-mode {mode} \
+         (Ctrl-C stops)"
+    );
     tokio::select! {
         _ = tokio::signal::ctrl_c() => {}
         () = hub.finished() => {
@@ -40,11 +52,13 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
     let stats = hub.stats();
     hub.stop().await;
     out!(
-        "stopped: {} clients, {} frames from the radio, {} from clients, {} dropped for slow clients",
+        "stopped: {} clients, {} frames from the radio, {} from clients, {} dropped for slow \
+         clients, {} of clients refused",
         stats.clients,
         stats.frames_from_radio,
         stats.frames_from_clients,
-        stats.frames_dropped
+        stats.frames_dropped,
+        stats.frames_refused
     );
     Ok(())
 }

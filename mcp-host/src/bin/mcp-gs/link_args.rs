@@ -279,7 +279,9 @@ pub(crate) fn connect_failure(link: &Link, error: ConnectError) -> Failure {
     match error {
         ConnectError::Options(what) => Failure::input(format!("invalid link options: {what}")),
         ConnectError::Link(e) => {
-            let hint = link_hint(&e).map(|h| format!(" ({h})")).unwrap_or_default();
+            let hint = link_hint(&e, link)
+                .map(|h| format!(" ({h})"))
+                .unwrap_or_default();
             Failure::link(format!("cannot open {link}: {e}{hint}"))
         }
     }
@@ -287,29 +289,31 @@ pub(crate) fn connect_failure(link: &Link, error: ConnectError) -> Failure {
 
 /// What an operator can do about a link that cannot be opened, where the cause is
 /// a common one.
-fn link_hint(error: &LinkError) -> Option<&'static str> {
+fn link_hint(error: &LinkError, link: &Link) -> Option<String> {
     use std::io::ErrorKind as Io;
     use tokio_serial::ErrorKind as Serial;
     match error {
         LinkError::Serial { source, .. } => match source.kind {
             Serial::Io(Io::NotFound) => {
-                Some("no such device: `mcp-gs ports` lists the serial ports present")
+                Some("no such device: `mcp-gs ports` lists the serial ports present".into())
             }
             Serial::Io(Io::PermissionDenied) => Some(
                 "this user may not open the device: on Linux, add the user to the group that \
-                 owns it (often dialout: `sudo usermod -aG dialout $USER`, then log in again)",
+                 owns it (often dialout: `sudo usermod -aG dialout $USER`, then log in again)"
+                    .into(),
             ),
             // The port is open for exclusive use elsewhere (TIOCEXCL or flock).
-            Serial::NoDevice => Some(
+            Serial::NoDevice => Some(format!(
                 "another program has the port open, perhaps another mcp-gs: one program at a \
-                 time can use a serial port; to share the radio, run `mcp-gs hub --link \
-                 serial:PATH` and give the other commands --link tcp:127.0.0.1:9750",
-            ),
+                 time can use a serial port; to share the radio, let `mcp-gs hub --link {link}` \
+                 hold it and give the other commands --link tcp:127.0.0.1:9750"
+            )),
             _ => None,
         },
-        LinkError::Connect { source, .. } if source.kind() == Io::ConnectionRefused => {
-            Some("nothing listens there: is the radio bridge or `mcp-gs sim` running?")
-        }
+        LinkError::Connect { source, .. } if source.kind() == Io::ConnectionRefused => Some(
+            "nothing listens there: is the radio bridge, `mcp-gs hub` or `mcp-gs sim` running?"
+                .into(),
+        ),
         _ => None,
     }
 }
