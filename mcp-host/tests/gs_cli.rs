@@ -721,3 +721,72 @@ fn options_may_follow_the_command_word() {
     let out = stdout(&run(&["encode", "--to", to, "message", "--", "--to"]));
     assert!(out.contains("6D 2D 2D 74 6F"), "{out}");
 }
+
+#[test]
+fn a_one_shot_command_on_tcp_listen_waits_for_its_peer() {
+    let dir = tempdir();
+    let file = dir.join("one.mcprec");
+    let mut bytes = Vec::new();
+    {
+        let mut writer = mcp_host::record::RecordWriter::new(&mut bytes).unwrap();
+        writer
+            .write(
+                std::time::SystemTime::now(),
+                mcp_host::record::Direction::Received,
+                &[0x8A, 0x06],
+            )
+            .unwrap();
+    }
+    std::fs::write(&file, &bytes).unwrap();
+    // A free port: replay listens there, the peer connects once it does.
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let peer = std::thread::spawn(move || {
+        let deadline = std::time::Instant::now() + std::time::Duration::from_secs(20);
+        let mut socket = loop {
+            match std::net::TcpStream::connect(("127.0.0.1", port)) {
+                Ok(socket) => break socket,
+                Err(_) if std::time::Instant::now() < deadline => std::thread::yield_now(),
+                Err(e) => panic!("replay never listened: {e}"),
+            }
+        };
+        let mut bytes = Vec::new();
+        std::io::Read::read_to_end(&mut socket, &mut bytes).unwrap();
+        bytes
+    });
+    let link = format!("tcp-listen:127.0.0.1:{port}");
+    let output = run(&[
+        "replay",
+        file.to_str().unwrap(),
+        "--link",
+        &link,
+        "--speed",
+        "0",
+    ]);
+    assert_eq!(
+        output.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert_eq!(peer.join().unwrap(), [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F]);
+    // Nobody comes: a timeout.
+    let output = run(&[
+        "send",
+        "--link",
+        "tcp-listen:127.0.0.1:0",
+        "--timeout",
+        "0.3",
+        "--to",
+        "0013A20040B599B9",
+        "landing",
+        "on",
+    ]);
+    assert_eq!(output.status.code(), Some(4));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("no peer connected"), "{stderr}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -110,9 +110,34 @@ impl LinkArgs {
             ));
         }
         let options = self.options(reconnect).await?;
-        mcp_host::connect(&self.link, options)
+        let (mut stream, sender) = mcp_host::connect(&self.link, options)
             .await
-            .map_err(|e| connect_failure(&self.link, e))
+            .map_err(|e| connect_failure(&self.link, e))?;
+        if !reconnect {
+            if let Some(addr) = stream.info().local_addr {
+                // A one-shot subcommand on `tcp-listen:` waits for its peer first.
+                eprintln!(
+                    "mcp-gs: waiting up to {:?} for a peer on {addr}",
+                    self.timeout()
+                );
+                let connected = async {
+                    while let Some(event) = stream.next().await {
+                        if let mcp_host::Event::Link(mcp_host::LinkEvent::Connected { .. }) = event
+                        {
+                            return true;
+                        }
+                    }
+                    false
+                };
+                if tokio::time::timeout(self.timeout(), connected).await != Ok(true) {
+                    return Err(Failure::new(
+                        Failure::TIMEOUT,
+                        format!("no peer connected to {addr} within {:?}", self.timeout()),
+                    ));
+                }
+            }
+        }
+        Ok((stream, sender))
     }
 
     /// The link options these arguments give, the API mode asked of the radio for
