@@ -346,6 +346,7 @@ fn bad_arguments_exit_2_with_one_line() {
             "telemetry_to_coordinator",
         ],
         &["decode", "/nonexistent/capture.bin"],
+        &["monitor", "--link", "tcp:127.0.0.1:9", "--record", "/"],
         // `status` prints one MAV's report: a broadcast would print the first of many.
         &[
             "status",
@@ -660,6 +661,21 @@ fn decode_says_what_input_it_cannot_read() {
     assert_eq!(output.status.code(), Some(2));
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(stderr.contains("decode it without --hex"), "{stderr}");
+    // A hex dump of a recording is read as the recording.
+    let mut bytes = Vec::new();
+    mcp_host::record::RecordWriter::new(&mut bytes)
+        .unwrap()
+        .write(
+            std::time::SystemTime::now(),
+            mcp_host::record::Direction::Received,
+            &[0x8A, 0x06],
+        )
+        .unwrap();
+    let dump = dir.join("flight.hex");
+    let hex: String = bytes.iter().map(|b| format!("{b:02x}")).collect();
+    std::fs::write(&dump, hex).unwrap();
+    let out = stdout(&run(&["decode", "--hex", dump.to_str().unwrap()]));
+    assert!(out.contains("rx modem status coordinator_started"), "{out}");
     // Bytes with no frame in them: said so, and exit 0 (nothing failed).
     let noise = dir.join("noise.bin");
     std::fs::write(&noise, b"hello, this is no capture\n").unwrap();

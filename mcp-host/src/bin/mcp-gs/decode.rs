@@ -79,7 +79,7 @@ pub(crate) fn run(args: DecodeArgs) -> Result<(), Failure> {
 
     let head = input
         .fill_buf()
-        .map_err(|e| Failure::input(format!("cannot read input: {e}")))?;
+        .map_err(|e| Failure::input(format!("cannot read {}: {e}", args.input.display())))?;
     if args.hex && record::is_recording(head) {
         return Err(Failure::input(format!(
             "{} is a recording (made by monitor --record), not hex text: decode it without --hex",
@@ -90,7 +90,12 @@ pub(crate) fn run(args: DecodeArgs) -> Result<(), Failure> {
         decode_recording(input, &mut printer)
     } else if args.hex {
         let bytes = read_hex(input)?;
-        decode_stream(&bytes[..], args.api_mode.0, &mut printer)
+        // A hex dump of a recording is a recording.
+        if record::is_recording(&bytes) {
+            decode_recording(&bytes[..], &mut printer)
+        } else {
+            decode_stream(&bytes[..], args.api_mode.0, &mut printer)
+        }
     } else {
         decode_stream(input, args.api_mode.0, &mut printer)
     };
@@ -276,10 +281,16 @@ fn decode_stream(
         let stats = decoder.stats();
         let errors =
             stats.bad_checksum + stats.oversize + stats.empty + stats.truncated + stats.bad_escape;
-        eprintln!(
-            "mcp-gs: no XBee frame in {offset} bytes ({errors} candidate frames dropped): \
-             not a capture of an XBee in API mode (a recording starts with MCPREC; hex text \
+        let other = crate::link_args::other_mode(mode);
+        let advice = if errors > 0 {
+            format!("if it is in API mode {other}, decode it with --api-mode {other}")
+        } else {
+            "not a capture of an XBee in API mode (a recording starts with MCPREC; hex text \
              needs --hex)"
+                .to_owned()
+        };
+        eprintln!(
+            "mcp-gs: no XBee frame in {offset} bytes ({errors} candidate frames dropped): {advice}"
         );
     }
     Ok(())

@@ -44,6 +44,12 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
     // A recording is never lost to a mistyped link: refuse to overwrite it before the
     // link is opened, and create the file only once the link is up.
     if let Some(path) = &args.record {
+        if path.is_dir() {
+            return Err(Failure::input(format!(
+                "{} is a directory: give a file to record to",
+                path.display()
+            )));
+        }
         if !args.force && path.exists() {
             return Err(exists(path));
         }
