@@ -565,20 +565,7 @@ fn decoding_in_the_wrong_api_mode_hints_at_the_other() {
 #[test]
 fn a_cut_off_recording_is_summed_up_to_the_cut_then_an_error() {
     let path = std::env::temp_dir().join(format!("mcp-gs-cut-{}.mcprec", std::process::id()));
-    let mut bytes = Vec::new();
-    {
-        let mut writer = mcp_host::record::RecordWriter::new(&mut bytes).unwrap();
-        // Modem status "coordinator started", three times.
-        for _ in 0..3 {
-            writer
-                .write(
-                    std::time::SystemTime::now(),
-                    mcp_host::record::Direction::Received,
-                    &[0x8A, 0x06],
-                )
-                .unwrap();
-        }
-    }
+    let mut bytes = modem_status_recording(3);
     bytes.truncate(bytes.len() - 1);
     std::fs::write(&path, &bytes).unwrap();
     let file = path.to_str().unwrap();
@@ -662,15 +649,7 @@ fn decode_says_what_input_it_cannot_read() {
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(stderr.contains("decode it without --hex"), "{stderr}");
     // A hex dump of a recording is read as the recording.
-    let mut bytes = Vec::new();
-    mcp_host::record::RecordWriter::new(&mut bytes)
-        .unwrap()
-        .write(
-            std::time::SystemTime::now(),
-            mcp_host::record::Direction::Received,
-            &[0x8A, 0x06],
-        )
-        .unwrap();
+    let bytes = modem_status_recording(1);
     let dump = dir.join("flight.hex");
     let hex: String = bytes.iter().map(|b| format!("{b:02x}")).collect();
     std::fs::write(&dump, hex).unwrap();
@@ -742,18 +721,7 @@ fn options_may_follow_the_command_word() {
 fn a_one_shot_command_on_tcp_listen_waits_for_its_peer() {
     let dir = tempdir();
     let file = dir.join("one.mcprec");
-    let mut bytes = Vec::new();
-    {
-        let mut writer = mcp_host::record::RecordWriter::new(&mut bytes).unwrap();
-        writer
-            .write(
-                std::time::SystemTime::now(),
-                mcp_host::record::Direction::Received,
-                &[0x8A, 0x06],
-            )
-            .unwrap();
-    }
-    std::fs::write(&file, &bytes).unwrap();
+    std::fs::write(&file, modem_status_recording(1)).unwrap();
     // A free port: replay listens there, the peer connects once it does.
     let port = std::net::TcpListener::bind("127.0.0.1:0")
         .unwrap()
@@ -805,4 +773,22 @@ fn a_one_shot_command_on_tcp_listen_waits_for_its_peer() {
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(stderr.contains("no peer connected"), "{stderr}");
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A recording of `n` received modem statuses ("coordinator started").
+fn modem_status_recording(n: usize) -> Vec<u8> {
+    let mut bytes = Vec::new();
+    {
+        let mut writer = mcp_host::record::RecordWriter::new(&mut bytes).unwrap();
+        for _ in 0..n {
+            writer
+                .write(
+                    std::time::SystemTime::now(),
+                    mcp_host::record::Direction::Received,
+                    &[0x8A, 0x06],
+                )
+                .unwrap();
+        }
+    }
+    bytes
 }
