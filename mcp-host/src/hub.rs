@@ -56,6 +56,7 @@ use xbee_api::{ApiMode, RawFrame};
 
 use crate::codec::{CodecItem, XBeeCodec, encode_frame};
 use crate::event::{carries_frame_id, is_response};
+use crate::ids::IdTable;
 use crate::{
     CommandSender, ConnectError, Event, Link, LinkEvent, LinkInfo, LinkOptions, PacketStream,
 };
@@ -222,14 +223,9 @@ impl Drop for Hub {
     }
 }
 
-/// Where the answers under each of the hub's frame ids go.
-struct Routes {
-    /// By hub frame id - 1.
-    slots: Vec<Option<Route>>,
-    /// Index to try first: ids go round, so that a late answer rarely meets a new
-    /// request under the same id.
-    cursor: usize,
-}
+/// Where the answers under each of the hub's frame ids go: ids handed out round-robin
+/// (as the link's own), so that a late answer rarely meets a new request under its id.
+struct Routes(IdTable<Route>);
 
 struct Route {
     client: mpsc::Sender<Bytes>,
@@ -241,37 +237,26 @@ struct Route {
 
 impl Routes {
     fn new() -> Self {
-        Routes {
-            slots: (0..255).map(|_| None).collect(),
-            cursor: 0,
-        }
+        Routes(IdTable::new())
     }
 
     /// A hub id for `route`; `None` while all 255 wait for answers.
     fn insert(&mut self, route: Route, now: Instant) -> Option<u8> {
-        let n = self.slots.len();
-        for step in 0..n {
-            let index = (self.cursor + step) % n;
-            let slot = self.slots.get_mut(index)?;
-            if slot.as_ref().is_none_or(|r| r.until <= now) {
-                *slot = Some(route);
-                self.cursor = (index + 1) % n;
-                return u8::try_from(index + 1).ok();
-            }
+        if !self.0.has_free() {
+            self.0.remove_where(|r| r.until <= now, |_, _| {});
         }
-        None
+        self.0.insert(route).ok()
     }
 
     /// Where an answer under hub id `id` goes, and the client's own id; the route ends
     /// with it unless more answers are due.
     fn answer(&mut self, id: u8, now: Instant) -> Option<(mpsc::Sender<Bytes>, u8)> {
-        let slot = self.slots.get_mut(usize::from(id).checked_sub(1)?)?;
-        let route = slot.take().filter(|r| r.until > now)?;
-        let to = (route.client.clone(), route.own_id);
-        if route.many {
-            *slot = Some(route);
+        let route = self.0.get(id)?;
+        let to = (route.until > now).then(|| (route.client.clone(), route.own_id));
+        if to.is_none() || !route.many {
+            self.0.remove(id);
         }
-        Some(to)
+        to
     }
 }
 
