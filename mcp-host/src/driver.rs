@@ -399,14 +399,7 @@ impl Driver {
             let deadline = self.next_deadline();
             let accept_ops =
                 self.ops_open && self.parked.len() < PARKED_MAX && out.len() < HIGH_WATER;
-            // Bytes of a partial frame come in without waking the loop (no item): while
-            // no partial frame is there, look again every timeout.
-            let check_stale_at = self.options.partial_frame_timeout.and_then(|timeout| {
-                (self.options.api_mode == xbee_api::ApiMode::Unescaped).then(|| {
-                    self.stale_at(reader.decoder())
-                        .unwrap_or_else(|| Instant::now() + timeout)
-                })
-            });
+            let check_stale_at = self.stale_check_at(reader.decoder());
             tokio::select! {
                 item = reader.next() => if let Some(failed) = self.on_read(item) {
                     return failed;
@@ -489,14 +482,25 @@ impl Driver {
         }
     }
 
-    /// When the partial frame the codec holds is to be given up (API mode 1 only, see
-    /// [`LinkOptions::partial_frame_timeout`]).
-    fn stale_at(&self, codec: &XBeeCodec) -> Option<Instant> {
-        let timeout = self.options.partial_frame_timeout?;
-        if self.options.api_mode != xbee_api::ApiMode::Unescaped {
-            return None;
+    /// How long a partial frame may wait for its next byte: API mode 1 only, see
+    /// [`LinkOptions::partial_frame_timeout`].
+    fn partial_frame_timeout(&self) -> Option<Duration> {
+        match self.options.api_mode {
+            xbee_api::ApiMode::Unescaped => self.options.partial_frame_timeout,
+            xbee_api::ApiMode::Escaped => None,
         }
-        Some(codec.partial_since()? + timeout)
+    }
+
+    /// When the partial frame the codec holds is to be given up.
+    fn stale_at(&self, codec: &XBeeCodec) -> Option<Instant> {
+        Some(codec.partial_since()? + self.partial_frame_timeout()?)
+    }
+
+    /// When to look at the partial frame next: when it goes stale or, with none there, a
+    /// timeout from now (the bytes of one come in without waking the loop: no item).
+    fn stale_check_at(&self, codec: &XBeeCodec) -> Option<Instant> {
+        let since = codec.partial_since().unwrap_or_else(Instant::now);
+        Some(since + self.partial_frame_timeout()?)
     }
 
     /// Queues `event` for the stream. When the queue is full, a link event is held back
