@@ -164,7 +164,7 @@ fn reading_ap_in_another_api_mode_warns() {
     let out = sim.at(&["--api-mode", "2", "AP"]);
     assert!(out.status.success(), "{}", stderr(&out));
     assert!(
-        stderr(&out).contains("the radio is in API mode 1 but --api-mode is 2"),
+        stderr(&out).contains("the radio is in API mode 1 (AP=1) but --api-mode is 2"),
         "{}",
         stderr(&out)
     );

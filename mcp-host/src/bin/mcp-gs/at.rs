@@ -4,7 +4,7 @@ use clap::Args;
 use xbee_api::{Address64, AtStatus, Frame};
 
 use crate::Failure;
-use crate::link_args::{ApiModeChoice, LinkArgs, diagnosed, send_failure};
+use crate::link_args::{ApiModeChoice, LinkArgs, diagnosed, send_failure, warn_mode_mismatch};
 use mcp_host::render::json::hex;
 
 /// Arguments of `at`.
@@ -172,13 +172,7 @@ pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
     if let (None, b"AP", ApiModeChoice::Fixed(mode), &[ap]) =
         (args.to, &command, args.link.api_mode, data)
     {
-        if ap != u8::from(mode) && (1..=2).contains(&ap) {
-            eprintln!(
-                "mcp-gs: warning: the radio is in API mode {ap} but --api-mode is {}: use \
-                 --api-mode {ap} or auto for the other commands",
-                u8::from(mode)
-            );
-        }
+        warn_mode_mismatch(ap, mode);
     }
     Ok(())
 }

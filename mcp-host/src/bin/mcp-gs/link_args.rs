@@ -227,17 +227,21 @@ pub(crate) async fn check_mode(sender: &CommandSender, configured: ApiMode) {
         return;
     };
     if let Ok(Frame::AtCommandResponse(at)) = response.parse() {
-        let radio = at.data.last().copied();
-        let configured = u8::from(configured);
-        if at.status == AtStatus::Ok && radio.is_some_and(|r| r != configured) {
-            eprintln!(
-                "mcp-gs: warning: the radio is in API mode {} (AP={}) but --api-mode is {configured}: \
-                 frames will be dropped or garbled; use --api-mode {} or auto",
-                radio.unwrap_or(0),
-                radio.unwrap_or(0),
-                radio.unwrap_or(0),
-            );
+        if let (AtStatus::Ok, &[radio]) = (at.status, at.data) {
+            warn_mode_mismatch(radio, configured);
         }
+    }
+}
+
+/// Warns when the radio's AP setting, read as `radio`, is another API mode than the
+/// configured one: its frames will be dropped or garbled.
+pub(crate) fn warn_mode_mismatch(radio: u8, configured: ApiMode) {
+    let configured = u8::from(configured);
+    if radio != configured {
+        eprintln!(
+            "mcp-gs: warning: the radio is in API mode {radio} (AP={radio}) but --api-mode is \
+             {configured}: frames will be dropped or garbled; use --api-mode {radio} or auto"
+        );
     }
 }
 
