@@ -58,7 +58,7 @@ use crate::codec::{CodecItem, XBeeCodec, encode_frame};
 use crate::event::{carries_frame_id, is_response};
 use crate::ids::IdTable;
 use crate::{
-    CommandSender, ConnectError, Event, Link, LinkEvent, LinkInfo, LinkOptions, PacketStream,
+    CommandSender, ConnectError, Event, Link, LinkEvent, LinkInfo, LinkOptions, PacketStream, Stats,
 };
 
 /// Frames from the radio waiting for one client, at most; more are dropped for it.
@@ -104,6 +104,10 @@ pub struct HubStats {
     /// Frames of clients not written: all 255 frame ids were waiting for answers, or
     /// the link to the radio was down.
     pub frames_refused: u64,
+    /// The counters of the hub's own link to the radio: frames and framing errors,
+    /// disconnects and reconnects, and in [`Stats::events_dropped`] the frames lost
+    /// because the hub itself fell behind the radio (before any client saw them).
+    pub radio: Stats,
 }
 
 #[derive(Debug, Default)]
@@ -129,6 +133,8 @@ pub struct Hub {
     stop: CancellationToken,
     tasks: TaskTracker,
     counters: Arc<Counters>,
+    /// The counters of the link to the radio.
+    radio_counters: Arc<crate::stats::Counters>,
 }
 
 impl Hub {
@@ -155,6 +161,7 @@ impl Hub {
             stop: CancellationToken::new(),
             tasks: TaskTracker::new(),
             counters: Arc::default(),
+            radio_counters: sender.counters.clone(),
         };
         let serve = Serve {
             mode,
@@ -194,6 +201,7 @@ impl Hub {
             frames_from_clients: c.frames_from_clients.load(Ordering::Relaxed),
             frames_dropped: c.frames_dropped.load(Ordering::Relaxed),
             frames_refused: c.frames_refused.load(Ordering::Relaxed),
+            radio: self.radio_counters.snapshot(),
         }
     }
 

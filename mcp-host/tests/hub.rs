@@ -107,6 +107,10 @@ async fn shares_one_radio(mode: ApiMode) {
     let stats = hub.stats();
     assert_eq!(stats.clients, 2);
     assert!(stats.frames_from_radio > 0 && stats.frames_from_clients >= 6);
+    // The hub's own link saw every frame it passed on, whole, and kept up.
+    assert!(stats.radio.frames >= stats.frames_from_radio, "{stats:?}");
+    assert_eq!(stats.radio.decode_errors(), 0, "{stats:?}");
+    assert_eq!(stats.radio.events_dropped, 0, "{stats:?}");
     a.close();
     b.close();
     a.closed().await;

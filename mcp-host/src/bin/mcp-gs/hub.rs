@@ -60,5 +60,13 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
         stats.frames_dropped,
         stats.frames_refused
     );
+    let radio = stats.radio;
+    if radio.events_dropped > 0 || radio.decode_errors() > 0 {
+        out!(
+            "from the radio: {} frames lost while the hub fell behind, {} corrupt frames dropped",
+            radio.events_dropped,
+            radio.decode_errors()
+        );
+    }
     Ok(())
 }
