@@ -34,10 +34,43 @@ fn chunks<'a>(stream: &'a [u8], sizes: &'a [u8]) -> impl Iterator<Item = &'a [u8
 
 /// Runs every check on one stream with a decoder of capacity `N`.
 pub fn check_stream<const N: usize>(mode: ApiMode, sizes: &[u8], stream: &[u8]) {
+    check_stream_with(|| Decoder::<N>::new(mode), mode, sizes, stream);
+}
+
+/// Runs every check on one stream with a decoder of capacity `M`, and again with one of
+/// the larger capacity `N` limited to `M`'s ([`Decoder::with_max_len`]), which must decode
+/// exactly as the small one: the same events and counters.
+pub fn check_stream_limited<const N: usize, const M: usize>(
+    mode: ApiMode,
+    sizes: &[u8],
+    stream: &[u8],
+) {
+    let small = check_stream_with(|| Decoder::<M>::new(mode), mode, sizes, stream);
+    let max_len = Decoder::<M>::new(mode).capacity();
+    let limited = check_stream_with(
+        || Decoder::<N>::with_max_len(mode, max_len),
+        mode,
+        sizes,
+        stream,
+    );
+    assert_eq!(
+        limited, small,
+        "decoder of capacity {N} limited to {max_len} differs from one of capacity {M}"
+    );
+}
+
+/// Runs every check on one stream with decoders made by `new` (each a fresh decoder in
+/// `mode`); the events and counters of the whole stream.
+pub fn check_stream_with<const N: usize>(
+    new: impl Fn() -> Decoder<N>,
+    mode: ApiMode,
+    sizes: &[u8],
+    stream: &[u8],
+) -> (Vec<Event>, xbee_api::Stats) {
     let bound = event_bound(stream.len());
 
     // Whole slice.
-    let mut whole = Decoder::<N>::new(mode);
+    let mut whole = new();
     let mut expected = Vec::new();
     decode_all(&mut whole, stream, &mut expected, bound);
     finish_all(&mut whole, &mut expected, bound);
@@ -56,7 +89,7 @@ pub fn check_stream<const N: usize>(mode: ApiMode, sizes: &[u8], stream: &[u8]) 
     assert_eq!(u64::from(stats.bytes_skipped), skipped, "bytes skipped");
 
     // Byte at a time.
-    let mut bytewise = Decoder::<N>::new(mode);
+    let mut bytewise = new();
     let mut events = Vec::new();
     push_all(&mut bytewise, stream, &mut events, bound);
     finish_all(&mut bytewise, &mut events, bound);
@@ -71,7 +104,7 @@ pub fn check_stream<const N: usize>(mode: ApiMode, sizes: &[u8], stream: &[u8]) 
     );
 
     // Fuzzer-chosen chunks.
-    let mut chunked = Decoder::<N>::new(mode);
+    let mut chunked = new();
     let mut events = Vec::new();
     for chunk in chunks(stream, sizes) {
         decode_all(&mut chunked, chunk, &mut events, bound);
@@ -85,7 +118,7 @@ pub fn check_stream<const N: usize>(mode: ApiMode, sizes: &[u8], stream: &[u8]) 
     );
 
     // The same chunks through the callback API.
-    let mut each = Decoder::<N>::new(mode);
+    let mut each = new();
     let mut events = Vec::new();
     for chunk in chunks(stream, sizes) {
         decode_each_all(&mut each, chunk, &mut events, bound);
@@ -127,7 +160,7 @@ pub fn check_stream<const N: usize>(mode: ApiMode, sizes: &[u8], stream: &[u8]) 
         let mut tail = stream.to_vec();
         let n = encode_raw(mode, frame, &mut tail);
         let mut events = Vec::new();
-        let mut decoder = Decoder::<N>::new(mode);
+        let mut decoder = new();
         decode_all(&mut decoder, &tail, &mut events, event_bound(tail.len()));
         assert_eq!(
             events.last(),
@@ -139,6 +172,7 @@ pub fn check_stream<const N: usize>(mode: ApiMode, sizes: &[u8], stream: &[u8]) 
             "mode 2: decoder not idle after a whole frame"
         );
     }
+    (expected, stats)
 }
 
 /// Appends `data` encoded as a frame in `mode` to `out`; returns the encoded length.
