@@ -193,7 +193,13 @@ where
         let out = tokio::select! {
             item = framed.next() => match item {
                 Some(Ok(CodecItem::Frame(frame))) if !fits(frame.data().len()) => {
-                    tracing::debug!(len = frame.data().len(), "MAV UART: frame over the receive buffer dropped");
+                    // A warning: the command is lost, as on the deployed MAV, and the
+                    // ground station learns of it by a timeout at best.
+                    tracing::warn!(
+                        frame_bytes = frame.data().len() + 4,
+                        rx_buffer = options.rx_buffer,
+                        "simulated MAV: a frame over its UART receive buffer dropped"
+                    );
                     Vec::new()
                 }
                 Some(Ok(CodecItem::Frame(frame))) => match frame.parse() {

@@ -93,6 +93,14 @@ fn value_line(name: &str, command: &[u8; 2], data: &[u8]) -> String {
 }
 
 fn parse_value(value: &str, text: bool) -> Result<Vec<u8>, String> {
+    if value.is_empty() {
+        // The frame would carry no parameter: the radio would read, not set.
+        return Err(
+            "an empty value cannot be set: an AT command with no value reads the \
+             parameter (omit VALUE to read it)"
+                .to_owned(),
+        );
+    }
     if text {
         return Ok(value.as_bytes().to_vec());
     }
@@ -196,5 +204,13 @@ mod tests {
         assert!(is_text(b"NI") && !is_text(b"ID"));
         assert_eq!(parse_value("20", true).unwrap(), b"20");
         assert_eq!(parse_value("20", false).unwrap(), [0x20]);
+    }
+
+    #[test]
+    fn an_empty_value_is_refused_not_read() {
+        for text in [true, false] {
+            let error = parse_value("", text).unwrap_err();
+            assert!(error.contains("reads the parameter"), "{error}");
+        }
     }
 }
