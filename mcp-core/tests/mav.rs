@@ -1,8 +1,8 @@
 //! The MAV state machine behaves like the deployed MAV.
 
 use mcp_core::{
-    Address, Command, Controller, LandingState, Packet, Report, SlaveAddresses, Slot,
-    StatusRequest, TelemetryId, Waypoint, Waypoints,
+    Address, BufferTooSmall, Command, Controller, LandingState, Packet, Report, SlaveAddresses,
+    Slot, StatusRequest, TelemetryId, Waypoint, Waypoints,
     mav::{Mav, Vehicle},
     parse,
 };
@@ -101,6 +101,23 @@ fn ids_in(packet: &[u8]) -> Vec<u8> {
 }
 
 #[test]
+fn telemetry_without_room_for_one_record_is_an_error_not_an_empty_packet() {
+    let mut sim = Sim::flying();
+    let mut mav = Mav::new(&sim);
+    send(&mut mav, &mut sim, b"c\x01\x01\x05");
+    let mut small = [0u8; 5];
+    assert_eq!(
+        mav.telemetry(&sim, &mut small),
+        Err(BufferTooSmall {
+            needed: 6,
+            available: 5
+        })
+    );
+    let mut enough = [0u8; 6];
+    assert_eq!(mav.telemetry(&sim, &mut enough), Ok(Some(6)));
+}
+
+#[test]
 fn no_telemetry_is_sent_when_none_is_enabled() {
     let sim = Sim::flying();
     let mav = Mav::new(&sim);
@@ -182,6 +199,28 @@ fn controller_change_is_reported_unsolicited() {
         send(&mut mav, &mut sim, b"c\x03\xff").unwrap(),
         b"r\x03\x03"
     );
+}
+
+#[test]
+fn a_state_answered_is_not_reported_again_as_a_change() {
+    let mut sim = Sim::flying();
+    let mut mav = Mav::new(&sim);
+    sim.landing = Some(LandingState::Landing);
+    sim.controller = Some(Controller::Altitude);
+    // Asked before the main loop polled: the answer tells the new landing state...
+    assert_eq!(
+        send(&mut mav, &mut sim, b"c\x02\xff").unwrap(),
+        b"r\x02\x01"
+    );
+    // ...so only the controller change is still to report; then the controller asked.
+    assert_eq!(poll(&mut mav, &sim).unwrap(), b"r\x03\x02");
+    assert_eq!(poll(&mut mav, &sim), None);
+    sim.controller = Some(Controller::Mpc);
+    assert_eq!(
+        send(&mut mav, &mut sim, b"c\x03\xff").unwrap(),
+        b"r\x03\x03"
+    );
+    assert_eq!(poll(&mut mav, &sim), None);
 }
 
 #[test]

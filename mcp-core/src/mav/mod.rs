@@ -10,7 +10,8 @@
 //! - [`Mav::handle`] answers a status request with the matching report, and a trajectory
 //!   set with a trajectory report at once. Other set commands get no reply.
 //! - A landing state or controller change produces that report unsolicited:
-//!   [`Mav::poll_changes`] compares the vehicle's state with the last one it reported.
+//!   [`Mav::poll_changes`] compares the vehicle's state with the last one it reported
+//!   (unsolicited, or in answer to a status request).
 //!   Call it after every command and in the main loop (the vehicle may change state on
 //!   its own, e.g. when a landing ends), until it returns `None`.
 //! - [`Mav::telemetry`] builds the 20 Hz telemetry packet: every enabled id in
@@ -68,7 +69,7 @@ pub use vehicle::Vehicle;
 
 use crate::{
     Address, BufferTooSmall, Command, Packet, Report, SlaveAddresses, StatusRequest,
-    TelemetryBuilder, TrajectoryBuilder,
+    TelemetryBuilder, TrajectoryBuilder, field,
     id::{Controller, LandingState},
 };
 
@@ -198,9 +199,11 @@ impl Mav {
         }
     }
 
-    /// Writes the report answering a status request.
+    /// Writes the report answering a status request. A landing state or controller
+    /// answered counts as reported: [`poll_changes`](Self::poll_changes) does not
+    /// report it again.
     fn answer<V: Vehicle + ?Sized>(
-        &self,
+        &mut self,
         vehicle: &V,
         request: StatusRequest,
         buf: &mut [u8],
@@ -218,7 +221,13 @@ impl Mav {
             }
             StatusRequest::Time => Report::Time(vehicle.time()),
         };
-        report.encode(buf)
+        let len = report.encode(buf)?;
+        match report {
+            Report::Landing(state) => self.landing = state,
+            Report::Controllers(controller) => self.controller = controller,
+            _ => {}
+        }
+        Ok(len)
     }
 
     /// Writes a trajectory report of the vehicle's waypoints, as many as fit.
@@ -263,7 +272,9 @@ impl Mav {
 
     /// Writes the periodic telemetry packet: every enabled id in ascending order with
     /// its value from [`Vehicle::telemetry`]. Returns `None` (send nothing) when no id
-    /// is enabled. Records that do not fit `buf` or the 255-byte payload are left out.
+    /// is enabled. Records that do not fit `buf` or the 255-byte payload are left out;
+    /// if not even one fits `buf`, the error (a packet with no record would say that
+    /// none is enabled).
     pub fn telemetry<V: Vehicle + ?Sized>(
         &self,
         vehicle: &V,
@@ -272,11 +283,18 @@ impl Mav {
         if self.enabled.is_empty() {
             return Ok(None);
         }
+        let available = buf.len();
         let mut builder = TelemetryBuilder::new(buf)?;
         for id in self.enabled.iter() {
             if builder.push(id, vehicle.telemetry(id)).is_err() {
                 break;
             }
+        }
+        if builder.count() == 0 {
+            return Err(BufferTooSmall {
+                needed: field::RECORDS + field::record::LEN,
+                available,
+            });
         }
         Ok(Some(builder.finish()))
     }
