@@ -82,6 +82,14 @@ impl Sim {
         let out = self.ok(&args);
         let report: Value = serde_json::from_str(out.trim()).expect("one JSON report");
         assert_eq!(report["category"], "report", "{out}");
+        // Which MAV answered, and when.
+        assert_eq!(report["src64"], MAV.to_lowercase(), "{out}");
+        let received_at = report["received_at"].as_f64().expect("received_at");
+        let now = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .unwrap()
+            .as_secs_f64();
+        assert!(received_at <= now && now - received_at < 60.0, "{out}");
         report
     }
 }

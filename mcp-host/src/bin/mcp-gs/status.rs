@@ -49,10 +49,22 @@ pub(crate) async fn run(args: StatusArgs) -> Result<(), Failure> {
             }
         })
         .map_err(|failure| diagnosed(failure, &args.link, &sender.stats()))?;
+    let received_at = std::time::SystemTime::now();
     let packet = Packet::Report(report);
     match args.format {
         Format::Text => out!("{}", packet.as_borrowed()),
-        Format::Json => out!("{}", mcp_host::render::json::packet_json(&packet)),
+        Format::Json => {
+            let mut json = mcp_host::render::json::packet_json(&packet);
+            // Which MAV answered, and when (a time report has a `time` field of its own).
+            if let serde_json::Value::Object(map) = &mut json {
+                map.insert("src64".into(), args.to.to_string().into());
+                let secs = received_at
+                    .duration_since(std::time::UNIX_EPOCH)
+                    .map_or(0.0, |d| d.as_secs_f64());
+                map.insert("received_at".into(), secs.into());
+            }
+            out!("{json}");
+        }
     }
     Ok(())
 }
