@@ -99,3 +99,24 @@ fn names_of_common_codes() {
     assert_eq!(AtStatus::from(0x05).name(), None);
     assert_eq!(ModemStatus::from(0x7F).to_string(), "unknown(0x7F)");
 }
+
+/// Some firmware answers an AT command with upper bits set in the status byte (0x40 for
+/// an OK); Digi's XCTU and xbee-python read only the low four bits, and so does
+/// `AtStatus::is_ok`. The byte itself is kept.
+#[test]
+fn an_at_status_with_upper_bits_set_is_read_by_its_low_four_bits() {
+    use xbee_api::{ApiMode, Decoder, Frame};
+    let wire = [0x7E, 0x00, 0x05, 0x88, 0x01, 0x42, 0x44, 0x40, 0xB0];
+    let mut decoder: Decoder = Decoder::new(ApiMode::Unescaped);
+    let (_, event) = decoder.decode(&wire);
+    let frame = event.expect("a frame").expect("a valid frame");
+    let Ok(Frame::AtCommandResponse(at)) = Frame::parse(frame) else {
+        panic!("not an AT Command Response: {frame:?}");
+    };
+    assert_eq!(at.command, *b"BD");
+    assert_eq!(at.status, AtStatus::Unknown(0x40));
+    assert!(at.status.is_ok());
+    assert_eq!(at.status.meaning(), AtStatus::Ok);
+    assert_eq!(AtStatus::from(0x44).meaning(), AtStatus::TxFailure);
+    assert_eq!(AtStatus::from(0x4B).meaning(), AtStatus::Unknown(0x4B));
+}

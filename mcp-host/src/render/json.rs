@@ -95,7 +95,12 @@ pub fn frame(frame: &Frame<'_>) -> Value {
             m.insert("frame".into(), "at_response".into());
             m.insert("id".into(), at.frame_id.into());
             m.insert("command".into(), at_name(at.command).into());
-            named(&mut m, "status", at.status.into(), at.status.name());
+            named(
+                &mut m,
+                "status",
+                at.status.into(),
+                at.status.meaning().name(),
+            );
             m.insert("data".into(), hex(at.data).into());
         }
         Frame::RemoteAtCommand(at) => {
@@ -113,7 +118,12 @@ pub fn frame(frame: &Frame<'_>) -> Value {
             m.insert("src64".into(), at.src64.to_string().into());
             m.insert("src16".into(), at.src16.to_string().into());
             m.insert("command".into(), at_name(at.command).into());
-            named(&mut m, "status", at.status.into(), at.status.name());
+            named(
+                &mut m,
+                "status",
+                at.status.into(),
+                at.status.meaning().name(),
+            );
             m.insert("data".into(), hex(at.data).into());
         }
         Frame::ExplicitAddressingCommand(tx) => {

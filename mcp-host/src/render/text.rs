@@ -2,7 +2,7 @@
 
 use std::fmt::Write;
 
-use xbee_api::{DecodeError, Frame};
+use xbee_api::{AtStatus, DecodeError, Frame};
 
 use super::json::hex;
 
@@ -66,7 +66,7 @@ pub fn frame(frame: &Frame<'_>) -> String {
             "at response id {} {} {}{}",
             at.frame_id,
             at_name(at.command),
-            at.status,
+            at_status(at.status),
             data_suffix(at.data)
         ),
         Frame::RemoteAtCommand(at) => write!(
@@ -86,7 +86,7 @@ pub fn frame(frame: &Frame<'_>) -> String {
             at.src64,
             at.src16,
             at_name(at.command),
-            at.status,
+            at_status(at.status),
             data_suffix(at.data)
         ),
         Frame::ExplicitAddressingCommand(tx) => write!(
@@ -173,6 +173,17 @@ pub fn event(event: &crate::Event) -> String {
     }
 }
 
+/// An AT status: its name, or for a code with upper bits set, what its low four bits
+/// say and the code (`ok (0x40)`).
+fn at_status(status: AtStatus) -> String {
+    let meaning = status.meaning();
+    if meaning == status {
+        status.to_string()
+    } else {
+        format!("{meaning} (0x{:02x})", u8::from(status))
+    }
+}
+
 /// `rx` or `tx`.
 pub fn direction(direction: crate::record::Direction) -> &'static str {
     match direction {
@@ -194,4 +205,22 @@ pub fn time(time: std::time::SystemTime) -> String {
         secs % 60,
         d.subsec_millis()
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_at_status_with_upper_bits_shows_what_its_low_bits_say_and_the_code() {
+        assert_eq!(at_status(AtStatus::Ok), "ok");
+        assert_eq!(at_status(AtStatus::from(0x40)), "ok (0x40)");
+        assert_eq!(at_status(AtStatus::from(0x44)), "tx_failure (0x44)");
+        assert_eq!(at_status(AtStatus::from(0x0B)), "unknown(0x0B)");
+        let frame = Frame::parse_bytes(&[0x88, 0x01, 0x42, 0x44, 0x40]).unwrap();
+        assert_eq!(super::frame(&frame), "at response id 1 BD ok (0x40)");
+        let json = super::super::json::frame(&frame);
+        assert_eq!(json["status"], 0x40);
+        assert_eq!(json["status_name"], "ok");
+    }
 }

@@ -18,8 +18,36 @@ code_enum! {
 }
 
 impl AtStatus {
-    /// Whether the command succeeded.
+    /// What the status says, read from the low four bits of its code as Digi's own
+    /// software reads it: some firmware sets upper bits in an answer (0x40 for an OK),
+    /// which Digi's XCTU and xbee-python ignore. The status itself keeps the whole code
+    /// as received (`AtStatus::Unknown(0x40)`), so that a frame encodes back to the
+    /// same bytes.
+    ///
+    /// ```
+    /// use xbee_api::AtStatus;
+    ///
+    /// assert_eq!(AtStatus::from(0x40).meaning(), AtStatus::Ok);
+    /// assert_eq!(AtStatus::from(0x43).meaning(), AtStatus::InvalidParameter);
+    /// assert!(AtStatus::from(0x40).is_ok());
+    /// assert_eq!(u8::from(AtStatus::from(0x40)), 0x40);
+    /// ```
+    pub const fn meaning(self) -> Self {
+        match self {
+            Self::Unknown(code) => match code & 0x0F {
+                0x00 => Self::Ok,
+                0x01 => Self::Error,
+                0x02 => Self::InvalidCommand,
+                0x03 => Self::InvalidParameter,
+                0x04 => Self::TxFailure,
+                _ => self,
+            },
+            named => named,
+        }
+    }
+
+    /// Whether the command succeeded: the [`meaning`](Self::meaning) is OK.
     pub const fn is_ok(self) -> bool {
-        matches!(self, Self::Ok)
+        matches!(self.meaning(), Self::Ok)
     }
 }

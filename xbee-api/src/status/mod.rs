@@ -115,10 +115,33 @@ mod tests {
         assert_eq!(DiscoveryStatus::from(0x04), DiscoveryStatus::Unknown(0x04));
         assert_eq!(AtStatus::from(3), AtStatus::InvalidParameter);
         assert_eq!(ModemStatus::from(0x06), ModemStatus::CoordinatorStarted);
+        // The modem status table's 0x34, not the delivery status table's.
+        assert_eq!(
+            ModemStatus::from(0x34).name(),
+            Some("bandmask_configuration_failed")
+        );
+        assert_eq!(DeliveryStatus::from(0x34).name(), Some("no_secure_session"));
         assert_eq!(ModemStatus::from(0x80), ModemStatus::StackError(0x80));
         assert_eq!(ModemStatus::from(0x7F), ModemStatus::Unknown(0x7F));
         assert!(DeliveryStatus::Success.is_success());
         assert!(!DeliveryStatus::MacAckFailure.is_success());
         assert!(AtStatus::Ok.is_ok());
+    }
+
+    #[test]
+    fn at_status_means_its_low_four_bits() {
+        for code in 0..=255u8 {
+            let status = AtStatus::from(code);
+            let low = AtStatus::from(code & 0x0F);
+            let expected = if matches!(low, AtStatus::Unknown(_)) {
+                status
+            } else {
+                low
+            };
+            assert_eq!(status.meaning(), expected, "0x{code:02X}");
+            assert_eq!(status.is_ok(), code & 0x0F == 0, "0x{code:02X}");
+            // The code itself is kept.
+            assert_eq!(u8::from(status), code);
+        }
     }
 }

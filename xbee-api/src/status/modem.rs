@@ -51,8 +51,8 @@ code_enum! {
         BleConnect = 0x32 => "ble_connect",
         /// 0x33: BLE disconnect.
         BleDisconnect = 0x33 => "ble_disconnect",
-        /// 0x34: no secure session connection.
-        NoSecureSession = 0x34 => "no_secure_session",
+        /// 0x34: LTE-M/NB-IoT band mask configuration failed (cellular modules).
+        BandmaskConfigurationFailed = 0x34 => "bandmask_configuration_failed",
         /// 0x3B: secure session successfully established.
         SecureSessionEstablished = 0x3B => "secure_session_established",
         /// 0x3C: secure session ended.

@@ -43,7 +43,7 @@ fn is_text(command: &[u8; 2]) -> bool {
 /// remote command was not delivered.
 fn explain(status: AtStatus, name: &str, to: Option<Address64>, set: bool) -> String {
     let code = u8::from(status);
-    match (status, to) {
+    match (status.meaning(), to) {
         (AtStatus::Error, _) => format!(
             "{name}: the radio answered error (0x{code:02x}): it could not carry out the command"
         ),
@@ -69,7 +69,7 @@ fn explain(status: AtStatus, name: &str, to: Option<Address64>, set: bool) -> St
 /// The exit code of an AT status other than ok: a remote command the radio could not
 /// deliver is a delivery failure, anything else a plain failure.
 fn exit_code(status: AtStatus) -> u8 {
-    match status {
+    match status.meaning() {
         AtStatus::TxFailure => Failure::DELIVERY,
         _ => Failure::OTHER,
     }
@@ -162,7 +162,7 @@ pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
         }
     };
     let name = String::from_utf8_lossy(&command).into_owned();
-    if status != AtStatus::Ok {
+    if !status.is_ok() {
         return Err(Failure::new(
             exit_code(status),
             explain(status, &name, args.to, args.value.is_some()),

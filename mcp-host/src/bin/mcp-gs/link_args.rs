@@ -8,7 +8,7 @@ use mcp_host::{
     CommandSender, ConnectError, Link, LinkError, LinkOptions, PacketStream, ReconnectPolicy,
     SendError, Stats,
 };
-use xbee_api::{Address64, ApiMode, AtStatus, Frame};
+use xbee_api::{Address64, ApiMode, Frame};
 
 use crate::Failure;
 
@@ -201,9 +201,7 @@ impl LinkArgs {
             other => send_failure(other),
         })?;
         let mode = match response.parse() {
-            Ok(Frame::AtCommandResponse(at)) if at.status == AtStatus::Ok => {
-                at.data.last().copied()
-            }
+            Ok(Frame::AtCommandResponse(at)) if at.status.is_ok() => at.data.last().copied(),
             _ => None,
         };
         match mode {
@@ -227,7 +225,7 @@ pub(crate) async fn check_mode(sender: &CommandSender, configured: ApiMode) {
         return;
     };
     if let Ok(Frame::AtCommandResponse(at)) = response.parse() {
-        if let (AtStatus::Ok, &[radio]) = (at.status, at.data) {
+        if let (true, &[radio]) = (at.status.is_ok(), at.data) {
             warn_mode_mismatch(radio, configured);
         }
     }
