@@ -29,7 +29,8 @@ pub mod field {
 pub mod options {
     /// Disable retries and route repair (what the deployed MAV sends).
     pub const DISABLE_RETRIES: u8 = 0x01;
-    /// Enable APS end-to-end encryption (shortens the largest payload by 4 bytes).
+    /// Enable APS end-to-end encryption (shortens the largest payload: by 4 bytes on
+    /// older Zigbee modules, by 9 on XBee 3; `AT NP` reads the radio's own limit).
     pub const APS_ENCRYPTION: u8 = 0x20;
     /// Use the extended transmission timeout.
     pub const EXTENDED_TIMEOUT: u8 = 0x40;
