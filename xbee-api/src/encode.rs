@@ -76,12 +76,16 @@ pub trait EncodeFrame {
     /// of `buf`, escaped in [`ApiMode::Escaped`]; returns the number of bytes written.
     ///
     /// Fails with [`EncodeError::BufferTooSmall`] when `buf` is shorter than
-    /// [`encoded_len`](Self::encoded_len) (nothing useful is written then), and with
-    /// [`EncodeError::FrameTooLong`] above [`MAX_FRAME_DATA_LEN`].
+    /// [`encoded_len`](Self::encoded_len) (nothing useful is written then), with
+    /// [`EncodeError::FrameTooLong`] above [`MAX_FRAME_DATA_LEN`], and with
+    /// [`EncodeError::EmptyFrame`] for no frame data at all.
     fn encode(&self, mode: ApiMode, buf: &mut [u8]) -> Result<usize, EncodeError> {
         let len = self.frame_data_len();
         if len > MAX_FRAME_DATA_LEN {
             return Err(EncodeError::FrameTooLong { len });
+        }
+        if len == 0 {
+            return Err(EncodeError::EmptyFrame);
         }
         let needed = self.encoded_len(mode);
         if buf.len() < needed {
@@ -243,6 +247,23 @@ mod tests {
             Err(EncodeError::LengthMismatch { announced: 1, .. })
         ));
         assert!(Liar.emit_frame_data(&mut buf).is_err());
+    }
+
+    struct Nothing;
+
+    impl EncodeFrame for Nothing {
+        fn frame_data_len(&self) -> usize {
+            0
+        }
+        fn write_frame_data<F: FnMut(&[u8])>(&self, _: &mut F) {}
+    }
+
+    #[test]
+    fn no_frame_data_is_an_error_not_a_frame_radios_drop() {
+        let mut buf = [0u8; 8];
+        for mode in [ApiMode::Unescaped, ApiMode::Escaped] {
+            assert_eq!(Nothing.encode(mode, &mut buf), Err(EncodeError::EmptyFrame));
+        }
     }
 
     #[test]

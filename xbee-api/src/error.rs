@@ -56,6 +56,9 @@ pub enum EncodeError {
         /// Bytes the buffer has.
         available: usize,
     },
+    /// The frame has no frame data, not even a frame type byte: a radio (and
+    /// [`Decoder`](crate::Decoder)) drops a frame whose length field is 0.
+    EmptyFrame,
     /// The frame data is longer than the 16-bit length field (0xFFFF bytes) can say.
     FrameTooLong {
         /// Frame data length.
@@ -77,6 +80,7 @@ impl fmt::Display for EncodeError {
             Self::BufferTooSmall { needed, available } => {
                 write!(f, "buffer too small: need {needed} bytes, have {available}")
             }
+            Self::EmptyFrame => write!(f, "frame data is empty (no frame type byte)"),
             Self::FrameTooLong { len } => {
                 write!(
                     f,
