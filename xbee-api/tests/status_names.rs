@@ -118,5 +118,6 @@ fn an_at_status_with_upper_bits_set_is_read_by_its_low_four_bits() {
     assert!(at.status.is_ok());
     assert_eq!(at.status.meaning(), AtStatus::Ok);
     assert_eq!(AtStatus::from(0x44).meaning(), AtStatus::TxFailure);
-    assert_eq!(AtStatus::from(0x4B).meaning(), AtStatus::Unknown(0x4B));
+    assert_eq!(AtStatus::from(0x4B).meaning(), AtStatus::NoSecureSession);
+    assert_eq!(AtStatus::from(0x4E).meaning(), AtStatus::Unknown(0x4E));
 }

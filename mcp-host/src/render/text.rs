@@ -216,7 +216,7 @@ mod tests {
         assert_eq!(at_status(AtStatus::Ok), "ok");
         assert_eq!(at_status(AtStatus::from(0x40)), "ok (0x40)");
         assert_eq!(at_status(AtStatus::from(0x44)), "tx_failure (0x44)");
-        assert_eq!(at_status(AtStatus::from(0x0B)), "unknown(0x0B)");
+        assert_eq!(at_status(AtStatus::from(0x0E)), "unknown(0x0E)");
         let frame = Frame::parse_bytes(&[0x88, 0x01, 0x42, 0x44, 0x40]).unwrap();
         assert_eq!(super::frame(&frame), "at response id 1 BD ok (0x40)");
         let json = super::super::json::frame(&frame);

@@ -14,6 +14,14 @@ code_enum! {
         InvalidParameter = 0x03 => "invalid_parameter",
         /// 0x04: transmission failure (remote command not delivered).
         TxFailure = 0x04 => "tx_failure",
+        /// 0x0B: no secure session: the remote radio takes remote commands only over a
+        /// secure session, which must be established first.
+        NoSecureSession = 0x0B => "no_secure_session",
+        /// 0x0C: encryption error.
+        EncryptionError = 0x0C => "encryption_error",
+        /// 0x0D: command sent insecurely: a secure session exists, but the command was
+        /// sent without the secure session option (bit 4).
+        CommandSentInsecurely = 0x0D => "command_sent_insecurely",
     }
 }
 
@@ -40,6 +48,9 @@ impl AtStatus {
                 0x02 => Self::InvalidCommand,
                 0x03 => Self::InvalidParameter,
                 0x04 => Self::TxFailure,
+                0x0B => Self::NoSecureSession,
+                0x0C => Self::EncryptionError,
+                0x0D => Self::CommandSentInsecurely,
                 _ => self,
             },
             named => named,

@@ -71,6 +71,8 @@ code_enum! {
         JoinWindowOpened = 0x43 => "join_window_opened",
         /// 0x44: joining window closed.
         JoinWindowClosed = 0x44 => "join_window_closed",
+        /// 0x45: network security key change initiated.
+        NetworkKeyChangeInitiated = 0x45 => "network_key_change_initiated",
         ;
         /// 0x80..=0xFF: stack error, with the code.
         StackError(0x80..=0xFF) => "stack_error",
