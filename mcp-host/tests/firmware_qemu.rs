@@ -814,3 +814,35 @@ fn a_burst_of_requests_is_answered_in_full_and_in_order() {
         );
     }
 }
+
+#[test]
+fn frames_found_inside_a_failed_candidate_are_all_answered() {
+    if !qemu_available("frames_found_inside_a_failed_candidate_are_all_answered") {
+        return;
+    }
+    let mut xbee = Xbee::boot();
+    // Five time requests (19 bytes each) inside a candidate that claims all 95 bytes
+    // and ends with a wrong checksum: API mode 1 scans again from the byte after its
+    // start delimiter and finds the five at once, one more than the firmware queues.
+    let request = McpCommand::status_request(StatusRequest::Time);
+    let mut payload = [0; MAX_PAYLOAD];
+    let n = request.encode(&mut payload).unwrap();
+    let frame = ReceivePacketRepr {
+        src64: Address64::COORDINATOR,
+        src16: Address16::COORDINATOR,
+        options: 0x01,
+        data: &payload[..n],
+    };
+    let mut one = vec![0; frame.encoded_len(ApiMode::Unescaped)];
+    frame.encode(ApiMode::Unescaped, &mut one).unwrap();
+    let inner: Vec<u8> = one.repeat(5);
+    assert_eq!(inner.len(), 95);
+    let mut wire = vec![0x7E, 0x00, 95];
+    wire.extend_from_slice(&inner);
+    wire.push(0x00);
+    xbee.stream.write_all(&wire).unwrap();
+    for i in 0..5 {
+        let report = xbee.next_report();
+        assert!(matches!(report, Report::Time(_)), "answer {i}: {report:?}");
+    }
+}

@@ -181,6 +181,11 @@ pub fn uart0_rx_interrupts(on: bool) {
     uart0::IM.write(if on { uart0::RX_INTERRUPTS } else { 0 });
 }
 
+/// Raises the UART0 interrupt without a new byte (for work left to its handler).
+pub fn uart0_pend() {
+    NVIC::pend(Interrupt::UART0);
+}
+
 /// Writes bytes to UART0, waiting for room in the TX FIFO.
 pub fn uart0_write(bytes: &[u8]) {
     for &b in bytes {

@@ -54,6 +54,9 @@ pub struct RxStats {
 pub struct Inbox {
     queue: Deque<Payload, QUEUE_LEN>,
     stats: RxStats,
+    /// The decoder may hold events not taken yet (in API mode 1 one byte can end a
+    /// failed candidate and release several frames found inside it).
+    pending: bool,
 }
 
 impl Default for Inbox {
@@ -73,23 +76,36 @@ impl Inbox {
                 dropped: 0,
                 uart_errors: 0,
             },
+            pending: false,
         }
     }
 
-    /// Feeds one byte from the UART to `decoder`, queueing the payload of every
-    /// Receive Packet it completes.
+    /// Feeds one byte from the UART to `decoder`, queueing the payload of the Receive
+    /// Packet it completes; [`drain`](Self::drain) takes the events it leaves pending.
+    /// Call it only after `drain` found room in the queue.
     pub fn push(&mut self, decoder: &mut XbeeDecoder, byte: Result<u8, RxError>) {
         let Ok(byte) = byte else {
             self.stats.uart_errors = self.stats.uart_errors.wrapping_add(1);
             return;
         };
-        let mut event = decoder.push(byte);
-        while let Some(e) = event {
-            // Decode errors are counted by the decoder; it resynchronises by itself.
-            if let Ok(frame) = e {
-                self.accept(frame);
+        let event = decoder.push(byte);
+        self.pending = event.is_some();
+        // Decode errors are counted by the decoder; it resynchronises by itself.
+        if let Some(Ok(frame)) = event {
+            self.accept(frame);
+        }
+    }
+
+    /// Takes the decoder's pending events while the queue has room: the others wait in
+    /// the decoder (no byte is pushed meanwhile), so that no frame is dropped for want
+    /// of a slot.
+    pub fn drain(&mut self, decoder: &mut XbeeDecoder) {
+        while self.pending && self.has_room() {
+            match decoder.poll() {
+                Some(Ok(frame)) => self.accept(frame),
+                Some(Err(_)) => {}
+                None => self.pending = false,
             }
-            event = decoder.poll();
         }
     }
 
@@ -152,7 +168,12 @@ pub fn on_uart0_interrupt() {
     critical_section::with(|cs| {
         let mut decoder = DECODER.borrow_ref_mut(cs);
         let mut inbox = INBOX.borrow_ref_mut(cs);
-        while inbox.has_room() {
+        loop {
+            // Frames the decoder still holds come before new bytes.
+            inbox.drain(&mut decoder);
+            if !inbox.has_room() {
+                break;
+            }
             let Some(byte) = hw::uart0_read() else { break };
             inbox.push(&mut decoder, byte);
         }
@@ -162,12 +183,15 @@ pub fn on_uart0_interrupt() {
     });
 }
 
-/// Takes the oldest received payload, and turns the receive interrupts back on.
+/// Takes the oldest received payload, turns the receive interrupts back on and raises
+/// the interrupt: the decoder may still hold frames for the slot freed, and no new byte
+/// may come to raise it.
 pub fn take() -> Option<Payload> {
     critical_section::with(|cs| {
         let payload = INBOX.borrow_ref_mut(cs).pop();
         if payload.is_some() {
             hw::uart0_rx_interrupts(true);
+            hw::uart0_pend();
         }
         payload
     })
