@@ -20,6 +20,27 @@ use crate::{ApiMode, DecodeError, RawFrame, Stats};
 /// sends, with margin, in both modes (mode 1 also buffers the 4 framing bytes).
 pub const DEFAULT_CAPACITY: usize = 512;
 
+/// The buffer size `N` a [`Decoder<N>`](Decoder) needs to take frame data of up to
+/// `frame_data_len` bytes in `mode`: mode 2 keeps only the frame data, mode 1 the whole
+/// frame (delimiter, length and checksum: 4 bytes more). For decoders sized at compile
+/// time; [`Decoder::capacity`] says what a decoder takes.
+///
+/// ```
+/// use xbee_api::{ApiMode, Decoder, ReceivePacketRepr, TransmitRequestRepr, decoder_buffer_len};
+/// // A Receive Packet with the largest unfragmented payload: 12 + 84 bytes.
+/// const DATA: usize = ReceivePacketRepr::HEADER_LEN + TransmitRequestRepr::MAX_UNICAST_DATA;
+/// type Mode1Decoder = Decoder<{ decoder_buffer_len(DATA, ApiMode::Unescaped) }>;
+/// assert_eq!(Mode1Decoder::new(ApiMode::Unescaped).capacity(), 96);
+/// assert_eq!(decoder_buffer_len(DATA, ApiMode::Unescaped), 100);
+/// assert_eq!(decoder_buffer_len(DATA, ApiMode::Escaped), 96);
+/// ```
+pub const fn decoder_buffer_len(frame_data_len: usize, mode: ApiMode) -> usize {
+    match mode {
+        ApiMode::Unescaped => frame_data_len + 4,
+        ApiMode::Escaped => frame_data_len,
+    }
+}
+
 /// What the decoder yields: a frame borrowed from its buffer, or why a candidate frame
 /// was dropped. The frame stays valid until the decoder is called again.
 pub type Event<'a> = Result<RawFrame<'a>, DecodeError>;

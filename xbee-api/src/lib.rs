@@ -68,7 +68,7 @@ pub mod wire;
 
 pub use address::{Address16, Address64, ParseAddressError};
 pub use decode_error::DecodeError;
-pub use decoder::{DEFAULT_CAPACITY, Decoder, Event};
+pub use decoder::{DEFAULT_CAPACITY, Decoder, Event, decoder_buffer_len};
 pub use encode::{EncodeFrame, MAX_FRAME_DATA_LEN, max_encoded_len};
 pub use error::{EncodeError, FrameError};
 pub use frame::Frame;
@@ -82,7 +82,9 @@ pub use frame::modem_status::{ModemStatusFrame, ModemStatusRepr};
 pub use frame::receive_packet::{ReceivePacket, ReceivePacketRepr};
 pub use frame::remote_at_command::{RemoteAtCommand, RemoteAtCommandRepr};
 pub use frame::remote_at_response::{RemoteAtResponse, RemoteAtResponseRepr};
-pub use frame::transmit_request::{TransmitRequest, TransmitRequestRepr};
+pub use frame::transmit_request::{
+    TransmitRequest, TransmitRequestRepr, options as transmit_options,
+};
 pub use frame::transmit_status::{TransmitStatus, TransmitStatusRepr};
 pub use mode::{ApiMode, InvalidApiMode};
 pub use raw::RawFrame;

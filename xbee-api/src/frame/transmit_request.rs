@@ -144,6 +144,31 @@ impl<'a> TransmitRequestRepr<'a> {
     /// The most RF data a broadcast carries.
     pub const MAX_BROADCAST_DATA: usize = 92;
 
+    /// A unicast of `data` to `dst64`, with the defaults: frame id 0 (no Transmit
+    /// Status), 16-bit address unknown (FFFE), the largest radius, no options. Change
+    /// a field with struct update syntax.
+    ///
+    /// ```
+    /// use xbee_api::{Address64, TransmitRequestRepr, transmit_options};
+    /// // What the deployed MAV sends: to the coordinator, without retries.
+    /// let request = TransmitRequestRepr {
+    ///     options: transmit_options::DISABLE_RETRIES,
+    ///     ..TransmitRequestRepr::unicast(Address64::COORDINATOR, b"t")
+    /// };
+    /// assert_eq!(request.frame_id, 0);
+    /// assert_eq!(request.dst16, xbee_api::Address16::UNKNOWN);
+    /// ```
+    pub const fn unicast(dst64: Address64, data: &'a [u8]) -> Self {
+        TransmitRequestRepr {
+            frame_id: 0,
+            dst64,
+            dst16: Address16::UNKNOWN,
+            radius: 0,
+            options: 0,
+            data,
+        }
+    }
+
     /// Reads the fields of `frame`, checking it first.
     pub fn parse(frame: &TransmitRequest<&'a [u8]>) -> Result<Self, FrameError> {
         frame.check_len()?;
