@@ -29,6 +29,26 @@ pub enum Packet<B> {
     Warning(Text<B>),
 }
 
+impl<B> Packet<B> {
+    /// A text message (`m`), as `text` holds it (8-bit characters, no terminator).
+    ///
+    /// ```
+    /// use mcp_core::Packet;
+    /// let mut buf = [0u8; 16];
+    /// let len = Packet::message(&b"MAV started"[..]).encode(&mut buf)?;
+    /// assert_eq!(&buf[..len], b"mMAV started");
+    /// # Ok::<(), mcp_core::BufferTooSmall>(())
+    /// ```
+    pub const fn message(text: B) -> Self {
+        Packet::Message(Text::new(text))
+    }
+
+    /// A warning (`w`), 8-bit text like a message.
+    pub const fn warning(text: B) -> Self {
+        Packet::Warning(Text::new(text))
+    }
+}
+
 /// Parses one MCP packet (an XBee payload).
 ///
 /// Parsing is strict: the category and the command or report type must be known and

@@ -46,6 +46,49 @@ pub enum SlaveAddresses {
     Slots([Address; 4]),
 }
 
+/// Reports that carry no bytes, built without naming `B`: `Report::Landing(state)`
+/// alone leaves the type of the trajectory bytes open (`Report::<&[u8]>::Landing(state)`
+/// names it), `Report::landing(state)` does not.
+///
+/// ```
+/// use mcp_core::{Controller, LandingState, Report, TelemetryId};
+/// let mut buf = [0u8; mcp_core::MAX_PAYLOAD];
+///
+/// let len = Report::landing(LandingState::Flight).encode(&mut buf)?;
+/// assert_eq!(&buf[..len], b"r\x02\x04");
+/// let len = Report::telemetry_to_coordinator(true, TelemetryId::Altitude).encode(&mut buf)?;
+/// assert_eq!(&buf[..len], b"r\x01\x01\x01");
+/// assert_eq!(Report::controllers(Controller::Mpc), Report::Controllers(Controller::Mpc));
+/// assert_eq!(Report::time(5), Report::Time(5));
+/// # Ok::<(), mcp_core::BufferTooSmall>(())
+/// ```
+impl Report<&'static [u8]> {
+    /// [`Report::TelemetryToCoordinator`]: whether telemetry `id` is sent.
+    pub const fn telemetry_to_coordinator(on: bool, id: TelemetryId) -> Self {
+        Report::TelemetryToCoordinator { on, id }
+    }
+
+    /// [`Report::Landing`]: the landing state.
+    pub const fn landing(state: LandingState) -> Self {
+        Report::Landing(state)
+    }
+
+    /// [`Report::Controllers`]: the active controller.
+    pub const fn controllers(controller: Controller) -> Self {
+        Report::Controllers(controller)
+    }
+
+    /// [`Report::PositionSlaveSet`]: the slave address(es), in either form.
+    pub const fn position_slave_set(addresses: SlaveAddresses) -> Self {
+        Report::PositionSlaveSet(addresses)
+    }
+
+    /// [`Report::Time`]: the MAV time (POSIX seconds).
+    pub const fn time(seconds: u32) -> Self {
+        Report::Time(seconds)
+    }
+}
+
 /// A length error for a report of type `t`.
 fn wrong_length(t: CommandType, expected: Expected, got: usize) -> Error {
     let offset = expected.offset(got);
