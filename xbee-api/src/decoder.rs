@@ -146,9 +146,10 @@ enum State {
 ///
 /// # Memory
 ///
-/// `size_of::<Decoder<N>>()` is `N` rounded up to a multiple of the pointer size, plus
-/// the cursors and counters: 56 bytes on a 32-bit target, 80 on a 64-bit one (so
-/// `Decoder<100>` takes 156 bytes on a Cortex-M, 184 on x86-64). Mode 2 holds frame
+/// `size_of::<Decoder<N>>()` is at most `N` plus the cursors and counters, 56 bytes on
+/// a 32-bit target and 80 on a 64-bit one, rounded up to a multiple of the pointer size
+/// (`Decoder<100>` takes 156 bytes on a Cortex-M, 184 on x86-64; the default
+/// `Decoder<512>` 568 and 592). Mode 2 holds frame
 /// data of up to `N` bytes; mode 1 holds the whole frame, so frame data of up to
 /// `N - 4` bytes ([`capacity`](Self::capacity)).
 #[derive(Debug, Clone)]
@@ -192,6 +193,12 @@ impl<const N: usize> Decoder<N> {
     /// A decoder for `mode`, hunting for a start delimiter.
     ///
     /// `N` must be at least 8 (checked at compile time).
+    ///
+    /// `const`, so a decoder can be a `static`. A new decoder in mode 1 is all zeros: a
+    /// `static` one goes to `.bss` and takes no flash. In mode 2 its mode byte is not
+    /// zero, so a `static` one also takes its size in flash, as the initial image of
+    /// `.data`; one initialised at start-up (on `main`'s stack, or in a
+    /// `static_cell::StaticCell`) does not.
     pub const fn new(mode: ApiMode) -> Self {
         const { assert!(N >= 8, "Decoder capacity N must be at least 8") };
         Self {

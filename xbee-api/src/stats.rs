@@ -19,7 +19,9 @@ pub struct Stats {
     pub truncated: u32,
     /// Candidate frames with an invalid escape sequence (mode 2).
     pub bad_escape: u32,
-    /// Bytes dropped while hunting for a start delimiter.
+    /// Bytes dropped while hunting for a start delimiter, and bytes
+    /// [`push`](crate::Decoder::push)ed in mode 1 while the buffer was full of pending
+    /// bytes (events not yet taken with [`poll`](crate::Decoder::poll)).
     pub bytes_skipped: u32,
 }
 
