@@ -122,6 +122,61 @@ pub trait EncodeFrame {
         Ok(w.pos)
     }
 
+    /// Writes the whole frame a byte at a time to `out`, escaped in
+    /// [`ApiMode::Escaped`], without a buffer of its own: straight into a UART's transmit
+    /// register or a ring buffer. Returns the number of bytes written, as
+    /// [`encoded_len`](Self::encoded_len) says.
+    ///
+    /// Fails before writing anything with [`EncodeError::FrameTooLong`] or
+    /// [`EncodeError::EmptyFrame`]; with [`EncodeError::LengthMismatch`] (after
+    /// writing) if the implementation wrote other than it announced.
+    ///
+    /// ```
+    /// use xbee_api::{ApiMode, EncodeFrame, ModemStatus, ModemStatusRepr};
+    /// let frame = ModemStatusRepr { status: ModemStatus::from(0x11) };
+    /// let mut uart = Vec::new();
+    /// let n = frame.write_to(ApiMode::Escaped, |byte| uart.push(byte))?;
+    /// assert_eq!(uart, [0x7E, 0x00, 0x02, 0x8A, 0x7D, 0x31, 0x64]);
+    /// assert_eq!(n, uart.len());
+    /// # Ok::<(), xbee_api::EncodeError>(())
+    /// ```
+    fn write_to<W: FnMut(u8)>(&self, mode: ApiMode, out: W) -> Result<usize, EncodeError> {
+        let len = self.frame_data_len();
+        if len > MAX_FRAME_DATA_LEN {
+            return Err(EncodeError::FrameTooLong { len });
+        }
+        if len == 0 {
+            return Err(EncodeError::EmptyFrame);
+        }
+        let mut sink = Sink {
+            out,
+            escape: mode == ApiMode::Escaped,
+            written: 0,
+        };
+        (sink.out)(START_DELIMITER);
+        sink.written = 1;
+        for b in (len as u16).to_be_bytes() {
+            sink.byte(b);
+        }
+        let mut s = 0u8;
+        let mut data = 0usize;
+        self.write_frame_data(&mut |chunk: &[u8]| {
+            s = s.wrapping_add(sum(chunk));
+            data += chunk.len();
+            for &b in chunk {
+                sink.byte(b);
+            }
+        });
+        sink.byte(checksum_of_sum(s));
+        if data != len {
+            return Err(EncodeError::LengthMismatch {
+                announced: len,
+                written: data,
+            });
+        }
+        Ok(sink.written)
+    }
+
     /// Writes the unescaped frame data alone (no delimiter, length or checksum) into the
     /// start of `buf`; returns its length.
     fn emit_frame_data(&self, buf: &mut [u8]) -> Result<usize, EncodeError> {
@@ -152,6 +207,26 @@ pub trait EncodeFrame {
 /// Length of `bytes` once escaped for API mode 2.
 fn escaped_len(bytes: &[u8]) -> usize {
     bytes.len() + bytes.iter().filter(|b| needs_escape(**b)).count()
+}
+
+/// Byte output of [`EncodeFrame::write_to`]: escapes in mode 2 and counts.
+struct Sink<W> {
+    out: W,
+    escape: bool,
+    written: usize,
+}
+
+impl<W: FnMut(u8)> Sink<W> {
+    fn byte(&mut self, b: u8) {
+        if self.escape && needs_escape(b) {
+            (self.out)(ESCAPE);
+            (self.out)(b ^ ESCAPE_XOR);
+            self.written += 2;
+        } else {
+            (self.out)(b);
+            self.written += 1;
+        }
+    }
 }
 
 /// Bounds-checked output cursor; a write past the end sets `overflow` instead of
@@ -247,6 +322,13 @@ mod tests {
             Err(EncodeError::LengthMismatch { announced: 1, .. })
         ));
         assert!(Liar.emit_frame_data(&mut buf).is_err());
+        assert!(matches!(
+            Liar.write_to(ApiMode::Unescaped, |_| {}),
+            Err(EncodeError::LengthMismatch {
+                announced: 1,
+                written: 8
+            })
+        ));
     }
 
     struct Nothing;
@@ -263,6 +345,12 @@ mod tests {
         let mut buf = [0u8; 8];
         for mode in [ApiMode::Unescaped, ApiMode::Escaped] {
             assert_eq!(Nothing.encode(mode, &mut buf), Err(EncodeError::EmptyFrame));
+            let mut out = 0;
+            assert_eq!(
+                Nothing.write_to(mode, |_| out += 1),
+                Err(EncodeError::EmptyFrame)
+            );
+            assert_eq!(out, 0, "nothing written");
         }
     }
 

@@ -204,6 +204,10 @@ proptest! {
         prop_assert!(n <= bound && (mode == ApiMode::Escaped || n == bound));
         prop_assert_eq!(&wire_bytes, &wire(&data, checksum(&data), mode));
         prop_assert!(frame.encode(mode, &mut vec![0u8; n - 1]).is_err());
+        // A byte at a time, the same bytes.
+        let mut bytes = Vec::new();
+        prop_assert_eq!(frame.write_to(mode, |b| bytes.push(b)), Ok(n));
+        prop_assert_eq!(&bytes, &wire_bytes);
         let (events, stats) = decode_slices::<N>(mode, &wire_bytes, &[n]);
         prop_assert_eq!(stats.errors(), 0);
         let decoded = frames(&events);
