@@ -186,12 +186,10 @@ pub fn uart0_pend() {
     NVIC::pend(Interrupt::UART0);
 }
 
-/// Writes bytes to UART0, waiting for room in the TX FIFO.
-pub fn uart0_write(bytes: &[u8]) {
-    for &b in bytes {
-        while uart0::FR.read() & uart0::TXFF != 0 {}
-        uart0::DR.write(u32::from(b));
-    }
+/// Writes a byte to UART0, waiting for room in the TX FIFO.
+pub fn uart0_write_byte(b: u8) {
+    while uart0::FR.read() & uart0::TXFF != 0 {}
+    uart0::DR.write(u32::from(b));
 }
 
 /// Starts SysTick from the system clock, interrupting `hz` times a second.
