@@ -126,21 +126,33 @@ macro_rules! id_enum {
             }
         }
 
-        impl From<u8> for $name {
-            fn from(value: u8) -> Self {
+        impl $name {
+            /// The value of a byte (`From<u8>`, in a `const` context).
+            pub const fn from_u8(value: u8) -> Self {
                 match value {
                     $( $value => $name::$variant, )*
                     other => $name::Unknown(other),
                 }
             }
+
+            /// The byte (`From<Self> for u8`, in a `const` context).
+            pub const fn to_u8(self) -> u8 {
+                match self {
+                    $( $name::$variant => $value, )*
+                    $name::Unknown(other) => other,
+                }
+            }
+        }
+
+        impl From<u8> for $name {
+            fn from(value: u8) -> Self {
+                Self::from_u8(value)
+            }
         }
 
         impl From<$name> for u8 {
             fn from(value: $name) -> u8 {
-                match value {
-                    $( $name::$variant => $value, )*
-                    $name::Unknown(other) => other,
-                }
+                value.to_u8()
             }
         }
 

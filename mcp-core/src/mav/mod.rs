@@ -112,6 +112,23 @@ impl Mav {
         }
     }
 
+    /// The MAV with `enabled` as the telemetry ids sent to the coordinator, in a `const`
+    /// context: a `static` MAV that sends telemetry from start-up.
+    ///
+    /// ```
+    /// use mcp_core::mav::{Mav, TelemetrySet};
+    /// use mcp_core::{Controller, LandingState, TelemetryId};
+    ///
+    /// const MAV: Mav = Mav::with_state(LandingState::OnGround, Controller::Manual)
+    ///     .with_enabled(TelemetrySet::new().with(TelemetryId::Altitude));
+    /// assert!(MAV.enabled().contains(TelemetryId::Altitude));
+    /// ```
+    #[must_use]
+    pub const fn with_enabled(mut self, enabled: TelemetrySet) -> Self {
+        self.enabled = enabled;
+        self
+    }
+
     /// The telemetry ids sent to the coordinator.
     pub fn enabled(&self) -> &TelemetrySet {
         &self.enabled

@@ -26,31 +26,49 @@ impl TelemetrySet {
         TelemetrySet { bits: [0; 8] }
     }
 
-    fn word_bit(id: TelemetryId) -> (usize, u32) {
-        let n = u8::from(id);
-        (usize::from(n / 32), 1 << (n % 32))
+    const fn word_bit(id: TelemetryId) -> (usize, u32) {
+        let n = id.to_u8();
+        ((n / 32) as usize, 1 << (n % 32))
     }
 
     /// Adds or removes `id`.
-    pub fn set(&mut self, id: TelemetryId, on: bool) {
+    // Indexing in a `const fn` (`get_mut` is not `const`), behind a bounds test.
+    #[allow(clippy::indexing_slicing)]
+    pub const fn set(&mut self, id: TelemetryId, on: bool) {
         let (word, bit) = Self::word_bit(id);
-        if let Some(w) = self.bits.get_mut(word) {
+        // Always true (`word` is a `u8` over 32); tested so that indexing cannot panic.
+        if word < self.bits.len() {
             if on {
-                *w |= bit;
+                self.bits[word] |= bit;
             } else {
-                *w &= !bit;
+                self.bits[word] &= !bit;
             }
         }
     }
 
     /// Adds `id`.
-    pub fn insert(&mut self, id: TelemetryId) {
+    pub const fn insert(&mut self, id: TelemetryId) {
         self.set(id, true);
     }
 
     /// Removes `id`.
-    pub fn remove(&mut self, id: TelemetryId) {
+    pub const fn remove(&mut self, id: TelemetryId) {
         self.set(id, false);
+    }
+
+    /// The set with `id` added, for sets built in a `const` context.
+    ///
+    /// ```
+    /// use mcp_core::{mav::TelemetrySet, TelemetryId};
+    /// const DEFAULT: TelemetrySet = TelemetrySet::new()
+    ///     .with(TelemetryId::Altitude)
+    ///     .with(TelemetryId::PitchAngle);
+    /// assert_eq!(DEFAULT.len(), 2);
+    /// ```
+    #[must_use]
+    pub const fn with(mut self, id: TelemetryId) -> Self {
+        self.insert(id);
+        self
     }
 
     /// Removes every id.
@@ -59,9 +77,10 @@ impl TelemetrySet {
     }
 
     /// `true` if `id` is in the set.
-    pub fn contains(&self, id: TelemetryId) -> bool {
+    #[allow(clippy::indexing_slicing)]
+    pub const fn contains(&self, id: TelemetryId) -> bool {
         let (word, bit) = Self::word_bit(id);
-        self.bits.get(word).is_some_and(|w| w & bit != 0)
+        word < self.bits.len() && self.bits[word] & bit != 0
     }
 
     /// The number of ids in the set.
