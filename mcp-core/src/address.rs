@@ -6,7 +6,9 @@ use core::{fmt, str::FromStr};
 ///
 /// The bytes are kept in wire order. The `u64` conversions read them big-endian, the
 /// order in which XBee addresses are written (`0013A20040B599B9`), and `Display`
-/// writes 16 lower-case hex digits in that order, as `xbee_api::Address64` does.
+/// writes 16 lower-case hex digits in that order, as `xbee_api::Address64` does. To
+/// address a slave MAV over the radio: `Address64(u64::from(address))`; back:
+/// `Address::from(address64.0)`.
 ///
 /// ```
 /// use mcp_core::Address;
