@@ -19,8 +19,9 @@
 //!   whose answers keep coming for [`ANSWER_WINDOW`]. Frames with id 0 and frames of
 //!   other types are written as they are.
 //! - **Outages:** while the hub's link to the radio is down (a USB radio unplugged), the
-//!   hub disconnects its clients and turns new ones away, so that their links see the
-//!   outage and reconnect once the radio is back.
+//!   hub disconnects its clients and stops listening (connections are refused), so that
+//!   their links see the outage, stay down quietly, and reconnect once the radio is
+//!   back and the hub listens again on the same address.
 //!
 //! ```no_run
 //! use mcp_host::hub::Hub;
@@ -293,10 +294,17 @@ struct Serve {
 
 impl Serve {
     async fn run(mut self, mut stream: PacketStream, listener: TcpListener) {
+        // `None` while the radio's link is down: clients are refused by the system
+        // rather than accepted and dropped, so that their links stay down quietly until
+        // the radio is back.
+        let mut listener = Some(listener);
+        let addr = listener.as_ref().and_then(|l| l.local_addr().ok());
+        let mut rebind = tokio::time::interval(REBIND_RETRY);
+        rebind.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
         loop {
             tokio::select! {
                 () = self.stop.cancelled() => break,
-                accepted = listener.accept() => match accepted {
+                accepted = accept(listener.as_ref()) => match accepted {
                     Ok((socket, peer)) => self.accept(socket, peer),
                     Err(error) => {
                         // Out of file descriptors, say: not again at once.
@@ -304,8 +312,23 @@ impl Serve {
                         tokio::time::sleep(Duration::from_millis(100)).await;
                     }
                 },
+                // The port again, if it could not be taken back at once.
+                _ = rebind.tick(), if listener.is_none() && self.radio_up => {
+                    listener = bind(addr).await;
+                }
                 event = stream.next() => match event {
-                    Some(event) => self.broadcast(&event),
+                    Some(event) => {
+                        let was_up = self.radio_up;
+                        if matches!(&event, Event::Link(link) if !is_up(link)) {
+                            // Before the clients are disconnected: none comes back in.
+                            listener = None;
+                        }
+                        self.broadcast(&event);
+                        if self.radio_up && !was_up && listener.is_none() {
+                            listener = bind(addr).await;
+                            rebind.reset();
+                        }
+                    }
                     None => break,
                 },
             }
@@ -354,10 +377,7 @@ impl Serve {
             Event::Frame(frame) => frame.data(),
             Event::Link(link) => {
                 tracing::info!(?link, "hub: radio link");
-                self.radio_up = matches!(
-                    link,
-                    LinkEvent::Connected { .. } | LinkEvent::Reconnected { .. }
-                );
+                self.radio_up = is_up(link);
                 if !self.radio_up {
                     // The clients' links see the outage as the hub's own link does (and
                     // reconnect to the hub once the radio is back).
@@ -407,6 +427,41 @@ impl Serve {
             if client.try_send(bytes).is_err() {
                 bump(&self.counters.frames_dropped);
             }
+        }
+    }
+}
+
+/// How often the hub tries to take its port back after an outage of the radio, if
+/// another program took it meanwhile.
+const REBIND_RETRY: Duration = Duration::from_secs(1);
+
+/// Whether a link event leaves the radio's link up.
+fn is_up(link: &LinkEvent) -> bool {
+    matches!(
+        link,
+        LinkEvent::Connected { .. } | LinkEvent::Reconnected { .. }
+    )
+}
+
+/// The next client of `listener`; never, without one.
+async fn accept(listener: Option<&TcpListener>) -> std::io::Result<(TcpStream, SocketAddr)> {
+    match listener {
+        Some(listener) => listener.accept().await,
+        None => std::future::pending().await,
+    }
+}
+
+/// Listens on `addr` again after an outage of the radio; `None` (logged) if that fails.
+async fn bind(addr: Option<SocketAddr>) -> Option<TcpListener> {
+    let addr = addr?;
+    match TcpListener::bind(addr).await {
+        Ok(listener) => {
+            tracing::info!(%addr, "hub: listening again");
+            Some(listener)
+        }
+        Err(error) => {
+            tracing::warn!(%addr, %error, "hub: cannot listen again yet");
+            None
         }
     }
 }

@@ -394,12 +394,19 @@ async fn clients_see_the_radios_outage_and_come_back_with_it() {
         next_link(&mut client_stream).await,
         mcp_host::LinkEvent::Connected { .. }
     ));
-    // The radio goes away: the client's link goes down with it.
+    // The radio goes away: the client's link goes down with it, and the hub stops
+    // listening (before it lets its clients go), so that clients stay down quietly
+    // rather than being taken in and dropped again.
     drop(radio);
     assert!(matches!(
         next_link(&mut client_stream).await,
         mcp_host::LinkEvent::Disconnected { .. }
     ));
+    let refused = tokio::net::TcpStream::connect(hub.local_addr()).await;
+    assert_eq!(
+        refused.map(|_| ()).map_err(|e| e.kind()),
+        Err(std::io::ErrorKind::ConnectionRefused)
+    );
     // The radio is back: the hub's link reconnects, and then the client's.
     let (socket, _) = listener.accept().await.unwrap();
     assert!(matches!(
