@@ -183,6 +183,28 @@ fn transmit_payload(frame: &[u8]) -> Vec<u8> {
     }
 }
 
+/// `payload` in a Receive Packet from the coordinator, as the MAV's XBee writes it to
+/// the UART (API mode 1).
+fn receive_frame(payload: &[u8]) -> Vec<u8> {
+    let frame = ReceivePacketRepr {
+        src64: Address64::COORDINATOR,
+        src16: Address16::COORDINATOR,
+        options: 0x01,
+        data: payload,
+    };
+    let mut wire = vec![0; frame.encoded_len(ApiMode::Unescaped)];
+    let n = frame.encode(ApiMode::Unescaped, &mut wire).unwrap();
+    wire.truncate(n);
+    wire
+}
+
+/// An MCP command in a Receive Packet from the coordinator.
+fn command_frame(command: McpCommand<&[u8]>) -> Vec<u8> {
+    let mut buf = [0; MAX_PAYLOAD];
+    let n = command.encode(&mut buf).expect("command fits");
+    receive_frame(&buf[..n])
+}
+
 /// The test's side of the UART: the MAV's XBee.
 struct Xbee {
     stream: TcpStream,
@@ -213,24 +235,16 @@ impl Xbee {
 
     /// Delivers `payload` to the firmware in a Receive Packet from the coordinator.
     fn send(&mut self, payload: &[u8]) {
-        let frame = ReceivePacketRepr {
-            src64: Address64::COORDINATOR,
-            src16: Address16::COORDINATOR,
-            options: 0x01,
-            data: payload,
-        };
-        let mut wire = vec![0; frame.encoded_len(ApiMode::Unescaped)];
-        let n = frame.encode(ApiMode::Unescaped, &mut wire).unwrap();
         self.stream
-            .write_all(&wire[..n])
+            .write_all(&receive_frame(payload))
             .expect("write to the UART");
     }
 
     /// Encodes and delivers an MCP command.
     fn command(&mut self, command: McpCommand<&[u8]>) {
-        let mut buf = [0; MAX_PAYLOAD];
-        let n = command.encode(&mut buf).expect("command fits");
-        self.send(&buf[..n]);
+        self.stream
+            .write_all(&command_frame(command))
+            .expect("write to the UART");
     }
 
     /// The next payload the firmware sends, telemetry included.
@@ -789,19 +803,7 @@ fn a_burst_of_requests_is_answered_in_full_and_in_order() {
         let request = McpCommand::status_request(StatusRequest::TelemetryToCoordinator(
             TelemetryId::from(id),
         ));
-        let mut payload = [0; MAX_PAYLOAD];
-        let n = request.encode(&mut payload).unwrap();
-        let frame = ReceivePacketRepr {
-            src64: Address64::COORDINATOR,
-            src16: Address16::COORDINATOR,
-            options: 0x01,
-            data: &payload[..n],
-        };
-        let start = burst.len();
-        burst.resize(start + frame.encoded_len(ApiMode::Unescaped), 0);
-        frame
-            .encode(ApiMode::Unescaped, &mut burst[start..])
-            .unwrap();
+        burst.extend(command_frame(request));
     }
     xbee.stream.write_all(&burst).unwrap();
     for &id in &ids {
@@ -824,18 +826,7 @@ fn frames_found_inside_a_failed_candidate_are_all_answered() {
     // Five time requests (19 bytes each) inside a candidate that claims all 95 bytes
     // and ends with a wrong checksum: API mode 1 scans again from the byte after its
     // start delimiter and finds the five at once, one more than the firmware queues.
-    let request = McpCommand::status_request(StatusRequest::Time);
-    let mut payload = [0; MAX_PAYLOAD];
-    let n = request.encode(&mut payload).unwrap();
-    let frame = ReceivePacketRepr {
-        src64: Address64::COORDINATOR,
-        src16: Address16::COORDINATOR,
-        options: 0x01,
-        data: &payload[..n],
-    };
-    let mut one = vec![0; frame.encoded_len(ApiMode::Unescaped)];
-    frame.encode(ApiMode::Unescaped, &mut one).unwrap();
-    let inner: Vec<u8> = one.repeat(5);
+    let inner = command_frame(McpCommand::status_request(StatusRequest::Time)).repeat(5);
     assert_eq!(inner.len(), 95);
     let mut wire = vec![0x7E, 0x00, 95];
     wire.extend_from_slice(&inner);
