@@ -19,7 +19,8 @@ use crate::{Failure, Format};
 pub(crate) struct MonitorArgs {
     #[command(flatten)]
     link: LinkArgs,
-    /// Output format.
+    /// Output format: text lines start with the UTC time of day (HH:MM:SS.mmm); JSON
+    /// objects carry `time`, seconds since 1970.
     #[arg(long, value_enum, default_value_t = Format::Text)]
     format: Format,
     /// Also record every received frame to FILE (see `decode` and `replay`). An
