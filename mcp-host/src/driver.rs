@@ -95,33 +95,18 @@ impl Op {
         }
     }
 
-    /// Answers the request with its timeout error.
+    /// Answers a request that timed out before it was sent: it waited for a frame id
+    /// (or its deadline had passed when it was taken).
     fn time_out(self) {
         match self {
             Op::Transmit { timeout, reply, .. } => {
-                let _ = reply.send(Err(SendError::Timeout {
-                    frame_id: 0,
-                    timeout,
-                }));
+                let _ = reply.send(Err(SendError::NoFreeFrameId { timeout }));
             }
-            Op::Request {
-                to,
-                key,
-                timeout,
-                reply,
-                ..
-            } => {
-                let _ = reply.send(Err(RequestError::Timeout {
-                    from: to,
-                    what: key.to_string(),
-                    timeout,
-                }));
+            Op::Request { timeout, reply, .. } => {
+                let _ = reply.send(Err(SendError::NoFreeFrameId { timeout }.into()));
             }
             Op::Frame { timeout, reply, .. } => {
-                let _ = reply.send(Err(SendError::Timeout {
-                    frame_id: 0,
-                    timeout,
-                }));
+                let _ = reply.send(Err(SendError::NoFreeFrameId { timeout }));
             }
             // Never parked nor timed out: it needs no frame id and waits for nothing.
             Op::Write { .. } => {}
@@ -686,11 +671,40 @@ impl Driver {
     /// (or requests parked before it still wait). Requests that need no id (raw writes,
     /// transmits without status) start at once even while all ids are in flight.
     fn start(&mut self, op: Op, out: &mut BytesMut) {
+        if op.needs_id() && !self.ids.has_free() {
+            self.reclaim_abandoned();
+        }
         if op.needs_id() && (!self.ids.has_free() || !self.parked.is_empty()) {
             self.parked.push_back(op);
             return;
         }
         self.begin(op, out);
+    }
+
+    /// Frees the frame ids of requests whose callers stopped waiting (a `send` in a
+    /// `tokio::time::timeout`, say), when no id is free: without this they would hold
+    /// them to their own deadlines. Their late answers, if any, then come as unclaimed
+    /// frames; the round-robin order keeps a freed id from being reused before the 254
+    /// others.
+    fn reclaim_abandoned(&mut self) {
+        let waiters = &self.waiters;
+        let mut gone = Vec::new();
+        self.ids.remove_where(
+            |p| match &p.kind {
+                PendingKind::Transmit { reply, .. } => reply.is_closed(),
+                PendingKind::Frame { reply } => reply.is_closed(),
+                PendingKind::Request { waiter, .. } => waiters
+                    .iter()
+                    .find(|w| w.id == *waiter)
+                    .is_none_or(|w| w.reply.is_closed()),
+            },
+            |_, p| {
+                if let PendingKind::Request { waiter, .. } = p.kind {
+                    gone.push(waiter);
+                }
+            },
+        );
+        self.waiters.retain(|w| !gone.contains(&w.id));
     }
 
     /// Starts parked requests, in order, while frame ids are free.

@@ -38,8 +38,16 @@ pub enum SendError {
     /// No status or response came before the timeout (the frame id is freed).
     #[error("no answer to frame id {frame_id} within {timeout:?}")]
     Timeout {
-        /// The frame id used (0 if none was allocated yet).
+        /// The frame id used.
         frame_id: u8,
+        /// The timeout that expired.
+        timeout: Duration,
+    },
+    /// The request waited for a frame id for all of its timeout and was never sent: all
+    /// 255 were taken by requests whose answers had not come (a radio that does not
+    /// answer, e.g. one in another API mode).
+    #[error("not sent: all 255 frame ids were waiting for answers for {timeout:?}")]
+    NoFreeFrameId {
         /// The timeout that expired.
         timeout: Duration,
     },

@@ -64,9 +64,11 @@ pub enum DeliveryReport {
 /// task's answer) and fails with a clear [`SendError`] when the link goes down while the
 /// request is in flight, or is down when it is made.
 ///
-/// Dropping a method's future before it resolves does not take the request back: once
-/// queued, its frame may still go out; a dropped [`request`](Self::request) stops
-/// waiting for its report at its deadline.
+/// Dropping a method's future before it resolves (in a `tokio::time::timeout`, say) does
+/// not take the request back: once queued, its frame may still go out. Its frame id is
+/// taken back as soon as a new request finds none free (its late answer then comes as
+/// an [`Event::Frame`](crate::Event::Frame)); a request still waiting for an id is
+/// dropped unsent.
 #[derive(Debug, Clone)]
 pub struct CommandSender {
     pub(crate) ops: mpsc::Sender<Op>,

@@ -1,6 +1,7 @@
 //! While all 255 frame ids are in flight (a radio that leaves statuses unanswered),
 //! requests that need no id still go out, and those that need one wait, in order, for
-//! the first id to come free, or time out at their own deadline.
+//! the first id to come free, or time out at their own deadline; ids whose callers
+//! stopped waiting are taken back for them.
 
 mod common;
 
@@ -110,7 +111,7 @@ async fn a_parked_request_times_out_at_its_deadline() {
     .await
     .expect("the parked transmit is answered at its deadline, not when an id frees");
     assert!(
-        matches!(result, Err(SendError::Timeout { frame_id: 0, .. })),
+        matches!(result, Err(SendError::NoFreeFrameId { timeout }) if timeout == Duration::from_millis(300)),
         "{result:?}"
     );
     assert_eq!(sender.stats().timeouts, 1);
@@ -118,4 +119,36 @@ async fn a_parked_request_times_out_at_its_deadline() {
     fake.status(ids[0], DeliveryStatus::Success).await;
     sender.write_frame(&[0x08, 0x00, b'N', b'I']).await.unwrap();
     assert_eq!(fake.next_frame().await, [0x08, 0x00, b'N', b'I']);
+}
+
+#[tokio::test]
+async fn ids_of_requests_nobody_waits_for_are_taken_back() {
+    let (_stream, sender, mut fake) = pty_link(ApiMode::Unescaped).await;
+    // 255 transmits whose callers give up once they went out (dropped, as an outer
+    // `tokio::time::timeout` drops them), long before their own 60 s deadline; the radio
+    // never answers.
+    for i in 0..255u8 {
+        let sender = sender.clone();
+        let abandoned =
+            tokio::spawn(async move { sender.send_payload(MAV, vec![b'm', i], waiting(60)).await });
+        fake.next_tx().await;
+        abandoned.abort();
+        assert!(abandoned.await.unwrap_err().is_cancelled());
+    }
+    // The next one gets an id at once and goes out.
+    let next = tokio::spawn({
+        let sender = sender.clone();
+        async move {
+            sender
+                .send_payload(MAV, b"mnext".to_vec(), waiting(60))
+                .await
+        }
+    });
+    let tx = fake.next_tx().await;
+    assert_eq!(tx.data, b"mnext");
+    fake.status(tx.frame_id, DeliveryStatus::Success).await;
+    assert!(matches!(
+        next.await.unwrap(),
+        Ok(DeliveryReport::Delivered { frame_id, .. }) if frame_id == tx.frame_id
+    ));
 }

@@ -349,7 +349,7 @@ fn link_hint(error: &LinkError, link: &Link) -> Option<String> {
 pub(crate) fn send_failure(error: SendError) -> Failure {
     let code = match &error {
         SendError::Delivery { .. } => Failure::DELIVERY,
-        SendError::Timeout { .. } => Failure::TIMEOUT,
+        SendError::Timeout { .. } | SendError::NoFreeFrameId { .. } => Failure::TIMEOUT,
         SendError::Disconnected { .. } | SendError::Closed => Failure::LINK,
         SendError::TooLarge { .. } | SendError::NoFrameId(_) | SendError::EmptyFrame => {
             Failure::INPUT
