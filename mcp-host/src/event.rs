@@ -72,8 +72,7 @@ pub struct InvalidPacket {
 /// (the [`LinkEvent`]s tell each change).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum LinkState {
-    /// Not connected yet (a `tcp-listen` link waiting for its first peer, or the first
-    /// moments of any link).
+    /// Not connected yet: a `tcp-listen` link waiting for its first peer.
     Connecting,
     /// The transport is up.
     Connected,

@@ -145,7 +145,13 @@ pub async fn connect(
     let (ops_tx, ops_rx) = mpsc::channel(OPS_CAPACITY);
     let (events_tx, events_rx) = mpsc::channel(options.event_capacity);
     let close_requested = Arc::new(tokio::sync::Notify::new());
-    let (state_tx, state) = tokio::sync::watch::channel(LinkState::Connecting);
+    // Connected already when the transport is open: `link_state` right after `connect`
+    // says so.
+    let (state_tx, state) = tokio::sync::watch::channel(if transport.is_some() {
+        LinkState::Connected
+    } else {
+        LinkState::Connecting
+    });
     let sender = CommandSender {
         ops: ops_tx,
         default_timeout: options.send_timeout,

@@ -333,8 +333,8 @@ impl CommandSender {
 
     /// Waits until the link has ended for good ([`LinkState::Closed`]: after
     /// [`close`](Self::close), or when reconnection gave up) and its transport is closed,
-    /// so that the same device can be opened again; or until every handle but this one
-    /// is gone and the background task has stopped.
+    /// so that the same device can be opened again. This sender keeps the link alive
+    /// while it waits: call [`close`](Self::close) first to end it.
     ///
     /// ```
     /// # #[tokio::main(flavor = "current_thread")]

@@ -566,3 +566,23 @@ async fn at_and_remote_at_commands_get_their_responses() {
         Err(SendError::NoFrameId(0x8A))
     );
 }
+
+#[tokio::test]
+async fn link_state_says_connected_as_soon_as_connect_returns_with_a_transport() {
+    use mcp_host::{Link, LinkState};
+    let (_stream, sender) = mcp_host::connect(&Link::Pty, LinkOptions::default())
+        .await
+        .unwrap();
+    assert_eq!(sender.link_state(), LinkState::Connected);
+    // A listening link has no peer yet.
+    let listen: Link = "tcp-listen:127.0.0.1:0".parse().unwrap();
+    let (stream, listening) = mcp_host::connect(&listen, LinkOptions::default())
+        .await
+        .unwrap();
+    assert_eq!(listening.link_state(), LinkState::Connecting);
+    assert_eq!(stream.link_state(), LinkState::Connecting);
+    sender.close();
+    listening.close();
+    sender.closed().await;
+    listening.closed().await;
+}
