@@ -107,7 +107,9 @@ pub struct HubStats {
     pub frames_refused: u64,
     /// The counters of the hub's own link to the radio: frames and framing errors,
     /// disconnects and reconnects, and in [`Stats::events_dropped`] the frames lost
-    /// because the hub itself fell behind the radio (before any client saw them).
+    /// because the hub itself fell behind the radio (before any client saw them). The
+    /// hub writes its clients' requests as raw frames, so the answers it routes to them
+    /// count in [`Stats::unclaimed_responses`].
     pub radio: Stats,
 }
 
