@@ -596,6 +596,16 @@ impl Network {
         self.tasks.close();
         self.tasks.wait().await;
     }
+
+    /// Runs `task` beside the nodes' tasks: [`stop`](Self::stop) waits for it too (it
+    /// must end once the network shuts down, as a device on an in-process node's stream
+    /// does when the stream ends).
+    pub(crate) fn spawn_beside<F>(&self, task: F)
+    where
+        F: std::future::Future<Output = ()> + Send + 'static,
+    {
+        self.tasks.spawn(task);
+    }
 }
 
 impl Drop for Network {

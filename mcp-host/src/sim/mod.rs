@@ -270,7 +270,7 @@ impl Simulator {
         for &address in addresses {
             let (info, io) =
                 network.add_in_process(address, NodeOptions::with_mode(ApiMode::Unescaped))?;
-            tokio::spawn(async move {
+            network.spawn_beside(async move {
                 if let Err(error) = run_mav_with(io, SimMav::new(posix_now()), options).await {
                     tracing::warn!(mav = %address, %error, "simulated MAV stopped");
                 }
@@ -316,8 +316,8 @@ impl Simulator {
         self.network.shutdown();
     }
 
-    /// Stops the MAVs and the network and waits until the coordinator's link is closed
-    /// and its port free ([`Network::stop`]).
+    /// Stops the MAVs and the network and waits until the MAVs have stopped and the
+    /// coordinator's link is closed and its port free ([`Network::stop`]).
     pub async fn stop(&self) {
         self.network.stop().await;
     }
