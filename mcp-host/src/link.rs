@@ -45,7 +45,7 @@ pub enum Link {
     TcpListen {
         /// Local address to bind (IPv6 without brackets).
         addr: String,
-        /// TCP port (0 picks a free port; see [`crate::Connector::local_addr`]).
+        /// TCP port (0 picks a free port; see [`crate::LinkInfo::local_addr`]).
         port: u16,
     },
     /// A fresh pseudo-terminal pair (`pty`), made when the link is opened; the far end's

@@ -2,7 +2,7 @@
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
-/// A snapshot of a link's counters, since the link was connected.
+/// A snapshot of a link's counters since [`connect`](crate::connect), across reconnections.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
 pub struct Stats {
     /// Frames with a good checksum.
