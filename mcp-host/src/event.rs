@@ -72,7 +72,7 @@ pub struct InvalidPacket {
 /// (the [`LinkEvent`]s tell each change).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum LinkState {
-    /// Not connected yet: a `tcp-listen` link waiting for its first peer.
+    /// Not connected yet: a `tcp-listen` or `pty` link waiting for its first peer.
     Connecting,
     /// The transport is up.
     Connected,

@@ -14,7 +14,7 @@
 //! | `serial:PATH[:BAUD]` | Serial port `PATH` (e.g. `/dev/ttyUSB0`, `COM3`), `BAUD` default 115200, 8N1, no flow control. Reopened after the device disappears (USB unplugged). |
 //! | `tcp:HOST:PORT` | TCP connection to `HOST:PORT` (a serial-to-TCP bridge, a simulator). Reconnected after the peer goes away. IPv6 hosts in brackets: `tcp:[::1]:9750`. |
 //! | `tcp-listen:ADDR:PORT` | Listens on `ADDR:PORT` and serves one peer at a time: while a peer is connected, further peers wait in the listen backlog; the next is accepted when the current one leaves. Port 0 picks a free port ([`LinkInfo::local_addr`]). |
-//! | `pty` | Creates a pseudo-terminal pair; the far end's path ([`LinkInfo::pty_path`], e.g. `/dev/pts/7`) is for a simulator or test to open. The pair stays open for the life of the link, so the path stays valid while simulators come and go. |
+//! | `pty` | Creates a pseudo-terminal pair; the far end's path ([`LinkInfo::pty_path`], e.g. `/dev/pts/7`) is for a simulator or test to open. The path stays valid for the life of the link; the link is up while a device has it open (connected, disconnected and reconnected as simulators come and go), and nothing written for one device reaches the next. |
 //!
 //! [`LinkOptions`] sets the XBee API mode (1, as the deployed MAVs use, or 2), the frame
 //! size limit, timeouts and the [`ReconnectPolicy`] (exponential backoff, or none).
@@ -70,6 +70,7 @@ pub mod hub;
 mod ids;
 pub mod link;
 pub mod options;
+mod pty;
 pub mod radio;
 pub mod record;
 pub mod render;
@@ -113,9 +114,9 @@ pub struct LinkInfo {
 /// Opens `link` and starts the background task serving it.
 ///
 /// For `serial` and `tcp` links the first connection is made before this returns (so a
-/// wrong path or a refused connection fails here); `tcp-listen` binds and returns at
-/// once, the first peer being announced by [`LinkEvent::Connected`]; `pty` creates the
-/// pair and returns.
+/// wrong path or a refused connection fails here); `tcp-listen` binds and `pty` creates
+/// the pair, and both return at once, the first peer being announced by
+/// [`LinkEvent::Connected`].
 ///
 /// The task runs until the link ends for good ([`LinkEvent::Closed`]) or the stream and
 /// every sender are dropped. Must be called within a tokio runtime.
@@ -133,7 +134,8 @@ pub async fn connect(
     }
     let mut connector = Connector::new(link, &options).await?;
     let transport = match link {
-        Link::TcpListen { .. } => None,
+        // Their first peer may come at any time: announced by `LinkEvent::Connected`.
+        Link::TcpListen { .. } | Link::Pty => None,
         _ => Some(connector.open().await?),
     };
     let info = Arc::new(LinkInfo {

@@ -49,7 +49,8 @@ pub enum Link {
         port: u16,
     },
     /// A fresh pseudo-terminal pair (`pty`), made when the link is opened; the far end's
-    /// path is in [`LinkInfo::pty_path`](crate::LinkInfo::pty_path) at once.
+    /// path is in [`LinkInfo::pty_path`](crate::LinkInfo::pty_path) at once. The link is
+    /// up while a device (a simulator, a test) has that path open.
     Pty,
 }
 

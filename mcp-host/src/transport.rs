@@ -5,6 +5,7 @@ use std::io;
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 use std::pin::Pin;
+use std::sync::{Arc, Mutex, PoisonError};
 use std::task::{Context, Poll};
 use std::time::Duration;
 
@@ -14,6 +15,7 @@ use tokio_serial::{SerialPort, SerialPortBuilderExt, SerialStream};
 
 use crate::link::Link;
 use crate::options::{LinkOptions, ReconnectPolicy};
+use crate::pty::{PtyPort, PtyStream};
 
 /// Why a link could not be opened.
 #[derive(Debug, thiserror::Error)]
@@ -93,6 +95,7 @@ impl LinkError {
 enum Inner {
     Tcp(TcpStream),
     Serial(SerialStream),
+    Pty(Lent),
 }
 
 /// An open byte stream to the radio: a serial port, a TCP connection or the local side of
@@ -127,6 +130,7 @@ impl AsyncRead for Transport {
         match &mut self.get_mut().inner {
             Inner::Tcp(s) => Pin::new(s).poll_read(cx, buf),
             Inner::Serial(s) => Pin::new(s).poll_read(cx, buf),
+            Inner::Pty(s) => s.stream()?.poll_read(cx, buf),
         }
     }
 }
@@ -140,6 +144,7 @@ impl AsyncWrite for Transport {
         match &mut self.get_mut().inner {
             Inner::Tcp(s) => Pin::new(s).poll_write(cx, buf),
             Inner::Serial(s) => Pin::new(s).poll_write(cx, buf),
+            Inner::Pty(s) => s.stream()?.poll_write(cx, buf),
         }
     }
 
@@ -147,6 +152,7 @@ impl AsyncWrite for Transport {
         match &mut self.get_mut().inner {
             Inner::Tcp(s) => Pin::new(s).poll_flush(cx),
             Inner::Serial(s) => Pin::new(s).poll_flush(cx),
+            Inner::Pty(s) => s.stream()?.poll_flush(cx),
         }
     }
 
@@ -154,23 +160,48 @@ impl AsyncWrite for Transport {
         match &mut self.get_mut().inner {
             Inner::Tcp(s) => Pin::new(s).poll_shutdown(cx),
             Inner::Serial(s) => Pin::new(s).poll_shutdown(cx),
+            Inner::Pty(s) => s.stream()?.poll_shutdown(cx),
         }
     }
 }
 
-struct PtyPair {
-    /// The local side, handed out by the first [`Connector::open`].
-    master: Option<SerialStream>,
-    /// The far end, held open so that its path stays valid while simulators come and go.
-    _slave: SerialStream,
-    path: PathBuf,
+/// A `pty` link's pair: up while a device has the far end open.
+struct PtyLink {
+    port: PtyPort,
+    /// The master side lent to the current transport, put back when it is dropped.
+    back: Arc<Mutex<Option<PtyStream>>>,
+}
+
+/// The master side of a `pty` link, lent to a [`Transport`] while a peer is there.
+struct Lent {
+    /// Always `Some` until dropped.
+    stream: Option<PtyStream>,
+    back: Arc<Mutex<Option<PtyStream>>>,
+}
+
+impl Lent {
+    /// The stream (taken only when dropped, so always there before).
+    fn stream(&mut self) -> io::Result<Pin<&mut PtyStream>> {
+        self.stream
+            .as_mut()
+            .map(Pin::new)
+            .ok_or_else(|| io::Error::from(io::ErrorKind::NotConnected))
+    }
+}
+
+impl Drop for Lent {
+    fn drop(&mut self) {
+        if let Some(stream) = self.stream.take() {
+            *self.back.lock().unwrap_or_else(PoisonError::into_inner) = Some(stream);
+        }
+    }
 }
 
 enum Kind {
     Serial { path: String, baud: u32 },
     Tcp { host: String, port: u16 },
     Listen { listener: TcpListener, name: String },
-    Pty(PtyPair),
+    Pty(PtyLink),
 }
 
 /// Opens [`Transport`]s for a [`Link`], and reopens them after a disconnection.
@@ -185,9 +216,9 @@ enum Kind {
 /// - `tcp-listen`: every open accepts the next peer. One peer is served at a time: while
 ///   one is connected, further peers are not accepted and wait in the listen backlog; the
 ///   next one is accepted when the current one leaves.
-/// - `pty`: the local side is opened once; the far end stays open for the life of the
-///   connector, so its path stays valid and a simulator can close and reopen it at will
-///   (the local side never sees a disconnection).
+/// - `pty`: every open waits for a device to open the far end (the path stays valid for
+///   the life of the connector); the transport ends when the device closes it, and what
+///   it left unread is dropped, so that nothing written for one device reaches the next.
 pub struct Connector {
     link: Link,
     kind: Kind,
@@ -228,16 +259,10 @@ impl Connector {
                         })?;
                 Kind::Listen { listener, name }
             }
-            Link::Pty => {
-                // The pair takes no lock (no TIOCEXCL, no flock) on the far end, so a
-                // simulator can open it, even exclusively, while this side holds it open.
-                let (master, slave, path) = pty_pair()?;
-                Kind::Pty(PtyPair {
-                    master: Some(master),
-                    _slave: slave,
-                    path,
-                })
-            }
+            Link::Pty => Kind::Pty(PtyLink {
+                port: PtyPort::new()?,
+                back: Arc::default(),
+            }),
         };
         Ok(Connector {
             link: link.clone(),
@@ -255,7 +280,7 @@ impl Connector {
     /// For a `pty` link, the path of the far end, for a simulator or test to open.
     pub fn pty_path(&self) -> Option<&Path> {
         match &self.kind {
-            Kind::Pty(pair) => Some(&pair.path),
+            Kind::Pty(pty) => Some(pty.port.path()),
             _ => None,
         }
     }
@@ -326,11 +351,22 @@ impl Connector {
                     peer: peer.to_string(),
                 })
             }
-            Kind::Pty(pair) => {
-                let master = pair.master.take().ok_or(LinkError::PtyClosed)?;
+            Kind::Pty(pty) => {
+                let lent = pty
+                    .back
+                    .lock()
+                    .unwrap_or_else(PoisonError::into_inner)
+                    .take();
+                if let Some(stream) = lent {
+                    pty.port.give_back(stream);
+                }
+                let stream = pty.port.peer().await.ok_or(LinkError::PtyClosed)?;
                 Ok(Transport {
-                    inner: Inner::Serial(master),
-                    peer: pair.path.display().to_string(),
+                    inner: Inner::Pty(Lent {
+                        stream: Some(stream),
+                        back: pty.back.clone(),
+                    }),
+                    peer: pty.port.path().display().to_string(),
                 })
             }
         }

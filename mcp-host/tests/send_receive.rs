@@ -570,19 +570,26 @@ async fn at_and_remote_at_commands_get_their_responses() {
 #[tokio::test]
 async fn link_state_says_connected_as_soon_as_connect_returns_with_a_transport() {
     use mcp_host::{Link, LinkState};
-    let (_stream, sender) = mcp_host::connect(&Link::Pty, LinkOptions::default())
+    // A TCP link connects before `connect` returns.
+    let radio = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let tcp: Link = format!("tcp:{}", radio.local_addr().unwrap())
+        .parse()
+        .unwrap();
+    let (_stream, sender) = mcp_host::connect(&tcp, LinkOptions::default())
         .await
         .unwrap();
     assert_eq!(sender.link_state(), LinkState::Connected);
-    // A listening link has no peer yet.
-    let listen: Link = "tcp-listen:127.0.0.1:0".parse().unwrap();
-    let (stream, listening) = mcp_host::connect(&listen, LinkOptions::default())
-        .await
-        .unwrap();
-    assert_eq!(listening.link_state(), LinkState::Connecting);
-    assert_eq!(stream.link_state(), LinkState::Connecting);
+    // Links that wait for their peer have none yet.
+    for link in ["tcp-listen:127.0.0.1:0", "pty"] {
+        let link: Link = link.parse().unwrap();
+        let (stream, waiting) = mcp_host::connect(&link, LinkOptions::default())
+            .await
+            .unwrap();
+        assert_eq!(waiting.link_state(), LinkState::Connecting, "{link}");
+        assert_eq!(stream.link_state(), LinkState::Connecting, "{link}");
+        waiting.close();
+        waiting.closed().await;
+    }
     sender.close();
-    listening.close();
     sender.closed().await;
-    listening.closed().await;
 }

@@ -31,29 +31,45 @@ async fn read_exact_n<R: AsyncReadExt + Unpin>(r: &mut R, n: usize) -> Vec<u8> {
 }
 
 #[tokio::test]
-async fn pty_carries_bytes_both_ways_and_its_path_outlives_the_far_end() {
+async fn pty_is_up_while_a_device_has_the_far_end_open_and_nothing_stale_reaches_the_next() {
     let mut connector = Connector::new(&Link::Pty, &LinkOptions::default())
         .await
         .unwrap();
     let path = connector.pty_path().unwrap().to_owned();
     assert!(path.exists(), "{path:?}");
-    let mut local = connector.open().await.unwrap();
-    assert_eq!(local.peer(), path.display().to_string());
-
     for round in 0..2u8 {
-        // A simulator opens the far end, talks, and closes it again.
+        // Opening waits for a device on the far end.
+        let open = tokio::spawn(async move {
+            let local = connector.open().await;
+            (connector, local)
+        });
         let mut far =
             tokio_serial::SerialStream::open(&tokio_serial::new(path.to_str().unwrap(), 115_200))
                 .unwrap();
+        let (back, local) = timeout(GUARD, open).await.unwrap().unwrap();
+        connector = back;
+        let mut local = local.unwrap();
+        assert_eq!(local.peer(), path.display().to_string());
+        // Bytes both ways; the first the device reads are the first written for it,
+        // nothing left from the device before.
         far.write_all(&[0x7E, round, 0x11]).await.unwrap();
         assert_eq!(read_exact_n(&mut local, 3).await, [0x7E, round, 0x11]);
         local.write_all(&[0x7D, 0x33, round]).await.unwrap();
         assert_eq!(read_exact_n(&mut far, 3).await, [0x7D, 0x33, round]);
+        // Written for this device, which leaves without reading it.
+        local.write_all(&[0xAA; 8]).await.unwrap();
+        local.flush().await.unwrap();
         drop(far);
+        // The transport ends with the device.
+        let mut rest = [0u8; 16];
+        let n = timeout(GUARD, local.read(&mut rest))
+            .await
+            .unwrap()
+            .unwrap();
+        assert_eq!(n, 0, "end of stream once the device closed the far end");
         assert!(path.exists());
+        drop(local);
     }
-    // The local side is handed out once.
-    assert!(matches!(connector.open().await, Err(LinkError::PtyClosed)));
 }
 
 #[tokio::test]

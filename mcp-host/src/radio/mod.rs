@@ -84,7 +84,6 @@
 
 mod faults;
 mod port;
-mod pty;
 mod router;
 mod wire;
 
@@ -357,7 +356,7 @@ impl Network {
     ) -> Result<NodeInfo, NetworkError> {
         self.check_new(address)?;
         if matches!(link, Link::Pty) {
-            let port = pty::PtyPort::new().map_err(|source| NetworkError::Link {
+            let port = crate::pty::PtyPort::new().map_err(|source| NetworkError::Link {
                 node: address,
                 source,
             })?;

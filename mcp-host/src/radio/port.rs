@@ -14,10 +14,10 @@ use tokio::time::{Instant, sleep_until};
 use tokio_util::codec::FramedRead;
 use xbee_api::{Address64, ApiMode};
 
-use super::pty::{PtyPort, PtyStream};
 use super::router::{OUT_CAPACITY, Out, State};
 use crate::codec::{CodecItem, XBeeCodec};
 use crate::options::ReconnectPolicy;
+use crate::pty::{PtyPort, PtyStream};
 use crate::transport::Connector;
 
 /// The peer of a node added as a byte stream.

@@ -1,17 +1,18 @@
-//! A node's pseudo-terminal: its link is up only while a device has the far end open.
+//! A pseudo-terminal whose link is up only while a device has the far end open: a `pty`
+//! link's, or a radio node's.
 //!
-//! The radio keeps the local (master) side and does not hold the far (slave) end open
+//! The link keeps the local (master) side and does not hold the far (slave) end open
 //! itself, so that the kernel tells whether anyone else does: while no process has the
 //! far end open, a read on the master side fails with EIO (it polls as hung up), and
-//! once one opens it the read waits for data instead. The radio looks every
+//! once one opens it the read waits for data instead. The link looks every
 //! [`PEER_POLL`] while no peer is there, and reads until EIO while one is.
 //!
 //! Writes to the master side succeed even with nobody on the far end: the kernel keeps
-//! the bytes for the next process that opens it. So the radio writes nothing while no
-//! peer is there (the node is down: nothing is queued for it), and when a peer leaves it
-//! empties what that peer left unread, so that the next one starts with its modem
-//! status rather than with stale frames, as a real radio's UART output is lost with
-//! nobody listening.
+//! the bytes for the next process that opens it. So nothing is written while no peer is
+//! there (the link is down: nothing is queued for it), and when a peer leaves, what it
+//! left unread is emptied, so that the next one starts afresh rather than with stale
+//! frames (a radio's UART output is lost with nobody listening, and a ground station's
+//! commands must not reach a MAV long after they were reported as failed).
 
 use std::io;
 use std::path::{Path, PathBuf};
@@ -25,14 +26,14 @@ use tokio_serial::SerialStream;
 
 use crate::transport::LinkError;
 
-/// How often the radio looks for a peer on the far end while there is none.
+/// How often the link looks for a peer on the far end while there is none.
 pub(crate) const PEER_POLL: Duration = Duration::from_millis(20);
 
 /// Errno of a read on a master side whose far end nobody has open (EIO on Linux and
 /// the BSDs).
 const EIO: i32 = 5;
 
-/// A pseudo-terminal pair of which the radio holds the master side.
+/// A pseudo-terminal pair of which the link holds the master side.
 pub(crate) struct PtyPort {
     /// The master side; lent to [`PtyStream`] while a peer is connected.
     master: Option<SerialStream>,
@@ -123,7 +124,7 @@ impl PtyPort {
 }
 
 /// The master side of a pseudo-terminal while a peer has its far end open. A read ends
-/// (returns no bytes) when the peer closes it; bytes the radio read while looking for
+/// (returns no bytes) when the peer closes it; bytes read while looking for
 /// the peer come first.
 pub(crate) struct PtyStream {
     master: SerialStream,
