@@ -39,7 +39,7 @@
 //! ```
 
 use std::net::SocketAddr;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, PoisonError};
 use std::time::Duration;
 
@@ -93,6 +93,9 @@ pub enum HubError {
 /// Counters of a hub.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct HubStats {
+    /// Whether the hub listens for clients now: not while the radio's link is down, nor
+    /// after an outage while another program holds its port (it retries every second).
+    pub listening: bool,
     /// Clients connected so far.
     pub clients: u64,
     /// Frames from the radio passed on (counted once a frame, whatever the number of
@@ -115,6 +118,7 @@ pub struct HubStats {
 
 #[derive(Debug, Default)]
 struct Counters {
+    listening: AtomicBool,
     clients: AtomicU64,
     frames_from_radio: AtomicU64,
     frames_from_clients: AtomicU64,
@@ -166,6 +170,7 @@ impl Hub {
             counters: Arc::default(),
             radio_counters: sender.counters.clone(),
         };
+        hub.counters.listening.store(true, Ordering::Relaxed);
         let serve = Serve {
             mode,
             sender,
@@ -175,6 +180,8 @@ impl Hub {
             routes: Arc::new(Mutex::new(Routes::new())),
             clients: Vec::new(),
             radio_up: true,
+            addr: local_addr,
+            rebind_failures: 0,
         };
         hub.tasks.spawn(serve.run(stream, listener));
         Ok(hub)
@@ -199,6 +206,7 @@ impl Hub {
     pub fn stats(&self) -> HubStats {
         let c = &self.counters;
         HubStats {
+            listening: c.listening.load(Ordering::Relaxed),
             clients: c.clients.load(Ordering::Relaxed),
             frames_from_radio: c.frames_from_radio.load(Ordering::Relaxed),
             frames_from_clients: c.frames_from_clients.load(Ordering::Relaxed),
@@ -292,15 +300,41 @@ struct Serve {
     clients: Vec<(mpsc::Sender<Bytes>, CancellationToken)>,
     /// Whether the link to the radio is up: clients are served only then.
     radio_up: bool,
+    /// Where clients connect, listened on again after an outage.
+    addr: SocketAddr,
+    /// Failed attempts to listen again since the radio came back.
+    rebind_failures: u32,
 }
 
 impl Serve {
+    /// Listens on the hub's address again after an outage of the radio; `None` if that
+    /// fails (another program took the port meanwhile), logged as a warning the first
+    /// time, then at debug level.
+    async fn listen_again(&mut self) -> Option<TcpListener> {
+        let addr = self.addr;
+        match TcpListener::bind(addr).await {
+            Ok(listener) => {
+                tracing::info!(%addr, "hub: listening again");
+                self.counters.listening.store(true, Ordering::Relaxed);
+                Some(listener)
+            }
+            Err(error) => {
+                if self.rebind_failures == 0 {
+                    tracing::warn!(%addr, %error, "hub: cannot listen again yet (retrying)");
+                } else {
+                    tracing::debug!(%addr, %error, "hub: cannot listen again yet");
+                }
+                self.rebind_failures += 1;
+                None
+            }
+        }
+    }
+
     async fn run(mut self, mut stream: PacketStream, listener: TcpListener) {
         // `None` while the radio's link is down: clients are refused by the system
         // rather than accepted and dropped, so that their links stay down quietly until
         // the radio is back.
         let mut listener = Some(listener);
-        let addr = listener.as_ref().and_then(|l| l.local_addr().ok());
         let mut rebind = tokio::time::interval(REBIND_RETRY);
         rebind.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
         loop {
@@ -316,7 +350,7 @@ impl Serve {
                 },
                 // The port again, if it could not be taken back at once.
                 _ = rebind.tick(), if listener.is_none() && self.radio_up => {
-                    listener = bind(addr).await;
+                    listener = self.listen_again().await;
                 }
                 event = stream.next() => match event {
                     Some(event) => {
@@ -324,10 +358,12 @@ impl Serve {
                         if matches!(&event, Event::Link(link) if !is_up(link)) {
                             // Before the clients are disconnected: none comes back in.
                             listener = None;
+                            self.counters.listening.store(false, Ordering::Relaxed);
                         }
                         self.broadcast(&event);
                         if self.radio_up && !was_up && listener.is_none() {
-                            listener = bind(addr).await;
+                            self.rebind_failures = 0;
+                            listener = self.listen_again().await;
                             rebind.reset();
                         }
                     }
@@ -344,12 +380,8 @@ impl Serve {
     }
 
     fn accept(&mut self, socket: TcpStream, peer: SocketAddr) {
+        // Only while the radio's link is up: the hub does not listen otherwise.
         self.clients.retain(|(client, _)| !client.is_closed());
-        if !self.radio_up {
-            // Its link reconnects once the radio is back.
-            tracing::info!(%peer, "hub: client turned away (the radio's link is down)");
-            return;
-        }
         if self.clients.len() >= MAX_CLIENTS {
             tracing::warn!(%peer, "hub: client turned away ({MAX_CLIENTS} connected)");
             return;
@@ -450,21 +482,6 @@ async fn accept(listener: Option<&TcpListener>) -> std::io::Result<(TcpStream, S
     match listener {
         Some(listener) => listener.accept().await,
         None => std::future::pending().await,
-    }
-}
-
-/// Listens on `addr` again after an outage of the radio; `None` (logged) if that fails.
-async fn bind(addr: Option<SocketAddr>) -> Option<TcpListener> {
-    let addr = addr?;
-    match TcpListener::bind(addr).await {
-        Ok(listener) => {
-            tracing::info!(%addr, "hub: listening again");
-            Some(listener)
-        }
-        Err(error) => {
-            tracing::warn!(%addr, %error, "hub: cannot listen again yet");
-            None
-        }
     }
 }
 

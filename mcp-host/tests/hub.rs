@@ -105,6 +105,7 @@ async fn shares_one_radio(mode: ApiMode) {
     assert_eq!(&sl.data()[2..4], b"SL");
 
     let stats = hub.stats();
+    assert!(stats.listening);
     assert_eq!(stats.clients, 2);
     assert!(stats.frames_from_radio > 0 && stats.frames_from_clients >= 6);
     // The hub's own link saw every frame it passed on, whole, and kept up.
@@ -407,6 +408,7 @@ async fn clients_see_the_radios_outage_and_come_back_with_it() {
         refused.map(|_| ()).map_err(|e| e.kind()),
         Err(std::io::ErrorKind::ConnectionRefused)
     );
+    assert!(!hub.stats().listening);
     // The radio is back: the hub's link reconnects, and then the client's.
     let (socket, _) = listener.accept().await.unwrap();
     assert!(matches!(
@@ -414,13 +416,13 @@ async fn clients_see_the_radios_outage_and_come_back_with_it() {
         mcp_host::LinkEvent::Reconnected { .. }
     ));
     // And frames flow again, once the hub has taken the client back (its connection
-    // may be complete in the kernel before the hub accepts it, or be one the hub turned
-    // away while its own link was still down).
+    // may be complete in the kernel before the hub accepts it).
     let deadline = tokio::time::Instant::now() + GUARD;
     while hub.stats().clients < 2 {
         assert!(tokio::time::Instant::now() < deadline, "{:?}", hub.stats());
         tokio::time::sleep(Duration::from_millis(5)).await;
     }
+    assert!(hub.stats().listening);
     let mut radio = FakeRadio::on(socket);
     radio.send(&[0x8A, 0x06]).await;
     loop {
@@ -432,6 +434,48 @@ async fn clients_see_the_radios_outage_and_come_back_with_it() {
             assert_eq!(&frame.data()[..], [0x8A, 0x06]);
             break;
         }
+    }
+    client.close();
+    hub.stop().await;
+}
+
+#[tokio::test]
+async fn a_hub_whose_port_was_taken_during_an_outage_listens_again_once_it_is_free() {
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let (hub, radio) = hub_on(&listener).await;
+    let (mut client_stream, client) = client(&hub, ApiMode::Unescaped).await;
+    assert!(matches!(
+        next_link(&mut client_stream).await,
+        mcp_host::LinkEvent::Connected { .. }
+    ));
+    drop(radio);
+    assert!(matches!(
+        next_link(&mut client_stream).await,
+        mcp_host::LinkEvent::Disconnected { .. }
+    ));
+    // Another program takes the port while the hub does not listen, and the radio
+    // comes back meanwhile.
+    let squatter = tokio::net::TcpListener::bind(hub.local_addr())
+        .await
+        .unwrap();
+    let (_radio, _) = listener.accept().await.unwrap();
+    let deadline = tokio::time::Instant::now() + GUARD;
+    while hub.stats().radio.reconnects < 1 {
+        assert!(tokio::time::Instant::now() < deadline, "{:?}", hub.stats());
+        tokio::time::sleep(Duration::from_millis(5)).await;
+    }
+    // The hub's clients reach the other program meanwhile, as any would.
+    let (to_squatter, _) = tokio::time::timeout(GUARD, squatter.accept())
+        .await
+        .unwrap()
+        .unwrap();
+    assert!(!hub.stats().listening);
+    drop(to_squatter);
+    drop(squatter);
+    // Once the port is free, the hub listens there again and takes the client back.
+    while !hub.stats().listening || hub.stats().clients < 2 {
+        assert!(tokio::time::Instant::now() < deadline, "{:?}", hub.stats());
+        tokio::time::sleep(Duration::from_millis(5)).await;
     }
     client.close();
     hub.stop().await;

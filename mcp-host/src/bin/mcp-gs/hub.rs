@@ -63,7 +63,8 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
     let radio = stats.radio;
     if radio.events_dropped > 0 || radio.decode_errors() > 0 {
         out!(
-            "from the radio: {} frames lost while the hub fell behind, {} corrupt frames dropped",
+            "from the radio: {} events lost while the hub fell behind, {} frames dropped \
+             (bad checksum, cut off, ...)",
             radio.events_dropped,
             radio.decode_errors()
         );
