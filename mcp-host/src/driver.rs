@@ -13,7 +13,7 @@ use tokio::io::AsyncWriteExt;
 use tokio::sync::{Notify, mpsc, oneshot, watch};
 use tokio::time::Instant;
 use tokio_util::codec::FramedRead;
-use xbee_api::{Address16, Address64, EncodeFrame};
+use xbee_api::{Address64, EncodeFrame};
 
 use crate::codec::{CodecItem, XBeeCodec, encode_frame};
 use crate::error::{RequestError, SendError};
@@ -1038,11 +1038,7 @@ fn write_transmit(
 ) -> Result<(), SendError> {
     let frame = xbee_api::TransmitRequestRepr {
         frame_id,
-        dst64: to,
-        dst16: Address16::UNKNOWN,
-        radius: 0,
-        options: 0,
-        data: payload,
+        ..xbee_api::TransmitRequestRepr::unicast(to, payload)
     };
     encode_frame(&frame, mode, out).map_err(|_| SendError::TooLarge {
         len: frame.frame_data_len(),

@@ -48,6 +48,7 @@ impl core::error::Error for FrameError {}
 
 /// Why a frame could not be encoded.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum EncodeError {
     /// The output buffer is shorter than the encoded frame.
     BufferTooSmall {

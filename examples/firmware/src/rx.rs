@@ -10,7 +10,10 @@ use core::cell::RefCell;
 
 use critical_section::{CriticalSection, Mutex};
 use heapless::{Deque, Vec};
-use xbee_api::{ApiMode, Decoder, RawFrame, ReceivePacket, ReceivePacketRepr, TransmitRequestRepr};
+use xbee_api::{
+    ApiMode, Decoder, RawFrame, ReceivePacket, ReceivePacketRepr, TransmitRequestRepr,
+    decoder_buffer_len,
+};
 
 use crate::hw::{self, RxError};
 
@@ -23,9 +26,10 @@ pub const MAX_PAYLOAD: usize = TransmitRequestRepr::MAX_UNICAST_DATA;
 pub const RECEIVE_HEADER_LEN: usize = ReceivePacketRepr::HEADER_LEN;
 
 /// Decoder buffer: in API mode 1 it holds the whole frame, delimiter, length and
-/// checksum (4 bytes) included, so frame data of `DECODER_CAPACITY - 4` = 96 bytes,
-/// exactly a Receive Packet with an 84-byte payload.
-pub const DECODER_CAPACITY: usize = RECEIVE_HEADER_LEN + MAX_PAYLOAD + 4;
+/// checksum (4 bytes) included: 100 bytes for frame data of 96, exactly a Receive
+/// Packet with an 84-byte payload.
+pub const DECODER_CAPACITY: usize =
+    decoder_buffer_len(RECEIVE_HEADER_LEN + MAX_PAYLOAD, ApiMode::Unescaped);
 
 /// Payloads waiting for the main loop.
 pub const QUEUE_LEN: usize = 4;

@@ -3,6 +3,9 @@
 code_enum! {
     /// Command status of an AT Command Response (0x88) or Remote AT Command Response
     /// (0x97).
+    ///
+    /// Test success with [`is_ok`](Self::is_ok), not `== AtStatus::Ok`: some firmware
+    /// sets upper bits of the code ([`meaning`](Self::meaning)).
     pub enum AtStatus {
         /// 0x00: OK.
         Ok = 0x00 => "ok",
