@@ -360,6 +360,12 @@ async fn every_answer_to_a_discovery_goes_to_the_client_that_asked_alone() {
         [0x88, 0x01, b'N', b'I', 0x00, b'G', b'S']
     );
     assert_eq!(next_raw(&mut b).await, packet);
+    // The radio sent four frames, all passed on; the hub's own link claimed none of
+    // the three answers (it wrote the requests as raw frames).
+    let stats = hub.stats();
+    assert_eq!(stats.frames_from_radio, 4, "{stats:?}");
+    assert_eq!(stats.radio.frames, 4, "{stats:?}");
+    assert_eq!(stats.radio.unclaimed_responses, 3, "{stats:?}");
     hub.stop().await;
 }
 
