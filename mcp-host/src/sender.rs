@@ -249,7 +249,22 @@ impl CommandSender {
         self.call(op, answer, deadline, self.default_timeout).await
     }
 
-    /// Sends a local AT command (0x08) and resolves with its AT Command Response (0x88).
+    /// Sends a local AT command (0x08) and resolves with its AT Command Response (0x88),
+    /// whatever the status the radio answered: parse it and test the status with
+    /// [`AtStatus::is_ok`](xbee_api::AtStatus::is_ok).
+    ///
+    /// ```no_run
+    /// # async fn run(sender: mcp_host::CommandSender) -> Result<(), Box<dyn std::error::Error>> {
+    /// use xbee_api::Frame;
+    /// let response = sender.at(*b"AP", &[], None).await?;
+    /// if let Ok(Frame::AtCommandResponse(at)) = response.parse() {
+    ///     if at.status.is_ok() {
+    ///         println!("API mode {:?}", at.data);
+    ///     }
+    /// }
+    /// # Ok(())
+    /// # }
+    /// ```
     pub async fn at(
         &self,
         command: [u8; 2],
@@ -267,7 +282,8 @@ impl CommandSender {
     }
 
     /// Sends a remote AT command (0x17) to `to` and resolves with its Remote AT Command
-    /// Response (0x97). `apply` sets the apply-changes option (0x02).
+    /// Response (0x97), whatever its status (as [`at`](Self::at)). `apply` sets the
+    /// apply-changes option (0x02).
     pub async fn remote_at(
         &self,
         to: Address64,
@@ -329,6 +345,28 @@ impl CommandSender {
     /// Where the link is now.
     pub fn link_state(&self) -> LinkState {
         *self.state.borrow()
+    }
+
+    /// The link's state as it changes: await a change, or a state, without reading the
+    /// [`PacketStream`](crate::PacketStream).
+    ///
+    /// ```
+    /// # #[tokio::main(flavor = "current_thread")]
+    /// # async fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// use mcp_host::{Link, LinkOptions, LinkState};
+    ///
+    /// let link: Link = "tcp-listen:127.0.0.1:0".parse()?;
+    /// let (stream, sender) = mcp_host::connect(&link, LinkOptions::default()).await?;
+    /// let addr = stream.info().local_addr.unwrap();
+    /// let _radio = tokio::net::TcpStream::connect(addr).await?;
+    /// // Waits for the peer, however long it takes.
+    /// let mut state = sender.watch_link_state();
+    /// state.wait_for(|s| *s == LinkState::Connected).await?;
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub fn watch_link_state(&self) -> watch::Receiver<LinkState> {
+        self.state.clone()
     }
 
     /// Waits until the link has ended for good ([`LinkState::Closed`]: after
