@@ -8,6 +8,7 @@ use crate::transport::LinkError;
 
 /// Why [`crate::connect`] failed.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum ConnectError {
     /// The link could not be opened.
     #[error(transparent)]
@@ -19,6 +20,7 @@ pub enum ConnectError {
 
 /// Why a send did not succeed.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
 pub enum SendError {
     /// The radio reported a delivery failure in its Transmit Status.
     #[error(
@@ -78,6 +80,7 @@ pub enum SendError {
 
 /// Why a status request did not produce a report.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
 pub enum RequestError {
     /// Sending the request failed (delivery failure, disconnection, ...).
     #[error("status request not delivered: {0}")]

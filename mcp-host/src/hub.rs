@@ -75,6 +75,7 @@ pub const ANSWER_WINDOW: Duration = Duration::from_secs(30);
 
 /// Why a hub could not start.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum HubError {
     /// The link to the radio could not be opened.
     #[error(transparent)]

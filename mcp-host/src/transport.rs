@@ -19,6 +19,7 @@ use crate::pty::{PtyPort, PtyStream};
 
 /// Why a link could not be opened.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum LinkError {
     /// The serial port could not be opened or configured.
     #[error("cannot open serial port {path} at {baud} baud: {source}")]

@@ -29,6 +29,7 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
             listen @ HubError::Listen { .. } => Failure::link(format!(
                 "{listen} (another hub may serve there: give it another --listen ADDR:PORT)"
             )),
+            other => Failure::link(other.to_string()),
         })?;
     if let Some(path) = &hub.radio_link().pty_path {
         eprintln!(

@@ -311,6 +311,7 @@ pub(crate) fn connect_failure(link: &Link, error: ConnectError) -> Failure {
                 .unwrap_or_default();
             Failure::link(format!("cannot open {link}: {e}{hint}"))
         }
+        other => Failure::link(format!("cannot open {link}: {other}")),
     }
 }
 
@@ -354,6 +355,7 @@ pub(crate) fn send_failure(error: SendError) -> Failure {
         SendError::TooLarge { .. } | SendError::NoFrameId(_) | SendError::EmptyFrame => {
             Failure::INPUT
         }
+        _ => Failure::OTHER,
     };
     Failure::new(code, error.to_string())
 }

@@ -47,6 +47,7 @@ pub(crate) async fn run(args: StatusArgs) -> Result<(), Failure> {
             timeout @ RequestError::Timeout { .. } => {
                 Failure::new(Failure::TIMEOUT, timeout.to_string())
             }
+            other => Failure::new(Failure::OTHER, other.to_string()),
         })
         .map_err(|failure| diagnosed(failure, &args.link, &sender.stats()))?;
     let received_at = std::time::SystemTime::now();
