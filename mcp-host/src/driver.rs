@@ -184,6 +184,8 @@ struct Waiter {
     key: ReportKey,
     deadline: Instant,
     timeout: Duration,
+    /// The radio confirmed delivery of the request (Transmit Status success).
+    delivered: bool,
     reply: oneshot::Sender<Result<mcp_core::Report<Bytes>, RequestError>>,
 }
 
@@ -649,11 +651,14 @@ impl Driver {
             PendingKind::Request { to, waiter } => {
                 match xbee_api::TransmitStatusRepr::parse_bytes(frame.data()) {
                     Ok(status) => {
-                        if let Err(error) = delivery(to, &status) {
-                            if let Some(pos) = self.waiters.iter().position(|w| w.id == waiter) {
+                        let pos = self.waiters.iter().position(|w| w.id == waiter);
+                        match (delivery(to, &status), pos) {
+                            (Ok(_), Some(pos)) => self.waiters[pos].delivered = true,
+                            (Err(error), Some(pos)) => {
                                 let w = self.waiters.swap_remove(pos);
                                 let _ = w.reply.send(Err(error.into()));
                             }
+                            (_, None) => {}
                         }
                     }
                     Err(error) => self.malformed(frame, &error),
@@ -801,6 +806,7 @@ impl Driver {
                     key,
                     deadline,
                     timeout,
+                    delivered: false,
                     reply,
                 });
             }
@@ -894,6 +900,7 @@ impl Driver {
                     from: w.from,
                     what: w.key.to_string(),
                     timeout: w.timeout,
+                    delivered: w.delivered,
                 }));
             } else {
                 i += 1;

@@ -87,7 +87,14 @@ pub enum RequestError {
     Send(#[from] SendError),
     /// The request was delivered (or no status came) but no matching report arrived in
     /// time.
-    #[error("no {what} report from {from} within {timeout:?}")]
+    #[error(
+        "no {what} report from {from} within {timeout:?} ({})",
+        if *delivered {
+            "the radio delivered the request: the MAV did not answer"
+        } else {
+            "the radio did not confirm delivery"
+        }
+    )]
     Timeout {
         /// Whom the request went to.
         from: Address64,
@@ -95,5 +102,9 @@ pub enum RequestError {
         what: String,
         /// The timeout that expired.
         timeout: Duration,
+        /// Whether the radio confirmed delivery of the request (a Transmit Status
+        /// success): if it did, the MAV got it and did not answer in time; if not, the
+        /// radio itself did not answer (off, another API mode or baud rate, ...).
+        delivered: bool,
     },
 }

@@ -201,10 +201,12 @@ impl CommandSender {
             match tokio::time::timeout_at(deadline + GRACE, answer).await {
                 Ok(Ok(result)) => result,
                 Ok(Err(_)) => Err(SendError::Closed.into()),
+                // A stalled task: whether the radio confirmed delivery is not known.
                 Err(_) => Err(RequestError::Timeout {
                     from: to,
                     what: key.to_string(),
                     timeout,
+                    delivered: false,
                 }),
             }
         };

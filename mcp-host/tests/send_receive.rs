@@ -499,12 +499,53 @@ async fn request_fails_on_delivery_failure_and_times_out_without_report() {
     fake.receive(MAV, &mcp(&Packet::Report(landing))).await;
     let err = silent.await.unwrap().unwrap_err();
     match &err {
-        RequestError::Timeout { from, what, .. } => {
+        RequestError::Timeout {
+            from,
+            what,
+            delivered,
+            ..
+        } => {
             assert_eq!(*from, OTHER_MAV);
             assert_eq!(what, "landing");
+            assert!(*delivered, "the radio confirmed delivery");
         }
         other => panic!("{other}"),
     }
+    assert!(err.to_string().contains("the MAV did not answer"), "{err}");
+}
+
+#[tokio::test]
+async fn a_request_the_radio_never_confirms_says_so_when_it_times_out() {
+    let (_stream, sender, mut fake) = pty_link(ApiMode::Unescaped).await;
+    let request = tokio::spawn({
+        let sender = sender.clone();
+        async move {
+            sender
+                .request_with(
+                    MAV,
+                    StatusRequest::Landing,
+                    Some(Duration::from_millis(200)),
+                )
+                .await
+        }
+    });
+    // The radio reads the request and says nothing.
+    fake.next_tx().await;
+    let err = request.await.unwrap().unwrap_err();
+    assert!(
+        matches!(
+            err,
+            RequestError::Timeout {
+                delivered: false,
+                ..
+            }
+        ),
+        "{err:?}"
+    );
+    assert!(
+        err.to_string().contains("did not confirm delivery"),
+        "{err}"
+    );
 }
 
 #[tokio::test]
