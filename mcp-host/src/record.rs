@@ -98,6 +98,17 @@ impl<W: Write> RecordWriter<W> {
     pub fn flush(&mut self) -> io::Result<()> {
         self.out.flush()
     }
+
+    /// The writer the records go to.
+    pub fn get_ref(&self) -> &W {
+        &self.out
+    }
+
+    /// Ends the recording, handing back the writer (not flushed: [`flush`](Self::flush)
+    /// first for a buffered one).
+    pub fn into_inner(self) -> W {
+        self.out
+    }
 }
 
 /// Whether `bytes` start like a recording.
@@ -222,7 +233,7 @@ mod tests {
         let mut w = RecordWriter::new(Vec::new()).unwrap();
         w.write(t, Direction::Received, &[0x8A, 0x06]).unwrap();
         w.write(t, Direction::Sent, &[0x10, 1, 2, 3]).unwrap();
-        let bytes = w.out;
+        let bytes = w.into_inner();
         assert!(is_recording(&bytes));
         let records: Vec<_> = RecordReader::new(&bytes[..])
             .unwrap()
@@ -248,7 +259,7 @@ mod tests {
             .unwrap();
         w.write(UNIX_EPOCH, Direction::Received, &[0x8A, 0x02])
             .unwrap();
-        let mut bytes = w.out;
+        let mut bytes = w.into_inner();
         bytes.truncate(bytes.len() - 1);
         let mut r = RecordReader::new(&bytes[..]).unwrap();
         assert!(r.next_record().unwrap().is_some());
