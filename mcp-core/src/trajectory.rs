@@ -30,6 +30,15 @@ pub struct Waypoint {
 }
 
 impl Waypoint {
+    /// Bytes of one waypoint on the wire.
+    pub const LEN: usize = waypoint::LEN;
+
+    /// Bytes of a trajectory set packet of `count` waypoints: the category, type and
+    /// size bytes, then the waypoints.
+    pub const fn packet_len(count: usize) -> usize {
+        field::WAYPOINTS + count * waypoint::LEN
+    }
+
     /// The 16 wire bytes of the waypoint.
     pub fn to_bytes(&self) -> [u8; waypoint::LEN] {
         let mut out = [0; waypoint::LEN];

@@ -117,6 +117,44 @@ impl CommandSender {
             .await
     }
 
+    /// Sends a trajectory set command of `waypoints` (at most 15 fit the 255-byte
+    /// payload; the deployed MAV takes at most 2, its receive buffer being 60 bytes) and
+    /// waits for the radio's delivery status. The MAV answers with a trajectory report,
+    /// which comes on the [`PacketStream`](crate::PacketStream).
+    ///
+    /// ```no_run
+    /// # async fn run(sender: mcp_host::CommandSender) -> Result<(), Box<dyn std::error::Error>> {
+    /// use mcp_core::Waypoint;
+    /// let mav = "0013A20040B599B9".parse()?;
+    /// let waypoint = Waypoint { time: 1_700_000_000, elevator: 0.5, aileron: 0.0, altitude: 1.2 };
+    /// sender.send_trajectory(mav, &[waypoint]).await?;
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub async fn send_trajectory(
+        &self,
+        to: Address64,
+        waypoints: &[mcp_core::Waypoint],
+    ) -> Result<DeliveryReport, SendError> {
+        let too_large = || SendError::TooLarge {
+            len: mcp_core::Waypoint::packet_len(waypoints.len()),
+            max: mcp_core::MAX_PAYLOAD,
+        };
+        let mut buf = [0u8; mcp_core::MAX_PAYLOAD];
+        let mut builder =
+            mcp_core::TrajectoryBuilder::command(&mut buf).map_err(|_| too_large())?;
+        for &waypoint in waypoints {
+            builder.push(waypoint).map_err(|_| too_large())?;
+        }
+        let len = builder.finish();
+        self.send_payload(
+            to,
+            Bytes::copy_from_slice(&buf[..len]),
+            SendOptions::default(),
+        )
+        .await
+    }
+
     /// Sends raw payload bytes in a Transmit Request (no MCP validation).
     pub async fn send_payload(
         &self,

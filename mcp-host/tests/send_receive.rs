@@ -634,3 +634,45 @@ async fn link_state_says_connected_as_soon_as_connect_returns_with_a_transport()
     sender.close();
     sender.closed().await;
 }
+
+#[tokio::test]
+async fn a_trajectory_goes_out_as_one_trajectory_set_command() {
+    let (_stream, sender, mut fake) = pty_link(ApiMode::Unescaped).await;
+    let waypoints = [
+        Waypoint {
+            time: 10,
+            elevator: 0.5,
+            aileron: 0.0,
+            altitude: 1.2,
+        },
+        Waypoint {
+            time: 11,
+            elevator: 0.0,
+            aileron: 0.5,
+            altitude: 1.4,
+        },
+    ];
+    let send = tokio::spawn({
+        let sender = sender.clone();
+        async move { sender.send_trajectory(MAV, &waypoints).await }
+    });
+    let tx = fake.next_tx().await;
+    let Ok(Packet::Command(Command::TrajectorySet(sent))) = mcp_core::parse(&tx.data) else {
+        panic!("not a trajectory set: {:02x?}", tx.data);
+    };
+    assert_eq!(sent.iter().collect::<Vec<_>>(), waypoints);
+    fake.status(tx.frame_id, DeliveryStatus::Success).await;
+    assert!(matches!(
+        send.await.unwrap(),
+        Ok(DeliveryReport::Delivered { .. })
+    ));
+    // 16 waypoints do not fit a payload: refused, nothing sent.
+    let too_many = [waypoints[0]; 16];
+    assert_eq!(
+        sender.send_trajectory(MAV, &too_many).await,
+        Err(SendError::TooLarge {
+            len: Waypoint::packet_len(16),
+            max: mcp_core::MAX_PAYLOAD
+        })
+    );
+}
