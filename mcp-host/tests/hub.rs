@@ -392,23 +392,31 @@ async fn a_client_that_reads_nothing_does_not_hold_up_stop() {
         .expect("stop returns");
 }
 
-#[tokio::test]
-async fn clients_see_the_radios_outage_and_come_back_with_it() {
-    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let (hub, radio) = hub_on(&listener).await;
+/// A hub on the radio listening on `listener`, with a client, once the radio has gone
+/// away and the client's link has seen it go down.
+async fn hub_in_an_outage(
+    listener: &tokio::net::TcpListener,
+) -> (Hub, PacketStream, CommandSender) {
+    let (hub, radio) = hub_on(listener).await;
     let (mut client_stream, client) = client(&hub, ApiMode::Unescaped).await;
     assert!(matches!(
         next_link(&mut client_stream).await,
         mcp_host::LinkEvent::Connected { .. }
     ));
-    // The radio goes away: the client's link goes down with it, and the hub stops
-    // listening (before it lets its clients go), so that clients stay down quietly
-    // rather than being taken in and dropped again.
     drop(radio);
     assert!(matches!(
         next_link(&mut client_stream).await,
         mcp_host::LinkEvent::Disconnected { .. }
     ));
+    (hub, client_stream, client)
+}
+
+#[tokio::test]
+async fn clients_see_the_radios_outage_and_come_back_with_it() {
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let (hub, mut client_stream, client) = hub_in_an_outage(&listener).await;
+    // The hub stopped listening before it let its clients go, so that clients stay
+    // down quietly rather than being taken in and dropped again.
     let refused = tokio::net::TcpStream::connect(hub.local_addr()).await;
     assert_eq!(
         refused.map(|_| ()).map_err(|e| e.kind()),
@@ -448,17 +456,7 @@ async fn clients_see_the_radios_outage_and_come_back_with_it() {
 #[tokio::test]
 async fn a_hub_whose_port_was_taken_during_an_outage_listens_again_once_it_is_free() {
     let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let (hub, radio) = hub_on(&listener).await;
-    let (mut client_stream, client) = client(&hub, ApiMode::Unescaped).await;
-    assert!(matches!(
-        next_link(&mut client_stream).await,
-        mcp_host::LinkEvent::Connected { .. }
-    ));
-    drop(radio);
-    assert!(matches!(
-        next_link(&mut client_stream).await,
-        mcp_host::LinkEvent::Disconnected { .. }
-    ));
+    let (hub, _client_stream, client) = hub_in_an_outage(&listener).await;
     // Another program takes the port while the hub does not listen, and the radio
     // comes back meanwhile.
     let squatter = tokio::net::TcpListener::bind(hub.local_addr())
