@@ -70,9 +70,9 @@ pub enum LinkError {
     /// The pseudo-terminal pair could not be created.
     #[error("cannot create a pseudo-terminal pair: {0}")]
     Pty(#[source] tokio_serial::Error),
-    /// The local side of a `pty` link was closed; a pseudo-terminal cannot be reopened
-    /// under the same path.
-    #[error("the pseudo-terminal link was closed and cannot be reopened")]
+    /// The local side of a `pty` link is gone (still held by a transport that was not
+    /// closed), so the link cannot wait for another device.
+    #[error("the pseudo-terminal's local side is gone: the link cannot be reopened")]
     PtyClosed,
     /// The transport went away and reconnection is disabled by the options.
     #[error("the link went down and reconnection is disabled")]

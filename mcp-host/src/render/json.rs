@@ -354,11 +354,7 @@ pub fn add_record_fields(
     time: std::time::SystemTime,
 ) {
     if let Value::Object(map) = value {
-        let secs = time
-            .duration_since(std::time::UNIX_EPOCH)
-            .map(|d| d.as_secs_f64())
-            .unwrap_or(0.0);
-        map.insert("time".into(), secs.into());
+        map.insert("time".into(), seconds(time).into());
         map.insert("direction".into(), super::text::direction(direction).into());
     }
 }
@@ -385,12 +381,15 @@ pub fn event(event: &Event) -> Value {
     }
 }
 
+/// A time as the JSON objects carry it: seconds since 1970, with microseconds (0 for a
+/// time before 1970).
+pub fn seconds(time: std::time::SystemTime) -> f64 {
+    time.duration_since(std::time::UNIX_EPOCH)
+        .map_or(0.0, |d| d.as_secs_f64())
+}
+
 fn receive(origin: &Origin, mcp: Value) -> Value {
-    let time = origin
-        .received_at
-        .duration_since(std::time::UNIX_EPOCH)
-        .map(|d| d.as_secs_f64())
-        .unwrap_or(0.0);
+    let time = seconds(origin.received_at);
     json!({
         "frame": "receive",
         "src64": origin.src64.to_string(),

@@ -59,9 +59,7 @@ pub(crate) async fn run(args: StatusArgs) -> Result<(), Failure> {
             // Which MAV answered, and when (a time report has a `time` field of its own).
             if let serde_json::Value::Object(map) = &mut json {
                 map.insert("src64".into(), args.to.to_string().into());
-                let secs = received_at
-                    .duration_since(std::time::UNIX_EPOCH)
-                    .map_or(0.0, |d| d.as_secs_f64());
+                let secs = mcp_host::render::json::seconds(received_at);
                 map.insert("received_at".into(), secs.into());
             }
             out!("{json}");
