@@ -22,7 +22,7 @@ use std::time::Duration;
 
 use bytes::{Buf, Bytes};
 use tokio::io::{AsyncRead, AsyncWrite, ReadBuf};
-use tokio_serial::SerialStream;
+use tokio_serial::{SerialPort, SerialStream};
 
 use crate::transport::LinkError;
 
@@ -44,7 +44,7 @@ pub(crate) struct PtyPort {
 impl PtyPort {
     /// A new pair; its far end is closed (no peer) until a device opens [`Self::path`].
     pub(crate) fn new() -> Result<Self, LinkError> {
-        let (master, slave, path) = crate::transport::pty_pair()?;
+        let (master, slave, path) = pty_pair()?;
         // The pair came with the far end open (and set to raw mode, which stays): closed
         // here so that only a peer's opening counts.
         drop(slave);
@@ -168,4 +168,17 @@ impl AsyncWrite for PtyStream {
     fn poll_shutdown(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<io::Result<()>> {
         Pin::new(&mut self.get_mut().master).poll_shutdown(cx)
     }
+}
+
+/// A new pseudo-terminal pair: its master side, its far end (open, in raw mode) and the
+/// far end's path.
+fn pty_pair() -> Result<(SerialStream, SerialStream, PathBuf), LinkError> {
+    let (master, slave) = SerialStream::pair().map_err(LinkError::Pty)?;
+    let path = slave.name().map(PathBuf::from).ok_or_else(|| {
+        LinkError::Pty(tokio_serial::Error::new(
+            tokio_serial::ErrorKind::Unknown,
+            "the pseudo-terminal has no name",
+        ))
+    })?;
+    Ok((master, slave, path))
 }

@@ -3,7 +3,7 @@
 
 use std::io;
 use std::net::SocketAddr;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::pin::Pin;
 use std::sync::{Arc, Mutex, PoisonError};
 use std::task::{Context, Poll};
@@ -11,7 +11,7 @@ use std::time::Duration;
 
 use tokio::io::{AsyncRead, AsyncWrite, ReadBuf};
 use tokio::net::{TcpListener, TcpStream};
-use tokio_serial::{SerialPort, SerialPortBuilderExt, SerialStream};
+use tokio_serial::{SerialPortBuilderExt, SerialStream};
 
 use crate::link::Link;
 use crate::options::{LinkOptions, ReconnectPolicy};
@@ -409,17 +409,4 @@ impl Connector {
     pub fn mark_healthy(&mut self) {
         self.delay = None;
     }
-}
-
-/// A new pseudo-terminal pair: its master side, its far end (open, in raw mode) and the
-/// far end's path.
-pub(crate) fn pty_pair() -> Result<(SerialStream, SerialStream, PathBuf), LinkError> {
-    let (master, slave) = SerialStream::pair().map_err(LinkError::Pty)?;
-    let path = slave.name().map(PathBuf::from).ok_or_else(|| {
-        LinkError::Pty(tokio_serial::Error::new(
-            tokio_serial::ErrorKind::Unknown,
-            "the pseudo-terminal has no name",
-        ))
-    })?;
-    Ok((master, slave, path))
 }
