@@ -287,10 +287,10 @@ impl Driver {
             self.state.send_replace(LinkState::Connected);
             if ever_connected {
                 bump(&self.counters.reconnects);
-                tracing::info!(link = %self.connector.link(), %peer, "reconnected");
+                tracing::info!(%peer, "reconnected");
                 self.emit(Event::Link(LinkEvent::Reconnected { peer }));
             } else {
-                tracing::info!(link = %self.connector.link(), %peer, "connected");
+                tracing::info!(%peer, "connected");
                 self.emit(Event::Link(LinkEvent::Connected { peer }));
             }
             ever_connected = true;
@@ -304,7 +304,7 @@ impl Driver {
                 Served::Failed(reason) => {
                     self.state.send_replace(LinkState::Reconnecting);
                     bump(&self.counters.disconnects);
-                    tracing::warn!(link = %self.connector.link(), %reason, "disconnected");
+                    tracing::warn!(%reason, "disconnected");
                     self.emit(Event::Link(LinkEvent::Disconnected {
                         reason: reason.clone(),
                     }));
@@ -464,8 +464,7 @@ impl Driver {
             .await
             .unwrap_or_else(|_| Err(std::io::ErrorKind::TimedOut.into()))
         {
-            tracing::warn!(link = %self.connector.link(), %error,
-                "closing: queued frames not all written");
+            tracing::warn!(%error, "closing: queued frames not all written");
         }
     }
 
@@ -518,7 +517,7 @@ impl Driver {
         match item {
             CodecItem::Error(error) => {
                 // The event is how it is reported; the log only traces it.
-                tracing::debug!(link = %self.connector.link(), %error, "dropped a corrupt frame");
+                tracing::debug!(%error, "dropped a corrupt frame");
                 self.emit(Event::DecodeError(error));
             }
             CodecItem::Frame(frame) => {
@@ -938,9 +937,9 @@ impl Driver {
         // The transport is closed by now.
         self.state.send_replace(LinkState::Closed);
         if reason == CLOSED_BY_APPLICATION {
-            tracing::debug!(link = %self.connector.link(), %reason, "link closed");
+            tracing::debug!(%reason, "link closed");
         } else {
-            tracing::warn!(link = %self.connector.link(), %reason, "link closed");
+            tracing::warn!(%reason, "link closed");
         }
         self.fail_all(&reason);
         self.ops.close();

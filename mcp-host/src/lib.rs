@@ -171,7 +171,9 @@ pub async fn connect(
         close_requested,
         state_tx,
     );
-    tokio::spawn(driver.run(transport));
+    // Everything the link's task logs carries the link: `link{link=serial:...}: ...`.
+    let span = tracing::info_span!("link", link = %link);
+    tokio::spawn(tracing::Instrument::instrument(driver.run(transport), span));
     let stream = PacketStream {
         events: events_rx,
         counters,

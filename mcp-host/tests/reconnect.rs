@@ -455,3 +455,53 @@ async fn link_state_follows_the_transport() {
     assert_eq!(sender.link_state(), LinkState::Closed);
     assert_eq!(stream.link_state(), LinkState::Closed);
 }
+
+/// Log lines written while the test runs (on its own thread: `#[tokio::test]` runs the
+/// link's task there too).
+#[derive(Clone, Default)]
+struct Captured(std::sync::Arc<std::sync::Mutex<Vec<u8>>>);
+
+impl std::io::Write for Captured {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.0.lock().unwrap().extend_from_slice(buf);
+        Ok(buf.len())
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+#[tokio::test]
+async fn what_a_link_logs_names_the_link() {
+    let logs = Captured::default();
+    let writer = logs.clone();
+    let subscriber = tracing_subscriber::fmt()
+        .with_ansi(false)
+        .with_max_level(tracing::Level::DEBUG)
+        .with_writer(move || writer.clone())
+        .finish();
+    let _guard = tracing::subscriber::set_default(subscriber);
+
+    let (listener, mut stream, _sender, fake) = tcp_radio(options(ApiMode::Escaped, true)).await;
+    let link = stream.info().link.to_string();
+    drop(fake);
+    assert!(matches!(
+        next_link_event(&mut stream).await,
+        LinkEvent::Disconnected { .. }
+    ));
+    let _fake = accept(&listener, ApiMode::Escaped).await;
+    assert!(matches!(
+        next_link_event(&mut stream).await,
+        LinkEvent::Reconnected { .. }
+    ));
+
+    let text = String::from_utf8(logs.0.lock().unwrap().clone()).unwrap();
+    let span = format!("link{{link={link}}}");
+    for message in ["connected", "disconnected", "reconnected"] {
+        assert!(
+            text.lines()
+                .any(|l| l.contains(&span) && l.contains(&format!(": {message}"))),
+            "no {message:?} line in the link's span {span}:\n{text}"
+        );
+    }
+}
