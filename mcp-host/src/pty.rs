@@ -14,15 +14,16 @@
 //! frames (a radio's UART output is lost with nobody listening, and a ground station's
 //! commands must not reach a MAV long after they were reported as failed).
 
-use std::io;
+use std::io::{self, Read};
 use std::path::{Path, PathBuf};
 use std::pin::Pin;
 use std::task::{Context, Poll};
 use std::time::Duration;
 
 use bytes::{Buf, Bytes};
+use serialport::{SerialPort, TTYPort};
 use tokio::io::{AsyncRead, AsyncWrite, ReadBuf};
-use tokio_serial::{SerialPort, SerialStream};
+use tokio_serial::SerialStream;
 
 use crate::transport::LinkError;
 
@@ -35,8 +36,9 @@ const EIO: i32 = 5;
 
 /// A pseudo-terminal pair of which the link holds the master side.
 pub(crate) struct PtyPort {
-    /// The master side; lent to [`PtyStream`] while a peer is connected.
-    master: Option<SerialStream>,
+    /// The master side, not registered with the runtime; lent to [`PtyStream`] while a
+    /// peer is connected.
+    master: Option<TTYPort>,
     /// The far end's path.
     path: PathBuf,
 }
@@ -44,10 +46,18 @@ pub(crate) struct PtyPort {
 impl PtyPort {
     /// A new pair; its far end is closed (no peer) until a device opens [`Self::path`].
     pub(crate) fn new() -> Result<Self, LinkError> {
-        let (master, slave, path) = pty_pair()?;
+        let (mut master, slave) = TTYPort::pair().map_err(LinkError::Pty)?;
+        let path = slave.name().map(PathBuf::from).ok_or_else(|| {
+            LinkError::Pty(tokio_serial::Error::new(
+                tokio_serial::ErrorKind::Unknown,
+                "the pseudo-terminal has no name",
+            ))
+        })?;
         // The pair came with the far end open (and set to raw mode, which stays): closed
         // here so that only a peer's opening counts.
         drop(slave);
+        // A read looks (polls) first and fails at once if there is nothing to read.
+        master.set_timeout(Duration::ZERO).map_err(LinkError::Pty)?;
         Ok(PtyPort {
             master: Some(master),
             path,
@@ -65,30 +75,61 @@ impl PtyPort {
         let mut buf = [0u8; 256];
         loop {
             let master = self.master.as_mut()?;
-            // A read straight from the file (not through the runtime's readiness, which
-            // may not know yet): EIO while nobody has the far end open.
-            match master.try_read(&mut buf) {
-                Err(e) if e.kind() == io::ErrorKind::WouldBlock => return self.lend(Bytes::new()),
+            // Straight from the file: a hang-up (BrokenPipe, or EIO from the read) while
+            // nobody has the far end open, a timeout once someone does and has not
+            // written yet.
+            let read = match master.read(&mut buf) {
+                Err(e) if e.kind() == io::ErrorKind::TimedOut => Some(Bytes::new()),
                 // It wrote already: keep what it wrote.
-                Ok(n) if n > 0 => return self.lend(Bytes::copy_from_slice(&buf[..n])),
-                Ok(_) => {}
-                Err(e) if e.raw_os_error() == Some(EIO) => {}
+                Ok(n) if n > 0 => Some(Bytes::copy_from_slice(&buf[..n])),
+                Ok(_) => None,
+                Err(e) if e.kind() == io::ErrorKind::BrokenPipe => None,
+                Err(e) if e.raw_os_error() == Some(EIO) => None,
                 Err(e) => {
                     tracing::warn!(path = %self.path.display(), error = %e, "pseudo-terminal read failed");
+                    None
+                }
+            };
+            if let Some(read) = read {
+                match self.lend(read) {
+                    Ok(stream) => return Some(stream),
+                    Err(e) => {
+                        tracing::warn!(path = %self.path.display(), error = %e,
+                            "pseudo-terminal: cannot wait for its input");
+                    }
                 }
             }
             tokio::time::sleep(PEER_POLL).await;
         }
     }
 
-    fn lend(&mut self, read: Bytes) -> Option<PtyStream> {
-        self.master.take().map(|master| PtyStream { master, read })
+    /// The master side for a peer that is there now, registered with the runtime
+    /// afresh. (A registration made while nobody had the far end open saw the hang-up,
+    /// and the runtime keeps a hang-up for good: every read would then find the side
+    /// ready, get nothing and try again at once, a core kept busy while the link idles.)
+    /// The registration is dropped with the stream when the peer leaves.
+    fn lend(&mut self, read: Bytes) -> Result<PtyStream, tokio_serial::Error> {
+        let Some(port) = self.master.take() else {
+            return Err(tokio_serial::Error::new(
+                tokio_serial::ErrorKind::Unknown,
+                "the master side is lent already",
+            ));
+        };
+        let registered = port.try_clone_native().and_then(SerialStream::try_from);
+        match registered {
+            Ok(master) => Ok(PtyStream { master, port, read }),
+            Err(e) => {
+                self.master = Some(port);
+                Err(e)
+            }
+        }
     }
 
     /// Takes the master side back after its peer left, and empties what the peer left
     /// unread on the far end.
     pub(crate) fn give_back(&mut self, stream: PtyStream) {
-        self.master = Some(stream.master);
+        // The stream's registration (its own file descriptor) goes with it.
+        self.master = Some(stream.port);
         self.drop_unread();
     }
 
@@ -97,7 +138,6 @@ impl PtyPort {
     /// exclusive open fail if it came at that moment), and reads what is there. Does
     /// nothing if it cannot be opened (a new peer already has it, exclusively).
     fn drop_unread(&self) {
-        use std::io::Read;
         use std::os::unix::fs::OpenOptionsExt;
         let far = std::fs::OpenOptions::new()
             .read(true)
@@ -127,7 +167,10 @@ impl PtyPort {
 /// (returns no bytes) when the peer closes it; bytes read while looking for
 /// the peer come first.
 pub(crate) struct PtyStream {
+    /// The master side, registered while this peer is there.
     master: SerialStream,
+    /// The master side as the port keeps it.
+    port: TTYPort,
     read: Bytes,
 }
 
@@ -170,15 +213,85 @@ impl AsyncWrite for PtyStream {
     }
 }
 
-/// A new pseudo-terminal pair: its master side, its far end (open, in raw mode) and the
-/// far end's path.
-fn pty_pair() -> Result<(SerialStream, SerialStream, PathBuf), LinkError> {
-    let (master, slave) = SerialStream::pair().map_err(LinkError::Pty)?;
-    let path = slave.name().map(PathBuf::from).ok_or_else(|| {
-        LinkError::Pty(tokio_serial::Error::new(
-            tokio_serial::ErrorKind::Unknown,
-            "the pseudo-terminal has no name",
-        ))
-    })?;
-    Ok((master, slave, path))
+#[cfg(test)]
+mod tests {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    use std::task::{Wake, Waker};
+
+    use tokio::io::AsyncReadExt;
+
+    use super::*;
+
+    /// Counts the wake-ups of the task it belongs to.
+    #[derive(Default)]
+    struct Wakes(AtomicUsize);
+
+    impl Wake for Wakes {
+        fn wake(self: Arc<Self>) {
+            self.0.fetch_add(1, Ordering::SeqCst);
+        }
+    }
+
+    /// Returns after the runtime has waited for I/O events at least once (a TCP
+    /// connection on the loopback made and accepted).
+    async fn turn_the_reactor() {
+        let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+        let addr = listener.local_addr().unwrap();
+        let (accepted, connected) =
+            tokio::join!(listener.accept(), tokio::net::TcpStream::connect(addr));
+        accepted.unwrap();
+        connected.unwrap();
+    }
+
+    /// Opens the far end as a device would.
+    fn open_far_end(path: &Path) -> std::fs::File {
+        use std::os::unix::fs::OpenOptionsExt;
+        std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .custom_flags(libc::O_NOCTTY)
+            .open(path)
+            .unwrap()
+    }
+
+    // The clock is paused: the device comes (virtual) time after the port began to
+    // wait for one, so that the runtime has looked at the port without a peer, as it
+    // does when a device comes later.
+    #[tokio::test(start_paused = true)]
+    async fn an_idle_peer_leaves_the_task_asleep() {
+        let mut port = PtyPort::new().unwrap();
+        let path = port.path().to_owned();
+        // Twice: the second peer comes after the first left.
+        for round in 0..2 {
+            let waiting = tokio::spawn(async move {
+                let stream = port.peer().await;
+                (port, stream)
+            });
+            tokio::time::sleep(PEER_POLL * 3).await;
+            let far = open_far_end(&path);
+            let (back, stream) = waiting.await.unwrap();
+            port = back;
+            let mut stream = stream.expect("the master side is there");
+            let wakes = Arc::new(Wakes::default());
+            let waker = Waker::from(wakes.clone());
+            let mut buf = [0u8; 16];
+            let mut read = std::pin::pin!(stream.read(&mut buf));
+            let polled = read.as_mut().poll(&mut Context::from_waker(&waker));
+            assert!(polled.is_pending(), "round {round}: nothing was written");
+            turn_the_reactor().await;
+            assert_eq!(
+                wakes.0.load(Ordering::SeqCst),
+                0,
+                "round {round}: a read with nothing to read woke its task"
+            );
+            // Bytes from the peer arrive, and its leaving ends the stream.
+            std::io::Write::write_all(&mut &far, b"\x7e").unwrap();
+            assert_eq!(read.await.unwrap(), 1);
+            assert_eq!(buf[0], 0x7e);
+            drop(far);
+            assert_eq!(stream.read(&mut buf).await.unwrap(), 0, "round {round}");
+            port.give_back(stream);
+        }
+    }
 }

@@ -221,6 +221,12 @@ async fn main() -> ExitCode {
         // Colours for a terminal only, not for a pipe or a log file.
         .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .init();
+    // What a bug report needs first.
+    tracing::debug!(
+        version = env!("CARGO_PKG_VERSION"),
+        args = ?std::env::args_os().skip(1).collect::<Vec<_>>(),
+        "mcp-gs starting"
+    );
     let result = match cli.command {
         Sub::Monitor(args) => monitor::run(args).await,
         Sub::Send(args) => send::run(args).await,
