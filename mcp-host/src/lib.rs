@@ -13,7 +13,7 @@
 //! |---|---|
 //! | `serial:PATH[:BAUD]` | Serial port `PATH` (e.g. `/dev/ttyUSB0`, `COM3`), `BAUD` default 115200, 8N1, no flow control. Reopened after the device disappears (USB unplugged). |
 //! | `tcp:HOST:PORT` | TCP connection to `HOST:PORT` (a serial-to-TCP bridge, a simulator). Reconnected after the peer goes away. IPv6 hosts in brackets: `tcp:[::1]:9750`. |
-//! | `tcp-listen:ADDR:PORT` | Listens on `ADDR:PORT` and serves one peer at a time: while a peer is connected, further peers wait in the listen backlog; the next is accepted when the current one leaves. Port 0 picks a free port ([`LinkInfo::local_addr`]). |
+//! | `tcp-listen:ADDR:PORT` | Listens on `ADDR:PORT` and serves one peer at a time: a peer that connects while another is served is turned away (its connection closed at once, so nothing it wrote is carried out later); the next is served once the current one leaves. Port 0 picks a free port ([`LinkInfo::local_addr`]). |
 //! | `pty` | Creates a pseudo-terminal pair; the far end's path ([`LinkInfo::pty_path`], e.g. `/dev/pts/7`) is for a simulator or test to open. The path stays valid for the life of the link; the link is up while a device has it open (connected, disconnected and reconnected as simulators come and go), and nothing written for one device reaches the next. |
 //!
 //! [`LinkOptions`] sets the XBee API mode (1, as the deployed MAVs use, or 2), the frame

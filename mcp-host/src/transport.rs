@@ -5,13 +5,16 @@ use std::io;
 use std::net::SocketAddr;
 use std::path::Path;
 use std::pin::Pin;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, PoisonError};
 use std::task::{Context, Poll};
 use std::time::Duration;
 
 use tokio::io::{AsyncRead, AsyncWrite, ReadBuf};
 use tokio::net::{TcpListener, TcpStream};
+use tokio::sync::mpsc;
 use tokio_serial::{SerialPortBuilderExt, SerialStream};
+use tokio_util::task::AbortOnDropHandle;
 
 use crate::link::Link;
 use crate::options::{LinkOptions, ReconnectPolicy};
@@ -104,6 +107,8 @@ enum Inner {
 pub struct Transport {
     inner: Inner,
     peer: String,
+    /// For a peer of a `tcp-listen` link: the link serves it until this is dropped.
+    _serving: Option<Serving>,
 }
 
 impl std::fmt::Debug for Transport {
@@ -201,8 +206,99 @@ impl Drop for Lent {
 enum Kind {
     Serial { path: String, baud: u32 },
     Tcp { host: String, port: u16 },
-    Listen { listener: TcpListener, name: String },
+    Listen(Listen),
     Pty(PtyLink),
+}
+
+/// How long the accepting task waits after a failed accept (such as too many open
+/// files) before it tries again.
+const ACCEPT_RETRY: Duration = Duration::from_millis(100);
+
+/// A `tcp-listen` link's listener. A task accepts all the time, so that a peer that
+/// comes while another is served is turned away at once (its connection closed) rather
+/// than left in the listen backlog, where what it wrote would be read and carried out
+/// long after it gave up.
+struct Listen {
+    /// The next peer, accepted while none was served.
+    next: mpsc::Receiver<(TcpStream, SocketAddr)>,
+    /// Set while a peer is served.
+    serving: Arc<AtomicBool>,
+    local_addr: Option<SocketAddr>,
+    _accepting: AbortOnDropHandle<()>,
+}
+
+impl Listen {
+    fn new(listener: TcpListener, name: String) -> Self {
+        let local_addr = listener.local_addr().ok();
+        let serving = Arc::new(AtomicBool::new(false));
+        let (tx, next) = mpsc::channel(1);
+        let task = tokio::spawn(accept_peers(listener, name, tx, serving.clone()));
+        Listen {
+            next,
+            serving,
+            local_addr,
+            _accepting: AbortOnDropHandle::new(task),
+        }
+    }
+}
+
+/// Accepts peers for a `tcp-listen` link: one waits for the link at most, and none while
+/// the link serves one; the others are closed at once.
+async fn accept_peers(
+    listener: TcpListener,
+    name: String,
+    next: mpsc::Sender<(TcpStream, SocketAddr)>,
+    serving: Arc<AtomicBool>,
+) {
+    let mut failures = 0u64;
+    loop {
+        let accepted = tokio::select! {
+            accepted = listener.accept() => accepted,
+            () = next.closed() => return,
+        };
+        match accepted {
+            Ok((stream, peer)) => {
+                failures = 0;
+                if serving.load(Ordering::SeqCst) {
+                    tracing::info!(%peer, "turned away: the link serves another peer");
+                    continue;
+                }
+                match next.try_send((stream, peer)) {
+                    Ok(()) => {}
+                    Err(mpsc::error::TrySendError::Full(_)) => {
+                        tracing::info!(%peer, "turned away: another peer is about to be served");
+                    }
+                    Err(mpsc::error::TrySendError::Closed(_)) => return,
+                }
+            }
+            Err(error) => {
+                failures += 1;
+                // One warning an outage of the listener, not one each retry.
+                if failures == 1 {
+                    tracing::warn!(addr = %name, %error, "accepting a peer failed (retrying)");
+                } else {
+                    tracing::debug!(addr = %name, %error, "accepting a peer failed");
+                }
+                tokio::time::sleep(ACCEPT_RETRY).await;
+            }
+        }
+    }
+}
+
+/// Marks a `tcp-listen` link as serving a peer until dropped.
+struct Serving(Arc<AtomicBool>);
+
+impl Serving {
+    fn new(flag: &Arc<AtomicBool>) -> Self {
+        flag.store(true, Ordering::SeqCst);
+        Serving(flag.clone())
+    }
+}
+
+impl Drop for Serving {
+    fn drop(&mut self) {
+        self.0.store(false, Ordering::SeqCst);
+    }
 }
 
 /// Opens [`Transport`]s for a [`Link`], and reopens them after a disconnection.
@@ -214,9 +310,10 @@ enum Kind {
 /// - `serial`: every open opens the device path again (after a USB unplug the device
 ///   comes back under the same path, or the retry waits for it).
 /// - `tcp`: every open connects again, within the connect timeout.
-/// - `tcp-listen`: every open accepts the next peer. One peer is served at a time: while
-///   one is connected, further peers are not accepted and wait in the listen backlog; the
-///   next one is accepted when the current one leaves.
+/// - `tcp-listen`: every open takes the next peer. One peer is served at a time: while
+///   one is connected (its transport not dropped), a peer that connects is turned away
+///   (its connection closed at once), so that nothing it writes is carried out later;
+///   it can connect again once the current one has left.
 /// - `pty`: every open waits for a device to open the far end (the path stays valid for
 ///   the life of the connector); the transport ends when the device closes it, and what
 ///   it left unread is dropped, so that nothing written for one device reaches the next.
@@ -258,7 +355,7 @@ impl Connector {
                             addr: name.clone(),
                             source,
                         })?;
-                Kind::Listen { listener, name }
+                Kind::Listen(Listen::new(listener, name))
             }
             Link::Pty => Kind::Pty(PtyLink {
                 port: PtyPort::new()?,
@@ -289,7 +386,7 @@ impl Connector {
     /// For a `tcp-listen` link, the bound address (useful with port 0).
     pub fn local_addr(&self) -> Option<SocketAddr> {
         match &self.kind {
-            Kind::Listen { listener, .. } => listener.local_addr().ok(),
+            Kind::Listen(listen) => listen.local_addr,
             _ => None,
         }
     }
@@ -313,6 +410,7 @@ impl Connector {
                 Ok(Transport {
                     inner: Inner::Serial(stream),
                     peer: path.clone(),
+                    _serving: None,
                 })
             }
             Kind::Tcp { host, port } => {
@@ -335,21 +433,20 @@ impl Connector {
                 Ok(Transport {
                     inner: Inner::Tcp(stream),
                     peer,
+                    _serving: None,
                 })
             }
-            Kind::Listen { listener, name } => {
-                let (stream, peer) =
-                    listener
-                        .accept()
-                        .await
-                        .map_err(|source| LinkError::Accept {
-                            addr: name.clone(),
-                            source,
-                        })?;
+            Kind::Listen(listen) => {
+                // The accepting task lives as long as the connector.
+                let (stream, peer) = listen.next.recv().await.ok_or_else(|| LinkError::Accept {
+                    addr: self.link.to_string(),
+                    source: io::Error::other("the listener stopped"),
+                })?;
                 let _ = stream.set_nodelay(true);
                 Ok(Transport {
                     inner: Inner::Tcp(stream),
                     peer: peer.to_string(),
+                    _serving: Some(Serving::new(&listen.serving)),
                 })
             }
             Kind::Pty(pty) => {
@@ -368,6 +465,7 @@ impl Connector {
                         back: pty.back.clone(),
                     }),
                     peer: pty.port.path().display().to_string(),
+                    _serving: None,
                 })
             }
         }

@@ -456,6 +456,54 @@ async fn link_state_follows_the_transport() {
     assert_eq!(stream.link_state(), LinkState::Closed);
 }
 
+#[tokio::test]
+async fn tcp_listen_turns_away_a_peer_while_it_serves_one() {
+    let link = "tcp-listen:127.0.0.1:0".parse().unwrap();
+    let (mut stream, _sender) = mcp_host::connect(&link, options(ApiMode::Unescaped, true))
+        .await
+        .unwrap();
+    let addr = stream.info().local_addr.unwrap();
+    let mut first = FakeXBee::new(TcpStream::connect(addr).await.unwrap(), ApiMode::Unescaped);
+    assert!(matches!(
+        next_link_event(&mut stream).await,
+        LinkEvent::Connected { .. }
+    ));
+
+    // A second peer writes a frame (as a ground station sending a command would) and is
+    // closed at once rather than left waiting in the backlog.
+    let mut second = TcpStream::connect(addr).await.unwrap();
+    let frame = first.encode(&rx(MAV, &time_report(20)));
+    tokio::io::AsyncWriteExt::write_all(&mut second, &frame)
+        .await
+        .unwrap();
+    let mut rest = Vec::new();
+    let read = tokio::time::timeout(
+        GUARD,
+        tokio::io::AsyncReadExt::read_to_end(&mut second, &mut rest),
+    )
+    .await
+    .expect("the second peer was not turned away");
+    // Closed: an end of stream, or a reset if its frame arrived before the close.
+    assert!(read.is_err() || rest.is_empty(), "{read:?} {rest:?}");
+
+    // The first is served as before; after it leaves, the next peer is, and the turned
+    // away peer's frame never shows up.
+    first.receive(MAV, &time_report(21)).await;
+    expect_time_report(&mut stream, 21).await;
+    drop(first);
+    assert!(matches!(
+        next_link_event(&mut stream).await,
+        LinkEvent::Disconnected { .. }
+    ));
+    let mut third = FakeXBee::new(TcpStream::connect(addr).await.unwrap(), ApiMode::Unescaped);
+    assert!(matches!(
+        next_link_event(&mut stream).await,
+        LinkEvent::Reconnected { .. }
+    ));
+    third.receive(MAV, &time_report(22)).await;
+    expect_time_report(&mut stream, 22).await;
+}
+
 /// Log lines written while the test runs (on its own thread: `#[tokio::test]` runs the
 /// link's task there too).
 #[derive(Clone, Default)]

@@ -162,10 +162,15 @@ async fn tcp_listen_serves_one_peer_at_a_time() {
     let mut transport = connector.open().await.unwrap();
     assert_eq!(transport.peer(), first.local_addr().unwrap().to_string());
 
-    // A second peer connects while the first is served: it waits, and what it sends is
-    // not mixed into the first peer's stream.
+    // A second peer connects while the first is served: it is turned away (closed at
+    // once), and what it sends is not mixed into the first peer's stream.
     let mut second = TcpStream::connect(addr).await.unwrap();
-    second.write_all(b"2nd").await.unwrap();
+    let _ = second.write_all(b"2nd").await;
+    let mut rest = Vec::new();
+    let closed = timeout(GUARD, second.read_to_end(&mut rest))
+        .await
+        .expect("the second peer was not turned away");
+    assert!(closed.is_err() || rest.is_empty(), "{closed:?} {rest:?}");
     first.write_all(b"1st").await.unwrap();
     assert_eq!(read_exact_n(&mut transport, 3).await, b"1st");
 
@@ -176,16 +181,19 @@ async fn tcp_listen_serves_one_peer_at_a_time() {
         .unwrap()
         .unwrap();
     assert_eq!(n, 0);
+    drop(transport);
 
-    // The next open accepts the waiting peer.
+    // Once the first has left, the next peer is served.
+    let mut third = TcpStream::connect(addr).await.unwrap();
     let mut transport = timeout(GUARD, connector.reopen(&options.reconnect))
         .await
         .unwrap()
         .unwrap();
-    assert_eq!(transport.peer(), second.local_addr().unwrap().to_string());
-    assert_eq!(read_exact_n(&mut transport, 3).await, b"2nd");
+    assert_eq!(transport.peer(), third.local_addr().unwrap().to_string());
+    third.write_all(b"3rd").await.unwrap();
+    assert_eq!(read_exact_n(&mut transport, 3).await, b"3rd");
     transport.write_all(b"ack").await.unwrap();
-    assert_eq!(read_exact_n(&mut second, 3).await, b"ack");
+    assert_eq!(read_exact_n(&mut third, 3).await, b"ack");
 }
 
 #[tokio::test]
