@@ -304,7 +304,8 @@ impl Driver {
                 Served::Failed(reason) => {
                     self.state.send_replace(LinkState::Reconnecting);
                     bump(&self.counters.disconnects);
-                    tracing::warn!(%reason, "disconnected");
+                    // Reported by `LinkEvent::Disconnected`; the log only traces it.
+                    tracing::info!(%reason, "disconnected");
                     self.emit(Event::Link(LinkEvent::Disconnected {
                         reason: reason.clone(),
                     }));
@@ -567,7 +568,9 @@ impl Driver {
 
     fn malformed(&mut self, frame: OwnedFrame, error: &dyn fmt::Display) {
         bump(&self.counters.malformed_frames);
-        tracing::warn!(?frame, %error, "malformed frame");
+        // Reported by the event and counted: a peer that sends many must not flood the
+        // log.
+        tracing::debug!(?frame, %error, "malformed frame");
         self.emit(Event::Frame(frame));
     }
 
@@ -936,10 +939,12 @@ impl Driver {
     async fn close(&mut self, reason: String) {
         // The transport is closed by now.
         self.state.send_replace(LinkState::Closed);
+        // The stream ends with `LinkEvent::Closed`, which says why: the log only traces
+        // it.
         if reason == CLOSED_BY_APPLICATION {
             tracing::debug!(%reason, "link closed");
         } else {
-            tracing::warn!(%reason, "link closed");
+            tracing::info!(%reason, "link closed");
         }
         self.fail_all(&reason);
         self.ops.close();

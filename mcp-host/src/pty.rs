@@ -73,6 +73,16 @@ impl PtyPort {
     /// it; `None` if the master side is gone for good.
     pub(crate) async fn peer(&mut self) -> Option<PtyStream> {
         let mut buf = [0u8; 256];
+        // An error that repeats is logged as a warning once, then at debug level.
+        let mut failures = 0u32;
+        let mut failed = |path: &Path, error: &dyn std::fmt::Display, what: &str| {
+            failures = failures.saturating_add(1);
+            if failures == 1 {
+                tracing::warn!(path = %path.display(), %error, "pseudo-terminal: {what}");
+            } else {
+                tracing::debug!(path = %path.display(), %error, "pseudo-terminal: {what}");
+            }
+        };
         loop {
             let master = self.master.as_mut()?;
             // Straight from the file: a hang-up (BrokenPipe, or EIO from the read) while
@@ -86,17 +96,14 @@ impl PtyPort {
                 Err(e) if e.kind() == io::ErrorKind::BrokenPipe => None,
                 Err(e) if e.raw_os_error() == Some(EIO) => None,
                 Err(e) => {
-                    tracing::warn!(path = %self.path.display(), error = %e, "pseudo-terminal read failed");
+                    failed(&self.path, &e, "read failed");
                     None
                 }
             };
             if let Some(read) = read {
                 match self.lend(read) {
                     Ok(stream) => return Some(stream),
-                    Err(e) => {
-                        tracing::warn!(path = %self.path.display(), error = %e,
-                            "pseudo-terminal: cannot wait for its input");
-                    }
+                    Err(e) => failed(&self.path, &e, "cannot wait for its input"),
                 }
             }
             tokio::time::sleep(PEER_POLL).await;

@@ -553,3 +553,38 @@ async fn what_a_link_logs_names_the_link() {
         );
     }
 }
+
+#[tokio::test]
+async fn malformed_frames_from_a_peer_are_not_warnings() {
+    let logs = Captured::default();
+    let writer = logs.clone();
+    let subscriber = tracing_subscriber::fmt()
+        .with_ansi(false)
+        .with_max_level(tracing::Level::WARN)
+        .with_writer(move || writer.clone())
+        .finish();
+    let _guard = tracing::subscriber::set_default(subscriber);
+
+    let (_listener, mut stream, _sender, mut fake) =
+        tcp_radio(options(ApiMode::Escaped, true)).await;
+    // A Receive Packet of one byte (its fields missing), a hundred times.
+    for _ in 0..100 {
+        fake.write_raw(&[0x7E, 0x00, 0x01, 0x90, 0x6F]).await;
+    }
+    fake.receive(MAV, &time_report(30)).await;
+    let mut malformed = 0;
+    loop {
+        match next_event(&mut stream).await {
+            Event::Frame(frame) if frame.frame_type() == 0x90 => malformed += 1,
+            Event::Packet(rx) => {
+                assert_eq!(&rx.payload[..], &time_report(30)[..]);
+                break;
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+    assert_eq!(malformed, 100);
+    assert_eq!(stream.stats().malformed_frames, 100);
+    let text = String::from_utf8(logs.0.lock().unwrap().clone()).unwrap();
+    assert!(text.is_empty(), "{text}");
+}
