@@ -128,6 +128,7 @@ macro_rules! id_enum {
 
         impl $name {
             /// The value of a byte (`From<u8>`, in a `const` context).
+            #[inline]
             pub const fn from_u8(value: u8) -> Self {
                 match value {
                     $( $value => $name::$variant, )*
@@ -136,6 +137,7 @@ macro_rules! id_enum {
             }
 
             /// The byte (`From<Self> for u8`, in a `const` context).
+            #[inline]
             pub const fn to_u8(self) -> u8 {
                 match self {
                     $( $name::$variant => $value, )*
@@ -145,12 +147,14 @@ macro_rules! id_enum {
         }
 
         impl From<u8> for $name {
+            #[inline]
             fn from(value: u8) -> Self {
                 Self::from_u8(value)
             }
         }
 
         impl From<$name> for u8 {
+            #[inline]
             fn from(value: $name) -> u8 {
                 value.to_u8()
             }
