@@ -9,7 +9,7 @@ use crate::unescape::special_in_word;
 #[cfg(target_pointer_width = "64")]
 use crate::unescape::special_mask;
 
-use crate::unescape::{is_plain, unescape, unescape_byte};
+use crate::unescape::{STEP, is_plain, unescape, unescape_byte};
 use crate::wire::{ESCAPE, ESCAPE_XOR, START_DELIMITER, checksum_of_sum, needs_escape, sum};
 use crate::{ApiMode, DecodeError, RawFrame, Stats};
 
@@ -531,16 +531,28 @@ impl<const N: usize> Decoder<N> {
             if self.state == State::Hunt && !self.escaped {
                 // Mode 2's capacity.
                 let limit = N - self.cut;
-                while let Some((&START_DELIMITER, body)) = input.split_first() {
-                    // A frame is not whole in fewer bytes than its length field asks for
-                    // (read raw: an escape there only makes the frame longer, but for
-                    // lengths from 0x1100 on, which take the byte path).
-                    if !matches!(body.first_chunk::<2>(),
-                        Some(&[hi, lo]) if usize::from(u16::from_be_bytes([hi, lo])) + 2 < body.len())
-                    {
-                        break;
-                    }
-                    let Some((after, outcome)) = self.whole2(body, limit) else {
+                // Frames with a plain length field that leave the step loop room past
+                // their data in the buffer: the length checked once, here.
+                let fast = limit.min(N.saturating_sub(STEP));
+                while let Some((&[START_DELIMITER, hi, lo], rest)) = input.split_first_chunk::<3>()
+                {
+                    let len = usize::from(u16::from_be_bytes([hi, lo]));
+                    let whole = if is_plain(hi) && is_plain(lo) {
+                        // Not whole, or not for the buffer: byte by byte.
+                        if len.wrapping_sub(1) >= fast || rest.len() <= len {
+                            break;
+                        }
+                        self.whole2_data(rest, len)
+                    } else {
+                        // A frame is not whole in fewer bytes than its length field asks
+                        // for (read raw: an escape there only makes the frame longer, but
+                        // for lengths from 0x1100 on, which take the byte path).
+                        if len >= rest.len() {
+                            break;
+                        }
+                        self.whole2(input.get(1..).unwrap_or_default(), limit)
+                    };
+                    let Some((after, outcome)) = whole else {
                         break;
                     };
                     input = after;
@@ -980,6 +992,13 @@ impl<const N: usize> Decoder<N> {
         if len == 0 || len > limit || rest.len() <= len {
             return None;
         }
+        self.whole2_data(rest, len)
+    }
+
+    /// [`whole2`](Self::whole2) after the length field: `rest` holds the frame data
+    /// (`len` bytes, `0 < len <= N`) and more; the checksum byte is read after it.
+    #[inline(always)]
+    fn whole2_data<'a>(&mut self, rest: &'a [u8], len: usize) -> Option<(&'a [u8], Outcome)> {
         let (mut i, sum) = unescape(rest, &mut self.buf, len)?;
         // The checksum byte, usually plain; what follows it is handed back as a slice,
         // so that the caller goes on without a bounds test of its own.
