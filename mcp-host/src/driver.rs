@@ -480,14 +480,17 @@ impl Driver {
 
     /// When the partial frame the codec holds is to be given up.
     fn stale_at(&self, codec: &XBeeCodec) -> Option<Instant> {
-        Some(codec.partial_since()? + self.partial_frame_timeout()?)
+        Some(crate::options::later(
+            codec.partial_since()?,
+            self.partial_frame_timeout()?,
+        ))
     }
 
     /// When to look at the partial frame next: when it goes stale or, with none there, a
     /// timeout from now (the bytes of one come in without waking the loop: no item).
     fn stale_check_at(&self, codec: &XBeeCodec) -> Option<Instant> {
         let since = codec.partial_since().unwrap_or_else(Instant::now);
-        Some(since + self.partial_frame_timeout()?)
+        Some(crate::options::later(since, self.partial_frame_timeout()?))
     }
 
     /// Queues `event` for the stream. When the queue is full, a link event is held back

@@ -9,6 +9,16 @@ pub const DEFAULT_PARTIAL_FRAME_TIMEOUT: Duration = Duration::from_secs(1);
 /// Default timeout for opening a TCP connection.
 pub const DEFAULT_CONNECT_TIMEOUT: Duration = Duration::from_secs(5);
 
+/// `start + d`, or about thirty years after `start` where that would overflow: a
+/// timeout of `Duration::MAX` means "never", not a panic.
+pub(crate) fn later(start: tokio::time::Instant, d: Duration) -> tokio::time::Instant {
+    const FAR: Duration = Duration::from_secs(30 * 365 * 86_400);
+    start
+        .checked_add(d.min(FAR))
+        .or_else(|| start.checked_add(Duration::from_secs(86_400)))
+        .unwrap_or(start)
+}
+
 /// How a link reconnects after its transport goes away (serial device unplugged, TCP peer
 /// gone).
 ///

@@ -170,7 +170,7 @@ impl CommandSender {
             });
         }
         let timeout = options.timeout.unwrap_or(self.default_timeout);
-        let deadline = Instant::now() + timeout;
+        let deadline = crate::options::later(Instant::now(), timeout);
         let (reply, answer) = oneshot::channel();
         let op = Op::Transmit {
             to,
@@ -211,7 +211,7 @@ impl CommandSender {
         let command: mcp_core::Command<&[u8]> = mcp_core::Command::StatusRequest(request);
         let payload = encode_command(&command)?;
         let timeout = timeout.unwrap_or(self.default_timeout);
-        let deadline = Instant::now() + timeout;
+        let deadline = crate::options::later(Instant::now(), timeout);
         let (reply, answer) = oneshot::channel();
         let key = ReportKey::of_request(&request);
         let op = Op::Request {
@@ -267,7 +267,7 @@ impl CommandSender {
             return Err(SendError::NoFrameId(frame_type));
         }
         let timeout = timeout.unwrap_or(self.default_timeout);
-        let deadline = Instant::now() + timeout;
+        let deadline = crate::options::later(Instant::now(), timeout);
         let (reply, answer) = oneshot::channel();
         let op = Op::Frame {
             data: Bytes::copy_from_slice(frame_data),
@@ -285,7 +285,7 @@ impl CommandSender {
             data: Bytes::copy_from_slice(frame_data),
             reply,
         };
-        let deadline = Instant::now() + self.default_timeout;
+        let deadline = crate::options::later(Instant::now(), self.default_timeout);
         self.call(op, answer, deadline, self.default_timeout).await
     }
 

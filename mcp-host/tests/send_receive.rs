@@ -676,3 +676,36 @@ async fn a_trajectory_goes_out_as_one_trajectory_set_command() {
         })
     );
 }
+
+#[tokio::test]
+async fn timeouts_of_any_length_mean_a_long_wait_not_a_panic() {
+    let (stream, sender, mut fake) = pty_link_with(LinkOptions {
+        api_mode: ApiMode::Unescaped,
+        send_timeout: Duration::MAX,
+        partial_frame_timeout: Some(Duration::MAX),
+        ..LinkOptions::default()
+    })
+    .await;
+    let send = tokio::spawn({
+        let sender = sender.clone();
+        async move { sender.send(MAV, &Command::time(5)).await }
+    });
+    let tx = fake.next_tx().await;
+    fake.status(tx.frame_id, DeliveryStatus::Success).await;
+    let report = send.await.unwrap().unwrap();
+    assert!(
+        matches!(report, DeliveryReport::Delivered { frame_id, .. } if frame_id == tx.frame_id),
+        "{report:?}"
+    );
+    // A partial frame starts the (never ending) wait for its rest; the link's task
+    // goes on: it still writes what is sent.
+    fake.write_raw(&[0x7E, 0x00]).await;
+    let send = tokio::spawn({
+        let sender = sender.clone();
+        async move { sender.send(MAV, &Command::time(6)).await }
+    });
+    let tx = fake.next_tx().await;
+    assert_eq!(tx.data, mcp(&Packet::<&[u8]>::Command(Command::time(6))));
+    assert_eq!(stream.link_state(), mcp_host::LinkState::Connected);
+    send.abort();
+}

@@ -255,7 +255,7 @@ async fn serve_until_end(
             () = sleep_until(next_at.unwrap_or_else(Instant::now)), if next_at.is_some() => {
                 let Some(item) = pending.pop_front() else { continue };
                 if let (Some(window), None) = (item.reorder, &held) {
-                    held = Some((item.bytes, Instant::now() + window));
+                    held = Some((item.bytes, crate::options::later(Instant::now(), window)));
                     continue;
                 }
                 if let Err(e) = write(&mut writer, &item.bytes).await {
