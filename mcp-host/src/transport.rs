@@ -5,11 +5,11 @@ use std::io;
 use std::net::SocketAddr;
 use std::path::Path;
 use std::pin::Pin;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, PoisonError};
 use std::task::{Context, Poll};
 use std::time::Duration;
 
+use bytes::{Bytes, BytesMut};
 use tokio::io::{AsyncRead, AsyncWrite, ReadBuf};
 use tokio::net::{TcpListener, TcpStream};
 use tokio::sync::mpsc;
@@ -98,6 +98,8 @@ impl LinkError {
 
 enum Inner {
     Tcp(TcpStream),
+    /// A `tcp-listen` peer, with what it wrote while it waited for its turn.
+    Accepted(TcpStream, Bytes),
     Serial(SerialStream),
     Pty(Lent),
 }
@@ -107,8 +109,6 @@ enum Inner {
 pub struct Transport {
     inner: Inner,
     peer: String,
-    /// For a peer of a `tcp-listen` link: the link serves it until this is dropped.
-    _serving: Option<Serving>,
 }
 
 impl std::fmt::Debug for Transport {
@@ -135,6 +135,15 @@ impl AsyncRead for Transport {
     ) -> Poll<io::Result<()>> {
         match &mut self.get_mut().inner {
             Inner::Tcp(s) => Pin::new(s).poll_read(cx, buf),
+            Inner::Accepted(s, early) => {
+                if early.is_empty() {
+                    Pin::new(s).poll_read(cx, buf)
+                } else {
+                    let n = early.len().min(buf.remaining());
+                    buf.put_slice(&early.split_to(n));
+                    Poll::Ready(Ok(()))
+                }
+            }
             Inner::Serial(s) => Pin::new(s).poll_read(cx, buf),
             Inner::Pty(s) => s.stream()?.poll_read(cx, buf),
         }
@@ -148,7 +157,7 @@ impl AsyncWrite for Transport {
         buf: &[u8],
     ) -> Poll<io::Result<usize>> {
         match &mut self.get_mut().inner {
-            Inner::Tcp(s) => Pin::new(s).poll_write(cx, buf),
+            Inner::Tcp(s) | Inner::Accepted(s, _) => Pin::new(s).poll_write(cx, buf),
             Inner::Serial(s) => Pin::new(s).poll_write(cx, buf),
             Inner::Pty(s) => s.stream()?.poll_write(cx, buf),
         }
@@ -156,7 +165,7 @@ impl AsyncWrite for Transport {
 
     fn poll_flush(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<io::Result<()>> {
         match &mut self.get_mut().inner {
-            Inner::Tcp(s) => Pin::new(s).poll_flush(cx),
+            Inner::Tcp(s) | Inner::Accepted(s, _) => Pin::new(s).poll_flush(cx),
             Inner::Serial(s) => Pin::new(s).poll_flush(cx),
             Inner::Pty(s) => s.stream()?.poll_flush(cx),
         }
@@ -164,7 +173,7 @@ impl AsyncWrite for Transport {
 
     fn poll_shutdown(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<io::Result<()>> {
         match &mut self.get_mut().inner {
-            Inner::Tcp(s) => Pin::new(s).poll_shutdown(cx),
+            Inner::Tcp(s) | Inner::Accepted(s, _) => Pin::new(s).poll_shutdown(cx),
             Inner::Serial(s) => Pin::new(s).poll_shutdown(cx),
             Inner::Pty(s) => s.stream()?.poll_shutdown(cx),
         }
@@ -214,15 +223,15 @@ enum Kind {
 /// files) before it tries again.
 const ACCEPT_RETRY: Duration = Duration::from_millis(100);
 
-/// A `tcp-listen` link's listener. A task accepts all the time, so that a peer that
-/// comes while another is served is turned away at once (its connection closed) rather
-/// than left in the listen backlog, where what it wrote would be read and carried out
-/// long after it gave up.
+/// A `tcp-listen` link's listener. A task accepts all the time: one peer may wait for
+/// its turn while another is served (a ground station that reconnects at once, before
+/// the link has seen its first connection end, is served next); any more are turned
+/// away at once (their connection closed). A waiting peer that leaves before its turn
+/// is dropped with what it wrote, so that a command whose sender gave up waiting is
+/// never carried out later.
 struct Listen {
-    /// The next peer, accepted while none was served.
+    /// The peer waiting for its turn.
     next: mpsc::Receiver<(TcpStream, SocketAddr)>,
-    /// Set while a peer is served.
-    serving: Arc<AtomicBool>,
     local_addr: Option<SocketAddr>,
     _accepting: AbortOnDropHandle<()>,
 }
@@ -230,25 +239,55 @@ struct Listen {
 impl Listen {
     fn new(listener: TcpListener, name: String) -> Self {
         let local_addr = listener.local_addr().ok();
-        let serving = Arc::new(AtomicBool::new(false));
         let (tx, next) = mpsc::channel(1);
-        let task = tokio::spawn(accept_peers(listener, name, tx, serving.clone()));
+        let task = tokio::spawn(accept_peers(listener, name, tx));
         Listen {
             next,
-            serving,
             local_addr,
             _accepting: AbortOnDropHandle::new(task),
         }
     }
+
+    /// The next peer that is still there, and what it wrote while it waited.
+    async fn next_peer(&mut self) -> Option<(TcpStream, SocketAddr, Bytes)> {
+        loop {
+            let (stream, peer) = self.next.recv().await?;
+            match waited(&stream) {
+                Some(early) => return Some((stream, peer, early)),
+                None => {
+                    tracing::info!(%peer, "a waiting peer left before its turn: what it wrote is dropped");
+                }
+            }
+        }
+    }
 }
 
-/// Accepts peers for a `tcp-listen` link: one waits for the link at most, and none while
-/// the link serves one; the others are closed at once.
+/// What a peer wrote while it waited, or `None` if it has closed its side (or its
+/// connection failed) meanwhile. At most [`WAITED_MAX`] bytes are read ahead.
+fn waited(stream: &TcpStream) -> Option<Bytes> {
+    let mut early = BytesMut::new();
+    while early.len() < WAITED_MAX {
+        early.reserve(4096);
+        match stream.try_read_buf(&mut early) {
+            Ok(0) => return None,
+            Ok(_) => {}
+            Err(e) if e.kind() == io::ErrorKind::WouldBlock => break,
+            Err(_) => return None,
+        }
+    }
+    Some(early.freeze())
+}
+
+/// How much of what a waiting peer wrote is read ahead to see whether it is still there
+/// (the rest is read as usual).
+const WAITED_MAX: usize = 64 * 1024;
+
+/// Accepts peers for a `tcp-listen` link: one waits for the link at most; the others
+/// are closed at once.
 async fn accept_peers(
     listener: TcpListener,
     name: String,
     next: mpsc::Sender<(TcpStream, SocketAddr)>,
-    serving: Arc<AtomicBool>,
 ) {
     let mut failures = 0u64;
     loop {
@@ -259,14 +298,10 @@ async fn accept_peers(
         match accepted {
             Ok((stream, peer)) => {
                 failures = 0;
-                if serving.load(Ordering::SeqCst) {
-                    tracing::info!(%peer, "turned away: the link serves another peer");
-                    continue;
-                }
                 match next.try_send((stream, peer)) {
                     Ok(()) => {}
                     Err(mpsc::error::TrySendError::Full(_)) => {
-                        tracing::info!(%peer, "turned away: another peer is about to be served");
+                        tracing::info!(%peer, "turned away: the link serves another peer, and one more waits");
                     }
                     Err(mpsc::error::TrySendError::Closed(_)) => return,
                 }
@@ -285,22 +320,6 @@ async fn accept_peers(
     }
 }
 
-/// Marks a `tcp-listen` link as serving a peer until dropped.
-struct Serving(Arc<AtomicBool>);
-
-impl Serving {
-    fn new(flag: &Arc<AtomicBool>) -> Self {
-        flag.store(true, Ordering::SeqCst);
-        Serving(flag.clone())
-    }
-}
-
-impl Drop for Serving {
-    fn drop(&mut self) {
-        self.0.store(false, Ordering::SeqCst);
-    }
-}
-
 /// Opens [`Transport`]s for a [`Link`], and reopens them after a disconnection.
 ///
 /// Creating the connector binds a `tcp-listen` socket and creates the `pty` pair (so the
@@ -310,10 +329,10 @@ impl Drop for Serving {
 /// - `serial`: every open opens the device path again (after a USB unplug the device
 ///   comes back under the same path, or the retry waits for it).
 /// - `tcp`: every open connects again, within the connect timeout.
-/// - `tcp-listen`: every open takes the next peer. One peer is served at a time: while
-///   one is connected (its transport not dropped), a peer that connects is turned away
-///   (its connection closed at once), so that nothing it writes is carried out later;
-///   it can connect again once the current one has left.
+/// - `tcp-listen`: every open takes the next peer. One peer is served at a time; while
+///   one is, the next may wait for its turn and any more are turned away (their
+///   connection closed at once). A waiting peer that leaves before its turn is dropped
+///   with what it wrote, so that nothing it wrote is carried out after it gave up.
 /// - `pty`: every open waits for a device to open the far end (the path stays valid for
 ///   the life of the connector); the transport ends when the device closes it, and what
 ///   it left unread is dropped, so that nothing written for one device reaches the next.
@@ -410,7 +429,6 @@ impl Connector {
                 Ok(Transport {
                     inner: Inner::Serial(stream),
                     peer: path.clone(),
-                    _serving: None,
                 })
             }
             Kind::Tcp { host, port } => {
@@ -433,20 +451,19 @@ impl Connector {
                 Ok(Transport {
                     inner: Inner::Tcp(stream),
                     peer,
-                    _serving: None,
                 })
             }
             Kind::Listen(listen) => {
                 // The accepting task lives as long as the connector.
-                let (stream, peer) = listen.next.recv().await.ok_or_else(|| LinkError::Accept {
-                    addr: self.link.to_string(),
-                    source: io::Error::other("the listener stopped"),
-                })?;
+                let (stream, peer, early) =
+                    listen.next_peer().await.ok_or_else(|| LinkError::Accept {
+                        addr: self.link.to_string(),
+                        source: io::Error::other("the listener stopped"),
+                    })?;
                 let _ = stream.set_nodelay(true);
                 Ok(Transport {
-                    inner: Inner::Tcp(stream),
+                    inner: Inner::Accepted(stream, early),
                     peer: peer.to_string(),
-                    _serving: Some(Serving::new(&listen.serving)),
                 })
             }
             Kind::Pty(pty) => {
@@ -465,7 +482,6 @@ impl Connector {
                         back: pty.back.clone(),
                     }),
                     peer: pty.port.path().display().to_string(),
-                    _serving: None,
                 })
             }
         }

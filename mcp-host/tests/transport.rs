@@ -162,14 +162,17 @@ async fn tcp_listen_serves_one_peer_at_a_time() {
     let mut transport = connector.open().await.unwrap();
     assert_eq!(transport.peer(), first.local_addr().unwrap().to_string());
 
-    // A second peer connects while the first is served: it is turned away (closed at
-    // once), and what it sends is not mixed into the first peer's stream.
+    // A second peer connects while the first is served: it waits for its turn, and
+    // what it sends is not mixed into the first peer's stream. A third is turned away
+    // (closed at once).
     let mut second = TcpStream::connect(addr).await.unwrap();
-    let _ = second.write_all(b"2nd").await;
+    second.write_all(b"2nd").await.unwrap();
+    let mut third = TcpStream::connect(addr).await.unwrap();
+    let _ = third.write_all(b"3rd").await;
     let mut rest = Vec::new();
-    let closed = timeout(GUARD, second.read_to_end(&mut rest))
+    let closed = timeout(GUARD, third.read_to_end(&mut rest))
         .await
-        .expect("the second peer was not turned away");
+        .expect("the third peer was not turned away");
     assert!(closed.is_err() || rest.is_empty(), "{closed:?} {rest:?}");
     first.write_all(b"1st").await.unwrap();
     assert_eq!(read_exact_n(&mut transport, 3).await, b"1st");
@@ -181,19 +184,46 @@ async fn tcp_listen_serves_one_peer_at_a_time() {
         .unwrap()
         .unwrap();
     assert_eq!(n, 0);
-    drop(transport);
 
-    // Once the first has left, the next peer is served.
-    let mut third = TcpStream::connect(addr).await.unwrap();
+    // The next open takes the waiting peer, with what it wrote while it waited.
     let mut transport = timeout(GUARD, connector.reopen(&options.reconnect))
         .await
         .unwrap()
         .unwrap();
-    assert_eq!(transport.peer(), third.local_addr().unwrap().to_string());
-    third.write_all(b"3rd").await.unwrap();
-    assert_eq!(read_exact_n(&mut transport, 3).await, b"3rd");
+    assert_eq!(transport.peer(), second.local_addr().unwrap().to_string());
+    assert_eq!(read_exact_n(&mut transport, 3).await, b"2nd");
     transport.write_all(b"ack").await.unwrap();
-    assert_eq!(read_exact_n(&mut third, 3).await, b"ack");
+    assert_eq!(read_exact_n(&mut second, 3).await, b"ack");
+
+    // A peer that waits, writes and leaves before its turn is dropped with what it
+    // wrote: the next open takes the peer after it.
+    let mut gone = TcpStream::connect(addr).await.unwrap();
+    gone.write_all(b"old").await.unwrap();
+    gone.shutdown().await.unwrap();
+    drop(second);
+    assert_eq!(
+        timeout(GUARD, transport.read(&mut buf))
+            .await
+            .unwrap()
+            .unwrap(),
+        0
+    );
+    drop(transport);
+    let reopened = connector.reopen(&options.reconnect);
+    tokio::pin!(reopened);
+    // The open drops `gone`, which then reads the end of its stream; only then is the
+    // waiting place free for the next peer.
+    tokio::select! {
+        t = &mut reopened => panic!("served a peer that had left: {:?}", t.map(|t| t.peer().to_owned())),
+        n = gone.read(&mut buf) => assert_eq!(n.unwrap(), 0),
+    }
+    let mut last = TcpStream::connect(addr).await.unwrap();
+    last.write_all(b"new").await.unwrap();
+    let mut transport = timeout(GUARD, reopened).await.unwrap().unwrap();
+    assert_eq!(transport.peer(), last.local_addr().unwrap().to_string());
+    assert_eq!(read_exact_n(&mut transport, 3).await, b"new");
+    transport.write_all(b"ack").await.unwrap();
+    assert_eq!(read_exact_n(&mut last, 3).await, b"ack");
 }
 
 #[tokio::test]
