@@ -30,7 +30,9 @@ use crate::transport::{Connector, Transport};
 const HIGH_WATER: usize = 16 * 1024;
 
 /// Requests that need a frame id, taken while all 255 are in flight, wait in the order
-/// they came, at most this many; beyond that no request is taken until ids free up.
+/// they came, at most this many; beyond that no such request is taken until ids free
+/// up. Requests that need no id come by a queue of their own
+/// ([`crate::CommandSender`] picks it), so they still go out meanwhile.
 const PARKED_MAX: usize = 64;
 
 /// A request from a [`crate::CommandSender`] to the background task.
@@ -66,7 +68,7 @@ pub(crate) enum Op {
 
 impl Op {
     /// Whether the request needs a frame id of its own (it awaits a status or response).
-    fn needs_id(&self) -> bool {
+    pub(crate) fn needs_id(&self) -> bool {
         match self {
             Op::Transmit { with_status, .. } => *with_status,
             Op::Request { .. } | Op::Frame { .. } => true,
@@ -210,6 +212,8 @@ pub(crate) struct Driver {
     pub(crate) connector: Connector,
     pub(crate) options: LinkOptions,
     pub(crate) ops: mpsc::Receiver<Op>,
+    /// Requests that need no frame id (raw writes, transmits without status).
+    pub(crate) writes: mpsc::Receiver<Op>,
     pub(crate) events: mpsc::Sender<Event>,
     pub(crate) counters: Arc<Counters>,
     /// Notified by [`CommandSender::close`](crate::CommandSender::close).
@@ -217,6 +221,7 @@ pub(crate) struct Driver {
     /// The link's state, for the handles to read at any time.
     state: watch::Sender<LinkState>,
     ops_open: bool,
+    writes_open: bool,
     ids: IdTable<Pending>,
     /// Requests that need a frame id, taken while none was free.
     parked: VecDeque<Op>,
@@ -237,10 +242,16 @@ const PENDING_LINKS_MAX: usize = 64;
 const CLOSE_FLUSH: Duration = Duration::from_secs(1);
 
 impl Driver {
+    /// Whether a [`crate::CommandSender`] is left to send requests.
+    fn senders_open(&self) -> bool {
+        self.ops_open || self.writes_open
+    }
+
     pub(crate) fn new(
         connector: Connector,
         options: LinkOptions,
-        ops: mpsc::Receiver<Op>,
+        // Requests that need a frame id, and those that need none.
+        (ops, writes): (mpsc::Receiver<Op>, mpsc::Receiver<Op>),
         events: mpsc::Sender<Event>,
         counters: Arc<Counters>,
         close_requested: Arc<Notify>,
@@ -250,11 +261,13 @@ impl Driver {
             connector,
             options,
             ops,
+            writes,
             events,
             counters,
             close_requested,
             state,
             ops_open: true,
+            writes_open: true,
             ids: IdTable::new(),
             parked: VecDeque::new(),
             waiters: Vec::new(),
@@ -358,12 +371,16 @@ impl Driver {
                     Some(op) => refuse(op, &down),
                     None => self.ops_open = false,
                 },
+                op = self.writes.recv(), if self.writes_open => match op {
+                    Some(op) => refuse(op, &down),
+                    None => self.writes_open = false,
+                },
                 // In an async block, so that the sender is cloned only while link events
                 // wait, not on every turn of the loop.
                 permit = async { self.events.clone().reserve_owned().await }, if !self.pending_links.is_empty() => {
                     deliver_pending_link(&mut self.pending_links, permit);
                 }
-                _ = self.events.closed(), if !self.ops_open => return Err(Stop::Shutdown),
+                _ = self.events.closed(), if !(self.ops_open || self.writes_open) => return Err(Stop::Shutdown),
                 () = self.close_requested.notified() => {
                     return Err(Stop::Fatal(CLOSED_BY_APPLICATION.to_owned()));
                 }
@@ -387,6 +404,7 @@ impl Driver {
             let deadline = self.next_deadline();
             let accept_ops =
                 self.ops_open && self.parked.len() < PARKED_MAX && out.len() < HIGH_WATER;
+            let accept_writes = self.writes_open && out.len() < HIGH_WATER;
             let check_stale_at = self.stale_check_at(reader.decoder());
             tokio::select! {
                 item = reader.next() => if let Some(failed) = self.on_read(item) {
@@ -400,6 +418,10 @@ impl Driver {
                 op = self.ops.recv(), if accept_ops => match op {
                     Some(op) => self.start(op, &mut out),
                     None => self.ops_open = false,
+                },
+                op = self.writes.recv(), if accept_writes => match op {
+                    Some(op) => self.start(op, &mut out),
+                    None => self.writes_open = false,
                 },
                 _ = tokio::time::sleep_until(deadline.unwrap_or_else(Instant::now)), if deadline.is_some() => {
                     self.expire(Instant::now());
@@ -424,7 +446,7 @@ impl Driver {
                 permit = async { self.events.clone().reserve_owned().await }, if !self.pending_links.is_empty() => {
                     deliver_pending_link(&mut self.pending_links, permit);
                 }
-                _ = self.events.closed(), if !self.ops_open => {
+                _ = self.events.closed(), if !self.senders_open() => {
                     self.flush_before_end(&mut wr, &mut out).await;
                     return Served::Shutdown;
                 }
@@ -951,7 +973,8 @@ impl Driver {
         }
         self.fail_all(&reason);
         self.ops.close();
-        while let Ok(op) = self.ops.try_recv() {
+        self.writes.close();
+        while let Ok(op) = self.ops.try_recv().or_else(|_| self.writes.try_recv()) {
             refuse_closed(op);
         }
         let held = std::mem::take(&mut self.pending_links);

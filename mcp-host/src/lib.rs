@@ -13,7 +13,7 @@
 //! |---|---|
 //! | `serial:PATH[:BAUD]` | Serial port `PATH` (e.g. `/dev/ttyUSB0`, `COM3`), `BAUD` default 115200, 8N1, no flow control. Reopened after the device disappears (USB unplugged). |
 //! | `tcp:HOST:PORT` | TCP connection to `HOST:PORT` (a serial-to-TCP bridge, a simulator). Reconnected after the peer goes away. IPv6 hosts in brackets: `tcp:[::1]:9750`. |
-//! | `tcp-listen:ADDR:PORT` | Listens on `ADDR:PORT` and serves one peer at a time: a peer that connects while another is served is turned away (its connection closed at once, so nothing it wrote is carried out later); the next is served once the current one leaves. Port 0 picks a free port ([`LinkInfo::local_addr`]). |
+//! | `tcp-listen:ADDR:PORT` | Listens on `ADDR:PORT` and serves one peer at a time: while one is served the next may wait for its turn (if it leaves first, what it wrote is dropped, never carried out later) and any more are turned away (connection closed at once). Port 0 picks a free port ([`LinkInfo::local_addr`]). |
 //! | `pty` | Creates a pseudo-terminal pair; the far end's path ([`LinkInfo::pty_path`], e.g. `/dev/pts/7`) is for a simulator or test to open. The path stays valid for the life of the link; the link is up while a device has it open (connected, disconnected and reconnected as simulators come and go), and nothing written for one device reaches the next. |
 //!
 //! [`LinkOptions`] sets the XBee API mode (1, as the deployed MAVs use, or 2), the frame
@@ -145,6 +145,7 @@ pub async fn connect(
     });
     let counters = Arc::new(stats::Counters::default());
     let (ops_tx, ops_rx) = mpsc::channel(OPS_CAPACITY);
+    let (writes_tx, writes_rx) = mpsc::channel(OPS_CAPACITY);
     let (events_tx, events_rx) = mpsc::channel(options.event_capacity);
     let close_requested = Arc::new(tokio::sync::Notify::new());
     // Connected already when the transport is open: `link_state` right after `connect`
@@ -156,6 +157,7 @@ pub async fn connect(
     });
     let sender = CommandSender {
         ops: ops_tx,
+        writes: writes_tx,
         default_timeout: options.send_timeout,
         counters: counters.clone(),
         info: info.clone(),
@@ -165,7 +167,7 @@ pub async fn connect(
     let driver = driver::Driver::new(
         connector,
         options,
-        ops_rx,
+        (ops_rx, writes_rx),
         events_tx,
         counters.clone(),
         close_requested,

@@ -71,7 +71,10 @@ pub enum DeliveryReport {
 /// dropped unsent.
 #[derive(Debug, Clone)]
 pub struct CommandSender {
+    /// Requests that need a frame id.
     pub(crate) ops: mpsc::Sender<Op>,
+    /// Requests that need none, which go out while those wait for one.
+    pub(crate) writes: mpsc::Sender<Op>,
     pub(crate) default_timeout: Duration,
     pub(crate) counters: Arc<Counters>,
     pub(crate) info: Arc<LinkInfo>,
@@ -223,7 +226,7 @@ impl CommandSender {
             reply,
         };
         let exchange = async {
-            match tokio::time::timeout_at(deadline, self.ops.send(op)).await {
+            match tokio::time::timeout_at(deadline, self.queue(&op).send(op)).await {
                 Ok(Ok(())) => {}
                 Ok(Err(_)) => return Err(SendError::Closed.into()),
                 Err(_) => {
@@ -431,6 +434,15 @@ impl CommandSender {
         let _ = state.wait_for(|s| *s == LinkState::Closed).await;
     }
 
+    /// The queue for `op`.
+    fn queue(&self, op: &Op) -> &mpsc::Sender<Op> {
+        if op.needs_id() {
+            &self.ops
+        } else {
+            &self.writes
+        }
+    }
+
     async fn call<T>(
         &self,
         op: Op,
@@ -438,7 +450,7 @@ impl CommandSender {
         deadline: Instant,
         timeout: Duration,
     ) -> Result<T, SendError> {
-        match tokio::time::timeout_at(deadline, self.ops.send(op)).await {
+        match tokio::time::timeout_at(deadline, self.queue(&op).send(op)).await {
             Ok(Ok(())) => {}
             Ok(Err(_)) => return Err(SendError::Closed),
             Err(_) => {

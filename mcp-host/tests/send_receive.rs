@@ -709,3 +709,49 @@ async fn timeouts_of_any_length_mean_a_long_wait_not_a_panic() {
     assert_eq!(stream.link_state(), mcp_host::LinkState::Connected);
     send.abort();
 }
+
+#[tokio::test]
+async fn sends_without_status_go_out_while_requests_wait_for_frame_ids() {
+    let (_stream, sender, mut fake) = pty_link(ApiMode::Unescaped).await;
+    // A radio that answers nothing: all 255 ids in flight, then more requests than
+    // can wait for an id, waiting to be taken.
+    let slow = SendOptions {
+        timeout: Some(Duration::from_secs(3600)),
+        frame_id: FrameId::Auto,
+    };
+    let mut waiting = Vec::new();
+    for _ in 0..255 + 80 {
+        let sender = sender.clone();
+        waiting.push(tokio::spawn(async move {
+            sender.send_payload(MAV, &b"c\x02\x01"[..], slow).await
+        }));
+    }
+    for _ in 0..255 {
+        assert_ne!(fake.next_tx().await.frame_id, 0);
+    }
+    // A transmit without status goes out at once all the same, and so does a raw write.
+    let no_status = SendOptions {
+        timeout: None,
+        frame_id: FrameId::None,
+    };
+    let report = tokio::time::timeout(
+        GUARD,
+        sender.send_payload(MAV, &b"c\x02\x00"[..], no_status),
+    )
+    .await
+    .expect("a transmit without status waited for the requests before it")
+    .unwrap();
+    assert_eq!(report, DeliveryReport::Written);
+    let tx = fake.next_tx().await;
+    assert_eq!((tx.frame_id, &tx.data[..]), (0, &b"c\x02\x00"[..]));
+    let modem_status = [0x8A, 0x00];
+    tokio::time::timeout(GUARD, sender.write_frame(&modem_status[..]))
+        .await
+        .expect("a raw write waited for the requests before it")
+        .unwrap();
+    assert_eq!(fake.next_frame().await, modem_status);
+    assert!(waiting.iter().all(|w| !w.is_finished()));
+    for w in waiting {
+        w.abort();
+    }
+}
