@@ -70,6 +70,14 @@ impl Default for ReconnectPolicy {
 pub struct LinkOptions {
     /// XBee API mode of the local radio (`AP` setting): 1 (unescaped, as the deployed
     /// MAVs use) or 2 (escaped).
+    ///
+    /// In mode 1 a payload from the air can hold the bytes of a whole frame (0x7E is not
+    /// escaped), and when the frame around it is damaged (a checksum error, or a stall
+    /// past [`Self::partial_frame_timeout`]) the decoder finds that inner frame, as it
+    /// must find every real frame after a damaged one. A node that can send payloads can
+    /// thus plant, say, a Transmit Status for a request in flight. Mode 2 escapes 0x7E
+    /// in frame data, so no payload can be read as a frame: prefer it wherever the
+    /// radios may carry hostile data.
     pub api_mode: xbee_api::ApiMode,
     /// Largest frame data length (frame type byte included) accepted from the radio;
     /// longer frames are dropped as soon as their length field is read and counted as
