@@ -24,8 +24,9 @@ pub(crate) fn later(start: tokio::time::Instant, d: Duration) -> tokio::time::In
 ///
 /// Attempts are spaced by an exponential backoff: the first one waits `initial_delay`,
 /// each failure doubles the delay up to `max_delay`. The delay returns to `initial_delay`
-/// once a connection has carried data, so a port that opens and fails at once keeps backing
-/// off instead of spinning.
+/// once a connection has carried data (and, for `serial` and `tcp` links, stayed up for
+/// `max_delay`), so a port that opens and fails at once keeps backing off instead of
+/// spinning, and so does a TCP peer that sends a frame and hangs up, again and again.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct ReconnectPolicy {
     /// Reconnect at all; when false the link ends at the first disconnection.

@@ -341,6 +341,10 @@ pub struct Connector {
     kind: Kind,
     connect_timeout: Duration,
     delay: Option<Duration>,
+    /// When the current (or last) transport was opened.
+    opened_at: Option<tokio::time::Instant>,
+    /// Whether it carried data ([`Connector::mark_healthy`]).
+    healthy: bool,
 }
 
 impl std::fmt::Debug for Connector {
@@ -386,6 +390,8 @@ impl Connector {
             kind,
             connect_timeout: options.connect_timeout,
             delay: None,
+            opened_at: None,
+            healthy: false,
         })
     }
 
@@ -413,6 +419,13 @@ impl Connector {
     /// Opens a transport once: opens the serial port, connects, accepts the next peer
     /// (waiting for one), or hands out the local side of the pseudo-terminal.
     pub async fn open(&mut self) -> Result<Transport, LinkError> {
+        let transport = self.open_kind().await?;
+        self.opened_at = Some(tokio::time::Instant::now());
+        self.healthy = false;
+        Ok(transport)
+    }
+
+    async fn open_kind(&mut self) -> Result<Transport, LinkError> {
         match &mut self.kind {
             Kind::Serial { path, baud } => {
                 let stream = tokio_serial::new(path.as_str(), *baud)
@@ -493,14 +506,26 @@ impl Connector {
     /// [`LinkError::ReconnectDisabled`] at once when reconnection is disabled. Failed
     /// attempts are logged at debug level.
     ///
-    /// The delay carries over between calls until [`Connector::mark_healthy`] resets it,
-    /// so a transport that opens and fails at once keeps backing off.
+    /// The delay carries over between calls; it starts again from `initial_delay` after
+    /// a transport that carried data ([`Connector::mark_healthy`]) and, for the links
+    /// that open the radio themselves (`serial`, `tcp`), stayed open for at least
+    /// `max_delay`. So a transport that opens and fails at once keeps backing off, and
+    /// so does a TCP peer that sends a frame and hangs up, again and again.
     ///
     /// Cancel-safe: dropping the future loses nothing but the attempt under way.
     pub async fn reopen(&mut self, policy: &ReconnectPolicy) -> Result<Transport, LinkError> {
         if !policy.enabled {
             return Err(LinkError::ReconnectDisabled);
         }
+        // A link that waits for its peers (tcp-listen, pty) serves short-lived ones as
+        // a matter of course; one that opens the radio itself backs off from a peer
+        // that answers and hangs up at once.
+        let waits_for_peers = matches!(self.kind, Kind::Listen(_) | Kind::Pty(_));
+        let lasted = self.opened_at.map(|at| at.elapsed());
+        if self.healthy && (waits_for_peers || lasted.is_some_and(|d| d >= policy.max_delay)) {
+            self.delay = None;
+        }
+        self.healthy = false;
         loop {
             let delay = *self.delay.get_or_insert(policy.initial_delay);
             tokio::time::sleep(delay).await;
@@ -519,8 +544,10 @@ impl Connector {
     }
 
     /// Tells the connector that the current transport works (it carried data), so the
-    /// next reconnection starts again from the initial delay.
+    /// next reconnection starts again from the initial delay (for `serial` and `tcp`
+    /// links, if the transport stays open for the policy's `max_delay`:
+    /// [`Connector::reopen`]).
     pub fn mark_healthy(&mut self) {
-        self.delay = None;
+        self.healthy = true;
     }
 }

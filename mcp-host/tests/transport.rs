@@ -249,3 +249,49 @@ async fn open_errors_are_clear() {
     assert!(matches!(err, LinkError::Listen { .. }));
     assert!(!err.is_retryable());
 }
+
+// Paused clock: the delays below are the reconnection's own sleeps, exactly.
+#[tokio::test(start_paused = true)]
+async fn backoff_starts_again_only_after_a_connection_that_lasted() {
+    use tokio::time::Instant;
+    // A serial link, on a pseudo-terminal whose far end stays there.
+    let (_master, slave) = tokio_serial::SerialStream::pair().unwrap();
+    let path = tokio_serial::SerialPort::name(&slave).unwrap();
+    drop(slave);
+    let link: Link = format!("serial:{path}").parse().unwrap();
+    let policy = ReconnectPolicy {
+        enabled: true,
+        initial_delay: Duration::from_millis(100),
+        max_delay: Duration::from_secs(1),
+    };
+    let mut connector = Connector::new(&link, &LinkOptions::default())
+        .await
+        .unwrap();
+    let mut transport = connector.open().await.unwrap();
+
+    // (carried data, stayed up for) -> the delay before the next transport.
+    let steps = [
+        // A radio that answers and goes away at once, again and again: backing off.
+        (true, Duration::ZERO, 100),
+        (true, Duration::ZERO, 200),
+        (true, Duration::ZERO, 400),
+        // A transport that worked for max_delay: from the start again.
+        (true, Duration::from_secs(1), 100),
+        // Up as long, but no data: backing off.
+        (false, Duration::from_secs(1), 200),
+    ];
+    for (step, (carried, lasted, delay)) in steps.into_iter().enumerate() {
+        if carried {
+            connector.mark_healthy();
+        }
+        tokio::time::advance(lasted).await;
+        drop(transport);
+        let started = Instant::now();
+        transport = connector.reopen(&policy).await.unwrap();
+        assert_eq!(
+            started.elapsed(),
+            Duration::from_millis(delay),
+            "step {step}"
+        );
+    }
+}
