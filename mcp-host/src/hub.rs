@@ -11,13 +11,27 @@
 //!   client that falls behind by [`CLIENT_QUEUE`] frames loses the newest ones (counted
 //!   in [`HubStats::frames_dropped`]); the others are not held up.
 //! - **From a client:** frames go to the radio in the order the client sent them. A
-//!   frame with a frame id (AT command, Transmit Request, ...) goes under an id the hub
-//!   allocates, and its answers (AT response, Transmit Status, ...) go back to that
-//!   client alone, under the client's own id, in their place among the radio's other
-//!   frames: clients that each count their ids from 1 never get each other's answers.
+//!   request with a frame id goes under an id the hub allocates, and its answers go
+//!   back to that client alone, under the client's own id, in their place among the
+//!   radio's other frames: clients that each count their ids from 1 never get each
+//!   other's answers. An answer completes a request only if its frame type answers the
+//!   request's type, so a client cannot answer another's request with a frame of its
+//!   own. The requests the hub knows, and their answers:
+//!
+//!   | request | answer |
+//!   |---|---|
+//!   | 0x08 AT Command, 0x09 AT Command - Queue Parameter Value | 0x88 AT Command Response |
+//!   | 0x10 Transmit Request, 0x11 Explicit Addressing Command | 0x8B Transmit Status |
+//!   | 0x17 Remote AT Command | 0x97 Remote AT Command Response |
+//!   | 0x00, 0x01 Transmit Request 64-/16-bit (802.15.4), 0x20 Transmit Request IPv4 | 0x89 TX Status |
+//!   | 0x24 Register Joining Device | 0xA4 Register Joining Device Status |
+//!
 //!   A request is answered once, but for node discovery (`ND`) and active scan (`AS`),
-//!   whose answers keep coming for [`ANSWER_WINDOW`]. Frames with id 0 and frames of
-//!   other types are written as they are.
+//!   whose answers keep coming for [`ANSWER_WINDOW`]. Frames with frame id 0 (no
+//!   answer wanted) are written as they are, whatever their type. A frame of a type not
+//!   in the table with a frame id (its second byte, in every XBee request) is refused
+//!   and counted in [`HubStats::frames_refused`]: the hub cannot tell its answers from
+//!   those to other clients' requests.
 //! - **Outages:** while the hub's link to the radio is down (a USB radio unplugged), the
 //!   hub disconnects its clients and stops listening (connections are refused), so that
 //!   their links see the outage, stay down quietly, and reconnect once the radio is
@@ -56,7 +70,6 @@ use tokio_util::task::TaskTracker;
 use xbee_api::{ApiMode, RawFrame};
 
 use crate::codec::{CodecItem, XBeeCodec, encode_frame};
-use crate::event::{carries_frame_id, is_response};
 use crate::ids::IdTable;
 use crate::{
     CommandSender, ConnectError, Event, Link, LinkEvent, LinkInfo, LinkOptions, PacketStream, Stats,
@@ -106,7 +119,8 @@ pub struct HubStats {
     pub frames_from_clients: u64,
     /// Frames from the radio not given to a client that had fallen behind.
     pub frames_dropped: u64,
-    /// Frames of clients not written: all 255 frame ids were waiting for answers, or
+    /// Frames of clients not written: all 255 frame ids were waiting for answers, a
+    /// frame id on a frame type the hub does not know (see the [module](self) docs), or
     /// the link to the radio was down.
     pub frames_refused: u64,
     /// The counters of the hub's own link to the radio: frames and framing errors,
@@ -250,6 +264,9 @@ struct Routes(IdTable<Route>);
 struct Route {
     client: mpsc::Sender<Bytes>,
     own_id: u8,
+    /// The frame type of the answers (see [`answer_type`]): an answer of another type
+    /// under the same id is not this request's.
+    answer_type: u8,
     until: Instant,
     /// Answers keep coming until `until` (node discovery, active scan).
     many: bool,
@@ -268,16 +285,55 @@ impl Routes {
         self.0.insert(route).ok()
     }
 
-    /// Where an answer under hub id `id` goes, and the client's own id; the route ends
-    /// with it unless more answers are due.
-    fn answer(&mut self, id: u8, now: Instant) -> Option<(mpsc::Sender<Bytes>, u8)> {
+    /// Where an answer of type `frame_type` under hub id `id` goes, and the client's own
+    /// id; the route ends with it unless more answers are due.
+    fn answer(
+        &mut self,
+        id: u8,
+        frame_type: u8,
+        now: Instant,
+    ) -> Option<(mpsc::Sender<Bytes>, u8)> {
         let route = self.0.get(id)?;
+        if route.answer_type != frame_type {
+            return None;
+        }
         let to = (route.until > now).then(|| (route.client.clone(), route.own_id));
         if to.is_none() || !route.many {
             self.0.remove(id);
         }
         to
     }
+}
+
+/// The frame type answering requests of type `frame_type` under their frame id; `None`
+/// for frame types the hub does not know as requests. Every XBee request type has its
+/// frame id at byte 1.
+fn answer_type(frame_type: u8) -> Option<u8> {
+    use xbee_api::frame::frame_type::*;
+    match frame_type {
+        // Transmit Request 64-bit and 16-bit address (802.15.4), Transmit Request IPv4
+        // (Wi-Fi, Cellular): TX Status.
+        0x00 | 0x01 | 0x20 => Some(TX_STATUS_802_15_4),
+        AT_COMMAND | AT_COMMAND_QUEUE => Some(AT_COMMAND_RESPONSE),
+        TRANSMIT_REQUEST | EXPLICIT_ADDRESSING_COMMAND => Some(TRANSMIT_STATUS),
+        REMOTE_AT_COMMAND => Some(REMOTE_AT_RESPONSE),
+        // Register Joining Device: Register Joining Device Status.
+        0x24 => Some(0xA4),
+        _ => None,
+    }
+}
+
+/// TX Status (802.15.4, Wi-Fi, Cellular).
+const TX_STATUS_802_15_4: u8 = 0x89;
+
+/// Whether frames of type `frame_type` from the radio answer a client's request (see
+/// [`answer_type`]).
+fn is_answer(frame_type: u8) -> bool {
+    use xbee_api::frame::frame_type::*;
+    matches!(
+        frame_type,
+        TX_STATUS_802_15_4 | AT_COMMAND_RESPONSE | TRANSMIT_STATUS | REMOTE_AT_RESPONSE | 0xA4
+    )
 }
 
 /// Whether a request gets several answers under its id: AT (or queued AT) node
@@ -426,8 +482,8 @@ impl Serve {
         };
         bump(&self.counters.frames_from_radio);
         if let [frame_type, id, ..] = data[..] {
-            if is_response(frame_type) && id != 0 {
-                self.answer(data, id);
+            if is_answer(frame_type) && id != 0 {
+                self.answer(data, frame_type, id);
                 return;
             }
         }
@@ -446,10 +502,11 @@ impl Serve {
             });
     }
 
-    /// An answer under hub id `id`: to the client that asked, under its own id; dropped
-    /// if nobody asked (every id on the hub's link is the hub's).
-    fn answer(&self, data: &[u8], id: u8) {
-        let to = lock(&self.routes).answer(id, Instant::now());
+    /// An answer of type `frame_type` under hub id `id`: to the client that asked, under
+    /// its own id; dropped if nobody asked for an answer of that type (every id on the
+    /// hub's link is the hub's).
+    fn answer(&self, data: &[u8], frame_type: u8, id: u8) {
+        let to = lock(&self.routes).answer(id, frame_type, Instant::now());
         let Some((client, own_id)) = to else {
             tracing::debug!(id, "hub: an answer nobody waits for dropped");
             return;
@@ -560,15 +617,26 @@ impl Client {
         None
     }
 
-    /// A client's frame to the radio, in turn: under a hub id if it carries a frame id,
-    /// its answers then routed back to this client.
+    /// A client's frame to the radio, in turn: under a hub id if it is a request with a
+    /// frame id, its answers then routed back to this client. A frame of a type the hub
+    /// does not know as a request is refused if it carries a frame id (byte 1): its
+    /// answers could not be told from those to other clients' requests.
     async fn forward(&self, data: &Bytes) {
         let mut data = data.to_vec();
         if let [frame_type, own_id, ..] = data[..] {
-            if carries_frame_id(frame_type) && !is_response(frame_type) && own_id != 0 {
+            if own_id != 0 {
+                let Some(answer_type) = answer_type(frame_type) else {
+                    tracing::debug!(
+                        frame_type,
+                        "hub: a frame id on a frame type the hub does not know; frame refused"
+                    );
+                    bump(&self.counters.frames_refused);
+                    return;
+                };
                 let route = Route {
                     client: self.queue.clone(),
                     own_id,
+                    answer_type,
                     until: Instant::now() + ANSWER_WINDOW,
                     many: answered_many_times(&data),
                 };
