@@ -27,7 +27,15 @@
 //!   | 0x24 Register Joining Device | 0xA4 Register Joining Device Status |
 //!
 //!   A request is answered once, but for node discovery (`ND`) and active scan (`AS`),
-//!   whose answers keep coming for [`ANSWER_WINDOW`]. Frames with frame id 0 (no
+//!   whose answers keep coming for [`ANSWER_WINDOW`]; a request unanswered by then
+//!   gives its id back.
+//! - **Frame ids:** the radio's link has 255. A client has at most
+//!   [`ROUTES_PER_CLIENT`] requests waiting for answers at once; its next request
+//!   waits (and the hub reads no more of its frames meanwhile) until one is answered,
+//!   so a client that floods the hub with requests slows itself alone, and the others
+//!   find ids free. When a client leaves, its requests' ids are free again (their late
+//!   answers are dropped). Requests that waited are counted in
+//!   [`HubStats::requests_held`]. Frames with frame id 0 (no
 //!   answer wanted) are written as they are, whatever their type. A frame of a type not
 //!   in the table with a frame id (its second byte, in every XBee request) is refused
 //!   and counted in [`HubStats::frames_refused`]: the hub cannot tell its answers from
@@ -62,7 +70,7 @@ use futures::StreamExt;
 use tokio::io::AsyncWriteExt;
 use tokio::net::tcp::{OwnedReadHalf, OwnedWriteHalf};
 use tokio::net::{TcpListener, TcpStream};
-use tokio::sync::mpsc;
+use tokio::sync::{OwnedSemaphorePermit, Semaphore, mpsc};
 use tokio::time::Instant;
 use tokio_util::codec::FramedRead;
 use tokio_util::sync::CancellationToken;
@@ -80,6 +88,13 @@ pub const CLIENT_QUEUE: usize = 1024;
 
 /// Clients served at once, at most; more are turned away.
 pub const MAX_CLIENTS: usize = 64;
+
+/// Requests of one client waiting for answers at once, at most (each holds one of the
+/// 255 frame ids of the radio's link). The client's next request waits, and the hub
+/// reads no more of its frames meanwhile, until an answer (or [`ANSWER_WINDOW`]) frees
+/// one: a client that floods the hub with requests, answered or not, slows itself
+/// alone, and the other clients always find frame ids free.
+pub const ROUTES_PER_CLIENT: usize = 16;
 
 /// How long the hub routes answers to a request: the first answer ends it, but for node
 /// discovery and active scan. A request still unanswered then gives its id back (its
@@ -123,6 +138,10 @@ pub struct HubStats {
     /// frame id on a frame type the hub does not know (see the [module](self) docs), or
     /// the link to the radio was down.
     pub frames_refused: u64,
+    /// Requests of clients that had to wait for a frame id before they went to the
+    /// radio: their client had [`ROUTES_PER_CLIENT`] requests waiting for answers, or
+    /// all 255 ids were taken.
+    pub requests_held: u64,
     /// The counters of the hub's own link to the radio: frames and framing errors,
     /// disconnects and reconnects, and in [`Stats::events_dropped`] the frames lost
     /// because the hub itself fell behind the radio (before any client saw them). The
@@ -139,6 +158,7 @@ struct Counters {
     frames_from_clients: AtomicU64,
     frames_dropped: AtomicU64,
     frames_refused: AtomicU64,
+    requests_held: AtomicU64,
 }
 
 fn bump(counter: &AtomicU64) {
@@ -193,7 +213,9 @@ impl Hub {
             tasks: hub.tasks.clone(),
             counters: hub.counters.clone(),
             routes: Arc::new(Mutex::new(Routes::new())),
+            ids: Arc::new(Semaphore::new(usize::from(u8::MAX))),
             clients: Vec::new(),
+            next_client: 0,
             radio_up: true,
             addr: local_addr,
             rebind_failures: 0,
@@ -227,6 +249,7 @@ impl Hub {
             frames_from_clients: c.frames_from_clients.load(Ordering::Relaxed),
             frames_dropped: c.frames_dropped.load(Ordering::Relaxed),
             frames_refused: c.frames_refused.load(Ordering::Relaxed),
+            requests_held: c.requests_held.load(Ordering::Relaxed),
             radio: self.radio_counters.snapshot(),
         }
     }
@@ -262,7 +285,10 @@ impl Drop for Hub {
 struct Routes(IdTable<Route>);
 
 struct Route {
-    client: mpsc::Sender<Bytes>,
+    /// The client's number (see [`Serve::next_client`]).
+    client: u64,
+    /// The client's queue of frames from the radio.
+    queue: mpsc::Sender<Bytes>,
     own_id: u8,
     /// The frame type of the answers (see [`answer_type`]): an answer of another type
     /// under the same id is not this request's.
@@ -270,6 +296,11 @@ struct Route {
     until: Instant,
     /// Answers keep coming until `until` (node discovery, active scan).
     many: bool,
+    /// One of the client's [`ROUTES_PER_CLIENT`] permits, given back with the route.
+    _permit: OwnedSemaphorePermit,
+    /// One of the 255 frame ids' permits: requests of all clients wait for a free id in
+    /// the order they came.
+    _id: OwnedSemaphorePermit,
 }
 
 impl Routes {
@@ -280,9 +311,20 @@ impl Routes {
     /// A hub id for `route`; `None` while all 255 wait for answers.
     fn insert(&mut self, route: Route, now: Instant) -> Option<u8> {
         if !self.0.has_free() {
-            self.0.remove_where(|r| r.until <= now, |_, _| {});
+            self.expire(now);
         }
         self.0.insert(route).ok()
+    }
+
+    /// Ends the routes whose answers are no longer due, giving their clients' permits
+    /// back.
+    fn expire(&mut self, now: Instant) {
+        self.0.remove_where(|r| r.until <= now, |_, _| {});
+    }
+
+    /// Ends the routes of client `client` (gone).
+    fn forget(&mut self, client: u64) {
+        self.0.remove_where(|r| r.client == client, |_, _| {});
     }
 
     /// Where an answer of type `frame_type` under hub id `id` goes, and the client's own
@@ -297,7 +339,7 @@ impl Routes {
         if route.answer_type != frame_type {
             return None;
         }
-        let to = (route.until > now).then(|| (route.client.clone(), route.own_id));
+        let to = (route.until > now).then(|| (route.queue.clone(), route.own_id));
         if to.is_none() || !route.many {
             self.0.remove(id);
         }
@@ -353,8 +395,12 @@ struct Serve {
     tasks: TaskTracker,
     counters: Arc<Counters>,
     routes: Arc<Mutex<Routes>>,
+    /// The permits of the 255 frame ids, one held by each route.
+    ids: Arc<Semaphore>,
     /// Each client's queue of encoded frames, and what ends it.
     clients: Vec<(mpsc::Sender<Bytes>, CancellationToken)>,
+    /// The number of the next client.
+    next_client: u64,
     /// Whether the link to the radio is up: clients are served only then.
     radio_up: bool,
     /// Where clients connect, listened on again after an outage.
@@ -394,9 +440,14 @@ impl Serve {
         let mut listener = Some(listener);
         let mut rebind = tokio::time::interval(REBIND_RETRY);
         rebind.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+        let mut expire = tokio::time::interval(EXPIRE_EVERY);
+        expire.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
         loop {
             tokio::select! {
                 () = self.stop.cancelled() => break,
+                // Requests no longer answered give their ids, and their clients'
+                // permits, back.
+                _ = expire.tick() => lock(&self.routes).expire(Instant::now()),
                 accepted = accept(listener.as_ref()) => match accepted {
                     Ok((socket, peer)) => self.accept(socket, peer),
                     Err(error) => {
@@ -450,14 +501,23 @@ impl Serve {
         let (queue, frames) = mpsc::channel(CLIENT_QUEUE);
         let end = self.stop.child_token();
         self.clients.push((queue.clone(), end.clone()));
-        let client = Client {
+        let number = self.next_client;
+        self.next_client += 1;
+        let client = Arc::new(Client {
+            number,
+            peer,
             mode: self.mode,
             sender: self.sender.clone(),
             queue,
             routes: self.routes.clone(),
+            ids: self.ids.clone(),
+            permits: Arc::new(Semaphore::new(ROUTES_PER_CLIENT)),
             counters: self.counters.clone(),
-        };
-        self.tasks.spawn(client.run(socket, peer, frames, end));
+            end,
+        });
+        let (rd, wr) = socket.into_split();
+        self.tasks.spawn(client.clone().read(rd));
+        self.tasks.spawn(client.write(wr, frames));
     }
 
     /// A frame from the radio: an answer to its client, anything else to every client.
@@ -523,6 +583,9 @@ impl Serve {
     }
 }
 
+/// How often routes whose answers are no longer due are ended.
+const EXPIRE_EVERY: Duration = Duration::from_secs(1);
+
 /// How often the hub tries to take its port back after an outage of the radio, if
 /// another program took it meanwhile.
 const REBIND_RETRY: Duration = Duration::from_secs(1);
@@ -548,73 +611,81 @@ fn lock(routes: &Mutex<Routes>) -> std::sync::MutexGuard<'_, Routes> {
     routes.lock().unwrap_or_else(PoisonError::into_inner)
 }
 
-/// One client's connection.
+/// One client's connection, served by two tasks: one reads its frames and writes them
+/// to the radio, the other writes the radio's frames to it. The client is gone when
+/// both have ended; its requests' routes then end too.
 struct Client {
+    /// Its number, in its routes.
+    number: u64,
+    peer: SocketAddr,
     mode: ApiMode,
     sender: CommandSender,
     /// Its own queue, for the answers to its requests.
     queue: mpsc::Sender<Bytes>,
     routes: Arc<Mutex<Routes>>,
+    /// The permits of the 255 frame ids, shared by all clients.
+    ids: Arc<Semaphore>,
+    /// Its [`ROUTES_PER_CLIENT`] permits to have a request waiting for answers.
+    permits: Arc<Semaphore>,
     counters: Arc<Counters>,
+    /// Ends both its tasks: the hub stopped, the radio's link went down, or its
+    /// connection failed.
+    end: CancellationToken,
+}
+
+impl Drop for Client {
+    /// Once both its tasks have ended: its requests' answers are no longer routed, and
+    /// their frame ids are free again.
+    fn drop(&mut self) {
+        lock(&self.routes).forget(self.number);
+    }
 }
 
 impl Client {
-    async fn run(
-        self,
-        socket: TcpStream,
-        peer: SocketAddr,
-        mut frames: mpsc::Receiver<Bytes>,
-        stop: CancellationToken,
-    ) {
-        let (rd, mut wr) = socket.into_split();
-        let mut reader = Some(FramedRead::new(rd, XBeeCodec::new(self.mode)));
-        let reason = loop {
-            // Each step (a frame read and written to the radio, or a frame written to
-            // the client) as a whole, but never past a stop: a client that reads
-            // nothing does not hold the hub up.
-            tokio::select! {
-                () = stop.cancelled() => break "the hub stopped, or the radio's link went down".to_owned(),
-                ended = self.step(&mut reader, &mut wr, &mut frames) => {
-                    if let Some(reason) = ended {
-                        break reason;
-                    }
-                }
-            }
-        };
-        tracing::info!(%peer, %reason, "hub: client gone");
-    }
-
-    /// Reads a frame and writes it to the radio, or writes a frame to the client; why
-    /// the client is done, if it is. A client that stops sending (its write side shut)
-    /// still gets its answers and the radio's frames.
-    async fn step(
-        &self,
-        reader: &mut Option<FramedRead<OwnedReadHalf, XBeeCodec>>,
-        wr: &mut OwnedWriteHalf,
-        frames: &mut mpsc::Receiver<Bytes>,
-    ) -> Option<String> {
+    /// Reads the client's frames and writes them to the radio, until the client stops
+    /// sending or its connection ends. A client that stops sending (its write side
+    /// shut) still gets its answers and the radio's frames.
+    async fn read(self: Arc<Self>, rd: OwnedReadHalf) {
+        let mut reader = FramedRead::new(rd, XBeeCodec::new(self.mode));
         let read = async {
-            match reader.as_mut() {
-                Some(reader) => reader.next().await,
-                None => std::future::pending().await,
+            loop {
+                match reader.next().await {
+                    Some(Ok(CodecItem::Frame(frame))) => self.forward(frame.data()).await,
+                    Some(Ok(CodecItem::Error(error))) => {
+                        tracing::debug!(%error, "hub: a client's frame dropped");
+                    }
+                    Some(Err(error)) => {
+                        tracing::debug!(peer = %self.peer, %error, "hub: reading from a client failed");
+                        self.end.cancel();
+                        return;
+                    }
+                    None => return,
+                }
             }
         };
         tokio::select! {
-            item = read => match item {
-                Some(Ok(CodecItem::Frame(frame))) => self.forward(frame.data()).await,
-                Some(Ok(CodecItem::Error(error))) => {
-                    tracing::debug!(%error, "hub: a client's frame dropped");
-                }
-                Some(Err(error)) => return Some(error.to_string()),
-                None => *reader = None,
-            },
-            Some(bytes) = frames.recv() => {
+            () = self.end.cancelled() => {}
+            () = read => {}
+        }
+    }
+
+    /// Writes the radio's frames to the client, until its connection fails or it is
+    /// ended; a client that reads nothing does not hold the hub up.
+    async fn write(self: Arc<Self>, mut wr: OwnedWriteHalf, mut frames: mpsc::Receiver<Bytes>) {
+        let write = async {
+            while let Some(bytes) = frames.recv().await {
                 if let Err(error) = wr.write_all(&bytes).await {
-                    return Some(error.to_string());
+                    return error.to_string();
                 }
             }
-        }
-        None
+            "the hub stopped".to_owned()
+        };
+        let reason = tokio::select! {
+            () = self.end.cancelled() => "the hub stopped, or the radio's link went down".to_owned(),
+            reason = write => reason,
+        };
+        self.end.cancel();
+        tracing::info!(peer = %self.peer, %reason, "hub: client gone");
     }
 
     /// A client's frame to the radio, in turn: under a hub id if it is a request with a
@@ -633,13 +704,28 @@ impl Client {
                     bump(&self.counters.frames_refused);
                     return;
                 };
+                // Waits while the client has ROUTES_PER_CLIENT requests waiting for
+                // answers, then for a free frame id (the semaphores are never closed).
+                if self.permits.available_permits() == 0 || self.ids.available_permits() == 0 {
+                    bump(&self.counters.requests_held);
+                }
+                let Ok(permit) = self.permits.clone().acquire_owned().await else {
+                    return;
+                };
+                let Ok(id) = self.ids.clone().acquire_owned().await else {
+                    return;
+                };
                 let route = Route {
-                    client: self.queue.clone(),
+                    client: self.number,
+                    queue: self.queue.clone(),
                     own_id,
                     answer_type,
                     until: Instant::now() + ANSWER_WINDOW,
                     many: answered_many_times(&data),
+                    _permit: permit,
+                    _id: id,
                 };
+                // An id is free: the route holds one of the 255 permits.
                 let Some(id) = lock(&self.routes).insert(route, Instant::now()) else {
                     tracing::debug!("hub: every frame id waits for an answer; frame refused");
                     bump(&self.counters.frames_refused);

@@ -1,0 +1,180 @@
+//! No client can take the hub's frame ids from the others: each has at most
+//! `ROUTES_PER_CLIENT` requests waiting for answers, and a client's requests give their
+//! ids back when it leaves. Over real TCP sockets.
+
+use std::time::Duration;
+
+use futures::{SinkExt, StreamExt};
+use mcp_host::codec::{CodecItem, XBeeCodec};
+use mcp_host::hub::{Hub, ROUTES_PER_CLIENT};
+use mcp_host::sim::Simulator;
+use mcp_host::{Link, LinkOptions, SendOptions};
+use tokio::net::{TcpListener, TcpStream};
+use tokio_util::codec::Framed;
+use xbee_api::{Address64, ApiMode, RawFrame};
+
+/// Failure guard only: every wait ends on a frame long before this.
+const GUARD: Duration = Duration::from_secs(20);
+const MAV: Address64 = Address64(0x0013_A200_40B5_99B9);
+
+type Wire = Framed<TcpStream, XBeeCodec>;
+
+async fn raw_client(hub: &Hub) -> Wire {
+    let socket = TcpStream::connect(hub.local_addr()).await.unwrap();
+    Framed::new(socket, XBeeCodec::new(ApiMode::Unescaped))
+}
+
+async fn send(wire: &mut Wire, data: &[u8]) {
+    wire.send(&RawFrame::new(data).unwrap()).await.unwrap();
+}
+
+async fn next(wire: &mut Wire) -> Vec<u8> {
+    loop {
+        let item = tokio::time::timeout(GUARD, wire.next())
+            .await
+            .expect("a frame")
+            .expect("the connection stays")
+            .unwrap();
+        if let CodecItem::Frame(frame) = item {
+            return frame.data().to_vec();
+        }
+    }
+}
+
+/// One client sends 255 node discoveries (`AT ND`), each answered at once by the radio.
+/// Their answers could keep coming for the hub's answer window, so each keeps its frame
+/// id meanwhile: the client gets `ROUTES_PER_CLIENT` of them through, the rest wait, and
+/// a ground station on the same hub still gets its AT commands and transmissions
+/// through at once.
+#[tokio::test(flavor = "multi_thread")]
+async fn a_client_flooding_the_hub_with_discoveries_leaves_frame_ids_for_the_others() {
+    let mode = ApiMode::Unescaped;
+    let link: Link = "tcp-listen:127.0.0.1:0".parse().unwrap();
+    let sim = Simulator::start(&link, mode, &[MAV], Simulator::network_config())
+        .await
+        .unwrap();
+    let radio: Link = format!("tcp:{}", sim.coordinator().local_addr.unwrap())
+        .parse()
+        .unwrap();
+    let hub = Hub::start(&radio, LinkOptions::default(), "127.0.0.1:0")
+        .await
+        .unwrap();
+    let honest_link: Link = format!("tcp:{}", hub.local_addr()).parse().unwrap();
+    let (_stream, honest) = mcp_host::connect(&honest_link, LinkOptions::default())
+        .await
+        .unwrap();
+
+    let mut flood = raw_client(&hub).await;
+    for id in 1..=255u8 {
+        flood
+            .feed(&RawFrame::new(&[0x08, id, b'N', b'D']).unwrap())
+            .await
+            .unwrap();
+    }
+    SinkExt::<&RawFrame<'_>>::flush(&mut flood).await.unwrap();
+    // Until the flood has taken all it can: every discovery answered, or the hub holds
+    // the client's next ones back.
+    let mut answers = 0;
+    while answers < 255 && (answers < ROUTES_PER_CLIENT || hub.stats().requests_held == 0) {
+        tokio::select! {
+            frame = next(&mut flood) => if frame[0] == 0x88 {
+                answers += 1;
+            },
+            () = tokio::task::yield_now(), if answers >= ROUTES_PER_CLIENT => {}
+        }
+    }
+
+    let quick = Some(Duration::from_secs(2));
+    let at = honest.at(*b"SH", &[], quick).await;
+    assert!(at.is_ok(), "{at:?}; {:?}", hub.stats());
+    let options = SendOptions {
+        timeout: quick,
+        ..SendOptions::default()
+    };
+    let sent = honest
+        .send_with(MAV, &mcp_core::Command::landing(true), options)
+        .await;
+    assert!(sent.is_ok(), "{sent:?}; {:?}", hub.stats());
+    assert_eq!(hub.stats().frames_refused, 0);
+    // The flooding client got through what the hub lets one client have at once.
+    assert_eq!(answers, ROUTES_PER_CLIENT);
+    hub.stop().await;
+    sim.stop().await;
+}
+
+/// Clients that send requests the radio never answers, enough together for every frame
+/// id, and go away: their requests' ids are free again once the hub has seen them go,
+/// long before the answer window ends.
+#[tokio::test]
+async fn the_ids_of_a_client_that_left_are_free_again() {
+    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let radio_link: Link = format!("tcp:{}", listener.local_addr().unwrap())
+        .parse()
+        .unwrap();
+    let (hub, accepted) = tokio::join!(
+        Hub::start(&radio_link, LinkOptions::default(), "127.0.0.1:0"),
+        listener.accept()
+    );
+    let hub = hub.unwrap();
+    let mut radio = Framed::new(accepted.unwrap().0, XBeeCodec::new(ApiMode::Unescaped));
+
+    // 16 clients with 16 requests each: more than the 255 ids.
+    let mut gone = Vec::new();
+    for _ in 0..16 {
+        let mut client = raw_client(&hub).await;
+        for id in 1..=16u8 {
+            client
+                .feed(&RawFrame::new(&[0x08, id, b'S', b'L']).unwrap())
+                .await
+                .unwrap();
+        }
+        SinkExt::<&RawFrame<'_>>::flush(&mut client).await.unwrap();
+        gone.push(client);
+    }
+    // The radio got all it will get of them (none answered), then they leave.
+    let mut written = 0;
+    while written < usize::from(u8::MAX) {
+        let frame = next(&mut radio).await;
+        assert_eq!(&frame[2..], b"SL");
+        written += 1;
+    }
+    drop(gone);
+
+    // Another client asks; the hub sees the others gone when it writes to them (the
+    // radio's modem status frames).
+    let mut client = raw_client(&hub).await;
+    send(&mut client, &[0x08, 0x01, b'S', b'H']).await;
+    let deadline = tokio::time::Instant::now() + GUARD;
+    let hub_id = loop {
+        assert!(
+            tokio::time::Instant::now() < deadline,
+            "the request never reached the radio: {:?}",
+            hub.stats()
+        );
+        send(&mut radio, &[0x8A, 0x00]).await;
+        tokio::select! {
+            frame = next(&mut radio) => {
+                if &frame[2..] == b"SH" {
+                    break frame[1];
+                }
+            }
+            frame = next(&mut client) => assert_eq!(frame, [0x8A, 0x00]),
+        }
+    };
+    send(
+        &mut radio,
+        &[0x88, hub_id, b'S', b'H', 0x00, 0x00, 0x13, 0xA2, 0x00],
+    )
+    .await;
+    loop {
+        let frame = next(&mut client).await;
+        if frame[0] == 0x88 {
+            assert_eq!(
+                frame,
+                [0x88, 0x01, b'S', b'H', 0x00, 0x00, 0x13, 0xA2, 0x00]
+            );
+            break;
+        }
+    }
+    hub.stop().await;
+}
