@@ -417,7 +417,8 @@ impl Serve {
         let addr = self.addr;
         match TcpListener::bind(addr).await {
             Ok(listener) => {
-                tracing::info!(%addr, "hub: listening again");
+                // As visible as the outage was (warnings are shown by default).
+                tracing::warn!("hub: radio back: listening on {addr}");
                 self.counters.listening.store(true, Ordering::Relaxed);
                 Some(listener)
             }
@@ -527,7 +528,13 @@ impl Serve {
             Event::InvalidPacket(rx) => &rx.frame,
             Event::Frame(frame) => frame.data(),
             Event::Link(link) => {
-                tracing::info!(?link, "hub: radio link");
+                match link {
+                    LinkEvent::Disconnected { reason } if self.radio_up => tracing::warn!(
+                        "hub: radio lost: {reason} (clients disconnected; not accepting \
+                         clients until it is back)"
+                    ),
+                    _ => tracing::info!(?link, "hub: radio link"),
+                }
                 self.radio_up = is_up(link);
                 if !self.radio_up {
                     // The clients' links see the outage as the hub's own link does (and

@@ -14,8 +14,23 @@ pub(crate) struct HubArgs {
     #[command(flatten)]
     link: LinkArgs,
     /// Where to serve the radio: other commands then take `--link tcp:ADDR:PORT`.
-    #[arg(long, value_name = "ADDR:PORT", default_value = "127.0.0.1:9750")]
+    #[arg(long, value_name = "ADDR:PORT", default_value = "127.0.0.1:9750", value_parser = parse_listen)]
     listen: String,
+}
+
+/// `--listen`: an address and a port (`127.0.0.1:9750`, `localhost:9750`, `[::1]:9750`,
+/// `0.0.0.0:9750`), checked before anything is opened.
+fn parse_listen(s: &str) -> Result<String, String> {
+    let valid = s
+        .rsplit_once(':')
+        .is_some_and(|(host, port)| !host.is_empty() && port.parse::<u16>().is_ok());
+    if valid {
+        Ok(s.to_owned())
+    } else {
+        Err(format!(
+            "expected ADDR:PORT, e.g. 127.0.0.1:9750, got `{s}`"
+        ))
+    }
 }
 
 /// Runs `hub` until Ctrl-C, or until the link to the radio ends.
@@ -54,7 +69,7 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
     hub.stop().await;
     out!(
         "stopped: {} clients, {} frames from the radio, {} from clients, {} dropped for slow \
-         clients, {} of clients refused",
+         clients, {} frames from clients refused",
         stats.clients,
         stats.frames_from_radio,
         stats.frames_from_clients,

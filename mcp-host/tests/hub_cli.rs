@@ -1,0 +1,100 @@
+//! `mcp-gs hub` as an operator sees it: argument errors, and the radio's outages said
+//! at the default log level.
+
+use std::io::{BufRead, BufReader};
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc;
+use std::time::Duration;
+
+/// Failure guard only: every wait ends on a line long before this.
+const GUARD: Duration = Duration::from_secs(20);
+
+/// Kills the hub when the test ends, passed or not.
+struct Running(Child);
+
+impl Drop for Running {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+#[test]
+fn a_listen_address_without_a_host_is_a_usage_error() {
+    let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args(["hub", "--link", "tcp:127.0.0.1:9", "--listen", "9750"])
+        .env_remove("MCP_LOG")
+        .output()
+        .expect("run mcp-gs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("expected ADDR:PORT, e.g. 127.0.0.1:9750"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("cannot listen"), "{stderr}");
+}
+
+/// The lines a stream gives, as they come.
+fn lines(stream: impl std::io::Read + Send + 'static) -> mpsc::Receiver<String> {
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stream).lines() {
+            let Ok(line) = line else { return };
+            if tx.send(line).is_err() {
+                return;
+            }
+        }
+    });
+    rx
+}
+
+/// The next line of `lines` containing `text`.
+fn line_with(lines: &mpsc::Receiver<String>, text: &str) -> String {
+    loop {
+        let line = lines
+            .recv_timeout(GUARD)
+            .unwrap_or_else(|e| panic!("no line with {text:?}: {e}"));
+        if line.contains(text) {
+            return line;
+        }
+    }
+}
+
+#[test]
+fn the_hub_says_when_the_radio_is_lost_and_when_it_is_back() {
+    let radio = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let radio_addr = radio.local_addr().unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args(["hub", "--link", &format!("tcp:{radio_addr}")])
+        .args(["--listen", "127.0.0.1:0"])
+        .env_remove("MCP_LOG")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run mcp-gs");
+    let out = lines(child.stdout.take().unwrap());
+    let err = lines(child.stderr.take().unwrap());
+    let _hub = Running(child);
+    let (socket, _) = radio.accept().unwrap();
+    let serving = line_with(&out, "serving");
+    // "serving tcp:... on ADDR:PORT: give other commands ..."
+    let addr = serving
+        .split(" on ")
+        .nth(1)
+        .and_then(|rest| rest.split(": ").next())
+        .unwrap_or_else(|| panic!("{serving}"))
+        .to_owned();
+    drop(socket);
+    let lost = line_with(&err, "radio lost");
+    assert!(
+        lost.contains("not accepting clients until it is back"),
+        "{lost}"
+    );
+    let (_socket, _) = radio.accept().unwrap();
+    let back = line_with(&err, "radio back");
+    assert!(
+        back.contains(&format!("listening on {addr}")),
+        "{back} ({serving})"
+    );
+}
