@@ -29,6 +29,14 @@
 //!   A request is answered once, but for node discovery (`ND`) and active scan (`AS`),
 //!   whose answers keep coming for [`ANSWER_WINDOW`]; a request unanswered by then
 //!   gives its id back.
+//! - **Fairness:** the hub takes its clients' frames in turn, one frame of each client
+//!   with frames waiting, and writes them at the pace of the radio's UART (its baud
+//!   rate on a serial link, [`DEFAULT_RADIO_BAUD`] on others), never more than
+//!   [`RADIO_BACKLOG`] ahead of it: the queues of the link (the operating system's
+//!   buffers, a serial-to-TCP bridge's) could otherwise hold seconds of one client's
+//!   frames before another's. A client's frames wait their turn [`CLIENT_FRAMES_TO_RADIO`]
+//!   at most; the hub reads no more of them meanwhile, so a client that writes nonstop
+//!   slows itself alone.
 //! - **Frame ids:** the radio's link has 255. A client has at most
 //!   [`ROUTES_PER_CLIENT`] requests waiting for answers at once; its next request
 //!   waits (and the hub reads no more of its frames meanwhile) until one is answered,
@@ -70,7 +78,7 @@ use futures::StreamExt;
 use tokio::io::AsyncWriteExt;
 use tokio::net::tcp::{OwnedReadHalf, OwnedWriteHalf};
 use tokio::net::{TcpListener, TcpStream};
-use tokio::sync::{OwnedSemaphorePermit, Semaphore, mpsc};
+use tokio::sync::{Notify, OwnedSemaphorePermit, Semaphore, mpsc};
 use tokio::time::Instant;
 use tokio_util::codec::FramedRead;
 use tokio_util::sync::CancellationToken;
@@ -95,6 +103,22 @@ pub const MAX_CLIENTS: usize = 64;
 /// one: a client that floods the hub with requests, answered or not, slows itself
 /// alone, and the other clients always find frame ids free.
 pub const ROUTES_PER_CLIENT: usize = 16;
+
+/// Frames of one client read by the hub and waiting for their turn to the radio, at
+/// most; the hub reads no more of the client's frames meanwhile.
+pub const CLIENT_FRAMES_TO_RADIO: usize = 4;
+
+/// How much of the radio's time the hub writes ahead, at most: the bytes written to
+/// the link and not yet through the radio's UART (as the hub reckons from its baud
+/// rate, see [`DEFAULT_RADIO_BAUD`]) are worth no more than this, so that the next
+/// client's frame never waits behind another's backlog for longer.
+pub const RADIO_BACKLOG: Duration = Duration::from_millis(250);
+
+/// The baud rate of the radio's UART (8N1: ten bits a byte) the hub reckons with on
+/// links that do not give one: `tcp`, `tcp-listen` and `pty` (a serial link's own is
+/// taken). A radio behind a serial-to-TCP bridge at another rate should be served
+/// through a `serial:` link where it can.
+pub const DEFAULT_RADIO_BAUD: u32 = 115_200;
 
 /// How long the hub routes answers to a request: the first answer ends it, but for node
 /// discovery and active scan. A request still unanswered then gives its id back (its
@@ -195,6 +219,10 @@ impl Hub {
             addr: listen.to_owned(),
             source,
         })?;
+        let bytes_per_second = match link {
+            Link::Serial { baud, .. } => *baud,
+            _ => DEFAULT_RADIO_BAUD,
+        } / 10;
         let (stream, sender) = crate::connect(link, options).await?;
         let hub = Hub {
             local_addr,
@@ -206,7 +234,17 @@ impl Hub {
             radio_counters: sender.counters.clone(),
         };
         hub.counters.listening.store(true, Ordering::Relaxed);
+        let to_radio = Arc::new(ToRadio::default());
+        let writer = RadioWriter {
+            mode,
+            sender: sender.clone(),
+            counters: hub.counters.clone(),
+            to_radio: to_radio.clone(),
+            bytes_per_second: f64::from(bytes_per_second.max(1)),
+        };
+        hub.tasks.spawn(writer.run(hub.stop.clone()));
         let serve = Serve {
+            to_radio,
             mode,
             sender,
             stop: hub.stop.clone(),
@@ -387,8 +425,94 @@ fn answered_many_times(data: &[u8]) -> bool {
     )
 }
 
+/// A client's queue of frames to the radio, and the client (kept until the queue is
+/// drained, so that the routes of its last frames stay until these are written).
+type ClientFrames = (mpsc::Receiver<Vec<u8>>, Arc<Client>);
+
+/// The clients' queues of frames to the radio, taken by the [`RadioWriter`].
+#[derive(Default)]
+struct ToRadio {
+    /// Queues of new clients, not yet taken by the writer.
+    new: Mutex<Vec<ClientFrames>>,
+    /// A frame waits in a queue, or a new queue.
+    ready: Notify,
+}
+
+/// The task that writes the clients' frames to the radio: one frame of each client in
+/// turn (round-robin), at the pace the radio takes them (see [`RADIO_BACKLOG`]), so that
+/// a client writing nonstop slows itself alone.
+struct RadioWriter {
+    mode: ApiMode,
+    sender: CommandSender,
+    counters: Arc<Counters>,
+    to_radio: Arc<ToRadio>,
+    /// The radio UART's pace.
+    bytes_per_second: f64,
+}
+
+impl RadioWriter {
+    async fn run(self, stop: CancellationToken) {
+        let mut queues: Vec<ClientFrames> = Vec::new();
+        // The queue to look at first.
+        let mut next = 0;
+        // When the bytes written so far are through the radio's UART, as reckoned.
+        let mut through = Instant::now();
+        loop {
+            let ahead = through.saturating_duration_since(Instant::now());
+            if ahead > RADIO_BACKLOG {
+                tokio::select! {
+                    () = stop.cancelled() => return,
+                    () = tokio::time::sleep(ahead - RADIO_BACKLOG) => {}
+                }
+            }
+            let data = tokio::select! {
+                () = stop.cancelled() => return,
+                data = self.next_frame(&mut queues, &mut next) => data,
+            };
+            match self.sender.write_frame(&data).await {
+                Ok(()) => bump(&self.counters.frames_from_clients),
+                Err(error) => {
+                    tracing::debug!(%error, "hub: a client's frame not written");
+                    bump(&self.counters.frames_refused);
+                }
+            }
+            let len = encode(&data, self.mode).map_or(data.len(), |bytes| bytes.len());
+            let time = Duration::from_secs_f64(len as f64 / self.bytes_per_second);
+            through = through.max(Instant::now()) + time;
+        }
+    }
+
+    /// The next client's next frame, in turn.
+    async fn next_frame(&self, queues: &mut Vec<ClientFrames>, next: &mut usize) -> Vec<u8> {
+        loop {
+            queues.append(&mut lock(&self.to_radio.new));
+            let n = queues.len();
+            let mut gone = false;
+            for step in 0..n {
+                let index = (*next + step) % n;
+                match queues[index].0.try_recv() {
+                    Ok(data) => {
+                        *next = index + 1;
+                        return data;
+                    }
+                    Err(mpsc::error::TryRecvError::Empty) => {}
+                    Err(mpsc::error::TryRecvError::Disconnected) => gone = true,
+                }
+            }
+            if gone {
+                // Clients gone, their frames all written.
+                queues.retain(|(queue, _)| !(queue.is_closed() && queue.is_empty()));
+            }
+            // A frame queued (or a queue added) since the look above has left a permit.
+            self.to_radio.ready.notified().await;
+        }
+    }
+}
+
 /// The hub's main task: frames from the radio to the clients, new clients accepted.
 struct Serve {
+    /// New clients' queues of frames to the radio, for the [`RadioWriter`].
+    to_radio: Arc<ToRadio>,
     mode: ApiMode,
     sender: CommandSender,
     stop: CancellationToken,
@@ -508,7 +632,7 @@ impl Serve {
             number,
             peer,
             mode: self.mode,
-            sender: self.sender.clone(),
+            to_radio: self.to_radio.clone(),
             queue,
             routes: self.routes.clone(),
             ids: self.ids.clone(),
@@ -517,7 +641,10 @@ impl Serve {
             end,
         });
         let (rd, wr) = socket.into_split();
-        self.tasks.spawn(client.clone().read(rd));
+        let (frames_to_radio, queue) = mpsc::channel(CLIENT_FRAMES_TO_RADIO);
+        lock(&self.to_radio.new).push((queue, client.clone()));
+        self.to_radio.ready.notify_one();
+        self.tasks.spawn(client.clone().read(rd, frames_to_radio));
         self.tasks.spawn(client.write(wr, frames));
     }
 
@@ -613,9 +740,9 @@ async fn accept(listener: Option<&TcpListener>) -> std::io::Result<(TcpStream, S
     }
 }
 
-fn lock(routes: &Mutex<Routes>) -> std::sync::MutexGuard<'_, Routes> {
-    // A panic elsewhere leaves the table as consistent as ever.
-    routes.lock().unwrap_or_else(PoisonError::into_inner)
+fn lock<T>(shared: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    // A panic elsewhere leaves the table (or the list) as consistent as ever.
+    shared.lock().unwrap_or_else(PoisonError::into_inner)
 }
 
 /// One client's connection, served by two tasks: one reads its frames and writes them
@@ -626,7 +753,8 @@ struct Client {
     number: u64,
     peer: SocketAddr,
     mode: ApiMode,
-    sender: CommandSender,
+    /// Where its queue of frames to the radio is taken from.
+    to_radio: Arc<ToRadio>,
     /// Its own queue, for the answers to its requests.
     queue: mpsc::Sender<Bytes>,
     routes: Arc<Mutex<Routes>>,
@@ -652,12 +780,20 @@ impl Client {
     /// Reads the client's frames and writes them to the radio, until the client stops
     /// sending or its connection ends. A client that stops sending (its write side
     /// shut) still gets its answers and the radio's frames.
-    async fn read(self: Arc<Self>, rd: OwnedReadHalf) {
+    async fn read(self: Arc<Self>, rd: OwnedReadHalf, to_radio: mpsc::Sender<Vec<u8>>) {
         let mut reader = FramedRead::new(rd, XBeeCodec::new(self.mode));
         let read = async {
             loop {
                 match reader.next().await {
-                    Some(Ok(CodecItem::Frame(frame))) => self.forward(frame.data()).await,
+                    Some(Ok(CodecItem::Frame(frame))) => {
+                        if let Some(data) = self.admit(frame.data()).await {
+                            // Waits while CLIENT_FRAMES_TO_RADIO frames wait their turn.
+                            if to_radio.send(data).await.is_err() {
+                                return; // The hub stops.
+                            }
+                            self.to_radio.ready.notify_one();
+                        }
+                    }
                     Some(Ok(CodecItem::Error(error))) => {
                         tracing::debug!(%error, "hub: a client's frame dropped");
                     }
@@ -695,11 +831,12 @@ impl Client {
         tracing::info!(peer = %self.peer, %reason, "hub: client gone");
     }
 
-    /// A client's frame to the radio, in turn: under a hub id if it is a request with a
-    /// frame id, its answers then routed back to this client. A frame of a type the hub
-    /// does not know as a request is refused if it carries a frame id (byte 1): its
-    /// answers could not be told from those to other clients' requests.
-    async fn forward(&self, data: &Bytes) {
+    /// A client's frame as it goes to the radio: under a hub id if it is a request with
+    /// a frame id, its answers then routed back to this client; `None` if refused. A
+    /// frame of a type the hub does not know as a request is refused if it carries a
+    /// frame id (byte 1): its answers could not be told from those to other clients'
+    /// requests.
+    async fn admit(&self, data: &Bytes) -> Option<Vec<u8>> {
         let mut data = data.to_vec();
         if let [frame_type, own_id, ..] = data[..] {
             if own_id != 0 {
@@ -709,19 +846,15 @@ impl Client {
                         "hub: a frame id on a frame type the hub does not know; frame refused"
                     );
                     bump(&self.counters.frames_refused);
-                    return;
+                    return None;
                 };
                 // Waits while the client has ROUTES_PER_CLIENT requests waiting for
                 // answers, then for a free frame id (the semaphores are never closed).
                 if self.permits.available_permits() == 0 || self.ids.available_permits() == 0 {
                     bump(&self.counters.requests_held);
                 }
-                let Ok(permit) = self.permits.clone().acquire_owned().await else {
-                    return;
-                };
-                let Ok(id) = self.ids.clone().acquire_owned().await else {
-                    return;
-                };
+                let permit = self.permits.clone().acquire_owned().await.ok()?;
+                let id = self.ids.clone().acquire_owned().await.ok()?;
                 let route = Route {
                     client: self.number,
                     queue: self.queue.clone(),
@@ -736,20 +869,14 @@ impl Client {
                 let Some(id) = lock(&self.routes).insert(route, Instant::now()) else {
                     tracing::debug!("hub: every frame id waits for an answer; frame refused");
                     bump(&self.counters.frames_refused);
-                    return;
+                    return None;
                 };
                 if let Some(slot) = data.get_mut(1) {
                     *slot = id;
                 }
             }
         }
-        match self.sender.write_frame(&data).await {
-            Ok(()) => bump(&self.counters.frames_from_clients),
-            Err(error) => {
-                tracing::debug!(%error, "hub: a client's frame not written");
-                bump(&self.counters.frames_refused);
-            }
-        }
+        Some(data)
     }
 }
 
