@@ -48,6 +48,14 @@
 //!   in the table with a frame id (its second byte, in every XBee request) is refused
 //!   and counted in [`HubStats::frames_refused`]: the hub cannot tell its answers from
 //!   those to other clients' requests.
+//! - **Clients:** [`MAX_CLIENTS`] at once. A client that comes while as many are
+//!   connected takes the place of the one that has fallen behind the radio's frames the
+//!   longest (its queue full, and not drained since), or is turned away if none has.
+//!   Connections that read nothing (a script that forgot its sockets) thus give their
+//!   places up once the radio sends anything, while a monitor that reads, even one
+//!   that sends nothing for hours, never loses its place; no client is dropped for
+//!   being quiet, as quiet is what a monitor is on a quiet network. A client is not
+//!   dropped either for falling behind while the hub has room.
 //! - **Outages:** while the hub's link to the radio is down (a USB radio unplugged), the
 //!   hub disconnects its clients and stops listening (connections are refused), so that
 //!   their links see the outage, stay down quietly, and reconnect once the radio is
@@ -94,7 +102,9 @@ use crate::{
 /// Frames from the radio waiting for one client, at most; more are dropped for it.
 pub const CLIENT_QUEUE: usize = 1024;
 
-/// Clients served at once, at most; more are turned away.
+/// Clients served at once, at most. A client that comes while as many are connected
+/// takes the place of the one that has fallen behind the radio's frames the longest
+/// (see the [module](self) docs); without one, it is turned away.
 pub const MAX_CLIENTS: usize = 64;
 
 /// Requests of one client waiting for answers at once, at most (each holds one of the
@@ -509,6 +519,17 @@ impl RadioWriter {
     }
 }
 
+/// A client as the hub's main task knows it.
+struct Connected {
+    peer: SocketAddr,
+    /// Its queue of frames from the radio.
+    queue: mpsc::Sender<Bytes>,
+    /// Ends its tasks.
+    end: CancellationToken,
+    /// Since when its queue has been full (frames dropped for it) without being drained.
+    behind: Arc<Mutex<Option<Instant>>>,
+}
+
 /// The hub's main task: frames from the radio to the clients, new clients accepted.
 struct Serve {
     /// New clients' queues of frames to the radio, for the [`RadioWriter`].
@@ -522,7 +543,7 @@ struct Serve {
     /// The permits of the 255 frame ids, one held by each route.
     ids: Arc<Semaphore>,
     /// Each client's queue of encoded frames, and what ends it.
-    clients: Vec<(mpsc::Sender<Bytes>, CancellationToken)>,
+    clients: Vec<Connected>,
     /// The number of the next client.
     next_client: u64,
     /// Whether the link to the radio is up: clients are served only then.
@@ -614,8 +635,8 @@ impl Serve {
 
     fn accept(&mut self, socket: TcpStream, peer: SocketAddr) {
         // Only while the radio's link is up: the hub does not listen otherwise.
-        self.clients.retain(|(client, _)| !client.is_closed());
-        if self.clients.len() >= MAX_CLIENTS {
+        self.clients.retain(|client| !client.queue.is_closed());
+        if self.clients.len() >= MAX_CLIENTS && !self.make_room(peer) {
             tracing::warn!(%peer, "hub: client turned away ({MAX_CLIENTS} connected)");
             return;
         }
@@ -625,7 +646,13 @@ impl Serve {
         let _ = socket.set_nodelay(true);
         let (queue, frames) = mpsc::channel(CLIENT_QUEUE);
         let end = self.stop.child_token();
-        self.clients.push((queue.clone(), end.clone()));
+        let behind = Arc::new(Mutex::new(None));
+        self.clients.push(Connected {
+            peer,
+            queue: queue.clone(),
+            end: end.clone(),
+            behind: behind.clone(),
+        });
         let number = self.next_client;
         self.next_client += 1;
         let client = Arc::new(Client {
@@ -639,6 +666,7 @@ impl Serve {
             permits: Arc::new(Semaphore::new(ROUTES_PER_CLIENT)),
             counters: self.counters.clone(),
             end,
+            behind,
         });
         let (rd, wr) = socket.into_split();
         let (frames_to_radio, queue) = mpsc::channel(CLIENT_FRAMES_TO_RADIO);
@@ -646,6 +674,29 @@ impl Serve {
         self.to_radio.ready.notify_one();
         self.tasks.spawn(client.clone().read(rd, frames_to_radio));
         self.tasks.spawn(client.write(wr, frames));
+    }
+
+    /// Ends the client that has fallen behind the radio's frames the longest, for
+    /// `peer`, a new one; whether there was one.
+    fn make_room(&mut self, peer: SocketAddr) -> bool {
+        let longest = self
+            .clients
+            .iter()
+            .enumerate()
+            .filter_map(|(index, client)| Some(((*lock(&client.behind))?, index)))
+            .min();
+        let Some((since, index)) = longest else {
+            return false;
+        };
+        let gone = self.clients.swap_remove(index);
+        gone.end.cancel();
+        tracing::warn!(
+            "hub: client {} dropped for {peer} ({MAX_CLIENTS} connected): it has taken none \
+             of the radio's frames for {:.1?}",
+            gone.peer,
+            since.elapsed()
+        );
+        true
     }
 
     /// A frame from the radio: an answer to its client, anything else to every client.
@@ -666,8 +717,8 @@ impl Serve {
                 if !self.radio_up {
                     // The clients' links see the outage as the hub's own link does (and
                     // reconnect to the hub once the radio is back).
-                    for (_, end) in self.clients.drain(..) {
-                        end.cancel();
+                    for client in self.clients.drain(..) {
+                        client.end.cancel();
                     }
                 }
                 return;
@@ -686,10 +737,11 @@ impl Serve {
         };
         let counters = &self.counters;
         self.clients
-            .retain(|(client, _)| match client.try_send(bytes.clone()) {
+            .retain(|client| match client.queue.try_send(bytes.clone()) {
                 Ok(()) => true,
                 Err(mpsc::error::TrySendError::Full(_)) => {
                     bump(&counters.frames_dropped);
+                    lock(&client.behind).get_or_insert_with(Instant::now);
                     true
                 }
                 Err(mpsc::error::TrySendError::Closed(_)) => false,
@@ -763,9 +815,12 @@ struct Client {
     /// Its [`ROUTES_PER_CLIENT`] permits to have a request waiting for answers.
     permits: Arc<Semaphore>,
     counters: Arc<Counters>,
-    /// Ends both its tasks: the hub stopped, the radio's link went down, or its
-    /// connection failed.
+    /// Ends both its tasks: the hub stopped, the radio's link went down, its
+    /// connection failed, or another client took its place.
     end: CancellationToken,
+    /// Since when its queue of frames from the radio has been full, without being
+    /// drained since.
+    behind: Arc<Mutex<Option<Instant>>>,
 }
 
 impl Drop for Client {
@@ -820,11 +875,15 @@ impl Client {
                 if let Err(error) = wr.write_all(&bytes).await {
                     return error.to_string();
                 }
+                if frames.is_empty() {
+                    // Caught up.
+                    *lock(&self.behind) = None;
+                }
             }
             "the hub stopped".to_owned()
         };
         let reason = tokio::select! {
-            () = self.end.cancelled() => "the hub stopped, or the radio's link went down".to_owned(),
+            () = self.end.cancelled() => "the hub stopped, the radio's link went down, or another client took its place".to_owned(),
             reason = write => reason,
         };
         self.end.cancel();

@@ -1,0 +1,133 @@
+//! Connections that take nothing from the hub cannot lock the others out: with
+//! `MAX_CLIENTS` connected, a new client takes the place of one that has fallen behind
+//! the radio's frames, never of one that keeps up. Over real TCP sockets.
+
+use std::time::Duration;
+
+use futures::{SinkExt, StreamExt};
+use mcp_host::codec::{CodecItem, XBeeCodec};
+use mcp_host::hub::{Hub, MAX_CLIENTS};
+use mcp_host::{Link, LinkOptions};
+use tokio::io::AsyncReadExt;
+use tokio::net::{TcpListener, TcpStream};
+use tokio_util::codec::Framed;
+use xbee_api::{ApiMode, RawFrame};
+
+/// Failure guard only: every wait ends on a frame long before this.
+const GUARD: Duration = Duration::from_secs(30);
+
+type Wire = Framed<TcpStream, XBeeCodec>;
+
+async fn send(wire: &mut Wire, data: &[u8]) {
+    wire.send(&RawFrame::new(data).unwrap()).await.unwrap();
+}
+
+async fn next(wire: &mut Wire) -> Vec<u8> {
+    loop {
+        let item = tokio::time::timeout(GUARD, wire.next())
+            .await
+            .expect("a frame")
+            .expect("the connection stays")
+            .unwrap();
+        if let CodecItem::Frame(frame) = item {
+            return frame.data().to_vec();
+        }
+    }
+}
+
+/// Whether the hub closes `socket` at once, having turned it away (it writes nothing
+/// to a client before the radio sends something).
+async fn turned_away(socket: &mut TcpStream) -> bool {
+    let mut byte = [0u8; 1];
+    let read = tokio::time::timeout(GUARD, socket.read(&mut byte)).await;
+    matches!(read, Ok(Ok(0) | Err(_)))
+}
+
+/// A client served by the hub: its frame reaches the radio.
+async fn served(hub: &Hub, radio: &mut Wire) -> Wire {
+    let socket = TcpStream::connect(hub.local_addr()).await.unwrap();
+    let mut client = Framed::new(socket, XBeeCodec::new(ApiMode::Unescaped));
+    send(&mut client, &[0x08, 0x00, b'S', b'H']).await;
+    assert_eq!(next(radio).await, [0x08, 0x00, b'S', b'H']);
+    client
+}
+
+#[tokio::test(flavor = "multi_thread")]
+async fn connections_that_take_nothing_give_their_place_to_new_clients_but_readers_keep_theirs() {
+    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let radio_link: Link = format!("tcp:{}", listener.local_addr().unwrap())
+        .parse()
+        .unwrap();
+    let (hub, accepted) = tokio::join!(
+        Hub::start(&radio_link, LinkOptions::default(), "127.0.0.1:0"),
+        listener.accept()
+    );
+    let hub = hub.unwrap();
+    let mut radio = Framed::new(accepted.unwrap().0, XBeeCodec::new(ApiMode::Unescaped));
+
+    // A monitor that reads all the radio's frames, and connections that never read.
+    let reader = TcpStream::connect(hub.local_addr()).await.unwrap();
+    let (seen, mut seen_rx) = tokio::sync::mpsc::unbounded_channel();
+    let reading = tokio::spawn(async move {
+        let mut reader = Framed::new(reader, XBeeCodec::new(ApiMode::Unescaped));
+        while let Some(Ok(CodecItem::Frame(frame))) = reader.next().await {
+            let data = frame.data();
+            let _ = seen.send(u32::from_be_bytes(data[12..16].try_into().unwrap()));
+        }
+    });
+    let mut idle = Vec::new();
+    for _ in 1..MAX_CLIENTS {
+        idle.push(TcpStream::connect(hub.local_addr()).await.unwrap());
+    }
+    // Full, and nobody behind yet: a new client is turned away (accepted in turn,
+    // after the others).
+    let mut late = TcpStream::connect(hub.local_addr()).await.unwrap();
+    assert!(turned_away(&mut late).await);
+
+    // The radio sends received packets until every idle connection has fallen behind:
+    // each packet of a batch dropped for all of them.
+    let mut packet = vec![
+        0x90, 0, 0x13, 0xA2, 0, 0x40, 0xB5, 0x99, 0xB9, 0xFF, 0xFE, 0x01,
+    ];
+    let mut number = 0u32;
+    let batch = 200;
+    loop {
+        let dropped = hub.stats().frames_dropped;
+        for _ in 0..batch {
+            number += 1;
+            packet.truncate(12);
+            packet.extend_from_slice(&number.to_be_bytes());
+            packet.resize(250, b'm');
+            radio.feed(&RawFrame::new(&packet).unwrap()).await.unwrap();
+        }
+        SinkExt::<&RawFrame<'_>>::flush(&mut radio).await.unwrap();
+        // The monitor keeps up.
+        loop {
+            let seen = tokio::time::timeout(GUARD, seen_rx.recv()).await.unwrap();
+            if seen.expect("the monitor stays") == number {
+                break;
+            }
+        }
+        let idle_count = (MAX_CLIENTS - 1) as u64;
+        if hub.stats().frames_dropped - dropped == idle_count * batch {
+            break;
+        }
+    }
+
+    // New clients take the idle connections' places, one each.
+    let mut new = Vec::new();
+    for _ in 1..MAX_CLIENTS {
+        new.push(served(&hub, &mut radio).await);
+    }
+    // Now nobody is behind: the monitor kept its place, and the next is turned away.
+    let mut late = TcpStream::connect(hub.local_addr()).await.unwrap();
+    assert!(turned_away(&mut late).await);
+    packet.truncate(12);
+    packet.extend_from_slice(&(number + 1).to_be_bytes());
+    send(&mut radio, &packet).await;
+    let seen = tokio::time::timeout(GUARD, seen_rx.recv()).await.unwrap();
+    assert_eq!(seen, Some(number + 1));
+    assert!(!reading.is_finished());
+    drop(idle);
+    hub.stop().await;
+}
