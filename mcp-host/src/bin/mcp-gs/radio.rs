@@ -35,7 +35,7 @@ pub(crate) struct RadioArgs {
     /// Print every delivery, not only connections and failures.
     #[arg(long, short)]
     verbose: bool,
-    /// Stop after this many seconds (default: run until Ctrl-C).
+    /// Stop after this many seconds; 0, the default, runs until Ctrl-C.
     #[arg(long, value_name = "S", value_parser = parse_duration)]
     duration: Option<Duration>,
 }
@@ -60,14 +60,22 @@ const MAX_DELAY_MS: u64 = 3_600_000;
 /// The longest `--duration`, seconds (about 31 years).
 const MAX_DURATION_S: f64 = 1e9;
 
-/// `--duration`: a number of seconds, 0 or more.
+/// `--duration` of `radio`, `sim` and `demo`: a number of seconds, 0 or more, where 0
+/// means no limit (run until Ctrl-C) in every subcommand. A time above 0 too short to
+/// count is one nanosecond, not 0.
 pub(crate) fn parse_duration(s: &str) -> Result<Duration, String> {
     s.parse::<f64>()
         .ok()
         .filter(|x| (0.0..=MAX_DURATION_S).contains(x))
-        .map(Duration::from_secs_f64)
+        .map(|x| match Duration::from_secs_f64(x) {
+            d if d.is_zero() && x > 0.0 => Duration::from_nanos(1),
+            d => d,
+        })
         .ok_or_else(|| {
-            format!("expected a number of seconds from 0 to {MAX_DURATION_S}, got `{s}`")
+            format!(
+                "expected a number of seconds from 0 (no limit: until Ctrl-C) to \
+                 {MAX_DURATION_S}, got `{s}`"
+            )
         })
 }
 
@@ -441,8 +449,9 @@ impl Repeats {
     }
 }
 
-/// Prints network events and carries out the cuts until Ctrl-C or `duration`. A failed
-/// delivery like one printed less than five seconds before is counted, not printed.
+/// Prints network events and carries out the cuts until Ctrl-C or `duration` (0: no
+/// limit). A failed delivery like one printed less than five seconds before is counted,
+/// not printed.
 pub(crate) async fn watch(
     network: &Network,
     mut events: broadcast::Receiver<NetEvent>,
@@ -451,7 +460,9 @@ pub(crate) async fn watch(
     duration: Option<Duration>,
 ) -> Result<(), Failure> {
     let mut timeline = net.timeline(Instant::now()).into_iter().peekable();
-    let deadline = duration.map(|d| Instant::now() + d);
+    let deadline = duration
+        .filter(|d| !d.is_zero())
+        .map(|d| Instant::now() + d);
     let stop = async {
         match deadline {
             Some(d) => tokio::time::sleep_until(d).await,

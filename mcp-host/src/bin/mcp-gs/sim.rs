@@ -39,7 +39,7 @@ pub(crate) struct SimArgs {
     /// Print every delivery, not only connections and failures.
     #[arg(long, short)]
     verbose: bool,
-    /// Stop after this many seconds (default: run until Ctrl-C).
+    /// Stop after this many seconds; 0, the default, runs until Ctrl-C.
     #[arg(long, value_name = "S", value_parser = parse_duration)]
     duration: Option<Duration>,
 }

@@ -1,0 +1,122 @@
+//! The `mcp-gs` binary as an operator uses it: durations, argument errors, hints, output
+//! formats, replays and Ctrl-C, each through real processes, links and signals.
+
+use std::process::{Command, Output};
+use std::sync::mpsc::Receiver;
+
+mod common;
+
+use common::{GUARD, Running, spawn_lines};
+
+/// The demo MAV's address.
+const M: &str = "0013a20040b599b9";
+
+fn gs() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+}
+
+fn run(args: &[&str]) -> Output {
+    gs().args(args).output().expect("mcp-gs runs")
+}
+
+fn stderr(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+fn stdout(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stdout).into_owned()
+}
+
+/// The first line from `lines` that contains `what` (failure guard: [`GUARD`]).
+fn line_with(lines: &Receiver<String>, what: &str) -> String {
+    loop {
+        match lines.recv_timeout(GUARD) {
+            Ok(line) if line.contains(what) => return line,
+            Ok(_) => {}
+            Err(e) => panic!("no line with {what:?}: {e}"),
+        }
+    }
+}
+
+/// Every line still to come from `lines`, up to the end of the output.
+fn rest(lines: &Receiver<String>) -> Vec<String> {
+    let mut all = Vec::new();
+    loop {
+        match lines.recv_timeout(GUARD) {
+            Ok(line) => all.push(line),
+            Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => return all,
+            Err(e) => panic!("output did not end: {e}; so far {all:?}"),
+        }
+    }
+}
+
+/// What an operator's Ctrl-C sends.
+fn interrupt(child: &std::process::Child) {
+    let pid = i32::try_from(child.id()).expect("pid");
+    // SAFETY: kill(2) with a pid of a child of this process and a valid signal.
+    let r = unsafe { libc::kill(pid, libc::SIGINT) };
+    assert_eq!(r, 0, "kill -INT {pid}");
+}
+
+/// The exit code of `child` (failure guard: [`GUARD`]).
+fn exit_code(child: &mut std::process::Child) -> Option<i32> {
+    let deadline = std::time::Instant::now() + GUARD;
+    loop {
+        if let Some(status) = child.try_wait().expect("wait") {
+            return status.code();
+        }
+        assert!(std::time::Instant::now() < deadline, "still running");
+        std::thread::yield_now();
+    }
+}
+
+/// The `tcp:` link of the coordinator a `sim` or `radio` line describes (`listening on
+/// ADDR (connect with tcp:ADDR)`).
+fn tcp_link(line: &str) -> String {
+    let start = line.find("connect with ").expect("a listening line") + "connect with ".len();
+    let end = line[start..].find(')').expect("a closing parenthesis");
+    line[start..start + end].to_owned()
+}
+
+#[test]
+fn duration_0_runs_until_ctrl_c_in_sim_and_radio() {
+    // sim: a ground station can still ask the MAV once the sim says it is running.
+    let (child, lines) = spawn_lines(&[
+        "sim",
+        "--link",
+        "tcp-listen:127.0.0.1:0",
+        "--duration",
+        "0",
+    ]);
+    let mut sim = Running(child);
+    let link = tcp_link(&line_with(&lines, "listening on"));
+    line_with(&lines, "running; Ctrl-C stops");
+    let output = run(&["status", "--link", &link, "--to", M, "landing"]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    assert!(stdout(&output).contains("report landing"));
+    interrupt(&sim.0);
+    assert_eq!(exit_code(&mut sim.0), Some(0));
+
+    // radio: the coordinator answers an AT command once it runs.
+    let (child, lines) = spawn_lines(&[
+        "radio",
+        "--coordinator",
+        "tcp-listen:127.0.0.1:0",
+        "--duration",
+        "0",
+    ]);
+    let mut radio = Running(child);
+    let link = tcp_link(&line_with(&lines, "listening on"));
+    line_with(&lines, "running; Ctrl-C stops");
+    let output = run(&["at", "--link", &link, "AP"]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    assert!(stdout(&output).starts_with("AP = "), "{}", stdout(&output));
+    interrupt(&radio.0);
+    assert_eq!(exit_code(&mut radio.0), Some(0));
+
+    // The help says so.
+    for sub in ["sim", "radio", "demo"] {
+        let help = stdout(&run(&[sub, "--help"]));
+        assert!(help.contains("0") && help.contains("until Ctrl-C"), "{help}");
+    }
+}
