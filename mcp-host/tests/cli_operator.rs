@@ -120,3 +120,27 @@ fn duration_0_runs_until_ctrl_c_in_sim_and_radio() {
         assert!(help.contains("0") && help.contains("until Ctrl-C"), "{help}");
     }
 }
+
+#[test]
+fn a_status_kind_with_no_status_request_says_why() {
+    for kind in ["0", "8", "0xff"] {
+        for args in [
+            &["status", "--link", "tcp:127.0.0.1:9", "--to", M, kind][..],
+            &["encode", "--to", M, "status", kind],
+        ] {
+            let output = run(args);
+            let stderr = stderr(&output);
+            assert_eq!(output.status.code(), Some(2), "{args:?}: {stderr}");
+            assert!(
+                stderr.contains("is not a command type with a status request"),
+                "{args:?}: {stderr}"
+            );
+            assert!(!stderr.contains("the position is in"), "{args:?}: {stderr}");
+            assert!(stderr.contains("landing"), "{args:?}: {stderr}");
+        }
+    }
+    // Position set has none for a reason of its own.
+    let output = run(&["encode", "--to", M, "status", "7"]);
+    assert_eq!(output.status.code(), Some(2));
+    assert!(stderr(&output).contains("the position is in the telemetry"));
+}

@@ -101,18 +101,29 @@ pub(crate) fn parse_status_kind(s: &str) -> Result<CommandType, String> {
             .parse::<CommandType>()
             .map_err(|_| format!("not a status request kind: {STATUS_KINDS}"))?,
     };
-    if kind == CommandType::PositionSet {
-        return Err(format!(
-            "{kind} has no status request (the position is in the telemetry): {STATUS_KINDS}"
-        ));
+    no_status_request(kind).map_or(Ok(kind), Err)
+}
+
+/// Why `kind` has no status request, if it has none.
+fn no_status_request(kind: CommandType) -> Option<String> {
+    if StatusRequest::for_type(kind, TelemetryId::from(0)).is_some() {
+        return None;
     }
-    Ok(kind)
+    Some(match kind {
+        CommandType::PositionSet => format!(
+            "{kind} has no status request (the position is in the telemetry): {STATUS_KINDS}"
+        ),
+        _ => format!(
+            "{} is not a command type with a status request: {STATUS_KINDS}",
+            u8::from(kind)
+        ),
+    })
 }
 
 /// The kinds [`parse_status_kind`] takes, for its errors.
 const STATUS_KINDS: &str = "give telemetry_to_coordinator (or telemetry), landing, \
     controllers (controller), trajectory_set (trajectory), position_slave_set (slave-set), \
-    time, or a command type number";
+    time, or the number of one of them (1 to 6)";
 
 fn parse_slot(s: &str) -> Result<Slot, String> {
     s.parse::<u8>()
@@ -242,9 +253,8 @@ pub(crate) fn status_request(
             Ok(StatusRequest::TelemetryToCoordinator(id))
         }
         (_, Some(_)) => Err(format!("a {kind} status request takes no telemetry id")),
-        (kind, None) => StatusRequest::for_type(kind, TelemetryId::from(0)).ok_or_else(|| {
-            format!("{kind} has no status request (the position is in the telemetry)")
-        }),
+        (kind, None) => StatusRequest::for_type(kind, TelemetryId::from(0))
+            .ok_or_else(|| no_status_request(kind).unwrap_or_default()),
     }
 }
 
