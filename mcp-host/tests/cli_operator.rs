@@ -144,3 +144,47 @@ fn a_status_kind_with_no_status_request_says_why() {
     assert_eq!(output.status.code(), Some(2));
     assert!(stderr(&output).contains("the position is in the telemetry"));
 }
+
+#[test]
+fn a_path_that_is_no_serial_port_says_so() {
+    let dir = tempdir("no-serial-port");
+    let file = dir.join("capture.bin");
+    std::fs::write(&file, b"not a radio").unwrap();
+    for (path, what) in [
+        ("/dev/null", "a device that is no terminal"),
+        (file.to_str().unwrap(), "a regular file"),
+        (dir.to_str().unwrap(), "a directory"),
+    ] {
+        let output = run(&["monitor", "--link", &format!("serial:{path}")]);
+        let stderr = stderr(&output);
+        assert_eq!(output.status.code(), Some(3), "{stderr}");
+        assert!(
+            stderr.contains(&format!("not a serial port ({path} is {what})")),
+            "{stderr}"
+        );
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_refused_connection_hints_at_a_hub_without_its_radio() {
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let link = format!("tcp:{}", listener.local_addr().unwrap());
+    drop(listener);
+    let output = run(&["send", "--link", &link, "--to", M, "landing", "on"]);
+    let stderr = stderr(&output);
+    assert_eq!(output.status.code(), Some(3), "{stderr}");
+    assert!(stderr.contains("nothing listens there"), "{stderr}");
+    assert!(
+        stderr.contains("a hub whose radio is disconnected refuses connections"),
+        "{stderr}"
+    );
+}
+
+/// A fresh directory for one test.
+fn tempdir(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("mcp-gs-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}

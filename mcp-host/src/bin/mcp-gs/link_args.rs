@@ -336,14 +336,38 @@ fn link_hint(error: &LinkError, link: &Link) -> Option<String> {
                  time can use a serial port; to share the radio, let `mcp-gs hub --link {link}` \
                  hold it and give the other commands --link tcp:127.0.0.1:9750"
             )),
-            _ => None,
+            _ => not_a_serial_port(&source.description, link),
         },
         LinkError::Connect { source, .. } if source.kind() == Io::ConnectionRefused => Some(
-            "nothing listens there: is the radio bridge, `mcp-gs hub` or `mcp-gs sim` running?"
+            "nothing listens there: is the radio bridge, `mcp-gs hub` or `mcp-gs sim` running \
+             (a hub whose radio is disconnected refuses connections)?"
                 .into(),
         ),
         _ => None,
     }
+}
+
+/// The hint for a serial link whose path is no serial port: a regular file, a
+/// directory, or a device that is no terminal (`/dev/null`: opening it fails with
+/// ENOTTY, whose text depends on the C library).
+fn not_a_serial_port(description: &str, link: &Link) -> Option<String> {
+    let Link::Serial { path, .. } = link else {
+        return None;
+    };
+    let what = match std::fs::metadata(path) {
+        Ok(meta) if meta.is_dir() => "a directory",
+        Ok(meta) if meta.is_file() => "a regular file",
+        _ if ["Not a typewriter", "Inappropriate ioctl", "Not a tty"]
+            .iter()
+            .any(|text| description.contains(text)) =>
+        {
+            "a device that is no terminal"
+        }
+        _ => return None,
+    };
+    Some(format!(
+        "not a serial port ({path} is {what}): `mcp-gs ports` lists the serial ports present"
+    ))
 }
 
 /// A send that did not succeed.
