@@ -81,13 +81,8 @@ fn tcp_link(line: &str) -> String {
 #[test]
 fn duration_0_runs_until_ctrl_c_in_sim_and_radio() {
     // sim: a ground station can still ask the MAV once the sim says it is running.
-    let (child, lines) = spawn_lines(&[
-        "sim",
-        "--link",
-        "tcp-listen:127.0.0.1:0",
-        "--duration",
-        "0",
-    ]);
+    let (child, lines) =
+        spawn_lines(&["sim", "--link", "tcp-listen:127.0.0.1:0", "--duration", "0"]);
     let mut sim = Running(child);
     let link = tcp_link(&line_with(&lines, "listening on"));
     line_with(&lines, "running; Ctrl-C stops");
@@ -117,7 +112,10 @@ fn duration_0_runs_until_ctrl_c_in_sim_and_radio() {
     // The help says so.
     for sub in ["sim", "radio", "demo"] {
         let help = stdout(&run(&[sub, "--help"]));
-        assert!(help.contains("0") && help.contains("until Ctrl-C"), "{help}");
+        assert!(
+            help.contains("0") && help.contains("until Ctrl-C"),
+            "{help}"
+        );
     }
 }
 
@@ -187,4 +185,76 @@ fn tempdir(name: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("mcp-gs-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     dir
+}
+
+#[test]
+fn sim_and_radio_check_their_addresses_before_they_start() {
+    let other = "0013a20040b599aa";
+    let cut = format!("{other}@1+1");
+    let faults = format!("{other}=loss=1");
+    let cases: &[(&[&str], &str)] = &[
+        (
+            &["sim", "--link", "pty", "--address", M, "--address", M],
+            "given twice",
+        ),
+        (
+            &["sim", "--link", "pty", "--cut", &cut, "--duration", "1"],
+            &format!("--cut {other}: no simulated MAV has that address"),
+        ),
+        (
+            &[
+                "sim",
+                "--link",
+                "pty",
+                "--faults",
+                &faults,
+                "--duration",
+                "1",
+            ],
+            &format!("--faults {other}: no simulated MAV has that address"),
+        ),
+        (
+            &[
+                "radio",
+                "--coordinator",
+                "pty",
+                "--cut",
+                &cut,
+                "--duration",
+                "1",
+            ],
+            "the network has only the coordinator",
+        ),
+        (
+            &[
+                "radio",
+                "--coordinator",
+                "pty",
+                "--node",
+                &format!("{M}=pty"),
+                "--node",
+                &format!("{M}=pty"),
+            ],
+            "given twice",
+        ),
+    ];
+    for (args, message) in cases {
+        let output = run(args);
+        let stderr = stderr(&output);
+        assert_eq!(output.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(message), "{args:?}: {stderr}");
+        // Before anything started: not even the seed.
+        assert_eq!(stdout(&output), "", "{args:?}");
+    }
+    // A default MAV's address is one to cut.
+    let output = run(&[
+        "sim",
+        "--link",
+        "pty",
+        "--cut",
+        &format!("{M}@0+0"),
+        "--duration",
+        "0.01",
+    ]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
 }

@@ -163,6 +163,39 @@ impl NetArgs {
         })
     }
 
+    /// Checks, before anything starts, that every `--cut` and `--faults` names the
+    /// coordinator or one of `nodes` (the network's addresses besides the
+    /// coordinator's): a fault on a node that is not there would silently do nothing.
+    pub(crate) fn check_nodes(&self, nodes: &[Address64], what: &str) -> Result<(), Failure> {
+        let known =
+            |address: Address64| address == Address64::COORDINATOR || nodes.contains(&address);
+        let list = || {
+            let mut shown: Vec<String> = nodes.iter().take(8).map(ToString::to_string).collect();
+            if nodes.len() > shown.len() {
+                shown.push(format!("{} more", nodes.len() - shown.len()));
+            }
+            match shown.is_empty() {
+                true => "the network has only the coordinator".to_owned(),
+                false => format!("the network has the coordinator and {}", shown.join(", ")),
+            }
+        };
+        if let Some(cut) = self.cuts.iter().find(|c| !known(c.address)) {
+            return Err(Failure::input(format!(
+                "--cut {}: no {what} has that address ({})",
+                cut.address,
+                list()
+            )));
+        }
+        if let Some(faults) = self.link_faults.iter().find(|f| !known(f.address)) {
+            return Err(Failure::input(format!(
+                "--faults {}: no {what} has that address ({})",
+                faults.address,
+                list()
+            )));
+        }
+        Ok(())
+    }
+
     /// The per-link faults of `address`, if given.
     pub(crate) fn faults_of(&self, address: Address64) -> Option<Faults> {
         self.link_faults
@@ -223,6 +256,26 @@ fn describe_faults(f: &Faults) -> String {
         f.reorder,
         f.corrupt
     )
+}
+
+/// Checks, before anything starts, that the node addresses given have no address
+/// twice and neither the coordinator's nor the broadcast address (`what`: what a node
+/// is, for the message).
+pub(crate) fn check_distinct(nodes: &[Address64], what: &str) -> Result<(), Failure> {
+    for (i, node) in nodes.iter().enumerate() {
+        if *node == Address64::COORDINATOR || *node == Address64::BROADCAST {
+            return Err(Failure::input(format!(
+                "{node} is the coordinator's or the broadcast address: give each {what} \
+                 another one"
+            )));
+        }
+        if nodes[..i].contains(node) {
+            return Err(Failure::input(format!(
+                "{node} is given twice: each {what} needs an address of its own"
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// `ADDR@START+LENGTH`.
@@ -516,6 +569,9 @@ pub(crate) async fn watch(
 /// Runs `radio`.
 pub(crate) async fn run(args: RadioArgs) -> Result<(), Failure> {
     let config = args.net.config(MAX_UNICAST)?;
+    let addresses: Vec<Address64> = args.nodes.iter().map(|n| n.address).collect();
+    check_distinct(&addresses, "node")?;
+    args.net.check_nodes(&addresses, "node")?;
     args.net.describe(&config);
     let network = Network::new(config);
     let events = network.subscribe();

@@ -8,7 +8,7 @@ use mcp_host::radio::MAX_UNICAST_FRAGMENTED;
 use mcp_host::sim::{SimOptions, Simulator, fleet_addresses};
 use xbee_api::Address64;
 
-use crate::radio::{NetArgs, describe_node, parse_address, parse_duration, watch};
+use crate::radio::{NetArgs, check_distinct, describe_node, parse_address, parse_duration, watch};
 use crate::{ApiModeArg, Failure};
 
 /// Arguments of `sim`.
@@ -80,6 +80,8 @@ Example: mcp-gs sim --link pty --mavs 2   (then connect a ground station to the 
 
 /// Runs `sim`.
 pub(crate) async fn run(args: SimArgs) -> Result<(), Failure> {
+    // Checked as given: the defaults added below never repeat an address.
+    check_distinct(&args.addresses, "simulated MAV")?;
     let mut addresses = args.addresses.clone();
     let wanted = args.mavs.map_or(addresses.len().max(1), usize::from);
     for address in fleet_addresses(wanted + addresses.len()) {
@@ -91,11 +93,7 @@ pub(crate) async fn run(args: SimArgs) -> Result<(), Failure> {
         }
     }
     addresses.truncate(wanted.max(args.addresses.len()));
-    if addresses.contains(&Address64::COORDINATOR) || addresses.contains(&Address64::BROADCAST) {
-        return Err(Failure::input(
-            "a MAV cannot have the coordinator's or the broadcast address",
-        ));
-    }
+    args.net.check_nodes(&addresses, "simulated MAV")?;
     let config = args.net.config(MAX_UNICAST_FRAGMENTED)?;
     args.net.describe(&config);
     let options = SimOptions {
