@@ -258,3 +258,62 @@ fn sim_and_radio_check_their_addresses_before_they_start() {
     ]);
     assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
 }
+
+/// The payload of the frame `encode` printed (after the 17 bytes of header).
+fn encoded_payload(output: &Output) -> String {
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(output));
+    let out = stdout(output);
+    let bytes: Vec<&str> = out.split_whitespace().collect();
+    bytes[17..bytes.len() - 1].join(" ")
+}
+
+#[test]
+fn numbers_beyond_an_f32_and_names_in_any_case() {
+    for value in ["1e40", "-1e400"] {
+        let output = run(&["encode", "--to", M, "position-set", value, "0"]);
+        let stderr = stderr(&output);
+        assert_eq!(output.status.code(), Some(2), "{stderr}");
+        assert!(
+            stderr.contains("outside the range of a 32-bit float"),
+            "{stderr}"
+        );
+        assert!(!stderr.contains("not a finite number"), "{stderr}");
+    }
+    // Too small: sent as 0, with a warning.
+    let output = run(&["encode", "--to", M, "position-set", "1e-50", "0"]);
+    assert_eq!(encoded_payload(&output), "63 07 00 00 00 00 00 00 00 00");
+    assert!(stderr(&output).contains("sent as 0"), "{}", stderr(&output));
+
+    // Names in any case, as `status LANDING` always took.
+    for (args, payload) in [
+        (&["controller", "MPC"][..], "63 03 03"),
+        (&["telemetry", "on", "ALTITUDE"], "63 01 01 01"),
+        (&["status", "telemetry", "Pitch_Angle"], "63 01 FF 19"),
+        (&["status", "LANDING"], "63 02 FF"),
+        (&["controller", "254"], "63 03 FE"),
+    ] {
+        let mut argv = vec!["encode", "--to", M];
+        argv.extend_from_slice(args);
+        assert_eq!(encoded_payload(&run(&argv)), payload, "{args:?}");
+    }
+    let output = run(&[
+        "status",
+        "--link",
+        "tcp:127.0.0.1:9",
+        "--to",
+        M,
+        "telemetry",
+        "ALTITUDE",
+    ]);
+    // Past the arguments: the link is what fails.
+    assert_eq!(output.status.code(), Some(3), "{}", stderr(&output));
+
+    // The controllers a command takes: 0 to 254, as the messages say.
+    for controller in ["255", "fast"] {
+        let output = run(&["encode", "--to", M, "controller", controller]);
+        let stderr = stderr(&output);
+        assert_eq!(output.status.code(), Some(2), "{stderr}");
+        assert!(stderr.contains("0 to 254"), "{stderr}");
+        assert!(!stderr.contains("0 to 255"), "{stderr}");
+    }
+}

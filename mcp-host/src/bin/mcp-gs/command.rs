@@ -67,15 +67,63 @@ fn parse_waypoint(s: &str) -> Result<Waypoint, String> {
     })
 }
 
-/// A finite `f32`: NaN and infinities are no position a MAV can fly to (`raw` sends any
-/// bytes, for testing firmware).
+/// A finite `f32`: NaN and infinities are no position a MAV can fly to, nor is a number
+/// beyond the range of an `f32`, which would be sent as an infinity (`raw` sends any
+/// bytes, for testing firmware). A number too small for an `f32` is sent as 0, with a
+/// warning.
 pub(crate) fn parse_finite(s: &str) -> Result<f32, String> {
-    match s.parse::<f32>() {
-        Ok(v) if v.is_finite() => Ok(v),
-        Ok(_) => Err(format!(
+    let Ok(v) = s.parse::<f32>() else {
+        return Err(format!("`{s}` is not a number"));
+    };
+    let word = s.trim().trim_start_matches(['+', '-']).to_ascii_lowercase();
+    if v.is_nan() || ["inf", "infinity"].contains(&word.as_str()) {
+        return Err(format!(
             "`{s}` is not a finite number (to send any bytes, use `raw`)"
+        ));
+    }
+    if v.is_infinite() {
+        return Err(format!(
+            "`{s}` is outside the range of a 32-bit float (-{max:e} to {max:e}; to send \
+             any bytes, use `raw`)",
+            max = f32::MAX
+        ));
+    }
+    if v == 0.0 && s.parse::<f64>().is_ok_and(|wide| wide != 0.0) {
+        eprintln!(
+            "mcp-gs: warning: `{s}` is closer to 0 than a 32-bit float can hold: it is sent as 0"
+        );
+    }
+    Ok(v)
+}
+
+/// A name or number of an identifier (a telemetry id, a controller): names in any case,
+/// as every name on the command line.
+fn parse_id<T>(s: &str) -> Result<T, mcp_core::ParseIdError>
+where
+    T: std::str::FromStr<Err = mcp_core::ParseIdError>,
+{
+    s.to_ascii_lowercase().parse()
+}
+
+/// A telemetry id: a name in any case, or a number.
+pub(crate) fn parse_telemetry_id(s: &str) -> Result<TelemetryId, String> {
+    parse_id(s).map_err(|e| e.to_string())
+}
+
+/// A controller of a controllers command: a name in any case, or a number from 0 to 254
+/// (255 is the status request byte).
+fn parse_controller(s: &str) -> Result<Controller, String> {
+    match parse_id::<Controller>(s) {
+        Ok(c) if u8::from(c) != 0xFF => Ok(c),
+        Ok(_) => Err(
+            "controller 255 (0xFF) is the status request byte: give 0 to 254, or ask with \
+             `status controllers`"
+                .into(),
+        ),
+        Err(e) => Err(format!(
+            "not a controller: give a name ({}) or a number from 0 to 254 (decimal or 0x-hex)",
+            e.names().join(", ")
         )),
-        Err(_) => Err(format!("`{s}` is not a number")),
     }
 }
 
@@ -142,6 +190,7 @@ pub(crate) enum CommandArgs {
         #[arg(ignore_case = true)]
         state: OnOff,
         /// Telemetry id: a name (e.g. `estimated_altitude`) or a number (0-255).
+        #[arg(value_parser = parse_telemetry_id)]
         id: TelemetryId,
     },
     /// Landing: turn autonomous landing on or off.
@@ -153,6 +202,7 @@ pub(crate) enum CommandArgs {
     /// Controllers: switch the active controller (`manual`, `altitude`, `mpc` or a number).
     Controller {
         /// Controller: a name or a number (0-254).
+        #[arg(value_parser = parse_controller)]
         id: Controller,
     },
     /// Trajectory set: send the waypoints, in order (none clears the trajectory).
@@ -193,6 +243,7 @@ pub(crate) enum CommandArgs {
         #[arg(value_parser = parse_status_kind)]
         kind: CommandType,
         /// For `telemetry_to_coordinator`: the telemetry id.
+        #[arg(value_parser = parse_telemetry_id)]
         id: Option<TelemetryId>,
     },
     /// A text message (category `m`).

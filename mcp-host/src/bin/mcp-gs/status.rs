@@ -26,6 +26,7 @@ pub(crate) struct StatusArgs {
     #[arg(value_parser = crate::command::parse_status_kind)]
     kind: CommandType,
     /// For telemetry_to_coordinator: the telemetry id (a name or a number).
+    #[arg(value_parser = crate::command::parse_telemetry_id)]
     id: Option<TelemetryId>,
 }
 
