@@ -317,3 +317,86 @@ fn numbers_beyond_an_f32_and_names_in_any_case() {
         assert!(!stderr.contains("0 to 255"), "{stderr}");
     }
 }
+
+#[test]
+fn every_json_object_of_monitor_has_a_time() {
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let link = format!("tcp:{}", listener.local_addr().unwrap());
+    let peer = std::thread::spawn(move || {
+        let (mut socket, _) = listener.accept().unwrap();
+        let bytes = [
+            &[0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F][..], // modem status
+            &[0x7E, 0x00, 0x02, 0x8A, 0x06, 0x00],     // bad checksum
+            // Receive Packet: landing report "flight".
+            &[
+                0x7E, 0x00, 0x0F, 0x90, 0x00, 0x13, 0xA2, 0x00, 0x40, 0xB5, 0x99, 0xB9, 0x7D, 0x84,
+                0x01, 0x72, 0x02, 0x04,
+            ],
+        ]
+        .concat();
+        // The checksum of the Receive Packet.
+        let sum = bytes[15..].iter().fold(0u8, |s, b| s.wrapping_add(*b));
+        std::io::Write::write_all(&mut socket, &bytes).unwrap();
+        std::io::Write::write_all(&mut socket, &[0xFF - sum]).unwrap();
+        let mut buf = [0u8; 64];
+        while matches!(std::io::Read::read(&mut socket, &mut buf), Ok(n) if n > 0) {}
+    });
+    let output = run(&[
+        "monitor", "--link", &link, "--format", "json", "--count", "4",
+    ]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    let objects: Vec<serde_json::Value> = stdout(&output)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let kinds: Vec<&str> = objects
+        .iter()
+        .map(|o| {
+            o.get("link")
+                .or(o.get("frame"))
+                .or(o.get("error"))
+                .and_then(|v| v.as_str())
+                .unwrap_or("?")
+        })
+        .collect();
+    assert_eq!(
+        kinds,
+        ["connected", "modem_status", "checksum", "receive"],
+        "{objects:?}"
+    );
+    let now = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap()
+        .as_secs_f64();
+    for object in &objects {
+        let time = object["time"]
+            .as_f64()
+            .unwrap_or_else(|| panic!("{object}"));
+        assert!((now - time).abs() < 600.0, "{object}");
+    }
+    peer.join().unwrap();
+    // The help says so.
+    assert!(stdout(&run(&["monitor", "--help"])).contains("every JSON object carries `time`"));
+}
+
+#[test]
+fn decode_of_input_with_no_frame_is_an_input_error() {
+    let dir = tempdir("no-capture");
+    let file = dir.join("f");
+    std::fs::write(&file, b"MCPRE").unwrap();
+    for summary in [false, true] {
+        let mut args = vec!["decode", file.to_str().unwrap()];
+        args.extend(summary.then_some("--summary"));
+        let output = run(&args);
+        let stderr = stderr(&output);
+        assert_eq!(output.status.code(), Some(2), "{stderr}");
+        assert!(stderr.contains("no XBee frame in 5 bytes"), "{stderr}");
+    }
+    // Empty input holds nothing wrong.
+    std::fs::write(&file, b"").unwrap();
+    assert_eq!(
+        run(&["decode", file.to_str().unwrap()]).status.code(),
+        Some(0)
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

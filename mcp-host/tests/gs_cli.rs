@@ -655,11 +655,11 @@ fn decode_says_what_input_it_cannot_read() {
     std::fs::write(&dump, hex).unwrap();
     let out = stdout(&run(&["decode", "--hex", dump.to_str().unwrap()]));
     assert!(out.contains("rx modem status coordinator_started"), "{out}");
-    // Bytes with no frame in them: said so, and exit 0 (nothing failed).
+    // Bytes with no frame in them: said so, and an input error.
     let noise = dir.join("noise.bin");
     std::fs::write(&noise, b"hello, this is no capture\n").unwrap();
     let output = run(&["decode", noise.to_str().unwrap()]);
-    assert_eq!(output.status.code(), Some(0));
+    assert_eq!(output.status.code(), Some(2));
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(stderr.contains("no XBee frame in 26 bytes"), "{stderr}");
     std::fs::remove_dir_all(&dir).unwrap();

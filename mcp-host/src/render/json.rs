@@ -362,12 +362,13 @@ pub fn add_record_fields(
 /// An event of a [`crate::PacketStream`] as a JSON object: received packets as
 /// `receive` frames, other frames as [`frame`] writes them, decode errors as
 /// [`decode_error`] does (without offset), link changes as
-/// `{"link":"disconnected","reason":"..."}`. Every object has a `time` (seconds since
-/// 1970) where the event carries one.
+/// `{"link":"disconnected","reason":"..."}`. Every object has a `time`, seconds since
+/// 1970 (as [`seconds`] writes it): when a packet was received, and for other events
+/// (which carry no time) when this function renders them, as they arrive.
 pub fn event(event: &Event) -> Value {
-    match event {
-        Event::Packet(rx) => receive(&rx.origin, packet_json(&rx.packet)),
-        Event::InvalidPacket(rx) => receive(&rx.origin, mcp(&rx.payload)),
+    let mut value = match event {
+        Event::Packet(rx) => return receive(&rx.origin, packet_json(&rx.packet)),
+        Event::InvalidPacket(rx) => return receive(&rx.origin, mcp(&rx.payload)),
         Event::Frame(frame) => match frame.parse() {
             Ok(parsed) => self::frame(&parsed),
             Err(error) => json!({
@@ -378,7 +379,11 @@ pub fn event(event: &Event) -> Value {
         },
         Event::DecodeError(error) => decode_error(error, None),
         Event::Link(link) => link_event(link),
+    };
+    if let Value::Object(map) = &mut value {
+        map.insert("time".into(), seconds(std::time::SystemTime::now()).into());
     }
+    value
 }
 
 /// A time as the JSON objects carry it: seconds since 1970, with microseconds (0 for a

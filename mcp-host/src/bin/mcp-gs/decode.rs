@@ -275,9 +275,8 @@ fn decode_stream(
             decoder.stats(),
         )?;
     }
-    if let Some(hint) = mode_hint(mode, decoder.stats()) {
-        eprintln!("mcp-gs: {hint}");
-    } else if offset > 0 && decoder.stats().frames_ok == 0 {
+    let hint = mode_hint(mode, decoder.stats());
+    if offset > 0 && decoder.stats().frames_ok == 0 {
         let stats = decoder.stats();
         let errors =
             stats.bad_checksum + stats.oversize + stats.empty + stats.truncated + stats.bad_escape;
@@ -289,9 +288,16 @@ fn decode_stream(
              needs --hex)"
                 .to_owned()
         };
-        eprintln!(
-            "mcp-gs: no XBee frame in {offset} bytes ({errors} candidate frames dropped): {advice}"
-        );
+        // Input that holds no frame at all is an input error, for scripts to tell.
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidData,
+            format!(
+                "no XBee frame in {offset} bytes ({errors} candidate frames dropped): {advice}"
+            ),
+        ));
+    }
+    if let Some(hint) = hint {
+        eprintln!("mcp-gs: {hint}");
     }
     Ok(())
 }

@@ -19,8 +19,8 @@ use crate::{Failure, Format};
 pub(crate) struct MonitorArgs {
     #[command(flatten)]
     link: LinkArgs,
-    /// Output format: text lines start with the UTC time of day (HH:MM:SS.mmm); JSON
-    /// objects carry `time`, seconds since 1970.
+    /// Output format: text lines start with the UTC time of day (HH:MM:SS.mmm); every
+    /// JSON object carries `time`, seconds since 1970 (with microseconds).
     #[arg(long, value_enum, default_value_t = Format::Text)]
     format: Format,
     /// Also record every received frame to FILE (see `decode` and `replay`). An
