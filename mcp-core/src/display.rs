@@ -15,12 +15,60 @@ fn on_off(on: bool) -> &'static str {
     if on { "on" } else { "off" }
 }
 
+/// An `f32` as text, in the shortest digits that read back as the same `f32`:
+/// positional for ordinary magnitudes (`1.5`, `-0.25`, `1200`), with an exponent below
+/// 1e-4 and from 1e9 on (`3.4e38`, `1e-45`), where positional notation would print
+/// dozens of zeros. NaN and the infinities print as `NaN`, `inf` and `-inf`.
+struct Float(f32);
+
+impl Float {
+    /// Below this magnitude (but not 0), an exponent.
+    const SMALL: f32 = 1e-4;
+    /// From this magnitude on, an exponent.
+    const LARGE: f32 = 1e9;
+}
+
+impl fmt::Display for Float {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let magnitude = self.0.abs();
+        if magnitude.is_finite()
+            && magnitude != 0.0
+            && !(Self::SMALL..Self::LARGE).contains(&magnitude)
+        {
+            write!(f, "{:e}", self.0)
+        } else {
+            write!(f, "{}", self.0)
+        }
+    }
+}
+
+/// Writes to a formatter with every `"` escaped as `\"`: text between quotes (whose
+/// backslashes are already escaped) reads back unambiguously.
+struct EscapeQuotes<'a, 'f>(&'a mut fmt::Formatter<'f>);
+
+impl fmt::Write for EscapeQuotes<'_, '_> {
+    fn write_str(&mut self, s: &str) -> fmt::Result {
+        let mut parts = s.split('"');
+        if let Some(first) = parts.next() {
+            self.0.write_str(first)?;
+        }
+        for part in parts {
+            self.0.write_str("\\\"")?;
+            self.0.write_str(part)?;
+        }
+        Ok(())
+    }
+}
+
 impl fmt::Display for Waypoint {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
             "(time={} elevator={} aileron={} altitude={})",
-            self.time, self.elevator, self.aileron, self.altitude
+            self.time,
+            Float(self.elevator),
+            Float(self.aileron),
+            Float(self.altitude)
         )
     }
 }
@@ -41,7 +89,7 @@ impl<B: AsRef<[u8]>> fmt::Display for Telemetry<B> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let mut sep = "";
         for r in self.iter() {
-            write!(f, "{sep}{}={}", r.id, r.value)?;
+            write!(f, "{sep}{}={}", r.id, Float(r.value))?;
             sep = " ";
         }
         Ok(())
@@ -67,7 +115,12 @@ impl<B: AsRef<[u8]>> fmt::Display for Command<B> {
             } => write!(f, " {address}"),
             Command::Time(t) => write!(f, " {t}"),
             Command::PositionSet { elevator, aileron } => {
-                write!(f, " elevator={elevator} aileron={aileron}")
+                write!(
+                    f,
+                    " elevator={} aileron={}",
+                    Float(*elevator),
+                    Float(*aileron)
+                )
             }
             Command::StatusRequest(StatusRequest::TelemetryToCoordinator(id)) => {
                 write!(f, " status request {id}")
@@ -98,7 +151,8 @@ impl<B: AsRef<[u8]>> fmt::Display for Report<B> {
 impl<B: AsRef<[u8]>> fmt::Display for Packet<B> {
     /// The category, then the packet's content: `command landing on`,
     /// `telemetry altitude=1.5`, `message "Hello World"` (text escaped as by
-    /// [`Text`](crate::Text)'s `Display`).
+    /// [`Text`](crate::Text)'s `Display`, and `"` as `\"`). Floats print in their
+    /// shortest round-trip digits, with an exponent when very large or small (`3.4e38`).
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "{}", self.category())?;
         match self {
@@ -106,7 +160,11 @@ impl<B: AsRef<[u8]>> fmt::Display for Packet<B> {
             Packet::Report(r) => write!(f, " {r}"),
             Packet::Telemetry(t) if t.is_empty() => Ok(()),
             Packet::Telemetry(t) => write!(f, " {t}"),
-            Packet::Message(t) | Packet::Warning(t) => write!(f, " \"{t}\""),
+            Packet::Message(t) | Packet::Warning(t) => {
+                f.write_str(" \"")?;
+                fmt::Write::write_fmt(&mut EscapeQuotes(f), format_args!("{t}"))?;
+                f.write_str("\"")
+            }
         }
     }
 }
@@ -137,7 +195,8 @@ mod tests {
             "telemetry altitude=1.5 pitch_angle=-0.25"
         );
         assert_eq!(show(b"t"), "telemetry");
-        assert_eq!(show(b"m\"hi\"\xff"), "message \"\"hi\"\\xff\"");
+        assert_eq!(show(b"m\"hi\"\xff"), r#"message "\"hi\"\xff""#);
+        assert_eq!(show(b"ma\"b\\c"), r#"message "a\"b\\c""#);
         assert_eq!(show(b"r\x06\x78\x56\x34\x12"), "report time 305419896");
         assert_eq!(
             show(b"c\x05\x01\x00\x13\xa2\x00\x40\xb5\x99\xb9"),
@@ -151,5 +210,44 @@ mod tests {
             show(b"c\x07\x00\x00\xc0\x3f\x00\x00\x10\xc0"),
             "command position_set elevator=1.5 aileron=-2.25"
         );
+    }
+
+    #[test]
+    fn very_large_and_small_floats_print_with_an_exponent() {
+        use std::format;
+        let position = |elevator: f32, aileron: f32| {
+            let mut bytes = std::vec![b'c', 0x07];
+            bytes.extend_from_slice(&elevator.to_le_bytes());
+            bytes.extend_from_slice(&aileron.to_le_bytes());
+            show(&bytes)
+        };
+        assert_eq!(
+            position(1e-45, 3.4e38),
+            "command position_set elevator=1e-45 aileron=3.4e38"
+        );
+        assert_eq!(
+            position(-f32::MAX, f32::MIN_POSITIVE),
+            "command position_set elevator=-3.4028235e38 aileron=1.1754944e-38"
+        );
+        // Ordinary magnitudes as before, at both ends of the range.
+        assert_eq!(
+            position(0.0001, 123456790.0),
+            "command position_set elevator=0.0001 aileron=123456790"
+        );
+        assert_eq!(
+            position(0.0, -0.0),
+            "command position_set elevator=0 aileron=-0"
+        );
+        assert_eq!(
+            position(f32::NAN, f32::NEG_INFINITY),
+            "command position_set elevator=NaN aileron=-inf"
+        );
+        // Shortest digits that read back as the same f32.
+        for value in [1e-45f32, 3.4e38, 0.99999982, 1.0e9, 9.999999e-5] {
+            let text = format!("{}", super::Float(value));
+            assert_eq!(text.parse::<f32>().unwrap(), value, "{text}");
+        }
+        let telemetry = show(b"t\x01\x01\x00\x00\x00");
+        assert_eq!(telemetry, "telemetry altitude=1e-45");
     }
 }

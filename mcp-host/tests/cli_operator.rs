@@ -400,3 +400,52 @@ fn decode_of_input_with_no_frame_is_an_input_error() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `decode --hex` of what `encode` printed for `command`, in `format`.
+fn encode_then_decode(command: &[&str], format: &str) -> String {
+    let mut argv = vec!["encode", "--to", M];
+    argv.extend_from_slice(command);
+    let frame = stdout(&run(&argv));
+    let mut child = gs()
+        .args(["decode", "--hex", "--format", format])
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::io::Write::write_all(&mut child.stdin.take().unwrap(), frame.as_bytes()).unwrap();
+    let output = child.wait_with_output().unwrap();
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    stdout(&output)
+}
+
+#[test]
+fn floats_and_text_print_unambiguously() {
+    let payload: String = [b'c', 0x07]
+        .into_iter()
+        .chain(0.999_999_8_f32.to_le_bytes())
+        .chain(3.4e38_f32.to_le_bytes())
+        .map(|b| format!("{b:02x}"))
+        .collect();
+    let text = encode_then_decode(&["raw", &payload], "text");
+    assert!(
+        text.contains("position_set elevator=0.9999998 aileron=3.4e38"),
+        "{text}"
+    );
+    let json = encode_then_decode(&["raw", &payload], "json");
+    assert!(json.contains(r#""elevator":0.9999998,"#), "{json}");
+    let value: serde_json::Value = serde_json::from_str(json.trim()).unwrap();
+    assert_eq!(value["mcp"]["aileron"].as_f64().unwrap() as f32, 3.4e38);
+    // Tiny numbers too.
+    let payload: String = [b't', 0x01]
+        .into_iter()
+        .chain(1e-45_f32.to_le_bytes())
+        .map(|b| format!("{b:02x}"))
+        .collect();
+    let text = encode_then_decode(&["raw", &payload], "text");
+    assert!(text.contains("telemetry altitude=1e-45"), "{text}");
+
+    // A quote inside a message is escaped, as a backslash is.
+    let text = encode_then_decode(&["message", r#"a"b\c"#], "text");
+    assert!(text.contains(r#"message "a\"b\\c""#), "{text}");
+}

@@ -26,14 +26,19 @@ pub fn hex(bytes: &[u8]) -> String {
         })
 }
 
-/// A float as JSON: a number, or `"NaN"`, `"Infinity"`, `"-Infinity"`.
+/// A float as JSON: a number in the shortest digits that read back as the same `f32`
+/// (`0.9999998`, not the `0.9999998211860657` of the `f64` it widens to), or `"NaN"`,
+/// `"Infinity"`, `"-Infinity"`.
 pub fn float(value: f32) -> Value {
     if value.is_nan() {
         Value::from("NaN")
     } else if value.is_infinite() {
         Value::from(if value > 0.0 { "Infinity" } else { "-Infinity" })
     } else {
-        Value::from(f64::from(value))
+        // The f64 nearest the f32's shortest decimal, which serde_json writes in those
+        // same digits (an f64 has more than enough to keep them).
+        let shortest = value.to_string().parse::<f64>().unwrap_or(f64::from(value));
+        Value::from(shortest)
     }
 }
 
@@ -411,5 +416,29 @@ fn link_event(link: &LinkEvent) -> Value {
         LinkEvent::Disconnected { reason } => json!({"link": "disconnected", "reason": reason}),
         LinkEvent::Reconnected { peer } => json!({"link": "reconnected", "peer": peer}),
         LinkEvent::Closed { reason } => json!({"link": "closed", "reason": reason}),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn floats_keep_the_shortest_digits_of_their_f32() {
+        for (value, text) in [
+            (0.999_999_8_f32, "0.9999998"),
+            (1.5, "1.5"),
+            (-0.1, "-0.1"),
+            (1e-45, "1e-45"),
+            (f32::MAX, "3.4028235e+38"),
+            (0.0, "0.0"),
+        ] {
+            let json = float(value).to_string();
+            assert_eq!(json, text, "{value}");
+            let back: f64 = serde_json::from_str(&json).unwrap();
+            assert_eq!(back as f32, value, "{json}");
+        }
+        assert_eq!(float(f32::NAN), "NaN");
+        assert_eq!(float(f32::NEG_INFINITY), "-Infinity");
     }
 }
