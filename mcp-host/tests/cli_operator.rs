@@ -449,3 +449,97 @@ fn floats_and_text_print_unambiguously() {
     let text = encode_then_decode(&["message", r#"a"b\c"#], "text");
     assert!(text.contains(r#"message "a\"b\\c""#), "{text}");
 }
+
+fn posix_now() -> u64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap()
+        .as_secs()
+}
+
+#[test]
+fn waypoint_times_from_now_and_their_help() {
+    for (time, ahead) in [("+10", 10), ("now", 0), ("NOW", 0), ("+0", 0)] {
+        let before = posix_now();
+        let waypoint = format!("{time},0.5,0.5,1");
+        let output = run(&["encode", "--to", M, "trajectory", "--waypoint", &waypoint]);
+        let after = posix_now();
+        let payload = encoded_payload(&output);
+        let bytes: Vec<u8> = payload
+            .split_whitespace()
+            .map(|b| u8::from_str_radix(b, 16).unwrap())
+            .collect();
+        // c, 4, count, then the first waypoint's time.
+        let sent = u64::from(u32::from_le_bytes(bytes[3..7].try_into().unwrap()));
+        assert!(
+            (before + ahead..=after + ahead).contains(&sent),
+            "{time}: {sent} not in {}..={}",
+            before + ahead,
+            after + ahead
+        );
+        assert_eq!(stderr(&output), "", "{time}");
+    }
+    // A time in 1970 is most likely meant from now: sent as given, with a warning.
+    let output = run(&[
+        "encode",
+        "--to",
+        M,
+        "trajectory",
+        "--waypoint",
+        "10,0.5,0.5,1",
+    ]);
+    assert!(encoded_payload(&output).starts_with("63 04 01 0A 00 00 00"));
+    assert!(stderr(&output).contains("give +10"), "{}", stderr(&output));
+    for bad in [
+        "+x,0,0,1",
+        "+-1,0,0,1",
+        "+4294967295,0,0,1",
+        "yesterday,0,0,1",
+    ] {
+        let output = run(&["encode", "--to", M, "trajectory", "--waypoint", bad]);
+        assert_eq!(output.status.code(), Some(2), "{bad}");
+    }
+    let help = stdout(&run(&["send", "trajectory", "--help"]));
+    assert!(
+        help.contains("seconds since 1970") && help.contains("+N") && help.contains("now"),
+        "{help}"
+    );
+}
+
+#[test]
+fn the_size_warning_names_the_command() {
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let link = format!("tcp:{}", listener.local_addr().unwrap());
+    drop(listener);
+    let long = "x".repeat(44);
+    let fits = "x".repeat(43);
+    let waypoints = ["--waypoint", "+1,0,0,1"].repeat(3);
+    let raw = "00".repeat(45);
+    let cases: [(Vec<&str>, Option<&str>); 4] = [
+        (
+            vec!["message", &long],
+            Some("a message of more than 43 bytes"),
+        ),
+        (vec!["message", &fits], None),
+        (
+            [&["trajectory"][..], &waypoints].concat(),
+            Some("a trajectory of more than 2 waypoints"),
+        ),
+        (vec!["raw", &raw], Some("a packet of more than 44 bytes")),
+    ];
+    for (command, warning) in cases {
+        let mut argv = vec!["send", "--link", &link, "--to", M];
+        argv.extend(&command);
+        let output = run(&argv);
+        let stderr = stderr(&output);
+        // The link is not there: the warning comes first all the same.
+        assert_eq!(output.status.code(), Some(3), "{stderr}");
+        match warning {
+            Some(warning) => {
+                assert!(stderr.contains(warning), "{command:?}: {stderr}");
+                assert_eq!(stderr.matches("warning").count(), 1, "{stderr}");
+            }
+            None => assert!(!stderr.contains("warning"), "{command:?}: {stderr}"),
+        }
+    }
+}

@@ -58,13 +58,46 @@ fn parse_waypoint(s: &str) -> Result<Waypoint, String> {
     };
     let float = |name: &str, v: &str| parse_finite(v).map_err(|e| format!("{name} {e}"));
     Ok(Waypoint {
-        time: time
-            .parse()
-            .map_err(|_| format!("time `{time}` is not a whole number of seconds (u32)"))?,
+        time: parse_waypoint_time(time)?,
         elevator: float("elevator", elevator)?,
         aileron: float("aileron", aileron)?,
         altitude: float("altitude", altitude)?,
     })
+}
+
+/// Before this time (2000-01-01 00:00:00 UTC), a waypoint's absolute time is most
+/// likely meant as seconds from now.
+const Y2000: u32 = 946_684_800;
+
+/// A waypoint's TIME: the MAV's clock time, seconds since 1970: `now`, `+N` (N seconds
+/// from now, by this machine's clock) or the absolute time. An absolute time before 2000
+/// is taken as given, with a warning.
+fn parse_waypoint_time(t: &str) -> Result<u32, String> {
+    if t.eq_ignore_ascii_case("now") {
+        return now();
+    }
+    if let Some(seconds) = t.strip_prefix('+') {
+        let seconds: u32 = seconds.parse().map_err(|_| {
+            format!("time `{t}`: +N takes a whole number of seconds from now (e.g. +10)")
+        })?;
+        return now()?
+            .checked_add(seconds)
+            .ok_or_else(|| format!("time `{t}` is past 2106: it does not fit u32"));
+    }
+    let time: u32 = t.parse().map_err(|_| {
+        format!(
+            "time `{t}` is not `now`, `+SECONDS` or a whole number of seconds since 1970 \
+             (0 to {})",
+            u32::MAX
+        )
+    })?;
+    if time < Y2000 {
+        eprintln!(
+            "mcp-gs: warning: waypoint time {time} is {time} s after 1970-01-01 00:00 UTC: TIME \
+             is the MAV's clock time, seconds since 1970; for {time} s from now, give +{time}"
+        );
+    }
+    Ok(time)
 }
 
 /// A finite `f32`: NaN and infinities are no position a MAV can fly to, nor is a number
@@ -207,7 +240,10 @@ pub(crate) enum CommandArgs {
     },
     /// Trajectory set: send the waypoints, in order (none clears the trajectory).
     Trajectory {
-        /// A waypoint as TIME,ELEVATOR,AILERON,ALTITUDE; repeat for more.
+        /// A waypoint as TIME,ELEVATOR,AILERON,ALTITUDE; repeat for more. TIME is the
+        /// MAV's clock time in seconds since 1970 (POSIX time, as `time` sets it): an
+        /// absolute time (e.g. 1763683210), `+N` for N seconds from now or `now`, both by
+        /// this machine's clock (set the MAV's with `time now` first).
         #[arg(long = "waypoint", value_name = "TIME,ELEV,AIL,ALT", value_parser = parse_waypoint, allow_hyphen_values = true)]
         waypoints: Vec<Waypoint>,
     },

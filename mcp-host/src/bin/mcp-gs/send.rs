@@ -37,12 +37,22 @@ pub(crate) async fn run(args: SendArgs) -> Result<(), Failure> {
     // The MAV receives the payload in a Receive Packet: 4 framing bytes and 12 of header.
     let frame = payload.len() + 4 + ReceivePacketRepr::HEADER_LEN;
     if frame > DEPLOYED_MAV_FRAME {
+        let largest = DEPLOYED_MAV_FRAME - 4 - ReceivePacketRepr::HEADER_LEN;
+        let what = match &args.command {
+            // A trajectory set: category, type and count, then 16 bytes a waypoint.
+            CommandArgs::Trajectory { .. } => {
+                format!("a trajectory of more than {} waypoints", (largest - 3) / 16)
+            }
+            // A message: the category, then the text.
+            CommandArgs::Message { .. } => {
+                format!("a message of more than {} bytes", largest - 1)
+            }
+            _ => format!("a packet of more than {largest} bytes"),
+        };
         eprintln!(
             "mcp-gs: warning: this {}-byte packet reaches the MAV in a {frame}-byte frame; the \
-             deployed MAV firmware drops frames over {DEPLOYED_MAV_FRAME} bytes (packets over \
-             {} bytes: a trajectory of more than 2 waypoints)",
+             deployed MAV firmware drops frames over {DEPLOYED_MAV_FRAME} bytes ({what})",
             payload.len(),
-            DEPLOYED_MAV_FRAME - 4 - ReceivePacketRepr::HEADER_LEN,
         );
     }
     let (mut stream, sender) = args.link.open(false).await?;
