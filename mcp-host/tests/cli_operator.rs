@@ -543,3 +543,74 @@ fn the_size_warning_names_the_command() {
         }
     }
 }
+
+#[test]
+fn at_no_apply_is_for_a_remote_radio() {
+    // A radio that answers nothing: with the fix, it is never asked.
+    let (link, peer) = common::silent_peer(1);
+    let output = run(&["at", "--link", &link, "--no-apply", "NI", "x"]);
+    let stderr = stderr(&output);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("--no-apply is for a remote radio"),
+        "{stderr}"
+    );
+    // The peer's one connection, for it to end.
+    drop(std::net::TcpStream::connect(link.trim_start_matches("tcp:")).unwrap());
+    peer.join().unwrap();
+}
+
+/// A recording of `records` (direction: 0 received, 1 sent; time in µs since 1970),
+/// each a modem status frame.
+fn recording(records: &[(u8, u64)]) -> Vec<u8> {
+    let mut bytes = b"MCPREC\x01\x00".to_vec();
+    for &(direction, micros) in records {
+        bytes.extend_from_slice(&micros.to_le_bytes());
+        bytes.push(direction);
+        bytes.extend_from_slice(&2u16.to_le_bytes());
+        bytes.extend_from_slice(&[0x8A, 0x06]);
+    }
+    bytes
+}
+
+#[test]
+fn replay_of_no_frame_of_the_chosen_direction_says_so_up_front() {
+    let dir = tempdir("replay-direction");
+    let received = dir.join("monitor.mcprec");
+    std::fs::write(&received, recording(&[(0, 1), (0, 2)])).unwrap();
+    let sent = dir.join("sent.mcprec");
+    std::fs::write(&sent, recording(&[(1, 1)])).unwrap();
+    let empty = dir.join("empty.mcprec");
+    std::fs::write(&empty, recording(&[])).unwrap();
+    // A link nobody listens on: with the fix, never opened.
+    for (file, frames, message) in [
+        (&received, "tx", "holds no sent frames"),
+        (&sent, "rx", "holds no received frames"),
+        (&empty, "both", "holds no frames"),
+    ] {
+        let output = run(&[
+            "replay",
+            file.to_str().unwrap(),
+            "--link",
+            "tcp-listen:127.0.0.1:0",
+            "--timeout",
+            "5",
+            "--frames",
+            frames,
+        ]);
+        let stderr = stderr(&output);
+        assert_eq!(output.status.code(), Some(2), "{stderr}");
+        assert!(stderr.contains(message), "{stderr}");
+        assert!(!stderr.contains("waiting"), "{stderr}");
+    }
+    let output = run(&[
+        "replay",
+        received.to_str().unwrap(),
+        "--link",
+        "tcp:127.0.0.1:9",
+        "--frames",
+        "tx",
+    ]);
+    assert!(stderr(&output).contains("records received frames only"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

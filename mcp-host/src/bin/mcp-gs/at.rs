@@ -18,7 +18,8 @@ pub(crate) struct AtArgs {
     /// VALUE is text, not hex (the default for the text parameters NI, DN, BI and VL).
     #[arg(long)]
     text: bool,
-    /// For a remote radio: do not apply the change at once (queue it until AC).
+    /// With --to: do not apply the change on the remote radio at once (it waits for AC).
+    /// Not for the local radio, which applies AT commands at once.
     #[arg(long)]
     no_apply: bool,
     /// The two-letter AT command, e.g. AP, NP, NI, SH, SL, MY, ID, CH.
@@ -124,6 +125,14 @@ fn parse_value(value: &str, text: bool) -> Result<Vec<u8>, String> {
 
 /// Runs `at`.
 pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
+    if args.no_apply && args.to.is_none() {
+        // The local radio would apply the change at once: refused rather than done
+        // against what was asked.
+        return Err(Failure::input(
+            "--no-apply is for a remote radio (--to ADDR): the local radio applies an AT \
+             command at once; drop --no-apply, or give --to",
+        ));
+    }
     let command: [u8; 2] = args
         .command
         .to_ascii_uppercase()

@@ -50,6 +50,7 @@ pub(crate) async fn run(args: ReplayArgs) -> Result<(), Failure> {
         .map_err(|e| Failure::input(format!("cannot open {}: {e}", args.file.display())))?;
     let reader = RecordReader::new(BufReader::new(file))
         .map_err(|e| Failure::input(format!("{}: {e}", args.file.display())))?;
+    check_wanted(&args)?;
     let (stream, sender) = args.link.open(false).await?;
     if let Some(path) = &stream.info().pty_path {
         eprintln!("mcp-gs: pseudo-terminal: {}", path.display());
@@ -68,6 +69,53 @@ pub(crate) async fn run(args: ReplayArgs) -> Result<(), Failure> {
     Ok(())
 }
 
+/// Whether `direction` is one of the frames `which` plays.
+fn wanted(which: Which, direction: Direction) -> bool {
+    matches!(
+        (which, direction),
+        (Which::Both, _) | (Which::Rx, Direction::Received) | (Which::Tx, Direction::Sent)
+    )
+}
+
+/// Reads the recording through before the link is opened: one that holds no frame
+/// `--frames` plays is an input error (a recording made by `monitor` holds received
+/// frames only), and so is one damaged before the first such frame.
+fn check_wanted(args: &ReplayArgs) -> Result<(), Failure> {
+    let file = File::open(&args.file)
+        .map_err(|e| Failure::input(format!("cannot open {}: {e}", args.file.display())))?;
+    let reader = RecordReader::new(BufReader::new(file))
+        .map_err(|e| Failure::input(format!("{}: {e}", args.file.display())))?;
+    let (mut received, mut sent) = (0u64, 0u64);
+    for record in reader {
+        let record = record.map_err(|e| {
+            Failure::input(format!(
+                "{}: {e} (no frame to replay before it)",
+                args.file.display()
+            ))
+        })?;
+        match record.direction {
+            Direction::Received => received += 1,
+            Direction::Sent => sent += 1,
+        }
+        if wanted(args.frames, record.direction) {
+            return Ok(());
+        }
+    }
+    let file = args.file.display();
+    Err(Failure::input(match args.frames {
+        _ if received + sent == 0 => format!("{file} holds no frames: nothing to replay"),
+        Which::Tx => format!(
+            "{file} holds no sent frames (--frames tx), only {received} received ones \
+             (`monitor --record` records received frames only): replay those with \
+             --frames rx, the default"
+        ),
+        _ => format!(
+            "{file} holds no received frames (--frames rx), only {sent} sent ones: \
+             replay those with --frames tx"
+        ),
+    }))
+}
+
 /// Writes the wanted records of `reader` at their pace; counts them in `played`.
 async fn play(
     args: &ReplayArgs,
@@ -84,11 +132,7 @@ async fn play(
                 args.file.display()
             ))
         })?;
-        let wanted = matches!(
-            (args.frames, record.direction),
-            (Which::Both, _) | (Which::Rx, Direction::Received) | (Which::Tx, Direction::Sent)
-        );
-        if !wanted {
+        if !wanted(args.frames, record.direction) {
             continue;
         }
         let first = *first.get_or_insert(record.time);
