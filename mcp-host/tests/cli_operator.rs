@@ -614,3 +614,29 @@ fn replay_of_no_frame_of_the_chosen_direction_says_so_up_front() {
     assert!(stderr(&output).contains("records received frames only"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn replay_of_a_hostile_recording_is_an_input_error_at_a_slow_speed() {
+    let dir = tempdir("replay-hostile");
+    let file = dir.join("far.mcprec");
+    std::fs::write(&file, recording(&[(0, 0), (0, u64::MAX)])).unwrap();
+    for speed in ["0.000001", "1", "1e-300"] {
+        let (link, reader) = common::recording_peer();
+        let output = run(&[
+            "replay",
+            file.to_str().unwrap(),
+            "--link",
+            &link,
+            "--speed",
+            speed,
+        ]);
+        let stderr = stderr(&output);
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        assert_eq!(output.status.code(), Some(2), "{speed}: {stderr}");
+        assert!(stderr.contains("too far ahead"), "{stderr}");
+        assert!(stderr.contains("replayed 1 frames before it"), "{stderr}");
+        // The first frame went out.
+        assert_eq!(reader.join().unwrap(), [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F]);
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

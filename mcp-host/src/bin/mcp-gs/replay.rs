@@ -69,6 +69,10 @@ pub(crate) async fn run(args: ReplayArgs) -> Result<(), Failure> {
     Ok(())
 }
 
+/// The longest a replay waits for a record, from the start (about 31 years, as the
+/// longest `--duration`): a later one is a damaged or hostile time stamp.
+const MAX_WAIT: Duration = Duration::from_secs(1_000_000_000);
+
 /// Whether `direction` is one of the frames `which` plays.
 fn wanted(which: Which, direction: Direction) -> bool {
     matches!(
@@ -138,7 +142,22 @@ async fn play(
         let first = *first.get_or_insert(record.time);
         if args.speed > 0.0 {
             let offset = record.time.duration_since(first).unwrap_or_default();
-            let at = start + Duration::from_secs_f64(offset.as_secs_f64() / args.speed);
+            // A hostile or damaged recording may stamp a record beyond any time a clock
+            // can wait for (at a slow speed, all the more).
+            let at = Duration::try_from_secs_f64(offset.as_secs_f64() / args.speed)
+                .ok()
+                .filter(|wait| *wait <= MAX_WAIT)
+                .and_then(|wait| start.checked_add(wait))
+                .ok_or_else(|| {
+                    Failure::input(format!(
+                        "{}: a record stamped {} s after the first is too far ahead to wait \
+                         for at --speed {} (replayed {played} frames before it; --speed 0 \
+                         plays every frame at once)",
+                        args.file.display(),
+                        offset.as_secs(),
+                        args.speed
+                    ))
+                })?;
             tokio::time::sleep_until(at).await;
         }
         sender
