@@ -640,3 +640,30 @@ fn replay_of_a_hostile_recording_is_an_input_error_at_a_slow_speed() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn ctrl_c_stops_the_demo_script_at_once() {
+    let (child, lines) = spawn_lines(&["demo", "--duration", "0"]);
+    let mut demo = Running(child);
+    line_with(&lines, "== Clock");
+    interrupt(&demo.0);
+    let after = rest(&lines);
+    assert_eq!(exit_code(&mut demo.0), Some(0), "{after:?}");
+    let headings: Vec<&String> = after.iter().filter(|l| l.starts_with("== ")).collect();
+    assert_eq!(
+        headings.last().map(|h| h.as_str()),
+        Some("== Summary"),
+        "{after:?}"
+    );
+    // The script stopped: no later step, and no watching after Ctrl-C.
+    for later in ["== Landing", "== Watching"] {
+        assert!(
+            !headings.iter().any(|h| h.starts_with(later)),
+            "{later}: {after:?}"
+        );
+    }
+    assert!(
+        after.iter().any(|l| l.contains("stopped by Ctrl-C")),
+        "{after:?}"
+    );
+}

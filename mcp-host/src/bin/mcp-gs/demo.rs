@@ -228,16 +228,20 @@ pub(crate) async fn run(args: DemoArgs) -> Result<(), Failure> {
     let started = Instant::now();
     let deadline = (!args.duration.is_zero()).then(|| started + args.duration);
     // Set when the time is up, or at Ctrl-C (which then no longer ends the process
-    // at once: the demo finishes its step and prints the summary).
-    let (stop_tx, mut stop) = watch::channel(false);
+    // at once: the demo stops where it is and prints the summary).
+    let (stop_tx, mut stop) = watch::channel(Stop::Running);
     tokio::spawn(async move {
-        match deadline {
-            Some(d) => tokio::time::sleep_until(d).await,
-            None => {
-                let _ = tokio::signal::ctrl_c().await;
+        let time_up = async {
+            match deadline {
+                Some(d) => tokio::time::sleep_until(d).await,
+                None => std::future::pending().await,
             }
-        }
-        stop_tx.send_replace(true);
+        };
+        let why = tokio::select! {
+            () = time_up => Stop::TimeUp,
+            Ok(()) = tokio::signal::ctrl_c() => Stop::Interrupted,
+        };
+        stop_tx.send_replace(why);
     });
 
     out!("MCP demo: a ground station talking to a simulated MAV. No hardware needed.");
@@ -300,9 +304,6 @@ pub(crate) async fn run(args: DemoArgs) -> Result<(), Failure> {
         printed_tx,
     ));
 
-    heading("Starting the radio");
-    let _ = tokio::time::timeout(STARTUP, radio_up.wait_for(|up| *up)).await;
-
     let mut script = Script {
         sender,
         reports_printed,
@@ -311,6 +312,74 @@ pub(crate) async fn run(args: DemoArgs) -> Result<(), Failure> {
         answered: 0,
         failures: Vec::new(),
     };
+    // Ctrl-C stops the script where it is; the time being up lets it finish.
+    let mut interrupt = stop.clone();
+    let finished = tokio::select! {
+        result = steps(&mut script, &mut radio_up, &mut landing, stop.clone()) => {
+            result?;
+            true
+        }
+        _ = interrupt.wait_for(|stop| *stop == Stop::Interrupted) => false,
+    };
+    if finished {
+        heading(match deadline {
+            Some(_) => "Watching telemetry until the time is up",
+            None => "Watching telemetry until Ctrl-C",
+        });
+        let _ = stop.wait_for(|stop| *stop != Stop::Running).await;
+    }
+
+    sim.shutdown();
+    printer.abort();
+    let seen = seen.lock().unwrap_or_else(|p| p.into_inner());
+    heading("Summary");
+    if *stop.borrow() == Stop::Interrupted {
+        out!("  stopped by Ctrl-C");
+    }
+    out!(
+        "  {:.1} s, MAV {MAV}: {} commands delivered, {} status requests answered, {} failures",
+        started.elapsed().as_secs_f64(),
+        script.delivered,
+        script.answered,
+        script.failures.len()
+    );
+    out!(
+        "  received {} telemetry packets ({} shown), {} reports, {} other packets, {} frames dropped",
+        seen.telemetry,
+        seen.shown,
+        seen.reports,
+        seen.other,
+        seen.decode_errors
+    );
+    out!(
+        "  Next: `mcp-gs sim --link pty` runs the simulated MAV alone for your own ground station."
+    );
+    match script.failures.into_iter().next() {
+        Some(failure) => Err(failure),
+        None => Ok(()),
+    }
+}
+
+/// Why the demo stops.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Stop {
+    /// It does not yet.
+    Running,
+    /// `--duration` is over: the script finishes its steps.
+    TimeUp,
+    /// Ctrl-C: everything stops at once.
+    Interrupted,
+}
+
+/// The scripted steps, one after the other.
+async fn steps(
+    script: &mut Script,
+    radio_up: &mut watch::Receiver<bool>,
+    landing: &mut watch::Receiver<Option<LandingState>>,
+    mut stop: watch::Receiver<Stop>,
+) -> Result<(), Failure> {
+    heading("Starting the radio");
+    let _ = tokio::time::timeout(STARTUP, radio_up.wait_for(|up| *up)).await;
 
     heading("Clock: set the MAV time, then ask for it");
     script.send("time set", &Command::Time(posix_now())).await;
@@ -388,7 +457,7 @@ pub(crate) async fn run(args: DemoArgs) -> Result<(), Failure> {
 
     let landed = tokio::select! {
         r = landing.wait_for(|s| *s == Some(LandingState::OnGround)) => r.is_ok(),
-        _ = stop.wait_for(|stop| *stop) => false,
+        _ = stop.wait_for(|stop| *stop != Stop::Running) => false,
     };
     if landed {
         heading("Take-off: landing off on the ground");
@@ -397,40 +466,9 @@ pub(crate) async fn run(args: DemoArgs) -> Result<(), Failure> {
             .await;
         let _ = tokio::select! {
             r = landing.wait_for(|s| *s == Some(LandingState::Flight)) => r.is_ok(),
-            _ = stop.wait_for(|stop| *stop) => false,
+            _ = stop.wait_for(|stop| *stop != Stop::Running) => false,
         };
         script.request(StatusRequest::Landing).await;
     }
-    heading(match deadline {
-        Some(_) => "Watching telemetry until the time is up",
-        None => "Watching telemetry until Ctrl-C",
-    });
-    let _ = stop.wait_for(|stop| *stop).await;
-
-    sim.shutdown();
-    printer.abort();
-    let seen = seen.lock().unwrap_or_else(|p| p.into_inner());
-    heading("Summary");
-    out!(
-        "  {:.1} s, MAV {MAV}: {} commands delivered, {} status requests answered, {} failures",
-        started.elapsed().as_secs_f64(),
-        script.delivered,
-        script.answered,
-        script.failures.len()
-    );
-    out!(
-        "  received {} telemetry packets ({} shown), {} reports, {} other packets, {} frames dropped",
-        seen.telemetry,
-        seen.shown,
-        seen.reports,
-        seen.other,
-        seen.decode_errors
-    );
-    out!(
-        "  Next: `mcp-gs sim --link pty` runs the simulated MAV alone for your own ground station."
-    );
-    match script.failures.into_iter().next() {
-        Some(failure) => Err(failure),
-        None => Ok(()),
-    }
+    Ok(())
 }
