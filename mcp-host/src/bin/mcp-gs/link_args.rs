@@ -330,11 +330,19 @@ fn link_hint(error: &LinkError, link: &Link) -> Option<String> {
                  owns it (often dialout: `sudo usermod -aG dialout $USER`, then log in again)"
                     .into(),
             ),
-            // The port is open for exclusive use elsewhere (TIOCEXCL or flock).
+            // On Unix: the port is open for exclusive use elsewhere (TIOCEXCL or flock).
+            // On Windows, serialport also reports a port that does not exist (or may
+            // not be opened) as NoDevice: the hint cannot claim it is in use.
             Serial::NoDevice => Some(format!(
-                "another program has the port open, perhaps another mcp-gs: one program at a \
-                 time can use a serial port; to share the radio, let `mcp-gs hub --link {link}` \
-                 hold it and give the other commands --link tcp:127.0.0.1:9750"
+                "{}: one program at a time can use a serial port; to share the radio, let \
+                 `mcp-gs hub --link {link}` hold it and give the other commands --link \
+                 tcp:127.0.0.1:9750",
+                if cfg!(windows) {
+                    "the port is missing (`mcp-gs ports` lists the serial ports present), or \
+                     another program, perhaps another mcp-gs, has it open"
+                } else {
+                    "another program has the port open, perhaps another mcp-gs"
+                }
             )),
             _ => not_a_serial_port(&source.description, link),
         },
