@@ -243,7 +243,7 @@ mod tests {
             "command position_set elevator=NaN aileron=-inf"
         );
         // Shortest digits that read back as the same f32.
-        for value in [1e-45f32, 3.4e38, 0.99999982, 1.0e9, 9.999999e-5] {
+        for value in [1e-45f32, 3.4e38, 0.999_999_8, 1.0e9, 9.999999e-5] {
             let text = format!("{}", super::Float(value));
             assert_eq!(text.parse::<f32>().unwrap(), value, "{text}");
         }
