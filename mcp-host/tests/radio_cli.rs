@@ -229,7 +229,8 @@ fn nonsense_numbers_are_refused_with_a_reason() {
             "--rx-buffer",
             "19",
         ])
-        .args(["--duration", "0"])
+        // (0 would run until Ctrl-C.)
+        .args(["--duration", "0.001"])
         .output()
         .unwrap();
     assert!(out.status.success(), "{out:?}");
