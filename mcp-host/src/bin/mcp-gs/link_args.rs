@@ -291,12 +291,19 @@ pub(crate) fn diagnosed(failure: Failure, link: &LinkArgs, stats: &Stats) -> Fai
     let silent = stats.frames == 0 && stats.decode_errors() == 0 && stats.bytes_skipped == 0;
     match from_counters {
         Some(hint) => failure.with_hint(hint),
-        None if silent => failure.with_hint(
-            "hint: nothing at all came from the radio: check its API mode (--api-mode, or \
-             auto to ask it), the baud rate (serial:PATH:BAUD), and that no other program \
-             reads the port (to share it, use mcp-gs hub)"
+        None if silent => failure.with_hint(match link.link {
+            // A tcp-listen peer (sim, radio) that serves another connection lets this
+            // one wait for its turn, silently.
+            Link::Tcp { .. } => "hint: nothing at all came from the radio: check its API mode \
+                (--api-mode, or auto to ask it), and whether the peer serves another \
+                connection (mcp-gs sim and radio serve one at a time and let the next wait; \
+                to share one, use mcp-gs hub)"
                 .to_owned(),
-        ),
+            _ => "hint: nothing at all came from the radio: check its API mode (--api-mode, \
+                or auto to ask it), the baud rate (serial:PATH:BAUD), and that no other \
+                program reads the port (to share it, use mcp-gs hub)"
+                .to_owned(),
+        }),
         None => failure,
     }
 }
