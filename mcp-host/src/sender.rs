@@ -324,6 +324,35 @@ impl CommandSender {
         self.send_frame(&data, timeout).await
     }
 
+    /// Sends a local AT command to be queued (AT Command - Queue Parameter Value, 0x09)
+    /// and resolves with its AT Command Response (0x88), as [`at`](Self::at). A value set
+    /// this way waits until an `AC` command (or the next 0x08 frame) applies the queued
+    /// values together, as when changing the radio's channel and PAN ID at once.
+    ///
+    /// ```no_run
+    /// # async fn run(sender: mcp_host::CommandSender) -> Result<(), Box<dyn std::error::Error>> {
+    /// sender.at_queued(*b"ID", &[0x12, 0x34], None).await?;
+    /// sender.at_queued(*b"CH", &[0x0C], None).await?;
+    /// sender.at(*b"AC", &[], None).await?; // both take effect now
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub async fn at_queued(
+        &self,
+        command: [u8; 2],
+        parameter: &[u8],
+        timeout: Option<Duration>,
+    ) -> Result<OwnedFrame, SendError> {
+        let frame = xbee_api::AtCommandRepr {
+            queued: true,
+            frame_id: 0,
+            command,
+            parameter,
+        };
+        let data = frame_data(&frame)?;
+        self.send_frame(&data, timeout).await
+    }
+
     /// Sends a remote AT command (0x17) to `to` and resolves with its Remote AT Command
     /// Response (0x97), whatever its status (as [`at`](Self::at)). `apply` sets the
     /// apply-changes option (0x02).

@@ -545,19 +545,23 @@ fn the_size_warning_names_the_command() {
 }
 
 #[test]
-fn at_no_apply_is_for_a_remote_radio() {
-    // A radio that answers nothing: with the fix, it is never asked.
-    let (link, peer) = common::silent_peer(1);
-    let output = run(&["at", "--link", &link, "--no-apply", "NI", "x"]);
-    let stderr = stderr(&output);
-    assert_eq!(output.status.code(), Some(2), "{stderr}");
-    assert!(
-        stderr.contains("--no-apply is for a remote radio"),
-        "{stderr}"
-    );
-    // The peer's one connection, for it to end.
-    drop(std::net::TcpStream::connect(link.trim_start_matches("tcp:")).unwrap());
-    peer.join().unwrap();
+fn at_no_apply_queues_the_value_on_the_local_radio() {
+    // A radio that keeps what it gets and answers nothing.
+    let (link, reader) = common::recording_peer();
+    let output = run(&[
+        "at",
+        "--link",
+        &link,
+        "--timeout",
+        "0.3",
+        "--no-apply",
+        "NI",
+        "x",
+    ]);
+    assert_eq!(output.status.code(), Some(4), "{}", stderr(&output));
+    // AT Command - Queue Parameter Value (0x09), frame id 1, NI = "x".
+    let wire = reader.join().unwrap();
+    assert_eq!(wire, [0x7E, 0x00, 0x05, 0x09, 0x01, b'N', b'I', b'x', 0xE6]);
 }
 
 /// A recording of `records` (direction: 0 received, 1 sent; time in µs since 1970),

@@ -18,8 +18,9 @@ pub(crate) struct AtArgs {
     /// VALUE is text, not hex (the default for the text parameters NI, DN, BI and VL).
     #[arg(long)]
     text: bool,
-    /// With --to: do not apply the change on the remote radio at once (it waits for AC).
-    /// Not for the local radio, which applies AT commands at once.
+    /// Do not apply the change at once: it waits for an AC command (`mcp-gs at AC`),
+    /// which applies every queued change together. Sent as AT Command - Queue Parameter
+    /// Value (0x09) to the local radio, without the apply option to a remote one.
     #[arg(long)]
     no_apply: bool,
     /// The two-letter AT command, e.g. AP, NP, NI, SH, SL, MY, ID, CH.
@@ -125,14 +126,6 @@ fn parse_value(value: &str, text: bool) -> Result<Vec<u8>, String> {
 
 /// Runs `at`.
 pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
-    if args.no_apply && args.to.is_none() {
-        // The local radio would apply the change at once: refused rather than done
-        // against what was asked.
-        return Err(Failure::input(
-            "--no-apply is for a remote radio (--to ADDR): the local radio applies an AT \
-             command at once; drop --no-apply, or give --to",
-        ));
-    }
     let command: [u8; 2] = args
         .command
         .to_ascii_uppercase()
@@ -152,6 +145,7 @@ pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
     let (_stream, sender) = args.link.open(false).await?;
     let timeout = Some(args.link.timeout());
     let response = match args.to {
+        None if args.no_apply => sender.at_queued(command, &parameter, timeout).await,
         None => sender.at(command, &parameter, timeout).await,
         Some(to) => {
             sender
