@@ -314,14 +314,7 @@ impl CommandSender {
         parameter: &[u8],
         timeout: Option<Duration>,
     ) -> Result<OwnedFrame, SendError> {
-        let frame = xbee_api::AtCommandRepr {
-            queued: false,
-            frame_id: 0,
-            command,
-            parameter,
-        };
-        let data = frame_data(&frame)?;
-        self.send_frame(&data, timeout).await
+        self.local_at(false, command, parameter, timeout).await
     }
 
     /// Sends a local AT command to be queued (AT Command - Queue Parameter Value, 0x09)
@@ -343,8 +336,19 @@ impl CommandSender {
         parameter: &[u8],
         timeout: Option<Duration>,
     ) -> Result<OwnedFrame, SendError> {
+        self.local_at(true, command, parameter, timeout).await
+    }
+
+    /// A local AT command, 0x09 if `queued`, else 0x08.
+    async fn local_at(
+        &self,
+        queued: bool,
+        command: [u8; 2],
+        parameter: &[u8],
+        timeout: Option<Duration>,
+    ) -> Result<OwnedFrame, SendError> {
         let frame = xbee_api::AtCommandRepr {
-            queued: true,
+            queued,
             frame_id: 0,
             command,
             parameter,

@@ -2,8 +2,11 @@
 //! `MAX_CLIENTS` connected, a new client takes the place of one that has fallen behind
 //! the radio's frames, never of one that keeps up. Over real TCP sockets.
 
+mod common;
+
 use std::time::Duration;
 
+use common::hub_wire::*;
 use futures::{SinkExt, StreamExt};
 use mcp_host::codec::{CodecItem, XBeeCodec};
 use mcp_host::hub::{Hub, MAX_CLIENTS};
@@ -15,25 +18,6 @@ use xbee_api::{ApiMode, RawFrame};
 
 /// Failure guard only: every wait ends on a frame long before this.
 const GUARD: Duration = Duration::from_secs(30);
-
-type Wire = Framed<TcpStream, XBeeCodec>;
-
-async fn send(wire: &mut Wire, data: &[u8]) {
-    wire.send(&RawFrame::new(data).unwrap()).await.unwrap();
-}
-
-async fn next(wire: &mut Wire) -> Vec<u8> {
-    loop {
-        let item = tokio::time::timeout(GUARD, wire.next())
-            .await
-            .expect("a frame")
-            .expect("the connection stays")
-            .unwrap();
-        if let CodecItem::Frame(frame) = item {
-            return frame.data().to_vec();
-        }
-    }
-}
 
 /// Whether the hub closes `socket` at once, having turned it away (it writes nothing
 /// to a client before the radio sends something).

@@ -2,44 +2,23 @@
 //! `ROUTES_PER_CLIENT` requests waiting for answers, and a client's requests give their
 //! ids back when it leaves. Over real TCP sockets.
 
+mod common;
+
 use std::time::Duration;
 
-use futures::{SinkExt, StreamExt};
-use mcp_host::codec::{CodecItem, XBeeCodec};
+use common::hub_wire::*;
+use futures::SinkExt;
+use mcp_host::codec::XBeeCodec;
 use mcp_host::hub::{Hub, ROUTES_PER_CLIENT};
 use mcp_host::sim::Simulator;
 use mcp_host::{Link, LinkOptions, SendOptions};
-use tokio::net::{TcpListener, TcpStream};
+use tokio::net::TcpListener;
 use tokio_util::codec::Framed;
 use xbee_api::{Address64, ApiMode, RawFrame};
 
 /// Failure guard only: every wait ends on a frame long before this.
 const GUARD: Duration = Duration::from_secs(20);
 const MAV: Address64 = Address64(0x0013_A200_40B5_99B9);
-
-type Wire = Framed<TcpStream, XBeeCodec>;
-
-async fn raw_client(hub: &Hub) -> Wire {
-    let socket = TcpStream::connect(hub.local_addr()).await.unwrap();
-    Framed::new(socket, XBeeCodec::new(ApiMode::Unescaped))
-}
-
-async fn send(wire: &mut Wire, data: &[u8]) {
-    wire.send(&RawFrame::new(data).unwrap()).await.unwrap();
-}
-
-async fn next(wire: &mut Wire) -> Vec<u8> {
-    loop {
-        let item = tokio::time::timeout(GUARD, wire.next())
-            .await
-            .expect("a frame")
-            .expect("the connection stays")
-            .unwrap();
-        if let CodecItem::Frame(frame) = item {
-            return frame.data().to_vec();
-        }
-    }
-}
 
 /// One client sends 255 node discoveries (`AT ND`), each answered at once by the radio.
 /// Their answers could keep coming for the hub's answer window, so each keeps its frame

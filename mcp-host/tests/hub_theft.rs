@@ -3,59 +3,9 @@
 //! type answers that request's type. Over real TCP sockets, with the radio played by
 //! the test.
 
-use std::time::Duration;
+mod common;
 
-use futures::{SinkExt, StreamExt};
-use mcp_host::codec::{CodecItem, XBeeCodec};
-use mcp_host::hub::Hub;
-use mcp_host::{Link, LinkOptions};
-use tokio::net::{TcpListener, TcpStream};
-use tokio_util::codec::Framed;
-use xbee_api::{ApiMode, RawFrame};
-
-/// Failure guard only: every wait ends on a frame long before this.
-const GUARD: Duration = Duration::from_secs(20);
-
-type Wire = Framed<TcpStream, XBeeCodec>;
-
-/// A hub whose radio is played by the test: the radio's side of the link.
-async fn hub_and_radio() -> (Hub, Wire) {
-    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let radio: Link = format!("tcp:{}", listener.local_addr().unwrap())
-        .parse()
-        .unwrap();
-    let (hub, accepted) = tokio::join!(
-        Hub::start(&radio, LinkOptions::default(), "127.0.0.1:0"),
-        listener.accept()
-    );
-    let socket = accepted.unwrap().0;
-    (
-        hub.unwrap(),
-        Framed::new(socket, XBeeCodec::new(ApiMode::Unescaped)),
-    )
-}
-
-async fn raw_client(hub: &Hub) -> Wire {
-    let socket = TcpStream::connect(hub.local_addr()).await.unwrap();
-    Framed::new(socket, XBeeCodec::new(ApiMode::Unescaped))
-}
-
-async fn send(wire: &mut Wire, data: &[u8]) {
-    wire.send(&RawFrame::new(data).unwrap()).await.unwrap();
-}
-
-async fn next(wire: &mut Wire) -> Vec<u8> {
-    loop {
-        let item = tokio::time::timeout(GUARD, wire.next())
-            .await
-            .expect("a frame")
-            .expect("the connection stays")
-            .unwrap();
-        if let CodecItem::Frame(frame) = item {
-            return frame.data().to_vec();
-        }
-    }
-}
+use common::hub_wire::*;
 
 /// A 64-bit Transmit Request (802.15.4) under frame id `id`.
 fn tx64(id: u8) -> Vec<u8> {

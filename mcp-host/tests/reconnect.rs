@@ -511,6 +511,24 @@ async fn tcp_listen_drops_what_a_peer_wrote_if_it_left_before_its_turn() {
 #[derive(Clone, Default)]
 struct Captured(std::sync::Arc<std::sync::Mutex<Vec<u8>>>);
 
+impl Captured {
+    /// Log lines up to `level`, captured until the guard is dropped.
+    fn at(level: tracing::Level) -> (Self, tracing::subscriber::DefaultGuard) {
+        let logs = Captured::default();
+        let writer = logs.clone();
+        let subscriber = tracing_subscriber::fmt()
+            .with_ansi(false)
+            .with_max_level(level)
+            .with_writer(move || writer.clone())
+            .finish();
+        (logs, tracing::subscriber::set_default(subscriber))
+    }
+
+    fn text(&self) -> String {
+        String::from_utf8(self.0.lock().unwrap().clone()).unwrap()
+    }
+}
+
 impl std::io::Write for Captured {
     fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
         self.0.lock().unwrap().extend_from_slice(buf);
@@ -523,14 +541,7 @@ impl std::io::Write for Captured {
 
 #[tokio::test]
 async fn what_a_link_logs_names_the_link() {
-    let logs = Captured::default();
-    let writer = logs.clone();
-    let subscriber = tracing_subscriber::fmt()
-        .with_ansi(false)
-        .with_max_level(tracing::Level::DEBUG)
-        .with_writer(move || writer.clone())
-        .finish();
-    let _guard = tracing::subscriber::set_default(subscriber);
+    let (logs, _guard) = Captured::at(tracing::Level::DEBUG);
 
     let (listener, mut stream, _sender, fake) = tcp_radio(options(ApiMode::Escaped, true)).await;
     let link = stream.info().link.to_string();
@@ -545,7 +556,7 @@ async fn what_a_link_logs_names_the_link() {
         LinkEvent::Reconnected { .. }
     ));
 
-    let text = String::from_utf8(logs.0.lock().unwrap().clone()).unwrap();
+    let text = logs.text();
     let span = format!("link{{link={link}}}");
     for message in ["connected", "disconnected", "reconnected"] {
         assert!(
@@ -558,14 +569,7 @@ async fn what_a_link_logs_names_the_link() {
 
 #[tokio::test]
 async fn malformed_frames_from_a_peer_are_not_warnings() {
-    let logs = Captured::default();
-    let writer = logs.clone();
-    let subscriber = tracing_subscriber::fmt()
-        .with_ansi(false)
-        .with_max_level(tracing::Level::WARN)
-        .with_writer(move || writer.clone())
-        .finish();
-    let _guard = tracing::subscriber::set_default(subscriber);
+    let (logs, _guard) = Captured::at(tracing::Level::WARN);
 
     let (_listener, mut stream, _sender, mut fake) =
         tcp_radio(options(ApiMode::Escaped, true)).await;
@@ -587,6 +591,6 @@ async fn malformed_frames_from_a_peer_are_not_warnings() {
     }
     assert_eq!(malformed, 100);
     assert_eq!(stream.stats().malformed_frames, 100);
-    let text = String::from_utf8(logs.0.lock().unwrap().clone()).unwrap();
+    let text = logs.text();
     assert!(text.is_empty(), "{text}");
 }

@@ -3,6 +3,8 @@
 
 #![allow(dead_code, unreachable_pub)]
 
+pub mod hub_wire;
+
 use std::time::Duration;
 
 use bytes::BytesMut;

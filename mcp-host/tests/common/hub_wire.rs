@@ -1,0 +1,56 @@
+//! A hub client speaking raw XBee frames over TCP, and a hub whose radio the test plays.
+
+use futures::{SinkExt, StreamExt};
+use mcp_host::codec::{CodecItem, XBeeCodec};
+use mcp_host::hub::Hub;
+use mcp_host::{Link, LinkOptions};
+use tokio::net::{TcpListener, TcpStream};
+use tokio_util::codec::Framed;
+use xbee_api::{ApiMode, RawFrame};
+
+use super::GUARD;
+
+/// XBee frames (API mode 1) over a TCP connection.
+pub type Wire = Framed<TcpStream, XBeeCodec>;
+
+/// A new client of `hub`.
+pub async fn raw_client(hub: &Hub) -> Wire {
+    let socket = TcpStream::connect(hub.local_addr()).await.unwrap();
+    Framed::new(socket, XBeeCodec::new(ApiMode::Unescaped))
+}
+
+/// Writes a frame of `data` (frame data, type first).
+pub async fn send(wire: &mut Wire, data: &[u8]) {
+    wire.send(&RawFrame::new(data).unwrap()).await.unwrap();
+}
+
+/// The next frame's data, skipping decode errors.
+pub async fn next(wire: &mut Wire) -> Vec<u8> {
+    loop {
+        let item = tokio::time::timeout(GUARD, wire.next())
+            .await
+            .expect("a frame")
+            .expect("the connection stays")
+            .unwrap();
+        if let CodecItem::Frame(frame) = item {
+            return frame.data().to_vec();
+        }
+    }
+}
+
+/// A hub whose radio is played by the test: the radio's side of the link.
+pub async fn hub_and_radio() -> (Hub, Wire) {
+    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let radio: Link = format!("tcp:{}", listener.local_addr().unwrap())
+        .parse()
+        .unwrap();
+    let (hub, accepted) = tokio::join!(
+        Hub::start(&radio, LinkOptions::default(), "127.0.0.1:0"),
+        listener.accept()
+    );
+    let socket = accepted.unwrap().0;
+    (
+        hub.unwrap(),
+        Framed::new(socket, XBeeCodec::new(ApiMode::Unescaped)),
+    )
+}
