@@ -12,7 +12,6 @@ use std::time::Duration;
 use bytes::{Bytes, BytesMut};
 use tokio::io::{AsyncRead, AsyncWrite, ReadBuf};
 use tokio::net::{TcpListener, TcpStream};
-use tokio::sync::mpsc;
 use tokio_serial::{SerialPortBuilderExt, SerialStream};
 use tokio_util::task::AbortOnDropHandle;
 
@@ -230,80 +229,117 @@ const ACCEPT_RETRY: Duration = Duration::from_millis(100);
 /// is dropped with what it wrote, so that a command whose sender gave up waiting is
 /// never carried out later.
 struct Listen {
-    /// The peer waiting for its turn.
-    next: mpsc::Receiver<(TcpStream, SocketAddr)>,
+    slot: Arc<Slot>,
     local_addr: Option<SocketAddr>,
     _accepting: AbortOnDropHandle<()>,
+}
+
+/// The place of the peer that waits for its turn.
+#[derive(Default)]
+struct Slot {
+    waiting: Mutex<Option<Waiting>>,
+    /// Told when a peer takes the place.
+    filled: tokio::sync::Notify,
+}
+
+impl Slot {
+    fn lock(&self) -> std::sync::MutexGuard<'_, Option<Waiting>> {
+        self.waiting.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+}
+
+/// A peer waiting for its turn, and what it wrote meanwhile.
+struct Waiting {
+    stream: TcpStream,
+    peer: SocketAddr,
+    early: BytesMut,
+}
+
+impl Waiting {
+    /// Reads what the peer wrote since it was last looked at; `false` if it has left
+    /// (closed its side, or its connection failed). At most [`WAITED_MAX`] bytes are
+    /// read ahead; beyond that it counts as there.
+    fn still_there(&mut self) -> bool {
+        while self.early.len() < WAITED_MAX {
+            self.early.reserve(4096);
+            match self.stream.try_read_buf(&mut self.early) {
+                Ok(0) => return false,
+                Ok(_) => {}
+                Err(e) if e.kind() == io::ErrorKind::WouldBlock => return true,
+                Err(_) => return false,
+            }
+        }
+        true
+    }
 }
 
 impl Listen {
     fn new(listener: TcpListener, name: String) -> Self {
         let local_addr = listener.local_addr().ok();
-        let (tx, next) = mpsc::channel(1);
-        let task = tokio::spawn(accept_peers(listener, name, tx));
+        let slot = Arc::new(Slot::default());
+        let task = tokio::spawn(accept_peers(listener, name, slot.clone()));
         Listen {
-            next,
+            slot,
             local_addr,
             _accepting: AbortOnDropHandle::new(task),
         }
     }
 
     /// The next peer that is still there, and what it wrote while it waited.
-    async fn next_peer(&mut self) -> Option<(TcpStream, SocketAddr, Bytes)> {
+    async fn next_peer(&mut self) -> (TcpStream, SocketAddr, Bytes) {
         loop {
-            let (stream, peer) = self.next.recv().await?;
-            match waited(&stream) {
-                Some(early) => return Some((stream, peer, early)),
-                None => {
-                    tracing::info!(%peer, "a waiting peer left before its turn: what it wrote is dropped");
+            let taken = self.slot.lock().take();
+            match taken {
+                Some(mut waiting) => {
+                    if waiting.still_there() {
+                        return (waiting.stream, waiting.peer, waiting.early.freeze());
+                    }
+                    left_before_its_turn(waiting.peer);
                 }
+                None => self.slot.filled.notified().await,
             }
         }
     }
 }
 
-/// What a peer wrote while it waited, or `None` if it has closed its side (or its
-/// connection failed) meanwhile. At most [`WAITED_MAX`] bytes are read ahead.
-fn waited(stream: &TcpStream) -> Option<Bytes> {
-    let mut early = BytesMut::new();
-    while early.len() < WAITED_MAX {
-        early.reserve(4096);
-        match stream.try_read_buf(&mut early) {
-            Ok(0) => return None,
-            Ok(_) => {}
-            Err(e) if e.kind() == io::ErrorKind::WouldBlock => break,
-            Err(_) => return None,
-        }
-    }
-    Some(early.freeze())
+fn left_before_its_turn(peer: SocketAddr) {
+    tracing::info!(%peer, "a waiting peer left before its turn: what it wrote is dropped");
 }
 
 /// How much of what a waiting peer wrote is read ahead to see whether it is still there
 /// (the rest is read as usual).
 const WAITED_MAX: usize = 64 * 1024;
 
-/// Accepts peers for a `tcp-listen` link: one waits for the link at most; the others
-/// are closed at once.
-async fn accept_peers(
-    listener: TcpListener,
-    name: String,
-    next: mpsc::Sender<(TcpStream, SocketAddr)>,
-) {
+/// Accepts peers for a `tcp-listen` link, for as long as the connector lives: one waits
+/// for the link at most (a new peer takes the place of one that has left meanwhile); the
+/// others are closed at once.
+async fn accept_peers(listener: TcpListener, name: String, slot: Arc<Slot>) {
     let mut failures = 0u64;
     loop {
-        let accepted = tokio::select! {
-            accepted = listener.accept() => accepted,
-            () = next.closed() => return,
-        };
-        match accepted {
+        match listener.accept().await {
             Ok((stream, peer)) => {
                 failures = 0;
-                match next.try_send((stream, peer)) {
-                    Ok(()) => {}
-                    Err(mpsc::error::TrySendError::Full(_)) => {
-                        tracing::info!(%peer, "turned away: the link serves another peer, and one more waits");
+                let mut waiting = slot.lock();
+                let free = match waiting.as_mut() {
+                    None => true,
+                    Some(w) => {
+                        let gone = !w.still_there();
+                        if gone {
+                            left_before_its_turn(w.peer);
+                        }
+                        gone
                     }
-                    Err(mpsc::error::TrySendError::Closed(_)) => return,
+                };
+                if free {
+                    *waiting = Some(Waiting {
+                        stream,
+                        peer,
+                        early: BytesMut::new(),
+                    });
+                    drop(waiting);
+                    slot.filled.notify_one();
+                } else {
+                    tracing::info!(%peer, "turned away: the link serves another peer, and one more waits");
                 }
             }
             Err(error) => {
@@ -467,12 +503,7 @@ impl Connector {
                 })
             }
             Kind::Listen(listen) => {
-                // The accepting task lives as long as the connector.
-                let (stream, peer, early) =
-                    listen.next_peer().await.ok_or_else(|| LinkError::Accept {
-                        addr: self.link.to_string(),
-                        source: io::Error::other("the listener stopped"),
-                    })?;
+                let (stream, peer, early) = listen.next_peer().await;
                 let _ = stream.set_nodelay(true);
                 Ok(Transport {
                     inner: Inner::Accepted(stream, early),

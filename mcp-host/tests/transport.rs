@@ -227,6 +227,41 @@ async fn tcp_listen_serves_one_peer_at_a_time() {
 }
 
 #[tokio::test]
+async fn tcp_listen_gives_the_waiting_place_of_a_peer_that_left_to_the_next() {
+    let link: Link = "tcp-listen:127.0.0.1:0".parse().unwrap();
+    let options = fast_reconnect();
+    let mut connector = Connector::new(&link, &options).await.unwrap();
+    let addr = connector.local_addr().unwrap();
+    let mut first = TcpStream::connect(addr).await.unwrap();
+    let mut transport = connector.open().await.unwrap();
+
+    // A second peer waits, writes and leaves; a third comes: it takes the place.
+    let mut gone = TcpStream::connect(addr).await.unwrap();
+    gone.write_all(b"old").await.unwrap();
+    drop(gone);
+    let mut third = TcpStream::connect(addr).await.unwrap();
+    third.write_all(b"new").await.unwrap();
+
+    drop(first.shutdown().await);
+    drop(first);
+    let mut buf = [0u8; 8];
+    assert_eq!(
+        timeout(GUARD, transport.read(&mut buf))
+            .await
+            .unwrap()
+            .unwrap(),
+        0
+    );
+    drop(transport);
+    let mut transport = timeout(GUARD, connector.reopen(&options.reconnect))
+        .await
+        .unwrap()
+        .unwrap();
+    assert_eq!(transport.peer(), third.local_addr().unwrap().to_string());
+    assert_eq!(read_exact_n(&mut transport, 3).await, b"new");
+}
+
+#[tokio::test]
 async fn open_errors_are_clear() {
     let link: Link = "serial:/dev/does-not-exist-mcp:9600".parse().unwrap();
     let mut connector = Connector::new(&link, &LinkOptions::default())
