@@ -27,8 +27,9 @@
 //!   | 0x24 Register Joining Device | 0xA4 Register Joining Device Status |
 //!
 //!   A request is answered once, but for node discovery (`ND`) and active scan (`AS`),
-//!   whose answers keep coming for [`ANSWER_WINDOW`]; a request unanswered by then
-//!   gives its id back.
+//!   whose answers keep coming for [`ANSWER_WINDOW`] from when the hub writes the
+//!   request to the radio (not while it waits its turn); a request unanswered by then
+//!   gives its id back. An answer under the id of a request not yet written is dropped.
 //! - **Fairness:** the hub takes its clients' frames in turn, one frame of each client
 //!   with frames waiting, and writes them at the pace of the radio's UART (its baud
 //!   rate on a serial link, [`DEFAULT_RADIO_BAUD`] on others), never more than
@@ -76,6 +77,7 @@
 //! # }
 //! ```
 
+use std::cell::Cell;
 use std::net::SocketAddr;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, PoisonError};
@@ -169,8 +171,8 @@ pub struct HubStats {
     /// Frames from the radio not given to a client that had fallen behind.
     pub frames_dropped: u64,
     /// Frames of clients not written: all 255 frame ids were waiting for answers, a
-    /// frame id on a frame type the hub does not know (see the [module](self) docs), or
-    /// the link to the radio was down.
+    /// frame id on a frame type the hub does not know (see the [module](self) docs), the
+    /// link to the radio was down, or the client was ended before their turn.
     pub frames_refused: u64,
     /// Requests of clients that had to wait for a frame id before they went to the
     /// radio: their client had [`ROUTES_PER_CLIENT`] requests waiting for answers, or
@@ -245,10 +247,12 @@ impl Hub {
         };
         hub.counters.listening.store(true, Ordering::Relaxed);
         let to_radio = Arc::new(ToRadio::default());
+        let routes = Arc::new(Mutex::new(Routes::new()));
         let writer = RadioWriter {
             mode,
             sender: sender.clone(),
             counters: hub.counters.clone(),
+            routes: routes.clone(),
             to_radio: to_radio.clone(),
             bytes_per_second: f64::from(bytes_per_second.max(1)),
         };
@@ -260,7 +264,7 @@ impl Hub {
             stop: hub.stop.clone(),
             tasks: hub.tasks.clone(),
             counters: hub.counters.clone(),
-            routes: Arc::new(Mutex::new(Routes::new())),
+            routes,
             ids: Arc::new(Semaphore::new(usize::from(u8::MAX))),
             clients: Vec::new(),
             next_client: 0,
@@ -341,7 +345,10 @@ struct Route {
     /// The frame type of the answers (see [`answer_type`]): an answer of another type
     /// under the same id is not this request's.
     answer_type: u8,
-    until: Instant,
+    /// Until when answers are due: [`ANSWER_WINDOW`] from when the request was written
+    /// to the radio; `None` while it waits its turn (no answer is due yet, and the route
+    /// does not expire).
+    until: Cell<Option<Instant>>,
     /// Answers keep coming until `until` (node discovery, active scan).
     many: bool,
     /// One of the client's [`ROUTES_PER_CLIENT`] permits, given back with the route.
@@ -367,7 +374,18 @@ impl Routes {
     /// Ends the routes whose answers are no longer due, giving their clients' permits
     /// back.
     fn expire(&mut self, now: Instant) {
-        self.0.remove_where(|r| r.until <= now, |_, _| {});
+        self.0.remove_where(
+            |r| r.until.get().is_some_and(|until| until <= now),
+            |_, _| {},
+        );
+    }
+
+    /// The request under hub id `id` goes to the radio at `now`: its answers are due
+    /// for [`ANSWER_WINDOW`].
+    fn written(&mut self, id: u8, now: Instant) {
+        if let Some(route) = self.0.get(id) {
+            route.until.set(Some(now + ANSWER_WINDOW));
+        }
     }
 
     /// Ends the routes of client `client` (gone).
@@ -384,10 +402,12 @@ impl Routes {
         now: Instant,
     ) -> Option<(mpsc::Sender<Bytes>, u8)> {
         let route = self.0.get(id)?;
+        // Not yet written: not its answer (a late one to an earlier request).
+        let until = route.until.get()?;
         if route.answer_type != frame_type {
             return None;
         }
-        let to = (route.until > now).then(|| (route.queue.clone(), route.own_id));
+        let to = (until > now).then(|| (route.queue.clone(), route.own_id));
         if to.is_none() || !route.many {
             self.0.remove(id);
         }
@@ -455,6 +475,8 @@ struct RadioWriter {
     mode: ApiMode,
     sender: CommandSender,
     counters: Arc<Counters>,
+    /// The routes of the requests it writes: their answer windows start then.
+    routes: Arc<Mutex<Routes>>,
     to_radio: Arc<ToRadio>,
     /// The radio UART's pace.
     bytes_per_second: f64,
@@ -479,16 +501,32 @@ impl RadioWriter {
                 () = stop.cancelled() => return,
                 data = self.next_frame(&mut queues, &mut next) => data,
             };
+            // A request's answers are due from now on (the window does not start while
+            // the request waits its turn), and not before: the route is marked before the
+            // radio can answer.
+            let hub_id = match data[..] {
+                [_, id, ..] if id != 0 => Some(id),
+                _ => None,
+            };
+            if let Some(id) = hub_id {
+                lock(&self.routes).written(id, Instant::now());
+            }
             match self.sender.write_frame(&data).await {
-                Ok(()) => bump(&self.counters.frames_from_clients),
+                Ok(()) => {
+                    bump(&self.counters.frames_from_clients);
+                    let len = encode(&data, self.mode).map_or(data.len(), |bytes| bytes.len());
+                    let time = Duration::from_secs_f64(len as f64 / self.bytes_per_second);
+                    through = through.max(Instant::now()) + time;
+                }
                 Err(error) => {
+                    // Not written: no pacing time spent, and no answer due.
                     tracing::debug!(%error, "hub: a client's frame not written");
                     bump(&self.counters.frames_refused);
+                    if let Some(id) = hub_id {
+                        lock(&self.routes).0.remove(id);
+                    }
                 }
             }
-            let len = encode(&data, self.mode).map_or(data.len(), |bytes| bytes.len());
-            let time = Duration::from_secs_f64(len as f64 / self.bytes_per_second);
-            through = through.max(Instant::now()) + time;
         }
     }
 
@@ -496,22 +534,28 @@ impl RadioWriter {
     async fn next_frame(&self, queues: &mut Vec<ClientFrames>, next: &mut usize) -> Vec<u8> {
         loop {
             queues.append(&mut lock(&self.to_radio.new));
+            // Whatever the other queues hold: the queues of clients ended (their frames
+            // not yet written are dropped: a client's commands are not carried out after
+            // it was disconnected), and of clients that closed their connection once
+            // their frames are all written. Each client then goes, and its routes with
+            // it (see `Client`'s `Drop`).
+            queues.retain_mut(|(queue, client)| {
+                if client.end.is_cancelled() {
+                    queue.close();
+                    while queue.try_recv().is_ok() {
+                        bump(&self.counters.frames_refused);
+                    }
+                    return false;
+                }
+                !(queue.is_closed() && queue.is_empty())
+            });
             let n = queues.len();
-            let mut gone = false;
             for step in 0..n {
                 let index = (*next + step) % n;
-                match queues[index].0.try_recv() {
-                    Ok(data) => {
-                        *next = index + 1;
-                        return data;
-                    }
-                    Err(mpsc::error::TryRecvError::Empty) => {}
-                    Err(mpsc::error::TryRecvError::Disconnected) => gone = true,
+                if let Ok(data) = queues[index].0.try_recv() {
+                    *next = index + 1;
+                    return data;
                 }
-            }
-            if gone {
-                // Clients gone, their frames all written.
-                queues.retain(|(queue, _)| !(queue.is_closed() && queue.is_empty()));
             }
             // A frame queued (or a queue added) since the look above has left a permit.
             self.to_radio.ready.notified().await;
@@ -919,7 +963,7 @@ impl Client {
                     queue: self.queue.clone(),
                     own_id,
                     answer_type,
-                    until: Instant::now() + ANSWER_WINDOW,
+                    until: Cell::new(None),
                     many: answered_many_times(&data),
                     _permit: permit,
                     _id: id,

@@ -7,8 +7,9 @@ mod common;
 use std::time::Duration;
 
 use common::hub_wire::*;
-use futures::SinkExt;
-use mcp_host::codec::XBeeCodec;
+use futures::{SinkExt, StreamExt};
+use mcp_host::codec::{CodecItem, XBeeCodec};
+use mcp_host::hub::ANSWER_WINDOW;
 use mcp_host::hub::{Hub, ROUTES_PER_CLIENT};
 use mcp_host::sim::Simulator;
 use mcp_host::{Link, LinkOptions, SendOptions};
@@ -155,5 +156,96 @@ async fn the_ids_of_a_client_that_left_are_free_again() {
             break;
         }
     }
+    hub.stop().await;
+}
+
+/// While one client keeps the radio busy (transmissions nonstop), clients that each
+/// take `ROUTES_PER_CLIENT` ids and leave (connection reset) with their requests
+/// unanswered give their ids back at once: after more than 255 ids so taken, a new
+/// client's requests still all reach the radio.
+#[tokio::test(flavor = "multi_thread")]
+async fn the_ids_of_clients_that_left_are_free_again_while_another_client_keeps_the_radio_busy() {
+    let (hub, mut radio) = hub_and_radio().await;
+    let (requests, mut written) = tokio::sync::mpsc::unbounded_channel();
+    tokio::spawn(async move {
+        while let Some(Ok(item)) = radio.next().await {
+            if let CodecItem::Frame(frame) = item {
+                if frame.data()[0] == 0x08 {
+                    let _ = requests.send(frame.data().to_vec());
+                }
+            }
+        }
+    });
+    let mut flood = raw_client(&hub).await;
+    let flooding = tokio::spawn(async move {
+        let mut data = vec![0x10, 0x00];
+        data.resize(200, 0x55);
+        while flood.send(&RawFrame::new(&data).unwrap()).await.is_ok() {}
+    });
+    let mut written_one = async || {
+        tokio::time::timeout(GUARD, written.recv())
+            .await
+            .unwrap_or_else(|_| panic!("a request held: {:?}", hub.stats()))
+            .expect("the radio stays")
+    };
+    for _ in 0..usize::from(u8::MAX) / ROUTES_PER_CLIENT {
+        let mut client = raw_client(&hub).await;
+        for id in 1..=ROUTES_PER_CLIENT as u8 {
+            send(&mut client, &[0x08, id, b'S', b'H']).await;
+        }
+        for _ in 0..ROUTES_PER_CLIENT {
+            written_one().await;
+        }
+        let socket = client.into_inner();
+        #[allow(deprecated)]
+        socket.set_linger(Some(Duration::ZERO)).unwrap();
+        drop(socket);
+    }
+    let mut client = raw_client(&hub).await;
+    for id in 1..=ROUTES_PER_CLIENT as u8 {
+        send(&mut client, &[0x08, id, b'S', b'H']).await;
+    }
+    for _ in 0..ROUTES_PER_CLIENT {
+        written_one().await;
+    }
+    flooding.abort();
+    hub.stop().await;
+}
+
+/// A request that waits its turn to the radio longer than the answer window (other
+/// frames ahead of it on a slow radio) still gets its answer: the window starts when
+/// the hub writes the request. Time stands still but for `tokio::time::advance`.
+#[tokio::test(flavor = "current_thread")]
+async fn a_request_that_waited_its_turn_longer_than_the_answer_window_gets_its_answer() {
+    let (hub, mut radio) = hub_and_radio().await;
+    let mut client = raw_client(&hub).await;
+    tokio::time::pause();
+    // A blocking task running keeps the paused clock from moving by itself.
+    let (release, held) = std::sync::mpsc::channel::<()>();
+    let clock_held = tokio::task::spawn_blocking(move || held.recv());
+    // Transmissions worth more of the radio's time than the hub writes ahead, then a
+    // request.
+    let mut filler = vec![0x10, 0x00];
+    filler.resize(500, 0x55);
+    for _ in 0..6 {
+        send(&mut client, &filler).await;
+    }
+    send(&mut client, &[0x08, 0x01, b'N', b'I']).await;
+    for _ in 0..6 {
+        assert_eq!(next(&mut radio).await, filler);
+    }
+    // Until the hub has read the request (real time; the clock stands still).
+    tokio::task::spawn_blocking(|| std::thread::sleep(Duration::from_millis(200)))
+        .await
+        .unwrap();
+    tokio::time::advance(ANSWER_WINDOW + Duration::from_secs(5)).await;
+    let request = next(&mut radio).await;
+    assert_eq!(request[0], 0x08);
+    send(&mut radio, &[0x88, request[1], b'N', b'I', 0x00]).await;
+    // A frame for every client after the answer: the answer comes first.
+    send(&mut radio, &[0x8A, 0x00]).await;
+    assert_eq!(next(&mut client).await, [0x88, 0x01, b'N', b'I', 0x00]);
+    release.send(()).unwrap();
+    clock_held.await.unwrap().unwrap();
     hub.stop().await;
 }
