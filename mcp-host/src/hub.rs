@@ -42,21 +42,34 @@
 //!   [`ROUTES_PER_CLIENT`] requests waiting for answers at once; its next request
 //!   waits (and the hub reads no more of its frames meanwhile) until one is answered,
 //!   so a client that floods the hub with requests slows itself alone, and the others
-//!   find ids free. When a client leaves, its requests' ids are free again (their late
-//!   answers are dropped). Requests that waited are counted in
+//!   find ids free. When a client leaves (its connection fails, or the hub ends it),
+//!   its requests' ids are free again (their late answers are dropped); a client that
+//!   closed its connection keeps them until it is let go (see below). Requests that waited are counted in
 //!   [`HubStats::requests_held`]. Frames with frame id 0 (no
 //!   answer wanted) are written as they are, whatever their type. A frame of a type not
 //!   in the table with a frame id (its second byte, in every XBee request) is refused
 //!   and counted in [`HubStats::frames_refused`]: the hub cannot tell its answers from
 //!   those to other clients' requests.
 //! - **Clients:** [`MAX_CLIENTS`] at once. A client that comes while as many are
-//!   connected takes the place of the one that has fallen behind the radio's frames the
-//!   longest (its queue full, and not drained since), or is turned away if none has.
-//!   Connections that read nothing (a script that forgot its sockets) thus give their
-//!   places up once the radio sends anything, while a monitor that reads, even one
-//!   that sends nothing for hours, never loses its place; no client is dropped for
-//!   being quiet, as quiet is what a monitor is on a quiet network. A client is not
-//!   dropped either for falling behind while the hub has room.
+//!   connected takes the place of the one that closed its connection first (the hub
+//!   read its end: it sends nothing more), else of the one that has fallen behind the
+//!   radio's frames the longest, or is turned away if none has. A client that closed
+//!   its connection is still served until its place is taken: the hub cannot tell a
+//!   connection closed from one whose sending side alone is shut (a monitor, or
+//!   `nc -N`, that still reads), so the frames it sent still go to the radio, and the
+//!   radio's frames and its answers still go to it (its requests keep their ids
+//!   meanwhile, [`ANSWER_WINDOW`] at most); it is let go at once if writing to it
+//!   fails. A client falls behind once the radio has sent it more than the operating
+//!   system's buffers of its connection and its queue of [`CLIENT_QUEUE`] frames hold
+//!   (on Linux, a few thousand frames): connections that read nothing (a script that
+//!   forgot its sockets) give their places up only then, while a monitor that reads,
+//!   even one that sends nothing for hours, never loses its place; no client is
+//!   dropped for being quiet, as quiet is what a monitor is on a quiet network. A
+//!   client is not dropped either for falling behind while the hub has room.
+//! - **Clients ended:** when the hub ends a client (its place taken, the radio's link
+//!   lost, the hub stopped) or its connection fails, its frames not yet written are
+//!   dropped (counted in [`HubStats::frames_refused`]): its commands are not carried out
+//!   after it was disconnected.
 //! - **Outages:** while the hub's link to the radio is down (a USB radio unplugged), the
 //!   hub disconnects its clients and stops listening (connections are refused), so that
 //!   their links see the outage, stay down quietly, and reconnect once the radio is
@@ -105,8 +118,9 @@ use crate::{
 pub const CLIENT_QUEUE: usize = 1024;
 
 /// Clients served at once, at most. A client that comes while as many are connected
-/// takes the place of the one that has fallen behind the radio's frames the longest
-/// (see the [module](self) docs); without one, it is turned away.
+/// takes the place of one that closed its connection, or of the one that has fallen
+/// behind the radio's frames the longest (see the [module](self) docs); without one,
+/// it is turned away.
 pub const MAX_CLIENTS: usize = 64;
 
 /// Requests of one client waiting for answers at once, at most (each holds one of the
@@ -572,6 +586,9 @@ struct Connected {
     end: CancellationToken,
     /// Since when its queue has been full (frames dropped for it) without being drained.
     behind: Arc<Mutex<Option<Instant>>>,
+    /// Since when it has sent nothing more: its connection closed (or its sending side
+    /// shut), or failed.
+    closed: Arc<Mutex<Option<Instant>>>,
 }
 
 /// The hub's main task: frames from the radio to the clients, new clients accepted.
@@ -691,11 +708,13 @@ impl Serve {
         let (queue, frames) = mpsc::channel(CLIENT_QUEUE);
         let end = self.stop.child_token();
         let behind = Arc::new(Mutex::new(None));
+        let closed = Arc::new(Mutex::new(None));
         self.clients.push(Connected {
             peer,
             queue: queue.clone(),
             end: end.clone(),
             behind: behind.clone(),
+            closed: closed.clone(),
         });
         let number = self.next_client;
         self.next_client += 1;
@@ -711,6 +730,7 @@ impl Serve {
             counters: self.counters.clone(),
             end,
             behind,
+            closed,
         });
         let (rd, wr) = socket.into_split();
         let (frames_to_radio, queue) = mpsc::channel(CLIENT_FRAMES_TO_RADIO);
@@ -720,26 +740,40 @@ impl Serve {
         self.tasks.spawn(client.write(wr, frames));
     }
 
-    /// Ends the client that has fallen behind the radio's frames the longest, for
-    /// `peer`, a new one; whether there was one.
+    /// Ends, for `peer`, a new one, the client that closed its connection first, or
+    /// without one the client that has fallen behind the radio's frames the longest;
+    /// whether there was one.
     fn make_room(&mut self, peer: SocketAddr) -> bool {
-        let longest = self
-            .clients
-            .iter()
-            .enumerate()
-            .filter_map(|(index, client)| Some(((*lock(&client.behind))?, index)))
-            .min();
-        let Some((since, index)) = longest else {
+        let longest = |state: fn(&Connected) -> &Mutex<Option<Instant>>| {
+            self.clients
+                .iter()
+                .enumerate()
+                .filter_map(|(index, client)| Some(((*lock(state(client)))?, index)))
+                .min()
+        };
+        let (why, since, index) = if let Some((since, index)) = longest(|c| &c.closed) {
+            (
+                "it has sent nothing since it closed its connection",
+                since,
+                index,
+            )
+        } else if let Some((since, index)) = longest(|c| &c.behind) {
+            ("it has taken none of the radio's frames", since, index)
+        } else {
             return false;
         };
         let gone = self.clients.swap_remove(index);
         gone.end.cancel();
-        tracing::warn!(
-            "hub: client {} dropped for {peer} ({MAX_CLIENTS} connected): it has taken none \
-             of the radio's frames for {:.1?}",
-            gone.peer,
-            since.elapsed()
-        );
+        let (client, since) = (gone.peer, since.elapsed());
+        if lock(&gone.closed).is_some() {
+            // As a client that left.
+            tracing::debug!("hub: client {client} let go for {peer}: {why} for {since:.1?}");
+        } else {
+            tracing::warn!(
+                "hub: client {client} dropped for {peer} ({MAX_CLIENTS} connected): {why} for \
+                 {since:.1?}"
+            );
+        }
         true
     }
 
@@ -865,6 +899,8 @@ struct Client {
     /// Since when its queue of frames from the radio has been full, without being
     /// drained since.
     behind: Arc<Mutex<Option<Instant>>>,
+    /// Since when it has sent nothing more (see [`Connected::closed`]).
+    closed: Arc<Mutex<Option<Instant>>>,
 }
 
 impl Drop for Client {
@@ -877,8 +913,11 @@ impl Drop for Client {
 
 impl Client {
     /// Reads the client's frames and writes them to the radio, until the client stops
-    /// sending or its connection ends. A client that stops sending (its write side
-    /// shut) still gets its answers and the radio's frames.
+    /// sending or its connection ends. A client that stops sending (its connection
+    /// closed, or only its write side shut) is the first to give its place to a new
+    /// client when the hub is full; until then it still gets its answers and the radio's
+    /// frames, and its frames already read still go to the radio. A connection that
+    /// fails ends the client.
     async fn read(self: Arc<Self>, rd: OwnedReadHalf, to_radio: mpsc::Sender<Vec<u8>>) {
         let mut reader = FramedRead::new(rd, XBeeCodec::new(self.mode));
         let read = async {
@@ -901,7 +940,10 @@ impl Client {
                         self.end.cancel();
                         return;
                     }
-                    None => return,
+                    None => {
+                        tracing::debug!(peer = %self.peer, "hub: a client sends nothing more");
+                        return;
+                    }
                 }
             }
         };
@@ -909,6 +951,11 @@ impl Client {
             () = self.end.cancelled() => {}
             () = read => {}
         }
+        lock(&self.closed).get_or_insert_with(Instant::now);
+        // The writer sees the queue closed (or the client ended) and lets the client go
+        // once it may.
+        drop(to_radio);
+        self.to_radio.ready.notify_one();
     }
 
     /// Writes the radio's frames to the client, until its connection fails or it is
@@ -930,7 +977,11 @@ impl Client {
             () = self.end.cancelled() => "the hub stopped, the radio's link went down, or another client took its place".to_owned(),
             reason = write => reason,
         };
-        self.end.cancel();
+        // A client that closed its connection has left as it meant to: the frames it
+        // sent before still go to the radio.
+        if lock(&self.closed).is_none() {
+            self.end.cancel();
+        }
         tracing::info!(peer = %self.peer, %reason, "hub: client gone");
     }
 

@@ -115,3 +115,19 @@ async fn connections_that_take_nothing_give_their_place_to_new_clients_but_reade
     drop(idle);
     hub.stop().await;
 }
+
+/// One-shot clients (as `mcp-gs at`): each connects, sends a frame and closes its
+/// connection, on a radio that sends nothing (so the hub never fails to write to them).
+/// Once `MAX_CLIENTS` of them have come and gone, the next client is still served: it
+/// takes the place of one that has closed.
+#[tokio::test(flavor = "multi_thread")]
+async fn clients_that_closed_their_connections_give_their_places_up_on_a_quiet_radio() {
+    let (hub, mut radio) = hub_and_radio().await;
+    for _ in 0..MAX_CLIENTS {
+        drop(served(&hub, &mut radio).await);
+    }
+    let mut late = served(&hub, &mut radio).await;
+    send(&mut late, &[0x08, 0x00, b'S', b'L']).await;
+    assert_eq!(next(&mut radio).await, [0x08, 0x00, b'S', b'L']);
+    hub.stop().await;
+}
