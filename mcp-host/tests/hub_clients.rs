@@ -10,9 +10,8 @@ use common::hub_wire::*;
 use futures::{SinkExt, StreamExt};
 use mcp_host::codec::{CodecItem, XBeeCodec};
 use mcp_host::hub::{Hub, MAX_CLIENTS};
-use mcp_host::{Link, LinkOptions};
 use tokio::io::AsyncReadExt;
-use tokio::net::{TcpListener, TcpStream};
+use tokio::net::TcpStream;
 use tokio_util::codec::Framed;
 use xbee_api::{ApiMode, RawFrame};
 
@@ -38,16 +37,7 @@ async fn served(hub: &Hub, radio: &mut Wire) -> Wire {
 
 #[tokio::test(flavor = "multi_thread")]
 async fn connections_that_take_nothing_give_their_place_to_new_clients_but_readers_keep_theirs() {
-    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let radio_link: Link = format!("tcp:{}", listener.local_addr().unwrap())
-        .parse()
-        .unwrap();
-    let (hub, accepted) = tokio::join!(
-        Hub::start(&radio_link, LinkOptions::default(), "127.0.0.1:0"),
-        listener.accept()
-    );
-    let hub = hub.unwrap();
-    let mut radio = Framed::new(accepted.unwrap().0, XBeeCodec::new(ApiMode::Unescaped));
+    let (hub, mut radio) = hub_and_radio().await;
 
     // A monitor that reads all the radio's frames, and connections that never read.
     let reader = TcpStream::connect(hub.local_addr()).await.unwrap();

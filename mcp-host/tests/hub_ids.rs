@@ -8,13 +8,11 @@ use std::time::Duration;
 
 use common::hub_wire::*;
 use futures::{SinkExt, StreamExt};
-use mcp_host::codec::{CodecItem, XBeeCodec};
+use mcp_host::codec::CodecItem;
 use mcp_host::hub::ANSWER_WINDOW;
 use mcp_host::hub::{Hub, ROUTES_PER_CLIENT};
 use mcp_host::sim::Simulator;
 use mcp_host::{Link, LinkOptions, SendOptions};
-use tokio::net::TcpListener;
-use tokio_util::codec::Framed;
 use xbee_api::{Address64, ApiMode, RawFrame};
 
 /// Failure guard only: every wait ends on a frame long before this.
@@ -87,16 +85,7 @@ async fn a_client_flooding_the_hub_with_discoveries_leaves_frame_ids_for_the_oth
 /// long before the answer window ends.
 #[tokio::test]
 async fn the_ids_of_a_client_that_left_are_free_again() {
-    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let radio_link: Link = format!("tcp:{}", listener.local_addr().unwrap())
-        .parse()
-        .unwrap();
-    let (hub, accepted) = tokio::join!(
-        Hub::start(&radio_link, LinkOptions::default(), "127.0.0.1:0"),
-        listener.accept()
-    );
-    let hub = hub.unwrap();
-    let mut radio = Framed::new(accepted.unwrap().0, XBeeCodec::new(ApiMode::Unescaped));
+    let (hub, mut radio) = hub_and_radio().await;
 
     // 16 clients with 16 requests each: more than the 255 ids.
     let mut gone = Vec::new();
