@@ -2,12 +2,14 @@
 //! a simulated MAV behind a virtual radio, a hub on its link, ground stations on the
 //! hub.
 
+mod common;
+
 use std::time::Duration;
 
+use common::hub_wire::*;
 use futures::StreamExt;
 use mcp_core::{Command, LandingState, Packet, Report, StatusRequest, TelemetryId};
 use mcp_host::hub::Hub;
-use mcp_host::sim::Simulator;
 use mcp_host::{CommandSender, DeliveryReport, Event, Link, LinkOptions, PacketStream, SendError};
 use xbee_api::{Address64, ApiMode, DeliveryStatus};
 
@@ -16,22 +18,6 @@ const GUARD: Duration = Duration::from_secs(20);
 const MAV: Address64 = Address64(0x0013_A200_40B5_99B9);
 /// No radio has this address: its transmissions fail.
 const NOBODY: Address64 = Address64(0x0013_A200_0000_0001);
-
-async fn sim_and_hub(mode: ApiMode) -> (Simulator, Hub) {
-    let link: Link = "tcp-listen:127.0.0.1:0".parse().unwrap();
-    let sim = Simulator::start(&link, mode, &[MAV], Simulator::network_config())
-        .await
-        .unwrap();
-    let radio: Link = format!("tcp:{}", sim.coordinator().local_addr.unwrap())
-        .parse()
-        .unwrap();
-    let options = LinkOptions {
-        api_mode: mode,
-        ..LinkOptions::default()
-    };
-    let hub = Hub::start(&radio, options, "127.0.0.1:0").await.unwrap();
-    (sim, hub)
-}
 
 async fn client(hub: &Hub, mode: ApiMode) -> (PacketStream, CommandSender) {
     let link: Link = format!("tcp:{}", hub.local_addr()).parse().unwrap();
@@ -275,49 +261,14 @@ async fn hub_on(listener: &tokio::net::TcpListener) -> (Hub, tokio::net::TcpStre
 }
 
 /// A client speaking frames on a raw TCP connection to the hub.
-async fn raw_client(
-    hub: &Hub,
-) -> tokio_util::codec::Framed<tokio::net::TcpStream, mcp_host::codec::XBeeCodec> {
-    let socket = tokio::net::TcpStream::connect(hub.local_addr())
-        .await
-        .unwrap();
-    tokio_util::codec::Framed::new(socket, mcp_host::codec::XBeeCodec::new(ApiMode::Unescaped))
-}
-
-async fn send_raw(
-    client: &mut tokio_util::codec::Framed<tokio::net::TcpStream, mcp_host::codec::XBeeCodec>,
-    data: &[u8],
-) {
-    use futures::SinkExt;
-    client
-        .send(&xbee_api::RawFrame::new(data).unwrap())
-        .await
-        .unwrap();
-}
-
-async fn next_raw(
-    client: &mut tokio_util::codec::Framed<tokio::net::TcpStream, mcp_host::codec::XBeeCodec>,
-) -> Vec<u8> {
-    loop {
-        let item = tokio::time::timeout(GUARD, client.next())
-            .await
-            .expect("a frame for the client")
-            .expect("the hub stays")
-            .unwrap();
-        if let mcp_host::codec::CodecItem::Frame(frame) = item {
-            return frame.data().to_vec();
-        }
-    }
-}
-
 #[tokio::test]
 async fn a_clients_frames_reach_the_radio_in_its_order() {
     let (mut radio, hub) = FakeRadio::with_hub().await;
     let mut client = raw_client(&hub).await;
     // Set a name (id 1), save it (id 2), then apply without an answer (id 0).
-    send_raw(&mut client, &[0x08, 0x01, b'N', b'I', b'A']).await;
-    send_raw(&mut client, &[0x08, 0x02, b'W', b'R']).await;
-    send_raw(&mut client, &[0x08, 0x00, b'A', b'C']).await;
+    send(&mut client, &[0x08, 0x01, b'N', b'I', b'A']).await;
+    send(&mut client, &[0x08, 0x02, b'W', b'R']).await;
+    send(&mut client, &[0x08, 0x00, b'A', b'C']).await;
     let commands: Vec<[u8; 2]> = [
         radio.next_frame().await,
         radio.next_frame().await,
@@ -336,9 +287,9 @@ async fn every_answer_to_a_discovery_goes_to_the_client_that_asked_alone() {
     let mut a = raw_client(&hub).await;
     let mut b = raw_client(&hub).await;
     // Both count their frame ids from 1.
-    send_raw(&mut a, &[0x08, 0x01, b'N', b'D']).await;
+    send(&mut a, &[0x08, 0x01, b'N', b'D']).await;
     let nd = radio.next_frame().await;
-    send_raw(&mut b, &[0x08, 0x01, b'N', b'I']).await;
+    send(&mut b, &[0x08, 0x01, b'N', b'I']).await;
     let ni = radio.next_frame().await;
     assert_ne!(nd[1], ni[1], "the hub gave them ids of its own");
     // Two nodes found, then the name, then a received packet for everyone.
@@ -352,14 +303,14 @@ async fn every_answer_to_a_discovery_goes_to_the_client_that_asked_alone() {
     ];
     radio.send(&packet).await;
     // Each in the radio's order, under the client's own id.
-    assert_eq!(next_raw(&mut a).await, [0x88, 0x01, b'N', b'D', 0x00, 0xAA]);
-    assert_eq!(next_raw(&mut a).await, [0x88, 0x01, b'N', b'D', 0x00, 0xBB]);
-    assert_eq!(next_raw(&mut a).await, packet);
+    assert_eq!(next(&mut a).await, [0x88, 0x01, b'N', b'D', 0x00, 0xAA]);
+    assert_eq!(next(&mut a).await, [0x88, 0x01, b'N', b'D', 0x00, 0xBB]);
+    assert_eq!(next(&mut a).await, packet);
     assert_eq!(
-        next_raw(&mut b).await,
+        next(&mut b).await,
         [0x88, 0x01, b'N', b'I', 0x00, b'G', b'S']
     );
-    assert_eq!(next_raw(&mut b).await, packet);
+    assert_eq!(next(&mut b).await, packet);
     // The radio sent four frames, all passed on; the hub's own link claimed none of
     // the three answers (it wrote the requests as raw frames).
     let stats = hub.stats();

@@ -9,9 +9,7 @@ use std::time::Duration;
 use common::hub_wire::*;
 use futures::{SinkExt, StreamExt};
 use mcp_host::codec::CodecItem;
-use mcp_host::hub::ANSWER_WINDOW;
-use mcp_host::hub::{Hub, ROUTES_PER_CLIENT};
-use mcp_host::sim::Simulator;
+use mcp_host::hub::{ANSWER_WINDOW, ROUTES_PER_CLIENT};
 use mcp_host::{Link, LinkOptions, SendOptions};
 use xbee_api::{Address64, ApiMode, RawFrame};
 
@@ -26,17 +24,7 @@ const MAV: Address64 = Address64(0x0013_A200_40B5_99B9);
 /// through at once.
 #[tokio::test(flavor = "multi_thread")]
 async fn a_client_flooding_the_hub_with_discoveries_leaves_frame_ids_for_the_others() {
-    let mode = ApiMode::Unescaped;
-    let link: Link = "tcp-listen:127.0.0.1:0".parse().unwrap();
-    let sim = Simulator::start(&link, mode, &[MAV], Simulator::network_config())
-        .await
-        .unwrap();
-    let radio: Link = format!("tcp:{}", sim.coordinator().local_addr.unwrap())
-        .parse()
-        .unwrap();
-    let hub = Hub::start(&radio, LinkOptions::default(), "127.0.0.1:0")
-        .await
-        .unwrap();
+    let (sim, hub) = sim_and_hub(ApiMode::Unescaped).await;
     let honest_link: Link = format!("tcp:{}", hub.local_addr()).parse().unwrap();
     let (_stream, honest) = mcp_host::connect(&honest_link, LinkOptions::default())
         .await

@@ -3,12 +3,13 @@
 use futures::{SinkExt, StreamExt};
 use mcp_host::codec::{CodecItem, XBeeCodec};
 use mcp_host::hub::Hub;
+use mcp_host::sim::Simulator;
 use mcp_host::{Link, LinkOptions};
 use tokio::net::{TcpListener, TcpStream};
 use tokio_util::codec::Framed;
 use xbee_api::{ApiMode, RawFrame};
 
-use super::GUARD;
+use super::{GUARD, MAV};
 
 /// XBee frames (API mode 1) over a TCP connection.
 pub type Wire = Framed<TcpStream, XBeeCodec>;
@@ -53,4 +54,22 @@ pub async fn hub_and_radio() -> (Hub, Wire) {
         hub.unwrap(),
         Framed::new(socket, XBeeCodec::new(ApiMode::Unescaped)),
     )
+}
+
+/// A simulated MAV (`MAV`) behind a virtual radio, and a hub on the radio's link, both in
+/// API mode `mode`.
+pub async fn sim_and_hub(mode: ApiMode) -> (Simulator, Hub) {
+    let link: Link = "tcp-listen:127.0.0.1:0".parse().unwrap();
+    let sim = Simulator::start(&link, mode, &[MAV], Simulator::network_config())
+        .await
+        .unwrap();
+    let radio: Link = format!("tcp:{}", sim.coordinator().local_addr.unwrap())
+        .parse()
+        .unwrap();
+    let options = LinkOptions {
+        api_mode: mode,
+        ..LinkOptions::default()
+    };
+    let hub = Hub::start(&radio, options, "127.0.0.1:0").await.unwrap();
+    (sim, hub)
 }
