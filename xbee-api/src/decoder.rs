@@ -10,6 +10,8 @@ use crate::unescape::special_in_word;
 use crate::unescape::special_mask;
 
 use crate::unescape::{STEP, is_plain, unescape, unescape_byte};
+#[cfg(target_pointer_width = "64")]
+use crate::window::{DATA, MAX_LEN, WINDOW_ROOM, frame_in_window};
 use crate::wire::{ESCAPE, ESCAPE_XOR, START_DELIMITER, checksum_of_sum, needs_escape, sum};
 use crate::{ApiMode, DecodeError, RawFrame, Stats};
 
@@ -534,6 +536,20 @@ impl<const N: usize> Decoder<N> {
                 // Frames with a plain length field that leave the step loop room past
                 // their data in the buffer: the length checked once, here.
                 let fast = limit.min(N.saturating_sub(STEP));
+                // Short frames, whole in one window (64-bit targets, room permitting).
+                #[cfg(target_pointer_width = "64")]
+                if N >= WINDOW_ROOM && limit >= MAX_LEN {
+                    while let Some(window) = input.first_chunk::<WINDOW_ROOM>() {
+                        if window[0] != START_DELIMITER {
+                            break;
+                        }
+                        let Some((taken, outcome)) = self.whole2_window(window) else {
+                            break;
+                        };
+                        input = input.get(taken..).unwrap_or_default();
+                        f(self.event(outcome));
+                    }
+                }
                 while let Some((&[START_DELIMITER, hi, lo], rest)) = input.split_first_chunk::<3>()
                 {
                     let len = usize::from(u16::from_be_bytes([hi, lo]));
@@ -993,6 +1009,21 @@ impl<const N: usize> Decoder<N> {
             return None;
         }
         self.whole2_data(rest, len)
+    }
+
+    /// A frame whose whole lies in the first 64 bytes of `window`: how many bytes it
+    /// took and the outcome; `None` as for [`whole2`](Self::whole2).
+    #[cfg(target_pointer_width = "64")]
+    #[inline(always)]
+    fn whole2_window(&mut self, window: &[u8; WINDOW_ROOM]) -> Option<(usize, Outcome)> {
+        let out = self.buf.first_chunk_mut::<WINDOW_ROOM>()?;
+        let frame = frame_in_window(window, out)?;
+        let got = *out.get(DATA + frame.len)?;
+        self.len = frame.len;
+        let outcome = self
+            .check_sum(frame.total.wrapping_sub(got), DATA, got)
+            .map_err(|e| self.record(e));
+        Some((frame.taken, outcome))
     }
 
     /// [`whole2`](Self::whole2) after the length field: `rest` holds the frame data

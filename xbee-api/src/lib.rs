@@ -64,6 +64,8 @@ mod raw;
 mod stats;
 mod status;
 mod unescape;
+#[cfg(target_pointer_width = "64")]
+mod window;
 pub mod wire;
 
 pub use address::{Address16, Address64, ParseAddressError};
