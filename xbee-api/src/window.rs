@@ -86,19 +86,20 @@ pub(crate) fn frame_in_window(
         if i - k >= end {
             break;
         }
-        let raw = *src.get(i + 1)?;
-        if !ESCAPED.get(usize::from(raw)).copied().unwrap_or(false) {
+        // What the pair adds to the raw sum, 0 if the escape is invalid.
+        let add = *ESCAPED.get(usize::from(*src.get(i + 1)?))?;
+        if add == 0 {
             return None;
         }
-        let byte = raw ^ ESCAPE_XOR;
-        // `k <= i < 64`: the mask changes nothing but spares the bounds tests.
+        adjust = adjust.wrapping_add(add);
+        // The escaped byte and the rest of the window one byte down, then the escaped
+        // byte unescaped in place. `k <= i < 64`: the mask changes nothing but spares
+        // the bounds tests.
         let o = (i - k) % WINDOW;
-        *out.get_mut(o)? = byte;
-        let tail = src.get(i + 2..)?.first_chunk::<WINDOW>()?;
-        out.get_mut(o + 1..)?
-            .first_chunk_mut::<WINDOW>()?
-            .copy_from_slice(tail);
-        adjust = adjust.wrapping_add(byte.wrapping_sub(raw).wrapping_sub(ESCAPE));
+        let rest = src.get(i + 1..)?.first_chunk::<WINDOW>()?;
+        let to = out.get_mut(o..)?.first_chunk_mut::<WINDOW>()?;
+        to.copy_from_slice(rest);
+        to[0] ^= ESCAPE_XOR;
         k += 1;
         escapes &= escapes - 1;
     }
@@ -122,15 +123,21 @@ pub(crate) fn frame_in_window(
     Some(WindowFrame { taken, len, total })
 }
 
-/// Raw bytes that may follow an escape: those that stand for a special byte.
+/// For each raw byte after an escape, what the pair adds to the wrapping sum of the
+/// raw bytes to make it the sum of the unescaped ones (`byte - raw - 0x7D`, never 0),
+/// or 0 if the byte does not stand for a special byte (an invalid escape).
 // Evaluated at compile time: an index out of bounds would fail the build, not panic.
 #[allow(clippy::indexing_slicing)]
-const ESCAPED: [bool; 256] = {
-    let mut escaped = [false; 256];
-    let mut i = 0;
-    while i < 256 {
-        escaped[i] = needs_escape(i as u8 ^ ESCAPE_XOR);
-        i += 1;
+const ESCAPED: [u8; 256] = {
+    let mut escaped = [0; 256];
+    let mut raw = 0;
+    while raw < 256 {
+        let byte = raw as u8 ^ ESCAPE_XOR;
+        if needs_escape(byte) {
+            escaped[raw] = byte.wrapping_sub(raw as u8).wrapping_sub(ESCAPE);
+            assert!(escaped[raw] != 0);
+        }
+        raw += 1;
     }
     escaped
 };
