@@ -538,17 +538,9 @@ impl<const N: usize> Decoder<N> {
                 let fast = limit.min(N.saturating_sub(STEP));
                 // Short frames, whole in one window (64-bit targets, room permitting).
                 #[cfg(target_pointer_width = "64")]
-                if N >= WINDOW_ROOM && limit >= MAX_LEN {
-                    while let Some(window) = input.first_chunk::<WINDOW_ROOM>() {
-                        if window[0] != START_DELIMITER {
-                            break;
-                        }
-                        let Some((taken, outcome)) = self.whole2_window(window) else {
-                            break;
-                        };
-                        input = input.get(taken..).unwrap_or_default();
-                        f(self.event(outcome));
-                    }
+                while let Some((taken, outcome)) = self.window2(input, limit) {
+                    input = input.get(taken..).unwrap_or_default();
+                    f(self.event(outcome));
                 }
                 while let Some((&[START_DELIMITER, hi, lo], rest)) = input.split_first_chunk::<3>()
                 {
@@ -1011,11 +1003,21 @@ impl<const N: usize> Decoder<N> {
         self.whole2_data(rest, len)
     }
 
-    /// A frame whose whole lies in the first 64 bytes of `window`: how many bytes it
-    /// took and the outcome; `None` as for [`whole2`](Self::whole2).
+    /// The frame at the start of `input` if it lies whole in its first 64 bytes (a
+    /// start delimiter first, and at least [`WINDOW_ROOM`] bytes) and the decoder takes
+    /// such frames (a buffer of [`WINDOW_ROOM`] bytes or more, and a capacity, `limit`,
+    /// of [`MAX_LEN`] or more): how many bytes it took and the outcome. `None`, with
+    /// nothing changed but the buffer's content, as for [`whole2`](Self::whole2).
     #[cfg(target_pointer_width = "64")]
     #[inline(always)]
-    fn whole2_window(&mut self, window: &[u8; WINDOW_ROOM]) -> Option<(usize, Outcome)> {
+    fn window2(&mut self, input: &[u8], limit: usize) -> Option<(usize, Outcome)> {
+        if N < WINDOW_ROOM || limit < MAX_LEN {
+            return None;
+        }
+        let window = input.first_chunk::<WINDOW_ROOM>()?;
+        if window[0] != START_DELIMITER {
+            return None;
+        }
         let out = self.buf.first_chunk_mut::<WINDOW_ROOM>()?;
         let frame = frame_in_window(window, out)?;
         // Frame data and checksum byte sum to 0xFF: the checksum is right.
@@ -1054,6 +1056,10 @@ impl<const N: usize> Decoder<N> {
         // Between frames, at a start delimiter: the whole frame at once if it is there.
         let mut try_whole = true;
         if self.state == State::Hunt {
+            #[cfg(target_pointer_width = "64")]
+            if let Some((taken, outcome)) = self.window2(input, self.capacity()) {
+                return (taken, Some(outcome));
+            }
             if let Some((&START_DELIMITER, body)) = input.split_first() {
                 if let Some((after, outcome)) = self.whole2(body, self.capacity()) {
                     return (input.len() - after.len(), Some(outcome));

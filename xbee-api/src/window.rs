@@ -8,12 +8,22 @@
 //! checksum and searched for a start delimiter together. One branch a frame and one an
 //! escape, wherever the escapes fall.
 
-use wide::u8x16;
+#[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
+use wide::u8x16 as Step;
+#[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
+use wide::{CmpEq, u8x32 as Step};
 
 use crate::wire::{ESCAPE, ESCAPE_XOR, START_DELIMITER, needs_escape};
 
 /// Bytes the window covers.
 pub(crate) const WINDOW: usize = 64;
+
+/// Bytes a step takes: 32 in a build for AVX2 (`-C target-cpu=x86-64-v3` or `native`
+/// on most x86-64 processors since 2013), else 16 (SSE2 on x86-64, NEON on AArch64).
+const LANES: usize = Step::LANES as usize;
+
+/// Steps in the window.
+const STEPS: usize = WINDOW / LANES;
 
 /// Bytes of input and of buffer [`frame_in_window`] needs: each escape copies the 64
 /// bytes after it.
@@ -66,7 +76,7 @@ pub(crate) fn frame_in_window(
     out: &mut [u8; WINDOW_ROOM],
 ) -> Option<WindowFrame> {
     let steps = load(src);
-    for (step, to) in steps.iter().zip(out.chunks_exact_mut(16)) {
+    for (step, to) in steps.iter().zip(out.chunks_exact_mut(LANES)) {
         to.copy_from_slice(step.as_array_ref());
     }
     let mut escapes = mask(&steps, ESCAPE);
@@ -109,12 +119,12 @@ pub(crate) fn frame_in_window(
     }
     // The frame's bytes after its length field, the rest of the window masked off:
     // summed, and searched for a start delimiter, which would cut the frame off.
-    let mut lanes = u8x16::ZERO;
-    let mut delimiters = u8x16::ZERO;
+    let mut lanes = Step::ZERO;
+    let mut delimiters = Step::ZERO;
     for (step, keep) in steps.iter().zip(frame_lanes(taken)) {
         let kept = *step & keep;
         lanes += kept;
-        delimiters |= kept.cmp_eq(u8x16::splat(START_DELIMITER));
+        delimiters |= kept.cmp_eq(Step::splat(START_DELIMITER));
     }
     if delimiters.any() {
         return None;
@@ -144,15 +154,15 @@ const ESCAPED: [u8; 256] = {
 
 /// Lane masks of the window's bytes from [`DATA`] up to `taken` (at most 64).
 #[inline(always)]
-fn frame_lanes(taken: usize) -> [u8x16; 4] {
+fn frame_lanes(taken: usize) -> [Step; STEPS] {
     let keep = KEEP.get(WINDOW - taken..).unwrap_or_default();
     core::array::from_fn(|j| {
         let m = keep
-            .get(16 * j..16 * j + 16)
-            .and_then(|m| m.first_chunk::<16>());
-        let m = u8x16::new(m.copied().unwrap_or_default());
+            .get(LANES * j..LANES * (j + 1))
+            .and_then(|m| m.first_chunk::<LANES>());
+        let m = Step::new(m.copied().unwrap_or_default());
         if j == 0 {
-            m & u8x16::new(AFTER_HEADER)
+            m & Step::new(AFTER_HEADER)
         } else {
             m
         }
@@ -160,50 +170,62 @@ fn frame_lanes(taken: usize) -> [u8x16; 4] {
 }
 
 /// The first step's lanes after the delimiter and the length field.
-const AFTER_HEADER: [u8; 16] = {
-    let mut mask = [0xFF; 16];
+const AFTER_HEADER: [u8; LANES] = {
+    let mut mask = [0xFF; LANES];
     mask[0] = 0;
     mask[1] = 0;
     mask[2] = 0;
     mask
 };
 
-/// The window's four steps of 16 bytes.
+/// The window's steps.
 #[inline(always)]
-fn load(src: &[u8; WINDOW_ROOM]) -> [u8x16; 4] {
+fn load(src: &[u8; WINDOW_ROOM]) -> [Step; STEPS] {
     core::array::from_fn(|j| {
         let step = src
-            .get(16 * j..16 * j + 16)
-            .and_then(|s| s.first_chunk::<16>());
-        u8x16::new(step.copied().unwrap_or_default())
+            .get(LANES * j..LANES * (j + 1))
+            .and_then(|s| s.first_chunk::<LANES>());
+        Step::new(step.copied().unwrap_or_default())
     })
 }
 
 /// Bit `k` set where byte `k` of the window is `byte`.
 #[inline(always)]
-fn mask(steps: &[u8x16; 4], byte: u8) -> u64 {
+fn mask(steps: &[Step; STEPS], byte: u8) -> u64 {
     steps.iter().enumerate().fold(0, |acc, (j, step)| {
-        let bits = step.cmp_eq(u8x16::splat(byte)).move_mask() as u16;
-        acc | u64::from(bits) << (16 * j)
+        // The step's lanes as the low bits (`move_mask` sign-extends 16 lanes).
+        let bits =
+            step.cmp_eq(Step::splat(byte)).move_mask() as u32 as u64 & (u64::MAX >> (64 - LANES));
+        acc | bits << (LANES * j)
     })
 }
 
 /// Wrapping sum of the 16 lanes: one `psadbw` (SSE2's sum of absolute differences,
 /// here against zero) on x86-64, where left to itself the compiler may add the lanes
 /// one by one.
-#[cfg(target_arch = "x86_64")]
+#[cfg(all(target_arch = "x86_64", not(target_feature = "avx2")))]
 #[inline(always)]
-fn reduce(lanes: u8x16) -> u8 {
+fn reduce(lanes: Step) -> u8 {
     use safe_arch::{m128i, sum_of_u8_abs_diff_m128i, zeroed_m128i};
     let halves: [u64; 2] =
         sum_of_u8_abs_diff_m128i(m128i::from(lanes.to_array()), zeroed_m128i()).into();
     halves[0].wrapping_add(halves[1]) as u8
 }
 
-/// Wrapping sum of the 16 lanes.
+/// Wrapping sum of the 32 lanes: one `vpsadbw` (AVX2).
+#[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
+#[inline(always)]
+fn reduce(lanes: Step) -> u8 {
+    use safe_arch::{m256i, sum_of_u8_abs_diff_m256i, zeroed_m256i};
+    let quarters: [u64; 4] =
+        sum_of_u8_abs_diff_m256i(m256i::from(lanes.to_array()), zeroed_m256i()).into();
+    quarters.iter().fold(0u64, |a, q| a.wrapping_add(*q)) as u8
+}
+
+/// Wrapping sum of the lanes.
 #[cfg(not(target_arch = "x86_64"))]
 #[inline(always)]
-fn reduce(lanes: u8x16) -> u8 {
+fn reduce(lanes: Step) -> u8 {
     lanes
         .to_array()
         .iter()
