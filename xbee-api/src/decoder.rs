@@ -71,7 +71,8 @@ enum State {
 /// a byte of frame data is only stored, everything else is done once a frame) or a slice
 /// at a time ([`decode`](Self::decode) for one event a call, as a codec wants it, or
 /// [`decode_each`](Self::decode_each) for a callback per event, the fastest; both decode
-/// a frame lying whole in the slice in one pass, 16 bytes a step); it yields
+/// a frame lying whole in the slice in one pass, 16 bytes a step, and on 64-bit targets a
+/// mode 2 frame of up to 60 bytes of data in one 64-byte window); it yields
 /// [`RawFrame`]s borrowed from its buffer (or, from `decode_each`, from the input), or a
 /// [`DecodeError`] for each candidate frame it drops, and counts both in
 /// [`stats`](Self::stats). At the end of input, call [`finish`](Self::finish) until it
@@ -364,8 +365,10 @@ impl<const N: usize> Decoder<N> {
     /// `input` was taken and nothing is pending: feed more, or [`finish`](Self::finish).
     ///
     /// A frame that lies whole in `input` is decoded in one go: unescaped, copied to the
-    /// buffer and summed 16 bytes a step. Frames split across calls go through the
-    /// buffer and come out the same.
+    /// buffer and summed 16 bytes a step (in mode 2 on 64-bit targets, a frame of up to
+    /// 60 bytes of data in one 64-byte window, when `input` holds 130 bytes or more and
+    /// the buffer `N` is as large). Frames split across calls go through the buffer and
+    /// come out the same.
     ///
     /// The bytes taken are the decoder's from then on (a caller holding a `BytesMut` can
     /// advance past them at once).
@@ -413,8 +416,8 @@ impl<const N: usize> Decoder<N> {
     /// chunks is stepped with its cursors in registers. From 16-byte chunks on it costs
     /// less a byte than [`push`](Self::push); single bytes cost more. Instructions a
     /// byte on a stream of 58-byte frames, 16-byte chunks against `push`: on a Cortex-M3
-    /// 17.9 against 21.2 in mode 2 and 13.7 against 23.4 in mode 1; on x86-64 11.5
-    /// against 17.7 in mode 2 and 9.7 against 19.8 in mode 1.
+    /// 18.0 against 21.2 in mode 2 and 14.4 against 23.4 in mode 1; on x86-64 11.9
+    /// against 17.7 in mode 2 and 9.8 against 19.9 in mode 1.
     ///
     /// ```
     /// use xbee_api::{ApiMode, Decoder};
