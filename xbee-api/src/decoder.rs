@@ -541,8 +541,8 @@ impl<const N: usize> Decoder<N> {
                 let fast = limit.min(N.saturating_sub(STEP));
                 // Short frames, whole in one window (64-bit targets, room permitting).
                 #[cfg(target_pointer_width = "64")]
-                while let Some((taken, outcome)) = self.window2(input, limit) {
-                    input = input.get(taken..).unwrap_or_default();
+                while let Some((rest, outcome)) = self.window2(input, limit) {
+                    input = rest;
                     f(self.event(outcome));
                 }
                 while let Some((&[START_DELIMITER, hi, lo], rest)) = input.split_first_chunk::<3>()
@@ -1009,11 +1009,11 @@ impl<const N: usize> Decoder<N> {
     /// The frame at the start of `input` if it lies whole in its first 64 bytes (a
     /// start delimiter first, and at least [`WINDOW_ROOM`] bytes) and the decoder takes
     /// such frames (a buffer of [`WINDOW_ROOM`] bytes or more, and a capacity, `limit`,
-    /// of [`MAX_LEN`] or more): how many bytes it took and the outcome. `None`, with
-    /// nothing changed but the buffer's content, as for [`whole2`](Self::whole2).
+    /// of [`MAX_LEN`] or more): the rest of `input` after it and the outcome. `None`,
+    /// with nothing changed but the buffer's content, as for [`whole2`](Self::whole2).
     #[cfg(target_pointer_width = "64")]
     #[inline(always)]
-    fn window2(&mut self, input: &[u8], limit: usize) -> Option<(usize, Outcome)> {
+    fn window2<'a>(&mut self, input: &'a [u8], limit: usize) -> Option<(&'a [u8], Outcome)> {
         if N < WINDOW_ROOM || limit < MAX_LEN {
             return None;
         }
@@ -1023,17 +1023,18 @@ impl<const N: usize> Decoder<N> {
         }
         let out = self.buf.first_chunk_mut::<WINDOW_ROOM>()?;
         let frame = frame_in_window(window, out)?;
+        let rest = input.get(frame.taken..)?;
         // Frame data and checksum byte sum to 0xFF: the checksum is right.
         if frame.total == checksum_of_sum(0) {
             self.stats.frames_ok = self.stats.frames_ok.wrapping_add(1);
-            return Some((frame.taken, Ok((DATA, DATA + frame.len))));
+            return Some((rest, Ok((DATA, DATA + frame.len))));
         }
         let got = *out.get(DATA + frame.len)?;
         self.len = frame.len;
         let outcome = self
             .check_sum(frame.total.wrapping_sub(got), DATA, got)
             .map_err(|e| self.record(e));
-        Some((frame.taken, outcome))
+        Some((rest, outcome))
     }
 
     /// [`whole2`](Self::whole2) after the length field: `rest` holds the frame data
@@ -1060,8 +1061,8 @@ impl<const N: usize> Decoder<N> {
         let mut try_whole = true;
         if self.state == State::Hunt {
             #[cfg(target_pointer_width = "64")]
-            if let Some((taken, outcome)) = self.window2(input, self.capacity()) {
-                return (taken, Some(outcome));
+            if let Some((rest, outcome)) = self.window2(input, self.capacity()) {
+                return (input.len() - rest.len(), Some(outcome));
             }
             if let Some((&START_DELIMITER, body)) = input.split_first() {
                 if let Some((after, outcome)) = self.whole2(body, self.capacity()) {
