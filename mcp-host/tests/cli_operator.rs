@@ -671,3 +671,16 @@ fn ctrl_c_stops_the_demo_script_at_once() {
         "{after:?}"
     );
 }
+
+#[test]
+fn a_demo_shorter_than_its_script_runs_the_script_to_its_end() {
+    // The time is up before the first step: the steps still run, without pauses.
+    let (child, lines) = spawn_lines(&["demo", "--duration", "0.001"]);
+    let mut demo = Running(child);
+    let out = rest(&lines).join("\n");
+    assert_eq!(exit_code(&mut demo.0), Some(0), "{out}");
+    assert!(out.contains("== Landing"), "{out}");
+    assert!(out.contains("== Summary"), "{out}");
+    assert!(!out.contains("stopped by Ctrl-C"), "{out}");
+    assert!(!out.contains(" 0 commands delivered"), "{out}");
+}

@@ -229,19 +229,10 @@ pub(crate) async fn run(args: DemoArgs) -> Result<(), Failure> {
     let deadline = (!args.duration.is_zero()).then(|| started + args.duration);
     // Set when the time is up, or at Ctrl-C (which then no longer ends the process
     // at once: the demo stops where it is and prints the summary).
-    let (stop_tx, mut stop) = watch::channel(Stop::Running);
-    tokio::spawn(async move {
-        let time_up = async {
-            match deadline {
-                Some(d) => tokio::time::sleep_until(d).await,
-                None => std::future::pending().await,
-            }
-        };
-        let why = tokio::select! {
-            () = time_up => Stop::TimeUp,
-            Ok(()) = tokio::signal::ctrl_c() => Stop::Interrupted,
-        };
-        stop_tx.send_replace(why);
+    let mut stop = stop_signal(deadline, async {
+        if tokio::signal::ctrl_c().await.is_err() {
+            std::future::pending::<()>().await;
+        }
     });
 
     out!("MCP demo: a ground station talking to a simulated MAV. No hardware needed.");
@@ -360,6 +351,35 @@ pub(crate) async fn run(args: DemoArgs) -> Result<(), Failure> {
     }
 }
 
+/// Tells why the demo stops: [`Stop::TimeUp`] at `deadline` (if any), then
+/// [`Stop::Interrupted`] when `interrupt` (Ctrl-C) completes, before or after the time
+/// is up. The sender lives until then, so that a receiver waiting for Ctrl-C is not
+/// woken by its end.
+fn stop_signal(
+    deadline: Option<Instant>,
+    interrupt: impl Future<Output = ()> + Send + 'static,
+) -> watch::Receiver<Stop> {
+    let (stop_tx, stop) = watch::channel(Stop::Running);
+    tokio::spawn(async move {
+        let time_up = async {
+            match deadline {
+                Some(d) => tokio::time::sleep_until(d).await,
+                None => std::future::pending().await,
+            }
+        };
+        let mut interrupt = std::pin::pin!(interrupt);
+        tokio::select! {
+            () = time_up => {
+                stop_tx.send_replace(Stop::TimeUp);
+                interrupt.await;
+            }
+            () = &mut interrupt => {}
+        }
+        stop_tx.send_replace(Stop::Interrupted);
+    });
+    stop
+}
+
 /// Why the demo stops.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Stop {
@@ -471,4 +491,31 @@ async fn steps(
         script.request(StatusRequest::Landing).await;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[tokio::test]
+    async fn ctrl_c_after_the_time_is_up_still_interrupts() {
+        let (ctrl_c, pressed) = tokio::sync::oneshot::channel::<()>();
+        let mut stop = stop_signal(Some(Instant::now()), async {
+            let _ = pressed.await;
+        });
+        stop.wait_for(|s| *s == Stop::TimeUp).await.unwrap();
+        ctrl_c.send(()).unwrap();
+        stop.wait_for(|s| *s == Stop::Interrupted).await.unwrap();
+    }
+
+    #[tokio::test]
+    async fn ctrl_c_before_the_time_is_up_interrupts() {
+        let (ctrl_c, pressed) = tokio::sync::oneshot::channel::<()>();
+        let mut stop = stop_signal(None, async {
+            let _ = pressed.await;
+        });
+        assert_eq!(*stop.borrow(), Stop::Running);
+        ctrl_c.send(()).unwrap();
+        stop.wait_for(|s| *s == Stop::Interrupted).await.unwrap();
+    }
 }
