@@ -684,3 +684,58 @@ fn a_demo_shorter_than_its_script_runs_the_script_to_its_end() {
     assert!(!out.contains("stopped by Ctrl-C"), "{out}");
     assert!(!out.contains(" 0 commands delivered"), "{out}");
 }
+
+/// `mcp-gs decode` with `args`, its standard input a pipe the test writes to, its output
+/// line by line on the channel.
+fn decode_piped(args: &[&str]) -> (Running, std::process::ChildStdin, Receiver<String>) {
+    use std::io::BufRead;
+    let mut child = gs()
+        .arg("decode")
+        .args(args)
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .expect("start mcp-gs");
+    let stdin = child.stdin.take().expect("stdin");
+    let stdout = child.stdout.take().expect("stdout");
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in std::io::BufReader::new(stdout)
+            .lines()
+            .map_while(Result::ok)
+        {
+            let _ = tx.send(line);
+        }
+    });
+    (Running(child), stdin, rx)
+}
+
+#[test]
+fn decode_from_a_pipe_shows_each_frame_as_it_comes() {
+    use std::io::Write;
+    // Hex typed or piped in a line at a time, and raw bytes as a serial port gives them:
+    // each frame is printed while the input is still open.
+    let cases: [(&[&str], &[u8]); 2] = [
+        (&["--hex", "-"], b"7E 00 02 8A 06 6F\n"),
+        (&["-"], &[0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F]),
+    ];
+    for (args, frame) in cases {
+        let (mut decode, mut stdin, lines) = decode_piped(args);
+        for _ in 0..2 {
+            stdin.write_all(frame).unwrap();
+            stdin.flush().unwrap();
+            let line = line_with(&lines, "modem status");
+            assert!(line.contains("coordinator_started"), "{args:?}: {line}");
+        }
+        drop(stdin);
+        assert_eq!(rest(&lines), Vec::<String>::new(), "{args:?}");
+        assert_eq!(exit_code(&mut decode.0), Some(0), "{args:?}");
+    }
+    // Text that is not hex ends it as an input error, after what came before.
+    let (mut decode, mut stdin, lines) = decode_piped(&["--hex", "-"]);
+    stdin.write_all(b"7E 00 02 8A 06 6F\n7E 0G\n").unwrap();
+    drop(stdin);
+    let out = rest(&lines);
+    assert_eq!(out.len(), 1, "{out:?}");
+    assert_eq!(exit_code(&mut decode.0), Some(2), "{out:?}");
+}

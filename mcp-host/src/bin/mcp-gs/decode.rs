@@ -10,13 +10,15 @@ use xbee_api::{ApiMode, DecodeError, Decoder, Frame};
 use mcp_host::record::{self, Direction, RecordReader};
 use mcp_host::render;
 
+use crate::hex_input::HexReader;
 use crate::{ApiModeArg, Failure, Format};
 
 /// Arguments of `decode`.
 #[derive(Debug, Args)]
 pub(crate) struct DecodeArgs {
     /// The capture: a file of raw bytes as read from the radio, a hex dump (`--hex`), or
-    /// a recording made by `monitor --record`; `-` or nothing for standard input.
+    /// a recording made by `monitor --record`; `-` or nothing for standard input, which
+    /// is decoded as it comes (a pipe from a serial port, hex typed a line at a time).
     #[arg(default_value = "-")]
     input: PathBuf,
     /// API mode of a raw capture (recordings are stored unescaped).
@@ -86,16 +88,20 @@ pub(crate) fn run(args: DecodeArgs) -> Result<(), Failure> {
             args.input.display()
         )));
     }
-    let result = if !args.hex && record::is_recording(head) {
-        decode_recording(input, &mut printer)
-    } else if args.hex {
-        let bytes = read_hex(input)?;
+    let result = if args.hex {
+        // Decoded a line at a time, as the text comes.
+        let mut bytes = HexReader::new(input);
+        let head = read_head(&mut bytes).map_err(|e| Failure::input(e.to_string()))?;
         // A hex dump of a recording is a recording.
-        if record::is_recording(&bytes) {
-            decode_recording(&bytes[..], &mut printer)
+        let recording = record::is_recording(&head);
+        let bytes = io::Cursor::new(head).chain(bytes);
+        if recording {
+            decode_recording(bytes, &mut printer)
         } else {
-            decode_stream(&bytes[..], args.api_mode.0, &mut printer)
+            decode_stream(bytes, args.api_mode.0, &mut printer)
         }
+    } else if record::is_recording(head) {
+        decode_recording(input, &mut printer)
     } else {
         decode_stream(input, args.api_mode.0, &mut printer)
     };
@@ -259,6 +265,11 @@ fn decode_stream(
                 None => break,
             }
         }
+        // A read that did not fill the buffer had all there was for now (a pipe, a
+        // terminal): what it decoded is shown at once, not when more comes.
+        if n < chunk.len() {
+            printer.out.flush()?;
+        }
     }
     while let Some(event) = decoder.finish() {
         match event {
@@ -392,32 +403,12 @@ fn print_summary(
     }
 }
 
-/// Reads hex text: pairs of hex digits; whitespace, `:`, `,` and `0x` prefixes between
-/// bytes are ignored; `#` starts a comment to the end of the line.
-fn read_hex(input: impl BufRead) -> Result<Vec<u8>, Failure> {
-    let mut bytes = Vec::new();
-    for (n, line) in input.lines().enumerate() {
-        let line = line.map_err(|e| Failure::input(format!("cannot read input: {e}")))?;
-        let line = line.split('#').next().unwrap_or("");
-        for word in line.split(|c: char| c.is_whitespace() || c == ':' || c == ',') {
-            let word = word
-                .strip_prefix("0x")
-                .or_else(|| word.strip_prefix("0X"))
-                .unwrap_or(word);
-            if word.len() % 2 != 0 {
-                return Err(Failure::input(format!(
-                    "line {}: `{word}` is not whole bytes of hex (odd number of digits)",
-                    n + 1
-                )));
-            }
-            for pair in word.as_bytes().chunks(2) {
-                let text = std::str::from_utf8(pair).unwrap_or("??");
-                let byte = u8::from_str_radix(text, 16).map_err(|_| {
-                    Failure::input(format!("line {}: `{text}` is not a hex byte", n + 1))
-                })?;
-                bytes.push(byte);
-            }
-        }
-    }
-    Ok(bytes)
+/// The first bytes of `input`, as many as a recording's magic number has (fewer at
+/// its end), read however the reads fall.
+fn read_head(input: &mut impl Read) -> io::Result<Vec<u8>> {
+    let mut head = Vec::with_capacity(record::MAGIC.len());
+    input
+        .take(record::MAGIC.len() as u64)
+        .read_to_end(&mut head)?;
+    Ok(head)
 }

@@ -13,6 +13,7 @@ mod command;
 mod decode;
 mod demo;
 mod encode;
+mod hex_input;
 mod hub;
 mod link_args;
 mod monitor;
