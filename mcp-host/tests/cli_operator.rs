@@ -6,7 +6,7 @@ use std::sync::mpsc::Receiver;
 
 mod common;
 
-use common::{GUARD, Running, spawn_lines};
+use common::{GUARD, Running, spawn_lines, stdout_lines};
 
 /// The demo MAV's address.
 const M: &str = "0013a20040b599b9";
@@ -688,7 +688,6 @@ fn a_demo_shorter_than_its_script_runs_the_script_to_its_end() {
 /// `mcp-gs decode` with `args`, its standard input a pipe the test writes to, its output
 /// line by line on the channel.
 fn decode_piped(args: &[&str]) -> (Running, std::process::ChildStdin, Receiver<String>) {
-    use std::io::BufRead;
     let mut child = gs()
         .arg("decode")
         .args(args)
@@ -697,17 +696,8 @@ fn decode_piped(args: &[&str]) -> (Running, std::process::ChildStdin, Receiver<S
         .spawn()
         .expect("start mcp-gs");
     let stdin = child.stdin.take().expect("stdin");
-    let stdout = child.stdout.take().expect("stdout");
-    let (tx, rx) = std::sync::mpsc::channel();
-    std::thread::spawn(move || {
-        for line in std::io::BufReader::new(stdout)
-            .lines()
-            .map_while(Result::ok)
-        {
-            let _ = tx.send(line);
-        }
-    });
-    (Running(child), stdin, rx)
+    let lines = stdout_lines(&mut child);
+    (Running(child), stdin, lines)
 }
 
 #[test]

@@ -251,14 +251,21 @@ impl Drop for Running {
 /// Starts `mcp-gs` with `args`; its standard output comes line by line on the channel
 /// (read to the end, so that the process never writes into a closed pipe).
 pub fn spawn_lines(args: &[&str]) -> (std::process::Child, std::sync::mpsc::Receiver<String>) {
-    use std::io::BufRead;
     let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
         .args(args)
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::inherit())
         .spawn()
         .expect("start mcp-gs");
-    let stdout = child.stdout.take().expect("stdout");
+    let lines = stdout_lines(&mut child);
+    (child, lines)
+}
+
+/// The standard output of `child` (started with it piped), line by line on a channel,
+/// read to the end by a thread of its own.
+pub fn stdout_lines(child: &mut std::process::Child) -> std::sync::mpsc::Receiver<String> {
+    use std::io::BufRead;
+    let stdout = child.stdout.take().expect("stdout piped");
     let (tx, rx) = std::sync::mpsc::channel();
     std::thread::spawn(move || {
         for line in std::io::BufReader::new(stdout)
@@ -268,7 +275,7 @@ pub fn spawn_lines(args: &[&str]) -> (std::process::Child, std::sync::mpsc::Rece
             let _ = tx.send(line);
         }
     });
-    (child, rx)
+    rx
 }
 
 /// A TCP peer that takes `connections` connections in turn and reads each until the
