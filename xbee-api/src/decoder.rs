@@ -366,7 +366,7 @@ impl<const N: usize> Decoder<N> {
     ///
     /// A frame that lies whole in `input` is decoded in one go: unescaped, copied to the
     /// buffer and summed 16 bytes a step (in mode 2 on 64-bit targets, a frame of up to
-    /// 60 bytes of data in one 64-byte window, when `input` holds 130 bytes or more and
+    /// 60 bytes of data in one 64-byte window, when `input` holds 128 bytes or more and
     /// the buffer `N` is as large). Frames split across calls go through the buffer and
     /// come out the same.
     ///

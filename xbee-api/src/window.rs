@@ -25,9 +25,9 @@ const LANES: usize = Step::LANES as usize;
 /// Steps in the window.
 const STEPS: usize = WINDOW / LANES;
 
-/// Bytes of input and of buffer [`frame_in_window`] needs: each escape copies the 64
-/// bytes after it.
-pub(crate) const WINDOW_ROOM: usize = 2 * WINDOW + 2;
+/// Bytes of input and of buffer [`frame_in_window`] needs: each escape (at most at
+/// byte 63) copies the 64 bytes from the one after it, one byte down.
+pub(crate) const WINDOW_ROOM: usize = 2 * WINDOW;
 
 /// Lane masks: the 64 bytes from `KEEP[64 - k]` keep the first `k`.
 // Evaluated at compile time: an index out of bounds would fail the build, not panic.
@@ -64,8 +64,8 @@ pub(crate) const MAX_LEN: usize = WINDOW - DATA - 1;
 
 /// Unescapes the frame that starts at `src[0]` into `out` when the whole of it lies in
 /// the first [`WINDOW`] bytes of `src` and its length field is from 1 to [`MAX_LEN`];
-/// writes all of `out[..WINDOW_ROOM]`. The caller has checked that `src[0]` is a start
-/// delimiter.
+/// writes `out[..WINDOW]` and, after an escape, as far as `out[WINDOW_ROOM - 1]`. The
+/// caller has checked that `src[0]` is a start delimiter.
 ///
 /// `None` if the frame runs past the window, or has another length, a start delimiter
 /// inside it or an invalid escape: the caller then takes a path that reports what went

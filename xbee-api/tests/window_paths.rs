@@ -1,10 +1,10 @@
 //! Mode 2 frames at the edges of the one-window path (a frame whole in the 64 bytes from
-//! its start delimiter, with 130 bytes or more of input and a buffer as large): every
+//! its start delimiter, with 128 bytes or more of input and a buffer as large): every
 //! length from 1 to 64, escapes and escaped checksum bytes up to the window's last byte,
 //! bad escapes, delimiters inside and right after a frame, length fields around the
 //! window's limit. `decode` in a loop and `decode_each`, whatever the reads, yield
 //! exactly the events and counters of `push`, for buffers below and above the window's
-//! 130 bytes and for length limits around its 60.
+//! 128 bytes and for length limits around its 60.
 
 mod common;
 
@@ -21,16 +21,16 @@ const MODE: ApiMode = ApiMode::Escaped;
 const LIMITS: [Option<usize>; 4] = [None, Some(59), Some(60), Some(61)];
 
 /// Reads tried on every stream (cycled): the whole of it, a byte at a time, sizes around
-/// the window's 64 and 130 bytes, and a mix.
+/// the window's 64 and 128 bytes, and a mix.
 const READS: [&[usize]; 9] = [
     &[1 << 20],
     &[1],
     &[7],
     &[64],
+    &[127],
+    &[128],
     &[129],
-    &[130],
-    &[131],
-    &[3, 130, 1, 200],
+    &[3, 128, 1, 200],
     &[61, 62, 63, 65, 66, 67],
 ];
 
@@ -68,7 +68,7 @@ fn same_as_push<const N: usize>(
     expected
 }
 
-/// [`same_as_push`] for buffers of 64, 129, 130, 131, 200 and 512 bytes and every limit
+/// [`same_as_push`] for buffers of 64, 127, 128, 129, 200 and 512 bytes and every limit
 /// of [`LIMITS`]; also checks that a limit decodes as a buffer of that size does.
 /// `push`'s events and counters on the largest buffer, without a limit.
 fn check(stream: &[u8], reads: &[&[usize]]) -> (Vec<Owned>, Stats) {
@@ -76,9 +76,9 @@ fn check(stream: &[u8], reads: &[&[usize]]) -> (Vec<Owned>, Stats) {
     for limit in LIMITS {
         let runs = [
             same_as_push::<64>(stream, limit, reads),
+            same_as_push::<127>(stream, limit, reads),
+            same_as_push::<128>(stream, limit, reads),
             same_as_push::<129>(stream, limit, reads),
-            same_as_push::<130>(stream, limit, reads),
-            same_as_push::<131>(stream, limit, reads),
             same_as_push::<200>(stream, limit, reads),
             same_as_push::<512>(stream, limit, reads),
         ];
@@ -141,7 +141,7 @@ fn data_with(len: usize, specials: &[usize], check: u8) -> Vec<u8> {
 }
 
 /// Filler after the frames under test: plain bytes, no delimiter, so that the window
-/// has its 130 bytes of input.
+/// has its 128 bytes of input.
 fn padding(n: usize) -> Vec<u8> {
     vec![0x42; n]
 }
@@ -201,7 +201,7 @@ fn frames_of_exactly_64_and_65_bytes_with_escapes_at_the_end() {
                 let data = data_with(len, &specials, check);
                 let mut stream = valid(&data);
                 let taken = stream.len();
-                stream.extend(padding(130));
+                stream.extend(padding(128));
                 let (events, _) = check_stream(&stream);
                 assert_eq!(frames(&events), [data], "taken {taken}");
             }
@@ -219,7 +219,7 @@ fn bad_escapes_at_every_place_of_the_window() {
                 let mut stream = good.clone();
                 stream.splice(at..at, [0x7D, partner]);
                 stream.extend(valid(&NEXT));
-                stream.extend(padding(130));
+                stream.extend(padding(128));
                 let (events, stats) = check_stream(&stream);
                 // A valid escape (0x31) only makes the frame longer by a byte: a bad
                 // checksum or a truncated frame, but never a frame of the wrong data.
@@ -242,14 +242,14 @@ fn escape_cut_off_at_the_window_end() {
         let at = 63.min(stream.len() - 1);
         stream.splice(at..at, [0x7D]);
         stream.extend(valid(&NEXT));
-        stream.extend(padding(130));
+        stream.extend(padding(128));
         check_stream(&stream);
         let mut stream = valid(&data);
         stream.truncate(63);
         stream.resize(63, 0x41);
         stream.extend([0x7D, 0x31]);
         stream.extend(valid(&NEXT));
-        stream.extend(padding(130));
+        stream.extend(padding(128));
         check_stream(&stream);
     }
 }
@@ -269,7 +269,7 @@ fn delimiters_inside_at_and_after_the_frame_end() {
                 stream.push(0x7E);
             }
             stream.extend(valid(&NEXT));
-            stream.extend(padding(130));
+            stream.extend(padding(128));
             let (events, stats) = check_stream(&stream);
             assert_eq!(frames(&events).last(), Some(&NEXT.to_vec()));
             if at < good.len() {
@@ -315,7 +315,7 @@ fn length_fields_around_the_window() {
                 }
                 stream.extend(&body[..split]);
                 stream.extend(valid(&NEXT));
-                stream.extend(padding(130));
+                stream.extend(padding(128));
                 check_stream(&stream);
             }
         }
@@ -324,7 +324,7 @@ fn length_fields_around_the_window() {
         if (1..=64).contains(&len) {
             let data = data_with(len, &[len - 1], 0x13);
             let mut stream = valid(&data);
-            stream.extend(padding(130));
+            stream.extend(padding(128));
             let (events, _) = check_stream(&stream);
             assert_eq!(frames(&events), [data]);
         }
@@ -339,7 +339,7 @@ fn bad_checksums_with_escaped_checksum_bytes() {
             for off in [1u8, 0x5D, 0x80] {
                 let mut stream = wire(&data, checksum(&data).wrapping_add(off) ^ check);
                 stream.extend(valid(&NEXT));
-                stream.extend(padding(130));
+                stream.extend(padding(128));
                 let (events, stats) = check_stream(&stream);
                 let expected = checksum(&data);
                 let got = expected.wrapping_add(off) ^ check;
@@ -419,7 +419,7 @@ fn window_frames_then_push_and_decode_on_the_same_decoder() {
     for _ in 0..3 {
         stream.extend(valid(&data));
     }
-    stream.extend(padding(130));
+    stream.extend(padding(128));
     let tail = [valid(&data), valid(&NEXT)].concat();
     let mut decoder: Decoder<130> = Decoder::new(MODE);
     let mut events = Vec::new();
@@ -442,7 +442,7 @@ fn window_frames_then_push_and_decode_on_the_same_decoder() {
         ]
     );
     assert_eq!(decoder.stats().frames_ok, 5);
-    assert_eq!(decoder.stats().bytes_skipped, 130);
+    assert_eq!(decoder.stats().bytes_skipped, 128);
 }
 
 /// Frame data of 1 to 64 bytes, plain at the front and rich in special bytes towards
