@@ -30,7 +30,21 @@ impl<R: BufRead> HexReader<R> {
     fn next_line(&mut self) -> io::Result<bool> {
         loop {
             self.line.clear();
-            if self.text.read_line(&mut self.line)? == 0 {
+            let read = self.text.read_line(&mut self.line).map_err(|e| {
+                if e.kind() == io::ErrorKind::InvalidData {
+                    // Not UTF-8: binary, not hex text.
+                    io::Error::new(
+                        e.kind(),
+                        format!(
+                            "line {}: not text (a raw capture needs no --hex)",
+                            self.line_no + 1
+                        ),
+                    )
+                } else {
+                    e
+                }
+            })?;
+            if read == 0 {
                 return Ok(false);
             }
             self.line_no += 1;
@@ -114,6 +128,14 @@ mod tests {
         );
         let e = all("7E zz\n").unwrap_err();
         assert_eq!(e.to_string(), "line 1: `zz` is not a hex byte");
+        let mut bytes = Vec::new();
+        let e = HexReader::new(&b"7E 00\n\x7E\x00\x02\x8A\xFF\n"[..])
+            .read_to_end(&mut bytes)
+            .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "line 2: not text (a raw capture needs no --hex)"
+        );
     }
 
     #[test]
