@@ -3,7 +3,7 @@
 //! A frame that lies whole, escapes included, in the 64 bytes from its start delimiter
 //! (an MCP telemetry frame of 8 values takes about 59) is unescaped with no loop over
 //! steps: the 64 bytes are copied to the buffer and scanned at once into a mask of
-//! escapes (16 bytes a compare), each escape inside the frame moves what follows it
+//! escapes (16 bytes a compare, 32 in a build for AVX2), each escape inside the frame moves what follows it
 //! one byte down, and the frame's raw bytes, masked in their lanes, are summed for the
 //! checksum and searched for a start delimiter together. One branch a frame and one an
 //! escape, wherever the escapes fall.
@@ -193,7 +193,7 @@ fn load(src: &[u8; WINDOW_ROOM]) -> [Step; STEPS] {
 #[inline(always)]
 fn mask(steps: &[Step; STEPS], byte: u8) -> u64 {
     steps.iter().enumerate().fold(0, |acc, (j, step)| {
-        // The step's lanes as the low bits (`move_mask` sign-extends 16 lanes).
+        // The step's lanes as its low bits (32 lanes fill the `i32`, sign bit too).
         let bits =
             step.cmp_eq(Step::splat(byte)).move_mask() as u32 as u64 & (u64::MAX >> (64 - LANES));
         acc | bits << (LANES * j)
