@@ -88,6 +88,8 @@ pub(crate) fn frame_in_window(
     }
     // The data and the checksum byte end before `end + k` after `k` escapes.
     let end = DATA + len + 1;
+    // The bytes after each escape: `after[i]` follows the escape at `i`.
+    let after = src.get(1..)?;
     let mut k = 0;
     // What the escapes add to the sum of the raw bytes.
     let mut adjust = 0u8;
@@ -97,7 +99,7 @@ pub(crate) fn frame_in_window(
             break;
         }
         // What the pair adds to the raw sum, 0 if the escape is invalid.
-        let add = *ESCAPED.get(usize::from(*src.get(i + 1)?))?;
+        let add = *ESCAPED.get(usize::from(*after.get(i)?))?;
         if add == 0 {
             return None;
         }
@@ -106,7 +108,7 @@ pub(crate) fn frame_in_window(
         // byte unescaped in place. `k <= i < 64`: the mask changes nothing but spares
         // the bounds tests.
         let o = (i - k) % WINDOW;
-        let rest = src.get(i + 1..)?.first_chunk::<WINDOW>()?;
+        let rest = after.get(i..)?.first_chunk::<WINDOW>()?;
         let to = out.get_mut(o..)?.first_chunk_mut::<WINDOW>()?;
         to.copy_from_slice(rest);
         to[0] ^= ESCAPE_XOR;
