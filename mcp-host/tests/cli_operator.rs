@@ -6,7 +6,7 @@ use std::sync::mpsc::Receiver;
 
 mod common;
 
-use common::{GUARD, Running, spawn_lines, stdout_lines};
+use common::{GUARD, Running, spawn_lines, stdout_lines, talking_peer};
 
 /// The demo MAV's address.
 const M: &str = "0013a20040b599b9";
@@ -320,27 +320,20 @@ fn numbers_beyond_an_f32_and_names_in_any_case() {
 
 #[test]
 fn every_json_object_of_monitor_has_a_time() {
-    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
-    let link = format!("tcp:{}", listener.local_addr().unwrap());
-    let peer = std::thread::spawn(move || {
-        let (mut socket, _) = listener.accept().unwrap();
-        let bytes = [
-            &[0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F][..], // modem status
-            &[0x7E, 0x00, 0x02, 0x8A, 0x06, 0x00],     // bad checksum
-            // Receive Packet: landing report "flight".
-            &[
-                0x7E, 0x00, 0x0F, 0x90, 0x00, 0x13, 0xA2, 0x00, 0x40, 0xB5, 0x99, 0xB9, 0x7D, 0x84,
-                0x01, 0x72, 0x02, 0x04,
-            ],
-        ]
-        .concat();
-        // The checksum of the Receive Packet.
-        let sum = bytes[15..].iter().fold(0u8, |s, b| s.wrapping_add(*b));
-        std::io::Write::write_all(&mut socket, &bytes).unwrap();
-        std::io::Write::write_all(&mut socket, &[0xFF - sum]).unwrap();
-        let mut buf = [0u8; 64];
-        while matches!(std::io::Read::read(&mut socket, &mut buf), Ok(n) if n > 0) {}
-    });
+    let mut bytes = [
+        &[0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F][..], // modem status
+        &[0x7E, 0x00, 0x02, 0x8A, 0x06, 0x00],     // bad checksum
+        // Receive Packet: landing report "flight".
+        &[
+            0x7E, 0x00, 0x0F, 0x90, 0x00, 0x13, 0xA2, 0x00, 0x40, 0xB5, 0x99, 0xB9, 0x7D, 0x84,
+            0x01, 0x72, 0x02, 0x04,
+        ],
+    ]
+    .concat();
+    // The checksum of the Receive Packet.
+    let sum = bytes[15..].iter().fold(0u8, |s, b| s.wrapping_add(*b));
+    bytes.push(0xFF - sum);
+    let (link, peer) = talking_peer(bytes);
     let output = run(&[
         "monitor", "--link", &link, "--format", "json", "--count", "4",
     ]);

@@ -626,16 +626,8 @@ fn monitor_keeps_an_existing_recording() {
 fn monitor_hints_at_the_baud_rate_when_nothing_makes_sense() {
     // What a radio at another baud rate looks like: start delimiters with impossible
     // lengths, and no good frame.
-    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
-    let link = format!("tcp:{}", listener.local_addr().unwrap());
-    let peer = std::thread::spawn(move || {
-        let (mut socket, _) = listener.accept().unwrap();
-        let noise: Vec<u8> = (0..10).flat_map(|_| [0x7E, 0xFF, 0xF0, 0x00]).collect();
-        std::io::Write::write_all(&mut socket, &noise).unwrap();
-        // Until the ground station hangs up.
-        let mut buf = [0u8; 64];
-        while matches!(std::io::Read::read(&mut socket, &mut buf), Ok(n) if n > 0) {}
-    });
+    let noise: Vec<u8> = (0..10).flat_map(|_| [0x7E, 0xFF, 0xF0, 0x00]).collect();
+    let (link, peer) = common::talking_peer(noise);
     let output = run(&["monitor", "--link", &link, "--count", "8"]);
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert_eq!(output.status.code(), Some(0), "{stderr}");

@@ -21,6 +21,16 @@ fn fast_reconnect() -> LinkOptions {
     }
 }
 
+/// Waits for the end of `r`'s stream: the peer hung up, with nothing more to read.
+async fn reads_end<R: AsyncReadExt + Unpin>(r: &mut R) {
+    let mut buf = [0u8; 8];
+    let n = timeout(GUARD, r.read(&mut buf))
+        .await
+        .expect("read timed out")
+        .expect("read failed");
+    assert_eq!(n, 0, "bytes after the peer hung up: {:02X?}", &buf[..n]);
+}
+
 async fn read_exact_n<R: AsyncReadExt + Unpin>(r: &mut R, n: usize) -> Vec<u8> {
     let mut buf = vec![0; n];
     timeout(GUARD, r.read_exact(&mut buf))
@@ -88,12 +98,7 @@ async fn tcp_reconnects_after_the_peer_goes_away() {
 
     // The peer goes away: the transport reads end of file.
     drop(peer);
-    let mut buf = [0u8; 8];
-    let n = timeout(GUARD, transport.read(&mut buf))
-        .await
-        .unwrap()
-        .unwrap();
-    assert_eq!(n, 0);
+    reads_end(&mut transport).await;
     drop(transport);
 
     // Reconnection succeeds once the peer accepts again.
@@ -178,12 +183,7 @@ async fn tcp_listen_serves_one_peer_at_a_time() {
     assert_eq!(read_exact_n(&mut transport, 3).await, b"1st");
 
     drop(first);
-    let mut buf = [0u8; 8];
-    let n = timeout(GUARD, transport.read(&mut buf))
-        .await
-        .unwrap()
-        .unwrap();
-    assert_eq!(n, 0);
+    reads_end(&mut transport).await;
 
     // The next open takes the waiting peer, with what it wrote while it waited.
     let mut transport = timeout(GUARD, connector.reopen(&options.reconnect))
@@ -201,13 +201,7 @@ async fn tcp_listen_serves_one_peer_at_a_time() {
     gone.write_all(b"old").await.unwrap();
     gone.shutdown().await.unwrap();
     drop(second);
-    assert_eq!(
-        timeout(GUARD, transport.read(&mut buf))
-            .await
-            .unwrap()
-            .unwrap(),
-        0
-    );
+    reads_end(&mut transport).await;
     drop(transport);
     let reopened = connector.reopen(&options.reconnect);
     tokio::pin!(reopened);
@@ -215,7 +209,7 @@ async fn tcp_listen_serves_one_peer_at_a_time() {
     // waiting place free for the next peer.
     tokio::select! {
         t = &mut reopened => panic!("served a peer that had left: {:?}", t.map(|t| t.peer().to_owned())),
-        n = gone.read(&mut buf) => assert_eq!(n.unwrap(), 0),
+        () = reads_end(&mut gone) => {}
     }
     let mut last = TcpStream::connect(addr).await.unwrap();
     last.write_all(b"new").await.unwrap();
@@ -244,14 +238,7 @@ async fn tcp_listen_gives_the_waiting_place_of_a_peer_that_left_to_the_next() {
 
     drop(first.shutdown().await);
     drop(first);
-    let mut buf = [0u8; 8];
-    assert_eq!(
-        timeout(GUARD, transport.read(&mut buf))
-            .await
-            .unwrap()
-            .unwrap(),
-        0
-    );
+    reads_end(&mut transport).await;
     drop(transport);
     let mut transport = timeout(GUARD, connector.reopen(&options.reconnect))
         .await

@@ -282,11 +282,24 @@ pub fn stdout_lines(child: &mut std::process::Child) -> std::sync::mpsc::Receive
 /// other side hangs up, never answering: a radio that is not there. Its `tcp:` link,
 /// and the thread to join.
 pub fn silent_peer(connections: usize) -> (String, std::thread::JoinHandle<()>) {
+    peer_writing(connections, Vec::new())
+}
+
+/// A TCP peer that takes one connection, writes `bytes` and then reads until the other
+/// side hangs up: a radio with something to say. Its `tcp:` link, and the thread to
+/// join.
+pub fn talking_peer(bytes: Vec<u8>) -> (String, std::thread::JoinHandle<()>) {
+    peer_writing(1, bytes)
+}
+
+/// [`silent_peer`] and [`talking_peer`]: `connections` in turn, `bytes` written to each.
+fn peer_writing(connections: usize, bytes: Vec<u8>) -> (String, std::thread::JoinHandle<()>) {
     let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
     let link = format!("tcp:{}", listener.local_addr().unwrap());
     let peer = std::thread::spawn(move || {
         for _ in 0..connections {
             let (mut socket, _) = listener.accept().unwrap();
+            std::io::Write::write_all(&mut socket, &bytes).unwrap();
             let mut buf = [0u8; 64];
             while matches!(std::io::Read::read(&mut socket, &mut buf), Ok(n) if n > 0) {}
         }
