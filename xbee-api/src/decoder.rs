@@ -442,9 +442,21 @@ impl<const N: usize> Decoder<N> {
         if rest.is_empty() && !input.is_empty() {
             return;
         }
-        match self.mode {
-            ApiMode::Escaped => self.each2(rest, f),
-            ApiMode::Unescaped => self.each1(rest, f),
+        let mut rest = rest;
+        let escaped = self.mode == ApiMode::Escaped;
+        let limit = self.capacity();
+        // Known to be between frames: right after a frame handed over whole.
+        let mut between = false;
+        let mut f = f;
+        // One call of `f` for every event of both modes: the compiler can then put the
+        // caller's closure in line in the loop (with more than one call of it, it keeps
+        // a closure of any size out of line, and each frame pays for the call).
+        while let Some(event) = if escaped {
+            self.next2(&mut rest, limit, &mut between)
+        } else {
+            self.next1(&mut rest, &mut between)
+        } {
+            f(event);
         }
     }
 
@@ -527,62 +539,50 @@ impl<const N: usize> Decoder<N> {
         rest
     }
 
-    /// [`decode_each`](Self::decode_each) in mode 2: whole frames at once where they
-    /// lie in `input`, the rest through [`feed2`](Self::feed2).
-    fn each2<F: FnMut(Event<'_>)>(&mut self, input: &[u8], mut f: F) {
-        let mut input = input;
+    /// The next event of [`decode_each`](Self::decode_each) in mode 2, `input` moved past
+    /// what it took; `None` once all of `input` is taken. Between frames, a frame that
+    /// lies whole in `input` is taken at once ([`whole2_at`](Self::whole2_at)); the
+    /// rest goes through [`feed2`](Self::feed2). `between` says the decoder is known to
+    /// be between frames, as a frame taken whole leaves it (it is then left `true`), so
+    /// that the state need not be read again; `limit` is [`capacity`](Self::capacity).
+    #[inline(always)]
+    fn next2<'s>(
+        &'s mut self,
+        input: &mut &[u8],
+        limit: usize,
+        between: &mut bool,
+    ) -> Option<Event<'s>> {
         loop {
             // Between frames (`escaped` is only ever set inside one).
-            if self.state == State::Hunt && !self.escaped {
-                // Mode 2's capacity.
-                let limit = N - self.cut;
-                // Frames with a plain length field that leave the step loop room past
-                // their data in the buffer: the length checked once, here.
-                let fast = limit.min(N.saturating_sub(STEP));
+            if *between || (self.state == State::Hunt && !self.escaped) {
                 // Short frames, whole in one window (64-bit targets, room permitting).
                 #[cfg(target_pointer_width = "64")]
-                while let Some((rest, outcome)) = self.window2(input, limit) {
-                    input = rest;
-                    f(self.event(outcome));
+                if let Some((rest, outcome)) = self.window2(input, limit) {
+                    *input = rest;
+                    *between = true;
+                    let data = |len| self.buf.get(DATA..DATA + len).unwrap_or_default();
+                    return Some(outcome.map(|len| RawFrame::from_data(data(len))));
                 }
-                while let Some((&[START_DELIMITER, hi, lo], rest)) = input.split_first_chunk::<3>()
-                {
-                    let len = usize::from(u16::from_be_bytes([hi, lo]));
-                    let whole = if is_plain(hi) && is_plain(lo) {
-                        // Not whole, or not for the buffer: byte by byte.
-                        if len.wrapping_sub(1) >= fast || rest.len() <= len {
-                            break;
-                        }
-                        self.whole2_data(rest, len)
-                    } else {
-                        // A frame is not whole in fewer bytes than its length field asks
-                        // for (read raw: an escape there only makes the frame longer, but
-                        // for lengths from 0x1100 on, which take the byte path).
-                        if len >= rest.len() {
-                            break;
-                        }
-                        self.whole2(input.get(1..).unwrap_or_default(), limit)
-                    };
-                    let Some((after, outcome)) = whole else {
-                        break;
-                    };
-                    input = after;
-                    f(self.event(outcome));
+                if let Some((rest, outcome)) = self.whole2_at(input, limit) {
+                    *input = rest;
+                    *between = true;
+                    return Some(self.event(outcome));
                 }
+                *between = false;
                 match input.split_first() {
-                    None => return,
+                    None => return None,
                     // A frame that is not whole here (or not valid): byte by byte, but
                     // for a plain length field that the buffer can take, read here.
                     Some((&START_DELIMITER, body)) => {
                         self.begin2();
-                        input = body;
+                        *input = body;
                         if let Some((&[hi, lo], data)) = body.split_first_chunk::<2>() {
                             let len = usize::from(u16::from_be_bytes([hi, lo]));
                             if is_plain(hi) && is_plain(lo) && len != 0 && len <= limit {
                                 self.len = len;
                                 self.state = State::Data;
                                 self.fill_to = len;
-                                input = data;
+                                *input = data;
                             }
                         }
                     }
@@ -591,17 +591,43 @@ impl<const N: usize> Decoder<N> {
                         // there whole.
                         let k = memchr(START_DELIMITER, input).unwrap_or(input.len());
                         self.skipped(k);
-                        input = input.get(k..).unwrap_or_default();
+                        *input = input.get(k..).unwrap_or_default();
                         continue;
                     }
                 }
             }
             let (consumed, outcome) = self.feed2(input);
-            input = input.get(consumed..).unwrap_or_default();
-            match outcome {
-                Some(outcome) => f(self.event(outcome)),
-                None => return,
+            *input = input.get(consumed..).unwrap_or_default();
+            return outcome.map(|o| self.event(o));
+        }
+    }
+
+    /// The frame at the start of `input` (between frames) if it lies whole there: the
+    /// rest of `input` after it and the outcome. With a plain length field that leaves
+    /// the step loop room past its data in the buffer, or through
+    /// [`whole2`](Self::whole2).
+    /// `None`, with nothing changed but the buffer's content, for a frame that is not
+    /// whole or not for the buffer, or has anything but a bad checksum wrong.
+    #[inline(always)]
+    fn whole2_at<'a>(&mut self, input: &'a [u8], limit: usize) -> Option<(&'a [u8], Outcome)> {
+        let (&[START_DELIMITER, hi, lo], rest) = input.split_first_chunk::<3>()? else {
+            return None;
+        };
+        let len = usize::from(u16::from_be_bytes([hi, lo]));
+        if is_plain(hi) && is_plain(lo) {
+            // The length checked once, here.
+            if len.wrapping_sub(1) >= limit.min(N.saturating_sub(STEP)) || rest.len() <= len {
+                return None;
             }
+            self.whole2_data(rest, len)
+        } else {
+            // A frame is not whole in fewer bytes than its length field asks for (read
+            // raw: an escape there only makes the frame longer, but for lengths from
+            // 0x1100 on, which take the byte path).
+            if len >= rest.len() {
+                return None;
+            }
+            self.whole2(input.get(1..).unwrap_or_default(), limit)
         }
     }
 
@@ -676,23 +702,27 @@ impl<const N: usize> Decoder<N> {
         }
     }
 
-    /// [`decode_each`](Self::decode_each) in mode 1.
-    fn each1<F: FnMut(Event<'_>)>(&mut self, input: &[u8], mut f: F) {
-        let mut input = input;
-        loop {
-            if self.state == State::Hunt && self.pos == self.end {
-                while let Some((n, data)) = self.valid1(input) {
-                    f(Ok(RawFrame::from_data(data)));
-                    input = input.get(n..).unwrap_or_default();
-                }
-            }
-            let (consumed, event) = self.feed1(input);
-            input = input.get(consumed..).unwrap_or_default();
-            match event {
-                Some(event) => f(event),
-                None => return,
+    /// The next event of [`decode_each`](Self::decode_each) in mode 1, as
+    /// [`next2`](Self::next2) gives it in mode 2: a whole valid frame borrowed from
+    /// `input` if `between` or the state says the decoder is between frames, else
+    /// through [`feed1`](Self::feed1).
+    #[inline(always)]
+    fn next1<'s, 'i: 's>(
+        &'s mut self,
+        input: &mut &'i [u8],
+        between: &mut bool,
+    ) -> Option<Event<'s>> {
+        if *between || (self.state == State::Hunt && self.pos == self.end) {
+            if let Some((n, data)) = self.valid1(input) {
+                *input = input.get(n..).unwrap_or_default();
+                *between = true;
+                return Some(Ok(RawFrame::from_data(data)));
             }
         }
+        *between = false;
+        let (consumed, event) = self.feed1(input);
+        *input = input.get(consumed..).unwrap_or_default();
+        event
     }
 
     /// [`decode`](Self::decode) in mode 1 for input that does not start with a whole valid
@@ -1009,11 +1039,16 @@ impl<const N: usize> Decoder<N> {
     /// The frame at the start of `input` if it lies whole in its first 64 bytes (a
     /// start delimiter first, and at least [`WINDOW_ROOM`] bytes) and the decoder takes
     /// such frames (a buffer of [`WINDOW_ROOM`] bytes or more, and a capacity, `limit`,
-    /// of [`MAX_LEN`] or more): the rest of `input` after it and the outcome. `None`,
-    /// with nothing changed but the buffer's content, as for [`whole2`](Self::whole2).
+    /// of [`MAX_LEN`] or more): the rest of `input` after it and the outcome, a frame as
+    /// the length of its data, which is at `buf[DATA..]`. `None`, with nothing changed
+    /// but the buffer's content, as for [`whole2`](Self::whole2).
     #[cfg(target_pointer_width = "64")]
     #[inline(always)]
-    fn window2<'a>(&mut self, input: &'a [u8], limit: usize) -> Option<(&'a [u8], Outcome)> {
+    fn window2<'a>(
+        &mut self,
+        input: &'a [u8],
+        limit: usize,
+    ) -> Option<(&'a [u8], Result<usize, DecodeError>)> {
         if N < WINDOW_ROOM || limit < MAX_LEN {
             return None;
         }
@@ -1027,12 +1062,13 @@ impl<const N: usize> Decoder<N> {
         // Frame data and checksum byte sum to 0xFF: the checksum is right.
         if frame.total == checksum_of_sum(0) {
             self.stats.frames_ok = self.stats.frames_ok.wrapping_add(1);
-            return Some((rest, Ok((DATA, DATA + frame.len))));
+            return Some((rest, Ok(frame.len)));
         }
         let got = *out.get(DATA + frame.len)?;
         self.len = frame.len;
         let outcome = self
             .check_sum(frame.total.wrapping_sub(got), DATA, got)
+            .map(|_| frame.len)
             .map_err(|e| self.record(e));
         Some((rest, outcome))
     }
@@ -1062,6 +1098,7 @@ impl<const N: usize> Decoder<N> {
         if self.state == State::Hunt {
             #[cfg(target_pointer_width = "64")]
             if let Some((rest, outcome)) = self.window2(input, self.capacity()) {
+                let outcome = outcome.map(|len| (DATA, DATA + len));
                 return (input.len() - rest.len(), Some(outcome));
             }
             if let Some((&START_DELIMITER, body)) = input.split_first() {

@@ -266,3 +266,29 @@ fn decoder_ram_is_buffer_plus_a_few_words() {
     println!("size_of::<Decoder>() = {}", std::mem::size_of::<Decoder>());
     assert!(overhead <= 80, "overhead {overhead}");
 }
+
+#[test]
+fn mode_1_a_read_that_starts_with_a_whole_frame_inside_a_frame() {
+    // Mode 1 counts a frame's bytes: a read that starts with what looks like a whole
+    // frame while a frame is in progress continues that frame (which then fails its
+    // checksum and is scanned again); it is not a frame of its own at once.
+    let inner = hex(MODEM);
+    let data = [0x55; 40];
+    let mut outer = vec![0x7E, 0x00, data.len() as u8];
+    outer.extend(data);
+    outer.push(xbee_api::wire::checksum(&data));
+    for k in [1, 3, 10, 30] {
+        // `inner` in place of the outer frame's bytes from `k` on.
+        let mut stream = outer.clone();
+        stream[k..k + inner.len()].copy_from_slice(&inner);
+        let expected = decode_bytes::<128>(ApiMode::Unescaped, &stream);
+        assert!(
+            matches!(expected.0.first(), Some(Owned::Error(_))),
+            "{:?}",
+            expected.0
+        );
+        let decoder: Decoder<128> = Decoder::new(ApiMode::Unescaped);
+        let got = common::decode_each_slices_with(decoder, &stream, &[k, 1 << 20]);
+        assert_eq!(got, expected, "read from {k}");
+    }
+}

@@ -646,3 +646,40 @@ proptest! {
         check(&bytes, &[&[1 << 20], &reads]);
     }
 }
+
+#[test]
+fn a_read_that_starts_at_a_delimiter_inside_a_frame() {
+    // The frame in progress is cut off by the start delimiter that begins the next read,
+    // a window frame: it is reported (cut off, or a bad escape right after its 0x7D)
+    // before that frame is taken whole.
+    let cut = valid(&data_with(40, &[7], 0x11));
+    let data = data_with(50, &[10], 0x22);
+    for k in 1..cut.len() {
+        let mut stream = cut[..k].to_vec();
+        stream.extend(valid(&data));
+        stream.extend(padding(128));
+        let (events, stats) = check(&stream, &[&[k, 1 << 20]]);
+        let [Owned::Error(error), Owned::Frame(frame)] = &events[..] else {
+            panic!("cut after {k}: {events:?}");
+        };
+        assert_eq!(*frame, data, "cut after {k}");
+        // Frame data bytes before `end` (the one escape there takes two).
+        let received = |end: usize| {
+            let raw = cut.get(3..end).unwrap_or_default();
+            raw.len() - raw.iter().filter(|&&b| b == 0x7D).count()
+        };
+        let expected = if cut[k - 1] == 0x7D {
+            DecodeError::BadEscape {
+                byte: 0x7E,
+                received: received(k - 1),
+            }
+        } else {
+            DecodeError::Truncated {
+                length: (k >= 3).then_some(40),
+                received: received(k),
+            }
+        };
+        assert_eq!(*error, expected, "cut after {k}");
+        assert_eq!(stats.frames_ok, 1, "cut after {k}");
+    }
+}
