@@ -182,6 +182,13 @@ pub struct Decoder<const N: usize = DEFAULT_CAPACITY> {
     stats: Stats,
 }
 
+/// Marks the path that calls it as the rare one, so that the compiler lays out the
+/// other straight on. Never in line, or the mark would go with the call.
+#[cfg(target_pointer_width = "64")]
+#[cold]
+#[inline(never)]
+fn unlikely() {}
+
 /// The length field at the start of `body` when it holds an escape: its value and how
 /// many bytes of `body` it takes; `None` if it is cut off or badly escaped.
 #[inline(never)]
@@ -1057,13 +1064,19 @@ impl<const N: usize> Decoder<N> {
             return None;
         }
         let out = self.buf.first_chunk_mut::<WINDOW_ROOM>()?;
-        let frame = frame_in_window(window, out)?;
+        let Some(frame) = frame_in_window(window, out) else {
+            // A longer frame, or one with something wrong: rare, out of the way.
+            unlikely();
+            return None;
+        };
         let rest = input.get(frame.taken..)?;
         // Frame data and checksum byte sum to 0xFF: the checksum is right.
         if frame.total == checksum_of_sum(0) {
             self.stats.frames_ok = self.stats.frames_ok.wrapping_add(1);
             return Some((rest, Ok(frame.len)));
         }
+        // A bad checksum.
+        unlikely();
         let got = *out.get(DATA + frame.len)?;
         self.len = frame.len;
         let outcome = self
