@@ -124,6 +124,7 @@ pub fn check_stats(stats: &Stats, events: &[Event]) {
             Event::Error(DecodeError::EmptyFrame) => &mut expected.empty,
             Event::Error(DecodeError::Truncated { .. }) => &mut expected.truncated,
             Event::Error(DecodeError::BadEscape { .. }) => &mut expected.bad_escape,
+            Event::Error(error) => panic!("a decode error with no counter: {error:?}"),
         };
         *counter += 1;
     }

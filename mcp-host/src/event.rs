@@ -11,6 +11,7 @@ pub type OwnedPacket = mcp_core::Packet<Bytes>;
 
 /// Something that happened on the link.
 #[derive(Debug, Clone)]
+#[non_exhaustive]
 pub enum Event {
     /// A valid MCP packet arrived.
     Packet(Received),
@@ -71,6 +72,7 @@ pub struct InvalidPacket {
 /// and [`PacketStream::link_state`](crate::PacketStream::link_state) tell at any time
 /// (the [`LinkEvent`]s tell each change).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
 pub enum LinkState {
     /// Not connected yet: a `tcp-listen` or `pty` link waiting for its first peer.
     Connecting,
@@ -84,6 +86,7 @@ pub enum LinkState {
 
 /// A transport state change.
 #[derive(Debug, Clone, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum LinkEvent {
     /// The transport is up for the first time (for `tcp-listen`: the first peer arrived).
     Connected {

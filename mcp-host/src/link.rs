@@ -26,6 +26,7 @@ pub const DEFAULT_BAUD: u32 = 115_200;
 /// # Ok::<(), mcp_host::LinkParseError>(())
 /// ```
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
+#[non_exhaustive]
 pub enum Link {
     /// A serial port (`serial:PATH[:BAUD]`), 8 data bits, no parity, 1 stop bit.
     Serial {
@@ -56,6 +57,7 @@ pub enum Link {
 
 /// Why a link string could not be parsed.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
 pub enum LinkParseError {
     /// The string was empty.
     #[error(

@@ -39,6 +39,7 @@ pub struct SendOptions {
 
 /// How a transmission went, as far as the local radio knows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum DeliveryReport {
     /// The radio reported success in its Transmit Status (0x8B, status 0x00).
     Delivered {

@@ -363,6 +363,7 @@ async fn link_events_survive_a_full_event_queue() {
             LinkEvent::Disconnected { .. } => "disconnected",
             LinkEvent::Reconnected { .. } => "reconnected",
             LinkEvent::Closed { .. } => "closed",
+            _ => "other",
         })
         .collect();
     assert_eq!(

@@ -78,6 +78,7 @@ impl fmt::Display for Address16 {
 
 /// Why a string is not an address.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum ParseAddressError {
     /// No hex digit (empty, or only `0x`).
     Empty,

@@ -4,6 +4,7 @@ use core::fmt;
 
 /// Why frame data is not a valid frame of the expected type.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum FrameError {
     /// The frame data is empty: there is not even a frame type byte.
     Empty,

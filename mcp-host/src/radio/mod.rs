@@ -218,6 +218,7 @@ pub struct NodeStats {
 
 /// What happens on the network, for monitoring ([`Network::subscribe`]).
 #[derive(Debug, Clone, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum NetEvent {
     /// A node's link came up.
     Connected {
@@ -289,6 +290,7 @@ pub enum NetEvent {
 
 /// Why a node cannot be added.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum NetworkError {
     /// A node with this address is already in the network.
     #[error("node {0} is already in the network")]

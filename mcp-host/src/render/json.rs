@@ -160,6 +160,11 @@ pub fn frame(frame: &Frame<'_>) -> Value {
             m.insert("type".into(), (*frame_type).into());
             m.insert("data".into(), hex(data).into());
         }
+        // A frame type that xbee-api learned to read after this renderer was written.
+        other => {
+            m.insert("frame".into(), "other".into());
+            m.insert("type".into(), other.frame_type().into());
+        }
     }
     Value::Object(m)
 }
@@ -198,6 +203,8 @@ pub fn decode_error(error: &DecodeError, offset: Option<u64>) -> Value {
             m.insert("byte".into(), byte.into());
             m.insert("received".into(), received.into());
         }
+        // A kind of error newer than this renderer: its message says what it is.
+        _ => {}
     }
     m.insert("message".into(), error.to_string().into());
     Value::Object(m)
@@ -211,6 +218,7 @@ pub fn decode_error_kind(error: &DecodeError) -> &'static str {
         DecodeError::EmptyFrame => "empty_frame",
         DecodeError::Truncated { .. } => "truncated",
         DecodeError::BadEscape { .. } => "bad_escape",
+        _ => "other",
     }
 }
 

@@ -116,6 +116,8 @@ pub fn frame(frame: &Frame<'_>) -> String {
         Frame::Unknown { frame_type, data } => {
             write!(s, "frame type 0x{frame_type:02x}{}", data_suffix(data))
         }
+        // A frame type that xbee-api learned to read after this renderer was written.
+        other => write!(s, "frame type 0x{:02x}", other.frame_type()),
     };
     s
 }

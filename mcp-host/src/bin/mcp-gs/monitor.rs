@@ -156,6 +156,6 @@ fn frame_data(event: &Event) -> Option<&[u8]> {
         Event::Packet(rx) => Some(&rx.frame),
         Event::InvalidPacket(rx) => Some(&rx.frame),
         Event::Frame(frame) => Some(frame.data()),
-        Event::DecodeError(_) | Event::Link(_) => None,
+        _ => None,
     }
 }

@@ -80,6 +80,7 @@ pub(crate) async fn run(args: SendArgs) -> Result<(), Failure> {
             args.to
         ),
         DeliveryReport::Written => out!("written, no status asked (frame id 0): {what}"),
+        other => out!("{other:?}: {what}"),
     }
     match &args.command {
         // The MAV answers a trajectory set at once with the trajectory it took (unless
