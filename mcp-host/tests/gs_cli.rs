@@ -587,7 +587,9 @@ fn a_cut_off_recording_is_summed_up_to_the_cut_then_an_error() {
     // Without --summary, the frames before the cut as well.
     let output = run(&["decode", file]);
     assert_eq!(output.status.code(), Some(2));
-    assert_eq!(String::from_utf8_lossy(&output.stdout).lines().count(), 2);
+    let stdout = String::from_utf8_lossy(&output.stdout).into_owned();
+    let frames = stdout.lines().filter(|l| !l.starts_with("-- ")).count();
+    assert_eq!(frames, 2, "{stdout}");
 
     // Replayed: the frames before the cut go out, and the error says how many.
     let (link, reader) = common::recording_peer();
@@ -632,6 +634,17 @@ fn monitor_hints_at_the_baud_rate_when_nothing_makes_sense() {
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert_eq!(output.status.code(), Some(0), "{stderr}");
     assert!(stderr.contains("baud rate may differ"), "{stderr}");
+    // The text lines carry the time of day, after a line with the date.
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let first = stdout.lines().next().unwrap_or_default();
+    let date = first
+        .strip_prefix("-- ")
+        .and_then(|l| l.strip_suffix(" (UTC) --"))
+        .unwrap_or_else(|| panic!("{stdout}"));
+    assert!(
+        date.len() == 10 && date.chars().filter(|c| *c == '-').count() == 2,
+        "{stdout}"
+    );
     peer.join().unwrap();
 }
 
@@ -772,6 +785,54 @@ fn a_one_shot_command_on_tcp_listen_waits_for_its_peer() {
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(stderr.contains("no peer connected"), "{stderr}");
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn decode_of_a_recording_dates_its_lines_at_each_new_day() {
+    // 2026-11-22 23:59:59.5, then 00:00:00.25 and 00:00:01 the next day (UTC).
+    let midnight = std::time::UNIX_EPOCH + std::time::Duration::from_secs(1_795_392_000);
+    let times = [
+        midnight - std::time::Duration::from_millis(500),
+        midnight + std::time::Duration::from_millis(250),
+        midnight + std::time::Duration::from_secs(1),
+    ];
+    let mut bytes = Vec::new();
+    {
+        let mut writer = mcp_host::record::RecordWriter::new(&mut bytes).unwrap();
+        for time in times {
+            writer
+                .write(time, mcp_host::record::Direction::Received, &[0x8A, 0x06])
+                .unwrap();
+        }
+    }
+    let path = std::env::temp_dir().join(format!("mcp-gs-days-{}.mcprec", std::process::id()));
+    std::fs::write(&path, &bytes).unwrap();
+    let file = path.to_str().unwrap();
+
+    let output = run(&["decode", file]);
+    assert_eq!(output.status.code(), Some(0));
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert_eq!(lines.len(), 5, "{stdout}");
+    assert_eq!(lines[0], "-- 2026-11-22 (UTC) --");
+    assert!(lines[1].starts_with("23:59:59.500 rx "), "{stdout}");
+    assert_eq!(lines[2], "-- 2026-11-23 (UTC) --");
+    assert!(lines[3].starts_with("00:00:00.250 rx "), "{stdout}");
+    assert!(lines[4].starts_with("00:00:01.000 rx "), "{stdout}");
+
+    // JSON carries the whole time in each object: no date lines.
+    let output = run(&["decode", file, "--format", "json"]);
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let times: Vec<f64> = stdout
+        .lines()
+        .map(|l| {
+            serde_json::from_str::<Value>(l).unwrap()["time"]
+                .as_f64()
+                .unwrap()
+        })
+        .collect();
+    assert_eq!(times, [1_795_391_999.5, 1_795_392_000.25, 1_795_392_001.0]);
+    std::fs::remove_file(&path).unwrap();
 }
 
 /// A recording of `n` received modem statuses ("coordinator started").

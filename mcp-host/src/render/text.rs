@@ -1,6 +1,7 @@
 //! The one-line text form of frames and packets (`mcp-gs --format text`).
 
 use std::fmt::Write;
+use std::time::{SystemTime, UNIX_EPOCH};
 
 use xbee_api::{AtStatus, DecodeError, Frame};
 
@@ -194,11 +195,9 @@ pub fn direction(direction: crate::record::Direction) -> &'static str {
     }
 }
 
-/// A time as UTC `HH:MM:SS.mmm`.
-pub fn time(time: std::time::SystemTime) -> String {
-    let d = time
-        .duration_since(std::time::UNIX_EPOCH)
-        .unwrap_or_default();
+/// A time as UTC `HH:MM:SS.mmm` (its date: [`DateLines`]).
+pub fn time(time: SystemTime) -> String {
+    let d = time.duration_since(UNIX_EPOCH).unwrap_or_default();
     let secs = d.as_secs();
     format!(
         "{:02}:{:02}:{:02}.{:03}",
@@ -209,9 +208,116 @@ pub fn time(time: std::time::SystemTime) -> String {
     )
 }
 
+/// Seconds since 1970-01-01 00:00:00 UTC, negative before it (saturating).
+fn unix_seconds(time: SystemTime) -> i64 {
+    match time.duration_since(UNIX_EPOCH) {
+        Ok(after) => i64::try_from(after.as_secs()).unwrap_or(i64::MAX),
+        // Rounded down: the last instant of 1969 is in 1969.
+        Err(before) => {
+            let before = before.duration();
+            let secs = i64::try_from(before.as_secs()).unwrap_or(i64::MAX);
+            secs.saturating_neg() - i64::from(before.subsec_nanos() > 0)
+        }
+    }
+}
+
+/// A time's UTC calendar date, `YYYY-MM-DD`; `None` for a time out of the years -9999
+/// to 9999 (a damaged recording's, say).
+pub fn date(time: SystemTime) -> Option<String> {
+    let stamp = ::time::OffsetDateTime::from_unix_timestamp(unix_seconds(time)).ok()?;
+    Some(stamp.date().to_string())
+}
+
+/// The dates of text output whose lines carry only the time of day ([`time`]): a line
+/// `-- YYYY-MM-DD (UTC) --` before the first line and before each line on another UTC
+/// day than the line before it, as a recording that spans midnight or a monitor left
+/// running for days has.
+///
+/// ```
+/// use std::time::{Duration, UNIX_EPOCH};
+/// use mcp_host::render::text::DateLines;
+///
+/// let mut dates = DateLines::new();
+/// let evening = UNIX_EPOCH + Duration::from_secs(1_700_000_000); // 22:13:20 UTC
+/// assert_eq!(dates.before(evening).as_deref(), Some("-- 2023-11-14 (UTC) --"));
+/// assert_eq!(dates.before(evening + Duration::from_secs(3600)), None);
+/// let after_midnight = evening + Duration::from_secs(7200);
+/// assert_eq!(dates.before(after_midnight).as_deref(), Some("-- 2023-11-15 (UTC) --"));
+/// ```
+#[derive(Debug, Clone, Default)]
+pub struct DateLines {
+    /// The UTC day (days since 1970) of the line before, once there is one.
+    day: Option<i64>,
+}
+
+impl DateLines {
+    /// No line shown yet: the first one gets its date.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The line to print before a line stamped `time`, if it is on another day than the
+    /// line before it (or is the first). A time with no calendar date ([`date`]) is
+    /// shown as `-- no date (UTC) --`.
+    pub fn before(&mut self, time: SystemTime) -> Option<String> {
+        let day = unix_seconds(time).div_euclid(86_400);
+        if self.day == Some(day) {
+            return None;
+        }
+        self.day = Some(day);
+        let date = date(time).unwrap_or_else(|| "no date".to_owned());
+        Some(format!("-- {date} (UTC) --"))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::time::Duration;
+
+    #[test]
+    fn dates_around_1970_midnights_and_out_of_range() {
+        let at = |secs: i64| {
+            let d = Duration::from_secs(secs.unsigned_abs());
+            if secs < 0 {
+                UNIX_EPOCH - d
+            } else {
+                UNIX_EPOCH + d
+            }
+        };
+        assert_eq!(date(at(0)).as_deref(), Some("1970-01-01"));
+        assert_eq!(date(at(-1)).as_deref(), Some("1969-12-31"));
+        assert_eq!(
+            date(UNIX_EPOCH - Duration::from_nanos(1)).as_deref(),
+            Some("1969-12-31")
+        );
+        assert_eq!(date(at(86_399)).as_deref(), Some("1970-01-01"));
+        assert_eq!(date(at(86_400)).as_deref(), Some("1970-01-02"));
+        assert_eq!(date(at(951_782_400)).as_deref(), Some("2000-02-29"));
+        assert_eq!(date(at(253_402_300_799)).as_deref(), Some("9999-12-31"));
+        assert_eq!(date(at(253_402_300_800)), None);
+        // The latest time a recording can hold (`u64` microseconds).
+        let latest = UNIX_EPOCH + Duration::from_micros(u64::MAX);
+        assert_eq!(date(latest), None);
+
+        let mut dates = DateLines::new();
+        assert_eq!(
+            dates.before(at(-1)).as_deref(),
+            Some("-- 1969-12-31 (UTC) --")
+        );
+        assert_eq!(
+            dates.before(at(0)).as_deref(),
+            Some("-- 1970-01-01 (UTC) --")
+        );
+        assert_eq!(dates.before(at(86_399)), None);
+        assert_eq!(dates.before(latest).as_deref(), Some("-- no date (UTC) --"));
+        assert_eq!(dates.before(latest), None);
+        // Back in time (a clock set back): the date again.
+        assert_eq!(
+            dates.before(at(0)).as_deref(),
+            Some("-- 1970-01-01 (UTC) --")
+        );
+    }
 
     #[test]
     fn an_at_status_with_upper_bits_shows_what_its_low_bits_say_and_the_code() {

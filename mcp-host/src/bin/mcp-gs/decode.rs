@@ -27,7 +27,9 @@ pub(crate) struct DecodeArgs {
     /// The input is hex text (whitespace, `:` and `,` between bytes are ignored).
     #[arg(long)]
     hex: bool,
-    /// Output format.
+    /// Output format. A recording's frames in text start with the UTC time of day they
+    /// were recorded at (HH:MM:SS.mmm), and a line `-- YYYY-MM-DD (UTC) --` gives the
+    /// date first and at each new day; in JSON each carries `time`, seconds since 1970.
     #[arg(long, value_enum, default_value_t = Format::Text)]
     format: Format,
     /// Print only counts: frames, MCP packets by category, and errors.
@@ -77,6 +79,7 @@ pub(crate) fn run(args: DecodeArgs) -> Result<(), Failure> {
         format: args.format,
         summary: args.summary.then(Summary::default),
         out: &mut out,
+        dates: render::text::DateLines::new(),
     };
 
     let head = input
@@ -117,6 +120,8 @@ struct Printer<'w, W: Write> {
     format: Format,
     summary: Option<Summary>,
     out: &'w mut W,
+    /// A recording's dates in text output, its lines carrying the time of day.
+    dates: render::text::DateLines,
 }
 
 impl<W: Write> Printer<'_, W> {
@@ -141,6 +146,9 @@ impl<W: Write> Printer<'_, W> {
             (Format::Text, Ok(frame)) => {
                 let line = render::text::frame(&frame);
                 if let Some((direction, time)) = direction {
+                    if let Some(date) = self.dates.before(time) {
+                        writeln!(self.out, "{date}")?;
+                    }
                     write!(self.out, "{} ", render::text::time(time))?;
                     // Packets say `rx`/`tx` themselves; other frames get it here.
                     let direction = render::text::direction(direction);

@@ -19,7 +19,8 @@ use crate::{Failure, Format};
 pub(crate) struct MonitorArgs {
     #[command(flatten)]
     link: LinkArgs,
-    /// Output format: text lines start with the UTC time of day (HH:MM:SS.mmm); every
+    /// Output format: text lines start with the UTC time of day (HH:MM:SS.mmm), and a
+    /// line `-- YYYY-MM-DD (UTC) --` gives the date first and at each new day; every
     /// JSON object carries `time`, seconds since 1970 (with microseconds).
     #[arg(long, value_enum, default_value_t = Format::Text)]
     format: Format,
@@ -77,6 +78,7 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
     let stdout = io::stdout();
     let mut seen = 0u64;
     let mut hinted = false;
+    let mut dates = render::text::DateLines::new();
     let ctrl_c = tokio::signal::ctrl_c();
     tokio::pin!(ctrl_c);
     loop {
@@ -93,16 +95,28 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
                     .map_err(|e| Failure::input(format!("cannot write the recording: {e}")))?;
             }
         }
-        let line = match args.format {
-            Format::Json => render::json::event(&event).to_string(),
-            Format::Text => format!(
-                "{} {}",
-                render::text::time(SystemTime::now()),
-                render::text::event(&event)
+        let now = SystemTime::now();
+        let (date, line) = match args.format {
+            Format::Json => (None, render::json::event(&event).to_string()),
+            Format::Text => (
+                dates.before(now),
+                format!(
+                    "{} {}",
+                    render::text::time(now),
+                    render::text::event(&event)
+                ),
             ),
         };
         let mut out = stdout.lock();
-        if writeln!(out, "{line}").and_then(|()| out.flush()).is_err() {
+        let written = match date {
+            Some(date) => writeln!(out, "{date}"),
+            None => Ok(()),
+        };
+        if written
+            .and_then(|()| writeln!(out, "{line}"))
+            .and_then(|()| out.flush())
+            .is_err()
+        {
             break; // stdout closed (e.g. piped into `head`)
         }
         if let (ApiModeChoice::Fixed(mode), false, Event::DecodeError(_)) =
