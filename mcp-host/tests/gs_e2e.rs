@@ -343,13 +343,15 @@ fn record_decode_and_replay() {
         assert_eq!(d["frame"], l["frame"]);
         assert_eq!(d["mcp"], l["mcp"]);
     }
-    // As text: the time, then `rx` once (packets say it themselves, other frames get
-    // it in front).
+    // As text: the date first, then for each frame the time and `rx` once (packets say
+    // it themselves, other frames get it in front).
     let out = mcp_gs_ok(&["decode", file]);
     let text = String::from_utf8(out.stdout).unwrap();
-    assert_eq!(text.lines().count(), live_frames.len());
+    assert!(text.starts_with("-- "), "{text}");
+    let lines: Vec<&str> = text.lines().filter(|l| !l.starts_with("-- ")).collect();
+    assert_eq!(lines.len(), live_frames.len());
     let mut packets = 0;
-    for line in text.lines() {
+    for line in lines {
         let (time, frame) = line.split_once(' ').unwrap();
         assert_eq!(time.len(), "12:00:00.000".len(), "{line}");
         assert!(
@@ -446,7 +448,9 @@ fn a_port_another_program_holds_is_named_as_busy() {
     let sim = Sim::start("pty");
     let (monitor, rx) = spawn_lines(&["monitor", "--link", &sim.link]);
     let _monitor = common::Running(monitor);
-    // Its first line is printed once it has the port.
+    // Its first line (after the date) is printed once it has the port.
+    let date = rx.recv_timeout(GUARD).expect("monitor prints a line");
+    assert!(date.starts_with("-- "), "{date}");
     let first = rx.recv_timeout(GUARD).expect("monitor prints a line");
     assert!(first.contains("connected"), "{first}");
     let out = sim.gs(&["send", "--to", MAV, "landing", "on"]);
