@@ -197,26 +197,28 @@ pub fn direction(direction: crate::record::Direction) -> &'static str {
 
 /// A time as UTC `HH:MM:SS.mmm` (its date: [`DateLines`]).
 pub fn time(time: SystemTime) -> String {
-    let d = time.duration_since(UNIX_EPOCH).unwrap_or_default();
-    let secs = d.as_secs();
+    let of_day = unix_millis(time).rem_euclid(DAY_MILLIS);
     format!(
         "{:02}:{:02}:{:02}.{:03}",
-        secs / 3600 % 24,
-        secs / 60 % 60,
-        secs % 60,
-        d.subsec_millis()
+        of_day / 3_600_000,
+        of_day / 60_000 % 60,
+        of_day / 1000 % 60,
+        of_day % 1000
     )
 }
 
-/// Seconds since 1970-01-01 00:00:00 UTC, negative before it (saturating).
-fn unix_seconds(time: SystemTime) -> i64 {
+/// Milliseconds in a day.
+const DAY_MILLIS: i128 = 86_400_000;
+
+/// Milliseconds since 1970-01-01 00:00:00 UTC, rounded down: negative before it, the
+/// last instant of 1969 in 1969.
+fn unix_millis(time: SystemTime) -> i128 {
     match time.duration_since(UNIX_EPOCH) {
-        Ok(after) => i64::try_from(after.as_secs()).unwrap_or(i64::MAX),
-        // Rounded down: the last instant of 1969 is in 1969.
+        Ok(after) => i128::try_from(after.as_millis()).unwrap_or(i128::MAX),
         Err(before) => {
-            let before = before.duration();
-            let secs = i64::try_from(before.as_secs()).unwrap_or(i64::MAX);
-            secs.saturating_neg() - i64::from(before.subsec_nanos() > 0)
+            // At most about 1.8e28: no overflow below.
+            let nanos = i128::try_from(before.duration().as_nanos()).unwrap_or(i128::MAX / 2);
+            -((nanos + 999_999) / 1_000_000)
         }
     }
 }
@@ -224,7 +226,8 @@ fn unix_seconds(time: SystemTime) -> i64 {
 /// A time's UTC calendar date, `YYYY-MM-DD`; `None` for a time out of the years -9999
 /// to 9999 (a damaged recording's, say).
 pub fn date(time: SystemTime) -> Option<String> {
-    let stamp = ::time::OffsetDateTime::from_unix_timestamp(unix_seconds(time)).ok()?;
+    let seconds = i64::try_from(unix_millis(time).div_euclid(1000)).ok()?;
+    let stamp = ::time::OffsetDateTime::from_unix_timestamp(seconds).ok()?;
     Some(stamp.date().to_string())
 }
 
@@ -247,7 +250,7 @@ pub fn date(time: SystemTime) -> Option<String> {
 #[derive(Debug, Clone, Default)]
 pub struct DateLines {
     /// The UTC day (days since 1970) of the line before, once there is one.
-    day: Option<i64>,
+    day: Option<i128>,
 }
 
 impl DateLines {
@@ -260,7 +263,7 @@ impl DateLines {
     /// line before it (or is the first). A time with no calendar date ([`date`]) is
     /// shown as `-- no date (UTC) --`.
     pub fn before(&mut self, time: SystemTime) -> Option<String> {
-        let day = unix_seconds(time).div_euclid(86_400);
+        let day = unix_millis(time).div_euclid(DAY_MILLIS);
         if self.day == Some(day) {
             return None;
         }
@@ -285,6 +288,13 @@ mod tests {
                 UNIX_EPOCH + d
             }
         };
+        assert_eq!(time(at(0)), "00:00:00.000");
+        assert_eq!(
+            time(at(86_399) + Duration::from_micros(999_999)),
+            "23:59:59.999"
+        );
+        assert_eq!(time(UNIX_EPOCH - Duration::from_micros(1)), "23:59:59.999");
+        assert_eq!(time(at(-86_400)), "00:00:00.000");
         assert_eq!(date(at(0)).as_deref(), Some("1970-01-01"));
         assert_eq!(date(at(-1)).as_deref(), Some("1969-12-31"));
         assert_eq!(
