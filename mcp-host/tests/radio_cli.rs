@@ -251,6 +251,9 @@ async fn radio_cuts_a_node_on_schedule() {
     ]);
     let coordinator = radio.listening("coordinator ");
     let node = radio.listening("node 0013a20040b599b9/");
+    // The date comes before the first line with a time of day.
+    let date = radio.line(|l| l.starts_with("-- ") || l.contains("out of range (cut)"));
+    assert!(date.ends_with(" (UTC) --"), "{date}");
     radio.line(|l| l.contains("0013a20040b599b9 out of range (cut)"));
     // Both links up: only the cut stands in the way.
     let mut ground = device(coordinator, ApiMode::Unescaped).await;

@@ -426,9 +426,9 @@ pub(crate) fn describe_node(name: &str, info: &NodeInfo, link: &Link) -> String 
     )
 }
 
-/// One line for a network event, or `None` to stay quiet.
-pub(crate) fn event_line(event: &NetEvent, verbose: bool) -> Option<String> {
-    let now = mcp_host::render::text::time(SystemTime::now());
+/// One line for a network event at `now`, or `None` to stay quiet.
+pub(crate) fn event_line(event: &NetEvent, verbose: bool, now: SystemTime) -> Option<String> {
+    let now = mcp_host::render::text::time(now);
     let text = match event {
         NetEvent::Connected { node, peer } if verbose || peer != "in-process" => {
             format!("{node} connected ({peer})")
@@ -526,6 +526,13 @@ pub(crate) async fn watch(
     };
     tokio::pin!(stop);
     let mut failures = Repeats::default();
+    // The date before the first timestamped line and at each new day.
+    let mut dates = mcp_host::render::text::DateLines::new();
+    let mut date_line = |now: SystemTime| {
+        if let Some(date) = dates.before(now) {
+            out!("{date}");
+        }
+    };
     loop {
         let next = timeline.peek().map(|step| step.0);
         tokio::select! {
@@ -534,7 +541,9 @@ pub(crate) async fn watch(
                 if let Some((_, node, cut)) = timeline.next() {
                     let known = if cut { network.cut(node) } else { network.restore(node) };
                     let what = if cut { "out of range (cut)" } else { "back in range" };
-                    let now = mcp_host::render::text::time(SystemTime::now());
+                    let time = SystemTime::now();
+                    date_line(time);
+                    let now = mcp_host::render::text::time(time);
                     match known {
                         true => out!("{now} {node} {what}"),
                         false => out!("{now} {node}: no such node to cut"),
@@ -552,7 +561,9 @@ pub(crate) async fn watch(
                         }
                         _ => 0,
                     };
-                    if let Some(line) = event_line(&event, verbose) {
+                    let now = SystemTime::now();
+                    if let Some(line) = event_line(&event, verbose, now) {
+                        date_line(now);
                         match repeats {
                             0 => out!("{line}"),
                             n => out!("{line} (and {n} more like it not shown)"),
