@@ -444,19 +444,17 @@ impl<const N: usize> Decoder<N> {
     /// assert_eq!(frames, 2);
     /// ```
     #[inline(always)]
-    pub fn decode_each<F: FnMut(Event<'_>)>(&mut self, input: &[u8], f: F) {
+    pub fn decode_each<F: FnMut(Event<'_>)>(&mut self, input: &[u8], mut f: F) {
         // Most chunks from a UART FIFO or a DMA buffer are frame data of the frame in
         // progress: stored here, in line in the caller, without a call.
-        let rest = self.fill(input);
+        let mut rest = self.fill(input);
         if rest.is_empty() && !input.is_empty() {
             return;
         }
-        let mut rest = rest;
         let escaped = self.mode == ApiMode::Escaped;
         let limit = self.capacity();
         // Known to be between frames: right after a frame handed over whole.
         let mut between = false;
-        let mut f = f;
         // One call of `f` for every event of both modes: the compiler can then put the
         // caller's closure in line in the loop (with more than one call of it, it keeps
         // a closure of any size out of line, and each frame pays for the call).

@@ -95,28 +95,23 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
                     .map_err(|e| Failure::input(format!("cannot write the recording: {e}")))?;
             }
         }
-        let now = SystemTime::now();
-        let (date, line) = match args.format {
-            Format::Json => (None, render::json::event(&event).to_string()),
-            Format::Text => (
-                dates.before(now),
-                format!(
+        let line = match args.format {
+            Format::Json => render::json::event(&event).to_string(),
+            Format::Text => {
+                let now = SystemTime::now();
+                let line = format!(
                     "{} {}",
                     render::text::time(now),
                     render::text::event(&event)
-                ),
-            ),
+                );
+                match dates.before(now) {
+                    Some(date) => format!("{date}\n{line}"),
+                    None => line,
+                }
+            }
         };
         let mut out = stdout.lock();
-        let written = match date {
-            Some(date) => writeln!(out, "{date}"),
-            None => Ok(()),
-        };
-        if written
-            .and_then(|()| writeln!(out, "{line}"))
-            .and_then(|()| out.flush())
-            .is_err()
-        {
+        if writeln!(out, "{line}").and_then(|()| out.flush()).is_err() {
             break; // stdout closed (e.g. piped into `head`)
         }
         if let (ApiModeChoice::Fixed(mode), false, Event::DecodeError(_)) =
