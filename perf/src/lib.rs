@@ -7,6 +7,7 @@
 //!   carrying an MCP telemetry packet of [`VALUES_PER_PACKET`] values;
 //! - [`mavlink_stream`]: a MAVLink v2 stream of ATTITUDE messages carrying as many
 //!   `f32` values, the same class of traffic in another protocol;
+//! - [`Machine`]: the processor and build a table of figures was measured on;
 //! - [`run`]: the measured loops (slice decoder, byte-at-a-time decoder, the pipeline
 //!   to typed telemetry values), each returning [`Totals`] so that nothing is
 //!   optimised away and every result can be checked.
@@ -27,6 +28,8 @@
 #![deny(missing_docs)]
 
 #[cfg(feature = "std")]
+mod machine;
+#[cfg(feature = "std")]
 mod mavlink_stream;
 #[cfg(feature = "std")]
 mod mcp_stream;
@@ -34,6 +37,8 @@ mod rng;
 pub mod run;
 mod totals;
 
+#[cfg(feature = "std")]
+pub use machine::Machine;
 #[cfg(feature = "std")]
 pub use mavlink_stream::{
     ATTITUDE_CRC_EXTRA, ATTITUDE_ID, ATTITUDE_VALUES, crc_x25, mavlink_stream,
