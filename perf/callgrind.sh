@@ -4,7 +4,9 @@
 # the XBee slice decoder, the byte-at-a-time decoder, the slice decoder fed in chunks
 # of CHUNK bytes (fifo2/fifo1; default 16, a UART FIFO or DMA buffer), the pipeline to
 # typed MCP telemetry values, and the `mavlink` crate on a MAVLink v2 stream carrying as
-# many values. Streams are 1 MiB unless given.
+# many values; and `floor1`, the least a byte-at-a-time decoder does (perf::floor: frames
+# split by their length field alone, one call a byte), the floor under push1 and push2.
+# Streams are 1 MiB unless given.
 #
 # Usage: [CHUNK=n] perf/callgrind.sh [bytes] [case...]
 set -euo pipefail
@@ -14,7 +16,7 @@ bytes=${1:-1048576}
 shift || true
 cases=("$@")
 if [ ${#cases[@]} -eq 0 ]; then
-    cases=(slice2 slice1 push2 push1 fifo2 fifo1 pipeline2 pipeline1 pipeline_push2 mavlink)
+    cases=(slice2 slice1 push2 push1 fifo2 fifo1 pipeline2 pipeline1 pipeline_push2 mavlink floor1)
 fi
 target=${CARGO_TARGET_DIR:-$crate/../target}
 work=$(mktemp -d)
@@ -26,7 +28,7 @@ bin=$target/release/examples/receive
 # (no trailing `*`): a closure such as `run_pipeline::{{closure}}` must not match, or
 # entering it would toggle collection off and leave its cost out.
 toggles=()
-for f in run_slice run_slice_calls run_push run_pipeline run_pipeline_push run_fifo run_mavlink; do
+for f in run_slice run_slice_calls run_push run_pipeline run_pipeline_push run_fifo run_mavlink run_floor; do
     toggles+=("--toggle-collect=*::$f")
 done
 printf "%-15s %12s %9s %8s %9s %12s\n" case instructions bytes values "per byte" "per value"

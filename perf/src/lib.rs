@@ -8,6 +8,7 @@
 //! - [`mavlink_stream`]: a MAVLink v2 stream of ATTITUDE messages carrying as many
 //!   `f32` values, the same class of traffic in another protocol;
 //! - [`Machine`]: the processor and build a table of figures was measured on;
+//! - [`floor`]: the least a byte-at-a-time decoder does, to measure `push` against;
 //! - [`run`]: the measured loops (slice decoder, byte-at-a-time decoder, the pipeline
 //!   to typed telemetry values), each returning [`Totals`] so that nothing is
 //!   optimised away and every result can be checked.
@@ -27,6 +28,7 @@
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
+pub mod floor;
 #[cfg(feature = "std")]
 mod machine;
 #[cfg(feature = "std")]

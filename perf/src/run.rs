@@ -7,6 +7,7 @@ use mcp_core::Packet;
 use xbee_api::{ApiMode, Decoder, Event, ReceivePacket};
 
 use crate::Totals;
+use crate::floor::LengthSplitter;
 
 /// Frame type of a Receive Packet.
 const RECEIVE_PACKET: u8 = 0x90;
@@ -109,6 +110,32 @@ pub fn run_push(stream: &[u8], mode: ApiMode) -> Totals {
             }
             Some(Err(error)) => panic!("{error}"),
             None => {}
+        }
+    }
+    totals
+}
+
+/// The floor under [`run_push`]: [`LengthSplitter`], which splits the stream into
+/// frames by their length field and does nothing else, one call a byte with the same
+/// loop around it: frames and frame data bytes. API mode 1 streams only (it does not
+/// unescape).
+///
+/// # Panics
+///
+/// On an API mode 2 stream.
+#[inline(never)]
+pub fn run_floor(stream: &[u8], mode: ApiMode) -> Totals {
+    assert_eq!(
+        mode,
+        ApiMode::Unescaped,
+        "the floor splits API mode 1 streams only"
+    );
+    let mut splitter: LengthSplitter<512> = LengthSplitter::new();
+    let mut totals = Totals::default();
+    for &byte in stream {
+        if let Some(data) = splitter.push(byte) {
+            totals.frames += 1;
+            totals.data_bytes += data.len();
         }
     }
     totals

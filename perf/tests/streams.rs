@@ -1,7 +1,7 @@
 //! Every measured loop finds in its stream exactly what the generator put there, and
 //! the MAVLink stream is what the `mavlink` crate reads.
 
-use perf::run::{run_fifo, run_pipeline, run_pipeline_push, run_push, run_slice};
+use perf::run::{run_fifo, run_floor, run_pipeline, run_pipeline_push, run_push, run_slice};
 use perf::{Totals, VALUES_PER_PACKET, mavlink_stream, mcp_stream};
 use xbee_api::ApiMode;
 
@@ -45,6 +45,22 @@ fn decoders_find_every_frame_and_value() {
         assert_eq!(run_pipeline(&stream.bytes, mode), expected, "{mode:?}");
         assert_eq!(run_pipeline_push(&stream.bytes, mode), expected, "{mode:?}");
     }
+}
+
+#[test]
+fn floor_splits_mode_1_stream_into_the_frames_the_decoder_finds() {
+    let stream = mcp_stream(ApiMode::Unescaped, BYTES);
+    assert_eq!(
+        run_floor(&stream.bytes, ApiMode::Unescaped),
+        frames_only(stream.totals)
+    );
+}
+
+#[test]
+#[should_panic(expected = "API mode 1 streams only")]
+fn floor_refuses_a_mode_2_stream() {
+    let stream = mcp_stream(ApiMode::Escaped, 1024);
+    run_floor(&stream.bytes, ApiMode::Escaped);
 }
 
 #[test]
