@@ -30,6 +30,31 @@ fn demo_runs_for_two_seconds_and_exits_0() {
     );
     assert!(!stdout.contains("NOT delivered"), "{stdout}");
     answers_print_under_their_requests_heading(&stdout);
+    dated_before_the_first_time_of_day(&stdout);
+}
+
+/// The lines carry the time of day: a line with the UTC date comes before the first,
+/// as in `monitor`'s text output.
+fn dated_before_the_first_time_of_day(stdout: &str) {
+    let is_time = |line: &str| {
+        let b = line.as_bytes();
+        b.len() > 12 && b[2] == b':' && b[5] == b':' && b[8] == b'.' && b[12] == b' '
+    };
+    let first = stdout.lines().position(is_time).expect("a stamped line");
+    let dates: Vec<&str> = stdout
+        .lines()
+        .take(first)
+        .filter(|line| line.starts_with("-- ") && line.ends_with(" (UTC) --"))
+        .collect();
+    assert_eq!(dates.len(), 1, "{stdout}");
+    let date = &dates[0]["-- ".len()..dates[0].len() - " (UTC) --".len()];
+    let digits: Vec<bool> = date.bytes().map(|b| b.is_ascii_digit()).collect();
+    assert_eq!(date.len(), 10, "{date}");
+    assert!(
+        date.as_bytes()[4] == b'-' && date.as_bytes()[7] == b'-',
+        "{date}"
+    );
+    assert_eq!(digits.iter().filter(|d| **d).count(), 8, "{date}");
 }
 
 /// A status request's answer prints before the next step's heading.

@@ -255,8 +255,8 @@ pub struct DateLines {
 
 impl DateLines {
     /// No line shown yet: the first one gets its date.
-    pub fn new() -> Self {
-        Self::default()
+    pub const fn new() -> Self {
+        Self { day: None }
     }
 
     /// The line to print before a line stamped `time`, if it is on another day than the

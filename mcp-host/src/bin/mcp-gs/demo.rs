@@ -1,8 +1,9 @@
 //! `mcp-gs demo`: a ground station and a simulated MAV in one process, over a
 //! pseudo-terminal, showing every command, delivery status, report and some telemetry.
 
+use std::fmt;
 use std::num::NonZeroU64;
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Mutex, PoisonError};
 use std::time::{Duration, SystemTime};
 
 use clap::Args;
@@ -11,6 +12,7 @@ use mcp_core::{
     Address, Command, Controller, LandingState, Packet, Report, Slot, StatusRequest, TelemetryId,
     TrajectoryBuilder, Waypoint,
 };
+use mcp_host::render::text::{self, DateLines};
 use mcp_host::sim::{Simulator, posix_now};
 use mcp_host::{
     CommandSender, DeliveryReport, Event, Link, LinkEvent, LinkOptions, PacketStream, RequestError,
@@ -53,8 +55,33 @@ struct Seen {
     decode_errors: u64,
 }
 
-fn now() -> String {
-    mcp_host::render::text::time(SystemTime::now())
+/// The date lines of the demo's output.
+static DATES: Mutex<DateLines> = Mutex::new(DateLines::new());
+
+/// Prints a line that starts with `time`'s time of day (UTC), after a line with its date
+/// if it is the first line stamped or on another day than the one before, as `monitor`
+/// prints its lines.
+fn stamped_line(time: SystemTime, rest: fmt::Arguments<'_>) {
+    // Held while both print, so that a line from another task cannot come between.
+    let mut dates = DATES.lock().unwrap_or_else(PoisonError::into_inner);
+    if let Some(date) = dates.before(time) {
+        out!("{date}");
+    }
+    out!("{} {rest}", text::time(time));
+}
+
+/// `stamped!(time, "...", args)`: a line stamped with `time` ([`stamped_line`]).
+macro_rules! stamped {
+    ($time:expr, $($arg:tt)*) => {
+        stamped_line($time, format_args!($($arg)*))
+    };
+}
+
+/// `say!("...", args)`: a line stamped with the time now ([`stamped_line`]).
+macro_rules! say {
+    ($($arg:tt)*) => {
+        stamped_line(SystemTime::now(), format_args!($($arg)*))
+    };
 }
 
 /// Prints what arrives on the ground station's link.
@@ -71,18 +98,22 @@ async fn print_events(
         match event {
             Event::Packet(rx) => {
                 let from = rx.origin.src64;
-                let time = mcp_host::render::text::time(rx.origin.received_at);
                 match &rx.packet {
                     Packet::Telemetry(_) => {
                         seen.telemetry += 1;
                         if (seen.telemetry - 1) % every == 0 {
                             seen.shown += 1;
-                            out!("{time} {from} {} (#{})", rx.packet, seen.telemetry);
+                            stamped!(
+                                rx.origin.received_at,
+                                "{from} {} (#{})",
+                                rx.packet,
+                                seen.telemetry
+                            );
                         }
                     }
                     Packet::Report(report) => {
                         seen.reports += 1;
-                        out!("{time} {from} <- {}", rx.packet);
+                        stamped!(rx.origin.received_at, "{from} <- {}", rx.packet);
                         reports_printed.send_replace(seen.reports);
                         if let Report::Landing(state) = report {
                             landing.send_replace(Some(*state));
@@ -90,43 +121,38 @@ async fn print_events(
                     }
                     _ => {
                         seen.other += 1;
-                        out!("{time} {from} {}", rx.packet);
+                        stamped!(rx.origin.received_at, "{from} {}", rx.packet);
                     }
                 }
             }
             Event::Frame(frame) => match frame.parse() {
                 Ok(f) => {
-                    out!("{} radio: {}", now(), mcp_host::render::text::frame(&f));
+                    say!("radio: {}", text::frame(&f));
                     if matches!(f, Frame::ModemStatus(_)) {
                         radio_up.send_replace(true);
                     }
                 }
-                Err(e) => out!("{} radio: malformed frame: {e}", now()),
+                Err(e) => say!("radio: malformed frame: {e}"),
             },
             Event::InvalidPacket(bad) => {
                 seen.other += 1;
-                out!(
-                    "{} {} invalid packet: {}",
-                    now(),
-                    bad.origin.src64,
-                    bad.error
-                );
+                say!("{} invalid packet: {}", bad.origin.src64, bad.error);
             }
             Event::DecodeError(e) => {
                 seen.decode_errors += 1;
-                out!("{} link: frame dropped: {e}", now());
+                say!("link: frame dropped: {e}");
             }
             Event::Link(LinkEvent::Closed { reason }) => {
-                out!("{} link closed: {reason}", now());
+                say!("link closed: {reason}");
                 return;
             }
             Event::Link(LinkEvent::Connected { peer } | LinkEvent::Reconnected { peer }) => {
-                out!("{} link: connected ({peer})", now());
+                say!("link: connected ({peer})");
             }
             Event::Link(LinkEvent::Disconnected { reason }) => {
-                out!("{} link: disconnected: {reason}", now());
+                say!("link: disconnected: {reason}");
             }
-            other => out!("{} {other:?}", now()),
+            other => say!("{other:?}"),
         }
     }
 }
@@ -160,7 +186,7 @@ impl Script {
     }
 
     async fn send(&mut self, what: &str, command: &Command<&[u8]>) {
-        out!("{} {MAV} -> {command}   ({what})", now());
+        say!("{MAV} -> {command}   ({what})");
         match self.sender.send(MAV, command).await {
             Ok(DeliveryReport::Delivered {
                 frame_id,
@@ -169,15 +195,14 @@ impl Script {
                 ..
             }) => {
                 self.delivered += 1;
-                out!(
-                    "{}                  delivered (transmit status id {frame_id}: success, to {dst16}, {retries} retries)",
-                    now()
+                say!(
+                    "                 delivered (transmit status id {frame_id}: success, to {dst16}, {retries} retries)"
                 );
             }
             // Written, no status asked (not the demo's way), or a report newer than it.
             Ok(_) => self.delivered += 1,
             Err(e) => {
-                out!("{}                  NOT delivered: {e}", now());
+                say!("                 NOT delivered: {e}");
                 self.failures.push(send_failure(&e));
             }
         }
@@ -186,7 +211,7 @@ impl Script {
 
     async fn request(&mut self, request: StatusRequest) {
         let command: Command<&[u8]> = Command::StatusRequest(request);
-        out!("{} {MAV} -> {command}", now());
+        say!("{MAV} -> {command}");
         let printed_before = *self.reports_printed.borrow_and_update();
         match self.sender.request(MAV, request).await {
             Ok(_) => {
@@ -197,11 +222,11 @@ impl Script {
                 let _ = tokio::time::timeout(PRINT_WAIT, printed).await;
             }
             Err(RequestError::Send(e)) => {
-                out!("{}                  NOT delivered: {e}", now());
+                say!("                 NOT delivered: {e}");
                 self.failures.push(send_failure(&e));
             }
             Err(e) => {
-                out!("{}                  no answer: {e}", now());
+                say!("                 no answer: {e}");
                 self.failures
                     .push(Failure::new(Failure::TIMEOUT, e.to_string()));
             }
