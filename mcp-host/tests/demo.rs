@@ -47,14 +47,15 @@ fn dated_before_the_first_time_of_day(stdout: &str) {
         .filter(|line| line.starts_with("-- ") && line.ends_with(" (UTC) --"))
         .collect();
     assert_eq!(dates.len(), 1, "{stdout}");
-    let date = &dates[0]["-- ".len()..dates[0].len() - " (UTC) --".len()];
-    let digits: Vec<bool> = date.bytes().map(|b| b.is_ascii_digit()).collect();
-    assert_eq!(date.len(), 10, "{date}");
-    assert!(
-        date.as_bytes()[4] == b'-' && date.as_bytes()[7] == b'-',
-        "{date}"
-    );
-    assert_eq!(digits.iter().filter(|d| **d).count(), 8, "{date}");
+    let date = dates[0]
+        .strip_prefix("-- ")
+        .and_then(|d| d.strip_suffix(" (UTC) --"))
+        .unwrap_or_default();
+    let shape: String = date
+        .chars()
+        .map(|c| if c.is_ascii_digit() { '9' } else { c })
+        .collect();
+    assert_eq!(shape, "9999-99-99", "{date}");
 }
 
 /// A status request's answer prints before the next step's heading.
