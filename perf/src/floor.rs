@@ -13,6 +13,8 @@
 //! go through a call). The start delimiter, the length bytes and the checksum byte take
 //! one step of a state machine out of line, as in `push`.
 
+use xbee_api::wire::START_DELIMITER;
+
 /// Where [`LengthSplitter`] is in a frame, for the bytes that are not frame data.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum State {
@@ -98,7 +100,7 @@ impl<const N: usize> LengthSplitter<N> {
     fn step(&mut self, byte: u8) -> Option<usize> {
         match self.state {
             State::Hunt => {
-                if byte == 0x7E {
+                if byte == START_DELIMITER {
                     self.state = State::LenHi;
                 }
             }
