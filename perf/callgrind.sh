@@ -4,8 +4,9 @@
 # the XBee slice decoder, the byte-at-a-time decoder, the slice decoder fed in chunks
 # of CHUNK bytes (fifo2/fifo1; default 16, a UART FIFO or DMA buffer), the pipeline to
 # typed MCP telemetry values, and the `mavlink` crate on a MAVLink v2 stream carrying as
-# many values; and `floor1`, the least a byte-at-a-time decoder does (perf::floor: frames
-# split by their length field alone, one call a byte), the floor under push1 and push2.
+# many values; and `floor1`/`floor2`, the least a byte-at-a-time decoder does (perf::floor:
+# frames split by their length field, escapes undone in mode 2, one call a byte), the
+# floors under push1 and push2.
 # Streams are 1 MiB unless given.
 #
 # Usage: [CHUNK=n] perf/callgrind.sh [bytes] [case...]
@@ -16,7 +17,7 @@ bytes=${1:-1048576}
 shift || true
 cases=("$@")
 if [ ${#cases[@]} -eq 0 ]; then
-    cases=(slice2 slice1 push2 push1 fifo2 fifo1 pipeline2 pipeline1 pipeline_push2 mavlink floor1)
+    cases=(slice2 slice1 push2 push1 fifo2 fifo1 pipeline2 pipeline1 pipeline_push2 mavlink floor2 floor1)
 fi
 target=${CARGO_TARGET_DIR:-$crate/../target}
 work=$(mktemp -d)

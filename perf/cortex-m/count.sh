@@ -10,14 +10,14 @@
 # Needs the thumbv7m-none-eabi target and qemu-system-arm (Debian: qemu-system-arm).
 #
 # Usage: perf/cortex-m/count.sh [case...]   (push1 push2 fifo1 fifo2 slice1 slice2
-#                                            calls1 calls2 floor1; all by default)
+#                                            calls1 calls2 floor1 floor2; all by default)
 set -euo pipefail
 cd "$(dirname "$0")"
 unset CARGO_TARGET_DIR
 
 cases=("$@")
 if [ ${#cases[@]} -eq 0 ]; then
-    cases=(push2 push1 fifo2 fifo1 slice2 slice1 calls2 calls1 floor1)
+    cases=(push2 push1 fifo2 fifo1 slice2 slice1 calls2 calls1 floor2 floor1)
 fi
 cargo build --release --quiet
 dir=target/thumbv7m-none-eabi/release

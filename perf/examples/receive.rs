@@ -5,8 +5,8 @@
 //! is `slice2`, `slice1`, `calls2`, `calls1` (one `decode` call a frame), `push2`, `push1`,
 //! `fifo2`, `fifo1` (`decode_each` on chunks of `CHUNK` bytes, default 16, as a UART FIFO
 //! or DMA buffer hands them over), `pipeline2`, `pipeline1`, `pipeline_push2`, `mavlink`
-//! (a MAVLink stream carrying as many values as the mode 2 stream) or `floor1` (the
-//! least a byte-at-a-time decoder does, `perf::floor`, on the mode 1 stream).
+//! (a MAVLink stream carrying as many values as the mode 2 stream), `floor2` or `floor1`
+//! (the least a byte-at-a-time decoder does, `perf::floor`).
 
 use std::hint::black_box;
 use std::time::Instant;
@@ -50,7 +50,7 @@ fn main() {
         "pipeline2" | "pipeline1" => Box::new(run_pipeline),
         "pipeline_push2" => Box::new(run_pipeline_push),
         "mavlink" => Box::new(|s, _| mavlink_run::run_mavlink(s)),
-        "floor1" => Box::new(run_floor),
+        "floor1" | "floor2" => Box::new(run_floor),
         other => panic!("unknown case {other}"),
     };
     let mut best = f64::INFINITY;

@@ -7,7 +7,7 @@ use mcp_core::Packet;
 use xbee_api::{ApiMode, Decoder, Event, ReceivePacket};
 
 use crate::Totals;
-use crate::floor::LengthSplitter;
+use crate::floor::{EscapedSplitter, LengthSplitter};
 
 /// Frame type of a Receive Packet.
 const RECEIVE_PACKET: u8 = 0x90;
@@ -115,27 +115,33 @@ pub fn run_push(stream: &[u8], mode: ApiMode) -> Totals {
     totals
 }
 
-/// The floor under [`run_push`]: [`LengthSplitter`], which splits the stream into
-/// frames by their length field and does nothing else, one call a byte with the same
-/// loop around it: frames and frame data bytes. API mode 1 streams only (it does not
-/// unescape).
-///
-/// # Panics
-///
-/// On an API mode 2 stream.
+/// The floor under [`run_push`]: [`LengthSplitter`] (API mode 1) or [`EscapedSplitter`]
+/// (API mode 2), which split the stream into frames by their length field (mode 2:
+/// escapes undone) and do nothing else, one call a byte with the same loop around them:
+/// frames and frame data bytes.
 #[inline(never)]
 pub fn run_floor(stream: &[u8], mode: ApiMode) -> Totals {
-    assert_eq!(
-        mode,
-        ApiMode::Unescaped,
-        "the floor splits API mode 1 streams only"
-    );
-    let mut splitter: LengthSplitter<512> = LengthSplitter::new();
+    match mode {
+        ApiMode::Unescaped => {
+            let mut splitter: LengthSplitter<512> = LengthSplitter::new();
+            split(stream, |byte| splitter.push(byte).map(<[u8]>::len))
+        }
+        ApiMode::Escaped => {
+            let mut splitter: EscapedSplitter<512> = EscapedSplitter::new();
+            split(stream, |byte| splitter.push(byte).map(<[u8]>::len))
+        }
+    }
+}
+
+/// The loop of [`run_floor`] around a splitter's `push`, which gives the length of the
+/// frame data a byte ends.
+#[inline(always)]
+fn split(stream: &[u8], mut push: impl FnMut(u8) -> Option<usize>) -> Totals {
     let mut totals = Totals::default();
     for &byte in stream {
-        if let Some(data) = splitter.push(byte) {
+        if let Some(len) = push(byte) {
             totals.frames += 1;
-            totals.data_bytes += data.len();
+            totals.data_bytes += len;
         }
     }
     totals

@@ -48,19 +48,15 @@ fn decoders_find_every_frame_and_value() {
 }
 
 #[test]
-fn floor_splits_mode_1_stream_into_the_frames_the_decoder_finds() {
-    let stream = mcp_stream(ApiMode::Unescaped, BYTES);
-    assert_eq!(
-        run_floor(&stream.bytes, ApiMode::Unescaped),
-        frames_only(stream.totals)
-    );
-}
-
-#[test]
-#[should_panic(expected = "API mode 1 streams only")]
-fn floor_refuses_a_mode_2_stream() {
-    let stream = mcp_stream(ApiMode::Escaped, 1024);
-    run_floor(&stream.bytes, ApiMode::Escaped);
+fn floors_split_streams_into_the_frames_the_decoder_finds() {
+    for mode in [ApiMode::Escaped, ApiMode::Unescaped] {
+        let stream = mcp_stream(mode, BYTES);
+        assert_eq!(
+            run_floor(&stream.bytes, mode),
+            frames_only(stream.totals),
+            "{mode:?}"
+        );
+    }
 }
 
 #[test]

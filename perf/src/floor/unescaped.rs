@@ -1,25 +1,8 @@
-//! The least a byte-at-a-time XBee decoder can do, as a floor to measure `push` against.
-//!
-//! [`LengthSplitter`] splits an API mode 1 stream into frames by their length field and
-//! does nothing else: no checksum, no escapes, no resync after a bad frame, no counters.
-//! It is not a decoder (a bad byte in the stream loses every frame after it); it shows
-//! what one call a byte costs before any of that work, with the same loop around it as
-//! [`Decoder::push`](xbee_api::Decoder::push) has in [`run_push`](crate::run::run_push).
-//!
-//! Its frame data bytes take the path that plain frame data takes in `push`, without the
-//! test of the byte: the cursor loaded from the splitter, compared with the frame's end,
-//! the byte stored, the cursor stored back (the splitter lives in memory between calls,
-//! as a decoder does in an interrupt handler, and as any decoder does whose rarer bytes
-//! go through a call). The start delimiter, the length bytes and the checksum byte take
-//! one step of a state machine out of line, as in `push`.
+//! The floor in API mode 1: frames by their length alone.
 
 use xbee_api::wire::START_DELIMITER;
 
-/// Marks the path that calls it as the rare one, so that the compiler lays out the other
-/// straight on, as `xbee_api`'s decoder does.
-#[cold]
-#[inline(never)]
-fn unlikely() {}
+use super::unlikely;
 
 /// Where [`LengthSplitter`] is in a frame, for the bytes that are not frame data.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -30,13 +13,13 @@ enum State {
     LenHi,
     /// After the length's high byte.
     LenLo,
-    /// After the frame data: the checksum byte is next.
+    /// After the length field: frame data while `at < N`, then the checksum byte.
     Checksum,
 }
 
 /// Splits an API mode 1 stream into frames by their length field alone (see the
-/// [module](self)). `N`, a power of two, is the largest frame data it holds; a longer
-/// length field sends it back to hunting for a start delimiter.
+/// [module](super)). `N` is the largest frame data it holds; a longer length field sends
+/// it back to hunting for a start delimiter.
 ///
 /// ```
 /// use perf::floor::LengthSplitter;
@@ -52,11 +35,11 @@ enum State {
 #[derive(Debug, Clone)]
 pub struct LengthSplitter<const N: usize> {
     buf: [u8; N],
-    /// Frame data bytes stored.
+    /// Where the next frame data byte goes while the frame's data comes in (it ends at
+    /// `N`), else `N`: `push` stores a byte while `at < N` and does nothing else.
     at: usize,
-    /// The frame's length while its data comes in, else 0: `push` stores a byte while
-    /// `at < end` and does nothing else.
-    end: usize,
+    /// The frame's length.
+    len: usize,
     /// The length field's high byte.
     hi: u8,
     state: State,
@@ -69,18 +52,12 @@ impl<const N: usize> Default for LengthSplitter<N> {
 }
 
 impl<const N: usize> LengthSplitter<N> {
-    /// A splitter hunting for a start delimiter. `N` must be a power of two.
+    /// A splitter hunting for a start delimiter.
     pub const fn new() -> Self {
-        const {
-            assert!(
-                N.is_power_of_two(),
-                "LengthSplitter size N must be a power of two"
-            )
-        };
         Self {
             buf: [0; N],
-            at: 0,
-            end: 0,
+            at: N,
+            len: 0,
             hi: 0,
             state: State::Hunt,
         }
@@ -90,9 +67,8 @@ impl<const N: usize> LengthSplitter<N> {
     #[inline(always)]
     pub fn push(&mut self, byte: u8) -> Option<&[u8]> {
         let at = self.at;
-        if at < self.end {
-            // `at < end <= N`: the mask changes nothing but shows the index in bounds.
-            self.buf[at & (N - 1)] = byte;
+        if at < N {
+            self.buf[at] = byte;
             self.at = at + 1;
             return None;
         }
@@ -101,12 +77,12 @@ impl<const N: usize> LengthSplitter<N> {
         if cfg!(target_arch = "arm") {
             unlikely();
         }
-        let len = self.step(byte)?;
-        self.buf.get(..len)
+        let from = self.step(byte)?;
+        self.buf.get(from..)
     }
 
-    /// One step of the state machine for a byte that is not frame data; the length of
-    /// the frame it ends, if it is a checksum byte.
+    /// One step of the state machine for a byte that is not frame data; where in the
+    /// buffer the data of the frame it ends starts, if it is a checksum byte.
     #[inline(never)]
     fn step(&mut self, byte: u8) -> Option<usize> {
         match self.state {
@@ -122,8 +98,8 @@ impl<const N: usize> LengthSplitter<N> {
             State::LenLo => {
                 let len = usize::from(u16::from_be_bytes([self.hi, byte]));
                 if len <= N {
-                    self.at = 0;
-                    self.end = len;
+                    self.len = len;
+                    self.at = N - len;
                     self.state = State::Checksum;
                 } else {
                     self.state = State::Hunt;
@@ -131,9 +107,7 @@ impl<const N: usize> LengthSplitter<N> {
             }
             State::Checksum => {
                 self.state = State::Hunt;
-                let len = self.end;
-                self.end = 0;
-                return Some(len);
+                return Some(N - self.len);
             }
         }
         None

@@ -1,0 +1,30 @@
+//! The least a byte-at-a-time XBee decoder can do, as a floor to measure `push` against.
+//!
+//! [`LengthSplitter`] (API mode 1) and [`EscapedSplitter`] (API mode 2) split a stream
+//! into frames by their length field and do nothing else: no checksum, no resync after
+//! a bad frame, no counters, and in mode 2 no test for a raw 0x7E inside a frame. They
+//! are not decoders (a bad byte in the stream loses every frame after it); they show
+//! what one call a byte costs before any of that work, with the same loop around them as
+//! [`Decoder::push`](xbee_api::Decoder::push) has in [`run_push`](crate::run::run_push).
+//!
+//! Their frame data bytes take the shortest path a byte can take when a call handles
+//! one byte and the splitter lives in memory between calls (as a decoder does in an
+//! interrupt handler, and as any decoder does whose rarer bytes go through a call): the
+//! cursor loaded, compared with a constant, the byte stored, the cursor stored back.
+//! The frame data is stored so that it ends at the end of the buffer, so that "the
+//! frame's data is still coming" is the cursor below the buffer's size, which is also
+//! all the compiler needs to know that the store is in bounds. In mode 2 the byte is
+//! also compared with 0x7D, the escape. The start delimiter, the length bytes, escapes
+//! and the checksum byte take one step of a state machine out of line, as in `push`.
+
+mod escaped;
+mod unescaped;
+
+pub use escaped::EscapedSplitter;
+pub use unescaped::LengthSplitter;
+
+/// Marks the path that calls it as the rare one, so that the compiler lays out the other
+/// straight on, as `xbee_api`'s decoder does.
+#[cold]
+#[inline(never)]
+fn unlikely() {}
