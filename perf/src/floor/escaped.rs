@@ -1,21 +1,8 @@
 //! The floor in API mode 2: frames by their length, escapes undone.
 
-use xbee_api::wire::{ESCAPE, ESCAPE_XOR, START_DELIMITER};
+use xbee_api::wire::{ESCAPE, ESCAPE_XOR};
 
-use super::unlikely;
-
-/// Where [`EscapedSplitter`] is in a frame, for the bytes that are not plain frame data.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum State {
-    /// Before a start delimiter.
-    Hunt,
-    /// After the start delimiter.
-    LenHi,
-    /// After the length's high byte.
-    LenLo,
-    /// After the length field: frame data while `at < N`, then the checksum byte.
-    Data,
-}
+use super::{Header, State, unlikely};
 
 /// Splits an API mode 2 stream into frames by their length field, undoing escapes (see
 /// the [module](super)). `N` is the largest frame data it holds; a longer length field
@@ -43,9 +30,7 @@ pub struct EscapedSplitter<const N: usize> {
     at: usize,
     /// The frame's length.
     len: usize,
-    /// The length field's high byte.
-    hi: u8,
-    state: State,
+    header: Header,
     /// The byte before was an escape.
     escaped: bool,
 }
@@ -63,8 +48,7 @@ impl<const N: usize> EscapedSplitter<N> {
             buf: [0; N],
             at: N,
             len: 0,
-            hi: 0,
-            state: State::Hunt,
+            header: Header::new(),
             escaped: false,
         }
     }
@@ -101,7 +85,7 @@ impl<const N: usize> EscapedSplitter<N> {
             self.escaped = false;
             self.at -= N;
             raw ^ ESCAPE_XOR
-        } else if raw == ESCAPE && self.state != State::Hunt {
+        } else if raw == ESCAPE && self.header.state != State::Hunt {
             // `at == N` here (an escape in the frame data is taken by `push`): the next
             // byte comes to this step whatever it is.
             self.escaped = true;
@@ -110,37 +94,21 @@ impl<const N: usize> EscapedSplitter<N> {
         } else {
             raw
         };
-        match self.state {
-            State::Hunt => {
-                if byte == START_DELIMITER {
-                    self.state = State::LenHi;
-                }
-            }
-            State::LenHi => {
-                self.hi = byte;
-                self.state = State::LenLo;
-            }
-            State::LenLo => {
-                let len = usize::from(u16::from_be_bytes([self.hi, byte]));
-                if len <= N {
-                    self.len = len;
-                    self.at = N - len;
-                    self.state = State::Data;
-                } else {
-                    self.state = State::Hunt;
-                }
-            }
-            State::Data => match self.buf.get_mut(self.at) {
-                // An escaped byte of frame data.
-                Some(slot) => {
-                    *slot = byte;
-                    self.at += 1;
-                }
-                // The checksum byte.
-                None => return self.end_frame(),
-            },
+        if self.header.state != State::Data {
+            self.len = self.header.step(byte, N)?;
+            self.at = N - self.len;
+            return None;
         }
-        None
+        match self.buf.get_mut(self.at) {
+            // An escaped byte of frame data.
+            Some(slot) => {
+                *slot = byte;
+                self.at += 1;
+                None
+            }
+            // The checksum byte.
+            None => self.end_frame(),
+        }
     }
 
     /// Ends the frame at its checksum byte: where its data starts in the buffer. Out of
@@ -149,7 +117,7 @@ impl<const N: usize> EscapedSplitter<N> {
     /// interrupt handler cannot do.
     #[inline(never)]
     fn end_frame(&mut self) -> Option<usize> {
-        self.state = State::Hunt;
+        self.header.state = State::Hunt;
         Some(N - self.len)
     }
 }

@@ -23,6 +23,68 @@ mod unescaped;
 pub use escaped::EscapedSplitter;
 pub use unescaped::LengthSplitter;
 
+use xbee_api::wire::START_DELIMITER;
+
+/// Where a splitter is in a frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum State {
+    /// Before a start delimiter.
+    Hunt,
+    /// After the start delimiter.
+    LenHi,
+    /// After the length's high byte.
+    LenLo,
+    /// After the length field: frame data while the splitter's cursor is below its
+    /// size, then the checksum byte.
+    Data,
+}
+
+/// The start delimiter and the length field, which both splitters read alike.
+#[derive(Debug, Clone)]
+struct Header {
+    state: State,
+    /// The length field's high byte.
+    hi: u8,
+}
+
+impl Header {
+    /// Hunting for a start delimiter.
+    const fn new() -> Self {
+        Self {
+            state: State::Hunt,
+            hi: 0,
+        }
+    }
+
+    /// Takes a byte (unescaped) before the frame data: the frame's length once its
+    /// length field is read, if it is at most `max` (else back to hunting). Takes
+    /// nothing in [`State::Data`].
+    #[inline(always)]
+    fn step(&mut self, byte: u8, max: usize) -> Option<usize> {
+        match self.state {
+            State::Hunt => {
+                if byte == START_DELIMITER {
+                    self.state = State::LenHi;
+                }
+            }
+            State::LenHi => {
+                self.hi = byte;
+                self.state = State::LenLo;
+            }
+            State::LenLo => {
+                let len = usize::from(u16::from_be_bytes([self.hi, byte]));
+                if len <= max {
+                    self.state = State::Data;
+                    return Some(len);
+                }
+                self.state = State::Hunt;
+            }
+            State::Data => {}
+        }
+        None
+    }
+}
+
 /// Marks the path that calls it as the rare one, so that the compiler lays out the other
 /// straight on, as `xbee_api`'s decoder does.
 #[cold]

@@ -1,21 +1,6 @@
 //! The floor in API mode 1: frames by their length alone.
 
-use xbee_api::wire::START_DELIMITER;
-
-use super::unlikely;
-
-/// Where [`LengthSplitter`] is in a frame, for the bytes that are not frame data.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum State {
-    /// Before a start delimiter.
-    Hunt,
-    /// After the start delimiter.
-    LenHi,
-    /// After the length's high byte.
-    LenLo,
-    /// After the length field: frame data while `at < N`, then the checksum byte.
-    Checksum,
-}
+use super::{Header, State, unlikely};
 
 /// Splits an API mode 1 stream into frames by their length field alone (see the
 /// [module](super)). `N` is the largest frame data it holds; a longer length field sends
@@ -40,9 +25,7 @@ pub struct LengthSplitter<const N: usize> {
     at: usize,
     /// The frame's length.
     len: usize,
-    /// The length field's high byte.
-    hi: u8,
-    state: State,
+    header: Header,
 }
 
 impl<const N: usize> Default for LengthSplitter<N> {
@@ -58,8 +41,7 @@ impl<const N: usize> LengthSplitter<N> {
             buf: [0; N],
             at: N,
             len: 0,
-            hi: 0,
-            state: State::Hunt,
+            header: Header::new(),
         }
     }
 
@@ -85,31 +67,12 @@ impl<const N: usize> LengthSplitter<N> {
     /// buffer the data of the frame it ends starts, if it is a checksum byte.
     #[inline(never)]
     fn step(&mut self, byte: u8) -> Option<usize> {
-        match self.state {
-            State::Hunt => {
-                if byte == START_DELIMITER {
-                    self.state = State::LenHi;
-                }
-            }
-            State::LenHi => {
-                self.hi = byte;
-                self.state = State::LenLo;
-            }
-            State::LenLo => {
-                let len = usize::from(u16::from_be_bytes([self.hi, byte]));
-                if len <= N {
-                    self.len = len;
-                    self.at = N - len;
-                    self.state = State::Checksum;
-                } else {
-                    self.state = State::Hunt;
-                }
-            }
-            State::Checksum => {
-                self.state = State::Hunt;
-                return Some(N - self.len);
-            }
+        if self.header.state == State::Data {
+            self.header.state = State::Hunt;
+            return Some(N - self.len);
         }
+        self.len = self.header.step(byte, N)?;
+        self.at = N - self.len;
         None
     }
 }
