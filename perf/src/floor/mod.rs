@@ -15,7 +15,9 @@
 //! frame's data is still coming" is the cursor below the buffer's size, which is also
 //! all the compiler needs to know that the store is in bounds. In mode 2 the byte is
 //! also compared with 0x7D, the escape. The start delimiter, the length bytes, escapes
-//! and the checksum byte take one step of a state machine out of line, as in `push`.
+//! and the checksum byte take one step of a state machine, as in `push`: out of line in
+//! mode 1; in line in mode 2 but for the checksum byte, which ends the frame through a
+//! call.
 
 mod escaped;
 mod unescaped;
