@@ -11,7 +11,7 @@
 //!
 //! | Link string | Meaning |
 //! |---|---|
-//! | `serial:PATH[:BAUD]` | Serial port `PATH` (e.g. `/dev/ttyUSB0`, `COM3`), `BAUD` default 115200, 8N1, no flow control. Reopened after the device disappears (USB unplugged). |
+//! | `serial:PATH[:BAUD]` | Serial port `PATH` (e.g. `/dev/ttyUSB0`, `COM3`), `BAUD` default 115200, 8N1, no flow control, for exclusive use (TIOCEXCL and an exclusive `flock`; on Linux, the far end of a pseudo-terminal by the lock alone, which goes with the process: a ground station killed while holding a simulator's pseudo-terminal leaves it free). Reopened after the device disappears (USB unplugged). |
 //! | `tcp:HOST:PORT` | TCP connection to `HOST:PORT` (a serial-to-TCP bridge, a simulator). Reconnected after the peer goes away. IPv6 hosts in brackets: `tcp:[::1]:9750`. |
 //! | `tcp-listen:ADDR:PORT` | Listens on `ADDR:PORT` and serves one peer at a time: while one is served the next may wait for its turn (if it leaves first, what it wrote is dropped, never carried out later) and any more are turned away (connection closed at once). Port 0 picks a free port ([`LinkInfo::local_addr`]). |
 //! | `pty` | Creates a pseudo-terminal pair; the far end's path ([`LinkInfo::pty_path`], e.g. `/dev/pts/7`) is for a simulator or test to open. The path stays valid for the life of the link; the link is up while a device has it open (connected, disconnected and reconnected as simulators come and go), and nothing written for one device reaches the next. |

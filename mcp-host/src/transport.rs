@@ -306,6 +306,16 @@ fn left_before_its_turn(peer: SocketAddr) {
     tracing::info!(%peer, "a waiting peer left before its turn: what it wrote is dropped");
 }
 
+/// Whether `path` is the far (slave) end of a Unix 98 pseudo-terminal (`/dev/pts/N`,
+/// device majors 136 to 143), however it is named (a symbolic link, say).
+#[cfg(target_os = "linux")]
+fn is_pty_far_end(path: &Path) -> bool {
+    use std::os::unix::fs::{FileTypeExt, MetadataExt};
+    std::fs::metadata(path).is_ok_and(|meta| {
+        meta.file_type().is_char_device() && (136..=143).contains(&libc::major(meta.rdev()))
+    })
+}
+
 /// How much of what a waiting peer wrote is read ahead to see whether it is still there
 /// (the rest is read as usual).
 const WAITED_MAX: usize = 64 * 1024;
@@ -464,17 +474,29 @@ impl Connector {
     async fn open_kind(&mut self) -> Result<Transport, LinkError> {
         match &mut self.kind {
             Kind::Serial { path, baud } => {
-                let stream = tokio_serial::new(path.as_str(), *baud)
+                let serial_error = |source| LinkError::Serial {
+                    path: path.clone(),
+                    baud: *baud,
+                    source,
+                };
+                #[cfg_attr(not(target_os = "linux"), allow(unused_mut))]
+                let mut stream = tokio_serial::new(path.as_str(), *baud)
                     .data_bits(tokio_serial::DataBits::Eight)
                     .parity(tokio_serial::Parity::None)
                     .stop_bits(tokio_serial::StopBits::One)
                     .flow_control(tokio_serial::FlowControl::None)
                     .open_native_async()
-                    .map_err(|source| LinkError::Serial {
-                        path: path.clone(),
-                        baud: *baud,
-                        source,
-                    })?;
+                    .map_err(serial_error)?;
+                // The far end of a pseudo-terminal (a virtual radio's, a simulator's) keeps
+                // the exclusive flag (TIOCEXCL) of a process that dies without closing it,
+                // killed say, for as long as its master side lives: nobody but root could
+                // open it again. So there the port is kept by its lock alone (flock, which
+                // goes with the process), which still turns away every other opener that
+                // asks for exclusive use (another mcp-gs, serialport, pyserial).
+                #[cfg(target_os = "linux")]
+                if is_pty_far_end(Path::new(path)) {
+                    stream.set_exclusive(false).map_err(serial_error)?;
+                }
                 Ok(Transport {
                     inner: Inner::Serial(stream),
                     peer: path.clone(),

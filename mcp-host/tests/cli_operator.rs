@@ -165,6 +165,44 @@ fn a_path_that_is_no_serial_port_says_so() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A ground station killed (SIGKILL) while it holds a simulator's pseudo-terminal
+/// leaves it free: the next command opens it and talks to the MAV behind it.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_killed_ground_station_leaves_a_pseudo_terminal_free() {
+    let (child, sim_lines) = spawn_lines(&["sim", "--link", "pty", "--seed", "1"]);
+    let _sim = Running(child);
+    let line = line_with(&sim_lines, "open it as serial:");
+    let start = line.find("open it as ").expect("the link") + "open it as ".len();
+    let end = line[start..].find(')').expect("a closing parenthesis");
+    let link = line[start..start + end].to_owned();
+    let path = std::path::PathBuf::from(link.trim_start_matches("serial:"));
+
+    let (child, lines) = spawn_lines(&["monitor", "--link", &link]);
+    let mut monitor = Running(child);
+    // Opened, and connected: the port is held as it will be until the end.
+    line_with(&lines, "link connected");
+    monitor.0.kill().expect("SIGKILL");
+    monitor.0.wait().expect("wait");
+    assert!(!common::far_end_is_exclusive(&path), "{}", path.display());
+
+    let output = run(&[
+        "status",
+        "--link",
+        &link,
+        "--to",
+        M,
+        "telemetry",
+        "altitude",
+    ]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    assert!(
+        stdout(&output).contains("report telemetry_to_coordinator"),
+        "{}",
+        stdout(&output)
+    );
+}
+
 #[test]
 fn a_refused_connection_hints_at_a_hub_without_its_radio() {
     let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();

@@ -7,6 +7,8 @@ use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::net::{TcpListener, TcpStream};
 use tokio::time::timeout;
 
+mod common;
+
 /// Failure guard only: every wait below ends on an event long before this.
 const GUARD: Duration = Duration::from_secs(10);
 
@@ -246,6 +248,35 @@ async fn tcp_listen_gives_the_waiting_place_of_a_peer_that_left_to_the_next() {
         .unwrap();
     assert_eq!(transport.peer(), third.local_addr().unwrap().to_string());
     assert_eq!(read_exact_n(&mut transport, 3).await, b"new");
+}
+
+/// A serial link on the far end of a pseudo-terminal holds it by its lock alone, not by
+/// the terminal's exclusive flag, which would outlive a process killed while holding
+/// it; the lock still turns away a second link on the same path until the first closes.
+#[cfg(target_os = "linux")]
+#[tokio::test]
+async fn a_serial_link_holds_a_pseudo_terminal_by_its_lock_alone() {
+    let pty = Connector::new(&Link::Pty, &LinkOptions::default())
+        .await
+        .unwrap();
+    let path = pty.pty_path().unwrap().to_owned();
+    let link: Link = format!("serial:{}", path.display()).parse().unwrap();
+    let mut first = Connector::new(&link, &LinkOptions::default())
+        .await
+        .unwrap();
+    let held = first.open().await.unwrap();
+    assert!(!common::far_end_is_exclusive(&path));
+    let mut second = Connector::new(&link, &LinkOptions::default())
+        .await
+        .unwrap();
+    let err = second.open().await.unwrap_err();
+    assert!(
+        matches!(&err, LinkError::Serial { source, .. }
+            if source.kind == tokio_serial::ErrorKind::NoDevice),
+        "{err}"
+    );
+    drop(held);
+    second.open().await.unwrap();
 }
 
 #[tokio::test]

@@ -145,7 +145,7 @@ pub fn decode_error(error: &DecodeError, offset: Option<u64>) -> String {
 }
 
 /// An event of a [`crate::PacketStream`] as a line of text (no time stamp: see
-/// [`time`]).
+/// [`time()`]).
 pub fn event(event: &crate::Event) -> String {
     use crate::{Event, LinkEvent};
     match event {
@@ -231,7 +231,7 @@ pub fn date(time: SystemTime) -> Option<String> {
     Some(stamp.date().to_string())
 }
 
-/// The dates of text output whose lines carry only the time of day ([`time`]): a line
+/// The dates of text output whose lines carry only the time of day ([`time()`]): a line
 /// `-- YYYY-MM-DD (UTC) --` before the first line and before each line on another UTC
 /// day than the line before it, as a recording that spans midnight or a monitor left
 /// running for days has.

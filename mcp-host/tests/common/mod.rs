@@ -320,3 +320,27 @@ pub fn recording_peer() -> (String, std::thread::JoinHandle<Vec<u8>>) {
     });
     (link, peer)
 }
+
+/// Whether the pseudo-terminal far end at `path` is in exclusive mode (TIOCEXCL): read
+/// with TIOCGEXCL where it can be opened (root opens it regardless), and true where it
+/// cannot be opened for being busy (anyone else).
+#[cfg(target_os = "linux")]
+pub fn far_end_is_exclusive(path: &std::path::Path) -> bool {
+    use std::os::fd::AsRawFd;
+    use std::os::unix::fs::OpenOptionsExt;
+    let far = std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(libc::O_NOCTTY | libc::O_NONBLOCK)
+        .open(path);
+    let far = match far {
+        Ok(far) => far,
+        Err(e) if e.raw_os_error() == Some(libc::EBUSY) => return true,
+        Err(e) => panic!("cannot open {}: {e}", path.display()),
+    };
+    let mut exclusive: libc::c_int = 0;
+    // SAFETY: TIOCGEXCL writes one int through the pointer, which points at one; the
+    // file descriptor is open for the call.
+    let done = unsafe { libc::ioctl(far.as_raw_fd(), libc::TIOCGEXCL, &mut exclusive) };
+    assert_eq!(done, 0, "TIOCGEXCL: {}", std::io::Error::last_os_error());
+    exclusive != 0
+}
