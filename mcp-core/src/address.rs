@@ -38,8 +38,17 @@ impl fmt::Display for Address {
     }
 }
 
+/// In hex, as [`Display`](fmt::Display) writes it.
+#[cfg(feature = "defmt")]
+impl defmt::Format for Address {
+    fn format(&self, f: defmt::Formatter<'_>) {
+        defmt::write!(f, "{=u64:016x}", u64::from_be_bytes(self.0));
+    }
+}
+
 /// Text that is not 1 to 16 hex digits (optionally prefixed by `0x`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[error("not a 64-bit address: expected 1 to 16 hex digits")]
 pub struct ParseAddressError;
 
@@ -70,6 +79,7 @@ impl FromStr for Address {
 /// assert_eq!(Slot::new(4), None);
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Slot(u8);
 
 impl Slot {

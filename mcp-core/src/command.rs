@@ -16,6 +16,7 @@ use crate::{
 ///
 /// `B` holds the bytes of the only variable-length command, trajectory set.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Command<B> {
     /// `c 01 on/off id` (table 3): start or stop sending telemetry `id`.
     TelemetryToCoordinator {
@@ -63,6 +64,7 @@ pub enum Command<B> {
 
 /// A status request command (tables 4, 6, 8, 10, 12, 14).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum StatusRequest {
     /// `c 01 FF id`: is telemetry `id` sent?
     TelemetryToCoordinator(TelemetryId),

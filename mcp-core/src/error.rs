@@ -17,6 +17,7 @@ use crate::id::{Category, CommandType};
 /// );
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[error("{kind} (at offset {offset})")]
 pub struct Error {
     kind: ErrorKind,
@@ -44,6 +45,7 @@ impl Error {
 
 /// What was wrong with a packet.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum ErrorKind {
     /// The packet has no bytes at all.
@@ -88,6 +90,7 @@ pub enum ErrorKind {
 
 /// The packet lengths a type allows (see [`ErrorKind::WrongLength`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Expected {
     /// Exactly this many bytes.
     Exactly(usize),
@@ -164,6 +167,7 @@ impl fmt::Display for ErrorKind {
 
 /// The output buffer is too small for the packet being encoded.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[error("buffer too small: {needed} bytes needed, {available} available")]
 pub struct BufferTooSmall {
     /// Bytes the packet needs.
@@ -176,5 +180,6 @@ pub struct BufferTooSmall {
 /// 255-byte XBee payload limit ([`MAX_PAYLOAD`](crate::MAX_PAYLOAD)) or the
 /// packet's own item limit. The packet built so far is intact.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[error("packet full")]
 pub struct Full;

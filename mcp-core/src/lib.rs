@@ -81,6 +81,13 @@
 //! assert_eq!(&buf[..len], b"c\x06\xff");
 //! # Ok::<(), mcp_core::BufferTooSmall>(())
 //! ```
+//!
+//! # Features
+//!
+//! - `defmt`: [`defmt::Format`](https://docs.rs/defmt/1/defmt/trait.Format.html) for
+//!   the public value types (packets and their views, parse errors, identifier enums,
+//!   addresses), for firmware that logs with defmt. Addresses print in hex, as their
+//!   `Display` does. Off by default.
 #![no_std]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]

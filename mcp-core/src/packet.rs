@@ -16,6 +16,7 @@ use crate::{
 /// trajectory waypoints, text). [`parse`] gives `Packet<&[u8]>`, borrowing the
 /// input; [`Packet::map_bytes`] moves it to owned storage.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Packet<B> {
     /// `c`: a command.
     Command(Command<B>),

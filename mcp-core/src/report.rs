@@ -17,6 +17,7 @@ use crate::{
 ///
 /// `B` holds the bytes of the only variable-length report, trajectory set.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Report<B> {
     /// `r 01 on/off id` (table 18): whether telemetry `id` is sent.
     TelemetryToCoordinator {
@@ -39,6 +40,7 @@ pub enum Report<B> {
 
 /// The content of a position slave set report, in one of its two forms.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum SlaveAddresses {
     /// Spec form (table 22): `r 05 addr[8]`, 10 bytes.
     Single(Address),

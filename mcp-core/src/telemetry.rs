@@ -12,6 +12,7 @@ use crate::{
 
 /// One telemetry record: an id and its value.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TelemetryRecord {
     /// Which quantity.
     pub id: TelemetryId,
@@ -33,6 +34,7 @@ pub struct TelemetryRecord {
 /// assert_eq!((r.id, r.value), (TelemetryId::Altitude, 1.5));
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Telemetry<B> {
     records: B,
 }

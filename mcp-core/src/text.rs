@@ -17,6 +17,7 @@ use crate::{error::BufferTooSmall, id::Category, write::Writer};
 /// assert_eq!(t.to_string(), r"caf\xe9 \\ ok\x0a");
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Text<B> {
     bytes: B,
 }

@@ -18,6 +18,7 @@ pub const MAX_WAYPOINTS: usize = 254;
 
 /// One trajectory waypoint.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Waypoint {
     /// Time, `u32`.
     pub time: u32,
@@ -63,6 +64,7 @@ impl Waypoint {
 /// assert_eq!(w.iter().next().unwrap().time, 7);
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Waypoints<B> {
     bytes: B,
 }

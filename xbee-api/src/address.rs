@@ -76,8 +76,25 @@ impl fmt::Display for Address16 {
     }
 }
 
+/// In hex, as [`Display`](fmt::Display) writes it.
+#[cfg(feature = "defmt")]
+impl defmt::Format for Address64 {
+    fn format(&self, f: defmt::Formatter<'_>) {
+        defmt::write!(f, "{=u64:016x}", self.0);
+    }
+}
+
+/// In hex, as [`Display`](fmt::Display) writes it.
+#[cfg(feature = "defmt")]
+impl defmt::Format for Address16 {
+    fn format(&self, f: defmt::Formatter<'_>) {
+        defmt::write!(f, "{=u16:04x}", self.0);
+    }
+}
+
 /// Why a string is not an address.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum ParseAddressError {
     /// No hex digit (empty, or only `0x`).

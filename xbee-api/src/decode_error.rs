@@ -7,6 +7,7 @@ use core::fmt;
 /// None of these stops the decoder: it goes on with the next frame (see the
 /// [`Decoder`](crate::Decoder) docs for where it resumes).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum DecodeError {
     /// The checksum byte does not match the frame data.

@@ -4,6 +4,7 @@ use core::fmt;
 
 /// Why frame data is not a valid frame of the expected type.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum FrameError {
     /// The frame data is empty: there is not even a frame type byte.
@@ -49,6 +50,7 @@ impl core::error::Error for FrameError {}
 
 /// Why a frame could not be encoded.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum EncodeError {
     /// The output buffer is shorter than the encoded frame.

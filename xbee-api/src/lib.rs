@@ -34,6 +34,13 @@
 //! let frame = Frame::parse(event.unwrap().unwrap()).unwrap();
 //! assert_eq!(frame, Frame::TransmitRequest(request));
 //! ```
+//!
+//! # Features
+//!
+//! - `defmt`: [`defmt::Format`](https://docs.rs/defmt/1/defmt/trait.Format.html) for
+//!   the public value types (frames and their views, decode and encode errors, status
+//!   codes, addresses, the decoder's counters), for firmware that logs with defmt.
+//!   Addresses print in hex, as their `Display` does. Off by default.
 #![no_std]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]

@@ -11,6 +11,7 @@ use core::fmt;
 /// assert!(ApiMode::try_from(0).is_err());
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum ApiMode {
     /// API mode 1 (`AP=1`): frames are sent as they are.
     Unescaped,
@@ -21,6 +22,7 @@ pub enum ApiMode {
 
 /// An `AP` value that is not an API mode with frames (1 or 2).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct InvalidApiMode(pub u8);
 
 impl fmt::Display for InvalidApiMode {

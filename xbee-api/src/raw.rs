@@ -16,6 +16,7 @@ use crate::{EncodeFrame, FrameError};
 /// assert!(RawFrame::new(&[]).is_err());
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct RawFrame<'a> {
     data: &'a [u8],
 }

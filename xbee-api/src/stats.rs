@@ -6,6 +6,7 @@
 /// In API mode 1 the bytes of a failed candidate frame are scanned again, so a byte can
 /// be part of a failed candidate and then be counted in `bytes_skipped` too.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Stats {
     /// Frames yielded with a good checksum.
     pub frames_ok: u32,

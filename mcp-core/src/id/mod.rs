@@ -32,6 +32,7 @@ pub use telemetry_id::TelemetryId;
 /// );
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ParseIdError {
     what: &'static str,
     names: &'static [&'static str],
@@ -88,6 +89,7 @@ macro_rules! id_enum {
     ) => {
         $(#[$meta])*
         #[derive(Debug, Clone, Copy)]
+        #[cfg_attr(feature = "defmt", derive(defmt::Format))]
         pub enum $name {
             $( $(#[$vmeta])* $variant, )*
             /// A byte value the specification does not name.

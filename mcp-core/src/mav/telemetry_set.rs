@@ -16,6 +16,7 @@ use crate::id::TelemetryId;
 /// assert_eq!(ids, [0x01, 0x19, 0xF0]);
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TelemetrySet {
     bits: [u32; 8],
 }

@@ -27,6 +27,7 @@ pub mod field {
 /// cannot panic. Turn it into owned fields with
 /// [`AtCommandRepr::parse`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct AtCommand<T: AsRef<[u8]>> {
     buffer: T,
 }
@@ -99,6 +100,7 @@ impl<'a> AtCommand<&'a [u8]> {
 /// assert_eq!(wire[..n], [0x7E, 0x00, 0x05, 0x09, 0x01, 0x42, 0x44, 0x07, 0x68]);
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct AtCommandRepr<'a> {
     /// A 0x09 frame: the setting is queued until `AC` (or the next 0x08 frame)
     /// applies it; a query is answered as by 0x08.

@@ -27,6 +27,7 @@ pub mod field {
 /// cannot panic. Turn it into owned fields with
 /// [`AtCommandResponseRepr::parse`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct AtCommandResponse<T: AsRef<[u8]>> {
     buffer: T,
 }
@@ -88,6 +89,7 @@ impl<'a> AtCommandResponse<&'a [u8]> {
 /// The fields of a AT Command Response (0x88) frame: parse one from a view, or fill one
 /// in and encode it with [`EncodeFrame`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct AtCommandResponseRepr<'a> {
     /// Frame id of the command this answers.
     pub frame_id: u8,

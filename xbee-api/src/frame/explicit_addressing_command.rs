@@ -39,6 +39,7 @@ pub mod field {
 /// cannot panic. Turn it into owned fields with
 /// [`ExplicitAddressingCommandRepr::parse`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ExplicitAddressingCommand<T: AsRef<[u8]>> {
     buffer: T,
 }
@@ -136,6 +137,7 @@ impl<'a> ExplicitAddressingCommand<&'a [u8]> {
 /// The fields of a Explicit Addressing Command (0x11) frame: parse one from a view, or fill one
 /// in and encode it with [`EncodeFrame`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ExplicitAddressingCommandRepr<'a> {
     /// Frame id: 0 asks for no Transmit Status.
     pub frame_id: u8,

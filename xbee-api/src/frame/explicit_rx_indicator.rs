@@ -35,6 +35,7 @@ pub mod field {
 /// cannot panic. Turn it into owned fields with
 /// [`ExplicitRxIndicatorRepr::parse`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ExplicitRxIndicator<T: AsRef<[u8]>> {
     buffer: T,
 }
@@ -120,6 +121,7 @@ impl<'a> ExplicitRxIndicator<&'a [u8]> {
 /// The fields of a Explicit Rx Indicator (0x91) frame: parse one from a view, or fill one
 /// in and encode it with [`EncodeFrame`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ExplicitRxIndicatorRepr<'a> {
     /// 64-bit source address.
     pub src64: Address64,

@@ -97,6 +97,7 @@ pub(crate) fn be<const N: usize>(bytes: &[u8]) -> [u8; N] {
 /// }
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum Frame<'a> {
     /// 0x10 Transmit Request.

@@ -21,6 +21,7 @@ pub mod field {
 /// cannot panic. Turn it into owned fields with
 /// [`ModemStatusRepr::parse`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ModemStatusFrame<T: AsRef<[u8]>> {
     buffer: T,
 }
@@ -63,6 +64,7 @@ impl<T: AsRef<[u8]>> ModemStatusFrame<T> {
 /// The fields of a Modem Status (0x8A) frame: parse one from a view, or fill one
 /// in and encode it with [`EncodeFrame`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ModemStatusRepr {
     /// Modem status.
     pub status: ModemStatus,

@@ -39,6 +39,7 @@ pub mod options {
 /// cannot panic. Turn it into owned fields with
 /// [`ReceivePacketRepr::parse`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ReceivePacket<T: AsRef<[u8]>> {
     buffer: T,
 }
@@ -101,6 +102,7 @@ impl<'a> ReceivePacket<&'a [u8]> {
 /// The fields of a Receive Packet (0x90) frame: parse one from a view, or fill one
 /// in and encode it with [`EncodeFrame`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ReceivePacketRepr<'a> {
     /// 64-bit source address.
     pub src64: Address64,

@@ -31,6 +31,7 @@ pub mod field {
 /// cannot panic. Turn it into owned fields with
 /// [`RemoteAtCommandRepr::parse`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct RemoteAtCommand<T: AsRef<[u8]>> {
     buffer: T,
 }
@@ -104,6 +105,7 @@ impl<'a> RemoteAtCommand<&'a [u8]> {
 /// The fields of a Remote AT Command (0x17) frame: parse one from a view, or fill one
 /// in and encode it with [`EncodeFrame`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct RemoteAtCommandRepr<'a> {
     /// Frame id: 0 asks for no response.
     pub frame_id: u8,

@@ -31,6 +31,7 @@ pub mod field {
 /// cannot panic. Turn it into owned fields with
 /// [`RemoteAtResponseRepr::parse`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct RemoteAtResponse<T: AsRef<[u8]>> {
     buffer: T,
 }
@@ -104,6 +105,7 @@ impl<'a> RemoteAtResponse<&'a [u8]> {
 /// The fields of a Remote AT Command Response (0x97) frame: parse one from a view, or fill one
 /// in and encode it with [`EncodeFrame`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct RemoteAtResponseRepr<'a> {
     /// Frame id of the command this answers.
     pub frame_id: u8,

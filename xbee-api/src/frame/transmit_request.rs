@@ -42,6 +42,7 @@ pub mod options {
 /// cannot panic. Turn it into owned fields with
 /// [`TransmitRequestRepr::parse`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TransmitRequest<T: AsRef<[u8]>> {
     buffer: T,
 }
@@ -115,6 +116,7 @@ impl<'a> TransmitRequest<&'a [u8]> {
 /// The fields of a Transmit Request (0x10) frame: parse one from a view, or fill one
 /// in and encode it with [`EncodeFrame`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TransmitRequestRepr<'a> {
     /// Frame id: 0 asks for no Transmit Status, 1..=255 match one.
     pub frame_id: u8,

@@ -29,6 +29,7 @@ pub mod field {
 /// cannot panic. Turn it into owned fields with
 /// [`TransmitStatusRepr::parse`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TransmitStatus<T: AsRef<[u8]>> {
     buffer: T,
 }
@@ -95,6 +96,7 @@ impl<T: AsRef<[u8]>> TransmitStatus<T> {
 /// The fields of a Transmit Status (0x8B) frame: parse one from a view, or fill one
 /// in and encode it with [`EncodeFrame`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TransmitStatusRepr {
     /// Frame id of the request this answers.
     pub frame_id: u8,

@@ -16,6 +16,7 @@ macro_rules! code_enum {
     ) => {
         $(#[$meta])*
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[cfg_attr(feature = "defmt", derive(defmt::Format))]
         pub enum $name {
             $( $(#[$vmeta])* $variant, )+
             $( $(#[$rmeta])* $range(u8), )?
