@@ -537,6 +537,42 @@ fn waypoint_times_from_now_and_their_help() {
     );
 }
 
+/// `time` takes the times a waypoint takes: `+N` is N seconds from now, not N seconds
+/// after 1970.
+#[test]
+fn the_time_command_takes_times_from_now_as_waypoints_do() {
+    for (time, ahead) in [("+10", 10), ("now", 0), ("NOW", 0), ("+0", 0)] {
+        let before = posix_now();
+        let output = run(&["encode", "--to", M, "time", time]);
+        let after = posix_now();
+        let payload = encoded_payload(&output);
+        let bytes: Vec<u8> = payload
+            .split_whitespace()
+            .map(|b| u8::from_str_radix(b, 16).unwrap())
+            .collect();
+        // c, 6, then the time.
+        assert_eq!(bytes[..2], [0x63, 0x06], "{time}");
+        let sent = u64::from(u32::from_le_bytes(bytes[2..6].try_into().unwrap()));
+        assert!(
+            (before + ahead..=after + ahead).contains(&sent),
+            "{time}: {sent} not in {}..={}",
+            before + ahead,
+            after + ahead
+        );
+        assert_eq!(stderr(&output), "", "{time}");
+    }
+    // A time in 1970 is most likely meant from now: sent as given, with a warning.
+    let output = run(&["encode", "--to", M, "time", "10"]);
+    assert_eq!(encoded_payload(&output), "63 06 0A 00 00 00");
+    assert!(stderr(&output).contains("give +10"), "{}", stderr(&output));
+    for bad in ["+x", "+-1", "++5", "+4294967295", "yesterday"] {
+        let output = run(&["encode", "--to", M, "time", bad]);
+        assert_eq!(output.status.code(), Some(2), "{bad}: {}", stderr(&output));
+    }
+    let help = stdout(&run(&["send", "time", "--help"]));
+    assert!(help.contains("+N") && help.contains("now"), "{help}");
+}
+
 #[test]
 fn the_size_warning_names_the_command() {
     let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();

@@ -23,13 +23,39 @@ impl OnOff {
     }
 }
 
-/// A time value: `now` or seconds since the Unix epoch.
+/// A time value for the MAV's clock: `now`, `+N` (N seconds from now) or seconds since
+/// the Unix epoch, as a waypoint's TIME takes them.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum TimeArg {
     /// This machine's clock, read when the command is built.
     Now,
+    /// This many seconds after this machine's clock, read when the command is built.
+    FromNow(u32),
     /// Seconds since 1970-01-01 00:00:00 UTC.
     Seconds(u32),
+}
+
+impl TimeArg {
+    /// The time to send: seconds since 1970. An absolute time before 2000 is sent as
+    /// given, with a warning (most likely meant as seconds from now).
+    fn resolve(self) -> Result<u32, String> {
+        match self {
+            Self::Now => now(),
+            Self::FromNow(seconds) => now()?
+                .checked_add(seconds)
+                .ok_or_else(|| format!("now +{seconds} s is past 2106: it does not fit u32")),
+            Self::Seconds(time) => {
+                if time < Y2000 {
+                    eprintln!(
+                        "mcp-gs: warning: time {time} is {time} s after 1970-01-01 00:00 UTC: \
+                         the MAV's clock is set to seconds since 1970; for {time} s from now, \
+                         give +{time}"
+                    );
+                }
+                Ok(time)
+            }
+        }
+    }
 }
 
 impl std::str::FromStr for TimeArg {
@@ -38,12 +64,19 @@ impl std::str::FromStr for TimeArg {
         if s.eq_ignore_ascii_case("now") {
             return Ok(Self::Now);
         }
-        s.parse().map(Self::Seconds).map_err(|_| {
-            format!(
-                "expected `now` or seconds since 1970 (0 to {}), got `{s}`",
+        let (digits, time): (_, fn(u32) -> Self) = match s.strip_prefix('+') {
+            Some(digits) => (digits, Self::FromNow),
+            None => (s, Self::Seconds),
+        };
+        // Digits alone: `u32::from_str` would also take a sign.
+        match digits.parse() {
+            Ok(seconds) if digits.bytes().all(|b| b.is_ascii_digit()) => Ok(time(seconds)),
+            _ => Err(format!(
+                "expected `now`, `+N` (N seconds from now) or seconds since 1970 (0 to {}), \
+                 got `{s}`",
                 u32::MAX
-            )
-        })
+            )),
+        }
     }
 }
 
@@ -258,7 +291,8 @@ pub(crate) enum CommandArgs {
     },
     /// Time: set the MAV's clock.
     Time {
-        /// `now` or seconds since 1970-01-01 UTC.
+        /// `now`, `+N` (N seconds from now, by this machine's clock) or seconds since
+        /// 1970-01-01 UTC.
         time: TimeArg,
     },
     /// Position set: the MAV's position in the new coordinate system.
@@ -387,11 +421,7 @@ impl CommandArgs {
                         address: *address,
                     }
                     .into(),
-                    Self::Time { time } => Command::Time(match time {
-                        TimeArg::Seconds(s) => *s,
-                        TimeArg::Now => now()?,
-                    })
-                    .into(),
+                    Self::Time { time } => Command::Time(time.resolve()?).into(),
                     Self::PositionSet { elevator, aileron } => Command::PositionSet {
                         elevator: *elevator,
                         aileron: *aileron,
