@@ -203,6 +203,46 @@ fn a_killed_ground_station_leaves_a_pseudo_terminal_free() {
     );
 }
 
+/// `monitor` and `hub` on `tcp-listen:` with port 0 say which port they took, and a
+/// radio bridge connects there.
+#[test]
+fn monitor_and_hub_say_where_they_listen_for_the_radio() {
+    use std::io::BufRead;
+    for args in [
+        &["monitor", "--link", "tcp-listen:127.0.0.1:0"][..],
+        &[
+            "hub",
+            "--link",
+            "tcp-listen:127.0.0.1:0",
+            "--listen",
+            "127.0.0.1:0",
+        ],
+    ] {
+        let mut child = gs()
+            .args(args)
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("start mcp-gs");
+        let stderr = child.stderr.take().expect("stderr piped");
+        let _running = Running(child);
+        let (tx, lines) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            for line in std::io::BufReader::new(stderr)
+                .lines()
+                .map_while(Result::ok)
+            {
+                let _ = tx.send(line);
+            }
+        });
+        let line = line_with(&lines, "listening for the radio side on");
+        let link = tcp_link(&line);
+        let addr = link.trim_start_matches("tcp:");
+        assert!(!addr.ends_with(":0"), "{args:?}: {line}");
+        std::net::TcpStream::connect(addr).unwrap_or_else(|e| panic!("{args:?}: {addr}: {e}"));
+    }
+}
+
 #[test]
 fn a_refused_connection_hints_at_a_hub_without_its_radio() {
     let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();

@@ -46,12 +46,7 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
             )),
             other => Failure::link(other.to_string()),
         })?;
-    if let Some(path) = &hub.radio_link().pty_path {
-        eprintln!(
-            "mcp-gs: pseudo-terminal for the radio side: {}",
-            path.display()
-        );
-    }
+    crate::link_args::announce_radio_side(hub.radio_link());
     let addr = hub.local_addr();
     let mode = u8::from(hub.api_mode());
     out!(

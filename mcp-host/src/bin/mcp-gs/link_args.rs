@@ -231,6 +231,20 @@ pub(crate) async fn check_mode(sender: &CommandSender, configured: ApiMode) {
     }
 }
 
+/// Says where the radio side of a link that waits for it comes: the pseudo-terminal's
+/// path (`pty`), or the address bound (`tcp-listen:`, where port 0 picks one).
+pub(crate) fn announce_radio_side(info: &mcp_host::LinkInfo) {
+    if let Some(path) = &info.pty_path {
+        eprintln!(
+            "mcp-gs: pseudo-terminal for the radio side: {}",
+            path.display()
+        );
+    }
+    if let Some(addr) = info.local_addr {
+        eprintln!("mcp-gs: listening for the radio side on {addr} (connect with tcp:{addr})");
+    }
+}
+
 /// Warns when the radio's AP setting, read as `radio`, is another API mode than the
 /// configured one: its frames will be dropped or garbled.
 pub(crate) fn warn_mode_mismatch(radio: u8, configured: ApiMode) {

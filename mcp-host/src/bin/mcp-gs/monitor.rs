@@ -61,12 +61,7 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
         Some(path) => Some(create_recording(path, args.force)?),
         None => None,
     };
-    if let Some(path) = &stream.info().pty_path {
-        eprintln!(
-            "mcp-gs: pseudo-terminal for the radio side: {}",
-            path.display()
-        );
-    }
+    crate::link_args::announce_radio_side(stream.info());
     if let (
         ApiModeChoice::Fixed(mode),
         mcp_host::Link::Serial { .. } | mcp_host::Link::Tcp { .. },
