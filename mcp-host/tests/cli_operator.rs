@@ -6,7 +6,7 @@ use std::sync::mpsc::Receiver;
 
 mod common;
 
-use common::{GUARD, Running, spawn_lines, stdout_lines, talking_peer};
+use common::{GUARD, Running, spawn_lines, stderr_lines, stdout_lines, talking_peer};
 
 /// The demo MAV's address.
 const M: &str = "0013a20040b599b9";
@@ -207,7 +207,6 @@ fn a_killed_ground_station_leaves_a_pseudo_terminal_free() {
 /// radio bridge connects there.
 #[test]
 fn monitor_and_hub_say_where_they_listen_for_the_radio() {
-    use std::io::BufRead;
     for args in [
         &["monitor", "--link", "tcp-listen:127.0.0.1:0"][..],
         &[
@@ -224,17 +223,8 @@ fn monitor_and_hub_say_where_they_listen_for_the_radio() {
             .stderr(std::process::Stdio::piped())
             .spawn()
             .expect("start mcp-gs");
-        let stderr = child.stderr.take().expect("stderr piped");
+        let lines = stderr_lines(&mut child);
         let _running = Running(child);
-        let (tx, lines) = std::sync::mpsc::channel();
-        std::thread::spawn(move || {
-            for line in std::io::BufReader::new(stderr)
-                .lines()
-                .map_while(Result::ok)
-            {
-                let _ = tx.send(line);
-            }
-        });
         let line = line_with(&lines, "listening for the radio side on");
         let link = tcp_link(&line);
         let addr = link.trim_start_matches("tcp:");
@@ -528,27 +518,35 @@ fn posix_now() -> u64 {
         .as_secs()
 }
 
+/// Encodes `command`, whose payload carries a time (u32, little-endian) at byte `at`,
+/// and checks that the time is `ahead` seconds past this machine's clock as it was
+/// while the command was built, with nothing on standard error.
+fn assert_time_from_now(command: &[&str], at: usize, ahead: u64) {
+    let mut argv = vec!["encode", "--to", M];
+    argv.extend_from_slice(command);
+    let before = posix_now();
+    let output = run(&argv);
+    let after = posix_now();
+    let bytes: Vec<u8> = encoded_payload(&output)
+        .split_whitespace()
+        .map(|b| u8::from_str_radix(b, 16).unwrap())
+        .collect();
+    let sent = u64::from(u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap()));
+    assert!(
+        (before + ahead..=after + ahead).contains(&sent),
+        "{command:?}: {sent} not in {}..={}",
+        before + ahead,
+        after + ahead
+    );
+    assert_eq!(stderr(&output), "", "{command:?}");
+}
+
 #[test]
 fn waypoint_times_from_now_and_their_help() {
     for (time, ahead) in [("+10", 10), ("now", 0), ("NOW", 0), ("+0", 0)] {
-        let before = posix_now();
         let waypoint = format!("{time},0.5,0.5,1");
-        let output = run(&["encode", "--to", M, "trajectory", "--waypoint", &waypoint]);
-        let after = posix_now();
-        let payload = encoded_payload(&output);
-        let bytes: Vec<u8> = payload
-            .split_whitespace()
-            .map(|b| u8::from_str_radix(b, 16).unwrap())
-            .collect();
         // c, 4, count, then the first waypoint's time.
-        let sent = u64::from(u32::from_le_bytes(bytes[3..7].try_into().unwrap()));
-        assert!(
-            (before + ahead..=after + ahead).contains(&sent),
-            "{time}: {sent} not in {}..={}",
-            before + ahead,
-            after + ahead
-        );
-        assert_eq!(stderr(&output), "", "{time}");
+        assert_time_from_now(&["trajectory", "--waypoint", &waypoint], 3, ahead);
     }
     // A time in 1970 is most likely meant from now: sent as given, with a warning.
     let output = run(&[
@@ -582,24 +580,8 @@ fn waypoint_times_from_now_and_their_help() {
 #[test]
 fn the_time_command_takes_times_from_now_as_waypoints_do() {
     for (time, ahead) in [("+10", 10), ("now", 0), ("NOW", 0), ("+0", 0)] {
-        let before = posix_now();
-        let output = run(&["encode", "--to", M, "time", time]);
-        let after = posix_now();
-        let payload = encoded_payload(&output);
-        let bytes: Vec<u8> = payload
-            .split_whitespace()
-            .map(|b| u8::from_str_radix(b, 16).unwrap())
-            .collect();
         // c, 6, then the time.
-        assert_eq!(bytes[..2], [0x63, 0x06], "{time}");
-        let sent = u64::from(u32::from_le_bytes(bytes[2..6].try_into().unwrap()));
-        assert!(
-            (before + ahead..=after + ahead).contains(&sent),
-            "{time}: {sent} not in {}..={}",
-            before + ahead,
-            after + ahead
-        );
-        assert_eq!(stderr(&output), "", "{time}");
+        assert_time_from_now(&["time", time], 2, ahead);
     }
     // A time in 1970 is most likely meant from now: sent as given, with a warning.
     let output = run(&["encode", "--to", M, "time", "10"]);

@@ -264,14 +264,21 @@ pub fn spawn_lines(args: &[&str]) -> (std::process::Child, std::sync::mpsc::Rece
 /// The standard output of `child` (started with it piped), line by line on a channel,
 /// read to the end by a thread of its own.
 pub fn stdout_lines(child: &mut std::process::Child) -> std::sync::mpsc::Receiver<String> {
+    lines_of(child.stdout.take().expect("stdout piped"))
+}
+
+/// The standard error of `child` (started with it piped), as [`stdout_lines`] gives
+/// its standard output.
+pub fn stderr_lines(child: &mut std::process::Child) -> std::sync::mpsc::Receiver<String> {
+    lines_of(child.stderr.take().expect("stderr piped"))
+}
+
+/// What `from` gives, line by line on a channel, read to the end by a thread of its own.
+fn lines_of(from: impl std::io::Read + Send + 'static) -> std::sync::mpsc::Receiver<String> {
     use std::io::BufRead;
-    let stdout = child.stdout.take().expect("stdout piped");
     let (tx, rx) = std::sync::mpsc::channel();
     std::thread::spawn(move || {
-        for line in std::io::BufReader::new(stdout)
-            .lines()
-            .map_while(Result::ok)
-        {
+        for line in std::io::BufReader::new(from).lines().map_while(Result::ok) {
             let _ = tx.send(line);
         }
     });
