@@ -490,9 +490,9 @@ impl Connector {
                 // The far end of a pseudo-terminal (a virtual radio's, a simulator's) keeps
                 // the exclusive flag (TIOCEXCL) of a process that dies without closing it,
                 // killed say, for as long as its master side lives: nobody but root could
-                // open it again. So there the port is kept by its lock alone (flock, which
-                // goes with the process), which still turns away every other opener that
-                // asks for exclusive use (another mcp-gs, serialport, pyserial).
+                // open it again. So there the port is kept by serialport's flock alone, then
+                // shared, which goes with the process and still turns away every other
+                // opener that asks for exclusive use (another mcp-gs, serialport, pyserial).
                 #[cfg(target_os = "linux")]
                 if is_pty_far_end(Path::new(path)) {
                     stream.set_exclusive(false).map_err(serial_error)?;
