@@ -36,19 +36,20 @@ pub(crate) enum TimeArg {
 }
 
 impl TimeArg {
-    /// The time to send: seconds since 1970. An absolute time before 2000 is sent as
-    /// given, with a warning (most likely meant as seconds from now).
-    fn resolve(self) -> Result<u32, String> {
+    /// The time to send, seconds since 1970; `what` names it in messages. An absolute
+    /// time before 2000 is sent as given, with a warning (most likely meant as seconds
+    /// from now).
+    fn resolve(self, what: &str) -> Result<u32, String> {
         match self {
             Self::Now => now(),
             Self::FromNow(seconds) => now()?
                 .checked_add(seconds)
-                .ok_or_else(|| format!("now +{seconds} s is past 2106: it does not fit u32")),
+                .ok_or_else(|| format!("{what} +{seconds} is past 2106: it does not fit u32")),
             Self::Seconds(time) => {
                 if time < Y2000 {
                     eprintln!(
-                        "mcp-gs: warning: time {time} is {time} s after 1970-01-01 00:00 UTC: \
-                         the MAV's clock is set to seconds since 1970; for {time} s from now, \
+                        "mcp-gs: warning: {what} {time} is {time} s after 1970-01-01 00:00 UTC: \
+                         the MAV's clock counts seconds since 1970; for {time} s from now, \
                          give +{time}"
                     );
                 }
@@ -91,47 +92,20 @@ fn parse_waypoint(s: &str) -> Result<Waypoint, String> {
     };
     let float = |name: &str, v: &str| parse_finite(v).map_err(|e| format!("{name} {e}"));
     Ok(Waypoint {
-        time: parse_waypoint_time(time)?,
+        // The MAV's clock time, seconds since 1970.
+        time: time
+            .parse::<TimeArg>()
+            .map_err(|e| format!("waypoint TIME: {e}"))?
+            .resolve("waypoint time")?,
         elevator: float("elevator", elevator)?,
         aileron: float("aileron", aileron)?,
         altitude: float("altitude", altitude)?,
     })
 }
 
-/// Before this time (2000-01-01 00:00:00 UTC), a waypoint's absolute time is most
-/// likely meant as seconds from now.
+/// Before this time (2000-01-01 00:00:00 UTC), an absolute time for the MAV's clock is
+/// most likely meant as seconds from now.
 const Y2000: u32 = 946_684_800;
-
-/// A waypoint's TIME: the MAV's clock time, seconds since 1970: `now`, `+N` (N seconds
-/// from now, by this machine's clock) or the absolute time. An absolute time before 2000
-/// is taken as given, with a warning.
-fn parse_waypoint_time(t: &str) -> Result<u32, String> {
-    if t.eq_ignore_ascii_case("now") {
-        return now();
-    }
-    if let Some(seconds) = t.strip_prefix('+') {
-        let seconds: u32 = seconds.parse().map_err(|_| {
-            format!("time `{t}`: +N takes a whole number of seconds from now (e.g. +10)")
-        })?;
-        return now()?
-            .checked_add(seconds)
-            .ok_or_else(|| format!("time `{t}` is past 2106: it does not fit u32"));
-    }
-    let time: u32 = t.parse().map_err(|_| {
-        format!(
-            "time `{t}` is not `now`, `+SECONDS` or a whole number of seconds since 1970 \
-             (0 to {})",
-            u32::MAX
-        )
-    })?;
-    if time < Y2000 {
-        eprintln!(
-            "mcp-gs: warning: waypoint time {time} is {time} s after 1970-01-01 00:00 UTC: TIME \
-             is the MAV's clock time, seconds since 1970; for {time} s from now, give +{time}"
-        );
-    }
-    Ok(time)
-}
 
 /// A finite `f32`: NaN and infinities are no position a MAV can fly to, nor is a number
 /// beyond the range of an `f32`, which would be sent as an infinity (`raw` sends any
@@ -421,7 +395,7 @@ impl CommandArgs {
                         address: *address,
                     }
                     .into(),
-                    Self::Time { time } => Command::Time(time.resolve()?).into(),
+                    Self::Time { time } => Command::Time(time.resolve("time")?).into(),
                     Self::PositionSet { elevator, aileron } => Command::PositionSet {
                         elevator: *elevator,
                         aileron: *aileron,
