@@ -70,10 +70,18 @@ fn exit_code(child: &mut std::process::Child) -> Option<i32> {
     }
 }
 
-/// The `tcp:` link of the coordinator a `sim` or `radio` line describes (`listening on
-/// ADDR (connect with tcp:ADDR)`).
+/// The `tcp:` link a line describes (`listening on ADDR (connect with tcp:ADDR)`).
 fn tcp_link(line: &str) -> String {
-    let start = line.find("connect with ").expect("a listening line") + "connect with ".len();
+    link_after(line, "connect with ")
+}
+
+/// The link a line gives after `words` and up to a closing parenthesis, as in
+/// `(connect with tcp:ADDR)` or `(open it as serial:PATH)`.
+fn link_after(line: &str, words: &str) -> String {
+    let start = line
+        .find(words)
+        .unwrap_or_else(|| panic!("no {words:?} in {line:?}"))
+        + words.len();
     let end = line[start..].find(')').expect("a closing parenthesis");
     line[start..start + end].to_owned()
 }
@@ -172,10 +180,7 @@ fn a_path_that_is_no_serial_port_says_so() {
 fn a_killed_ground_station_leaves_a_pseudo_terminal_free() {
     let (child, sim_lines) = spawn_lines(&["sim", "--link", "pty", "--seed", "1"]);
     let _sim = Running(child);
-    let line = line_with(&sim_lines, "open it as serial:");
-    let start = line.find("open it as ").expect("the link") + "open it as ".len();
-    let end = line[start..].find(')').expect("a closing parenthesis");
-    let link = line[start..start + end].to_owned();
+    let link = link_after(&line_with(&sim_lines, "open it as serial:"), "open it as ");
     let path = std::path::PathBuf::from(link.trim_start_matches("serial:"));
 
     let (child, lines) = spawn_lines(&["monitor", "--link", &link]);
