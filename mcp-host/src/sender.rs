@@ -373,7 +373,11 @@ impl CommandSender {
             frame_id: 0,
             dst64: to,
             dst16: Address16::UNKNOWN,
-            options: if apply { 0x02 } else { 0x00 },
+            options: if apply {
+                xbee_api::RemoteAtCommandRepr::APPLY_CHANGES
+            } else {
+                0
+            },
             command,
             parameter,
         };

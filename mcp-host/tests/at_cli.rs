@@ -158,6 +158,23 @@ fn network_parameters_read_and_the_node_identifier_is_set_as_text() {
 }
 
 #[test]
+fn a_queued_change_is_applied_with_ac_and_saved_with_wr() {
+    let sim = Sim::start();
+    // As --no-apply's help says: queue, then AC; WR writes the settings to flash.
+    for to in [&[][..], &["--to", MAV][..]] {
+        let run = |args: &[&str]| sim.ok(&[to, args].concat());
+        assert_eq!(run(&["--no-apply", "NI", "Queued"]), "NI: ok\n");
+        assert_eq!(run(&["AC"]), "AC: ok\n");
+        assert_eq!(run(&["WR"]), "WR: ok\n");
+        assert_eq!(run(&["NI"]), "NI = \"Queued\"\n");
+    }
+    // AC and WR take no value.
+    let out = sim.at(&["AC", "1"]);
+    assert_eq!(out.status.code(), Some(1), "{out:?}");
+    assert!(stderr(&out).contains("invalid_parameter (0x03)"), "{out:?}");
+}
+
+#[test]
 fn reading_ap_in_another_api_mode_warns() {
     let sim = Sim::start();
     // The simulated radio is in mode 1; its AP answer reads the same in mode 2.

@@ -875,6 +875,23 @@ async fn network_parameters_read_and_the_node_identifier_can_be_set() {
         dev_a.at(18, b"NI", &[]).await,
         (AtStatus::Ok, b"Left wing".to_vec())
     );
+
+    // A queued name reads back at once, as a module's register does; AC and WR answer ok
+    // and take no value.
+    assert_eq!(
+        dev_a.at_frame(true, 19, b"NI", b"Queued").await,
+        (AtStatus::Ok, vec![])
+    );
+    assert_eq!(
+        dev_a.at_frame(true, 20, b"NI", &[]).await,
+        (AtStatus::Ok, b"Queued".to_vec())
+    );
+    assert_eq!(dev_a.at(21, b"AC", &[]).await, (AtStatus::Ok, vec![]));
+    assert_eq!(dev_a.at(22, b"WR", &[]).await, (AtStatus::Ok, vec![]));
+    assert_eq!(
+        dev_a.at(23, b"WR", &[1]).await,
+        (AtStatus::InvalidParameter, vec![])
+    );
 }
 
 /// A peer on the far end of a pseudo-terminal, opened as a ground station would.

@@ -28,11 +28,14 @@
 //!   extended PAN ID: any), `OP` (the operating extended PAN ID, 0013A2004D435000),
 //!   `OI` (the operating 16-bit PAN ID, 4D43), `CH` (the operating channel, 0x17) and
 //!   `NI` (the node identifier: a space, the default, until set). `NI` can be set to 1
-//!   to 20 printable ASCII characters (at once, even when queued with 0x09 or sent
-//!   without the apply option), and later reads answer the new name; the others are
-//!   read-only: a value gets status 3, invalid parameter (but `AP` set to the node's own
-//!   mode, a no-op). Any other command gets status 2, invalid command. These are what
-//!   Digi's xbee-python library reads when it opens a device.
+//!   to 20 printable ASCII characters; the others are read-only: a value gets status 3,
+//!   invalid parameter (but `AP` set to the node's own mode, a no-op). These are what
+//!   Digi's xbee-python library reads when it opens a device. A name set is read back
+//!   at once, even when it was queued (AT Command - Queue Parameter Value, 0x09, or a
+//!   remote command without the apply option), as a module's register is; nothing else
+//!   in the emulation depends on it, so `AC` (apply changes) and `WR` (write to
+//!   non-volatile memory) answer ok and have nothing more to do. Any other command gets
+//!   status 2, invalid command.
 //!   Remote AT commands (0x17) get the same answers from the destination's radio
 //!   (0x97), or status 4, transmission failure, when it cannot be reached.
 //! - When a link comes up its device gets a Modem Status: 0x06 coordinator started on the

@@ -417,6 +417,9 @@ impl State {
     /// `value`, of length returned. Reads answer as an S2C with Zigbee firmware would;
     /// `NI` can be set, `AP` set to the node's own mode (a no-op); any other value gets
     /// invalid parameter, and a command the radio does not emulate invalid command.
+    /// A value set is read back at once, whether it was applied or queued (nothing else
+    /// in the emulation depends on it), so `AC` (apply changes) and `WR` (write to
+    /// non-volatile memory) have nothing to do but answer ok.
     fn at_value(
         &mut self,
         node: Address64,
@@ -463,9 +466,10 @@ impl State {
                 radio.name = name.to_vec();
                 (AtStatus::Ok, 0)
             }
+            (b"AC" | b"WR", []) => (AtStatus::Ok, 0),
             (
                 b"AP" | b"NP" | b"SH" | b"SL" | b"MY" | b"AI" | b"CE" | b"SM" | b"HV" | b"VR"
-                | b"NI" | b"ID" | b"OP" | b"OI" | b"CH",
+                | b"NI" | b"ID" | b"OP" | b"OI" | b"CH" | b"AC" | b"WR",
                 _,
             ) => (AtStatus::InvalidParameter, 0),
             _ => (AtStatus::InvalidCommand, 0),

@@ -113,7 +113,8 @@ pub struct RemoteAtCommandRepr<'a> {
     pub dst64: Address64,
     /// 16-bit destination address ([`Address16::UNKNOWN`](crate::Address16::UNKNOWN) if unknown).
     pub dst16: Address16,
-    /// Remote command options (0x02: apply changes).
+    /// Remote command options ([`APPLY_CHANGES`](Self::APPLY_CHANGES), 0x02: apply
+    /// changes).
     pub options: u8,
     /// Two-character AT command.
     pub command: [u8; 2],
@@ -124,6 +125,11 @@ pub struct RemoteAtCommandRepr<'a> {
 impl<'a> RemoteAtCommandRepr<'a> {
     /// The frame type, 0x17.
     pub const FRAME_TYPE: u8 = frame_type::REMOTE_AT_COMMAND;
+
+    /// The option bit that has the remote radio apply the change at once, with any it
+    /// has queued; without it, changes wait for an `AC` command (or a later command with
+    /// this option).
+    pub const APPLY_CHANGES: u8 = 0x02;
 
     /// Reads the fields of `frame`, checking it first.
     pub fn parse(frame: &RemoteAtCommand<&'a [u8]>) -> Result<Self, FrameError> {

@@ -36,6 +36,12 @@ pub(crate) struct AtArgs {
 /// as such even when its bytes happen to be printable.
 const TEXT_PARAMETERS: [&[u8; 2]; 4] = [b"NI", b"DN", b"BI", b"VL"];
 
+/// The AT commands Digi defines as actions rather than parameters, which answer with no
+/// value: apply changes, write to non-volatile memory, restore defaults, software reset,
+/// network reset, exit command mode, sleep immediately and the commissioning button.
+/// Their success prints as `AC: ok`, not as a read that found no value.
+const ACTIONS: [&[u8; 2]; 8] = [b"AC", b"WR", b"RE", b"FR", b"NR", b"CN", b"SI", b"CB"];
+
 /// Whether `command`'s value is text.
 fn is_text(command: &[u8; 2]) -> bool {
     TEXT_PARAMETERS.contains(&command)
@@ -171,7 +177,7 @@ pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
             explain(status, &name, args.to, args.value.is_some()),
         ));
     }
-    if data.is_empty() && args.value.is_some() {
+    if data.is_empty() && (args.value.is_some() || ACTIONS.contains(&&command)) {
         out!("{name}: ok");
     } else if data.is_empty() && !is_text(&command) {
         out!("{name}: ok (no value)");
