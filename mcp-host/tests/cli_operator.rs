@@ -458,6 +458,20 @@ fn decode_of_input_with_no_frame_is_an_input_error() {
         assert_eq!(output.status.code(), Some(2), "{stderr}");
         assert!(stderr.contains("no XBee frame in 5 bytes"), "{stderr}");
     }
+    // A capture cut off inside its one frame says so, and sends nobody to the other
+    // API mode; the error line tells the checksum byte is what is missing.
+    std::fs::write(&file, [0x7E, 0x00, 0x02, 0x8A, 0x06]).unwrap();
+    for mode in ["1", "2"] {
+        let output = run(&["decode", "--api-mode", mode, file.to_str().unwrap()]);
+        let (out, err) = (stdout(&output), stderr(&output));
+        assert_eq!(output.status.code(), Some(2), "{err}");
+        assert!(err.contains("its one candidate frame is cut off"), "{err}");
+        assert!(!err.contains("--api-mode"), "{err}");
+        assert!(
+            out.contains("truncated before its checksum byte (all 2 data bytes received)"),
+            "{out}"
+        );
+    }
     // Empty input holds nothing wrong.
     std::fs::write(&file, b"").unwrap();
     assert_eq!(
@@ -822,4 +836,49 @@ fn decode_from_a_pipe_shows_each_frame_as_it_comes() {
     let out = rest(&lines);
     assert_eq!(out.len(), 1, "{out:?}");
     assert_eq!(exit_code(&mut decode.0), Some(2), "{out:?}");
+}
+
+#[test]
+fn decode_on_a_terminal_says_it_waits_for_input() {
+    use serialport::SerialPort;
+    use std::io::Write;
+    for hex in [true, false] {
+        // A real terminal on standard input: the far end of a pseudo-terminal.
+        let (mut terminal, far) = serialport::TTYPort::pair().expect("pseudo-terminal");
+        let far = std::fs::File::open(far.name().expect("far end's path")).unwrap();
+        let mut args = vec!["decode"];
+        args.extend(hex.then_some("--hex"));
+        let mut child = gs()
+            .args(&args)
+            .stdin(far)
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let (out, err) = (stdout_lines(&mut child), stderr_lines(&mut child));
+        let note = err.recv_timeout(GUARD).expect("a note on standard error");
+        let expected = if hex {
+            "decoding hex typed on the terminal"
+        } else {
+            "give a capture FILE, or --hex"
+        };
+        assert!(note.contains(expected) && note.contains("Ctrl-D"), "{note}");
+        // And what is typed is decoded as each line ends, even a frame of 5 bytes,
+        // shorter than a recording's magic number.
+        if hex {
+            terminal.write_all(b"7E 00 01 8A 75\n").unwrap();
+            line_with(&out, "frame type 0x8A needs at least 2 bytes");
+            terminal.write_all(b"7E 00 02 8A 06 6F\n").unwrap();
+            line_with(&out, "modem status coordinator_started");
+        }
+        child.kill().unwrap();
+        child.wait().unwrap();
+    }
+    // Nothing is said when the input is not a terminal.
+    let output = gs()
+        .args(["decode", "--hex"])
+        .stdin(std::process::Stdio::null())
+        .output()
+        .unwrap();
+    assert_eq!(stderr(&output), "");
 }

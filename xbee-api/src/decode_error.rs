@@ -60,6 +60,13 @@ impl fmt::Display for DecodeError {
             Self::Truncated {
                 length: Some(length),
                 received,
+            } if *received >= usize::from(*length) => write!(
+                f,
+                "frame truncated before its checksum byte (all {length} data bytes received)"
+            ),
+            Self::Truncated {
+                length: Some(length),
+                received,
             } => write!(f, "frame truncated after {received} of {length} data bytes"),
             Self::Truncated {
                 length: None,
@@ -74,3 +81,26 @@ impl fmt::Display for DecodeError {
 }
 
 impl core::error::Error for DecodeError {}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::DecodeError;
+    use std::string::ToString;
+
+    #[test]
+    fn a_frame_cut_before_its_checksum_says_so() {
+        let cut = |received| DecodeError::Truncated {
+            length: Some(2),
+            received,
+        };
+        assert_eq!(
+            cut(1).to_string(),
+            "frame truncated after 1 of 2 data bytes"
+        );
+        assert_eq!(
+            cut(2).to_string(),
+            "frame truncated before its checksum byte (all 2 data bytes received)"
+        );
+    }
+}

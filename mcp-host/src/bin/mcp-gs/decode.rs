@@ -1,7 +1,7 @@
 //! `mcp-gs decode`: decode a captured byte stream or a recording.
 
 use std::fs::File;
-use std::io::{self, BufRead, BufReader, Read, Write};
+use std::io::{self, BufRead, BufReader, IsTerminal, Read, Write};
 use std::path::PathBuf;
 
 use clap::Args;
@@ -24,7 +24,8 @@ pub(crate) struct DecodeArgs {
     /// API mode of a raw capture (recordings are stored unescaped).
     #[arg(long, value_name = "1|2", default_value = "1")]
     api_mode: ApiModeArg,
-    /// The input is hex text (whitespace, `:` and `,` between bytes are ignored).
+    /// The input is hex text: pairs of hex digits, with whitespace, `:`, `,` and `0x`
+    /// prefixes between bytes ignored and `#` starting a comment to the end of the line.
     #[arg(long)]
     hex: bool,
     /// Output format. A recording's frames in text start with the UTC time of day they
@@ -62,11 +63,27 @@ impl Default for Summary {
     }
 }
 
+/// What `decode` says when it reads a terminal: that it waits for input, which input,
+/// and how to end it.
+fn terminal_note(hex: bool) -> &'static str {
+    if hex {
+        "mcp-gs: decoding hex typed on the terminal, a line at a time (end with Ctrl-D)"
+    } else {
+        "mcp-gs: decoding raw bytes from the terminal: give a capture FILE, or --hex to type \
+         frames in hex (end with Ctrl-D)"
+    }
+}
+
 /// Runs `decode`.
 pub(crate) fn run(args: DecodeArgs) -> Result<(), Failure> {
     let input: Box<dyn Read> =
         if args.input.as_os_str() == "-" {
-            Box::new(io::stdin().lock())
+            let stdin = io::stdin();
+            if stdin.is_terminal() {
+                // Nobody is left waiting on a silent terminal without knowing why.
+                eprintln!("{}", terminal_note(args.hex));
+            }
+            Box::new(stdin.lock())
         } else {
             Box::new(File::open(&args.input).map_err(|e| {
                 Failure::input(format!("cannot open {}: {e}", args.input.display()))
@@ -300,7 +317,13 @@ fn decode_stream(
         let errors =
             stats.bad_checksum + stats.oversize + stats.empty + stats.truncated + stats.bad_escape;
         let other = crate::link_args::other_mode(mode);
-        let advice = if errors > 0 {
+        let advice = if errors == 1 && stats.truncated == 1 {
+            // One candidate, cut off (by the end of the input, or in mode 2 by a start
+            // delimiter): the other mode would not find it whole either.
+            "its one candidate frame is cut off (a capture that stops part way through a \
+             frame?)"
+                .to_owned()
+        } else if errors > 0 {
             format!("if it is in API mode {other}, decode it with --api-mode {other}")
         } else {
             "not a capture of an XBee in API mode (a recording starts with MCPREC; hex text \
@@ -411,12 +434,19 @@ fn print_summary(
     }
 }
 
-/// The first bytes of `input`, as many as a recording's magic number has (fewer at
-/// its end), read however the reads fall.
+/// The first bytes of `input`, enough to tell a recording: as many as a recording's
+/// magic number has, or fewer if they stop matching it (or at the input's end), so that a
+/// frame typed on a terminal is decoded as soon as its line ends, however short.
 fn read_head(input: &mut impl Read) -> io::Result<Vec<u8>> {
     let mut head = Vec::with_capacity(record::MAGIC.len());
-    input
-        .take(record::MAGIC.len() as u64)
-        .read_to_end(&mut head)?;
+    while head.len() < record::MAGIC.len() && record::MAGIC.starts_with(&head) {
+        let mut byte = [0];
+        match input.read(&mut byte) {
+            Ok(0) => break,
+            Ok(_) => head.push(byte[0]),
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
     Ok(head)
 }
