@@ -295,6 +295,9 @@ fn monitor_in_the_wrong_api_mode_says_so_over_tcp() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(4), "{stderr}");
     assert!(stderr.contains("try --api-mode 2"), "{stderr}");
+    // The MAV answered, in frames that could not be read: no blame on the MAV.
+    assert!(stderr.contains("could not be read"), "{stderr}");
+    assert!(!stderr.contains("the MAV did not answer"), "{stderr}");
 }
 
 #[test]

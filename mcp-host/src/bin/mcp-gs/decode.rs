@@ -334,7 +334,8 @@ fn decode_stream(
         return Err(io::Error::new(
             io::ErrorKind::InvalidData,
             format!(
-                "no XBee frame in {offset} bytes ({errors} candidate frames dropped): {advice}"
+                "no XBee frame in {offset} bytes ({} dropped): {advice}",
+                crate::counted(errors, "candidate frame")
             ),
         ));
     }

@@ -273,18 +273,20 @@ pub(crate) fn diagnosis(
     let checksum = stats.bad_checksum + stats.bad_escape;
     if checksum >= min_errors && (!majority || checksum > stats.frames) {
         return Some(format!(
-            "hint: {checksum} frames failed their checksum and {} passed: the radio may be in \
-             API mode {other} (AP={other}); try --api-mode {other} or --api-mode auto",
+            "hint: {} failed the checksum and {} passed: the radio may be in API mode \
+             {other} (AP={other}); try --api-mode {other} or --api-mode auto",
+            crate::counted(checksum, "frame"),
             stats.frames
         ));
     }
     let nonsense = stats.oversize + stats.empty + stats.truncated;
     if nonsense >= min_errors && stats.frames == 0 {
         return Some(format!(
-            "hint: {nonsense} frames of impossible lengths, {} bytes that were no frames, and \
+            "hint: {} of impossible length, {} bytes that were no frames, and \
              no good frame: the link's baud rate may differ from the radio's (give it as \
              serial:PATH:BAUD; XBee modules ship at 9600), or the radio may be in transparent \
              mode (AP=0)",
+            crate::counted(nonsense, "frame"),
             stats.bytes_skipped
         ));
     }

@@ -210,6 +210,14 @@ impl Failure {
     }
 }
 
+/// `n` and `noun`, which takes an `s` unless `n` is 1: `1 frame`, `2 frames`.
+pub(crate) fn counted(n: impl Into<u64>, noun: &str) -> String {
+    match n.into() {
+        1 => format!("1 {noun}"),
+        n => format!("{n} {noun}s"),
+    }
+}
+
 #[tokio::main]
 async fn main() -> ExitCode {
     let cli = Cli::parse_from(hoist_options(std::env::args_os().collect()));

@@ -45,6 +45,20 @@ pub(crate) async fn run(args: StatusArgs) -> Result<(), Failure> {
         .await
         .map_err(|e| match e {
             RequestError::Send(e) => send_failure(e),
+            // The MAV may well have answered: frames came that could not be read.
+            RequestError::Timeout {
+                from,
+                what,
+                timeout,
+                delivered: true,
+            } if sender.stats().decode_errors() > 0 => Failure::new(
+                Failure::TIMEOUT,
+                format!(
+                    "no {what} report from {from} within {timeout:?} (the radio delivered the \
+                     request, and {} that came back could not be read)",
+                    crate::counted(sender.stats().decode_errors(), "frame")
+                ),
+            ),
             timeout @ RequestError::Timeout { .. } => {
                 Failure::new(Failure::TIMEOUT, timeout.to_string())
             }
