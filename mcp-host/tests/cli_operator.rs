@@ -128,6 +128,35 @@ fn duration_0_runs_until_ctrl_c_in_sim_and_radio() {
 }
 
 #[test]
+fn ctrl_c_stops_monitor_hub_and_a_timed_sim_cleanly() {
+    // Each is interrupted as soon as its output says it runs: Ctrl-C is listened for
+    // from then on, with or without a duration.
+    let (child, sim_lines) = spawn_lines(&[
+        "sim",
+        "--link",
+        "tcp-listen:127.0.0.1:0",
+        "--duration",
+        "600",
+    ]);
+    let mut sim = Running(child);
+    let link = tcp_link(&line_with(&sim_lines, "listening on"));
+    line_with(&sim_lines, "running; Ctrl-C stops");
+    let (child, lines) = spawn_lines(&["monitor", "--link", &link]);
+    let mut monitor = Running(child);
+    line_with(&lines, "link connected");
+    interrupt(&monitor.0);
+    assert_eq!(exit_code(&mut monitor.0), Some(0));
+    let (child, lines) = spawn_lines(&["hub", "--link", &link, "--listen", "127.0.0.1:0"]);
+    let mut hub = Running(child);
+    line_with(&lines, "(Ctrl-C stops)");
+    interrupt(&hub.0);
+    assert_eq!(exit_code(&mut hub.0), Some(0));
+    line_with(&lines, "stopped: 0 clients");
+    interrupt(&sim.0);
+    assert_eq!(exit_code(&mut sim.0), Some(0));
+}
+
+#[test]
 fn a_status_kind_with_no_status_request_says_why() {
     for kind in ["0", "8", "0xff"] {
         for args in [

@@ -256,11 +256,7 @@ pub(crate) async fn run(args: DemoArgs) -> Result<(), Failure> {
     let deadline = (!args.duration.is_zero()).then(|| started + args.duration);
     // Set when the time is up, or at Ctrl-C (which then no longer ends the process
     // at once: the demo stops where it is and prints the summary).
-    let mut stop = stop_signal(deadline, async {
-        if tokio::signal::ctrl_c().await.is_err() {
-            std::future::pending::<()>().await;
-        }
-    });
+    let mut stop = stop_signal(deadline, crate::interrupt::ctrl_c());
 
     out!("MCP demo: a ground station talking to a simulated MAV. No hardware needed.");
     // The ground station's end: a pseudo-terminal, as if its XBee were on a serial port.

@@ -46,6 +46,7 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
             )),
             other => Failure::link(other.to_string()),
         })?;
+    let ctrl_c = crate::interrupt::ctrl_c();
     crate::link_args::announce_radio_side(hub.radio_link());
     let addr = hub.local_addr();
     let mode = u8::from(hub.api_mode());
@@ -54,7 +55,7 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
          (Ctrl-C stops)"
     );
     tokio::select! {
-        _ = tokio::signal::ctrl_c() => {}
+        () = ctrl_c => {}
         () = hub.finished() => {
             hub.stop().await;
             return Err(Failure::link(format!("the link to {radio} closed")));

@@ -15,6 +15,7 @@ mod demo;
 mod encode;
 mod hex_input;
 mod hub;
+mod interrupt;
 mod link_args;
 mod monitor;
 mod ports;

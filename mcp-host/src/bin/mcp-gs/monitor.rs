@@ -57,6 +57,7 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
         }
     }
     let (mut stream, sender) = args.link.open(true).await?;
+    let mut ctrl_c = std::pin::pin!(crate::interrupt::ctrl_c());
     let mut recorder = match &args.record {
         Some(path) => Some(create_recording(path, args.force)?),
         None => None,
@@ -74,12 +75,10 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
     let mut seen = 0u64;
     let mut hinted = false;
     let mut dates = render::text::DateLines::new();
-    let ctrl_c = tokio::signal::ctrl_c();
-    tokio::pin!(ctrl_c);
     loop {
         let event = tokio::select! {
             event = stream.next() => event,
-            _ = &mut ctrl_c => None,
+            () = &mut ctrl_c => None,
         };
         let Some(event) = event else { break };
         if let Some(recorder) = &mut recorder {

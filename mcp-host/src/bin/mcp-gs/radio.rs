@@ -502,9 +502,9 @@ impl Repeats {
     }
 }
 
-/// Prints network events and carries out the cuts until Ctrl-C or `duration` (0: no
-/// limit). A failed delivery like one printed less than five seconds before is counted,
-/// not printed.
+/// Says it runs, then prints network events and carries out the cuts until Ctrl-C or
+/// `duration` (0: no limit), whichever comes first. A failed delivery like one printed
+/// less than five seconds before is counted, not printed.
 pub(crate) async fn watch(
     network: &Network,
     mut events: broadcast::Receiver<NetEvent>,
@@ -516,12 +516,18 @@ pub(crate) async fn watch(
     let deadline = duration
         .filter(|d| !d.is_zero())
         .map(|d| Instant::now() + d);
+    let ctrl_c = crate::interrupt::ctrl_c();
+    out!("running; Ctrl-C stops");
     let stop = async {
-        match deadline {
-            Some(d) => tokio::time::sleep_until(d).await,
-            None => {
-                let _ = tokio::signal::ctrl_c().await;
+        let time_up = async {
+            match deadline {
+                Some(d) => tokio::time::sleep_until(d).await,
+                None => std::future::pending().await,
             }
+        };
+        tokio::select! {
+            () = time_up => {}
+            () = ctrl_c => {}
         }
     };
     tokio::pin!(stop);
@@ -609,7 +615,6 @@ pub(crate) async fn run(args: RadioArgs) -> Result<(), Failure> {
         };
         out!("{}", describe_node(name, &info, &link.link));
     }
-    out!("running; Ctrl-C stops");
     watch(&network, events, &args.net, args.verbose, args.duration).await
 }
 

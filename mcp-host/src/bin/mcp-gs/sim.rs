@@ -126,7 +126,6 @@ pub(crate) async fn run(args: SimArgs) -> Result<(), Failure> {
         .map(|m| format!("{}/{}", m.address, m.addr16))
         .collect();
     out!("simulating {} MAV(s): {}", list.len(), list.join(", "));
-    out!("running; Ctrl-C stops");
     watch(
         sim.network(),
         events,
