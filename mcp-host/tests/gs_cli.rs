@@ -457,6 +457,20 @@ fn missing_device_exits_3() {
         "{stderr}"
     );
     assert!(stderr.contains("`mcp-gs ports` lists"), "{stderr}");
+    // A baud rate that is not digits is part of the path: the hint says so when the path
+    // without it exists (a pseudo-terminal's far end here).
+    let (_terminal, far) = serialport::TTYPort::pair().expect("pseudo-terminal");
+    let device = serialport::SerialPort::name(&far).expect("far end's path");
+    let output = send(&format!("serial:{device}:9600baud"));
+    assert_eq!(output.status.code(), Some(3));
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains(&format!(
+            "`9600baud` was read as part of the path: a baud rate is digits alone, as in \
+             serial:{device}:9600"
+        )),
+        "{stderr}"
+    );
     // Nothing listening on a TCP port: said so.
     let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
     let link = format!("tcp:{}", listener.local_addr().unwrap());

@@ -211,6 +211,32 @@ fn nonsense_numbers_are_refused_with_a_reason() {
             ],
             "milliseconds",
         ),
+        (
+            &["sim", "--link", "pty", "--loss", "2"],
+            "a probability from 0 to 1",
+        ),
+        (
+            &["radio", "--coordinator", "pty", "--corrupt", "NaN"],
+            "a probability from 0 to 1",
+        ),
+        (
+            &[
+                "radio",
+                "--coordinator",
+                "pty",
+                "--faults",
+                "coordinator=duplicate=-0.5",
+            ],
+            "duplicate must be a probability from 0 to 1, got -0.5",
+        ),
+        (
+            &["replay", "--link", "pty", "--speed", "inf", "x"],
+            "a speed of 0 (as fast as possible) or more",
+        ),
+        (
+            &["monitor", "--link", "pty", "--count", "0"],
+            "a number of events, 1 or more",
+        ),
     ] {
         let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
             .args(args)

@@ -345,9 +345,13 @@ fn link_hint(error: &LinkError, link: &Link) -> Option<String> {
     use tokio_serial::ErrorKind as Serial;
     match error {
         LinkError::Serial { source, .. } => match source.kind {
-            Serial::Io(Io::NotFound) => {
-                Some("no such device: `mcp-gs ports` lists the serial ports present".into())
-            }
+            Serial::Io(Io::NotFound) => Some(match misread_baud(link) {
+                Some((path, baud)) => format!(
+                    "no such device; `{baud}` was read as part of the path: a baud rate is \
+                     digits alone, as in serial:{path}:9600"
+                ),
+                None => "no such device: `mcp-gs ports` lists the serial ports present".into(),
+            }),
             Serial::Io(Io::PermissionDenied) => Some(
                 "this user may not open the device: on Linux, add the user to the group that \
                  owns it (often dialout: `sudo usermod -aG dialout $USER`, then log in again)"
@@ -376,6 +380,20 @@ fn link_hint(error: &LinkError, link: &Link) -> Option<String> {
         ),
         _ => None,
     }
+}
+
+/// For a serial link whose path does not exist but would without its last `:` part (as
+/// in `serial:/dev/ttyUSB0:9600baud`): the path that exists and that part, which was
+/// meant as a baud rate. Paths may hold colons (`/dev/serial/by-path/...`), so only a
+/// trailing `:DIGITS` is read as the baud rate.
+fn misread_baud(link: &Link) -> Option<(&str, &str)> {
+    let Link::Serial { path, .. } = link else {
+        return None;
+    };
+    let (device, baud) = path.rsplit_once(':')?;
+    std::path::Path::new(device)
+        .exists()
+        .then_some((device, baud))
 }
 
 /// The hint for a serial link whose path is no serial port: a regular file, a

@@ -33,8 +33,16 @@ pub(crate) struct MonitorArgs {
     force: bool,
     /// Stop after this many events, 1 or more (default: run until the link closes or
     /// Ctrl-C).
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+    #[arg(long, value_name = "N", value_parser = parse_count)]
     count: Option<u64>,
+}
+
+/// `--count`: a whole number, 1 or more.
+fn parse_count(s: &str) -> Result<u64, String> {
+    s.parse::<u64>()
+        .ok()
+        .filter(|n| *n >= 1)
+        .ok_or_else(|| format!("expected a number of events, 1 or more, got `{s}`"))
 }
 
 /// After this many failed frames, more than the good ones, suggest what may be wrong

@@ -79,6 +79,14 @@ pub(crate) fn parse_duration(s: &str) -> Result<Duration, String> {
         })
 }
 
+/// A probability (`--loss` and the other fault rates): a number from 0 to 1.
+pub(crate) fn parse_probability(s: &str) -> Result<f64, String> {
+    s.parse::<f64>()
+        .ok()
+        .filter(|p| (0.0..=1.0).contains(p))
+        .ok_or_else(|| format!("expected a probability from 0 to 1 (e.g. 0.05), got `{s}`"))
+}
+
 /// Network-wide settings shared by `radio` and `sim`.
 #[derive(Debug, Args)]
 pub(crate) struct NetArgs {
@@ -93,7 +101,7 @@ pub(crate) struct NetArgs {
     #[arg(long, conflicts_with = "max_unicast")]
     fragmentation: bool,
     /// Probability that a frame to a link is lost.
-    #[arg(long, value_name = "P", default_value_t = 0.0)]
+    #[arg(long, value_name = "P", default_value_t = 0.0, value_parser = parse_probability)]
     loss: f64,
     /// Delay before a frame is written to a link, milliseconds (at most an hour).
     #[arg(long, value_name = "MS", default_value_t = 0,
@@ -104,13 +112,13 @@ pub(crate) struct NetArgs {
           value_parser = clap::value_parser!(u64).range(0..=MAX_DELAY_MS))]
     jitter: u64,
     /// Probability that a frame is written twice.
-    #[arg(long, value_name = "P", default_value_t = 0.0)]
+    #[arg(long, value_name = "P", default_value_t = 0.0, value_parser = parse_probability)]
     duplicate: f64,
     /// Probability that a frame is held back behind the next one.
-    #[arg(long, value_name = "P", default_value_t = 0.0)]
+    #[arg(long, value_name = "P", default_value_t = 0.0, value_parser = parse_probability)]
     reorder: f64,
     /// Probability that a frame's bytes are corrupted (bad checksum).
-    #[arg(long, value_name = "P", default_value_t = 0.0)]
+    #[arg(long, value_name = "P", default_value_t = 0.0, value_parser = parse_probability)]
     corrupt: f64,
     /// Faults of one link, ADDR=SPEC (see below). Repeat for more.
     #[arg(long = "faults", value_name = "ADDR=SPEC")]
@@ -124,18 +132,6 @@ pub(crate) struct NetArgs {
 impl NetArgs {
     /// The network settings; `default_max_unicast` unless given.
     pub(crate) fn config(&self, default_max_unicast: usize) -> Result<NetworkConfig, Failure> {
-        for (name, p) in [
-            ("loss", self.loss),
-            ("duplicate", self.duplicate),
-            ("reorder", self.reorder),
-            ("corrupt", self.corrupt),
-        ] {
-            if !(0.0..=1.0).contains(&p) {
-                return Err(Failure::input(format!(
-                    "--{name} must be in 0..=1, got {p}"
-                )));
-            }
-        }
         let seed = self.seed.unwrap_or_else(|| {
             SystemTime::now()
                 .duration_since(SystemTime::UNIX_EPOCH)
@@ -371,7 +367,7 @@ impl std::str::FromStr for LinkFaults {
                 (0.0..=1.0)
                     .contains(&number)
                     .then_some(number)
-                    .ok_or_else(|| format!("{key} must be in 0..=1, got {number}"))
+                    .ok_or_else(|| format!("{key} must be a probability from 0 to 1, got {value}"))
             };
             let millis = || {
                 (0.0..=MAX_DELAY_MS as f64)

@@ -31,21 +31,27 @@ pub(crate) struct ReplayArgs {
     #[command(flatten)]
     link: LinkArgs,
     /// Playback speed: 1 is real time, 2 twice as fast, 0 as fast as possible.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = parse_speed)]
     speed: f64,
     /// Which frames to play.
     #[arg(long, value_enum, default_value_t = Which::Rx)]
     frames: Which,
 }
 
+/// `--speed`: a finite number, 0 or more.
+fn parse_speed(s: &str) -> Result<f64, String> {
+    s.parse::<f64>()
+        .ok()
+        .filter(|x| x.is_finite() && *x >= 0.0)
+        .ok_or_else(|| {
+            format!(
+                "expected a speed of 0 (as fast as possible) or more (1 is real time), got `{s}`"
+            )
+        })
+}
+
 /// Runs `replay`.
 pub(crate) async fn run(args: ReplayArgs) -> Result<(), Failure> {
-    if !(args.speed.is_finite() && args.speed >= 0.0) {
-        return Err(Failure::input(format!(
-            "--speed must be 0 or more, got {}",
-            args.speed
-        )));
-    }
     let file = File::open(&args.file)
         .map_err(|e| Failure::input(format!("cannot open {}: {e}", args.file.display())))?;
     let reader = RecordReader::new(BufReader::new(file))
