@@ -41,6 +41,10 @@
 //!   the public value types (frames and their views, decode and encode errors, status
 //!   codes, addresses, the decoder's counters), for firmware that logs with defmt.
 //!   Addresses print in hex, as their `Display` does. Off by default.
+//! - `embedded-io`: the `io` module, frames read from and written to any
+//!   [`embedded_io`](https://docs.rs/embedded-io/0.7) reader and writer (a HAL's UART):
+//!   `io::FrameReader` and `io::write_frame`. `embedded-io-async` adds their async
+//!   forms for `embedded_io_async` (Embassy's drivers). Off by default.
 #![no_std]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
@@ -66,6 +70,8 @@ mod encode;
 mod error;
 #[allow(clippy::indexing_slicing)]
 pub mod frame;
+#[cfg(feature = "embedded-io")]
+pub mod io;
 mod mode;
 mod raw;
 mod stats;

@@ -176,3 +176,23 @@ fn manual_fields_through_views() {
     assert_eq!(view.retries(), 2);
     assert_eq!(view.discovery(), DiscoveryStatus::AddressDiscovery);
 }
+
+#[test]
+fn every_manual_frame_through_embedded_io_is_its_bytes() {
+    use xbee_api::io::{FrameReader, write_frame};
+    for ((_, mode, wire), frame) in lines().iter().zip(expected()) {
+        let mut buf = [0u8; 64];
+        let mut uart = &mut buf[..];
+        let n = write_frame(&mut uart, *mode, &frame).unwrap();
+        assert_eq!(&buf[..n], &wire[..], "{frame:?} in {mode}");
+        let mut reader: FrameReader<&[u8], 128> = FrameReader::new(&wire[..], *mode);
+        let mut frames = Vec::new();
+        while reader
+            .read_events(|event| frames.push(event.unwrap().data().to_vec()))
+            .unwrap()
+            > 0
+        {}
+        assert_eq!(frames.len(), 1, "{wire:02X?}");
+        assert_eq!(Frame::parse_bytes(&frames[0]).unwrap(), frame);
+    }
+}

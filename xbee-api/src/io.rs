@@ -1,0 +1,228 @@
+//! Frames over [`embedded_io`] readers and writers: a UART of any HAL that implements
+//! the `embedded-io` traits (features `embedded-io`, and `embedded-io-async` for the
+//! async ones that Embassy's drivers implement).
+//!
+//! - [`FrameReader`] reads from a reader and hands every event (frame or dropped
+//!   candidate) to a closure, a read at a time.
+//! - [`write_frame`] writes a frame to a writer, escaped in API mode 2, through a small
+//!   buffer on the stack; [`write_frame_async`] encodes it into a buffer the caller
+//!   gives and writes it.
+//!
+//! ```
+//! use xbee_api::io::{FrameReader, write_frame};
+//! use xbee_api::{ApiMode, ModemStatus, ModemStatusRepr};
+//!
+//! // What a radio wrote to the UART: a modem status, escaped in mode 2.
+//! let mut wire = [0u8; 16];
+//! let mut uart = &mut wire[..];
+//! let frame = ModemStatusRepr { status: ModemStatus::from(0x11) };
+//! let n = write_frame(&mut uart, ApiMode::Escaped, &frame)?;
+//! assert_eq!(wire[..n], [0x7E, 0x00, 0x02, 0x8A, 0x7D, 0x31, 0x64]);
+//!
+//! // Read back a read at a time.
+//! let mut reader: FrameReader<&[u8], 64> = FrameReader::new(&wire[..n], ApiMode::Escaped);
+//! let mut frames = Vec::new();
+//! while reader.read_events(|event| frames.extend(event.ok().map(|f| f.data().to_vec())))? > 0 {}
+//! assert_eq!(frames, [vec![0x8A, 0x11]]);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+use core::fmt;
+
+use crate::{ApiMode, DEFAULT_CAPACITY, Decoder, EncodeError, EncodeFrame, Event};
+
+/// Bytes read from the reader at a time, and written to the writer at a time by
+/// [`write_frame`]: a UART FIFO's worth, kept on the stack for the call.
+const CHUNK: usize = 32;
+
+/// A [`Decoder`] fed from a reader: the events of the bytes each read returns.
+///
+/// Each [`read_events`](Self::read_events) call reads once (blocking until the reader
+/// has bytes, as `embedded-io` readers do) and passes every event those bytes complete
+/// to a closure, frames borrowed from the decoder's buffer. A frame split across reads
+/// comes out whole on the read that completes it. At the end of the input (a read of no
+/// bytes) the decoder is [finished](Decoder::finish): a frame cut off there is reported.
+///
+/// Events go to a closure rather than being returned because a frame borrows the
+/// decoder, which the next read feeds again.
+#[derive(Debug)]
+pub struct FrameReader<R, const N: usize = DEFAULT_CAPACITY> {
+    reader: R,
+    decoder: Decoder<N>,
+}
+
+impl<R, const N: usize> FrameReader<R, N> {
+    /// A reader of frames in `mode` from `reader`.
+    pub const fn new(reader: R, mode: ApiMode) -> Self {
+        Self {
+            reader,
+            decoder: Decoder::new(mode),
+        }
+    }
+
+    /// The decoder: its [`stats`](Decoder::stats) count frames and errors.
+    pub const fn decoder(&self) -> &Decoder<N> {
+        &self.decoder
+    }
+
+    /// The decoder, to [`reset`](Decoder::reset) it (after the line was reconfigured).
+    pub fn decoder_mut(&mut self) -> &mut Decoder<N> {
+        &mut self.decoder
+    }
+
+    /// The reader.
+    pub const fn get_ref(&self) -> &R {
+        &self.reader
+    }
+
+    /// The reader, to reconfigure it; bytes read from it past this reader are not seen.
+    pub fn get_mut(&mut self) -> &mut R {
+        &mut self.reader
+    }
+
+    /// The reader back; a partial frame in the decoder is dropped.
+    pub fn into_inner(self) -> R {
+        self.reader
+    }
+
+    /// Passes the events of `bytes` to `f`; at the end of the input (no bytes), those
+    /// of [`Decoder::finish`].
+    fn feed<F: FnMut(Event<'_>)>(&mut self, bytes: &[u8], mut f: F) {
+        if bytes.is_empty() {
+            while let Some(event) = self.decoder.finish() {
+                f(event);
+            }
+        } else {
+            self.decoder.decode_each(bytes, f);
+        }
+    }
+}
+
+impl<R: embedded_io::Read, const N: usize> FrameReader<R, N> {
+    /// Reads once and passes every event the bytes read complete to `f`, in order;
+    /// returns how many bytes were read. `Ok(0)` is the end of the input, after the
+    /// events of a frame cut off by it.
+    ///
+    /// A read error is returned as it is; the decoder keeps what it had, so the next call
+    /// goes on with the frame in progress.
+    pub fn read_events<F: FnMut(Event<'_>)>(&mut self, f: F) -> Result<usize, R::Error> {
+        let mut chunk = [0u8; CHUNK];
+        let n = self.reader.read(&mut chunk)?;
+        self.feed(chunk.get(..n).unwrap_or(&[]), f);
+        Ok(n)
+    }
+}
+
+#[cfg(feature = "embedded-io-async")]
+impl<R: embedded_io_async::Read, const N: usize> FrameReader<R, N> {
+    /// [`read_events`](Self::read_events) from an async reader: waits for the read, then
+    /// passes the events to `f`.
+    pub async fn read_events_async<F: FnMut(Event<'_>)>(
+        &mut self,
+        f: F,
+    ) -> Result<usize, R::Error> {
+        let mut chunk = [0u8; CHUNK];
+        let n = self.reader.read(&mut chunk).await?;
+        self.feed(chunk.get(..n).unwrap_or(&[]), f);
+        Ok(n)
+    }
+}
+
+/// A frame that could not be written: it cannot be encoded, or the writer failed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum WriteError<E> {
+    /// The frame cannot be encoded (nothing was written), or the buffer given to
+    /// [`write_frame_async`] is too small for it.
+    Encode(EncodeError),
+    /// The writer failed; part of the frame may have been written.
+    Io(E),
+}
+
+impl<E: fmt::Display> fmt::Display for WriteError<E> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Encode(e) => write!(f, "cannot encode the frame: {e}"),
+            Self::Io(e) => write!(f, "cannot write the frame: {e}"),
+        }
+    }
+}
+
+impl<E: core::error::Error + 'static> core::error::Error for WriteError<E> {
+    fn source(&self) -> Option<&(dyn core::error::Error + 'static)> {
+        match self {
+            Self::Encode(e) => Some(e),
+            Self::Io(e) => Some(e),
+        }
+    }
+}
+
+impl<E: embedded_io::Error + 'static> embedded_io::Error for WriteError<E> {
+    fn kind(&self) -> embedded_io::ErrorKind {
+        match self {
+            Self::Encode(_) => embedded_io::ErrorKind::InvalidInput,
+            Self::Io(e) => e.kind(),
+        }
+    }
+}
+
+/// Writes `frame` to `writer` in `mode` (escaped in [`ApiMode::Escaped`]), 32 bytes at
+/// a time from a buffer on the stack, then flushes the writer; returns the number of
+/// bytes written, as [`EncodeFrame::encoded_len`] says.
+///
+/// A frame that cannot be encoded ([`EncodeError::EmptyFrame`],
+/// [`EncodeError::FrameTooLong`]) fails before anything is written. After a write
+/// error nothing more is written and the error is returned.
+pub fn write_frame<W: embedded_io::Write>(
+    writer: &mut W,
+    mode: ApiMode,
+    frame: &impl EncodeFrame,
+) -> Result<usize, WriteError<W::Error>> {
+    let mut chunk = [0u8; CHUNK];
+    let mut len = 0;
+    let mut failed = None;
+    let mut put = |byte: u8| {
+        if failed.is_some() {
+            return;
+        }
+        if let Some(slot) = chunk.get_mut(len) {
+            *slot = byte;
+            len += 1;
+        }
+        if len == CHUNK {
+            failed = writer.write_all(&chunk).err();
+            len = 0;
+        }
+    };
+    let written = frame.write_to(mode, &mut put).map_err(WriteError::Encode)?;
+    if let Some(e) = failed {
+        return Err(WriteError::Io(e));
+    }
+    writer
+        .write_all(chunk.get(..len).unwrap_or(&[]))
+        .and_then(|()| writer.flush())
+        .map_err(WriteError::Io)?;
+    Ok(written)
+}
+
+/// Writes `frame` to an async `writer` in `mode`: encodes it into `buf`, then writes it
+/// and flushes the writer; returns the number of bytes written.
+///
+/// `buf` must hold the encoded frame: [`max_encoded_len`](crate::max_encoded_len) of
+/// the largest frame data sizes one at compile time. A frame that does not fit, or that
+/// cannot be encoded, fails with [`WriteError::Encode`] before anything is written.
+#[cfg(feature = "embedded-io-async")]
+pub async fn write_frame_async<W: embedded_io_async::Write>(
+    writer: &mut W,
+    mode: ApiMode,
+    frame: &impl EncodeFrame,
+    buf: &mut [u8],
+) -> Result<usize, WriteError<W::Error>> {
+    let n = frame.encode(mode, buf).map_err(WriteError::Encode)?;
+    writer
+        .write_all(buf.get(..n).unwrap_or(&[]))
+        .await
+        .map_err(WriteError::Io)?;
+    writer.flush().await.map_err(WriteError::Io)?;
+    Ok(n)
+}

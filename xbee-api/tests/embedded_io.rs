@@ -1,0 +1,258 @@
+//! Frames over `embedded-io` readers and writers (the `io` module): what is written is
+//! what `encode` gives, what is read comes out however the reads fall, and read and
+//! write errors are the reader's and writer's, with nothing lost or written after them.
+
+use embedded_io::{ErrorKind, ErrorType, Read, Write};
+use proptest::prelude::*;
+use xbee_api::io::{FrameReader, WriteError, write_frame, write_frame_async};
+use xbee_api::{ApiMode, DecodeError, EncodeError, EncodeFrame, Event, RawFrame};
+
+/// A UART that hands over at most the next of `sizes` bytes a read (cycling), and fails
+/// once, with [`ErrorKind::TimedOut`], where `fail_at` says (before that read).
+struct Uart<'a> {
+    bytes: &'a [u8],
+    sizes: Vec<usize>,
+    reads: usize,
+    fail_at: Option<usize>,
+}
+
+impl<'a> Uart<'a> {
+    fn new(bytes: &'a [u8], sizes: &[usize]) -> Self {
+        Self {
+            bytes,
+            sizes: sizes.to_vec(),
+            reads: 0,
+            fail_at: None,
+        }
+    }
+}
+
+impl ErrorType for Uart<'_> {
+    type Error = ErrorKind;
+}
+
+impl Read for Uart<'_> {
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, ErrorKind> {
+        self.reads += 1;
+        if self.fail_at.take_if(|at| *at == self.reads).is_some() {
+            return Err(ErrorKind::TimedOut);
+        }
+        let size = self.sizes[self.reads % self.sizes.len()];
+        let n = size.min(buf.len()).min(self.bytes.len());
+        buf[..n].copy_from_slice(&self.bytes[..n]);
+        self.bytes = &self.bytes[n..];
+        Ok(n)
+    }
+}
+
+/// A UART transmitter that takes `room` bytes, at most `step` a write, then fails.
+struct Tx {
+    sent: Vec<u8>,
+    room: usize,
+    step: usize,
+    flushed: bool,
+}
+
+impl ErrorType for Tx {
+    type Error = ErrorKind;
+}
+
+impl Write for Tx {
+    fn write(&mut self, buf: &[u8]) -> Result<usize, ErrorKind> {
+        if buf.is_empty() {
+            return Ok(0);
+        }
+        let n = buf.len().min(self.step).min(self.room - self.sent.len());
+        if n == 0 {
+            return Err(ErrorKind::WriteZero);
+        }
+        self.sent.extend_from_slice(&buf[..n]);
+        Ok(n)
+    }
+
+    fn flush(&mut self) -> Result<(), ErrorKind> {
+        self.flushed = true;
+        Ok(())
+    }
+}
+
+impl embedded_io_async::Write for Tx {
+    async fn write(&mut self, buf: &[u8]) -> Result<usize, ErrorKind> {
+        Write::write(self, buf)
+    }
+
+    async fn flush(&mut self) -> Result<(), ErrorKind> {
+        Write::flush(self)
+    }
+}
+
+impl embedded_io_async::Read for Uart<'_> {
+    async fn read(&mut self, buf: &mut [u8]) -> Result<usize, ErrorKind> {
+        Read::read(self, buf)
+    }
+}
+
+fn tx(room: usize, step: usize) -> Tx {
+    Tx {
+        sent: Vec::new(),
+        room,
+        step,
+        flushed: false,
+    }
+}
+
+/// What a reader's events come to: frame data, or the error.
+#[derive(Debug, PartialEq)]
+enum Seen {
+    Frame(Vec<u8>),
+    Error(DecodeError),
+}
+
+fn seen(event: Event<'_>) -> Seen {
+    match event {
+        Ok(frame) => Seen::Frame(frame.data().to_vec()),
+        Err(error) => Seen::Error(error),
+    }
+}
+
+/// Every event of `reader` to the end of its input; read errors are retried.
+fn read_all<const N: usize>(reader: &mut FrameReader<Uart<'_>, N>) -> (Vec<Seen>, usize) {
+    let mut events = Vec::new();
+    let mut errors = 0;
+    loop {
+        match reader.read_events(|event| events.push(seen(event))) {
+            Ok(0) => return (events, errors),
+            Ok(_) => {}
+            Err(_) => errors += 1,
+        }
+    }
+}
+
+fn mode() -> impl Strategy<Value = ApiMode> {
+    prop_oneof![Just(ApiMode::Unescaped), Just(ApiMode::Escaped)]
+}
+
+proptest! {
+    /// Frames written with `write_frame` are the bytes `encode` gives, and read back
+    /// whole however the reads split them, a read error in between included.
+    #[test]
+    fn frames_written_are_read_back(
+        frames in prop::collection::vec(prop::collection::vec(any::<u8>(), 1..=100), 1..8),
+        mode in mode(),
+        sizes in prop::collection::vec(1usize..=40, 1..5),
+        step in 1usize..=64,
+        fail_at in prop::option::of(1usize..20),
+    ) {
+        let mut wire = Vec::new();
+        for data in &frames {
+            let frame = RawFrame::new(data).unwrap();
+            let mut out = tx(usize::MAX, step);
+            let n = write_frame(&mut out, mode, &frame).unwrap();
+            prop_assert!(out.flushed);
+            let mut expected = vec![0; frame.encoded_len(mode)];
+            frame.encode(mode, &mut expected).unwrap();
+            prop_assert_eq!(n, expected.len());
+            prop_assert_eq!(&out.sent, &expected);
+            wire.extend(out.sent);
+        }
+        let mut uart = Uart::new(&wire, &sizes);
+        uart.fail_at = fail_at;
+        let mut reader: FrameReader<_, 128> = FrameReader::new(uart, mode);
+        let (events, errors) = read_all(&mut reader);
+        let expected: Vec<Seen> = frames.into_iter().map(Seen::Frame).collect();
+        prop_assert_eq!(reader.decoder().stats().frames_ok as usize, expected.len());
+        prop_assert_eq!(events, expected);
+        let reads = reader.get_ref().reads;
+        prop_assert_eq!(errors, usize::from(fail_at.is_some_and(|at| at <= reads)));
+    }
+}
+
+#[test]
+fn a_frame_cut_off_by_the_end_of_input_is_reported_there() {
+    let wire = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F, 0x7E, 0x00, 0x05, 0x8A];
+    let mut reader: FrameReader<_, 64> = FrameReader::new(Uart::new(&wire, &[3]), ApiMode::Escaped);
+    let (events, _) = read_all(&mut reader);
+    assert_eq!(
+        events,
+        [
+            Seen::Frame(vec![0x8A, 0x06]),
+            Seen::Error(DecodeError::Truncated {
+                length: Some(5),
+                received: 1
+            })
+        ]
+    );
+    assert_eq!(reader.decoder().stats().truncated, 1);
+}
+
+#[test]
+fn a_write_error_is_the_writers_and_ends_the_frame() {
+    // A frame of 80 bytes on the wire, into a transmitter with room for 40.
+    let data = [0x41u8; 76];
+    let frame = RawFrame::new(&data).unwrap();
+    let mut out = tx(40, 7);
+    let error = write_frame(&mut out, ApiMode::Unescaped, &frame).unwrap_err();
+    assert_eq!(error, WriteError::Io(ErrorKind::WriteZero));
+    assert_eq!(embedded_io::Error::kind(&error), ErrorKind::WriteZero);
+    assert_eq!(error.to_string(), "cannot write the frame: WriteZero");
+    // The 32-byte chunk that fitted went out, the rest of the frame did not.
+    assert_eq!(out.sent.len(), 40);
+    assert!(!out.flushed);
+}
+
+#[test]
+fn a_frame_that_cannot_be_encoded_writes_nothing() {
+    /// Frame data of no bytes, not even a type byte.
+    struct Empty;
+    impl EncodeFrame for Empty {
+        fn frame_data_len(&self) -> usize {
+            0
+        }
+        fn write_frame_data<F: FnMut(&[u8])>(&self, _: &mut F) {}
+    }
+    let mut out = tx(usize::MAX, 64);
+    let error = write_frame(&mut out, ApiMode::Escaped, &Empty).unwrap_err();
+    assert_eq!(error, WriteError::Encode(EncodeError::EmptyFrame));
+    assert_eq!(embedded_io::Error::kind(&error), ErrorKind::InvalidInput);
+    assert!(out.sent.is_empty() && !out.flushed);
+}
+
+#[test]
+fn async_reads_and_writes_match_the_blocking_ones() {
+    let data = [0x10, 0x01, 0x7E, 0x7D, 0x11, 0x13, 0x00];
+    let frame = RawFrame::new(&data).unwrap();
+    for mode in [ApiMode::Unescaped, ApiMode::Escaped] {
+        let mut blocking = tx(usize::MAX, 5);
+        write_frame(&mut blocking, mode, &frame).unwrap();
+        let mut out = tx(usize::MAX, 5);
+        let mut buf = [0u8; 32];
+        let n = futures::executor::block_on(write_frame_async(&mut out, mode, &frame, &mut buf))
+            .unwrap();
+        assert_eq!((n, &out.sent), (blocking.sent.len(), &blocking.sent));
+        assert!(out.flushed);
+        // Too small a buffer: nothing written.
+        let mut small = tx(usize::MAX, 5);
+        let error = futures::executor::block_on(write_frame_async(
+            &mut small,
+            mode,
+            &frame,
+            &mut buf[..n - 1],
+        ))
+        .unwrap_err();
+        assert!(matches!(
+            error,
+            WriteError::Encode(EncodeError::BufferTooSmall { .. })
+        ));
+        assert!(small.sent.is_empty());
+        // Read back, two bytes a read.
+        let mut reader: FrameReader<_, 64> = FrameReader::new(Uart::new(&out.sent, &[2]), mode);
+        let mut events = Vec::new();
+        while futures::executor::block_on(
+            reader.read_events_async(|event| events.push(seen(event))),
+        )
+        .unwrap()
+            > 0
+        {}
+        assert_eq!(events, [Seen::Frame(data.to_vec())]);
+    }
+}
