@@ -42,7 +42,9 @@ pub(crate) async fn run(args: StatusArgs) -> Result<(), Failure> {
     let (_stream, sender) = args.link.open(false).await?;
     let report = sender
         .request_with(args.to, request, Some(args.link.timeout()))
-        .await
+        .await;
+    let unreadable = sender.stats().decode_errors();
+    let report = report
         .map_err(|e| match e {
             RequestError::Send(e) => send_failure(e),
             // The MAV may well have answered: frames came that could not be read.
@@ -51,12 +53,12 @@ pub(crate) async fn run(args: StatusArgs) -> Result<(), Failure> {
                 what,
                 timeout,
                 delivered: true,
-            } if sender.stats().decode_errors() > 0 => Failure::new(
+            } if unreadable > 0 => Failure::new(
                 Failure::TIMEOUT,
                 format!(
                     "no {what} report from {from} within {timeout:?} (the radio delivered the \
                      request, and {} that came back could not be read)",
-                    crate::counted(sender.stats().decode_errors(), "frame")
+                    crate::counted(unreadable, "frame")
                 ),
             ),
             timeout @ RequestError::Timeout { .. } => {
