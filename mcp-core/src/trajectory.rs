@@ -35,9 +35,16 @@ impl Waypoint {
     pub const LEN: usize = waypoint::LEN;
 
     /// Bytes of a trajectory set packet of `count` waypoints: the category, type and
-    /// size bytes, then the waypoints.
+    /// size bytes, then the waypoints. Saturates at `usize::MAX` rather than overflow
+    /// (no packet holds more than 254 waypoints).
+    ///
+    /// ```
+    /// use mcp_core::Waypoint;
+    /// assert_eq!(Waypoint::packet_len(2), 35);
+    /// assert_eq!(Waypoint::packet_len(usize::MAX), usize::MAX);
+    /// ```
     pub const fn packet_len(count: usize) -> usize {
-        field::WAYPOINTS + count * waypoint::LEN
+        field::WAYPOINTS.saturating_add(count.saturating_mul(waypoint::LEN))
     }
 
     /// The 16 wire bytes of the waypoint.

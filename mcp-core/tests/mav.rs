@@ -320,6 +320,31 @@ fn position_slave_set_keeps_four_slots() {
 }
 
 #[test]
+fn a_mav_with_the_spec_slave_report_answers_with_slot_0_in_10_bytes() {
+    let mut sim = Sim::flying();
+    let mut mav = Mav::new(&sim).with_spec_slave_report();
+    let a = Address::from(0x0013_A200_40B5_99B9);
+    let b = Address::from(0x0013_A200_40B5_99BD);
+    let mut spec = vec![b'c', 0x05];
+    spec.extend_from_slice(&a.0);
+    assert_eq!(send(&mut mav, &mut sim, &spec), None);
+    let mut firmware = vec![b'c', 0x05, 0x01];
+    firmware.extend_from_slice(&b.0);
+    assert_eq!(send(&mut mav, &mut sim, &firmware), None);
+    // The slots are kept as before; only the answer's form changes.
+    let zero = Address::default();
+    assert_eq!(mav.slaves(), [a, b, zero, zero]);
+    let reply = send(&mut mav, &mut sim, b"c\x05\xff").unwrap();
+    let mut expected = vec![b'r', 0x05];
+    expected.extend_from_slice(&a.0);
+    assert_eq!(reply, expected);
+    assert_eq!(
+        parse(&reply).unwrap(),
+        Packet::Report(Report::PositionSlaveSet(SlaveAddresses::Single(a)))
+    );
+}
+
+#[test]
 fn time_and_position_set_get_no_reply() {
     let mut sim = Sim::flying();
     let mut mav = Mav::new(&sim);

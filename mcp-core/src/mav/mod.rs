@@ -19,7 +19,10 @@
 //!   payload; ids past those are left out.
 //! - Position slave set: the MAV keeps the firmware's four slots. A spec-form command
 //!   (no slot) sets slot 0. The status request is answered with the firmware-form
-//!   report (four addresses, 34 bytes).
+//!   report (four addresses, 34 bytes), as the deployed MAV answers it; a MAV built
+//!   [`with_spec_slave_report`](Mav::with_spec_slave_report) answers with the spec's
+//!   (table 22: slot 0's address, 10 bytes), for ground stations that know only the
+//!   spec's form.
 //! - Telemetry to coordinator accepts every id 0-255; ids outside table 29 are enabled
 //!   like the others and read through [`Vehicle::telemetry`].
 //!
@@ -78,6 +81,7 @@ use crate::{
 pub struct Mav {
     enabled: TelemetrySet,
     slaves: [Address; 4],
+    spec_slave_report: bool,
     landing: LandingState,
     controller: Controller,
 }
@@ -107,6 +111,7 @@ impl Mav {
         Mav {
             enabled: TelemetrySet::new(),
             slaves: [Address([0; 8]); 4],
+            spec_slave_report: false,
             landing,
             controller,
         }
@@ -126,6 +131,43 @@ impl Mav {
     #[must_use]
     pub const fn with_enabled(mut self, enabled: TelemetrySet) -> Self {
         self.enabled = enabled;
+        self
+    }
+
+    /// The MAV answering the position slave set status request in the spec's form
+    /// (table 22: `r 05` and the address of slot 0, 10 bytes) instead of the deployed
+    /// firmware's (the four slots' addresses, 34 bytes): for a ground station that knows
+    /// only the spec's form.
+    ///
+    /// ```
+    /// use mcp_core::mav::Mav;
+    /// use mcp_core::{Command, Controller, LandingState, StatusRequest};
+    /// # use mcp_core::{TelemetryId, Waypoint, Waypoints, mav::Vehicle};
+    /// # struct Sim;
+    /// # impl Vehicle for Sim {
+    /// #     fn landing_state(&self) -> LandingState { LandingState::OnGround }
+    /// #     fn set_landing(&mut self, _on: bool) {}
+    /// #     fn controller(&self) -> Controller { Controller::Manual }
+    /// #     fn set_controller(&mut self, _c: Controller) {}
+    /// #     fn time(&self) -> u32 { 0 }
+    /// #     fn set_time(&mut self, _t: u32) {}
+    /// #     fn set_position(&mut self, _elevator: f32, _aileron: f32) {}
+    /// #     fn telemetry(&self, _id: TelemetryId) -> f32 { 0.0 }
+    /// #     fn set_trajectory(&mut self, _waypoints: Waypoints<&[u8]>) {}
+    /// #     fn waypoint(&self, _index: usize) -> Option<Waypoint> { None }
+    /// # }
+    /// # let mut sim = Sim;
+    /// let mut mav = Mav::with_state(LandingState::OnGround, Controller::Manual)
+    ///     .with_spec_slave_report();
+    /// let mut buf = [0u8; mcp_core::MAX_PAYLOAD];
+    /// let request = Command::<&[u8]>::StatusRequest(StatusRequest::PositionSlaveSet);
+    /// let len = mav.handle(&mut sim, &request, &mut buf)?.unwrap();
+    /// assert_eq!(&buf[..len], b"r\x05\0\0\0\0\0\0\0\0");
+    /// # Ok::<(), mcp_core::BufferTooSmall>(())
+    /// ```
+    #[must_use]
+    pub const fn with_spec_slave_report(mut self) -> Self {
+        self.spec_slave_report = true;
         self
     }
 
@@ -233,6 +275,9 @@ impl Mav {
             StatusRequest::Landing => Report::Landing(vehicle.landing_state()),
             StatusRequest::Controllers => Report::Controllers(vehicle.controller()),
             StatusRequest::TrajectorySet => return Self::trajectory_report(vehicle, buf),
+            StatusRequest::PositionSlaveSet if self.spec_slave_report => {
+                Report::PositionSlaveSet(SlaveAddresses::Single(self.slaves[0]))
+            }
             StatusRequest::PositionSlaveSet => {
                 Report::PositionSlaveSet(SlaveAddresses::Slots(self.slaves))
             }
