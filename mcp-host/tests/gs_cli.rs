@@ -553,6 +553,82 @@ fn closed_standard_output_ends_quietly() {
 }
 
 #[test]
+fn standard_output_that_cannot_be_written_is_a_failure() {
+    // A full disk, unlike a reader that went away, loses what was to be printed: a
+    // script must not read it as success.
+    let full = || {
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap()
+    };
+    let mut decode = gs()
+        .args(["decode", "--hex"])
+        .stdin(Stdio::piped())
+        .stdout(full())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    decode
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(b"7E 00 02 8A 06 6F\n")
+        .unwrap();
+    let encode = gs()
+        .args(["encode", "--to", "0013a20040b599b9", "landing", "on"])
+        .stdout(full())
+        .output()
+        .unwrap();
+    for output in [decode.wait_with_output().unwrap(), encode] {
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(1), "{stderr}");
+        assert!(
+            stderr.starts_with("mcp-gs: cannot write to standard output: "),
+            "{stderr}"
+        );
+    }
+}
+
+#[test]
+fn a_recording_on_a_pipe_is_decoded_as_it_comes() {
+    // As `monitor --record /dev/stdout | decode` or a recording sent over a network:
+    // each record is shown while the writer is still at work.
+    let mut child = gs()
+        .args(["decode"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stdin = child.stdin.take().unwrap();
+    let recording = modem_status_recording(2);
+    // The header and the first record, then nothing more until a line has come out.
+    let header = mcp_host::record::HEADER_LEN;
+    let first = header + (recording.len() - header) / 2;
+    stdin.write_all(&recording[..first]).unwrap();
+    stdin.flush().unwrap();
+    let stdout = child.stdout.take().unwrap();
+    let (first_line, lines) = std::sync::mpsc::channel();
+    let reader = std::thread::spawn(move || {
+        let mut lines = std::io::BufRead::lines(std::io::BufReader::new(stdout))
+            .map(Result::unwrap)
+            .filter(|line| line.contains("modem status"));
+        first_line.send(lines.next()).unwrap();
+        lines.count()
+    });
+    // Failing, decode would hold the line until the end of its input.
+    let line = lines
+        .recv_timeout(std::time::Duration::from_secs(30))
+        .expect("the first record is shown before the input ends")
+        .unwrap();
+    assert!(line.contains("coordinator_started"), "{line}");
+    stdin.write_all(&recording[first..]).unwrap();
+    drop(stdin);
+    assert_eq!(reader.join().unwrap(), 1);
+    assert!(child.wait().unwrap().success());
+}
+
+#[test]
 fn log_lines_into_a_pipe_carry_no_colour_codes() {
     let output = gs()
         .args(["sim", "--link", "pty", "--duration", "0.1"])

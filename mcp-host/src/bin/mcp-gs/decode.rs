@@ -76,6 +76,8 @@ fn terminal_note(hex: bool) -> &'static str {
 
 /// Runs `decode`.
 pub(crate) fn run(args: DecodeArgs) -> Result<(), Failure> {
+    // Input that comes as it is made (a pipe, a terminal) is shown as it comes.
+    let live = args.input.as_os_str() == "-" && !stdin_is_a_file();
     let input: Box<dyn Read> =
         if args.input.as_os_str() == "-" {
             let stdin = io::stdin();
@@ -91,7 +93,10 @@ pub(crate) fn run(args: DecodeArgs) -> Result<(), Failure> {
         };
     let mut input = BufReader::with_capacity(1 << 16, input);
     let stdout = io::stdout().lock();
-    let mut out = io::BufWriter::with_capacity(1 << 16, stdout);
+    let mut out = Output {
+        inner: io::BufWriter::with_capacity(1 << 16, stdout),
+        failed: false,
+    };
     let mut printer = Printer {
         format: args.format,
         summary: args.summary.then(Summary::default),
@@ -116,20 +121,60 @@ pub(crate) fn run(args: DecodeArgs) -> Result<(), Failure> {
         let recording = record::is_recording(&head);
         let bytes = io::Cursor::new(head).chain(bytes);
         if recording {
-            decode_recording(bytes, &mut printer)
+            decode_recording(bytes, &mut printer, live)
         } else {
             decode_stream(bytes, args.api_mode.0, &mut printer)
         }
     } else if record::is_recording(head) {
-        decode_recording(input, &mut printer)
+        decode_recording(input, &mut printer, live)
     } else {
         decode_stream(input, args.api_mode.0, &mut printer)
     };
     let result = result.and_then(|()| printer.finish());
     match result.and_then(|()| out.flush()) {
         Ok(()) => Ok(()),
-        Err(e) if e.kind() == io::ErrorKind::BrokenPipe => Ok(()),
+        Err(e) if out.failed => crate::output_failure(&e).map_or(Ok(()), Err),
         Err(e) => Err(Failure::input(e.to_string())),
+    }
+}
+
+/// Whether standard input is a regular file (`decode < capture`), read at once, rather
+/// than a pipe or a terminal whose bytes come as they are made.
+fn stdin_is_a_file() -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::fd::AsFd;
+        io::stdin()
+            .as_fd()
+            .try_clone_to_owned()
+            .and_then(|fd| File::from(fd).metadata())
+            .is_ok_and(|meta| meta.is_file())
+    }
+    #[cfg(not(unix))]
+    {
+        false
+    }
+}
+
+/// Standard output, remembering whether writing it failed: an error from the output is
+/// the output's failure (exit 1, or none for a closed pipe), an error from the input is
+/// bad input (exit 2).
+struct Output<W> {
+    inner: W,
+    failed: bool,
+}
+
+impl<W: Write> Write for Output<W> {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        let result = self.inner.write(buf);
+        self.failed |= result.is_err();
+        result
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        let result = self.inner.flush();
+        self.failed |= result.is_err();
+        result
     }
 }
 
@@ -360,7 +405,13 @@ fn mode_hint(mode: ApiMode, stats: &xbee_api::Stats) -> Option<String> {
     ))
 }
 
-fn decode_recording(input: impl Read, printer: &mut Printer<'_, impl Write>) -> io::Result<()> {
+/// Decodes a recording; `live` flushes the output after every record, for a recording
+/// read from a pipe as it is made.
+fn decode_recording(
+    input: impl Read,
+    printer: &mut Printer<'_, impl Write>,
+    live: bool,
+) -> io::Result<()> {
     let mut reader = RecordReader::new(input)?;
     // A recording cut off or damaged part way: what came before it is still decoded and
     // counted, then the error is reported.
@@ -368,6 +419,9 @@ fn decode_recording(input: impl Read, printer: &mut Printer<'_, impl Write>) -> 
         match reader.next_record() {
             Ok(Some(record)) => {
                 printer.frame(&record.frame, Some((record.direction, record.time)))?;
+                if live && printer.summary.is_none() {
+                    printer.out.flush()?;
+                }
             }
             Ok(None) => break Ok(()),
             Err(e) => break Err(e),

@@ -1,7 +1,8 @@
 //! `mcp-gs`: the MCP ground station.
 
 /// Prints a line to standard output; exits quietly (status 0) when standard output is
-/// closed, as when piped into `head`, instead of panicking like `println!`.
+/// closed, as when piped into `head`, instead of panicking like `println!`, and with an
+/// error (status 1) when it cannot be written (a full disk).
 macro_rules! out {
     ($($arg:tt)*) => {
         $crate::write_line(format_args!($($arg)*))
@@ -126,16 +127,33 @@ fn hoist_options(args: Vec<OsString>) -> Vec<OsString> {
     before
 }
 
-/// Writes one line to standard output, exiting quietly if it is closed.
+/// Writes one line to standard output, exiting quietly if it is closed and with an
+/// error if it cannot be written.
 pub(crate) fn write_line(line: std::fmt::Arguments<'_>) {
     use std::io::Write;
     let mut stdout = std::io::stdout().lock();
-    if writeln!(stdout, "{line}")
-        .and_then(|()| stdout.flush())
-        .is_err()
-    {
-        std::process::exit(0);
+    if let Err(e) = writeln!(stdout, "{line}").and_then(|()| stdout.flush()) {
+        match output_failure(&e) {
+            None => std::process::exit(0),
+            Some(failure) => {
+                eprintln!("mcp-gs: {}", failure.message);
+                std::process::exit(failure.code.into());
+            }
+        }
     }
+}
+
+/// What an error writing standard output ends the program with: `None` when standard
+/// output was closed by its reader (piped into `head`), which ends it quietly and
+/// successfully; a failure otherwise (a full disk), which a script must not take for
+/// success.
+pub(crate) fn output_failure(error: &std::io::Error) -> Option<Failure> {
+    (error.kind() != std::io::ErrorKind::BrokenPipe).then(|| {
+        Failure::new(
+            Failure::OTHER,
+            format!("cannot write to standard output: {error}"),
+        )
+    })
 }
 
 /// Output format of `monitor` and `decode`.

@@ -94,7 +94,9 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
                 recorder
                     .write(SystemTime::now(), Direction::Received, frame)
                     .and_then(|()| recorder.flush())
-                    .map_err(|e| Failure::input(format!("cannot write the recording: {e}")))?;
+                    .map_err(|e| {
+                        Failure::new(Failure::OTHER, format!("cannot write the recording: {e}"))
+                    })?;
             }
         }
         let line = match args.format {
@@ -113,8 +115,9 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
             }
         };
         let mut out = stdout.lock();
-        if writeln!(out, "{line}").and_then(|()| out.flush()).is_err() {
-            break; // stdout closed (e.g. piped into `head`)
+        if let Err(e) = writeln!(out, "{line}").and_then(|()| out.flush()) {
+            // Closed by its reader (piped into `head`): done; anything else is a failure.
+            return crate::output_failure(&e).map_or(Ok(()), Err);
         }
         if let (ApiModeChoice::Fixed(mode), false, Event::DecodeError(_)) =
             (args.link.api_mode, hinted, &event)
