@@ -443,6 +443,26 @@ fn a_recording_keeps_each_frame_as_it_came() {
     // The Explicit Rx Indicator stays one (0x91, with its endpoints and cluster).
     assert_eq!(recorded, frames);
     assert_eq!(recorded[0][0], 0x91);
+
+    // Read back, the recording shows the MCP packet of each as monitor showed it.
+    let path = file.to_str().unwrap();
+    let text = String::from_utf8(mcp_gs_ok(&["decode", path]).stdout).unwrap();
+    assert!(
+        text.contains("explicit rx 0013a20040000001/")
+            && text.contains(": report controllers mpc")
+            && text.contains("message \"hello\""),
+        "{text}"
+    );
+    let json = String::from_utf8(mcp_gs_ok(&["decode", path, "--format", "json"]).stdout).unwrap();
+    let first: serde_json::Value = serde_json::from_str(json.lines().next().unwrap()).unwrap();
+    assert_eq!(first["frame"], "explicit_receive");
+    assert_eq!(first["data"], "720303");
+    assert_eq!(first["mcp"]["category"], "report", "{first}");
+    let summary = String::from_utf8(mcp_gs_ok(&["decode", path, "--summary"]).stdout).unwrap();
+    assert!(
+        summary.contains("mcp packets:\n  message: 1\n  report: 1\n"),
+        "{summary}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -143,6 +143,7 @@ pub fn frame(frame: &Frame<'_>) -> Value {
             m.insert("radius".into(), tx.radius.into());
             m.insert("options".into(), tx.options.into());
             m.insert("data".into(), hex(tx.data).into());
+            m.insert("mcp".into(), mcp(tx.data));
         }
         Frame::ExplicitRxIndicator(rx) => {
             m.insert("frame".into(), "explicit_receive".into());
@@ -154,6 +155,7 @@ pub fn frame(frame: &Frame<'_>) -> Value {
             m.insert("profile".into(), rx.profile_id.into());
             m.insert("options".into(), rx.options.into());
             m.insert("data".into(), hex(rx.data).into());
+            m.insert("mcp".into(), mcp(rx.data));
         }
         Frame::Unknown { frame_type, data } => {
             m.insert("frame".into(), "unknown".into());

@@ -100,7 +100,7 @@ pub fn frame(frame: &Frame<'_>) -> String {
             tx.dst_endpoint,
             tx.cluster_id,
             tx.profile_id,
-            hex(tx.data)
+            mcp(tx.data)
         ),
         Frame::ExplicitRxIndicator(rx) => write!(
             s,
@@ -112,7 +112,7 @@ pub fn frame(frame: &Frame<'_>) -> String {
             rx.cluster_id,
             rx.profile_id,
             rx.options,
-            hex(rx.data)
+            mcp(rx.data)
         ),
         Frame::Unknown { frame_type, data } => {
             write!(s, "frame type 0x{frame_type:02x}{}", data_suffix(data))

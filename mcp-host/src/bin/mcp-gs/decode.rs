@@ -262,6 +262,9 @@ impl Summary {
         match Frame::parse_bytes(data) {
             Ok(Frame::ReceivePacket(rx)) => self.count_mcp(rx.data),
             Ok(Frame::TransmitRequest(tx)) => self.count_mcp(tx.data),
+            // MCP with AO=1: the radio hands it over with its endpoints and cluster.
+            Ok(Frame::ExplicitRxIndicator(rx)) => self.count_mcp(rx.data),
+            Ok(Frame::ExplicitAddressingCommand(tx)) => self.count_mcp(tx.data),
             Ok(_) => {}
             Err(_) => self.invalid_frames += 1,
         }
