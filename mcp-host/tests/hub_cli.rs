@@ -35,6 +35,36 @@ fn a_listen_address_without_a_host_is_a_usage_error() {
     assert!(!stderr.contains("cannot listen"), "{stderr}");
 }
 
+#[test]
+fn a_listen_address_that_cannot_be_had_says_why() {
+    let taken = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let taken = taken.local_addr().unwrap().to_string();
+    // 192.0.2.1 (TEST-NET-1) is no address of this machine.
+    for (listen, hint) in [
+        (
+            taken.as_str(),
+            "another hub, or another program, serves there",
+        ),
+        (
+            "192.0.2.1:9750",
+            "no network interface of this machine has that address",
+        ),
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+            .args(["hub", "--link", "pty", "--listen", listen])
+            .env_remove("MCP_LOG")
+            .output()
+            .expect("run mcp-gs");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(3), "{stderr}");
+        assert!(
+            stderr.starts_with(&format!("mcp-gs: cannot listen on {listen}: ")),
+            "{stderr}"
+        );
+        assert!(stderr.contains(hint), "{stderr}");
+    }
+}
+
 /// The lines a stream gives, as they come.
 fn lines(stream: impl std::io::Read + Send + 'static) -> mpsc::Receiver<String> {
     let (tx, rx) = mpsc::channel();

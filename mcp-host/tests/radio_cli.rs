@@ -157,6 +157,17 @@ fn bad_node_arguments_are_input_errors() {
         &["sim", "--link", "pty", "--address", "0000000000000000"],
         &["sim", "--link", "pty", "--mavs", "0"],
         &[
+            "sim",
+            "--link",
+            "pty",
+            "--mavs",
+            "1",
+            "--address",
+            "0013A20040B599BF",
+            "--address",
+            "0013A20040B599BD",
+        ],
+        &[
             "radio",
             "--coordinator",
             "pty",

@@ -33,6 +33,25 @@ fn parse_listen(s: &str) -> Result<String, String> {
     }
 }
 
+/// The failure of a `--listen` address that cannot be listened on, with what to do about
+/// the common causes.
+fn listen_failure(addr: &str, error: &std::io::Error) -> Failure {
+    use std::io::ErrorKind;
+    let hint = match error.kind() {
+        ErrorKind::AddrInUse => {
+            " (another hub, or another program, serves there: give this one another \
+             --listen ADDR:PORT)"
+        }
+        ErrorKind::AddrNotAvailable => {
+            " (no network interface of this machine has that address: give 127.0.0.1 for \
+             this machine alone, or 0.0.0.0 for every interface)"
+        }
+        ErrorKind::PermissionDenied => " (ports below 1024 need privileges: use 1024 or above)",
+        _ => "",
+    };
+    Failure::link(format!("cannot listen on {addr}: {error}{hint}"))
+}
+
 /// Runs `hub` until Ctrl-C, or until the link to the radio ends.
 pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
     let options = args.link.options(true).await?;
@@ -41,9 +60,7 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
         .await
         .map_err(|e| match e {
             HubError::Connect(e) => connect_failure(radio, e),
-            listen @ HubError::Listen { .. } => Failure::link(format!(
-                "{listen} (another hub may serve there: give it another --listen ADDR:PORT)"
-            )),
+            HubError::Listen { addr, source } => listen_failure(&addr, &source),
             other => Failure::link(other.to_string()),
         })?;
     let ctrl_c = crate::interrupt::ctrl_c();

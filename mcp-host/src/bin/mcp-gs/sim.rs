@@ -22,8 +22,9 @@ pub(crate) struct SimArgs {
     /// A simulated MAV's 64-bit address (repeat for more). Default 0013A20040B599B9.
     #[arg(long = "address", value_name = "ADDR", value_parser = parse_address)]
     addresses: Vec<Address64>,
-    /// Number of MAVs: the given addresses, then the known MAVs 0013A20040B599B9,
-    /// 0013A20040B599BF, 0013A20040B599BD, 0013A20040B599B8, then made-up ones.
+    /// Number of MAVs, no fewer than the `--address` options: the given addresses, then
+    /// the known MAVs 0013A20040B599B9, 0013A20040B599BF, 0013A20040B599BD,
+    /// 0013A20040B599B8, then made-up ones.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..=4096))]
     mavs: Option<u16>,
     /// API mode of the link (what the ground station's XBee would be set to).
@@ -84,6 +85,14 @@ pub(crate) async fn run(args: SimArgs) -> Result<(), Failure> {
     check_distinct(&args.addresses, "simulated MAV")?;
     let mut addresses = args.addresses.clone();
     let wanted = args.mavs.map_or(addresses.len().max(1), usize::from);
+    if wanted < addresses.len() {
+        return Err(Failure::input(format!(
+            "--mavs {wanted} is fewer than the {} --address options given: drop --mavs, or \
+             raise it to {} or more",
+            addresses.len(),
+            addresses.len()
+        )));
+    }
     for address in fleet_addresses(wanted + addresses.len()) {
         if addresses.len() >= wanted {
             break;
@@ -92,7 +101,7 @@ pub(crate) async fn run(args: SimArgs) -> Result<(), Failure> {
             addresses.push(address);
         }
     }
-    addresses.truncate(wanted.max(args.addresses.len()));
+    addresses.truncate(wanted);
     args.net.check_nodes(&addresses, "simulated MAV")?;
     let config = args.net.config(MAX_UNICAST_FRAGMENTED)?;
     args.net.describe(&config);
