@@ -783,6 +783,32 @@ fn replay_of_a_hostile_recording_is_an_input_error_at_a_slow_speed() {
 }
 
 #[test]
+fn replay_says_how_far_it_got_when_its_peer_leaves() {
+    let dir = tempdir("replay-peer-leaves");
+    let file = dir.join("minute.mcprec");
+    // The second frame a minute after the first: the replay is waiting for it when the
+    // peer leaves, and says so then, not a minute later.
+    std::fs::write(&file, recording(&[(0, 0), (0, 60_000_000)])).unwrap();
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let link = format!("tcp:{}", listener.local_addr().unwrap());
+    let peer = std::thread::spawn(move || {
+        let (mut socket, _) = listener.accept().unwrap();
+        let mut first = [0u8; 6];
+        std::io::Read::read_exact(&mut socket, &mut first).unwrap();
+        first
+    });
+    let output = run(&["replay", file.to_str().unwrap(), "--link", &link]);
+    let stderr = stderr(&output);
+    assert_eq!(peer.join().unwrap(), [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F]);
+    assert_eq!(output.status.code(), Some(3), "{stderr}");
+    assert_eq!(
+        stderr.trim_end(),
+        "mcp-gs: link closed (replayed 1 frames before it)"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
 fn ctrl_c_stops_the_demo_script_at_once() {
     let (child, lines) = spawn_lines(&["demo", "--duration", "0"]);
     let mut demo = Running(child);

@@ -6,8 +6,8 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use clap::{Args, ValueEnum};
-use mcp_host::CommandSender;
 use mcp_host::record::{Direction, RecordReader};
+use mcp_host::{CommandSender, SendError};
 
 use crate::Failure;
 use crate::link_args::{LinkArgs, send_failure};
@@ -126,6 +126,13 @@ fn check_wanted(args: &ReplayArgs) -> Result<(), Failure> {
     }))
 }
 
+/// The failure of a frame that could not be written, after `played` were.
+fn lost(error: SendError, played: u64) -> Failure {
+    let failure = send_failure(error);
+    let message = format!("{} (replayed {played} frames before it)", failure.message);
+    Failure::new(failure.code(), message)
+}
+
 /// Writes the wanted records of `reader` at their pace; counts them in `played`.
 async fn play(
     args: &ReplayArgs,
@@ -164,12 +171,17 @@ async fn play(
                         args.speed
                     ))
                 })?;
-            tokio::time::sleep_until(at).await;
+            // A link that ends while the replay waits for a record's time is said at
+            // once, not at the record.
+            tokio::select! {
+                () = tokio::time::sleep_until(at) => {}
+                () = sender.closed() => return Err(lost(SendError::Closed, *played)),
+            }
         }
         sender
             .write_frame(&record.frame)
             .await
-            .map_err(send_failure)?;
+            .map_err(|e| lost(e, *played))?;
         *played += 1;
     }
     Ok(())
