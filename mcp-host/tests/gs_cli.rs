@@ -739,6 +739,50 @@ fn monitor_hints_at_the_baud_rate_when_nothing_makes_sense() {
 }
 
 #[test]
+fn a_radio_in_transparent_mode_is_named_by_status_and_monitor() {
+    // A radio in transparent mode (AP=0) passes on what it hears as it is: text from a
+    // MAV's console, with no frame in it.
+    let text = b"MAV booting... IMU ok, GPS waiting for fix\r\n".repeat(4);
+    let (link, peer) = common::talking_peer(text.clone());
+    let output = run(&[
+        "status",
+        "--link",
+        &link,
+        "--to",
+        "0013A20040B599B9",
+        "--timeout",
+        "1",
+        "landing",
+    ]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(4), "{stderr}");
+    assert!(
+        stderr.contains("hint: 176 bytes came from the radio and none began a frame")
+            && stderr.contains("transparent mode (AP=0"),
+        "{stderr}"
+    );
+    peer.join().unwrap();
+
+    // monitor has no event to show for it, and says it all the same.
+    let (link, peer) = common::talking_peer(text);
+    let mut monitor = common::Running(
+        gs().args(["monitor", "--link", &link])
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap(),
+    );
+    let lines = common::stderr_lines(&mut monitor.0);
+    let hint = lines.recv_timeout(common::GUARD).expect("monitor hints");
+    assert!(
+        hint.contains("none began a frame") && hint.contains("transparent mode"),
+        "{hint}"
+    );
+    drop(monitor);
+    peer.join().unwrap();
+}
+
+#[test]
 fn decode_says_what_input_it_cannot_read() {
     let dir = tempdir();
     // A recording given as hex text.

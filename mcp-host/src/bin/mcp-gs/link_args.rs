@@ -258,8 +258,9 @@ pub(crate) fn warn_mode_mismatch(radio: u8, configured: ApiMode) {
 }
 
 /// What the link's counters say is wrong with the radio's settings, if anything: frames
-/// that fail their checksum (another API mode), or only frames of impossible lengths and
-/// bytes that were no frames (another baud rate, or transparent mode). `min_errors`:
+/// that fail their checksum (another API mode), only frames of impossible lengths and
+/// bytes that were no frames (another baud rate, or transparent mode), or only bytes
+/// that were no frames (16 for each of `min_errors`). `min_errors`:
 /// how many failed frames it takes; with `majority`, also more failed frames than good
 /// ones (a frame with no byte to escape passes in either mode: a long-running command
 /// waits for most to fail, one that timed out has seen too few to count).
@@ -280,6 +281,16 @@ pub(crate) fn diagnosis(
         ));
     }
     let nonsense = stats.oversize + stats.empty + stats.truncated;
+    if stats.frames == 0 && nonsense == 0 && checksum == 0 && stats.bytes_skipped >= 16 * min_errors
+    {
+        return Some(format!(
+            "hint: {} came from the radio and none began a frame: the radio may be in \
+             transparent mode (AP=0; API mode needs AP=1 or AP=2), or the link's baud rate \
+             may differ from the radio's (give it as serial:PATH:BAUD; XBee modules ship at \
+             9600)",
+            crate::counted(stats.bytes_skipped, "byte")
+        ));
+    }
     if nonsense >= min_errors && stats.frames == 0 {
         return Some(format!(
             "hint: {} of impossible length, {} bytes that were no frames, and \

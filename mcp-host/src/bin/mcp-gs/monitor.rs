@@ -83,10 +83,22 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
     let mut seen = 0u64;
     let mut hinted = false;
     let mut dates = render::text::DateLines::new();
+    // Bytes that are no frames at all come as no event: the counters are looked at now
+    // and then for them.
+    let mut look = tokio::time::interval(std::time::Duration::from_secs(1));
     loop {
         let event = tokio::select! {
             event = stream.next() => event,
             () = &mut ctrl_c => None,
+            _ = look.tick(), if !hinted => {
+                if let ApiModeChoice::Fixed(mode) = args.link.api_mode {
+                    if let Some(hint) = diagnosis(mode, &stream.stats(), HINT_ERRORS, true) {
+                        hinted = true;
+                        eprintln!("mcp-gs: {hint}");
+                    }
+                }
+                continue;
+            }
         };
         let Some(event) = event else { break };
         if let Some(recorder) = &mut recorder {
