@@ -73,7 +73,9 @@
 //! - **Outages:** while the hub's link to the radio is down (a USB radio unplugged), the
 //!   hub disconnects its clients and stops listening (connections are refused), so that
 //!   their links see the outage, stay down quietly, and reconnect once the radio is
-//!   back and the hub listens again on the same address.
+//!   back and the hub listens again on the same address. A radio on a link that waits
+//!   for its first peer (`pty`, `tcp-listen:`) is down until that peer comes: the hub
+//!   listens from then on.
 //!
 //! ```no_run
 //! use mcp_host::hub::Hub;
@@ -259,7 +261,9 @@ impl Hub {
             counters: Arc::default(),
             radio_counters: sender.counters.clone(),
         };
-        hub.counters.listening.store(true, Ordering::Relaxed);
+        // A `pty` or `tcp-listen:` link has no radio on it yet.
+        let radio_up = sender.link_state() == crate::LinkState::Connected;
+        hub.counters.listening.store(radio_up, Ordering::Relaxed);
         let to_radio = Arc::new(ToRadio::default());
         let routes = Arc::new(Mutex::new(Routes::new()));
         let writer = RadioWriter {
@@ -282,7 +286,8 @@ impl Hub {
             ids: Arc::new(Semaphore::new(usize::from(u8::MAX))),
             clients: Vec::new(),
             next_client: 0,
-            radio_up: true,
+            radio_up,
+            radio_seen: radio_up,
             addr: local_addr,
             rebind_failures: 0,
         };
@@ -609,6 +614,8 @@ struct Serve {
     next_client: u64,
     /// Whether the link to the radio is up: clients are served only then.
     radio_up: bool,
+    /// Whether the link to the radio has been up.
+    radio_seen: bool,
     /// Where clients connect, listened on again after an outage.
     addr: SocketAddr,
     /// Failed attempts to listen again since the radio came back.
@@ -624,7 +631,12 @@ impl Serve {
         match TcpListener::bind(addr).await {
             Ok(listener) => {
                 // As visible as the outage was (warnings are shown by default).
-                tracing::warn!("hub: radio back: listening on {addr}");
+                if self.radio_seen {
+                    tracing::warn!("hub: radio back: listening on {addr}");
+                } else {
+                    tracing::warn!("hub: radio there: listening on {addr}");
+                    self.radio_seen = true;
+                }
                 self.counters.listening.store(true, Ordering::Relaxed);
                 Some(listener)
             }
@@ -643,8 +655,8 @@ impl Serve {
     async fn run(mut self, mut stream: PacketStream, listener: TcpListener) {
         // `None` while the radio's link is down: clients are refused by the system
         // rather than accepted and dropped, so that their links stay down quietly until
-        // the radio is back.
-        let mut listener = Some(listener);
+        // the radio is back (or there for the first time).
+        let mut listener = self.radio_up.then_some(listener);
         let mut rebind = tokio::time::interval(REBIND_RETRY);
         rebind.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
         let mut expire = tokio::time::interval(EXPIRE_EVERY);

@@ -128,3 +128,46 @@ fn the_hub_says_when_the_radio_is_lost_and_when_it_is_back() {
         "{back} ({serving})"
     );
 }
+
+#[test]
+fn a_hub_on_a_pty_listens_once_a_radio_is_there() {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args(["hub", "--link", "pty", "--listen", "127.0.0.1:0"])
+        .env_remove("MCP_LOG")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run mcp-gs");
+    let out = lines(child.stdout.take().unwrap());
+    let err = lines(child.stderr.take().unwrap());
+    let _hub = Running(child);
+    // "pseudo-terminal: PATH ..." names the far end, where the radio goes.
+    let far_end = line_with(&err, "/dev/pts/");
+    let path = far_end
+        .split_whitespace()
+        .find(|word| word.starts_with("/dev/pts/"))
+        .map(|word| word.trim_end_matches([',', ';', ':', ')']))
+        .unwrap_or_else(|| panic!("{far_end}"))
+        .to_owned();
+    let serving = line_with(&out, "serving");
+    let addr = serving
+        .split(" on ")
+        .nth(1)
+        .and_then(|rest| rest.split(": ").next())
+        .unwrap_or_else(|| panic!("{serving}"))
+        .to_owned();
+    let waiting = line_with(&err, "no radio on pty yet");
+    assert!(waiting.contains("clients are refused"), "{waiting}");
+    // Nothing to serve yet: a client is refused, not accepted and left without answers.
+    let refused = std::net::TcpStream::connect(&addr).unwrap_err();
+    assert_eq!(refused.kind(), std::io::ErrorKind::ConnectionRefused);
+    // A radio opens the far end: the hub listens on the address it printed.
+    let _radio = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .open(&path)
+        .unwrap();
+    let there = line_with(&err, "radio there");
+    assert!(there.contains(&format!("listening on {addr}")), "{there}");
+    std::net::TcpStream::connect(&addr).unwrap();
+}

@@ -71,6 +71,9 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
         "serving {radio} on {addr}: give other commands --link tcp:{addr} --api-mode {mode} \
          (Ctrl-C stops)"
     );
+    if !hub.stats().listening {
+        eprintln!("mcp-gs: no radio on {radio} yet: clients are refused until one is there");
+    }
     tokio::select! {
         () = ctrl_c => {}
         () = hub.finished() => {
