@@ -969,6 +969,33 @@ fn decode_of_a_recording_dates_its_lines_at_each_new_day() {
     std::fs::remove_file(&path).unwrap();
 }
 
+#[test]
+fn a_recorded_frame_that_cannot_be_read_keeps_its_time() {
+    let noon = std::time::UNIX_EPOCH + std::time::Duration::from_secs(1_795_435_200);
+    let mut bytes = Vec::new();
+    {
+        let mut writer = mcp_host::record::RecordWriter::new(&mut bytes).unwrap();
+        // A Receive Packet too short for its addresses.
+        writer
+            .write(noon, mcp_host::record::Direction::Received, &[0x90, 0x01])
+            .unwrap();
+    }
+    let path = std::env::temp_dir().join(format!("mcp-gs-bad-{}.mcprec", std::process::id()));
+    std::fs::write(&path, &bytes).unwrap();
+    let file = path.to_str().unwrap();
+    let text = stdout(&run(&["decode", file]));
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines[0], "-- 2026-11-23 (UTC) --", "{text}");
+    assert!(lines[1].starts_with("12:00:00.000 rx error: "), "{text}");
+    assert!(lines[1].ends_with(": 9001"), "{text}");
+    let json = stdout(&run(&["decode", file, "--format", "json"]));
+    let value: Value = serde_json::from_str(json.trim()).unwrap();
+    assert_eq!(value["error"], "frame");
+    assert_eq!(value["time"], 1_795_435_200.0);
+    assert_eq!(value["direction"], "rx");
+    std::fs::remove_file(&path).unwrap();
+}
+
 /// A recording of `n` received modem statuses ("coordinator started").
 fn modem_status_recording(n: usize) -> Vec<u8> {
     let mut bytes = Vec::new();

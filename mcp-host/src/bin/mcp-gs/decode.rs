@@ -197,6 +197,14 @@ impl<W: Write> Printer<'_, W> {
             return Ok(());
         }
         let parsed = Frame::parse_bytes(data);
+        if let (Format::Text, Err(_), Some((direction, time))) = (self.format, &parsed, direction) {
+            // A recorded frame that cannot be read keeps its place in time.
+            if let Some(date) = self.dates.before(time) {
+                writeln!(self.out, "{date}")?;
+            }
+            let direction = render::text::direction(direction);
+            write!(self.out, "{} {direction} ", render::text::time(time))?;
+        }
         match (self.format, parsed) {
             (Format::Json, Ok(frame)) => {
                 let mut value = render::json::frame(&frame);
@@ -220,11 +228,13 @@ impl<W: Write> Printer<'_, W> {
                 }
                 writeln!(self.out, "{line}")
             }
-            (Format::Json, Err(e)) => writeln!(
-                self.out,
-                "{}",
-                serde_json::json!({"error": "frame", "message": e.to_string(), "data": render::json::hex(data)})
-            ),
+            (Format::Json, Err(e)) => {
+                let mut value = serde_json::json!({"error": "frame", "message": e.to_string(), "data": render::json::hex(data)});
+                if let Some((direction, time)) = direction {
+                    render::json::add_record_fields(&mut value, direction, time);
+                }
+                writeln!(self.out, "{value}")
+            }
             (Format::Text, Err(e)) => writeln!(self.out, "error: {e}: {}", render::json::hex(data)),
         }
     }
