@@ -91,13 +91,11 @@ fn line_with(lines: &mpsc::Receiver<String>, text: &str) -> String {
     }
 }
 
-#[test]
-fn the_hub_says_when_the_radio_is_lost_and_when_it_is_back() {
-    let radio = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
-    let radio_addr = radio.local_addr().unwrap();
+/// A hub on `radio`, listening on a free port of 127.0.0.1: the process, and its
+/// standard output and error line by line.
+fn start_hub(radio: &str) -> (Running, mpsc::Receiver<String>, mpsc::Receiver<String>) {
     let mut child = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
-        .args(["hub", "--link", &format!("tcp:{radio_addr}")])
-        .args(["--listen", "127.0.0.1:0"])
+        .args(["hub", "--link", radio, "--listen", "127.0.0.1:0"])
         .env_remove("MCP_LOG")
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -105,16 +103,29 @@ fn the_hub_says_when_the_radio_is_lost_and_when_it_is_back() {
         .expect("run mcp-gs");
     let out = lines(child.stdout.take().unwrap());
     let err = lines(child.stderr.take().unwrap());
-    let _hub = Running(child);
-    let (socket, _) = radio.accept().unwrap();
-    let serving = line_with(&out, "serving");
-    // "serving tcp:... on ADDR:PORT: give other commands ..."
+    (Running(child), out, err)
+}
+
+/// The hub's "serving RADIO on ADDR:PORT: give other commands ..." line, and the
+/// address in it.
+fn serving(out: &mpsc::Receiver<String>) -> (String, String) {
+    let serving = line_with(out, "serving");
     let addr = serving
         .split(" on ")
         .nth(1)
         .and_then(|rest| rest.split(": ").next())
         .unwrap_or_else(|| panic!("{serving}"))
         .to_owned();
+    (serving, addr)
+}
+
+#[test]
+fn the_hub_says_when_the_radio_is_lost_and_when_it_is_back() {
+    let radio = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let radio_addr = radio.local_addr().unwrap();
+    let (_hub, out, err) = start_hub(&format!("tcp:{radio_addr}"));
+    let (socket, _) = radio.accept().unwrap();
+    let (serving, addr) = serving(&out);
     drop(socket);
     let lost = line_with(&err, "radio lost");
     assert!(
@@ -131,16 +142,7 @@ fn the_hub_says_when_the_radio_is_lost_and_when_it_is_back() {
 
 #[test]
 fn a_hub_on_a_pty_listens_once_a_radio_is_there() {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
-        .args(["hub", "--link", "pty", "--listen", "127.0.0.1:0"])
-        .env_remove("MCP_LOG")
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("run mcp-gs");
-    let out = lines(child.stdout.take().unwrap());
-    let err = lines(child.stderr.take().unwrap());
-    let _hub = Running(child);
+    let (_hub, out, err) = start_hub("pty");
     // "pseudo-terminal: PATH ..." names the far end, where the radio goes.
     let far_end = line_with(&err, "/dev/pts/");
     let path = far_end
@@ -149,13 +151,7 @@ fn a_hub_on_a_pty_listens_once_a_radio_is_there() {
         .map(|word| word.trim_end_matches([',', ';', ':', ')']))
         .unwrap_or_else(|| panic!("{far_end}"))
         .to_owned();
-    let serving = line_with(&out, "serving");
-    let addr = serving
-        .split(" on ")
-        .nth(1)
-        .and_then(|rest| rest.split(": ").next())
-        .unwrap_or_else(|| panic!("{serving}"))
-        .to_owned();
+    let (_, addr) = serving(&out);
     let waiting = line_with(&err, "no radio on pty yet");
     assert!(waiting.contains("clients are refused"), "{waiting}");
     // Nothing to serve yet: a client is refused, not accepted and left without answers.
