@@ -1,69 +1,93 @@
-//! Hex text read as the bytes it stands for, a line at a time, so that a capture typed
-//! or piped in as hex is decoded as it comes.
+//! Hex text read as the bytes it stands for, as it comes: a line typed or piped in is
+//! decoded when its end arrives, and memory stays bounded however long a line is.
 
 use std::io::{self, BufRead, Read};
 
+/// The most bytes held back from the reader before a line ends: a longer line (a hex dump
+/// on one line) is handed over in pieces of this size.
+const HELD: usize = 4096;
+
+/// How many characters of a word an error message quotes.
+const QUOTED: usize = 24;
+
 /// Reads hex text: pairs of hex digits; whitespace, `:`, `,` and `0x` prefixes between
-/// bytes are ignored; `#` starts a comment to the end of the line. Each read hands over
-/// the bytes of one line at most; text that is not hex is an [`io::ErrorKind::InvalidData`]
-/// error naming the line.
+/// bytes are ignored; `#` starts a comment to the end of the line. A read hands over the
+/// bytes of one line at most (of [`HELD`] bytes of it, for a longer line); text that is
+/// not hex is an [`io::ErrorKind::InvalidData`] error naming the line.
 pub(crate) struct HexReader<R> {
     text: R,
-    line: String,
-    line_no: usize,
-    bytes: Vec<u8>,
+    parser: Parser,
+    /// The end of the text was read.
+    ended: bool,
+    /// Bytes parsed and handed over so far of `parser.bytes`.
     taken: usize,
+}
+
+/// Where reading hex text is, a character at a time.
+#[derive(Default)]
+struct Parser {
+    /// The line being read, counted from 0.
+    line: usize,
+    /// In a `#` comment.
+    comment: bool,
+    /// The word being read, as far as an error message quotes it.
+    word: String,
+    /// Characters of the word read so far.
+    word_len: usize,
+    /// The first digit of a pair whose second has not come yet.
+    half: Option<u8>,
+    /// Bytes parsed and not yet handed over.
+    bytes: Vec<u8>,
 }
 
 impl<R: BufRead> HexReader<R> {
     pub(crate) fn new(text: R) -> Self {
         HexReader {
             text,
-            line: String::new(),
-            line_no: 0,
-            bytes: Vec::new(),
+            parser: Parser::default(),
+            ended: false,
             taken: 0,
         }
     }
 
-    /// The bytes of the next line that has any; false at the end of the text.
-    fn next_line(&mut self) -> io::Result<bool> {
-        loop {
-            self.line.clear();
-            let read = self.text.read_line(&mut self.line).map_err(|e| {
-                if e.kind() == io::ErrorKind::InvalidData {
-                    // Not UTF-8: binary, not hex text.
-                    io::Error::new(
-                        e.kind(),
-                        format!(
-                            "line {}: not text (a raw capture needs no --hex)",
-                            self.line_no + 1
-                        ),
-                    )
-                } else {
-                    e
-                }
-            })?;
-            if read == 0 {
-                return Ok(false);
+    /// Parses text until bytes are there to hand over at a line's end (or [`HELD`] of
+    /// them within a line), or the text ends; false if it ended with none.
+    fn fill(&mut self) -> io::Result<bool> {
+        self.parser.bytes.clear();
+        self.taken = 0;
+        while !self.ended {
+            let chunk = self.text.fill_buf()?;
+            if chunk.is_empty() {
+                self.ended = true;
+                self.parser.end_word()?;
+                break;
             }
-            self.line_no += 1;
-            self.bytes.clear();
-            self.taken = 0;
-            parse_line(&self.line, self.line_no, &mut self.bytes)?;
-            if !self.bytes.is_empty() {
-                return Ok(true);
+            let mut used = 0;
+            let mut hand_over = false;
+            for &c in chunk {
+                used += 1;
+                self.parser.take(c)?;
+                let bytes = self.parser.bytes.len();
+                if bytes > 0 && (c == b'\n' || bytes >= HELD) {
+                    hand_over = true;
+                    break;
+                }
+            }
+            self.text.consume(used);
+            if hand_over {
+                break;
             }
         }
+        Ok(!self.parser.bytes.is_empty())
     }
 }
 
 impl<R: BufRead> Read for HexReader<R> {
     fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
-        if self.taken == self.bytes.len() && !self.next_line()? {
+        if self.taken == self.parser.bytes.len() && !self.fill()? {
             return Ok(0);
         }
-        let rest = &self.bytes[self.taken..];
+        let rest = &self.parser.bytes[self.taken..];
         let n = rest.len().min(buf.len());
         buf[..n].copy_from_slice(&rest[..n]);
         self.taken += n;
@@ -71,28 +95,78 @@ impl<R: BufRead> Read for HexReader<R> {
     }
 }
 
-/// Appends the bytes that line `line_no` of hex text stands for to `bytes`.
-fn parse_line(line: &str, line_no: usize, bytes: &mut Vec<u8>) -> io::Result<()> {
-    let invalid = |message: String| io::Error::new(io::ErrorKind::InvalidData, message);
-    let line = line.split('#').next().unwrap_or("");
-    for word in line.split(|c: char| c.is_whitespace() || c == ':' || c == ',') {
-        let word = word
-            .strip_prefix("0x")
-            .or_else(|| word.strip_prefix("0X"))
-            .unwrap_or(word);
-        if word.len() % 2 != 0 {
-            return Err(invalid(format!(
-                "line {line_no}: `{word}` is not whole bytes of hex (odd number of digits)"
+impl Parser {
+    fn invalid(&self, message: impl std::fmt::Display) -> io::Error {
+        io::Error::new(
+            io::ErrorKind::InvalidData,
+            format!("line {}: {message}", self.line + 1),
+        )
+    }
+
+    /// Takes one character of the text.
+    fn take(&mut self, c: u8) -> io::Result<()> {
+        match c {
+            b'\n' => {
+                self.end_word()?;
+                self.comment = false;
+                self.line += 1;
+            }
+            // Control bytes: binary, not text.
+            0x00..=0x08 | 0x0E..=0x1F | 0x7F => {
+                return Err(self.invalid("not text (a raw capture needs no --hex)"));
+            }
+            _ if self.comment => {}
+            0x80.. => {
+                return Err(self.invalid(format_args!(
+                    "a byte outside ASCII (0x{c:02X}) is not hex text (a raw capture needs \
+                     no --hex)"
+                )));
+            }
+            b'#' => {
+                self.end_word()?;
+                self.comment = true;
+            }
+            b':' | b',' => self.end_word()?,
+            _ if c.is_ascii_whitespace() || c == 0x0B => self.end_word()?,
+            _ => self.word_char(c)?,
+        }
+        Ok(())
+    }
+
+    /// Takes a character of a word: a digit of a pair, or of a `0x` prefix.
+    fn word_char(&mut self, c: u8) -> io::Result<()> {
+        if self.word_len < QUOTED {
+            self.word.push(char::from(c));
+        } else if self.word_len == QUOTED {
+            self.word.push('…');
+        }
+        self.word_len += 1;
+        match self.half.take() {
+            None => self.half = Some(c),
+            Some(b'0') if self.word_len == 2 && matches!(c, b'x' | b'X') => {}
+            Some(first) => {
+                let pair = [first, c];
+                let text = std::str::from_utf8(&pair).unwrap_or("??");
+                let byte = u8::from_str_radix(text, 16)
+                    .map_err(|_| self.invalid(format_args!("`{text}` is not a hex byte")))?;
+                self.bytes.push(byte);
+            }
+        }
+        Ok(())
+    }
+
+    /// Ends the word being read, if any: a digit left without its pair is an error.
+    fn end_word(&mut self) -> io::Result<()> {
+        if self.half.is_some() {
+            return Err(self.invalid(format_args!(
+                "`{}` is not whole bytes of hex (odd number of digits)",
+                self.word
             )));
         }
-        for pair in word.as_bytes().chunks(2) {
-            let text = std::str::from_utf8(pair).unwrap_or("??");
-            let byte = u8::from_str_radix(text, 16)
-                .map_err(|_| invalid(format!("line {line_no}: `{text}` is not a hex byte")))?;
-            bytes.push(byte);
-        }
+        self.word.clear();
+        self.word_len = 0;
+        Ok(())
     }
-    Ok(())
 }
 
 #[cfg(test)]
@@ -148,5 +222,53 @@ mod tests {
         assert_eq!(buf[..2], [0x8A, 0x06]);
         assert_eq!(reader.read(&mut buf).unwrap(), 1);
         assert_eq!(reader.read(&mut buf).unwrap(), 0);
+    }
+
+    #[test]
+    fn a_long_line_is_read_in_pieces() {
+        // A hex dump on one line of 1 MB of text: read a piece at a time, not whole.
+        let text = "7e".repeat(500_000);
+        let mut input = io::Cursor::new(text.as_bytes());
+        let mut reader = HexReader::new(&mut input);
+        let mut buf = vec![0u8; 100_000];
+        assert_eq!(reader.read(&mut buf).unwrap(), HELD);
+        assert!(reader.parser.bytes.capacity() <= HELD);
+        let mut rest = Vec::new();
+        reader.read_to_end(&mut rest).unwrap();
+        assert_eq!(rest.len(), 500_000 - HELD);
+        assert!(rest.iter().all(|&b| b == 0x7E));
+        assert!(reader.parser.bytes.capacity() <= HELD);
+
+        // Only so much of the text was read for the first piece.
+        let mut input = io::BufReader::with_capacity(64, text.as_bytes());
+        let mut reader = HexReader::new(&mut input);
+        assert_eq!(reader.read(&mut buf).unwrap(), HELD);
+        drop(reader);
+        assert_eq!(input.into_inner().len(), text.len() - 2 * HELD);
+    }
+
+    #[test]
+    fn words_are_quoted_short_and_comments_may_be_any_text() {
+        let long = format!("7E {}0\n", "a".repeat(40));
+        let e = all(&long).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            format!(
+                "line 1: `{}…` is not whole bytes of hex (odd number of digits)",
+                "a".repeat(24)
+            )
+        );
+        // An odd word at the very end, with no line end after it.
+        let e = all("7E\n0x7").unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "line 2: `0x7` is not whole bytes of hex (odd number of digits)"
+        );
+        assert_eq!(all("0X7e # café, naïve\r\n0x\t8a").unwrap(), [0x7E, 0x8A]);
+        let e = all("7E é").unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "line 1: a byte outside ASCII (0xC3) is not hex text (a raw capture needs no --hex)"
+        );
     }
 }
