@@ -449,6 +449,7 @@ fn a_recording_keeps_each_frame_as_it_came() {
     let text = String::from_utf8(mcp_gs_ok(&["decode", path]).stdout).unwrap();
     assert!(
         text.contains("explicit rx 0013a20040000001/")
+            && !text.contains("rx explicit rx")
             && text.contains(": report controllers mpc")
             && text.contains("message \"hello\""),
         "{text}"

@@ -220,9 +220,11 @@ impl<W: Write> Printer<'_, W> {
                         writeln!(self.out, "{date}")?;
                     }
                     write!(self.out, "{} ", render::text::time(time))?;
-                    // Packets say `rx`/`tx` themselves; other frames get it here.
+                    // Packets say `rx`/`tx` themselves (`explicit rx`/`explicit tx`);
+                    // other frames get it here.
                     let direction = render::text::direction(direction);
-                    if !line.starts_with(direction) {
+                    let said = line.strip_prefix("explicit ").unwrap_or(&line);
+                    if !said.starts_with(direction) {
                         write!(self.out, "{direction} ")?;
                     }
                 }
