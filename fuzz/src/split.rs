@@ -1,9 +1,10 @@
 //! Split invariance of the XBee streaming decoder: the events out of a stream are the
 //! same whether it is fed whole, in chunks of any sizes, or a byte at a time, and are
 //! those of the plain reference decoder over the whole input; the decoder takes new
-//! input after `finish` as if new; every frame it yields encodes and decodes to itself.
+//! input after `finish` as if new; every frame it yields encodes and decodes to itself,
+//! and so does a node discovery answer in it.
 
-use xbee_api::{ApiMode, Decoder, EncodeFrame, Frame, RawFrame};
+use xbee_api::{ApiMode, Decoder, EncodeFrame, Frame, NodeInfo, RawFrame};
 
 use crate::events::{
     Event, check_stats, decode_all, decode_each_all, event_bound, finish_all, push_all,
@@ -225,4 +226,19 @@ pub fn check_typed(frame: &Frame<'_>, data: &[u8]) {
         _ => assert_eq!(emitted, data, "typed frame emitted other bytes"),
     }
     assert_eq!(Frame::parse_bytes(&emitted).as_ref(), Ok(frame));
+    // A node discovery answer reads back to its bytes.
+    let answer = match frame {
+        Frame::AtCommandResponse(at) if at.command == *b"ND" => Some(at.data),
+        Frame::RemoteAtResponse(at) if at.command == *b"ND" => Some(at.data),
+        _ => None,
+    };
+    if let Some(Ok(node)) = answer.map(NodeInfo::parse) {
+        let mut bytes = vec![0u8; node.len()];
+        assert_eq!(node.emit(&mut bytes), Ok(bytes.len()));
+        assert_eq!(
+            Some(&bytes[..]),
+            answer,
+            "node discovery answer emitted other bytes"
+        );
+    }
 }

@@ -75,7 +75,10 @@ pub mod io;
 mod mode;
 mod raw;
 mod stats;
+#[macro_use]
 mod status;
+// After `status`, whose `code_enum!` it uses.
+mod node;
 mod unescape;
 #[cfg(target_pointer_width = "64")]
 mod window;
@@ -102,6 +105,7 @@ pub use frame::transmit_request::{
 };
 pub use frame::transmit_status::{TransmitStatus, TransmitStatusRepr};
 pub use mode::{ApiMode, InvalidApiMode};
+pub use node::{DeviceType, NodeInfo, NodeInfoError};
 pub use raw::RawFrame;
 pub use stats::Stats;
 pub use status::{AtStatus, DeliveryStatus, DiscoveryStatus, ModemStatus};
