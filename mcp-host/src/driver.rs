@@ -64,6 +64,26 @@ pub(crate) enum Op {
         data: Bytes,
         reply: oneshot::Sender<Result<(), SendError>>,
     },
+    /// A frame whose answers are gathered until the deadline, not just the first.
+    Answers {
+        data: Bytes,
+        deadline: Instant,
+        timeout: Duration,
+        answers: AnswerSender,
+    },
+}
+
+/// Where the answers of an [`Op::Answers`] go, with the error that ends them early.
+pub(crate) type AnswerSender = mpsc::Sender<Result<OwnedFrame, SendError>>;
+
+/// Answers to one request held for its caller at most ([`crate::Answers`]); later
+/// ones are dropped until the caller takes some. One more place is kept for the error
+/// that may end them.
+pub(crate) const ANSWERS_HELD: usize = 256;
+
+/// Ends the answers of `answers` with `error` (the place for it is kept free).
+fn fail_answers(answers: &AnswerSender, error: SendError) {
+    let _ = answers.try_send(Err(error));
 }
 
 impl Op {
@@ -71,7 +91,7 @@ impl Op {
     pub(crate) fn needs_id(&self) -> bool {
         match self {
             Op::Transmit { with_status, .. } => *with_status,
-            Op::Request { .. } | Op::Frame { .. } => true,
+            Op::Request { .. } | Op::Frame { .. } | Op::Answers { .. } => true,
             Op::Write { .. } => false,
         }
     }
@@ -81,7 +101,8 @@ impl Op {
         match self {
             Op::Transmit { deadline, .. }
             | Op::Request { deadline, .. }
-            | Op::Frame { deadline, .. } => Some(*deadline),
+            | Op::Frame { deadline, .. }
+            | Op::Answers { deadline, .. } => Some(*deadline),
             Op::Write { .. } => None,
         }
     }
@@ -93,6 +114,7 @@ impl Op {
             Op::Transmit { reply, .. } => reply.is_closed(),
             Op::Request { reply, .. } => reply.is_closed(),
             Op::Frame { reply, .. } => reply.is_closed(),
+            Op::Answers { answers, .. } => answers.is_closed(),
             Op::Write { .. } => false,
         }
     }
@@ -110,6 +132,9 @@ impl Op {
             Op::Frame { timeout, reply, .. } => {
                 let _ = reply.send(Err(SendError::NoFreeFrameId { timeout }));
             }
+            Op::Answers {
+                timeout, answers, ..
+            } => fail_answers(&answers, SendError::NoFreeFrameId { timeout }),
             // Never parked nor timed out: it needs no frame id and waits for nothing.
             Op::Write { .. } => {}
         }
@@ -176,6 +201,9 @@ enum PendingKind {
     },
     Frame {
         reply: oneshot::Sender<Result<OwnedFrame, SendError>>,
+    },
+    Answers {
+        answers: AnswerSender,
     },
 }
 
@@ -647,6 +675,22 @@ impl Driver {
             return self.unclaimed(frame);
         };
         let claims = match self.ids.get(id).map(|p| &p.kind) {
+            Some(PendingKind::Answers { answers }) => {
+                if answers.is_closed() {
+                    // Its caller stopped listening: the id is free again.
+                    self.ids.remove(id);
+                    return self.unclaimed(frame);
+                }
+                if answers.capacity() > 1 {
+                    let _ = answers.try_send(Ok(frame));
+                } else {
+                    tracing::warn!(
+                        frame_id = id,
+                        "an answer was dropped: {ANSWERS_HELD} answers wait for their caller"
+                    );
+                }
+                return;
+            }
             Some(PendingKind::Frame { .. }) => true,
             Some(PendingKind::Transmit { .. } | PendingKind::Request { .. }) => frame_type == 0x8B,
             None => false,
@@ -661,6 +705,8 @@ impl Driver {
             PendingKind::Frame { reply } => {
                 let _ = reply.send(Ok(frame));
             }
+            // Taken above.
+            PendingKind::Answers { .. } => {}
             PendingKind::Transmit { to, reply } => {
                 let result = match xbee_api::TransmitStatusRepr::parse_bytes(frame.data()) {
                     Ok(status) => delivery(to, &status),
@@ -725,6 +771,7 @@ impl Driver {
             |p| match &p.kind {
                 PendingKind::Transmit { reply, .. } => reply.is_closed(),
                 PendingKind::Frame { reply } => reply.is_closed(),
+                PendingKind::Answers { answers } => answers.is_closed(),
                 PendingKind::Request { waiter, .. } => waiters
                     .iter()
                     .find(|w| w.id == *waiter)
@@ -875,6 +922,44 @@ impl Driver {
             Op::Write { data, reply } => {
                 let _ = reply.send(write_raw(self.options.api_mode, out, &data));
             }
+            Op::Answers {
+                data,
+                deadline,
+                timeout,
+                answers,
+            } => {
+                let pending = Pending {
+                    deadline,
+                    timeout,
+                    kind: PendingKind::Answers { answers },
+                };
+                match self.ids.insert(pending) {
+                    Ok(id) => {
+                        let mut data = BytesMut::from(&data[..]);
+                        data[1] = id;
+                        if let Err(e) = write_raw(self.options.api_mode, out, &data) {
+                            if let Some(Pending {
+                                kind: PendingKind::Answers { answers },
+                                ..
+                            }) = self.ids.remove(id)
+                            {
+                                fail_answers(&answers, e);
+                            }
+                        }
+                    }
+                    Err(pending) => {
+                        if let PendingKind::Answers { answers } = pending.kind {
+                            fail_answers(
+                                &answers,
+                                SendError::Timeout {
+                                    frame_id: 0,
+                                    timeout,
+                                },
+                            );
+                        }
+                    }
+                }
+            }
         }
     }
 
@@ -913,6 +998,8 @@ impl Driver {
                         bump(&counters.timeouts);
                         let _ = reply.send(Err(error));
                     }
+                    // Its window is over: dropping the sender ends the answers.
+                    PendingKind::Answers { .. } => {}
                     // The report waiter has the same deadline and answers below.
                     PendingKind::Request { .. } => {}
                 }
@@ -947,6 +1034,7 @@ impl Driver {
             PendingKind::Frame { reply } => {
                 let _ = reply.send(Err(error.clone()));
             }
+            PendingKind::Answers { answers } => fail_answers(&answers, error.clone()),
             PendingKind::Request { .. } => {}
         });
         for w in self.waiters.drain(..) {
@@ -1023,6 +1111,7 @@ fn refuse(op: Op, why: &str) {
         Op::Write { reply, .. } => {
             let _ = reply.send(Err(error));
         }
+        Op::Answers { answers, .. } => fail_answers(&answers, error),
     }
 }
 
@@ -1040,6 +1129,7 @@ fn refuse_closed(op: Op) {
         Op::Write { reply, .. } => {
             let _ = reply.send(Err(SendError::Closed));
         }
+        Op::Answers { answers, .. } => fail_answers(&answers, SendError::Closed),
     }
 }
 

@@ -25,6 +25,10 @@
 //! in order for the first free id (or their deadline), and raw writes and transmits
 //! without status still go out at once.
 //!
+//! [`CommandSender::discover`] finds the radios the local one can reach (node
+//! discovery, `ND`, in [`discovery`]); [`CommandSender::at_answers`] gathers every
+//! answer to any AT command that many radios answer.
+//!
 //! A serial port serves one program at a time: [`hub::Hub`] holds the link to the radio
 //! and serves it on a TCP port to any number of programs (`tcp:HOST:PORT` links), each
 //! getting every received frame and the answers to its own requests.
@@ -62,7 +66,9 @@
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
+mod answers;
 pub mod codec;
+pub mod discovery;
 mod driver;
 mod error;
 mod event;
@@ -87,6 +93,7 @@ use std::task::{Context, Poll};
 
 use tokio::sync::mpsc;
 
+pub use answers::Answers;
 pub use error::{ConnectError, RequestError, SendError};
 pub use event::{
     Event, InvalidPacket, LinkEvent, LinkState, Origin, OwnedFrame, OwnedPacket, Received,

@@ -9,6 +9,8 @@ use tokio::time::Instant;
 use xbee_api::{Address16, Address64, DiscoveryStatus};
 
 use crate::LinkInfo;
+use crate::answers::Answers;
+use crate::discovery::{DiscoverError, Node};
 use crate::driver::{Op, ReportKey};
 use crate::error::{RequestError, SendError};
 use crate::event::{LinkState, OwnedFrame, carries_frame_id};
@@ -383,6 +385,76 @@ impl CommandSender {
         };
         let data = frame_data(&frame)?;
         self.send_frame(&data, timeout).await
+    }
+
+    /// Sends a local AT command (0x08) that many may answer, and gathers every AT
+    /// Command Response (0x88) to it for `window`: node discovery (`ND`, one answer per
+    /// radio that heard it, until the radio's `NT`) and active scan (`AS`). See
+    /// [`discover`](Self::discover) for the nodes of `ND` read out.
+    ///
+    /// Resolves once the request is queued; the [`Answers`] stream then gives each
+    /// answer as it comes and ends with the window.
+    ///
+    /// ```no_run
+    /// # async fn run(sender: mcp_host::CommandSender) -> Result<(), Box<dyn std::error::Error>> {
+    /// use std::time::Duration;
+    /// use futures::StreamExt;
+    /// let mut answers = sender.at_answers(*b"ND", &[], Duration::from_secs(7)).await?;
+    /// while let Some(answer) = answers.next().await {
+    ///     println!("{:02x?}", answer?.data());
+    /// }
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub async fn at_answers(
+        &self,
+        command: [u8; 2],
+        parameter: &[u8],
+        window: Duration,
+    ) -> Result<Answers, SendError> {
+        let frame = xbee_api::AtCommandRepr {
+            queued: false,
+            frame_id: 0,
+            command,
+            parameter,
+        };
+        let data = Bytes::from(frame_data(&frame)?);
+        let deadline = crate::options::later(Instant::now(), window);
+        let (answers, receiver) = mpsc::channel(crate::driver::ANSWERS_HELD + 1);
+        let op = Op::Answers {
+            data,
+            deadline,
+            timeout: window,
+            answers,
+        };
+        match tokio::time::timeout_at(deadline, self.queue(&op).send(op)).await {
+            Ok(Ok(())) => Ok(Answers { answers: receiver }),
+            Ok(Err(_)) => Err(SendError::Closed),
+            Err(_) => Err(SendError::Timeout {
+                frame_id: 0,
+                timeout: window,
+            }),
+        }
+    }
+
+    /// Node discovery: the radios the local one can reach, each once, in the order
+    /// they answered. Sends `ND` and gathers the answers for `window`; `None` reads the
+    /// radio's discovery time (`NT`, [`DEFAULT_DISCOVERY_TIME`](crate::discovery::DEFAULT_DISCOVERY_TIME)
+    /// if it does not say) and waits that long and
+    /// [`DISCOVERY_MARGIN`](crate::discovery::DISCOVERY_MARGIN) more. The local radio
+    /// is not among them. An answer that cannot be read is left out, with a warning in
+    /// the log.
+    ///
+    /// ```no_run
+    /// # async fn run(sender: mcp_host::CommandSender) -> Result<(), Box<dyn std::error::Error>> {
+    /// for node in sender.discover(None).await? {
+    ///     println!("{node}"); // 0013a20040000002 (7d84) router "MAV 1"
+    /// }
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub async fn discover(&self, window: Option<Duration>) -> Result<Vec<Node>, DiscoverError> {
+        crate::discovery::discover(self, window).await
     }
 
     /// The link's counters.

@@ -26,10 +26,15 @@
 //!   joined), `CE` (1 on the coordinator), `SM` (0, no sleep), `HV` (2E00: an S2C
 //!   through-hole module), `VR` (4060: Zigbee 3.0 firmware), `ID` (0, the configured
 //!   extended PAN ID: any), `OP` (the operating extended PAN ID, 0013A2004D435000),
-//!   `OI` (the operating 16-bit PAN ID, 4D43), `CH` (the operating channel, 0x17) and
-//!   `NI` (the node identifier: a space, the default, until set). `NI` can be set to 1
-//!   to 20 printable ASCII characters; the others are read-only: a value gets status 3,
-//!   invalid parameter (but `AP` set to the node's own mode, a no-op). These are what
+//!   `OI` (the operating 16-bit PAN ID, 4D43), `CH` (the operating channel, 0x17),
+//!   `NT` (the node discovery time, 0x3C tenths of a second) and `NI` (the node
+//!   identifier: a space, the default, until set). `NI` can be set to 1 to 20 printable
+//!   ASCII characters and `NT` to 0x20..=0x2EE0; the others are read-only: a value gets
+//!   status 3, invalid parameter (but `AP` set to the node's own mode, a no-op).
+//!   Node discovery (`ND`, or `ND NAME` for the node named NAME) is answered at once
+//!   with an AT Command Response for each other node the radio can reach (its
+//!   [`xbee_api::NodeInfo`]: the coordinator as coordinator, the others as routers,
+//!   parent FFFE), as a network of quick radios would within `NT`. These are what
 //!   Digi's xbee-python library reads when it opens a device. A name set is read back
 //!   at once, even when it was queued (AT Command - Queue Parameter Value, 0x09, or a
 //!   remote command without the apply option), as a module's register is; nothing else
@@ -459,6 +464,7 @@ impl Network {
                     cut: false,
                     stats: NodeStats::default(),
                     name: router::NODE_IDENTIFIER.to_vec(),
+                    discovery_time: router::DISCOVERY_TIME,
                 },
             );
             if up_already {

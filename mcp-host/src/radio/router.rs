@@ -37,6 +37,14 @@ const OPERATING_PAN_ID_16: u16 = 0x4D43;
 /// `CH`: the operating channel (one of 0x0B..=0x1A; an S2C uses 0x0C..=0x1A).
 const OPERATING_CHANNEL: u8 = 0x17;
 
+/// `NT`: the node discovery time by default, in tenths of a second (Digi's default, 6 s).
+pub(crate) const DISCOVERY_TIME: u16 = 0x3C;
+/// The range of `NT` a Zigbee radio accepts (3.2 s to 20 minutes).
+const DISCOVERY_TIME_RANGE: std::ops::RangeInclusive<u16> = 0x20..=0x2EE0;
+/// Digi's profile id and manufacturer id, as node discovery answers give them.
+const DIGI_PROFILE_ID: u16 = 0xC105;
+const DIGI_MANUFACTURER_ID: u16 = 0x101E;
+
 /// Capacity of the queue of frames waiting to be written to one link.
 pub(crate) const OUT_CAPACITY: usize = 1024;
 /// The 64-bit address that means "use the 16-bit address".
@@ -64,6 +72,8 @@ pub(crate) struct Node {
     pub(crate) stats: NodeStats,
     /// Its node identifier (`NI`): at most [`AT_VALUE_MAX`] printable ASCII characters.
     pub(crate) name: Vec<u8>,
+    /// Its node discovery time (`NT`), in tenths of a second.
+    pub(crate) discovery_time: u16,
 }
 
 /// Everything the nodes share, behind one mutex; no lock is held across an await.
@@ -415,7 +425,7 @@ impl State {
 
     /// Executes an AT command on `node`'s radio: its status and the value, written into
     /// `value`, of length returned. Reads answer as an S2C with Zigbee firmware would;
-    /// `NI` can be set, `AP` set to the node's own mode (a no-op); any other value gets
+    /// `NI` and `NT` can be set, `AP` set to the node's own mode (a no-op); any other value gets
     /// invalid parameter, and a command the radio does not emulate invalid command.
     /// A value set is read back at once, whether it was applied or queued (nothing else
     /// in the emulation depends on it), so `AC` (apply changes) and `WR` (write to
@@ -466,10 +476,22 @@ impl State {
                 radio.name = name.to_vec();
                 (AtStatus::Ok, 0)
             }
+            (b"NT", []) => {
+                let nt = radio.discovery_time;
+                read(&nt.to_be_bytes())
+            }
+            (b"NT", [hi, lo]) if DISCOVERY_TIME_RANGE.contains(&u16::from_be_bytes([*hi, *lo])) => {
+                radio.discovery_time = u16::from_be_bytes([*hi, *lo]);
+                (AtStatus::Ok, 0)
+            }
+            (b"NT", [lo]) if DISCOVERY_TIME_RANGE.contains(&u16::from(*lo)) => {
+                radio.discovery_time = u16::from(*lo);
+                (AtStatus::Ok, 0)
+            }
             (b"AC" | b"WR", []) => (AtStatus::Ok, 0),
             (
                 b"AP" | b"NP" | b"SH" | b"SL" | b"MY" | b"AI" | b"CE" | b"SM" | b"HV" | b"VR"
-                | b"NI" | b"ID" | b"OP" | b"OI" | b"CH" | b"AC" | b"WR",
+                | b"NI" | b"NT" | b"ID" | b"OP" | b"OI" | b"CH" | b"AC" | b"WR",
                 _,
             ) => (AtStatus::InvalidParameter, 0),
             _ => (AtStatus::InvalidCommand, 0),
@@ -478,6 +500,9 @@ impl State {
 
     /// Answers a local AT command.
     fn at_command(&mut self, from: Address64, at: &AtCommandRepr<'_>) {
+        if at.command == *b"ND" {
+            return self.node_discovery(from, at);
+        }
         let mut value = [0u8; AT_VALUE_MAX];
         let (status, len) = self.at_value(from, at.command, at.parameter, &mut value);
         self.emit(NetEvent::AtCommand {
@@ -495,6 +520,61 @@ impl State {
             data: &value[..len],
         };
         self.send_to(from, &response, true);
+    }
+
+    /// Node discovery (`ND`) from `from`'s radio: an AT Command Response for each other
+    /// node it can reach (with `ND NAME`: the one whose `NI` is NAME), all at once, as
+    /// the answers of a network of quick radios (a real one spreads them over `NT`).
+    /// A radio cut off from the network finds none.
+    fn node_discovery(&mut self, from: Address64, at: &AtCommandRepr<'_>) {
+        let reachable = |n: &Node| n.connected && !n.cut;
+        let found: Vec<(Address64, Address16, Vec<u8>)> = match self.nodes.get(&from) {
+            Some(me) if reachable(me) => self
+                .nodes
+                .iter()
+                .filter(|(a, n)| **a != from && reachable(n))
+                .filter(|(_, n)| at.parameter.is_empty() || n.name == at.parameter)
+                .map(|(a, n)| (*a, n.addr16, n.name.clone()))
+                .collect(),
+            _ => Vec::new(),
+        };
+        self.emit(NetEvent::AtCommand {
+            node: from,
+            command: at.command,
+            status: AtStatus::Ok,
+        });
+        if at.frame_id == 0 {
+            return;
+        }
+        for (addr64, addr16, name) in found {
+            let info = xbee_api::NodeInfo {
+                addr16,
+                addr64,
+                identifier: &name,
+                parent: Address16::UNKNOWN,
+                device_type: if addr64 == Address64::COORDINATOR {
+                    xbee_api::DeviceType::Coordinator
+                } else {
+                    xbee_api::DeviceType::Router
+                },
+                status: 0,
+                profile_id: DIGI_PROFILE_ID,
+                manufacturer_id: DIGI_MANUFACTURER_ID,
+                device_type_identifier: None,
+                rssi: None,
+            };
+            let mut data = [0u8; 64];
+            let Ok(len) = info.emit(&mut data) else {
+                continue;
+            };
+            let response = AtCommandResponseRepr {
+                frame_id: at.frame_id,
+                command: at.command,
+                status: AtStatus::Ok,
+                data: data.get(..len).unwrap_or_default(),
+            };
+            self.send_to(from, &response, true);
+        }
     }
 
     /// Answers a remote AT command on behalf of the destination's radio; a destination

@@ -1,0 +1,44 @@
+//! [`Answers`]: every answer to a request that many may answer.
+
+use std::pin::Pin;
+use std::task::{Context, Poll};
+
+use futures::Stream;
+use tokio::sync::mpsc;
+
+use crate::error::SendError;
+use crate::event::OwnedFrame;
+
+/// The answers to one request, as they come: a [`Stream`] of the response frames that
+/// carry its frame id, from [`CommandSender::at_answers`](crate::CommandSender::at_answers).
+///
+/// It ends when the request's window is over. A link that goes down or closes meanwhile
+/// ends it with one error ([`SendError::Disconnected`], [`SendError::Closed`]), as does a
+/// request that could not be written or found no free frame id in its window. Dropping
+/// it gives the frame id back at the next answer (or when a request finds none free);
+/// answers that come after are [`Event::Frame`](crate::Event::Frame)s of the stream.
+///
+/// Answers are held for it, [`HELD`](Self::HELD) at most, while it is not read;
+/// more are dropped (with a warning in the log).
+#[derive(Debug)]
+pub struct Answers {
+    pub(crate) answers: mpsc::Receiver<Result<OwnedFrame, SendError>>,
+}
+
+impl Answers {
+    /// How many answers are held while the stream is not read.
+    pub const HELD: usize = crate::driver::ANSWERS_HELD;
+
+    /// The next answer; `None` once the window is over.
+    pub async fn next(&mut self) -> Option<Result<OwnedFrame, SendError>> {
+        self.answers.recv().await
+    }
+}
+
+impl Stream for Answers {
+    type Item = Result<OwnedFrame, SendError>;
+
+    fn poll_next(mut self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<Option<Self::Item>> {
+        self.answers.poll_recv(cx)
+    }
+}

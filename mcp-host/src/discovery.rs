@@ -1,0 +1,133 @@
+//! Node discovery: which radios the local one can reach, from [`CommandSender::discover`].
+
+use std::fmt;
+use std::time::Duration;
+
+use xbee_api::{Address16, Address64, AtStatus, DeviceType, Frame, NodeInfo};
+
+use crate::error::SendError;
+use crate::sender::CommandSender;
+
+/// The discovery time of a radio whose `NT` cannot be read: Digi's default `NT`, 6 s.
+pub const DEFAULT_DISCOVERY_TIME: Duration = Duration::from_secs(6);
+
+/// Added to the radio's discovery time (`NT`) for the last answer to reach the host.
+pub const DISCOVERY_MARGIN: Duration = Duration::from_secs(1);
+
+/// A radio found by node discovery.
+#[derive(Debug, Clone, PartialEq, Eq)]
+#[non_exhaustive]
+pub struct Node {
+    /// Its 64-bit address: the one to send to.
+    pub addr64: Address64,
+    /// Its 16-bit network address.
+    pub addr16: Address16,
+    /// Its node identifier (`NI`), bytes outside UTF-8 replaced.
+    pub identifier: String,
+    /// Its role in the network.
+    pub device_type: DeviceType,
+    /// Its parent's 16-bit address (`FFFE`: none).
+    pub parent: Address16,
+    /// The signal strength of the last hop in -dBm, when the local radio's `NO` asks for
+    /// it.
+    pub rssi: Option<u8>,
+}
+
+impl From<&NodeInfo<'_>> for Node {
+    fn from(info: &NodeInfo<'_>) -> Self {
+        Node {
+            addr64: info.addr64,
+            addr16: info.addr16,
+            identifier: String::from_utf8_lossy(info.identifier).into_owned(),
+            device_type: info.device_type,
+            parent: info.parent,
+            rssi: info.rssi,
+        }
+    }
+}
+
+/// `0013a20040000002 (7d84) router "MAV 1"`, with `, -40 dBm` when the RSSI is known.
+impl fmt::Display for Node {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{} ({}) {} {:?}",
+            self.addr64, self.addr16, self.device_type, self.identifier
+        )?;
+        if let Some(rssi) = self.rssi {
+            write!(f, ", -{rssi} dBm")?;
+        }
+        Ok(())
+    }
+}
+
+/// Why node discovery failed.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum DiscoverError {
+    /// The `ND` command could not be sent, or the link went down meanwhile.
+    #[error("node discovery: {0}")]
+    Send(#[from] SendError),
+    /// The radio answered `ND` with a status other than ok.
+    #[error("node discovery: the radio answered {status} (0x{code:02x})", code = u8::from(*.status))]
+    Refused {
+        /// The status it answered.
+        status: AtStatus,
+    },
+}
+
+/// What [`CommandSender::discover`] does.
+pub(crate) async fn discover(
+    sender: &CommandSender,
+    window: Option<Duration>,
+) -> Result<Vec<Node>, DiscoverError> {
+    let window = match window {
+        Some(window) => window,
+        None => self::window(sender).await?,
+    };
+    let mut answers = sender.at_answers(*b"ND", &[], window).await?;
+    let mut nodes: Vec<Node> = Vec::new();
+    while let Some(answer) = answers.next().await {
+        let answer = answer?;
+        let Ok(Frame::AtCommandResponse(response)) = answer.parse() else {
+            tracing::warn!(data = %crate::render::json::hex(answer.data()), "node discovery: not an AT Command Response");
+            continue;
+        };
+        if !response.status.is_ok() {
+            return Err(DiscoverError::Refused {
+                status: response.status,
+            });
+        }
+        if response.data.is_empty() {
+            // The end of the answers, on radios that mark it (802.15.4).
+            break;
+        }
+        match NodeInfo::parse(response.data) {
+            Ok(info) => {
+                let node = Node::from(&info);
+                match nodes.iter_mut().find(|n| n.addr64 == node.addr64) {
+                    Some(known) => *known = node,
+                    None => nodes.push(node),
+                }
+            }
+            Err(error) => {
+                tracing::warn!(%error, data = %crate::render::json::hex(response.data), "node discovery: an answer cannot be read");
+            }
+        }
+    }
+    Ok(nodes)
+}
+
+/// How long [`CommandSender::discover`] listens when given no window: the radio's
+/// discovery time (its `NT`, read from it; [`DEFAULT_DISCOVERY_TIME`] if it does not
+/// say) and [`DISCOVERY_MARGIN`].
+pub async fn window(sender: &CommandSender) -> Result<Duration, SendError> {
+    let response = sender.at(*b"NT", &[], None).await?;
+    let tenths = match response.parse() {
+        Ok(Frame::AtCommandResponse(at)) if at.status.is_ok() && matches!(at.data.len(), 1..=2) => {
+            at.data.iter().fold(0u64, |n, &b| (n << 8) | u64::from(b))
+        }
+        _ => return Ok(DEFAULT_DISCOVERY_TIME + DISCOVERY_MARGIN),
+    };
+    Ok(Duration::from_millis(tenths * 100) + DISCOVERY_MARGIN)
+}

@@ -1,0 +1,256 @@
+//! Node discovery: `CommandSender::at_answers` gathers every answer to one request for
+//! its window, and `CommandSender::discover` reads the radios out of `ND`'s answers,
+//! against a fake radio on a real pseudo-terminal and against the emulated network over
+//! real TCP.
+
+use std::time::Duration;
+
+use mcp_host::discovery::{DISCOVERY_MARGIN, DiscoverError, Node};
+use mcp_host::radio::{Network, NetworkConfig, NodeOptions};
+use mcp_host::{Event, LinkOptions, SendError};
+use xbee_api::{
+    Address16, Address64, ApiMode, AtCommandRepr, AtCommandResponseRepr, AtStatus, DeviceType,
+    NodeInfo,
+};
+
+mod common;
+
+use common::{FakeXBee, next_event};
+
+const COORD: Address64 = Address64::COORDINATOR;
+const MAV_A: Address64 = Address64(0x0013_A200_40B5_99B9);
+const MAV_B: Address64 = Address64(0x0013_A200_40B5_99BF);
+const MAV_C: Address64 = Address64(0x0013_A200_40B5_99BD);
+/// Failure guard only.
+const GUARD: Duration = Duration::from_secs(20);
+
+/// The data of a node discovery answer from `addr64`, named `name`.
+fn answer(addr64: Address64, name: &[u8]) -> Vec<u8> {
+    let info = NodeInfo {
+        addr16: Address16(0x7D84),
+        addr64,
+        identifier: name,
+        parent: Address16::UNKNOWN,
+        device_type: DeviceType::Router,
+        status: 0,
+        profile_id: 0xC105,
+        manufacturer_id: 0x101E,
+        device_type_identifier: None,
+        rssi: Some(0x28),
+    };
+    let mut data = vec![0u8; info.len()];
+    info.emit(&mut data).unwrap();
+    data
+}
+
+/// The fake radio reads the host's next AT command, which must be `command`: its frame id.
+async fn at_command(fake: &mut FakeXBee, command: [u8; 2]) -> u8 {
+    let data = fake.next_frame().await;
+    let at = AtCommandRepr::parse_bytes(&data).expect("an AT command");
+    assert_eq!(at.command, command);
+    at.frame_id
+}
+
+async fn respond(fake: &mut FakeXBee, frame_id: u8, status: AtStatus, data: &[u8]) {
+    fake.send(&AtCommandResponseRepr {
+        frame_id,
+        command: *b"ND",
+        status,
+        data,
+    })
+    .await;
+}
+
+#[tokio::test]
+async fn every_answer_comes_until_the_window_is_over() {
+    let (mut stream, sender, mut fake) = common::pty_link(ApiMode::Unescaped).await;
+    let window = Duration::from_millis(1500);
+    let mut answers = sender.at_answers(*b"ND", &[], window).await.unwrap();
+    let id = at_command(&mut fake, *b"ND").await;
+    respond(&mut fake, id, AtStatus::Ok, &answer(MAV_A, b"A")).await;
+    respond(&mut fake, id, AtStatus::Ok, &answer(MAV_B, b"B")).await;
+    // Another id's answer is not one of them: it comes on the stream.
+    respond(&mut fake, id.wrapping_add(1), AtStatus::Ok, b"x").await;
+    let mut got = Vec::new();
+    while let Some(answer) = tokio::time::timeout(GUARD, answers.next()).await.unwrap() {
+        got.push(answer.unwrap().data().to_vec());
+    }
+    let header = |d: &[u8]| {
+        [0x88, id, b'N', b'D', 0x00]
+            .iter()
+            .chain(d)
+            .copied()
+            .collect()
+    };
+    let expected: Vec<Vec<u8>> = vec![header(&answer(MAV_A, b"A")), header(&answer(MAV_B, b"B"))];
+    assert_eq!(got, expected);
+    match next_event(&mut stream).await {
+        Event::Frame(frame) => assert_eq!(frame.data()[1], id.wrapping_add(1)),
+        other => panic!("{other:?}"),
+    }
+    // After the window an answer under the id is nobody's: it comes on the stream too.
+    respond(&mut fake, id, AtStatus::Ok, &answer(MAV_C, b"C")).await;
+    match next_event(&mut stream).await {
+        Event::Frame(frame) => assert_eq!(frame.data()[1], id),
+        other => panic!("{other:?}"),
+    }
+}
+
+#[tokio::test]
+async fn discovery_reads_each_radio_once_and_stops_at_an_empty_answer() {
+    let (_stream, sender, mut fake) = common::pty_link(ApiMode::Escaped).await;
+    // A long window: the empty answer (as 802.15.4 radios end with) ends it early.
+    let discovery = tokio::spawn({
+        let sender = sender.clone();
+        async move { sender.discover(Some(Duration::from_secs(60))).await }
+    });
+    let id = at_command(&mut fake, *b"ND").await;
+    respond(&mut fake, id, AtStatus::Ok, &answer(MAV_A, b"MAV 1")).await;
+    // An answer that cannot be read is left out.
+    respond(&mut fake, id, AtStatus::Ok, &[1, 2, 3]).await;
+    respond(&mut fake, id, AtStatus::Ok, &answer(MAV_B, b"MAV 2")).await;
+    // The same radio again (it heard the request twice): once in the list, as last seen.
+    respond(&mut fake, id, AtStatus::Ok, &answer(MAV_A, b"MAV 1b")).await;
+    respond(&mut fake, id, AtStatus::Ok, &[]).await;
+    let nodes = tokio::time::timeout(GUARD, discovery)
+        .await
+        .expect("discovery ends at the empty answer")
+        .unwrap()
+        .unwrap();
+    let names: Vec<(Address64, &str)> = nodes
+        .iter()
+        .map(|n| (n.addr64, n.identifier.as_str()))
+        .collect();
+    assert_eq!(names, [(MAV_A, "MAV 1b"), (MAV_B, "MAV 2")]);
+    assert_eq!(nodes[1].rssi, Some(0x28));
+    assert_eq!(
+        nodes[1].to_string(),
+        "0013a20040b599bf (7d84) router \"MAV 2\", -40 dBm"
+    );
+}
+
+#[tokio::test]
+async fn a_radio_that_refuses_discovery_says_so() {
+    let (_stream, sender, mut fake) = common::pty_link(ApiMode::Unescaped).await;
+    let discovery = tokio::spawn({
+        let sender = sender.clone();
+        async move { sender.discover(Some(Duration::from_secs(60))).await }
+    });
+    let id = at_command(&mut fake, *b"ND").await;
+    respond(&mut fake, id, AtStatus::InvalidCommand, &[]).await;
+    let error = tokio::time::timeout(GUARD, discovery)
+        .await
+        .unwrap()
+        .unwrap()
+        .unwrap_err();
+    assert_eq!(
+        error,
+        DiscoverError::Refused {
+            status: AtStatus::InvalidCommand
+        }
+    );
+    assert_eq!(
+        error.to_string(),
+        "node discovery: the radio answered invalid_command (0x02)"
+    );
+}
+
+#[tokio::test]
+async fn a_link_lost_during_discovery_ends_the_answers_with_why() {
+    let (_stream, sender, mut fake) = common::pty_link(ApiMode::Unescaped).await;
+    let mut answers = sender
+        .at_answers(*b"ND", &[], Duration::from_secs(60))
+        .await
+        .unwrap();
+    let id = at_command(&mut fake, *b"ND").await;
+    respond(&mut fake, id, AtStatus::Ok, &answer(MAV_A, b"A")).await;
+    assert!(answers.next().await.unwrap().is_ok());
+    drop(fake);
+    let end = tokio::time::timeout(GUARD, answers.next()).await.unwrap();
+    assert!(
+        matches!(end, Some(Err(SendError::Disconnected { .. }))),
+        "{end:?}"
+    );
+    assert!(answers.next().await.is_none());
+    // A closed link takes no more.
+    sender.close();
+    sender.closed().await;
+    let after = sender.at_answers(*b"ND", &[], Duration::from_secs(1)).await;
+    match after {
+        Err(SendError::Closed) => {}
+        Ok(mut answers) => assert_eq!(answers.next().await, Some(Err(SendError::Closed))),
+        Err(other) => panic!("{other}"),
+    }
+}
+
+#[tokio::test]
+async fn the_emulated_network_answers_with_every_radio_it_can_reach() {
+    let network = Network::new(NetworkConfig::default());
+    let coord = network
+        .add_link(
+            COORD,
+            &"tcp-listen:127.0.0.1:0".parse().unwrap(),
+            NodeOptions::default(),
+        )
+        .await
+        .unwrap();
+    // Devices kept open: their nodes stay reachable.
+    let (a, _dev_a) = network
+        .add_in_process(MAV_A, NodeOptions::default())
+        .unwrap();
+    let (b, _dev_b) = network
+        .add_in_process(MAV_B, NodeOptions::default())
+        .unwrap();
+    let (_, _dev_c) = network
+        .add_in_process(MAV_C, NodeOptions::default())
+        .unwrap();
+    assert!(network.cut(MAV_C));
+    let link = format!("tcp:{}", coord.local_addr.unwrap())
+        .parse()
+        .unwrap();
+    let (_stream, sender) = mcp_host::connect(&link, LinkOptions::default())
+        .await
+        .unwrap();
+    let named = sender
+        .remote_at(MAV_A, *b"NI", b"MAV 1", true, None)
+        .await
+        .unwrap();
+    assert_eq!(named.data()[named.data().len() - 1], 0x00, "NI set");
+
+    let nodes = sender.discover(Some(Duration::from_secs(2))).await.unwrap();
+    let expected = [(a.address, a.addr16, "MAV 1"), (b.address, b.addr16, " ")];
+    let found: Vec<(Address64, Address16, &str)> = nodes
+        .iter()
+        .map(|n: &Node| (n.addr64, n.addr16, n.identifier.as_str()))
+        .collect();
+    assert_eq!(found, expected);
+    assert!(
+        nodes
+            .iter()
+            .all(|n| n.device_type == DeviceType::Router && n.parent == Address16::UNKNOWN)
+    );
+
+    // `ND NAME` finds the one named so.
+    let mut answers = sender
+        .at_answers(*b"ND", b"MAV 1", Duration::from_secs(2))
+        .await
+        .unwrap();
+    let only = answers.next().await.unwrap().unwrap();
+    let info = NodeInfo::parse(&only.data()[5..]).unwrap();
+    assert_eq!(info.addr64, MAV_A);
+    assert!(answers.next().await.is_none());
+
+    // Without a window, the radio's discovery time tells how long to listen.
+    let window = mcp_host::discovery::window(&sender).await.unwrap();
+    assert_eq!(window, Duration::from_secs(6) + DISCOVERY_MARGIN);
+    let set = sender.at(*b"NT", &[0x20], None).await.unwrap();
+    assert_eq!(set.data()[4], 0x00, "NT set");
+    let window = mcp_host::discovery::window(&sender).await.unwrap();
+    assert_eq!(window, Duration::from_millis(3200) + DISCOVERY_MARGIN);
+    let refused = sender.at(*b"NT", &[0x10], None).await.unwrap();
+    assert_eq!(
+        AtStatus::from(refused.data()[4]),
+        AtStatus::InvalidParameter
+    );
+    network.shutdown();
+}
