@@ -1,5 +1,6 @@
-//! `mcp-gs at` as a process against `mcp-gs sim` (its emulated radios) over TCP: how
-//! values print, what the radio's refusals say and which exit codes they give.
+//! `mcp-gs at` and `mcp-gs nodes` as processes against `mcp-gs sim` (its emulated
+//! radios) over TCP: how values and radios print, what the radio's refusals say and
+//! which exit codes they give.
 
 use std::process::{Child, Command, Output};
 use std::time::Duration;
@@ -188,4 +189,60 @@ fn reading_ap_in_another_api_mode_warns() {
     // In its own mode, no warning.
     let out = sim.at(&["AP"]);
     assert_eq!(stderr(&out), "");
+}
+
+/// `mcp-gs nodes --link LINK ARGS...` against `sim`.
+fn nodes(link: &str, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args(["nodes", "--link", link, "--timeout", "10"])
+        .args(args)
+        .output()
+        .expect("run mcp-gs nodes")
+}
+
+#[test]
+fn nodes_lists_the_radios_that_answer_node_discovery() {
+    let sim = Sim::start();
+    sim.ok(&["--to", MAV, "NI", "MAV 1"]);
+    let out = nodes(&sim.link, &["--window", "2"]);
+    assert!(out.status.success(), "{out:?}");
+    let text = String::from_utf8(out.stdout.clone()).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 1, "{text}");
+    assert!(
+        lines[0].starts_with("0013a20040b599b9 (") && lines[0].ends_with(") router \"MAV 1\""),
+        "{text}"
+    );
+    assert!(stderr(&out).contains("answers for 2.0 s"), "{out:?}");
+
+    let out = nodes(&sim.link, &["--window", "2", "--format", "json"]);
+    let node: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(node["addr64"], MAV);
+    assert_eq!(node["identifier"], "MAV 1");
+    assert_eq!(node["device_type"], "router");
+    assert_eq!(node["rssi_dbm"], serde_json::Value::Null);
+
+    // Without --window: as long as the radio's NT says, and a second.
+    sim.ok(&["NT", "20"]);
+    let out = nodes(&sim.link, &[]);
+    assert!(out.status.success(), "{out:?}");
+    assert!(stderr(&out).contains("answers for 4.2 s"), "{out:?}");
+    assert_eq!(String::from_utf8(out.stdout).unwrap(), text);
+}
+
+#[test]
+fn nodes_says_when_no_radio_answers() {
+    // A network of a coordinator alone.
+    let (child, rx) = common::spawn_lines(&["radio", "--coordinator", "tcp-listen:127.0.0.1:0"]);
+    let _radio = common::Running(child);
+    let link = loop {
+        let line = rx.recv_timeout(GUARD).expect("radio prints its link");
+        if let Some(rest) = line.split("(connect with ").nth(1) {
+            break rest.split(')').next().unwrap().to_string();
+        }
+    };
+    let out = nodes(&link, &["--window", "1"]);
+    assert!(out.status.success(), "{out:?}");
+    assert!(out.stdout.is_empty(), "{out:?}");
+    assert!(stderr(&out).contains("no radio answered"), "{out:?}");
 }

@@ -19,6 +19,7 @@ mod hub;
 mod interrupt;
 mod link_args;
 mod monitor;
+mod nodes;
 mod ports;
 mod radio;
 mod replay;
@@ -57,6 +58,8 @@ enum Sub {
     Replay(replay::ReplayArgs),
     /// Read or set an AT parameter of the local radio, or of a remote one.
     At(at::AtArgs),
+    /// List the radios the local one can reach (node discovery, ND).
+    Nodes(nodes::NodesArgs),
     /// List the serial ports present.
     Ports(ports::PortsArgs),
     /// Run a virtual XBee network between links (radios emulated in software).
@@ -261,6 +264,7 @@ async fn main() -> ExitCode {
         Sub::Status(args) => status::run(args).await,
         Sub::Replay(args) => replay::run(args).await,
         Sub::At(args) => at::run(args).await,
+        Sub::Nodes(args) => nodes::run(args).await,
         Sub::Ports(args) => ports::run(args),
         Sub::Decode(args) => decode::run(args),
         Sub::Encode(args) => encode::run(args),

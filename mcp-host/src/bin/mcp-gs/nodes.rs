@@ -1,0 +1,66 @@
+//! `mcp-gs nodes`: the radios the local one can reach (node discovery, `ND`).
+
+use std::time::Duration;
+
+use clap::Args;
+use mcp_host::discovery::{DiscoverError, Node};
+
+use crate::link_args::{LinkArgs, diagnosed, send_failure};
+use crate::{Failure, Format};
+
+/// Arguments of `nodes`.
+#[derive(Debug, Args)]
+pub(crate) struct NodesArgs {
+    #[command(flatten)]
+    link: LinkArgs,
+    /// Seconds to gather answers (default: the radio's discovery time, NT, and a second
+    /// more).
+    #[arg(long, value_name = "SECONDS", value_parser = crate::link_args::parse_seconds)]
+    window: Option<f64>,
+    /// Output format: a line per radio, or a JSON object per radio.
+    #[arg(long, value_enum, default_value_t = Format::Text)]
+    format: Format,
+}
+
+/// Runs `nodes`.
+pub(crate) async fn run(args: NodesArgs) -> Result<(), Failure> {
+    let (_stream, sender) = args.link.open(false).await?;
+    let failed = |e| diagnosed(send_failure(e), &args.link, &sender.stats());
+    let window = match args.window {
+        Some(seconds) => Duration::from_secs_f64(seconds),
+        None => mcp_host::discovery::window(&sender).await.map_err(failed)?,
+    };
+    eprintln!(
+        "mcp-gs: asking who is there (ND), answers for {:.1} s",
+        window.as_secs_f64()
+    );
+    let nodes = sender.discover(Some(window)).await.map_err(|e| match e {
+        DiscoverError::Send(e) => failed(e),
+        other => Failure::new(Failure::OTHER, other.to_string()),
+    })?;
+    if nodes.is_empty() {
+        eprintln!(
+            "mcp-gs: no radio answered: the others are off, out of range, or in another \
+             network (ID, CH)"
+        );
+    }
+    for node in &nodes {
+        match args.format {
+            Format::Text => out!("{node}"),
+            Format::Json => out!("{}", json(node)),
+        }
+    }
+    Ok(())
+}
+
+/// A radio found, as a JSON object.
+fn json(node: &Node) -> serde_json::Value {
+    serde_json::json!({
+        "addr64": node.addr64.to_string(),
+        "addr16": node.addr16.to_string(),
+        "identifier": node.identifier,
+        "device_type": node.device_type.to_string(),
+        "parent": node.parent.to_string(),
+        "rssi_dbm": node.rssi.map(|rssi| -i16::from(rssi)),
+    })
+}
