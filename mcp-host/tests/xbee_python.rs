@@ -5,7 +5,8 @@
 //! - As a ground station on the simulated network (`tests/peer/xbee_python_ground.py`):
 //!   it opens the simulated coordinator as it opens a real module, sends MCP commands to
 //!   a simulated MAV in Transmit Requests, gets their Transmit Statuses, and reads the
-//!   MAV's answers from Receive Packets.
+//!   MAV's answers from Receive Packets. It names the MAV's radio by a remote AT
+//!   command and finds it by node discovery (`ND`), as its `XBeeNetwork` does.
 //! - As the radio of our ground station (`tests/peer/xbee_python_radio.py`): it reads
 //!   our frames with its own frame reader and parser and answers with frames it builds;
 //!   `mcp_host::connect` asks it `AP`, sends commands and gets reports and telemetry.
@@ -192,6 +193,33 @@ async fn xbee_python_ground_station_in_api_mode_1() {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn xbee_python_ground_station_in_api_mode_2() {
     ground_station_in(ApiMode::Escaped, "ESCAPED_API_MODE").await;
+}
+
+/// xbee-python names the MAV's radio (`NI`, by a Remote AT Command) and finds it by
+/// node discovery: it reads `N?` (refused: not a Zigbee command) and `NT` from the
+/// coordinator, sends `ND NAME`, and reads the radio out of the answer.
+async fn discovery_in(mode: ApiMode) {
+    let steps = ["name", "MAV 1", "discover", "MAV 1"].map(String::from);
+    let out = run_ground_station(mode, &steps).await;
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stdout}\n{stderr}");
+    let lines: Vec<&str> = stdout.lines().skip(1).collect();
+    assert_eq!(
+        lines,
+        ["named MAV 1", "found 0013A20040B599B9 MAV 1"],
+        "{stdout}\n{stderr}"
+    );
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn xbee_python_finds_the_mav_by_node_discovery_in_api_mode_1() {
+    discovery_in(ApiMode::Unescaped).await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn xbee_python_finds_the_mav_by_node_discovery_in_api_mode_2() {
+    discovery_in(ApiMode::Escaped).await;
 }
 
 /// Our ground station with xbee-python playing its radio.

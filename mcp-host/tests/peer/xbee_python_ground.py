@@ -7,13 +7,17 @@ HV, VR, SH, SL, NI, MY and CE), then runs the steps given, printing one line a s
     send-to ADDR HEX
                   the same to another 64-bit address
     read N        read N messages; prints `rx SRC64 HEX` for each
+    name NAME     set MAV's node identifier (NI) by a remote AT command; prints `named NI`
+                  with the NI read back
+    discover NAME find the radio named NAME by node discovery (ND); prints
+                  `found ADDR64 NI` or `not found`
 
 Usage: xbee_python_ground.py PORT MAV STEP...
 """
 
 import sys
 
-from digi.xbee.devices import ZigBeeDevice
+from digi.xbee.devices import RemoteZigBeeDevice, ZigBeeDevice
 from digi.xbee.exception import TimeoutException, TransmitException
 from digi.xbee.models.address import XBee16BitAddress, XBee64BitAddress
 
@@ -50,6 +54,17 @@ def main(port, mav, steps):
                         message.data.hex(),
                         flush=True,
                     )
+            elif step == "name":
+                remote = RemoteZigBeeDevice(device, XBee64BitAddress.from_hex_string(mav))
+                remote.set_node_id(steps.pop(0))
+                remote.read_device_info(init=True)
+                print("named", remote.get_node_id(), flush=True)
+            elif step == "discover":
+                found = device.get_network().discover_device(steps.pop(0))
+                if found is None:
+                    print("not found", flush=True)
+                else:
+                    print("found", found.get_64bit_addr(), found.get_node_id(), flush=True)
             else:
                 raise ValueError(f"unknown step {step!r}")
     finally:
