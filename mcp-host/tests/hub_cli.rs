@@ -1,5 +1,5 @@
-//! `mcp-gs hub` as an operator sees it: argument errors, and the radio's outages said
-//! at the default log level.
+//! `mcp-gs hub` as an operator sees it: argument errors, the radio's outages said at
+//! the default log level, and a client's node discovery answered through it.
 
 use std::io::{BufRead, BufReader};
 use std::process::{Child, Command, Stdio};
@@ -166,4 +166,41 @@ fn a_hub_on_a_pty_listens_once_a_radio_is_there() {
     let there = line_with(&err, "radio there");
     assert!(there.contains(&format!("listening on {addr}")), "{there}");
     std::net::TcpStream::connect(&addr).unwrap();
+}
+
+#[test]
+fn node_discovery_through_the_hub_gets_every_answer() {
+    // A simulated network of two MAVs, its coordinator on TCP.
+    let mut sim = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args(["sim", "--link", "tcp-listen:127.0.0.1:0", "--mavs", "2"])
+        .env_remove("MCP_LOG")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("run mcp-gs sim");
+    let sim_out = lines(sim.stdout.take().unwrap());
+    let _sim = Running(sim);
+    let announced = line_with(&sim_out, "(connect with ");
+    let radio = announced
+        .split("(connect with ")
+        .nth(1)
+        .and_then(|rest| rest.split(')').next())
+        .unwrap_or_else(|| panic!("{announced}"))
+        .to_owned();
+    let (_hub, out, _err) = start_hub(&radio);
+    let (_, addr) = serving(&out);
+    let nodes = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args(["nodes", "--link", &format!("tcp:{addr}"), "--window", "2"])
+        .env_remove("MCP_LOG")
+        .output()
+        .expect("run mcp-gs nodes");
+    let stdout = String::from_utf8_lossy(&nodes.stdout);
+    assert!(nodes.status.success(), "{nodes:?}");
+    // Both MAVs' answers come back to the client that asked, under its own frame id.
+    let found: Vec<&str> = stdout.lines().collect();
+    assert_eq!(found.len(), 2, "{stdout}");
+    assert!(
+        found.iter().all(|line| line.contains(") router \" \"")),
+        "{stdout}"
+    );
 }
