@@ -10,7 +10,8 @@ use crate::error::SendError;
 use crate::event::OwnedFrame;
 
 /// The answers to one request, as they come: a [`Stream`] of the response frames that
-/// carry its frame id, from [`CommandSender::at_answers`](crate::CommandSender::at_answers).
+/// carry its frame id, from [`CommandSender::at_answers`](crate::CommandSender::at_answers)
+/// or [`CommandSender::remote_at_answers`](crate::CommandSender::remote_at_answers).
 ///
 /// It ends when the request's window is over. A link that goes down or closes meanwhile
 /// ends it with one error ([`SendError::Disconnected`], [`SendError::Closed`]), as does a

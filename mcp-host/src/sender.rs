@@ -418,7 +418,56 @@ impl CommandSender {
             command,
             parameter,
         };
-        let data = Bytes::from(frame_data(&frame)?);
+        self.answers(&frame_data(&frame)?, window).await
+    }
+
+    /// Sends a Remote AT Command (0x17) that many may answer, and gathers every Remote
+    /// AT Command Response (0x97) to it for `window`: to
+    /// [`Address64::BROADCAST`](xbee_api::Address64::BROADCAST), every radio in range
+    /// carries it out and answers, each with its own address in its response. `apply`
+    /// as for [`remote_at`](Self::remote_at).
+    ///
+    /// ```no_run
+    /// # async fn run(sender: mcp_host::CommandSender) -> Result<(), Box<dyn std::error::Error>> {
+    /// use std::time::Duration;
+    /// use xbee_api::{Address64, Frame};
+    /// let to = Address64::BROADCAST;
+    /// let mut answers = sender.remote_at_answers(to, *b"VR", &[], true, Duration::from_secs(3)).await?;
+    /// while let Some(answer) = answers.next().await {
+    ///     if let Ok(Frame::RemoteAtResponse(vr)) = answer?.parse() {
+    ///         println!("{}: {:02x?}", vr.src64, vr.data);
+    ///     }
+    /// }
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub async fn remote_at_answers(
+        &self,
+        to: Address64,
+        command: [u8; 2],
+        parameter: &[u8],
+        apply: bool,
+        window: Duration,
+    ) -> Result<Answers, SendError> {
+        let frame = xbee_api::RemoteAtCommandRepr {
+            frame_id: 0,
+            dst64: to,
+            dst16: Address16::UNKNOWN,
+            options: if apply {
+                xbee_api::RemoteAtCommandRepr::APPLY_CHANGES
+            } else {
+                0
+            },
+            command,
+            parameter,
+        };
+        self.answers(&frame_data(&frame)?, window).await
+    }
+
+    /// Queues the request `data` (a frame id at byte 1) whose answers are gathered for
+    /// `window`.
+    async fn answers(&self, data: &[u8], window: Duration) -> Result<Answers, SendError> {
+        let data = Bytes::copy_from_slice(data);
         let deadline = crate::options::later(Instant::now(), window);
         let (answers, receiver) = mpsc::channel(crate::driver::ANSWERS_HELD + 1);
         let op = Op::Answers {

@@ -1,5 +1,6 @@
 //! Node discovery: `CommandSender::at_answers` gathers every answer to one request for
-//! its window, and `CommandSender::discover` reads the radios out of `ND`'s answers,
+//! its window (`remote_at_answers` those of a broadcast remote AT command), and
+//! `CommandSender::discover` reads the radios out of `ND`'s answers,
 //! against a fake radio on a real pseudo-terminal and against the emulated network over
 //! real TCP.
 
@@ -239,6 +240,31 @@ async fn the_emulated_network_answers_with_every_radio_it_can_reach() {
     let info = NodeInfo::parse(&only.data()[5..]).unwrap();
     assert_eq!(info.addr64, MAV_A);
     assert!(answers.next().await.is_none());
+
+    // A remote AT command to the broadcast address: every radio it reaches answers,
+    // with its own address (the cut one does not).
+    let mut answers = sender
+        .remote_at_answers(
+            Address64::BROADCAST,
+            *b"NI",
+            &[],
+            true,
+            Duration::from_secs(2),
+        )
+        .await
+        .unwrap();
+    let mut named = Vec::new();
+    while let Some(answer) = answers.next().await {
+        match answer.unwrap().parse() {
+            Ok(xbee_api::Frame::RemoteAtResponse(at)) => {
+                assert_eq!(at.status, AtStatus::Ok);
+                named.push((at.src64, at.data.to_vec()));
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+    named.sort();
+    assert_eq!(named, [(MAV_A, b"MAV 1".to_vec()), (MAV_B, b" ".to_vec())]);
 
     // Without a window, the radio's discovery time tells how long to listen.
     let window = mcp_host::discovery::window(&sender).await.unwrap();

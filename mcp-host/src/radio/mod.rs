@@ -42,7 +42,10 @@
 //!   non-volatile memory) answer ok and have nothing more to do. Any other command gets
 //!   status 2, invalid command.
 //!   Remote AT commands (0x17) get the same answers from the destination's radio
-//!   (0x97), or status 4, transmission failure, when it cannot be reached.
+//!   (0x97), or status 4, transmission failure, when it cannot be reached. One to the
+//!   broadcast address (000000000000FFFF) is carried out by every other node the
+//!   sender can reach, each answering with its own address; none answers a sender cut
+//!   off from the network.
 //! - When a link comes up its device gets a Modem Status: 0x06 coordinator started on the
 //!   coordinator, 0x02 joined network on other nodes. Links that go down are reopened
 //!   (a `tcp-listen` node's next peer is the node back); frames for a node whose link is

@@ -580,6 +580,9 @@ impl State {
     /// Answers a remote AT command on behalf of the destination's radio; a destination
     /// that is unknown, down or cut gets status 4, transmission failure.
     fn remote_at_command(&mut self, from: Address64, at: &RemoteAtCommandRepr<'_>) {
+        if at.dst64 == Address64::BROADCAST {
+            return self.broadcast_remote_at_command(from, at);
+        }
         let target = self.resolve(at.dst64, at.dst16).filter(|t| {
             let reachable =
                 |a: &Address64| self.nodes.get(a).is_some_and(|n| n.connected && !n.cut);
@@ -611,6 +614,46 @@ impl State {
             data: &value[..len],
         };
         self.send_to(from, &response, true);
+    }
+
+    /// A remote AT command to the broadcast address: every other node `from` can reach
+    /// carries it out and answers with its own address, as radios in range do; a radio
+    /// cut off from the network reaches none, and nobody answers.
+    fn broadcast_remote_at_command(&mut self, from: Address64, at: &RemoteAtCommandRepr<'_>) {
+        let reachable = |n: &Node| n.connected && !n.cut;
+        let targets: Vec<Address64> = match self.nodes.get(&from) {
+            Some(me) if reachable(me) => self
+                .nodes
+                .iter()
+                .filter(|(a, n)| **a != from && reachable(n))
+                .map(|(a, _)| *a)
+                .collect(),
+            _ => Vec::new(),
+        };
+        for target in targets {
+            let mut value = [0u8; AT_VALUE_MAX];
+            let (status, len) = self.at_value(target, at.command, at.parameter, &mut value);
+            self.emit(NetEvent::AtCommand {
+                node: target,
+                command: at.command,
+                status,
+            });
+            if at.frame_id == 0 {
+                continue;
+            }
+            let response = RemoteAtResponseRepr {
+                frame_id: at.frame_id,
+                src64: target,
+                src16: self
+                    .nodes
+                    .get(&target)
+                    .map_or(Address16::UNKNOWN, |n| n.addr16),
+                command: at.command,
+                status,
+                data: value.get(..len).unwrap_or_default(),
+            };
+            self.send_to(from, &response, true);
+        }
     }
 }
 
