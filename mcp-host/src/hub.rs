@@ -26,8 +26,8 @@
 //!   | 0x00, 0x01 Transmit Request 64-/16-bit (802.15.4), 0x20 Transmit Request IPv4 | 0x89 TX Status |
 //!   | 0x24 Register Joining Device | 0xA4 Register Joining Device Status |
 //!
-//!   A request is answered once, but for node discovery (`ND`) and active scan (`AS`),
-//!   whose answers keep coming for [`ANSWER_WINDOW`] from when the hub writes the
+//!   A request is answered once, but for node discovery (`ND`), active scan (`AS`) and
+//!   a remote AT command to the broadcast address, whose answers keep coming for [`ANSWER_WINDOW`] from when the hub writes the
 //!   request to the radio (not while it waits its turn); a request unanswered by then
 //!   gives its id back. An answer under the id of a request not yet written is dropped.
 //! - **Fairness:** the hub takes its clients' frames in turn, one frame of each client
@@ -149,7 +149,7 @@ pub const RADIO_BACKLOG: Duration = Duration::from_millis(250);
 pub const DEFAULT_RADIO_BAUD: u32 = 115_200;
 
 /// How long the hub routes answers to a request: the first answer ends it, but for node
-/// discovery and active scan. A request still unanswered then gives its id back (its
+/// discovery, active scan and a broadcast remote AT command. A request still unanswered then gives its id back (its
 /// client has given up long before: `mcp-gs` waits 12 s by default).
 pub const ANSWER_WINDOW: Duration = Duration::from_secs(30);
 
@@ -368,7 +368,8 @@ struct Route {
     /// to the radio; `None` while it waits its turn (no answer is due yet, and the route
     /// does not expire).
     until: Cell<Option<Instant>>,
-    /// Answers keep coming until `until` (node discovery, active scan).
+    /// Answers keep coming until `until` (node discovery, active scan, broadcast remote
+    /// AT).
     many: bool,
     /// One of the client's [`ROUTES_PER_CLIENT`] permits, given back with the route.
     _permit: OwnedSemaphorePermit,
@@ -466,11 +467,14 @@ fn is_answer(frame_type: u8) -> bool {
 }
 
 /// Whether a request gets several answers under its id: AT (or queued AT) node
-/// discovery and active scan.
+/// discovery and active scan, and a remote AT command to the broadcast address (every
+/// radio in range answers).
 fn answered_many_times(data: &[u8]) -> bool {
     matches!(
         data,
-        [0x08 | 0x09, _, b'N', b'D', ..] | [0x08 | 0x09, _, b'A', b'S', ..]
+        [0x08 | 0x09, _, b'N', b'D', ..]
+            | [0x08 | 0x09, _, b'A', b'S', ..]
+            | [0x17, _, 0, 0, 0, 0, 0, 0, 0xFF, 0xFF, ..]
     )
 }
 
