@@ -21,13 +21,20 @@ struct Sim {
 
 impl Sim {
     fn start() -> Self {
-        let (child, rx) = common::spawn_lines(&[
+        Self::start_with(&[])
+    }
+
+    /// `sim` with more arguments.
+    fn start_with(args: &[&str]) -> Self {
+        let mut all = vec![
             "sim",
             "--link",
             "tcp-listen:127.0.0.1:0",
             "--duration",
             "300",
-        ]);
+        ];
+        all.extend_from_slice(args);
+        let (child, rx) = common::spawn_lines(&all);
         let link = loop {
             let line = rx.recv_timeout(GUARD).expect("sim prints its link");
             if let Some(rest) = line.split("(connect with ").nth(1) {
@@ -64,6 +71,19 @@ impl Drop for Sim {
         let _ = self.child.kill();
         let _ = self.child.wait();
     }
+}
+
+/// A virtual network of a coordinator alone, on TCP: the process and its link.
+fn lone_coordinator() -> (common::Running, String) {
+    let (child, rx) = common::spawn_lines(&["radio", "--coordinator", "tcp-listen:127.0.0.1:0"]);
+    let radio = common::Running(child);
+    let link = loop {
+        let line = rx.recv_timeout(GUARD).expect("radio prints its link");
+        if let Some(rest) = line.split("(connect with ").nth(1) {
+            break rest.split(')').next().unwrap().to_string();
+        }
+    };
+    (radio, link)
 }
 
 fn stderr(out: &Output) -> String {
@@ -232,17 +252,82 @@ fn nodes_lists_the_radios_that_answer_node_discovery() {
 
 #[test]
 fn nodes_says_when_no_radio_answers() {
-    // A network of a coordinator alone.
-    let (child, rx) = common::spawn_lines(&["radio", "--coordinator", "tcp-listen:127.0.0.1:0"]);
-    let _radio = common::Running(child);
-    let link = loop {
-        let line = rx.recv_timeout(GUARD).expect("radio prints its link");
-        if let Some(rest) = line.split("(connect with ").nth(1) {
-            break rest.split(')').next().unwrap().to_string();
-        }
-    };
+    let (_radio, link) = lone_coordinator();
     let out = nodes(&link, &["--window", "1"]);
     assert!(out.status.success(), "{out:?}");
     assert!(out.stdout.is_empty(), "{out:?}");
     assert!(stderr(&out).contains("no radio answered"), "{out:?}");
+}
+
+#[test]
+fn a_broadcast_remote_command_is_answered_by_every_radio() {
+    let sim = Sim::start_with(&["--mavs", "2"]);
+    let broadcast = |args: &[&str]| {
+        let mut all = vec!["--to", "000000000000ffff", "--window", "1"];
+        all.extend_from_slice(args);
+        sim.at(&all)
+    };
+    let lines = |out: &Output| {
+        let mut lines: Vec<String> = String::from_utf8_lossy(&out.stdout)
+            .lines()
+            .map(String::from)
+            .collect();
+        lines.sort();
+        lines
+    };
+    // Every MAV's radio sets its name, and each reads it back.
+    let out = broadcast(&["NI", "MAV"]);
+    assert!(out.status.success(), "{out:?}");
+    assert_eq!(
+        lines(&out),
+        ["0013a20040b599b9: NI: ok", "0013a20040b599bf: NI: ok"],
+        "{out:?}"
+    );
+    let out = broadcast(&["NI"]);
+    assert!(out.status.success(), "{out:?}");
+    assert_eq!(
+        lines(&out),
+        [
+            "0013a20040b599b9: NI = \"MAV\"",
+            "0013a20040b599bf: NI = \"MAV\""
+        ]
+    );
+    assert_eq!(sim.ok(&["--to", MAV, "NI"]), "NI = \"MAV\"\n");
+    // Refused by every radio: each says so, and the exit code is 1.
+    let out = broadcast(&["HV", "1"]);
+    assert_eq!(out.status.code(), Some(1), "{out:?}");
+    let refused = lines(&out);
+    assert_eq!(refused.len(), 2, "{out:?}");
+    assert!(
+        refused.iter().all(|l| l.contains("invalid_parameter")),
+        "{refused:?}"
+    );
+    assert!(
+        stderr(&out).contains("HV: 2 of 2 radios refused the command"),
+        "{out:?}"
+    );
+}
+
+#[test]
+fn a_broadcast_nobody_answers_exits_4() {
+    let (_radio, link) = lone_coordinator();
+    let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args([
+            "at",
+            "--link",
+            &link,
+            "--to",
+            "000000000000ffff",
+            "--window",
+            "1",
+            "VR",
+        ])
+        .output()
+        .expect("run mcp-gs at");
+    assert_eq!(out.status.code(), Some(4), "{out:?}");
+    assert!(out.stdout.is_empty(), "{out:?}");
+    assert!(
+        stderr(&out).contains("VR: no radio answered the broadcast within 1.0 s"),
+        "{out:?}"
+    );
 }

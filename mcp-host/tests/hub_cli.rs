@@ -1,5 +1,6 @@
 //! `mcp-gs hub` as an operator sees it: argument errors, the radio's outages said at
-//! the default log level, and a client's node discovery answered through it.
+//! the default log level, and a client's node discovery and broadcast remote AT command
+//! answered through it.
 
 use std::io::{BufRead, BufReader};
 use std::process::{Child, Command, Stdio};
@@ -169,7 +170,7 @@ fn a_hub_on_a_pty_listens_once_a_radio_is_there() {
 }
 
 #[test]
-fn node_discovery_through_the_hub_gets_every_answer() {
+fn node_discovery_and_broadcast_at_through_the_hub_get_every_answer() {
     // A simulated network of two MAVs, its coordinator on TCP.
     let mut sim = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
         .args(["sim", "--link", "tcp-listen:127.0.0.1:0", "--mavs", "2"])
@@ -201,6 +202,23 @@ fn node_discovery_through_the_hub_gets_every_answer() {
     assert_eq!(found.len(), 2, "{stdout}");
     assert!(
         found.iter().all(|line| line.contains(") router \" \"")),
+        "{stdout}"
+    );
+    // So does a broadcast remote AT command's.
+    let at = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args(["at", "--link", &format!("tcp:{addr}")])
+        .args(["--to", "000000000000ffff", "--window", "2", "VR"])
+        .env_remove("MCP_LOG")
+        .output()
+        .expect("run mcp-gs at");
+    let stdout = String::from_utf8_lossy(&at.stdout);
+    assert!(at.status.success(), "{at:?}");
+    let answers: Vec<&str> = stdout.lines().collect();
+    assert_eq!(answers.len(), 2, "{stdout}");
+    assert!(
+        answers
+            .iter()
+            .all(|line| line.ends_with(": VR = 4060 (0x4060, 16480)")),
         "{stdout}"
     );
 }

@@ -12,9 +12,18 @@ use mcp_host::render::json::hex;
 pub(crate) struct AtArgs {
     #[command(flatten)]
     link: LinkArgs,
-    /// Ask a remote radio (Remote AT Command, 0x17) instead of the local one.
+    /// Ask a remote radio (Remote AT Command, 0x17) instead of the local one; every
+    /// radio in range with 000000000000ffff (broadcast), one line each.
     #[arg(long, value_name = "ADDR", value_parser = crate::link_args::parse_address64)]
     to: Option<Address64>,
+    /// With --to 000000000000ffff: seconds to gather the radios' answers.
+    #[arg(
+        long,
+        value_name = "SECONDS",
+        default_value = "3",
+        value_parser = crate::link_args::parse_seconds
+    )]
+    window: f64,
     /// VALUE is text, not hex (the default for the text parameters NI, DN, BI and VL).
     #[arg(long)]
     text: bool,
@@ -100,6 +109,76 @@ fn value_line(name: &str, command: &[u8; 2], data: &[u8]) -> String {
     }
 }
 
+/// The line that shows a successful answer: the value read, or that the change or
+/// action was done.
+fn answer_line(name: &str, command: &[u8; 2], data: &[u8], set: bool) -> String {
+    if data.is_empty() && (set || ACTIONS.contains(&command)) {
+        format!("{name}: ok")
+    } else if data.is_empty() && !is_text(command) {
+        format!("{name}: ok (no value)")
+    } else {
+        value_line(name, command, data)
+    }
+}
+
+/// `at --to 000000000000ffff`: the command to every radio in range, and a line for each
+/// one's answer, `ADDR: ...`, as they come for `--window` seconds. A radio that refuses
+/// makes the exit code 1; no answer at all, 4.
+async fn broadcast(
+    args: &AtArgs,
+    sender: &mcp_host::CommandSender,
+    command: [u8; 2],
+    parameter: &[u8],
+) -> Result<(), Failure> {
+    let window = std::time::Duration::from_secs_f64(args.window);
+    let failed = |e| diagnosed(send_failure(e), &args.link, &sender.stats());
+    let mut answers = sender
+        .remote_at_answers(
+            Address64::BROADCAST,
+            command,
+            parameter,
+            !args.no_apply,
+            window,
+        )
+        .await
+        .map_err(failed)?;
+    let name = String::from_utf8_lossy(&command).into_owned();
+    let set = args.value.is_some();
+    let (mut answered, mut refused) = (0u32, 0u32);
+    while let Some(answer) = answers.next().await {
+        let answer = answer.map_err(failed)?;
+        let Ok(Frame::RemoteAtResponse(at)) = answer.parse() else {
+            continue;
+        };
+        answered += 1;
+        if at.status.is_ok() {
+            out!(
+                "{}: {}",
+                at.src64,
+                answer_line(&name, &command, at.data, set)
+            );
+        } else {
+            refused += 1;
+            out!("{}: {}", at.src64, explain(at.status, &name, None, set));
+        }
+    }
+    match (answered, refused) {
+        (0, _) => Err(Failure::new(
+            Failure::TIMEOUT,
+            format!(
+                "{name}: no radio answered the broadcast within {:.1} s: the others are off, \
+                 out of range, or in another network (ID, CH)",
+                window.as_secs_f64()
+            ),
+        )),
+        (_, 0) => Ok(()),
+        (_, n) => Err(Failure::new(
+            Failure::OTHER,
+            format!("{name}: {n} of {answered} radios refused the command"),
+        )),
+    }
+}
+
 fn parse_value(value: &str, text: bool) -> Result<Vec<u8>, String> {
     if value.is_empty() {
         // The frame would carry no parameter: the radio would read, not set.
@@ -149,6 +228,9 @@ pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
         None => Vec::new(),
     };
     let (_stream, sender) = args.link.open(false).await?;
+    if args.to == Some(Address64::BROADCAST) {
+        return broadcast(&args, &sender, command, &parameter).await;
+    }
     let timeout = Some(args.link.timeout());
     let response = match args.to {
         None if args.no_apply => sender.at_queued(command, &parameter, timeout).await,
@@ -177,13 +259,10 @@ pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
             explain(status, &name, args.to, args.value.is_some()),
         ));
     }
-    if data.is_empty() && (args.value.is_some() || ACTIONS.contains(&&command)) {
-        out!("{name}: ok");
-    } else if data.is_empty() && !is_text(&command) {
-        out!("{name}: ok (no value)");
-    } else {
-        out!("{}", value_line(&name, &command, data));
-    }
+    out!(
+        "{}",
+        answer_line(&name, &command, data, args.value.is_some())
+    );
     // The local radio's API mode, read in another than --api-mode (the AP answer reads
     // the same in both modes): the other frames will not.
     if let (None, b"AP", ApiModeChoice::Fixed(mode), &[ap]) =
