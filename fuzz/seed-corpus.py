@@ -75,6 +75,17 @@ TABLES = {
 }
 
 
+# A node discovery answer, as an AT Command Response to ND (frame id 1, status ok): MY,
+# SH and SL, the node identifier and its 0x00, the parent, device type (router),
+# status, profile id, manufacturer id, then the device type identifier and the RSSI
+# that a radio whose NO asks for them adds.
+ND_ANSWER = (
+    bytes.fromhex("88014E4400" "7D84" "0013A20040B599B9")
+    + b"MAV 1\x00"
+    + bytes.fromhex("FFFE" "01" "00" "C105" "101E" "000B0000" "28")
+)
+
+
 def checksum(data):
     return 0xFF - (sum(data) & 0xFF)
 
@@ -219,6 +230,10 @@ def main():
         write("host_codec", f"m{mode}-ap-whole-split", bytes([mode]) + stream_seed(stream, (7, 64, 1)), seen)
         for i, data in enumerate(ap_frames[mode][:12]):
             write(decoder, f"ap-frame-{i:02}", stream_seed(encode(data, mode)), seen)
+        # A node discovery answer.
+        write(decoder, "nd-answer", stream_seed(encode(ND_ANSWER, mode)), seen)
+        if mode == 1:
+            write("frame_roundtrip", "nd-answer", ND_ANSWER, seen)
         # Every table packet in a Receive Packet, back to back.
         rx = b"".join(encode(receive_packet(p), mode) for p in TABLES.values())
         write(decoder, "tables-in-receive-packets", stream_seed(rx, (3,)), seen)
