@@ -25,6 +25,9 @@
 //! in order for the first free id (or their deadline), and raw writes and transmits
 //! without status still go out at once.
 //!
+//! A radio in transparent mode (`AP=0`, as XBee modules leave the factory) speaks no API
+//! frames: [`command_mode`] puts it into API mode through its AT command mode (`+++`).
+//!
 //! [`CommandSender::discover`] finds the radios the local one can reach (node
 //! discovery, `ND`, in [`discovery`]); [`CommandSender::at_answers`] gathers every
 //! answer to any AT command that many radios answer.
@@ -68,6 +71,7 @@
 
 mod answers;
 pub mod codec;
+pub mod command_mode;
 pub mod discovery;
 mod driver;
 mod error;
