@@ -194,8 +194,9 @@ impl LinkArgs {
                 Failure::TIMEOUT,
                 format!(
                     "the radio on {} did not answer AT AP within {timeout:?}: it may be in \
-                     transparent mode (AP=0) or at another baud rate",
-                    self.link
+                     transparent mode (AP=0: `mcp-gs setup --link {}` puts it into API mode) \
+                     or at another baud rate",
+                    self.link, self.link
                 ),
             ),
             other => send_failure(other),
@@ -208,7 +209,7 @@ impl LinkArgs {
             Some(1) => Ok(ApiMode::Unescaped),
             Some(2) => Ok(ApiMode::Escaped),
             Some(0) => Err(Failure::input(
-                "the radio is in transparent mode (AP=0): set AP=1 or 2 with XCTU or `mcp-gs at`",
+                "the radio is in transparent mode (AP=0): `mcp-gs setup` puts it into API mode",
             )),
             other => Err(Failure::new(
                 Failure::OTHER,
@@ -285,7 +286,7 @@ pub(crate) fn diagnosis(
     {
         return Some(format!(
             "hint: {} came from the radio and none began a frame: the radio may be in \
-             transparent mode (AP=0; API mode needs AP=1 or AP=2), or the link's baud rate \
+             transparent mode (AP=0; `mcp-gs setup` puts it into API mode), or the link's baud rate \
              may differ from the radio's (give it as serial:PATH:BAUD; XBee modules ship at \
              9600)",
             crate::counted(stats.bytes_skipped, "byte")

@@ -24,6 +24,7 @@ mod ports;
 mod radio;
 mod replay;
 mod send;
+mod setup;
 mod sim;
 mod status;
 
@@ -62,6 +63,9 @@ enum Sub {
     Nodes(nodes::NodesArgs),
     /// List the serial ports present.
     Ports(ports::PortsArgs),
+    /// Put the local radio into API mode through its AT command mode (+++), as a radio
+    /// in transparent mode (AP=0, as it leaves the factory) needs.
+    Setup(setup::SetupArgs),
     /// Run a virtual XBee network between links (radios emulated in software).
     Radio(radio::RadioArgs),
     /// Run simulated MAVs behind a virtual XBee network on a link.
@@ -266,6 +270,7 @@ async fn main() -> ExitCode {
         Sub::At(args) => at::run(args).await,
         Sub::Nodes(args) => nodes::run(args).await,
         Sub::Ports(args) => ports::run(args),
+        Sub::Setup(args) => setup::run(args).await,
         Sub::Decode(args) => decode::run(args),
         Sub::Encode(args) => encode::run(args),
         Sub::Radio(args) => radio::run(args).await,

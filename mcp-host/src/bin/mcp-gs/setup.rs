@@ -1,0 +1,234 @@
+//! `mcp-gs setup`: put the local radio into API mode through its AT command mode (`+++`),
+//! as a radio fresh from the factory (transparent mode, `AP=0`) needs before anything
+//! else here can talk to it.
+
+use std::time::Duration;
+
+use clap::Args;
+use futures::StreamExt;
+use mcp_host::command_mode::{CommandMode, CommandModeError};
+use mcp_host::{ConnectError, Connector, Link, LinkOptions, ReconnectPolicy};
+use xbee_api::{ApiMode, Frame};
+
+use crate::link_args::{connect_failure, parse_seconds, send_failure};
+use crate::{ApiModeArg, Failure};
+
+/// Arguments of `setup`.
+#[derive(Debug, Args)]
+pub(crate) struct SetupArgs {
+    #[arg(
+        long,
+        value_name = "LINK",
+        help = "The local radio: serial:PATH[:BAUD] (XBee modules leave the factory at 9600 \
+                baud: serial:/dev/ttyUSB0:9600) or tcp:HOST:PORT (a serial-to-TCP bridge)"
+    )]
+    link: Link,
+    /// The API mode to set (AP): 1, as the deployed MAVs use, or 2 (escaped).
+    #[arg(long, value_name = "1|2", default_value = "1")]
+    api_mode: ApiModeArg,
+    /// The radio's guard time (its GT), in milliseconds: the silence it needs before and
+    /// after +++.
+    #[arg(
+        long,
+        value_name = "MS",
+        default_value_t = 1000,
+        value_parser = clap::value_parser!(u64).range(1..=10_000)
+    )]
+    guard_time: u64,
+    /// Also set the radio's UART baud rate (BD): 1200, 2400, 4800, 9600, 19200, 38400,
+    /// 57600, 115200 (the links' default) or 230400. A serial link is checked at the new
+    /// rate; a serial-to-TCP bridge must be set to it by hand.
+    #[arg(long, value_name = "BAUD", value_parser = parse_baud)]
+    baud: Option<u32>,
+    /// Seconds to wait for each answer of the radio.
+    #[arg(long, value_name = "SECONDS", default_value_t = 3.0, value_parser = parse_seconds)]
+    timeout: f64,
+}
+
+/// The baud rates `BD` selects, by its value.
+const BAUD_RATES: [u32; 9] = [
+    1200, 2400, 4800, 9600, 19_200, 38_400, 57_600, 115_200, 230_400,
+];
+
+fn parse_baud(s: &str) -> Result<u32, String> {
+    s.parse::<u32>()
+        .ok()
+        .filter(|baud| BAUD_RATES.contains(baud))
+        .ok_or_else(|| {
+            let rates: Vec<String> = BAUD_RATES.iter().map(u32::to_string).collect();
+            format!(
+                "a baud rate the radio takes: {}; got `{s}`",
+                rates.join(", ")
+            )
+        })
+}
+
+/// What a `BD` value means: the baud rate, or the value as the radio gave it.
+fn baud_of(bd: &str) -> String {
+    usize::from_str_radix(bd, 16)
+        .ok()
+        .and_then(|i| BAUD_RATES.get(i))
+        .map_or_else(|| format!("0x{bd}"), u32::to_string)
+}
+
+/// `AP`'s value for `mode`.
+fn ap(mode: ApiMode) -> u8 {
+    match mode {
+        ApiMode::Unescaped => 1,
+        ApiMode::Escaped => 2,
+    }
+}
+
+/// What an `AP` value means.
+fn meaning(ap: &str) -> &'static str {
+    match ap {
+        "0" => "transparent mode",
+        "1" => "API mode 1",
+        "2" => "API mode 2, escaped",
+        _ => "a mode this ground station does not speak",
+    }
+}
+
+/// Runs `setup`.
+pub(crate) async fn run(args: SetupArgs) -> Result<(), Failure> {
+    if !matches!(args.link, Link::Serial { .. } | Link::Tcp { .. }) {
+        return Err(Failure::input(
+            "setup needs a link to a radio that is there: serial:PATH[:BAUD] or tcp:HOST:PORT",
+        ));
+    }
+    let timeout = Duration::from_secs_f64(args.timeout);
+    let guard = Duration::from_millis(args.guard_time);
+    let target = ap(args.api_mode.0);
+    let options = LinkOptions {
+        connect_timeout: timeout,
+        reconnect: ReconnectPolicy::disabled(),
+        ..LinkOptions::default()
+    };
+    let opened = async { Connector::new(&args.link, &options).await?.open().await };
+    let port = opened
+        .await
+        .map_err(|e| connect_failure(&args.link, ConnectError::Link(e)))?;
+    eprintln!("mcp-gs: entering the radio's command mode (+++ between {guard:?} of silence)");
+    let failed = |e| command_failure(e, &args.link);
+    let mut radio = CommandMode::enter(port, guard, timeout)
+        .await
+        .map_err(failed)?;
+    let was = radio.read(*b"AP").await.map_err(failed)?;
+    let target_text = target.to_string();
+    let mut changes = Vec::new();
+    if was == target_text {
+        changes.push(format!("AP = {was} ({}) already", meaning(&was)));
+    } else {
+        radio.set(*b"AP", &target_text).await.map_err(failed)?;
+        changes.push(format!(
+            "AP = {was} ({}) -> {target} ({})",
+            meaning(&was),
+            meaning(&target_text)
+        ));
+    }
+    if let Some(baud) = args.baud {
+        let bd = BAUD_RATES
+            .iter()
+            .position(|&b| b == baud)
+            .unwrap_or_default();
+        let bd = format!("{bd:X}");
+        let was = radio.read(*b"BD").await.map_err(failed)?;
+        if was == bd {
+            changes.push(format!("BD = {was} ({baud} baud) already"));
+        } else {
+            radio.set(*b"BD", &bd).await.map_err(failed)?;
+            changes.push(format!(
+                "BD = {was} ({} baud) -> {bd} ({baud} baud)",
+                baud_of(&was)
+            ));
+        }
+    }
+    if changes.iter().any(|c| !c.ends_with("already")) {
+        radio.set(*b"WR", "").await.map_err(failed)?;
+    }
+    for change in &changes {
+        if change.ends_with("already") {
+            out!("{change}");
+        } else {
+            out!("{change}, saved");
+        }
+    }
+    // Leaving command mode applies the changes; the port is closed for the check.
+    drop(radio.exit().await.map_err(failed)?);
+    let link = match (&args.link, args.baud) {
+        (Link::Serial { path, .. }, Some(baud)) => Link::Serial {
+            path: path.clone(),
+            baud,
+        },
+        (Link::Tcp { .. }, Some(baud)) => {
+            eprintln!(
+                "mcp-gs: the radio's UART now runs at {baud} baud: set the bridge's serial \
+                 side to it before the check below can pass"
+            );
+            args.link.clone()
+        }
+        (link, _) => link.clone(),
+    };
+    check(&link, args.api_mode.0, options, timeout).await
+}
+
+/// Asks the radio its `AP` in API frames of the mode set: that it answers is the proof.
+async fn check(
+    link: &Link,
+    mode: ApiMode,
+    options: LinkOptions,
+    timeout: Duration,
+) -> Result<(), Failure> {
+    let options = LinkOptions {
+        api_mode: mode,
+        send_timeout: timeout,
+        ..options
+    };
+    let (mut stream, sender) = mcp_host::connect(link, options)
+        .await
+        .map_err(|e| connect_failure(link, e))?;
+    let answer = sender.at(*b"AP", &[], None).await;
+    sender.close();
+    while stream.next().await.is_some() {}
+    let answer = answer.map_err(send_failure)?;
+    match answer.parse() {
+        Ok(Frame::AtCommandResponse(at)) if at.status.is_ok() && at.data == [ap(mode)] => {
+            let flag = match mode {
+                ApiMode::Unescaped => String::new(),
+                ApiMode::Escaped => " with --api-mode 2".to_owned(),
+            };
+            out!(
+                "checked: the radio answers API frames in mode {} (use --link {link}{flag})",
+                ap(mode)
+            );
+            Ok(())
+        }
+        _ => Err(Failure::new(
+            Failure::OTHER,
+            format!(
+                "the radio answered AT AP in API mode {} with {}, not AP = {}",
+                ap(mode),
+                mcp_host::render::json::hex(answer.data()),
+                ap(mode)
+            ),
+        )),
+    }
+}
+
+/// A failed command mode exchange, with what the operator can do about it.
+fn command_failure(error: CommandModeError, link: &Link) -> Failure {
+    match error {
+        CommandModeError::NoAnswer { ref sent, .. } if sent == "+++" => Failure::new(
+            Failure::TIMEOUT,
+            format!(
+                "{error}: the radio may be in API mode already (`mcp-gs at --link {link} \
+                 --api-mode auto AP` reads its mode), at another baud rate (XBee modules \
+                 leave the factory at 9600: serial:PATH:9600), or need a longer \
+                 --guard-time (its GT)"
+            ),
+        ),
+        CommandModeError::NoAnswer { .. } => Failure::new(Failure::TIMEOUT, error.to_string()),
+        CommandModeError::Io(_) | CommandModeError::Closed => Failure::link(error.to_string()),
+        other => Failure::new(Failure::OTHER, other.to_string()),
+    }
+}

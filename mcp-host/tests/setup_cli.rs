@@ -1,0 +1,280 @@
+//! `mcp-gs setup` as a process against a fake radio on a real pseudo-terminal: a radio
+//! in transparent mode (AP=0), as XBee modules leave the factory, is put into API mode
+//! through its AT command mode (`+++`, `ATAP`, `ATAPn`, `ATWR`, `ATCN`) and then answers
+//! API frames; one already in API mode does not answer `+++`, and the operator is told
+//! what to do.
+
+use std::process::Output;
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use mcp_host::{Connector, Link, LinkOptions, Transport};
+use tokio::io::{AsyncReadExt, AsyncWriteExt};
+use xbee_api::{ApiMode, AtCommandRepr, AtCommandResponseRepr, AtStatus, Decoder, EncodeFrame};
+
+/// Failure guard only.
+const GUARD: Duration = Duration::from_secs(30);
+
+/// What the fake radio holds and what it was told.
+#[derive(Debug, Default)]
+struct Radio {
+    /// Its API mode setting: 0 transparent, 1 or 2.
+    ap: u8,
+    /// An `AP` set in command mode, applied when command mode is left.
+    pending: Option<u8>,
+    /// Its baud rate setting (`BD`: 3 is 9600 baud, 7 is 115200).
+    bd: u8,
+    /// A `BD` set in command mode, applied when command mode is left.
+    pending_bd: Option<u8>,
+    /// `WR` was given.
+    saved: bool,
+    /// The command mode lines it got, in order.
+    commands: Vec<String>,
+}
+
+/// Plays the radio on the pseudo-terminal of `connector`, for each device that opens
+/// its far end in turn.
+async fn play(mut connector: Connector, radio: Arc<Mutex<Radio>>) {
+    while let Ok(port) = connector.open().await {
+        serve(port, &radio).await;
+    }
+}
+
+/// One device's session: transparent mode and its command mode while `AP` is 0, API
+/// frames (an `AT AP` answered) otherwise.
+async fn serve(mut port: Transport, radio: &Mutex<Radio>) {
+    // What a radio in transparent mode passes on from the air, unasked.
+    if radio.lock().unwrap().ap == 0 && port.write_all(b"HELLO FROM THE AIR\r").await.is_err() {
+        return;
+    }
+    let mut command_mode = false;
+    let mut line = Vec::new();
+    let mut decoder: Option<(ApiMode, Decoder)> = None;
+    let mut buf = [0u8; 256];
+    loop {
+        let n = match port.read(&mut buf).await {
+            Ok(0) | Err(_) => return,
+            Ok(n) => n,
+        };
+        let bytes = &buf[..n];
+        let ap = radio.lock().unwrap().ap;
+        let mut out = Vec::new();
+        if ap == 0 {
+            if !command_mode {
+                // `+++` alone after silence (what else comes goes over the air).
+                if bytes == b"+++" {
+                    command_mode = true;
+                    out.extend_from_slice(b"OK\r");
+                }
+            } else {
+                line.extend_from_slice(bytes);
+                while let Some(end) = line.iter().position(|&b| b == b'\r') {
+                    let text: Vec<u8> = line.drain(..=end).collect();
+                    let text = String::from_utf8_lossy(&text[..end]).into_owned();
+                    let mut radio = radio.lock().unwrap();
+                    radio.commands.push(text.clone());
+                    let answer = match text.as_str() {
+                        "ATAP" => format!("{:X}", radio.ap),
+                        "ATAP0" | "ATAP1" | "ATAP2" => {
+                            radio.pending = text[4..].parse().ok();
+                            "OK".to_owned()
+                        }
+                        "ATBD" => format!("{:X}", radio.bd),
+                        "ATBD3" | "ATBD7" => {
+                            radio.pending_bd = text[4..].parse().ok();
+                            "OK".to_owned()
+                        }
+                        "ATWR" => {
+                            radio.saved = true;
+                            "OK".to_owned()
+                        }
+                        "ATCN" => {
+                            command_mode = false;
+                            if let Some(ap) = radio.pending.take() {
+                                radio.ap = ap;
+                            }
+                            if let Some(bd) = radio.pending_bd.take() {
+                                radio.bd = bd;
+                            }
+                            "OK".to_owned()
+                        }
+                        _ => "ERROR".to_owned(),
+                    };
+                    out.extend_from_slice(format!("{answer}\r").as_bytes());
+                }
+            }
+        } else {
+            let mode = if ap == 1 {
+                ApiMode::Unescaped
+            } else {
+                ApiMode::Escaped
+            };
+            let (_, decoder) = decoder.get_or_insert_with(|| (mode, Decoder::new(mode)));
+            let mut requests = Vec::new();
+            decoder.decode_each(bytes, |event| {
+                if let Ok(frame) = event {
+                    if let Ok(at) = AtCommandRepr::parse_bytes(frame.data()) {
+                        requests.push((at.frame_id, at.command));
+                    }
+                }
+            });
+            for (frame_id, command) in requests {
+                let value = [ap];
+                let response = AtCommandResponseRepr {
+                    frame_id,
+                    command,
+                    status: if command == *b"AP" {
+                        AtStatus::Ok
+                    } else {
+                        AtStatus::InvalidCommand
+                    },
+                    data: if command == *b"AP" { &value } else { &[] },
+                };
+                let mut frame = vec![0u8; response.encoded_len(mode)];
+                let n = response.encode(mode, &mut frame).unwrap();
+                out.extend_from_slice(&frame[..n]);
+            }
+        }
+        if !out.is_empty() && port.write_all(&out).await.is_err() {
+            return;
+        }
+    }
+}
+
+/// A fake radio with `AP` = `ap` on a pseudo-terminal: its state, and the far end's
+/// path, for `mcp-gs` to open as `serial:PATH`.
+async fn fake_radio(ap: u8) -> (Arc<Mutex<Radio>>, String) {
+    let connector = Connector::new(&Link::Pty, &LinkOptions::default())
+        .await
+        .unwrap();
+    let path = connector.pty_path().unwrap().display().to_string();
+    let radio = Arc::new(Mutex::new(Radio {
+        ap,
+        bd: 3,
+        ..Radio::default()
+    }));
+    tokio::spawn(play(connector, radio.clone()));
+    (radio, path)
+}
+
+/// `mcp-gs setup --link LINK ARGS...`, with a short guard time.
+async fn setup(link: &str, args: &[&str]) -> Output {
+    let run = tokio::process::Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args(["setup", "--link", link, "--guard-time", "50"])
+        .args(args)
+        .env_remove("MCP_LOG")
+        .kill_on_drop(true)
+        .output();
+    tokio::time::timeout(GUARD, run)
+        .await
+        .expect("mcp-gs setup ends")
+        .unwrap()
+}
+
+fn stdout(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+#[tokio::test]
+async fn a_radio_in_transparent_mode_is_put_into_api_mode_and_answers_in_it() {
+    for (mode, meaning, flag) in [
+        ("1", "API mode 1", ""),
+        ("2", "API mode 2, escaped", " with --api-mode 2"),
+    ] {
+        let (radio, path) = fake_radio(0).await;
+        let out = setup(&format!("serial:{path}"), &["--api-mode", mode]).await;
+        assert!(out.status.success(), "{out:?}");
+        assert_eq!(
+            stdout(&out),
+            format!(
+                "AP = 0 (transparent mode) -> {mode} ({meaning}), saved\n\
+                 checked: the radio answers API frames in mode {mode} \
+                 (use --link serial:{path}:115200{flag})\n"
+            ),
+            "{out:?}"
+        );
+        let radio = radio.lock().unwrap();
+        assert_eq!(
+            radio.commands,
+            [
+                "ATAP".to_owned(),
+                format!("ATAP{mode}"),
+                "ATWR".into(),
+                "ATCN".into()
+            ]
+        );
+        assert_eq!(radio.ap.to_string(), mode);
+        assert!(radio.saved);
+    }
+}
+
+#[tokio::test]
+async fn the_baud_rate_is_set_with_the_mode_and_the_check_runs_at_it() {
+    // A radio fresh from the factory: transparent mode, 9600 baud.
+    let (radio, path) = fake_radio(0).await;
+    let out = setup(&format!("serial:{path}:9600"), &["--baud", "115200"]).await;
+    assert!(out.status.success(), "{out:?}");
+    assert_eq!(
+        stdout(&out),
+        format!(
+            "AP = 0 (transparent mode) -> 1 (API mode 1), saved\n\
+             BD = 3 (9600 baud) -> 7 (115200 baud), saved\n\
+             checked: the radio answers API frames in mode 1 (use --link serial:{path}:115200)\n"
+        ),
+        "{out:?}"
+    );
+    let radio = radio.lock().unwrap();
+    assert_eq!(
+        radio.commands,
+        ["ATAP", "ATAP1", "ATBD", "ATBD7", "ATWR", "ATCN"]
+    );
+    assert_eq!((radio.ap, radio.bd), (1, 7));
+}
+
+#[tokio::test]
+async fn a_baud_rate_the_radio_does_not_take_is_refused() {
+    let out = setup("serial:/dev/null", &["--baud", "100000"]).await;
+    assert_eq!(out.status.code(), Some(2), "{out:?}");
+    assert!(
+        stderr(&out).contains("a baud rate the radio takes: 1200, 2400"),
+        "{out:?}"
+    );
+}
+
+#[tokio::test]
+async fn transparent_mode_is_no_api_mode_to_set() {
+    let out = setup("serial:/dev/null", &["--api-mode", "0"]).await;
+    assert_eq!(out.status.code(), Some(2), "{out:?}");
+    assert!(
+        stderr(&out).contains("API mode must be 1 or 2, got `0`"),
+        "{out:?}"
+    );
+}
+
+#[tokio::test]
+async fn a_radio_in_api_mode_does_not_answer_plus_plus_plus_and_the_operator_is_told() {
+    let (radio, path) = fake_radio(1).await;
+    let out = setup(&format!("serial:{path}"), &["--timeout", "1"]).await;
+    assert_eq!(out.status.code(), Some(4), "{out:?}");
+    assert!(out.stdout.is_empty(), "{out:?}");
+    let err = stderr(&out);
+    assert!(err.contains("no answer to +++"), "{err}");
+    assert!(err.contains("may be in API mode already"), "{err}");
+    let read_mode = format!("mcp-gs at --link serial:{path}:115200 --api-mode auto AP");
+    assert!(err.contains(&read_mode), "{err}");
+    assert!(radio.lock().unwrap().commands.is_empty());
+}
+
+#[tokio::test]
+async fn a_link_to_no_radio_is_refused() {
+    let out = setup("pty", &[]).await;
+    assert_eq!(out.status.code(), Some(2), "{out:?}");
+    assert!(
+        stderr(&out).contains("setup needs a link to a radio that is there"),
+        "{out:?}"
+    );
+}
