@@ -207,6 +207,23 @@ enum PendingKind {
     },
 }
 
+impl PendingKind {
+    /// Fails the request with `error`. A report request tells its caller nothing here:
+    /// its report waiter does.
+    fn fail(self, error: SendError) {
+        match self {
+            PendingKind::Transmit { reply, .. } => {
+                let _ = reply.send(Err(error));
+            }
+            PendingKind::Frame { reply } => {
+                let _ = reply.send(Err(error));
+            }
+            PendingKind::Answers { answers } => fail_answers(&answers, error),
+            PendingKind::Request { .. } => {}
+        }
+    }
+}
+
 #[derive(Debug)]
 struct Waiter {
     id: u64,
@@ -890,34 +907,8 @@ impl Driver {
                 timeout,
                 reply,
             } => {
-                let pending = Pending {
-                    deadline,
-                    timeout,
-                    kind: PendingKind::Frame { reply },
-                };
-                match self.ids.insert(pending) {
-                    Ok(id) => {
-                        let mut data = BytesMut::from(&data[..]);
-                        data[1] = id;
-                        if let Err(e) = write_raw(self.options.api_mode, out, &data) {
-                            if let Some(Pending {
-                                kind: PendingKind::Frame { reply },
-                                ..
-                            }) = self.ids.remove(id)
-                            {
-                                let _ = reply.send(Err(e));
-                            }
-                        }
-                    }
-                    Err(pending) => {
-                        if let PendingKind::Frame { reply } = pending.kind {
-                            let _ = reply.send(Err(SendError::Timeout {
-                                frame_id: 0,
-                                timeout,
-                            }));
-                        }
-                    }
-                }
+                let kind = PendingKind::Frame { reply };
+                self.write_under_id(out, &data, deadline, timeout, kind);
             }
             Op::Write { data, reply } => {
                 let _ = reply.send(write_raw(self.options.api_mode, out, &data));
@@ -928,37 +919,8 @@ impl Driver {
                 timeout,
                 answers,
             } => {
-                let pending = Pending {
-                    deadline,
-                    timeout,
-                    kind: PendingKind::Answers { answers },
-                };
-                match self.ids.insert(pending) {
-                    Ok(id) => {
-                        let mut data = BytesMut::from(&data[..]);
-                        data[1] = id;
-                        if let Err(e) = write_raw(self.options.api_mode, out, &data) {
-                            if let Some(Pending {
-                                kind: PendingKind::Answers { answers },
-                                ..
-                            }) = self.ids.remove(id)
-                            {
-                                fail_answers(&answers, e);
-                            }
-                        }
-                    }
-                    Err(pending) => {
-                        if let PendingKind::Answers { answers } = pending.kind {
-                            fail_answers(
-                                &answers,
-                                SendError::Timeout {
-                                    frame_id: 0,
-                                    timeout,
-                                },
-                            );
-                        }
-                    }
-                }
+                let kind = PendingKind::Answers { answers };
+                self.write_under_id(out, &data, deadline, timeout, kind);
             }
         }
     }
@@ -1022,21 +984,46 @@ impl Driver {
         }
     }
 
+    /// Takes a frame id for a request that awaits its answers as `kind`, and writes its
+    /// frame `data` under it; the request fails if the write does, or if no id is free.
+    fn write_under_id(
+        &mut self,
+        out: &mut BytesMut,
+        data: &[u8],
+        deadline: Instant,
+        timeout: Duration,
+        kind: PendingKind,
+    ) {
+        let pending = Pending {
+            deadline,
+            timeout,
+            kind,
+        };
+        match self.ids.insert(pending) {
+            Ok(id) => {
+                let mut data = BytesMut::from(data);
+                if let Some(slot) = data.get_mut(1) {
+                    *slot = id;
+                }
+                if let Err(e) = write_raw(self.options.api_mode, out, &data) {
+                    if let Some(pending) = self.ids.remove(id) {
+                        pending.kind.fail(e);
+                    }
+                }
+            }
+            Err(pending) => pending.kind.fail(SendError::Timeout {
+                frame_id: 0,
+                timeout,
+            }),
+        }
+    }
+
     /// Fails every request in flight after a disconnection.
     fn fail_all(&mut self, reason: &str) {
         let error = SendError::Disconnected {
             reason: reason.to_owned(),
         };
-        self.ids.drain(|_, p| match p.kind {
-            PendingKind::Transmit { reply, .. } => {
-                let _ = reply.send(Err(error.clone()));
-            }
-            PendingKind::Frame { reply } => {
-                let _ = reply.send(Err(error.clone()));
-            }
-            PendingKind::Answers { answers } => fail_answers(&answers, error.clone()),
-            PendingKind::Request { .. } => {}
-        });
+        self.ids.drain(|_, p| p.kind.fail(error.clone()));
         for w in self.waiters.drain(..) {
             let _ = w.reply.send(Err(error.clone().into()));
         }

@@ -371,19 +371,7 @@ impl CommandSender {
         apply: bool,
         timeout: Option<Duration>,
     ) -> Result<OwnedFrame, SendError> {
-        let frame = xbee_api::RemoteAtCommandRepr {
-            frame_id: 0,
-            dst64: to,
-            dst16: Address16::UNKNOWN,
-            options: if apply {
-                xbee_api::RemoteAtCommandRepr::APPLY_CHANGES
-            } else {
-                0
-            },
-            command,
-            parameter,
-        };
-        let data = frame_data(&frame)?;
+        let data = remote_at_frame(to, command, parameter, apply)?;
         self.send_frame(&data, timeout).await
     }
 
@@ -449,19 +437,8 @@ impl CommandSender {
         apply: bool,
         window: Duration,
     ) -> Result<Answers, SendError> {
-        let frame = xbee_api::RemoteAtCommandRepr {
-            frame_id: 0,
-            dst64: to,
-            dst16: Address16::UNKNOWN,
-            options: if apply {
-                xbee_api::RemoteAtCommandRepr::APPLY_CHANGES
-            } else {
-                0
-            },
-            command,
-            parameter,
-        };
-        self.answers(&frame_data(&frame)?, window).await
+        let data = remote_at_frame(to, command, parameter, apply)?;
+        self.answers(&data, window).await
     }
 
     /// Queues the request `data` (a frame id at byte 1) whose answers are gathered for
@@ -632,6 +609,28 @@ impl CommandSender {
 }
 
 /// The frame data of `frame` (frame type first).
+/// The frame data of a Remote AT Command (frame id 0, set when it is written) to `to`,
+/// with the apply-changes option if `apply`.
+fn remote_at_frame(
+    to: Address64,
+    command: [u8; 2],
+    parameter: &[u8],
+    apply: bool,
+) -> Result<Vec<u8>, SendError> {
+    frame_data(&xbee_api::RemoteAtCommandRepr {
+        frame_id: 0,
+        dst64: to,
+        dst16: Address16::UNKNOWN,
+        options: if apply {
+            xbee_api::RemoteAtCommandRepr::APPLY_CHANGES
+        } else {
+            0
+        },
+        command,
+        parameter,
+    })
+}
+
 fn frame_data(frame: &impl xbee_api::EncodeFrame) -> Result<Vec<u8>, SendError> {
     let len = frame.frame_data_len();
     let mut data = vec![0u8; len];

@@ -522,22 +522,33 @@ impl State {
         self.send_to(from, &response, true);
     }
 
+    /// The other nodes `from`'s radio reaches, as a broadcast from it would: none while
+    /// it is down or cut off.
+    fn reached_from(&self, from: Address64) -> Vec<Address64> {
+        let reachable = |n: &Node| n.connected && !n.cut;
+        match self.nodes.get(&from) {
+            Some(me) if reachable(me) => self
+                .nodes
+                .iter()
+                .filter(|(a, n)| **a != from && reachable(n))
+                .map(|(a, _)| *a)
+                .collect(),
+            _ => Vec::new(),
+        }
+    }
+
     /// Node discovery (`ND`) from `from`'s radio: an AT Command Response for each other
     /// node it can reach (with `ND NAME`: the one whose `NI` is NAME), all at once, as
     /// the answers of a network of quick radios (a real one spreads them over `NT`).
     /// A radio cut off from the network finds none.
     fn node_discovery(&mut self, from: Address64, at: &AtCommandRepr<'_>) {
-        let reachable = |n: &Node| n.connected && !n.cut;
-        let found: Vec<(Address64, Address16, Vec<u8>)> = match self.nodes.get(&from) {
-            Some(me) if reachable(me) => self
-                .nodes
-                .iter()
-                .filter(|(a, n)| **a != from && reachable(n))
-                .filter(|(_, n)| at.parameter.is_empty() || n.name == at.parameter)
-                .map(|(a, n)| (*a, n.addr16, n.name.clone()))
-                .collect(),
-            _ => Vec::new(),
-        };
+        let found: Vec<(Address64, Address16, Vec<u8>)> = self
+            .reached_from(from)
+            .into_iter()
+            .filter_map(|a| self.nodes.get(&a).map(|n| (a, n)))
+            .filter(|(_, n)| at.parameter.is_empty() || n.name == at.parameter)
+            .map(|(a, n)| (a, n.addr16, n.name.clone()))
+            .collect();
         self.emit(NetEvent::AtCommand {
             node: from,
             command: at.command,
@@ -620,17 +631,7 @@ impl State {
     /// carries it out and answers with its own address, as radios in range do; a radio
     /// cut off from the network reaches none, and nobody answers.
     fn broadcast_remote_at_command(&mut self, from: Address64, at: &RemoteAtCommandRepr<'_>) {
-        let reachable = |n: &Node| n.connected && !n.cut;
-        let targets: Vec<Address64> = match self.nodes.get(&from) {
-            Some(me) if reachable(me) => self
-                .nodes
-                .iter()
-                .filter(|(a, n)| **a != from && reachable(n))
-                .map(|(a, _)| *a)
-                .collect(),
-            _ => Vec::new(),
-        };
-        for target in targets {
+        for target in self.reached_from(from) {
             let mut value = [0u8; AT_VALUE_MAX];
             let (status, len) = self.at_value(target, at.command, at.parameter, &mut value);
             self.emit(NetEvent::AtCommand {
