@@ -119,15 +119,29 @@ pub(crate) async fn discover(
 }
 
 /// How long [`CommandSender::discover`] listens when given no window: the radio's
-/// discovery time (its `NT`, read from it; [`DEFAULT_DISCOVERY_TIME`] if it does not
-/// say) and [`DISCOVERY_MARGIN`].
+/// longest discovery time, `N?` (in milliseconds, on DigiMesh and 802.15.4 radios, which
+/// add the network's delays to `NT`), else its discovery time `NT` (tenths of a second,
+/// on Zigbee radios, which have no `N?`), else [`DEFAULT_DISCOVERY_TIME`]; and
+/// [`DISCOVERY_MARGIN`] more.
 pub async fn window(sender: &CommandSender) -> Result<Duration, SendError> {
-    let response = sender.at(*b"NT", &[], None).await?;
-    let tenths = match response.parse() {
-        Ok(Frame::AtCommandResponse(at)) if at.status.is_ok() && matches!(at.data.len(), 1..=2) => {
-            at.data.iter().fold(0u64, |n, &b| (n << 8) | u64::from(b))
-        }
-        _ => return Ok(DEFAULT_DISCOVERY_TIME + DISCOVERY_MARGIN),
+    let time = match read_number(sender, *b"N?").await? {
+        Some(ms) => Duration::from_millis(ms),
+        None => match read_number(sender, *b"NT").await? {
+            Some(tenths) => Duration::from_millis(tenths * 100),
+            None => DEFAULT_DISCOVERY_TIME,
+        },
     };
-    Ok(Duration::from_millis(tenths * 100) + DISCOVERY_MARGIN)
+    Ok(time + DISCOVERY_MARGIN)
+}
+
+/// A number the local radio answers `command` with (1 to 4 bytes, big-endian); `None` if
+/// it refuses the command or answers otherwise.
+async fn read_number(sender: &CommandSender, command: [u8; 2]) -> Result<Option<u64>, SendError> {
+    let response = sender.at(command, &[], None).await?;
+    Ok(match response.parse() {
+        Ok(Frame::AtCommandResponse(at)) if at.status.is_ok() && matches!(at.data.len(), 1..=4) => {
+            Some(at.data.iter().fold(0u64, |n, &b| (n << 8) | u64::from(b)))
+        }
+        _ => None,
+    })
 }

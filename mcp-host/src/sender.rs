@@ -464,12 +464,10 @@ impl CommandSender {
     }
 
     /// Node discovery: the radios the local one can reach, each once, in the order
-    /// they answered. Sends `ND` and gathers the answers for `window`; `None` reads the
-    /// radio's discovery time (`NT`, [`DEFAULT_DISCOVERY_TIME`](crate::discovery::DEFAULT_DISCOVERY_TIME)
-    /// if it does not say) and waits that long and
-    /// [`DISCOVERY_MARGIN`](crate::discovery::DISCOVERY_MARGIN) more. The local radio
-    /// is not among them. An answer that cannot be read is left out, with a warning in
-    /// the log.
+    /// they answered. Sends `ND` and gathers the answers for `window`; `None` waits as
+    /// long as the radio's discovery time says
+    /// ([`discovery::window`](crate::discovery::window)). The local radio is not among
+    /// them. An answer that cannot be read is left out, with a warning in the log.
     ///
     /// ```no_run
     /// # async fn run(sender: mcp_host::CommandSender) -> Result<(), Box<dyn std::error::Error>> {

@@ -185,6 +185,30 @@ async fn a_link_lost_during_discovery_ends_the_answers_with_why() {
 }
 
 #[tokio::test]
+async fn the_window_is_the_radios_longest_discovery_time_where_it_gives_one() {
+    let (_stream, sender, mut fake) = common::pty_link(ApiMode::Unescaped).await;
+    let window = tokio::spawn({
+        let sender = sender.clone();
+        async move { mcp_host::discovery::window(&sender).await }
+    });
+    // A DigiMesh radio: N? is NT and the network's delays, in milliseconds.
+    let id = at_command(&mut fake, *b"N?").await;
+    fake.send(&AtCommandResponseRepr {
+        frame_id: id,
+        command: *b"N?",
+        status: AtStatus::Ok,
+        data: &[0x00, 0x00, 0x1F, 0x40],
+    })
+    .await;
+    let window = tokio::time::timeout(GUARD, window)
+        .await
+        .unwrap()
+        .unwrap()
+        .unwrap();
+    assert_eq!(window, Duration::from_secs(8) + DISCOVERY_MARGIN);
+}
+
+#[tokio::test]
 async fn the_emulated_network_answers_with_every_radio_it_can_reach() {
     let network = Network::new(NetworkConfig::default());
     let coord = network

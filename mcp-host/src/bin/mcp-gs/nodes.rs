@@ -13,8 +13,8 @@ use crate::{Failure, Format};
 pub(crate) struct NodesArgs {
     #[command(flatten)]
     link: LinkArgs,
-    /// Seconds to gather answers (default: the radio's discovery time, NT, and a second
-    /// more).
+    /// Seconds to gather answers (default: the radio's discovery time, N? or NT, and a
+    /// second more).
     #[arg(long, value_name = "SECONDS", value_parser = crate::link_args::parse_seconds)]
     window: Option<f64>,
     /// Output format: a line per radio, or a JSON object per radio.
