@@ -315,6 +315,27 @@ async fn every_answer_to_a_discovery_goes_to_the_client_that_asked_alone() {
 }
 
 #[tokio::test]
+async fn every_answer_to_a_broadcast_remote_at_command_goes_to_its_client() {
+    let (mut radio, hub) = FakeRadio::with_hub().await;
+    let mut client = raw_client(&hub).await;
+    // VR to the broadcast address, as DigiMesh radios answer it: once from each radio.
+    let mut request = vec![0x17, 0x01, 0, 0, 0, 0, 0, 0, 0xFF, 0xFF, 0xFF, 0xFE, 0x02];
+    request.extend_from_slice(b"VR");
+    send(&mut client, &request).await;
+    let written = radio.next_frame().await;
+    let answer = |id: u8, last: u8| {
+        let mut frame = vec![0x97, id, 0x00, 0x13, 0xA2, 0x00, 0x40, 0xB5, 0x99, last];
+        frame.extend_from_slice(&[0x7D, 0x84, b'V', b'R', 0x00, 0x40, 0x60]);
+        frame
+    };
+    radio.send(&answer(written[1], 0xB9)).await;
+    radio.send(&answer(written[1], 0xBF)).await;
+    assert_eq!(next(&mut client).await, answer(0x01, 0xB9));
+    assert_eq!(next(&mut client).await, answer(0x01, 0xBF));
+    hub.stop().await;
+}
+
+#[tokio::test]
 async fn a_client_that_reads_nothing_does_not_hold_up_stop() {
     let (mut radio, hub) = FakeRadio::with_hub().await;
     // Connected, never read from.

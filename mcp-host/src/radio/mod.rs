@@ -29,12 +29,13 @@
 //!   `OI` (the operating 16-bit PAN ID, 4D43), `CH` (the operating channel, 0x17),
 //!   `NT` (the node discovery time, 0x3C tenths of a second) and `NI` (the node
 //!   identifier: a space, the default, until set). `NI` can be set to 1 to 20 printable
-//!   ASCII characters and `NT` to 0x20..=0x2EE0; the others are read-only: a value gets
+//!   ASCII characters and `NT` to 0x20..=0xFF; the others are read-only: a value gets
 //!   status 3, invalid parameter (but `AP` set to the node's own mode, a no-op).
 //!   Node discovery (`ND`, or `ND NAME` for the node named NAME) is answered at once
 //!   with an AT Command Response for each other node the radio can reach (its
 //!   [`xbee_api::NodeInfo`]: the coordinator as coordinator, the others as routers,
-//!   parent FFFE), as a network of quick radios would within `NT`. These are what
+//!   parent FFFE), as a network of quick radios would within `NT`; `ND NAME` that
+//!   finds nobody gets one with status 1, error. These are what
 //!   Digi's xbee-python library reads when it opens a device. A name set is read back
 //!   at once, even when it was queued (AT Command - Queue Parameter Value, 0x09, or a
 //!   remote command without the apply option), as a module's register is; nothing else
@@ -44,8 +45,9 @@
 //!   Remote AT commands (0x17) get the same answers from the destination's radio
 //!   (0x97), or status 4, transmission failure, when it cannot be reached. One to the
 //!   broadcast address (000000000000FFFF) is carried out by every other node the
-//!   sender can reach, each answering with its own address; none answers a sender cut
-//!   off from the network.
+//!   sender can reach, and, as on Zigbee radios (Digi discourages it there), the sender
+//!   hands over a single answer, the first node's; none for a sender cut off from the
+//!   network.
 //! - When a link comes up its device gets a Modem Status: 0x06 coordinator started on the
 //!   coordinator, 0x02 joined network on other nodes. Links that go down are reopened
 //!   (a `tcp-listen` node's next peer is the node back); frames for a node whose link is

@@ -39,8 +39,8 @@ const OPERATING_CHANNEL: u8 = 0x17;
 
 /// `NT`: the node discovery time by default, in tenths of a second (Digi's default, 6 s).
 pub(crate) const DISCOVERY_TIME: u16 = 0x3C;
-/// The range of `NT` a Zigbee radio accepts (3.2 s to 20 minutes).
-const DISCOVERY_TIME_RANGE: std::ops::RangeInclusive<u16> = 0x20..=0x2EE0;
+/// The range of `NT` a Zigbee radio accepts (3.2 s to 25.5 s).
+const DISCOVERY_TIME_RANGE: std::ops::RangeInclusive<u16> = 0x20..=0xFF;
 /// Digi's profile id and manufacturer id, as node discovery answers give them.
 const DIGI_PROFILE_ID: u16 = 0xC105;
 const DIGI_MANUFACTURER_ID: u16 = 0x101E;
@@ -538,9 +538,10 @@ impl State {
     }
 
     /// Node discovery (`ND`) from `from`'s radio: an AT Command Response for each other
-    /// node it can reach (with `ND NAME`: the one whose `NI` is NAME), all at once, as
-    /// the answers of a network of quick radios (a real one spreads them over `NT`).
-    /// A radio cut off from the network finds none.
+    /// node it can reach (with `ND NAME`: the one whose `NI` is NAME, or one response
+    /// with status 1, error, if none is), all at once, as the answers of a network of
+    /// quick radios (a real one spreads them over `NT`). A radio cut off from the
+    /// network finds none.
     fn node_discovery(&mut self, from: Address64, at: &AtCommandRepr<'_>) {
         let found: Vec<(Address64, Address16, Vec<u8>)> = self
             .reached_from(from)
@@ -555,6 +556,16 @@ impl State {
             status: AtStatus::Ok,
         });
         if at.frame_id == 0 {
+            return;
+        }
+        if found.is_empty() && !at.parameter.is_empty() {
+            let response = AtCommandResponseRepr {
+                frame_id: at.frame_id,
+                command: at.command,
+                status: AtStatus::Error,
+                data: &[],
+            };
+            self.send_to(from, &response, true);
             return;
         }
         for (addr64, addr16, name) in found {
@@ -628,9 +639,11 @@ impl State {
     }
 
     /// A remote AT command to the broadcast address: every other node `from` can reach
-    /// carries it out and answers with its own address, as radios in range do; a radio
-    /// cut off from the network reaches none, and nobody answers.
+    /// carries it out, but, as on Zigbee radios, `from` hands over a single answer (the
+    /// first node's, with its address), however many carried it out; a radio cut off
+    /// from the network reaches none, and nobody answers.
     fn broadcast_remote_at_command(&mut self, from: Address64, at: &RemoteAtCommandRepr<'_>) {
+        let mut answered = false;
         for target in self.reached_from(from) {
             let mut value = [0u8; AT_VALUE_MAX];
             let (status, len) = self.at_value(target, at.command, at.parameter, &mut value);
@@ -639,9 +652,10 @@ impl State {
                 command: at.command,
                 status,
             });
-            if at.frame_id == 0 {
+            if at.frame_id == 0 || answered {
                 continue;
             }
+            answered = true;
             let response = RemoteAtResponseRepr {
                 frame_id: at.frame_id,
                 src64: target,
