@@ -61,6 +61,19 @@ impl fmt::Display for Node {
     }
 }
 
+/// What node discovery found.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+#[non_exhaustive]
+pub struct Discovery {
+    /// The radios that answered, each once, in the order they first answered (as they
+    /// last answered, for one heard twice).
+    pub nodes: Vec<Node>,
+    /// Answers left out because they are no Zigbee or DigiMesh node discovery answer
+    /// ([`NodeInfo`]; an 802.15.4 radio's have another layout), each with a warning in
+    /// the log.
+    pub unreadable: usize,
+}
+
 /// Why node discovery failed.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[non_exhaustive]
@@ -80,18 +93,22 @@ pub enum DiscoverError {
 pub(crate) async fn discover(
     sender: &CommandSender,
     window: Option<Duration>,
-) -> Result<Vec<Node>, DiscoverError> {
+) -> Result<Discovery, DiscoverError> {
     let window = match window {
         Some(window) => window,
         None => self::window(sender).await?,
     };
     let mut answers = sender.at_answers(*b"ND", &[], window).await?;
-    let mut nodes: Vec<Node> = Vec::new();
+    let mut found = Discovery::default();
     while let Some(answer) = answers.next().await {
         let answer = answer?;
-        let Ok(Frame::AtCommandResponse(response)) = answer.parse() else {
-            tracing::warn!(data = %crate::render::json::hex(answer.data()), "node discovery: not an AT Command Response");
-            continue;
+        let response = match answer.parse() {
+            Ok(Frame::AtCommandResponse(response)) if response.command == *b"ND" => response,
+            _ => {
+                tracing::warn!(data = %crate::render::json::hex(answer.data()), "node discovery: not an answer to ND");
+                found.unreadable += 1;
+                continue;
+            }
         };
         if !response.status.is_ok() {
             return Err(DiscoverError::Refused {
@@ -99,23 +116,24 @@ pub(crate) async fn discover(
             });
         }
         if response.data.is_empty() {
-            // The end of the answers, on radios that mark it (802.15.4).
+            // The end of the answers, on radios that mark it.
             break;
         }
         match NodeInfo::parse(response.data) {
             Ok(info) => {
                 let node = Node::from(&info);
-                match nodes.iter_mut().find(|n| n.addr64 == node.addr64) {
+                match found.nodes.iter_mut().find(|n| n.addr64 == node.addr64) {
                     Some(known) => *known = node,
-                    None => nodes.push(node),
+                    None => found.nodes.push(node),
                 }
             }
             Err(error) => {
                 tracing::warn!(%error, data = %crate::render::json::hex(response.data), "node discovery: an answer cannot be read");
+                found.unreadable += 1;
             }
         }
     }
-    Ok(nodes)
+    Ok(found)
 }
 
 /// How long [`CommandSender::discover`] listens when given no window: the radio's

@@ -13,6 +13,7 @@ use tokio::io::AsyncWriteExt;
 use tokio::sync::{Notify, mpsc, oneshot, watch};
 use tokio::time::Instant;
 use tokio_util::codec::FramedRead;
+use xbee_api::frame::frame_type::{AT_COMMAND_RESPONSE, REMOTE_AT_COMMAND, REMOTE_AT_RESPONSE};
 use xbee_api::{Address64, EncodeFrame};
 
 use crate::codec::{CodecItem, XBeeCodec, encode_frame};
@@ -204,6 +205,8 @@ enum PendingKind {
     },
     Answers {
         answers: AnswerSender,
+        /// The frame type of its answers (0x88 for AT commands, 0x97 for remote ones).
+        answer_type: u8,
     },
 }
 
@@ -218,7 +221,7 @@ impl PendingKind {
             PendingKind::Frame { reply } => {
                 let _ = reply.send(Err(error));
             }
-            PendingKind::Answers { answers } => fail_answers(&answers, error),
+            PendingKind::Answers { answers, .. } => fail_answers(&answers, error),
             PendingKind::Request { .. } => {}
         }
     }
@@ -692,7 +695,10 @@ impl Driver {
             return self.unclaimed(frame);
         };
         let claims = match self.ids.get(id).map(|p| &p.kind) {
-            Some(PendingKind::Answers { answers }) => {
+            Some(PendingKind::Answers {
+                answers,
+                answer_type,
+            }) if *answer_type == frame_type => {
                 if answers.is_closed() {
                     // Its caller stopped listening: the id is free again.
                     self.ids.remove(id);
@@ -708,6 +714,8 @@ impl Driver {
                 }
                 return;
             }
+            // Another type under its id is no answer of its.
+            Some(PendingKind::Answers { .. }) => false,
             Some(PendingKind::Frame { .. }) => true,
             Some(PendingKind::Transmit { .. } | PendingKind::Request { .. }) => frame_type == 0x8B,
             None => false,
@@ -788,7 +796,7 @@ impl Driver {
             |p| match &p.kind {
                 PendingKind::Transmit { reply, .. } => reply.is_closed(),
                 PendingKind::Frame { reply } => reply.is_closed(),
-                PendingKind::Answers { answers } => answers.is_closed(),
+                PendingKind::Answers { answers, .. } => answers.is_closed(),
                 PendingKind::Request { waiter, .. } => waiters
                     .iter()
                     .find(|w| w.id == *waiter)
@@ -919,7 +927,14 @@ impl Driver {
                 timeout,
                 answers,
             } => {
-                let kind = PendingKind::Answers { answers };
+                let answer_type = match data.first() {
+                    Some(&REMOTE_AT_COMMAND) => REMOTE_AT_RESPONSE,
+                    _ => AT_COMMAND_RESPONSE,
+                };
+                let kind = PendingKind::Answers {
+                    answers,
+                    answer_type,
+                };
                 self.write_under_id(out, &data, deadline, timeout, kind);
             }
         }

@@ -10,7 +10,7 @@ use xbee_api::{Address16, Address64, DiscoveryStatus};
 
 use crate::LinkInfo;
 use crate::answers::Answers;
-use crate::discovery::{DiscoverError, Node};
+use crate::discovery::{DiscoverError, Discovery};
 use crate::driver::{Op, ReportKey};
 use crate::error::{RequestError, SendError};
 use crate::event::{LinkState, OwnedFrame, carries_frame_id};
@@ -467,17 +467,18 @@ impl CommandSender {
     /// they answered. Sends `ND` and gathers the answers for `window`; `None` waits as
     /// long as the radio's discovery time says
     /// ([`discovery::window`](crate::discovery::window)). The local radio is not among
-    /// them. An answer that cannot be read is left out, with a warning in the log.
+    /// them, unless its `NO` has it answer for itself. Answers are read as Zigbee and
+    /// DigiMesh radios give them; one that cannot be read is left out and counted.
     ///
     /// ```no_run
     /// # async fn run(sender: mcp_host::CommandSender) -> Result<(), Box<dyn std::error::Error>> {
-    /// for node in sender.discover(None).await? {
+    /// for node in sender.discover(None).await?.nodes {
     ///     println!("{node}"); // 0013a20040000002 (7d84) router "MAV 1"
     /// }
     /// # Ok(())
     /// # }
     /// ```
-    pub async fn discover(&self, window: Option<Duration>) -> Result<Vec<Node>, DiscoverError> {
+    pub async fn discover(&self, window: Option<Duration>) -> Result<Discovery, DiscoverError> {
         crate::discovery::discover(self, window).await
     }
 

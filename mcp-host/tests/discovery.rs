@@ -1,5 +1,5 @@
 //! Node discovery: `CommandSender::at_answers` gathers every answer to one request for
-//! its window (`remote_at_answers` those of a broadcast remote AT command), and
+//! its window (`remote_at_answers` those of a remote AT command), and
 //! `CommandSender::discover` reads the radios out of `ND`'s answers,
 //! against a fake radio on a real pseudo-terminal and against the emulated network over
 //! real TCP.
@@ -65,13 +65,15 @@ async fn respond(fake: &mut FakeXBee, frame_id: u8, status: AtStatus, data: &[u8
 #[tokio::test]
 async fn every_answer_comes_until_the_window_is_over() {
     let (mut stream, sender, mut fake) = common::pty_link(ApiMode::Unescaped).await;
-    let window = Duration::from_millis(1500);
+    let window = Duration::from_secs(3);
     let mut answers = sender.at_answers(*b"ND", &[], window).await.unwrap();
     let id = at_command(&mut fake, *b"ND").await;
     respond(&mut fake, id, AtStatus::Ok, &answer(MAV_A, b"A")).await;
     respond(&mut fake, id, AtStatus::Ok, &answer(MAV_B, b"B")).await;
-    // Another id's answer is not one of them: it comes on the stream.
+    // Another id's answer is not one of them, nor a frame of another type under its id
+    // (a Transmit Status): they come on the stream.
     respond(&mut fake, id.wrapping_add(1), AtStatus::Ok, b"x").await;
+    fake.status(id, xbee_api::DeliveryStatus::Success).await;
     let mut got = Vec::new();
     while let Some(answer) = tokio::time::timeout(GUARD, answers.next()).await.unwrap() {
         got.push(answer.unwrap().data().to_vec());
@@ -87,6 +89,10 @@ async fn every_answer_comes_until_the_window_is_over() {
     assert_eq!(got, expected);
     match next_event(&mut stream).await {
         Event::Frame(frame) => assert_eq!(frame.data()[1], id.wrapping_add(1)),
+        other => panic!("{other:?}"),
+    }
+    match next_event(&mut stream).await {
+        Event::Frame(frame) => assert_eq!(frame.data()[..2], [0x8B, id]),
         other => panic!("{other:?}"),
     }
     // After the window an answer under the id is nobody's: it comes on the stream too.
@@ -113,11 +119,13 @@ async fn discovery_reads_each_radio_once_and_stops_at_an_empty_answer() {
     // The same radio again (it heard the request twice): once in the list, as last seen.
     respond(&mut fake, id, AtStatus::Ok, &answer(MAV_A, b"MAV 1b")).await;
     respond(&mut fake, id, AtStatus::Ok, &[]).await;
-    let nodes = tokio::time::timeout(GUARD, discovery)
+    let found = tokio::time::timeout(GUARD, discovery)
         .await
         .expect("discovery ends at the empty answer")
         .unwrap()
         .unwrap();
+    assert_eq!(found.unreadable, 1);
+    let nodes = found.nodes;
     let names: Vec<(Address64, &str)> = nodes
         .iter()
         .map(|n| (n.addr64, n.identifier.as_str()))
@@ -242,7 +250,11 @@ async fn the_emulated_network_answers_with_every_radio_it_can_reach() {
         .unwrap();
     assert_eq!(named.data()[named.data().len() - 1], 0x00, "NI set");
 
-    let nodes = sender.discover(Some(Duration::from_secs(2))).await.unwrap();
+    let nodes = sender
+        .discover(Some(Duration::from_secs(2)))
+        .await
+        .unwrap()
+        .nodes;
     let expected = [(a.address, a.addr16, "MAV 1"), (b.address, b.addr16, " ")];
     let found: Vec<(Address64, Address16, &str)> = nodes
         .iter()
@@ -264,31 +276,45 @@ async fn the_emulated_network_answers_with_every_radio_it_can_reach() {
     let info = NodeInfo::parse(&only.data()[5..]).unwrap();
     assert_eq!(info.addr64, MAV_A);
     assert!(answers.next().await.is_none());
+    // `ND NAME` for a name nobody has: one answer, status 1 (error).
+    let mut answers = sender
+        .at_answers(*b"ND", b"nobody", Duration::from_secs(2))
+        .await
+        .unwrap();
+    let none = answers.next().await.unwrap().unwrap();
+    assert_eq!(none.data()[..], [0x88, none.data()[1], b'N', b'D', 0x01]);
+    assert!(answers.next().await.is_none());
 
-    // A remote AT command to the broadcast address: every radio it reaches answers,
-    // with its own address (the cut one does not).
+    // A remote AT command to the broadcast address: every radio it reaches carries it
+    // out (the cut one does not), and, as on Zigbee, one answer comes, the first's.
     let mut answers = sender
         .remote_at_answers(
             Address64::BROADCAST,
             *b"NI",
-            &[],
+            b"ALL",
             true,
             Duration::from_secs(2),
         )
         .await
         .unwrap();
-    let mut named = Vec::new();
+    let mut answered = Vec::new();
     while let Some(answer) = answers.next().await {
         match answer.unwrap().parse() {
             Ok(xbee_api::Frame::RemoteAtResponse(at)) => {
                 assert_eq!(at.status, AtStatus::Ok);
-                named.push((at.src64, at.data.to_vec()));
+                answered.push(at.src64);
             }
             other => panic!("{other:?}"),
         }
     }
-    named.sort();
-    assert_eq!(named, [(MAV_A, b"MAV 1".to_vec()), (MAV_B, b" ".to_vec())]);
+    assert_eq!(answered, [MAV_A]);
+    for mav in [MAV_A, MAV_B] {
+        let name = sender
+            .remote_at(mav, *b"NI", &[], true, None)
+            .await
+            .unwrap();
+        assert!(name.data().ends_with(b"ALL"), "{mav}: {:02x?}", name.data());
+    }
 
     // Without a window, the radio's discovery time tells how long to listen.
     let window = mcp_host::discovery::window(&sender).await.unwrap();
