@@ -87,6 +87,9 @@ impl<T: AsyncRead + AsyncWrite + Unpin> CommandMode<T> {
     /// dropped), `+++`, and the radio's `OK`, waited for `guard_time` and `timeout` more.
     /// Bytes the radio hands over from the air before its `OK` (in transparent mode it
     /// passes on what it receives) are passed over.
+    ///
+    /// The silence is counted from this call: bytes written to `io` just before may
+    /// still be on their way to the radio at a low baud rate, and cut it short.
     pub async fn enter(
         mut io: T,
         guard_time: Duration,
@@ -155,8 +158,10 @@ impl<T: AsyncRead + AsyncWrite + Unpin> CommandMode<T> {
         Ok(self.io)
     }
 
-    /// Sends `AT` `command` `value` and a carriage return; the answer line.
+    /// Sends `AT` `command` `value` and a carriage return; the answer line. Lines read
+    /// before (a late answer to a command that timed out) are no answer to it.
     async fn send(&mut self, command: [u8; 2], value: &str) -> Result<String, CommandModeError> {
+        self.pending.clear();
         let sent = text(command, value);
         self.io.write_all(format!("{sent}\r").as_bytes()).await?;
         self.io.flush().await?;

@@ -1,8 +1,8 @@
 //! `mcp-gs setup` as a process against a fake radio on a real pseudo-terminal: a radio
 //! in transparent mode (AP=0), as XBee modules leave the factory, is put into API mode
 //! through its AT command mode (`+++`, `ATAP`, `ATAPn`, `ATWR`, `ATCN`) and then answers
-//! API frames; one already in API mode does not answer `+++`, and the operator is told
-//! what to do.
+//! API frames; one that does not answer `+++` (here an older radio in API mode, which
+//! takes `+++` in transparent mode only) gets the operator told what to do.
 
 use std::process::Output;
 use std::sync::{Arc, Mutex};

@@ -12,8 +12,11 @@ use mcp_host::render::json::hex;
 pub(crate) struct AtArgs {
     #[command(flatten)]
     link: LinkArgs,
-    /// Ask a remote radio (Remote AT Command, 0x17) instead of the local one; every
-    /// radio in range with 000000000000ffff (broadcast), one line each.
+    /// Ask a remote radio (Remote AT Command, 0x17) instead of the local one. With
+    /// 000000000000ffff (broadcast) every radio in range carries the command out, and
+    /// each answer is a line: DigiMesh and 802.15.4 radios all answer, but a Zigbee
+    /// radio hands over one answer only (to read every radio, list them with `nodes`
+    /// and ask each).
     #[arg(long, value_name = "ADDR", value_parser = crate::link_args::parse_address64)]
     to: Option<Address64>,
     /// With --to 000000000000ffff: seconds to gather the radios' answers.
@@ -122,8 +125,8 @@ fn answer_line(name: &str, command: &[u8; 2], data: &[u8], set: bool) -> String 
 }
 
 /// `at --to 000000000000ffff`: the command to every radio in range, and a line for each
-/// one's answer, `ADDR: ...`, as they come for `--window` seconds. A radio that refuses
-/// makes the exit code 1; no answer at all, 4.
+/// answer handed over, `ADDR: ...`, as they come for `--window` seconds (one in all on
+/// Zigbee). An answer that refuses makes the exit code 1; no answer at all, 4.
 async fn broadcast(
     args: &AtArgs,
     sender: &mcp_host::CommandSender,
@@ -131,6 +134,7 @@ async fn broadcast(
     parameter: &[u8],
 ) -> Result<(), Failure> {
     let window = std::time::Duration::from_secs_f64(args.window);
+    crate::link_args::warn_hub_window(&args.link.link, window);
     let failed = |e| diagnosed(send_failure(e), &args.link, &sender.stats());
     let mut answers = sender
         .remote_at_answers(
@@ -174,7 +178,11 @@ async fn broadcast(
         (_, 0) => Ok(()),
         (_, n) => Err(Failure::new(
             Failure::OTHER,
-            format!("{name}: {n} of {answered} radios refused the command"),
+            if answered == 1 {
+                format!("{name}: the radio that answered refused the command")
+            } else {
+                format!("{name}: {n} of the {answered} radios that answered refused the command")
+            },
         )),
     }
 }

@@ -232,6 +232,18 @@ pub(crate) async fn check_mode(sender: &CommandSender, configured: ApiMode) {
     }
 }
 
+/// Warns that answers gathered for `window` through a hub (a `tcp:` link may be one)
+/// stop coming after the hub's answer window.
+pub(crate) fn warn_hub_window(link: &Link, window: Duration) {
+    if matches!(link, Link::Tcp { .. }) && window > mcp_host::hub::ANSWER_WINDOW {
+        eprintln!(
+            "mcp-gs: through a hub, answers come for {:?} after it writes the request, \
+             not for all of the {window:?} asked",
+            mcp_host::hub::ANSWER_WINDOW
+        );
+    }
+}
+
 /// Says where the radio side of a link that waits for it comes: the pseudo-terminal's
 /// path (`pty`), or the address bound (`tcp-listen:`, where port 0 picks one).
 pub(crate) fn announce_radio_side(info: &mcp_host::LinkInfo) {

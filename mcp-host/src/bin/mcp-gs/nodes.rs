@@ -34,17 +34,24 @@ pub(crate) async fn run(args: NodesArgs) -> Result<(), Failure> {
         "mcp-gs: asking who is there (ND), answers for {:.1} s",
         window.as_secs_f64()
     );
-    let nodes = sender.discover(Some(window)).await.map_err(|e| match e {
+    crate::link_args::warn_hub_window(&args.link.link, window);
+    let found = sender.discover(Some(window)).await.map_err(|e| match e {
         DiscoverError::Send(e) => failed(e),
         other => Failure::new(Failure::OTHER, other.to_string()),
     })?;
-    if nodes.is_empty() {
+    if found.unreadable > 0 {
+        eprintln!(
+            "mcp-gs: {} could not be read as a Zigbee or DigiMesh radio's (an 802.15.4 \
+             radio's answers are not read here)",
+            crate::counted(found.unreadable as u64, "answer")
+        );
+    } else if found.nodes.is_empty() {
         eprintln!(
             "mcp-gs: no radio answered: the others are off, out of range, or in another \
              network (ID, CH)"
         );
     }
-    for node in &nodes {
+    for node in &found.nodes {
         match args.format {
             Format::Text => out!("{node}"),
             Format::Json => out!("{}", json(node)),

@@ -187,7 +187,12 @@ async fn check(
     let (mut stream, sender) = mcp_host::connect(link, options)
         .await
         .map_err(|e| connect_failure(link, e))?;
-    let answer = sender.at(*b"AP", &[], None).await;
+    let mut answer = sender.at(*b"AP", &[], None).await;
+    if matches!(answer, Err(mcp_host::SendError::Timeout { .. })) {
+        // Asked once more: the radio may have been setting its UART up after leaving
+        // command mode.
+        answer = sender.at(*b"AP", &[], None).await;
+    }
     sender.close();
     while stream.next().await.is_some() {}
     let answer = answer.map_err(send_failure)?;
@@ -221,10 +226,11 @@ fn command_failure(error: CommandModeError, link: &Link) -> Failure {
         CommandModeError::NoAnswer { ref sent, .. } if sent == "+++" => Failure::new(
             Failure::TIMEOUT,
             format!(
-                "{error}: the radio may be in API mode already (`mcp-gs at --link {link} \
-                 --api-mode auto AP` reads its mode), at another baud rate (XBee modules \
-                 leave the factory at 9600: serial:PATH:9600), or need a longer \
-                 --guard-time (its GT)"
+                "{error}: the radio may be at another baud rate (XBee modules leave the \
+                 factory at 9600: serial:PATH:9600), need a longer --guard-time (its GT), \
+                 or still be in command mode from a run less than 10 s ago (try again); \
+                 an older radio takes +++ in transparent mode only, and may be in API mode \
+                 already (`mcp-gs at --link {link} --api-mode auto AP` reads its mode)"
             ),
         ),
         CommandModeError::NoAnswer { .. } => Failure::new(Failure::TIMEOUT, error.to_string()),
