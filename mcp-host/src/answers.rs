@@ -9,7 +9,8 @@ use tokio::sync::mpsc;
 use crate::error::SendError;
 use crate::event::OwnedFrame;
 
-/// The answers to one request, as they come: a [`Stream`] of the response frames that
+/// The answers to one request, as they come: a [`Stream`] of the response frames of its
+/// answer type (AT Command Response, 0x88, or Remote AT Command Response, 0x97) that
 /// carry its frame id, from [`CommandSender::at_answers`](crate::CommandSender::at_answers)
 /// or [`CommandSender::remote_at_answers`](crate::CommandSender::remote_at_answers).
 ///
@@ -17,7 +18,8 @@ use crate::event::OwnedFrame;
 /// ends it with one error ([`SendError::Disconnected`], [`SendError::Closed`]), as does a
 /// request that could not be written or found no free frame id in its window. Dropping
 /// it gives the frame id back at the next answer (or when a request finds none free);
-/// answers that come after are [`Event::Frame`](crate::Event::Frame)s of the stream.
+/// answers that come after, and frames of other types under its id, are
+/// [`Event::Frame`](crate::Event::Frame)s of the stream.
 ///
 /// Answers are held for it, [`HELD`](Self::HELD) at most, while it is not read;
 /// more are dropped (with a warning in the log).
