@@ -8,10 +8,12 @@ use xbee_api::{Address16, Address64, AtStatus, DeviceType, Frame, NodeInfo};
 use crate::error::SendError;
 use crate::sender::CommandSender;
 
-/// The discovery time of a radio whose `NT` cannot be read: Digi's default `NT`, 6 s.
+/// The discovery time of a radio whose `N?` and `NT` cannot be read: Digi's default
+/// `NT`, 6 s.
 pub const DEFAULT_DISCOVERY_TIME: Duration = Duration::from_secs(6);
 
-/// Added to the radio's discovery time (`NT`) for the last answer to reach the host.
+/// Added to the radio's discovery time (`N?` or `NT`) for the last answer to reach the
+/// host.
 pub const DISCOVERY_MARGIN: Duration = Duration::from_secs(1);
 
 /// A radio found by node discovery.

@@ -13,7 +13,6 @@ use tokio::io::AsyncWriteExt;
 use tokio::sync::{Notify, mpsc, oneshot, watch};
 use tokio::time::Instant;
 use tokio_util::codec::FramedRead;
-use xbee_api::frame::frame_type::{AT_COMMAND_RESPONSE, REMOTE_AT_COMMAND, REMOTE_AT_RESPONSE};
 use xbee_api::{Address64, EncodeFrame};
 
 use crate::codec::{CodecItem, XBeeCodec, encode_frame};
@@ -927,10 +926,12 @@ impl Driver {
                 timeout,
                 answers,
             } => {
-                let answer_type = match data.first() {
-                    Some(&REMOTE_AT_COMMAND) => REMOTE_AT_RESPONSE,
-                    _ => AT_COMMAND_RESPONSE,
-                };
+                // Its answers are of the type that answers its request (0x88 for AT
+                // commands, the only requests queued as `Op::Answers` but remote ones).
+                let answer_type = data
+                    .first()
+                    .and_then(|&t| crate::event::answer_type(t))
+                    .unwrap_or(xbee_api::frame::frame_type::AT_COMMAND_RESPONSE);
                 let kind = PendingKind::Answers {
                     answers,
                     answer_type,

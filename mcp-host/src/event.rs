@@ -174,3 +174,24 @@ pub(crate) fn carries_frame_id(frame_type: u8) -> bool {
 pub(crate) fn is_response(frame_type: u8) -> bool {
     matches!(frame_type, 0x88 | 0x89 | 0x8B | 0x97)
 }
+
+/// The frame type answering requests of type `frame_type` under their frame id; `None`
+/// for frame types not known as requests. Every XBee request type has its frame id at
+/// byte 1.
+pub(crate) fn answer_type(frame_type: u8) -> Option<u8> {
+    use xbee_api::frame::frame_type::*;
+    match frame_type {
+        // Transmit Request 64-bit and 16-bit address (802.15.4), Transmit Request IPv4
+        // (Wi-Fi, Cellular): TX Status.
+        0x00 | 0x01 | 0x20 => Some(TX_STATUS_802_15_4),
+        AT_COMMAND | AT_COMMAND_QUEUE => Some(AT_COMMAND_RESPONSE),
+        TRANSMIT_REQUEST | EXPLICIT_ADDRESSING_COMMAND => Some(TRANSMIT_STATUS),
+        REMOTE_AT_COMMAND => Some(REMOTE_AT_RESPONSE),
+        // Register Joining Device: Register Joining Device Status.
+        0x24 => Some(0xA4),
+        _ => None,
+    }
+}
+
+/// TX Status (802.15.4, Wi-Fi, Cellular).
+pub(crate) const TX_STATUS_802_15_4: u8 = 0x89;

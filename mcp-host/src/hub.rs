@@ -27,9 +27,9 @@
 //!   | 0x24 Register Joining Device | 0xA4 Register Joining Device Status |
 //!
 //!   A request is answered once, but for node discovery (`ND`), active scan (`AS`) and
-//!   a remote AT command to the broadcast address, whose answers keep coming for [`ANSWER_WINDOW`] from when the hub writes the
-//!   request to the radio (not while it waits its turn); a request unanswered by then
-//!   gives its id back. An answer under the id of a request not yet written is dropped.
+//!   a remote AT command to the broadcast address, whose answers keep coming for
+//!   [`ANSWER_WINDOW`] from when the hub writes the request to the radio (not while it
+//!   waits its turn); a request unanswered by then gives its id back. An answer under the id of a request not yet written is dropped.
 //! - **Fairness:** the hub takes its clients' frames in turn, one frame of each client
 //!   with frames waiting, and writes them at the pace of the radio's UART (its baud
 //!   rate on a serial link, [`DEFAULT_RADIO_BAUD`] on others), never more than
@@ -111,6 +111,7 @@ use tokio_util::task::TaskTracker;
 use xbee_api::{ApiMode, RawFrame};
 
 use crate::codec::{CodecItem, XBeeCodec, encode_frame};
+use crate::event::{TX_STATUS_802_15_4, answer_type};
 use crate::ids::IdTable;
 use crate::{
     CommandSender, ConnectError, Event, Link, LinkEvent, LinkInfo, LinkOptions, PacketStream, Stats,
@@ -149,8 +150,9 @@ pub const RADIO_BACKLOG: Duration = Duration::from_millis(250);
 pub const DEFAULT_RADIO_BAUD: u32 = 115_200;
 
 /// How long the hub routes answers to a request: the first answer ends it, but for node
-/// discovery, active scan and a broadcast remote AT command. A request still unanswered then gives its id back (its
-/// client has given up long before: `mcp-gs` waits 12 s by default).
+/// discovery, active scan and a broadcast remote AT command. A request still unanswered
+/// then gives its id back (its client has given up long before: `mcp-gs` waits 12 s by
+/// default).
 pub const ANSWER_WINDOW: Duration = Duration::from_secs(30);
 
 /// Why a hub could not start.
@@ -434,27 +436,6 @@ impl Routes {
         to
     }
 }
-
-/// The frame type answering requests of type `frame_type` under their frame id; `None`
-/// for frame types the hub does not know as requests. Every XBee request type has its
-/// frame id at byte 1.
-fn answer_type(frame_type: u8) -> Option<u8> {
-    use xbee_api::frame::frame_type::*;
-    match frame_type {
-        // Transmit Request 64-bit and 16-bit address (802.15.4), Transmit Request IPv4
-        // (Wi-Fi, Cellular): TX Status.
-        0x00 | 0x01 | 0x20 => Some(TX_STATUS_802_15_4),
-        AT_COMMAND | AT_COMMAND_QUEUE => Some(AT_COMMAND_RESPONSE),
-        TRANSMIT_REQUEST | EXPLICIT_ADDRESSING_COMMAND => Some(TRANSMIT_STATUS),
-        REMOTE_AT_COMMAND => Some(REMOTE_AT_RESPONSE),
-        // Register Joining Device: Register Joining Device Status.
-        0x24 => Some(0xA4),
-        _ => None,
-    }
-}
-
-/// TX Status (802.15.4, Wi-Fi, Cellular).
-const TX_STATUS_802_15_4: u8 = 0x89;
 
 /// Whether frames of type `frame_type` from the radio answer a client's request (see
 /// [`answer_type`]).

@@ -412,8 +412,9 @@ impl CommandSender {
     /// Sends a Remote AT Command (0x17) that many may answer, and gathers every Remote
     /// AT Command Response (0x97) to it for `window`: to
     /// [`Address64::BROADCAST`](xbee_api::Address64::BROADCAST), every radio in range
-    /// carries it out and answers, each with its own address in its response. `apply`
-    /// as for [`remote_at`](Self::remote_at).
+    /// carries it out; DigiMesh and 802.15.4 radios each answer, with their own address,
+    /// but a Zigbee radio hands over a single answer. `apply` as for
+    /// [`remote_at`](Self::remote_at).
     ///
     /// ```no_run
     /// # async fn run(sender: mcp_host::CommandSender) -> Result<(), Box<dyn std::error::Error>> {
@@ -607,7 +608,6 @@ impl CommandSender {
     }
 }
 
-/// The frame data of `frame` (frame type first).
 /// The frame data of a Remote AT Command (frame id 0, set when it is written) to `to`,
 /// with the apply-changes option if `apply`.
 fn remote_at_frame(
@@ -630,6 +630,7 @@ fn remote_at_frame(
     })
 }
 
+/// The frame data of `frame` (frame type first).
 fn frame_data(frame: &impl xbee_api::EncodeFrame) -> Result<Vec<u8>, SendError> {
     let len = frame.frame_data_len();
     let mut data = vec![0u8; len];

@@ -35,12 +35,7 @@ impl Sim {
         ];
         all.extend_from_slice(args);
         let (child, rx) = common::spawn_lines(&all);
-        let link = loop {
-            let line = rx.recv_timeout(GUARD).expect("sim prints its link");
-            if let Some(rest) = line.split("(connect with ").nth(1) {
-                break rest.split(')').next().unwrap().to_string();
-            }
-        };
+        let link = announced_link(&rx);
         Sim { child, link }
     }
 
@@ -76,14 +71,19 @@ impl Drop for Sim {
 /// A virtual network of a coordinator alone, on TCP: the process and its link.
 fn lone_coordinator() -> (common::Running, String) {
     let (child, rx) = common::spawn_lines(&["radio", "--coordinator", "tcp-listen:127.0.0.1:0"]);
-    let radio = common::Running(child);
-    let link = loop {
-        let line = rx.recv_timeout(GUARD).expect("radio prints its link");
+    (common::Running(child), announced_link(&rx))
+}
+
+/// The link a `sim` or `radio` process says to connect with, from its output lines.
+fn announced_link(lines: &std::sync::mpsc::Receiver<String>) -> String {
+    loop {
+        let line = lines
+            .recv_timeout(GUARD)
+            .expect("the process prints its link");
         if let Some(rest) = line.split("(connect with ").nth(1) {
-            break rest.split(')').next().unwrap().to_string();
+            return rest.split(')').next().unwrap().to_string();
         }
-    };
-    (radio, link)
+    }
 }
 
 fn stdout(out: &Output) -> String {

@@ -76,6 +76,13 @@ pub(crate) struct Node {
     pub(crate) discovery_time: u16,
 }
 
+impl Node {
+    /// Whether the radio is in the network: its link up and not cut off.
+    fn reachable(&self) -> bool {
+        self.connected && !self.cut
+    }
+}
+
 /// Everything the nodes share, behind one mutex; no lock is held across an await.
 #[derive(Debug)]
 pub(crate) struct State {
@@ -345,7 +352,7 @@ impl State {
             let others: Vec<Address64> = self
                 .nodes
                 .iter()
-                .filter(|(a, n)| **a != from && n.connected && !n.cut && !src_cut)
+                .filter(|(a, n)| **a != from && n.reachable() && !src_cut)
                 .map(|(a, _)| *a)
                 .collect();
             for to in &others {
@@ -425,8 +432,9 @@ impl State {
 
     /// Executes an AT command on `node`'s radio: its status and the value, written into
     /// `value`, of length returned. Reads answer as an S2C with Zigbee firmware would;
-    /// `NI` and `NT` can be set, `AP` set to the node's own mode (a no-op); any other value gets
-    /// invalid parameter, and a command the radio does not emulate invalid command.
+    /// `NI` and `NT` can be set, `AP` set to the node's own mode (a no-op); any other
+    /// value gets invalid parameter, and a command the radio does not emulate invalid
+    /// command.
     /// A value set is read back at once, whether it was applied or queued (nothing else
     /// in the emulation depends on it), so `AC` (apply changes) and `WR` (write to
     /// non-volatile memory) have nothing to do but answer ok.
@@ -525,12 +533,11 @@ impl State {
     /// The other nodes `from`'s radio reaches, as a broadcast from it would: none while
     /// it is down or cut off.
     fn reached_from(&self, from: Address64) -> Vec<Address64> {
-        let reachable = |n: &Node| n.connected && !n.cut;
         match self.nodes.get(&from) {
-            Some(me) if reachable(me) => self
+            Some(me) if me.reachable() => self
                 .nodes
                 .iter()
-                .filter(|(a, n)| **a != from && reachable(n))
+                .filter(|(a, n)| **a != from && n.reachable())
                 .map(|(a, _)| *a)
                 .collect(),
             _ => Vec::new(),
@@ -606,8 +613,7 @@ impl State {
             return self.broadcast_remote_at_command(from, at);
         }
         let target = self.resolve(at.dst64, at.dst16).filter(|t| {
-            let reachable =
-                |a: &Address64| self.nodes.get(a).is_some_and(|n| n.connected && !n.cut);
+            let reachable = |a: &Address64| self.nodes.get(a).is_some_and(Node::reachable);
             reachable(t) && reachable(&from)
         });
         let mut value = [0u8; AT_VALUE_MAX];

@@ -113,18 +113,20 @@ pub(crate) async fn run(args: SetupArgs) -> Result<(), Failure> {
     let mut radio = CommandMode::enter(port, guard, timeout)
         .await
         .map_err(failed)?;
+    // What each parameter was, and whether it was changed (then saved below).
+    let mut lines: Vec<(String, bool)> = Vec::new();
     let was = radio.read(*b"AP").await.map_err(failed)?;
     let target_text = target.to_string();
-    let mut changes = Vec::new();
     if was == target_text {
-        changes.push(format!("AP = {was} ({}) already", meaning(&was)));
+        lines.push((format!("AP = {was} ({}) already", meaning(&was)), false));
     } else {
         radio.set(*b"AP", &target_text).await.map_err(failed)?;
-        changes.push(format!(
+        let line = format!(
             "AP = {was} ({}) -> {target} ({})",
             meaning(&was),
             meaning(&target_text)
-        ));
+        );
+        lines.push((line, true));
     }
     if let Some(baud) = args.baud {
         let bd = BAUD_RATES
@@ -134,23 +136,21 @@ pub(crate) async fn run(args: SetupArgs) -> Result<(), Failure> {
         let bd = format!("{bd:X}");
         let was = radio.read(*b"BD").await.map_err(failed)?;
         if was == bd {
-            changes.push(format!("BD = {was} ({baud} baud) already"));
+            lines.push((format!("BD = {was} ({baud} baud) already"), false));
         } else {
             radio.set(*b"BD", &bd).await.map_err(failed)?;
-            changes.push(format!(
-                "BD = {was} ({} baud) -> {bd} ({baud} baud)",
-                baud_of(&was)
-            ));
+            let line = format!("BD = {was} ({} baud) -> {bd} ({baud} baud)", baud_of(&was));
+            lines.push((line, true));
         }
     }
-    if changes.iter().any(|c| !c.ends_with("already")) {
+    if lines.iter().any(|(_, changed)| *changed) {
         radio.set(*b"WR", "").await.map_err(failed)?;
     }
-    for change in &changes {
-        if change.ends_with("already") {
-            out!("{change}");
+    for (line, changed) in &lines {
+        if *changed {
+            out!("{line}, saved");
         } else {
-            out!("{change}, saved");
+            out!("{line}");
         }
     }
     // Leaving command mode applies the changes; the port is closed for the check.
