@@ -2,7 +2,10 @@
 //! in transparent mode (AP=0), as XBee modules leave the factory, is put into API mode
 //! through its AT command mode (`+++`, `ATAP`, `ATAPn`, `ATWR`, `ATCN`) and then answers
 //! API frames; one that does not answer `+++` (here an older radio in API mode, which
-//! takes `+++` in transparent mode only) gets the operator told what to do.
+//! takes `+++` in transparent mode only) gets the operator told what to do. And the
+//! simulator's own radio, started as from the factory, is set up and then reaches its MAV.
+
+mod common;
 
 use std::process::Output;
 use std::sync::{Arc, Mutex};
@@ -14,6 +17,18 @@ use xbee_api::{ApiMode, AtCommandRepr, AtCommandResponseRepr, AtStatus, Decoder,
 
 /// Failure guard only.
 const GUARD: Duration = Duration::from_secs(30);
+/// `mcp-gs` with `args`, to its end.
+async fn mcp_gs(args: &[&str]) -> Output {
+    let run = tokio::process::Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args(args)
+        .env_remove("MCP_LOG")
+        .kill_on_drop(true)
+        .output();
+    tokio::time::timeout(GUARD, run)
+        .await
+        .expect("mcp-gs ends")
+        .unwrap()
+}
 
 /// What the fake radio holds and what it was told.
 #[derive(Debug, Default)]
@@ -159,16 +174,9 @@ async fn fake_radio(ap: u8) -> (Arc<Mutex<Radio>>, String) {
 
 /// `mcp-gs setup --link LINK ARGS...`, with a short guard time.
 async fn setup(link: &str, args: &[&str]) -> Output {
-    let run = tokio::process::Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
-        .args(["setup", "--link", link, "--guard-time", "50"])
-        .args(args)
-        .env_remove("MCP_LOG")
-        .kill_on_drop(true)
-        .output();
-    tokio::time::timeout(GUARD, run)
-        .await
-        .expect("mcp-gs setup ends")
-        .unwrap()
+    let mut all = vec!["setup", "--link", link, "--guard-time", "50"];
+    all.extend_from_slice(args);
+    mcp_gs(&all).await
 }
 
 fn stdout(out: &Output) -> String {
@@ -277,4 +285,69 @@ async fn a_link_to_no_radio_is_refused() {
         stderr(&out).contains("setup needs a link to a radio that is there"),
         "{out:?}"
     );
+}
+
+#[tokio::test]
+async fn the_simulators_factory_radio_is_set_up_and_then_reaches_the_mav() {
+    let (child, lines) = common::spawn_lines(&[
+        "sim",
+        "--link",
+        "pty",
+        "--api-mode",
+        "0",
+        "--duration",
+        "60",
+    ]);
+    let _sim = common::Running(child);
+    let announced = loop {
+        let line = lines.recv_timeout(GUARD).expect("sim prints its link");
+        if line.starts_with("ground station link") {
+            break line;
+        }
+    };
+    assert!(announced.contains("transparent mode (AP=0"), "{announced}");
+    let link = announced
+        .split("(open it as ")
+        .nth(1)
+        .and_then(|rest| rest.split(')').next())
+        .expect("the pty's link")
+        .to_owned();
+
+    // The emulated radio's guard time is Digi's default, setup's too.
+    let out = mcp_gs(&[
+        "setup",
+        "--link",
+        &link,
+        "--api-mode",
+        "2",
+        "--baud",
+        "115200",
+    ])
+    .await;
+    assert!(out.status.success(), "{out:?}");
+    assert_eq!(
+        stdout(&out),
+        format!(
+            "AP = 0 (transparent mode) -> 2 (API mode 2, escaped), saved\n\
+             BD = 3 (9600 baud) -> 7 (115200 baud), saved\n\
+             checked: the radio answers API frames in mode 2 (use --link {link}:115200 with \
+             --api-mode 2)\n"
+        ),
+        "{out:?}"
+    );
+
+    let link = format!("{link}:115200");
+    let out = mcp_gs(&[
+        "status",
+        "--link",
+        &link,
+        "--api-mode",
+        "2",
+        "--to",
+        "0013A20040B599B9",
+        "landing",
+    ])
+    .await;
+    assert!(out.status.success(), "{out:?}");
+    assert!(stdout(&out).contains("landing"), "{out:?}");
 }

@@ -429,6 +429,7 @@ async fn a_receive_buffer_limit_drops_long_commands() {
     let link: Link = "tcp-listen:127.0.0.1:0".parse().unwrap();
     let options = SimOptions {
         rx_buffer: Some(MAV_RX_BUFFER),
+        ..SimOptions::default()
     };
     let sim = Simulator::start_with(
         &link,

@@ -30,7 +30,9 @@
 //!   `NT` (the node discovery time, 0x3C tenths of a second) and `NI` (the node
 //!   identifier: a space, the default, until set). `NI` can be set to 1 to 20 printable
 //!   ASCII characters and `NT` to 0x20..=0xFF; the others are read-only: a value gets
-//!   status 3, invalid parameter (but `AP` set to the node's own mode, a no-op).
+//!   status 3, invalid parameter (but `AP` set to the node's own mode, a no-op). `BD`
+//!   (the UART's baud rate: 3, 9600 baud, on a radio that starts in transparent mode,
+//!   else 7, 115200) can be set to 0..=8; `GT` (0x3E8) and `CT` (0x64) are read-only.
 //!   Node discovery (`ND`, or `ND NAME` for the node named NAME) is answered at once
 //!   with an AT Command Response for each other node the radio can reach (its
 //!   [`xbee_api::NodeInfo`]: the coordinator as coordinator, the others as routers,
@@ -57,6 +59,18 @@
 //!   and after the device closes it, the node is down and nothing is written for it, and
 //!   what a device leaves unread when it closes the far end is dropped, so that the
 //!   next device starts with its modem status, not with stale frames.
+//! - A node added with [`NodeOptions::transparent`] starts in transparent mode
+//!   (`AP` = 0), as XBee modules leave the factory. Its device gets the payloads of the
+//!   Receive Packets (and Explicit Rx Indicators) for it as bytes, and nothing else: no
+//!   modem status, no frame. What the device writes is data, which goes nowhere in this
+//!   emulation, except `+++` written alone between two guard times of silence (`GT`,
+//!   1 s), which the radio answers `OK` to: AT command mode. There each line `AT`,
+//!   command, value (hex, text for `NI`) and carriage return is answered with the value
+//!   read (hex), `OK` or `ERROR`, as the radio's API answers the same command (`ND`
+//!   excepted); `AP` takes 0, 1 or 2, and `BD` 0 to 8 (the link is not slowed down).
+//!   `ATCN`, or `CT` (10 s) without a command, leaves command mode: with `AP` set to 1
+//!   or 2 the radio speaks API frames in that mode from then on, as a node added in API
+//!   mode does (until the network ends). A radio in API mode does not take `+++`.
 //! - [`Faults`] (loss, latency, jitter, duplication, reordering, corruption) apply to the
 //!   frames written to a link, network-wide or per node, drawn from a generator seeded
 //!   with [`NetworkConfig::seed`] and the node's address, so that a run replays.
@@ -95,6 +109,7 @@
 //! # }
 //! ```
 
+mod command_mode;
 mod faults;
 mod port;
 mod router;
@@ -161,6 +176,11 @@ impl Default for NetworkConfig {
 pub struct NodeOptions {
     /// API mode its device speaks.
     pub api_mode: ApiMode,
+    /// The radio starts in transparent mode (`AP` = 0), as XBee modules leave the
+    /// factory, rather than in `api_mode`: see [the module documentation](self)
+    /// for what it does then. Its device puts it into API mode through AT command mode,
+    /// as [`crate::command_mode::CommandMode`] does.
+    pub transparent: bool,
     /// Its own faults; `None` uses the network's.
     pub faults: Option<Faults>,
     /// How its link is reopened after a disconnection.
@@ -174,6 +194,7 @@ impl Default for NodeOptions {
     fn default() -> Self {
         NodeOptions {
             api_mode: ApiMode::Unescaped,
+            transparent: false,
             faults: None,
             reconnect: ReconnectPolicy::default(),
             connect_timeout: DEFAULT_CONNECT_TIMEOUT,
@@ -200,6 +221,8 @@ pub struct NodeInfo {
     pub addr16: Address16,
     /// Its API mode.
     pub api_mode: ApiMode,
+    /// It started in transparent mode (`AP` = 0), not in `api_mode`.
+    pub transparent: bool,
     /// For a `pty` link: the path its device opens.
     pub pty_path: Option<PathBuf>,
     /// For a `tcp-listen` link: the bound address.
@@ -462,6 +485,12 @@ impl Network {
                 Node {
                     addr16,
                     mode: options.api_mode,
+                    transparent: options.transparent,
+                    baud: if options.transparent {
+                        router::BAUD_RATE
+                    } else {
+                        router::BAUD_RATE_API
+                    },
                     faults: options.faults,
                     rng: faults::FaultRng::new(seed, address),
                     out: tx,
@@ -480,6 +509,7 @@ impl Network {
                 address,
                 addr16,
                 api_mode: options.api_mode,
+                transparent: options.transparent,
                 pty_path: None,
                 local_addr: None,
             }
@@ -488,7 +518,6 @@ impl Network {
             self.shutdown.clone(),
             self.state.clone(),
             address,
-            options.api_mode,
             source,
             rx,
         ));

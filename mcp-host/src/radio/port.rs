@@ -6,15 +6,16 @@ use std::pin::Pin;
 use std::sync::{Arc, Mutex};
 use std::task::{Context, Poll};
 
-use bytes::Bytes;
+use bytes::{Bytes, BytesMut};
 use futures::StreamExt;
 use tokio::io::{AsyncRead, AsyncWrite, AsyncWriteExt, ReadBuf};
 use tokio::sync::mpsc;
 use tokio::time::{Instant, sleep_until};
-use tokio_util::codec::FramedRead;
-use xbee_api::{Address64, ApiMode};
+use tokio_util::codec::{Decoder, FramedRead};
+use xbee_api::Address64;
 
-use super::router::{OUT_CAPACITY, Out, State};
+use super::command_mode::{CommandMode, Step};
+use super::router::{LinkMode, OUT_CAPACITY, Out, State};
 use crate::codec::{CodecItem, XBeeCodec};
 use crate::options::ReconnectPolicy;
 use crate::pty::{PtyPort, PtyStream};
@@ -148,20 +149,18 @@ pub(crate) async fn run(
     shutdown: tokio_util::sync::CancellationToken,
     state: Arc<Mutex<State>>,
     addr: Address64,
-    mode: ApiMode,
     source: Source,
     out: mpsc::Receiver<Out>,
 ) {
     tokio::select! {
         () = shutdown.cancelled() => {}
-        () = run_node(state, addr, mode, source, out) => {}
+        () = run_node(state, addr, source, out) => {}
     }
 }
 
 async fn run_node(
     state: Arc<Mutex<State>>,
     addr: Address64,
-    mode: ApiMode,
     mut source: Source,
     mut out: mpsc::Receiver<Out>,
 ) {
@@ -174,7 +173,7 @@ async fn run_node(
             while out.try_recv().is_ok() {}
             lock(&state).connected(addr, peer);
         }
-        let (reason, healthy) = serve(&state, addr, mode, &mut io, &mut out).await;
+        let (reason, healthy) = serve(&state, addr, &mut io, &mut out).await;
         if healthy {
             source.mark_healthy();
         }
@@ -213,43 +212,68 @@ impl std::fmt::Display for End {
 async fn serve(
     state: &Mutex<State>,
     addr: Address64,
-    mode: ApiMode,
     io: &mut Stream,
     out: &mut mpsc::Receiver<Out>,
 ) -> (End, bool) {
     let mut healthy = false;
-    let end = serve_until_end(state, addr, mode, io, out, &mut healthy).await;
+    let end = serve_until_end(state, addr, io, out, &mut healthy).await;
     (end, healthy)
 }
 
 async fn serve_until_end(
     state: &Mutex<State>,
     addr: Address64,
-    mode: ApiMode,
     io: &mut Stream,
     out: &mut mpsc::Receiver<Out>,
     healthy: &mut bool,
 ) -> End {
     let (reader, mut writer) = tokio::io::split(io);
-    let mut frames = FramedRead::new(reader, XBeeCodec::new(mode));
+    let link_mode = lock(state).link_mode(addr);
+    let mut command_mode = (link_mode == LinkMode::Transparent).then(CommandMode::new);
+    let mut frames = FramedRead::new(reader, NodeCodec::new(link_mode));
     let mut pending: VecDeque<Out> = VecDeque::new();
     let mut held: Option<(Bytes, Instant)> = None;
     loop {
         let next_at = pending.front().map(|o| o.at);
         let held_until = held.as_ref().map(|(_, until)| *until);
-        tokio::select! {
+        let command_due = command_mode.as_ref().and_then(CommandMode::deadline);
+        let steps = tokio::select! {
             item = frames.next() => match item {
-                Some(Ok(CodecItem::Frame(frame))) => {
+                Some(Ok(Input::Frame(CodecItem::Frame(frame)))) => {
                     *healthy = true;
                     lock(state).handle(addr, frame.data());
+                    continue;
                 }
-                Some(Ok(CodecItem::Error(error))) => lock(state).decode_error(addr, error),
+                Some(Ok(Input::Frame(CodecItem::Error(error)))) => {
+                    lock(state).decode_error(addr, error);
+                    continue;
+                }
+                Some(Ok(Input::Bytes(bytes))) => {
+                    *healthy = true;
+                    let Some(command_mode) = &mut command_mode else { continue };
+                    command_mode.on_bytes(Instant::now(), &bytes, |command, value| {
+                        lock(state).command_line(addr, command, value)
+                    })
+                }
                 Some(Err(e)) => return End::Io(e),
                 None => return End::Closed,
             },
+            () = sleep_until(command_due.unwrap_or_else(Instant::now)), if command_due.is_some() => {
+                command_mode
+                    .as_mut()
+                    .and_then(|c| c.on_deadline(Instant::now()))
+                    .into_iter()
+                    .collect()
+            },
             item = out.recv() => match item {
-                Some(item) if pending.len() < OUT_CAPACITY => pending.push_back(item),
-                Some(_) => tracing::warn!(node = %addr, "write queue full: frame dropped"),
+                Some(item) if pending.len() < OUT_CAPACITY => {
+                    pending.push_back(item);
+                    continue;
+                }
+                Some(_) => {
+                    tracing::warn!(node = %addr, "write queue full: frame dropped");
+                    continue;
+                }
                 None => return End::NetworkGone,
             },
             () = sleep_until(next_at.unwrap_or_else(Instant::now)), if next_at.is_some() => {
@@ -266,6 +290,7 @@ async fn serve_until_end(
                         return End::Io(e);
                     }
                 }
+                continue;
             },
             () = sleep_until(held_until.unwrap_or_else(Instant::now)), if held_until.is_some() => {
                 if let Some((bytes, _)) = held.take() {
@@ -273,7 +298,67 @@ async fn serve_until_end(
                         return End::Io(e);
                     }
                 }
+                continue;
             },
+        };
+        for step in steps {
+            match step {
+                Step::Answer(line) => {
+                    if let Err(e) = write(&mut writer, &line).await {
+                        return End::Io(e);
+                    }
+                }
+                Step::Leave { ap, rest } => {
+                    let link_mode = lock(state).leave_command_mode(addr, ap);
+                    if let LinkMode::Api(_) = link_mode {
+                        // What the device wrote after `ATCN` is for the API decoder.
+                        command_mode = None;
+                        *frames.decoder_mut() = NodeCodec::new(link_mode);
+                        frames.read_buffer_mut().extend_from_slice(&rest);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// What a device writes to its radio: frames in API mode, bytes in transparent mode.
+enum Input {
+    Frame(CodecItem),
+    Bytes(BytesMut),
+}
+
+/// The decoder of a device's writes, for the radio's mode.
+enum NodeCodec {
+    Api(XBeeCodec),
+    Transparent,
+}
+
+impl NodeCodec {
+    fn new(mode: LinkMode) -> Self {
+        match mode {
+            LinkMode::Api(mode) => NodeCodec::Api(XBeeCodec::new(mode)),
+            LinkMode::Transparent => NodeCodec::Transparent,
+        }
+    }
+}
+
+impl Decoder for NodeCodec {
+    type Item = Input;
+    type Error = std::io::Error;
+
+    fn decode(&mut self, src: &mut BytesMut) -> Result<Option<Input>, std::io::Error> {
+        match self {
+            NodeCodec::Api(codec) => Ok(codec.decode(src)?.map(Input::Frame)),
+            NodeCodec::Transparent if src.is_empty() => Ok(None),
+            NodeCodec::Transparent => Ok(Some(Input::Bytes(src.split()))),
+        }
+    }
+
+    fn decode_eof(&mut self, src: &mut BytesMut) -> Result<Option<Input>, std::io::Error> {
+        match self {
+            NodeCodec::Api(codec) => Ok(codec.decode_eof(src)?.map(Input::Frame)),
+            NodeCodec::Transparent => self.decode(src),
         }
     }
 }

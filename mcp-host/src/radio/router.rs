@@ -36,6 +36,18 @@ const OPERATING_PAN_ID: u64 = 0x0013_A200_4D43_5000;
 const OPERATING_PAN_ID_16: u16 = 0x4D43;
 /// `CH`: the operating channel (one of 0x0B..=0x1A; an S2C uses 0x0C..=0x1A).
 const OPERATING_CHANNEL: u8 = 0x17;
+/// `BD`: the UART baud rate setting a module leaves the factory with, 3 (9600 baud).
+pub(crate) const BAUD_RATE: u8 = 3;
+/// `BD` of a radio that starts in API mode: 7 (115200 baud, the links' default).
+pub(crate) const BAUD_RATE_API: u8 = 7;
+/// The `BD` settings the emulated radios take: 0 to 8, 1200 to 230400 baud. The links
+/// are not slowed down by them.
+const BAUD_RATES: std::ops::RangeInclusive<u8> = 0..=8;
+/// `GT`: the guard time of AT command mode, in milliseconds (Digi's default, 1 s).
+pub(crate) const GUARD_TIME_MS: u16 = 0x3E8;
+/// `CT`: how long AT command mode waits for a command, in tenths of a second (Digi's
+/// default, 10 s).
+pub(crate) const COMMAND_TIMEOUT: u16 = 0x64;
 
 /// `NT`: the node discovery time by default, in tenths of a second (Digi's default, 6 s).
 pub(crate) const DISCOVERY_TIME: u16 = 0x3C;
@@ -64,6 +76,11 @@ pub(crate) struct Out {
 pub(crate) struct Node {
     pub(crate) addr16: Address16,
     pub(crate) mode: ApiMode,
+    /// In transparent mode (`AP` = 0): its device gets the payloads it receives as bytes
+    /// and nothing else; `mode` applies once its device sets `AP` to 1 or 2.
+    pub(crate) transparent: bool,
+    /// Its UART baud rate setting (`BD`).
+    pub(crate) baud: u8,
     pub(crate) faults: Option<Faults>,
     pub(crate) rng: FaultRng,
     pub(crate) out: mpsc::Sender<Out>,
@@ -128,6 +145,10 @@ impl State {
         let Some(node) = self.nodes.get_mut(&to) else {
             return false;
         };
+        if node.transparent && !wire::carried_transparently(frame) {
+            // Only received payloads leave a radio in transparent mode.
+            return false;
+        }
         let faults = node.faults.unwrap_or(default_faults);
         let now = Instant::now();
         let fate = with_faults.then(|| node.rng.decide(&faults));
@@ -150,14 +171,18 @@ impl State {
                 }
                 at = now + fate.delay;
                 match fate.corrupt {
+                    Some((index, mask)) if node.transparent => {
+                        node.stats.corrupted += 1;
+                        wire::payload_corrupt(frame, index, mask)
+                    }
                     Some((index, mask)) => {
                         node.stats.corrupted += 1;
                         wire::encode_corrupt(frame, node.mode, index, mask)
                     }
-                    None => wire::encode(frame, node.mode),
+                    None => wire::encode_for(frame, node.mode, node.transparent),
                 }
             }
-            None => wire::encode(frame, node.mode),
+            None => wire::encode_for(frame, node.mode, node.transparent),
         };
         let Some(bytes) = bytes else {
             return false;
@@ -458,6 +483,7 @@ impl State {
             None => (AtStatus::Error, 0),
         };
         match (&command, parameter) {
+            (b"AP", []) if radio.transparent => read(&[0]),
             (b"AP", []) => read(&[u8::from(radio.mode)]),
             (b"AP", [mode]) if *mode == u8::from(radio.mode) => (AtStatus::Ok, 0),
             (b"NP", []) => {
@@ -496,13 +522,87 @@ impl State {
                 radio.discovery_time = u16::from(*lo);
                 (AtStatus::Ok, 0)
             }
+            (b"BD", []) => read(&[radio.baud]),
+            (b"BD", [bd]) if BAUD_RATES.contains(bd) => {
+                radio.baud = *bd;
+                (AtStatus::Ok, 0)
+            }
+            (b"GT", []) => read(&GUARD_TIME_MS.to_be_bytes()),
+            (b"CT", []) => read(&COMMAND_TIMEOUT.to_be_bytes()),
             (b"AC" | b"WR", []) => (AtStatus::Ok, 0),
             (
                 b"AP" | b"NP" | b"SH" | b"SL" | b"MY" | b"AI" | b"CE" | b"SM" | b"HV" | b"VR"
-                | b"NI" | b"NT" | b"ID" | b"OP" | b"OI" | b"CH" | b"AC" | b"WR",
+                | b"NI" | b"NT" | b"ID" | b"OP" | b"OI" | b"CH" | b"BD" | b"GT" | b"CT" | b"AC"
+                | b"WR",
                 _,
             ) => (AtStatus::InvalidParameter, 0),
             _ => (AtStatus::InvalidCommand, 0),
+        }
+    }
+
+    /// Carries out a command line of AT command mode on `node`'s radio, `AT` and the
+    /// command (`AP` and `CN` excepted: the command mode itself handles them) and its
+    /// value as typed: hex for a number, text for `NI`. The answer line, without its
+    /// carriage return: the value read (hex, no leading zeros; text for `NI`), `OK`, or
+    /// `ERROR` for a command or value the radio does not take (`ND` among them: node
+    /// discovery is answered in API mode only).
+    pub(crate) fn command_line(
+        &mut self,
+        node: Address64,
+        command: [u8; 2],
+        value: &str,
+    ) -> String {
+        let text = command == *b"NI";
+        let parameter = if text {
+            Some(value.trim_start().as_bytes().to_vec())
+        } else {
+            hex_value(value)
+        };
+        let Some(parameter) = parameter.filter(|_| command != *b"ND") else {
+            return "ERROR".to_owned();
+        };
+        let mut value = [0u8; AT_VALUE_MAX];
+        let (status, len) = self.at_value(node, command, &parameter, &mut value);
+        self.emit(NetEvent::AtCommand {
+            node,
+            command,
+            status,
+        });
+        let value = value.get(..len).unwrap_or_default();
+        match status {
+            AtStatus::Ok if value.is_empty() => "OK".to_owned(),
+            AtStatus::Ok if text => String::from_utf8_lossy(value).into_owned(),
+            AtStatus::Ok => {
+                let n = value.iter().fold(0u64, |n, &b| (n << 8) | u64::from(b));
+                format!("{n:X}")
+            }
+            _ => "ERROR".to_owned(),
+        }
+    }
+
+    /// `node`'s radio left AT command mode with `ap` its API mode setting: 0 stays in
+    /// transparent mode, 1 and 2 switch to API frames in that mode. Its mode now.
+    pub(crate) fn leave_command_mode(&mut self, node: Address64, ap: u8) -> LinkMode {
+        let Some(radio) = self.nodes.get_mut(&node) else {
+            return LinkMode::Transparent;
+        };
+        if let Ok(mode) = ApiMode::try_from(ap) {
+            radio.mode = mode;
+            radio.transparent = false;
+        }
+        self.emit(NetEvent::AtCommand {
+            node,
+            command: *b"CN",
+            status: AtStatus::Ok,
+        });
+        self.link_mode(node)
+    }
+
+    /// What `node`'s radio speaks to its device.
+    pub(crate) fn link_mode(&self, node: Address64) -> LinkMode {
+        match self.nodes.get(&node) {
+            Some(radio) if !radio.transparent => LinkMode::Api(radio.mode),
+            _ => LinkMode::Transparent,
         }
     }
 
@@ -676,6 +776,35 @@ impl State {
             self.send_to(from, &response, true);
         }
     }
+}
+
+/// What a radio speaks to its device.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum LinkMode {
+    /// Transparent mode (`AP` = 0): received payloads as bytes, and AT command mode.
+    Transparent,
+    /// API frames in this mode.
+    Api(ApiMode),
+}
+
+/// A number typed in AT command mode: up to 16 hex digits (spaces ignored), as
+/// big-endian bytes without leading zero bytes (one 0x00 for zero); nothing for no
+/// digits. `None` for anything else.
+fn hex_value(text: &str) -> Option<Vec<u8>> {
+    let digits: String = text.chars().filter(|c| *c != ' ').collect();
+    if digits.is_empty() {
+        return Some(Vec::new());
+    }
+    if digits.len() > 16 || !digits.chars().all(|c| c.is_ascii_hexdigit()) {
+        return None;
+    }
+    let n = u64::from_str_radix(&digits, 16).ok()?;
+    let bytes = n.to_be_bytes();
+    let first = bytes
+        .iter()
+        .position(|&b| b != 0)
+        .unwrap_or(bytes.len() - 1);
+    Some(bytes.get(first..).unwrap_or_default().to_vec())
 }
 
 /// Whether `name` is a node identifier a radio accepts: 1 to 20 printable ASCII

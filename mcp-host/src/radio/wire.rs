@@ -1,13 +1,71 @@
 //! Encoding frames for a link, and corrupting them on purpose.
 
 use bytes::{Bytes, BytesMut};
-use xbee_api::{ApiMode, EncodeFrame};
+use xbee_api::{ApiMode, EncodeFrame, Frame};
 
 /// Encodes `frame` for a link in `mode`.
 pub(crate) fn encode<F: EncodeFrame + ?Sized>(frame: &F, mode: ApiMode) -> Option<Bytes> {
     let mut out = BytesMut::new();
     crate::codec::encode_frame(frame, mode, &mut out).ok()?;
     Some(out.freeze())
+}
+
+/// Encodes `frame` for a link in `mode`, or, for a radio in transparent mode, the
+/// payload it carries ([`payload`]).
+pub(crate) fn encode_for<F: EncodeFrame + ?Sized>(
+    frame: &F,
+    mode: ApiMode,
+    transparent: bool,
+) -> Option<Bytes> {
+    if transparent {
+        payload(frame)
+    } else {
+        encode(frame, mode)
+    }
+}
+
+/// The frame data of `frame`.
+fn frame_data<F: EncodeFrame + ?Sized>(frame: &F) -> Vec<u8> {
+    let mut data = Vec::with_capacity(frame.frame_data_len());
+    frame.write_frame_data(&mut |chunk: &[u8]| data.extend_from_slice(chunk));
+    data
+}
+
+/// Whether a radio in transparent mode passes anything of `frame` to its device: the
+/// payload of a Receive Packet (0x90) or of an Explicit Rx Indicator (0x91), as bytes.
+pub(crate) fn carried_transparently<F: EncodeFrame + ?Sized>(frame: &F) -> bool {
+    let mut frame_type = None;
+    frame.write_frame_data(&mut |chunk: &[u8]| {
+        frame_type = frame_type.or_else(|| chunk.first().copied());
+    });
+    matches!(frame_type, Some(0x90 | 0x91))
+}
+
+/// What a radio in transparent mode writes for `frame`: the payload of a Receive Packet
+/// or of an Explicit Rx Indicator; `None` for any other frame (or an empty payload).
+pub(crate) fn payload<F: EncodeFrame + ?Sized>(frame: &F) -> Option<Bytes> {
+    let data = frame_data(frame);
+    let payload = match Frame::parse_bytes(&data).ok()? {
+        Frame::ReceivePacket(rx) => rx.data,
+        Frame::ExplicitRxIndicator(rx) => rx.data,
+        _ => return None,
+    };
+    (!payload.is_empty()).then(|| Bytes::copy_from_slice(payload))
+}
+
+/// [`payload`] with one byte XORed with `mask` (non-zero): what a radio in transparent
+/// mode writes for a frame that came in damaged (nothing checks it).
+pub(crate) fn payload_corrupt<F: EncodeFrame + ?Sized>(
+    frame: &F,
+    index: usize,
+    mask: u8,
+) -> Option<Bytes> {
+    let mut bytes = payload(frame)?.to_vec();
+    let i = index % bytes.len();
+    if let Some(byte) = bytes.get_mut(i) {
+        *byte ^= mask.max(1);
+    }
+    Some(Bytes::from(bytes))
 }
 
 /// Encodes `frame` with one byte of its frame data XORed with `mask` (non-zero) but the
@@ -20,8 +78,7 @@ pub(crate) fn encode_corrupt<F: EncodeFrame + ?Sized>(
     index: usize,
     mask: u8,
 ) -> Option<Bytes> {
-    let mut data = Vec::with_capacity(frame.frame_data_len());
-    frame.write_frame_data(&mut |chunk: &[u8]| data.extend_from_slice(chunk));
+    let mut data = frame_data(frame);
     let len = u16::try_from(data.len()).ok()?;
     let sum = data.iter().fold(0u8, |s, b| s.wrapping_add(*b));
     let checksum = 0xFF - sum;

@@ -160,13 +160,17 @@ impl SimMav {
 /// Size of the deployed MAV's UART receive buffer, bytes.
 pub const MAV_RX_BUFFER: usize = 60;
 
-/// Options of simulated MAVs.
+/// Options of the simulated MAVs and of the ground station's radio.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct SimOptions {
     /// Drop received frames longer than this many bytes on the wire (start delimiter,
     /// length, frame data and checksum), as a firmware with a fixed receive buffer
     /// would ([`MAV_RX_BUFFER`] for the deployed MAV). `None`: no limit.
     pub rx_buffer: Option<usize>,
+    /// The ground station's radio (the coordinator) starts in transparent mode
+    /// (`AP` = 0), as XBee modules leave the factory, until it is put into API mode
+    /// through its AT command mode ([`NodeOptions::transparent`]).
+    pub coordinator_transparent: bool,
 }
 
 /// Runs a simulated MAV on `io`, the UART to its XBee in API mode 1, until the stream
@@ -254,7 +258,7 @@ impl Simulator {
         Self::start_with(link, mode, addresses, config, SimOptions::default()).await
     }
 
-    /// [`Simulator::start`] with MAV options.
+    /// [`Simulator::start`] with options.
     pub async fn start_with(
         link: &Link,
         mode: ApiMode,
@@ -263,8 +267,12 @@ impl Simulator {
         options: SimOptions,
     ) -> Result<Self, NetworkError> {
         let network = Network::new(config);
+        let coordinator_options = NodeOptions {
+            transparent: options.coordinator_transparent,
+            ..NodeOptions::with_mode(mode)
+        };
         let coordinator = network
-            .add_link(Address64::COORDINATOR, link, NodeOptions::with_mode(mode))
+            .add_link(Address64::COORDINATOR, link, coordinator_options)
             .await?;
         let mut mavs = Vec::new();
         for &address in addresses {

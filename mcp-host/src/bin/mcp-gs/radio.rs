@@ -27,9 +27,11 @@ pub(crate) struct RadioArgs {
     /// ADDR=LINK@MODE (e.g. `0013A20040B599B9=tcp:127.0.0.1:5000@1`). Repeat for more.
     #[arg(long = "node", value_name = "ADDR=LINK[@MODE]")]
     nodes: Vec<NodeArg>,
-    /// API mode of links given without @MODE.
-    #[arg(long, default_value = "1", value_name = "1|2")]
-    api_mode: ApiModeArg,
+    /// API mode of links given without @MODE: 1, 2, or 0 for a radio in transparent
+    /// mode (AP=0) as XBee modules leave the factory, which `mcp-gs setup` puts into API
+    /// mode.
+    #[arg(long, default_value = "1", value_name = "0|1|2")]
+    api_mode: RadioModeArg,
     #[command(flatten)]
     net: NetArgs,
     /// Print every delivery, not only connections and failures.
@@ -43,7 +45,7 @@ pub(crate) struct RadioArgs {
 const RADIO_HELP: &str = "\
 Links: serial:PATH[:BAUD], tcp:HOST:PORT, tcp-listen:ADDR:PORT (each new peer is the device \
 back), pty (the path to open is printed). A link's API mode is given after an @ \
-(LINK@1, LINK@2), else --api-mode.
+(LINK@1, LINK@2, or LINK@0: transparent mode), else --api-mode.
 
 Faults apply to the frames the network writes to a link: --loss, --latency, --jitter, \
 --duplicate, --reorder and --corrupt for every link, --faults ADDR=SPEC for one (SPEC: \
@@ -303,18 +305,43 @@ impl std::str::FromStr for CutArg {
     }
 }
 
+/// The mode an emulated radio starts in: `AP` 1 or 2, or 0, transparent mode.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct RadioModeArg {
+    pub(crate) api_mode: ApiMode,
+    pub(crate) transparent: bool,
+}
+
+impl std::str::FromStr for RadioModeArg {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        if s == "0" {
+            return Ok(RadioModeArg {
+                api_mode: ApiMode::Unescaped,
+                transparent: true,
+            });
+        }
+        s.parse::<ApiModeArg>()
+            .map(|mode| RadioModeArg {
+                api_mode: mode.0,
+                transparent: false,
+            })
+            .map_err(|_| format!("API mode must be 1, 2 or 0 (transparent mode), got `{s}`"))
+    }
+}
+
 /// `LINK` or `LINK@MODE`.
 #[derive(Debug, Clone)]
 pub(crate) struct LinkArg {
     pub(crate) link: Link,
-    pub(crate) mode: Option<ApiMode>,
+    pub(crate) mode: Option<RadioModeArg>,
 }
 
 impl std::str::FromStr for LinkArg {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
         let (link, mode) = match s.rsplit_once('@') {
-            Some((link, mode)) => (link, Some(mode.parse::<ApiModeArg>()?.0)),
+            Some((link, mode)) => (link, Some(mode.parse::<RadioModeArg>()?)),
             None => (s, None),
         };
         let link = link.parse::<Link>().map_err(|e| e.to_string())?;
@@ -414,12 +441,13 @@ pub(crate) fn describe_node(name: &str, info: &NodeInfo, link: &Link) -> String 
         (_, Some(addr)) => format!("listening on {addr} (connect with tcp:{addr})"),
         _ => format!("link {link}"),
     };
-    format!(
-        "{name} {}/{}: {at}, API mode {}",
-        info.address,
-        info.addr16,
-        u8::from(info.api_mode)
-    )
+    let mode = if info.transparent {
+        "transparent mode (AP=0, as from the factory: `mcp-gs setup` puts it into API mode)"
+            .to_owned()
+    } else {
+        format!("API mode {}", u8::from(info.api_mode))
+    };
+    format!("{name} {}/{}: {at}, {mode}", info.address, info.addr16)
 }
 
 /// One line for a network event at `now`, or `None` to stay quiet.
@@ -588,12 +616,14 @@ pub(crate) async fn run(args: RadioArgs) -> Result<(), Failure> {
     args.net.describe(&config);
     let network = Network::new(config);
     let events = network.subscribe();
-    let default_mode = args.api_mode.0;
+    let default_mode = args.api_mode;
     let coordinator = std::iter::once((Address64::COORDINATOR, args.coordinator.clone()));
     let nodes = args.nodes.iter().map(|n| (n.address, n.link.clone()));
     for (address, link) in coordinator.chain(nodes) {
+        let mode = link.mode.unwrap_or(default_mode);
         let options = NodeOptions {
-            api_mode: link.mode.unwrap_or(default_mode),
+            api_mode: mode.api_mode,
+            transparent: mode.transparent,
             faults: args.net.faults_of(address),
             ..NodeOptions::default()
         };

@@ -8,8 +8,10 @@ use mcp_host::radio::MAX_UNICAST_FRAGMENTED;
 use mcp_host::sim::{SimOptions, Simulator, fleet_addresses};
 use xbee_api::Address64;
 
-use crate::radio::{NetArgs, check_distinct, describe_node, parse_address, parse_duration, watch};
-use crate::{ApiModeArg, Failure};
+use crate::Failure;
+use crate::radio::{
+    NetArgs, RadioModeArg, check_distinct, describe_node, parse_address, parse_duration, watch,
+};
 
 /// Arguments of `sim`.
 #[derive(Debug, Args)]
@@ -27,9 +29,11 @@ pub(crate) struct SimArgs {
     /// 0013A20040B599B8, then made-up ones.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..=4096))]
     mavs: Option<u16>,
-    /// API mode of the link (what the ground station's XBee would be set to).
-    #[arg(long, default_value = "1", value_name = "1|2")]
-    api_mode: ApiModeArg,
+    /// API mode of the link (what the ground station's XBee is set to): 1, 2, or 0 for
+    /// a radio in transparent mode (AP=0) as XBee modules leave the factory, which
+    /// `mcp-gs setup` puts into API mode.
+    #[arg(long, default_value = "1", value_name = "0|1|2")]
+    api_mode: RadioModeArg,
     /// Drop commands whose frame is longer than N bytes, as the deployed MAV's 60-byte
     /// UART receive buffer does (default: no limit). At least 19, the smallest command's
     /// frame.
@@ -107,8 +111,10 @@ pub(crate) async fn run(args: SimArgs) -> Result<(), Failure> {
     args.net.describe(&config);
     let options = SimOptions {
         rx_buffer: args.rx_buffer,
+        coordinator_transparent: args.api_mode.transparent,
     };
-    let sim = Simulator::start_with(&args.link, args.api_mode.0, &addresses, config, options)
+    let mode = args.api_mode.api_mode;
+    let sim = Simulator::start_with(&args.link, mode, &addresses, config, options)
         .await
         .map_err(|e| Failure::link(e.to_string()))?;
     let events = sim.network().subscribe();
