@@ -258,9 +258,47 @@ fn nodes_lists_the_radios_that_answer_node_discovery() {
 fn nodes_says_when_no_radio_answers() {
     let (_radio, link) = lone_coordinator();
     let out = nodes(&link, &["--window", "1"]);
-    assert!(out.status.success(), "{out:?}");
+    assert_eq!(out.status.code(), Some(4), "{out:?}");
     assert!(out.stdout.is_empty(), "{out:?}");
     assert!(stderr(&out).contains("no radio answered"), "{out:?}");
+    assert!(!stderr(&out).contains("hint"), "{out:?}");
+}
+
+#[test]
+fn nodes_in_the_wrong_api_mode_points_at_the_mode() {
+    // The local radio answers N? in either mode (no byte of it is escaped), but every
+    // node's answer holds its 64-bit address, 0013A2..., whose 0x13 a radio in mode 2
+    // escapes: read in mode 1, the answer fails its checksum.
+    let sim = Sim::start_with(&["--api-mode", "2"]);
+    let out = nodes(&sim.link, &["--window", "1", "--api-mode", "1"]);
+    assert_eq!(out.status.code(), Some(4), "{out:?}");
+    assert!(stderr(&out).contains("no radio answered"), "{out:?}");
+    assert!(
+        stderr(&out).contains("the radio may be in API mode 2 (AP=2)"),
+        "{out:?}"
+    );
+}
+
+#[test]
+fn a_command_sent_in_the_wrong_api_mode_times_out_pointing_at_the_mode() {
+    // The radio's modem status passes in either mode, but the Transmit Request holds the
+    // MAV's address, 0013A2..., whose 0x13 is escaped in mode 2: a radio in mode 1
+    // fails its checksum and never answers.
+    let sim = Sim::start();
+    let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args(["send", "--link", &sim.link, "--api-mode", "2", "--to", MAV])
+        .args(["--timeout", "2", "landing", "on"])
+        .output()
+        .expect("run mcp-gs send");
+    assert_eq!(out.status.code(), Some(4), "{out:?}");
+    let err = stderr(&out);
+    assert!(err.contains("may still have gone out"), "{err}");
+    assert!(
+        err.contains("other frames came from the radio, but no answer to this one"),
+        "{err}"
+    );
+    let read_mode = format!("mcp-gs at --link {} --api-mode auto AP", sim.link);
+    assert!(err.contains(&read_mode), "{err}");
 }
 
 #[test]
@@ -281,6 +319,18 @@ fn a_broadcast_remote_command_is_carried_out_by_every_radio_and_answered_once() 
     let out = broadcast(&["NI"]);
     assert!(out.status.success(), "{out:?}");
     assert_eq!(stdout(&out), "0013a20040b599b9: NI = \"MAV\"\n");
+    assert!(
+        stderr(&out).contains("a Zigbee radio hands over a single answer to a broadcast"),
+        "{out:?}"
+    );
+    // Digi's commands with a sign are commands too: N? reaches the radio, which, as a
+    // Zigbee radio, does not know it.
+    let out = sim.at(&["N?"]);
+    assert_eq!(out.status.code(), Some(1), "{out:?}");
+    assert!(
+        stderr(&out).contains("N?: the radio answered invalid_command"),
+        "{out:?}"
+    );
     // A refusal: its line, and the exit code 1.
     let out = broadcast(&["HV", "1"]);
     assert_eq!(out.status.code(), Some(1), "{out:?}");

@@ -643,20 +643,25 @@ fn log_lines_into_a_pipe_carry_no_colour_codes() {
 
 #[test]
 fn decoding_in_the_wrong_api_mode_hints_at_the_other() {
-    let capture = testdata("ap2.bin");
-    let capture = capture.to_str().unwrap();
-    for summary in [false, true] {
-        let mut args = vec!["decode", capture, "--api-mode", "1"];
-        args.extend(summary.then_some("--summary"));
-        let output = run(&args);
-        let stderr = String::from_utf8_lossy(&output.stderr);
-        assert_eq!(output.status.code(), Some(0), "{stderr}");
-        assert!(stderr.contains("decode it with --api-mode 2"), "{stderr}");
+    // A mode 2 capture read in mode 1 fails checksums; a mode 1 capture read in mode 2
+    // loses bytes to what look like escapes, but most of its frames still pass.
+    for (file, right, wrong) in [("ap2.bin", "2", "1"), ("ap1.bin", "1", "2")] {
+        let capture = testdata(file);
+        let capture = capture.to_str().unwrap();
+        for summary in [false, true] {
+            let mut args = vec!["decode", capture, "--api-mode", wrong];
+            args.extend(summary.then_some("--summary"));
+            let output = run(&args);
+            let stderr = String::from_utf8_lossy(&output.stderr);
+            assert_eq!(output.status.code(), Some(0), "{stderr}");
+            let hint = format!("decode it with --api-mode {right}");
+            assert!(stderr.contains(&hint), "{file}: {stderr}");
+        }
+        // In the right mode, no hint.
+        let output = run(&["decode", capture, "--api-mode", right]);
+        assert_eq!(output.status.code(), Some(0));
+        assert_eq!(String::from_utf8_lossy(&output.stderr), "");
     }
-    // In the right mode, no hint.
-    let output = run(&["decode", capture, "--api-mode", "2"]);
-    assert_eq!(output.status.code(), Some(0));
-    assert_eq!(String::from_utf8_lossy(&output.stderr), "");
 }
 
 #[test]

@@ -35,7 +35,7 @@ pub(crate) struct AtArgs {
     /// Value (0x09) to the local radio, without the apply option to a remote one.
     #[arg(long)]
     no_apply: bool,
-    /// The two-letter AT command, e.g. AP, NP, NI, SH, SL, MY, ID, CH.
+    /// The two-letter AT command, e.g. AP, NP, NI, SH, SL, MY, ID, CH, N?.
     command: String,
     /// The value to set, in hex (e.g. `2` for AP=2), or text for a text parameter (NI)
     /// or with --text; omit to read.
@@ -166,6 +166,13 @@ async fn broadcast(
             out!("{}: {}", at.src64, explain(at.status, &name, None, set));
         }
     }
+    if answered == 1 {
+        eprintln!(
+            "mcp-gs: one radio answered: a Zigbee radio hands over a single answer to a \
+             broadcast, however many radios carried it out; `mcp-gs nodes` lists them all, \
+             for `--to ADDR` each"
+        );
+    }
     match (answered, refused) {
         (0, _) => Err(Failure::new(
             Failure::TIMEOUT,
@@ -185,6 +192,14 @@ async fn broadcast(
             },
         )),
     }
+}
+
+/// Whether `name` can be an AT command: letters and digits, `%` first (`%V`, supply
+/// voltage) or `?` second (`N?`, the network discovery timeout) as some of Digi's are.
+fn is_command_name(name: &[u8; 2]) -> bool {
+    let [first, second] = *name;
+    (first.is_ascii_alphanumeric() || first == b'%')
+        && (second.is_ascii_alphanumeric() || second == b'?')
 }
 
 fn parse_value(value: &str, text: bool) -> Result<Vec<u8>, String> {
@@ -225,9 +240,13 @@ pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
         .as_bytes()
         .try_into()
         .ok()
-        .filter(|c: &[u8; 2]| c.iter().all(u8::is_ascii_alphanumeric))
+        .filter(is_command_name)
         .ok_or_else(|| {
-            Failure::input(format!("`{}` is not a two-letter AT command", args.command))
+            Failure::input(format!(
+                "`{}` is not an AT command: two letters or digits (AP, D0), or Digi's few \
+                 with a sign (N?, %V)",
+                args.command
+            ))
         })?;
     let parameter = match &args.value {
         Some(value) => {
@@ -300,6 +319,16 @@ mod tests {
         assert!(is_text(b"NI") && !is_text(b"ID"));
         assert_eq!(parse_value("20", true).unwrap(), b"20");
         assert_eq!(parse_value("20", false).unwrap(), [0x20]);
+    }
+
+    #[test]
+    fn commands_with_a_sign_are_commands() {
+        for name in [b"AP", b"D0", b"N?", b"%V"] {
+            assert!(is_command_name(name), "{name:?}");
+        }
+        for name in [b"?N", b"V%", b"A ", b"-1"] {
+            assert!(!is_command_name(name), "{name:?}");
+        }
     }
 
     #[test]

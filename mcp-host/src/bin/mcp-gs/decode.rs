@@ -405,17 +405,22 @@ fn decode_stream(
     Ok(())
 }
 
-/// A hint when most frames failed in a way that reading the stream in the other API
-/// mode explains: checksums (mode 2 escapes read as data, or the reverse) and escapes.
+/// A hint when many frames failed in a way that reading the stream in the other API
+/// mode explains: checksums (mode 2 escapes read as data, or the reverse), escapes, and
+/// lengths (a mode 1 stream read in mode 2 loses bytes to what look like escapes), one
+/// frame in ten or more.
 fn mode_hint(mode: ApiMode, stats: &xbee_api::Stats) -> Option<String> {
-    let failed = u64::from(stats.bad_checksum) + u64::from(stats.bad_escape);
-    if failed < 8 || failed <= u64::from(stats.frames_ok) {
+    let failed = u64::from(stats.bad_checksum)
+        + u64::from(stats.bad_escape)
+        + u64::from(stats.truncated)
+        + u64::from(stats.oversize);
+    if failed < 8 || failed * 10 < u64::from(stats.frames_ok) {
         return None;
     }
     let other = crate::link_args::other_mode(mode);
     Some(format!(
-        "hint: {failed} frames failed their checksum or escapes and {} passed: if the \
-         stream is in API mode {other}, decode it with --api-mode {other}",
+        "hint: {failed} frames failed their checksum, escapes or length and {} passed: if \
+         the stream is in API mode {other}, decode it with --api-mode {other}",
         stats.frames_ok
     ))
 }

@@ -331,6 +331,17 @@ pub(crate) fn diagnosed(failure: Failure, link: &LinkArgs, stats: &Stats) -> Fai
     let silent = stats.frames == 0 && stats.decode_errors() == 0 && stats.bytes_skipped == 0;
     match from_counters {
         Some(hint) => failure.with_hint(hint),
+        None if !silent && stats.frames > 0 => match link.api_mode {
+            ApiModeChoice::Fixed(mode) => failure.with_hint(format!(
+                "hint: other frames came from the radio, but no answer to this one: if the \
+                 radio is not in API mode {} (AP={}), only frames with no byte to escape \
+                 get through; `mcp-gs at --link {} --api-mode auto AP` reads its mode",
+                u8::from(mode),
+                u8::from(mode),
+                link.link
+            )),
+            ApiModeChoice::Auto => failure,
+        },
         None if silent => failure.with_hint(match link.link {
             // A tcp-listen peer (sim, radio) that serves another connection lets this
             // one wait for its turn, silently.
@@ -454,5 +465,12 @@ pub(crate) fn send_failure(error: SendError) -> Failure {
         }
         _ => Failure::OTHER,
     };
-    Failure::new(code, error.to_string())
+    match error {
+        // No answer is no proof that nothing happened.
+        SendError::Timeout { .. } => Failure::new(
+            code,
+            format!("{error} (the frame may still have gone out and been carried out)"),
+        ),
+        _ => Failure::new(code, error.to_string()),
+    }
 }

@@ -5,7 +5,7 @@ use std::time::Duration;
 use clap::Args;
 use mcp_host::discovery::{DiscoverError, Node};
 
-use crate::link_args::{LinkArgs, diagnosed, send_failure};
+use crate::link_args::{ApiModeChoice, LinkArgs, diagnosed, diagnosis, send_failure};
 use crate::{Failure, Format};
 
 /// Arguments of `nodes`.
@@ -46,10 +46,19 @@ pub(crate) async fn run(args: NodesArgs) -> Result<(), Failure> {
             crate::counted(found.unreadable as u64, "answer")
         );
     } else if found.nodes.is_empty() {
-        eprintln!(
-            "mcp-gs: no radio answered: the others are off, out of range, or in another \
-             network (ID, CH)"
+        let failure = Failure::new(
+            Failure::TIMEOUT,
+            "no radio answered: the others are off, out of range, or in another network \
+             (ID, CH)",
         );
+        // Answers that failed their checksum: the local radio may be in the other mode.
+        return Err(match args.link.api_mode {
+            ApiModeChoice::Fixed(mode) => match diagnosis(mode, &sender.stats(), 1, false) {
+                Some(hint) => failure.with_hint(hint),
+                None => failure,
+            },
+            ApiModeChoice::Auto => failure,
+        });
     }
     for node in &found.nodes {
         match args.format {
