@@ -85,6 +85,9 @@ pub enum LinkParseError {
     /// `pty` followed by anything.
     #[error("unexpected text after pty: {0:?}")]
     TrailingPty(String),
+    /// A link written as a URL, `tcp://HOST:PORT`: the kind and the `//`.
+    #[error("{0}:// is no link kind: write {0}:HOST:PORT, without //")]
+    UrlForm(String),
 }
 
 /// For a link string that is a bare device path: the `serial:` link meant.
@@ -93,8 +96,11 @@ fn bare_path_hint(kind: &str) -> String {
         .strip_prefix("COM")
         .is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()));
     let is_path = kind.starts_with('/') || com_port;
+    let is_host = kind == "localhost" || kind.parse::<std::net::IpAddr>().is_ok();
     if is_path {
         format!("; for a serial port, write serial:{kind}")
+    } else if is_host {
+        format!("; to connect to a TCP port, write tcp:{kind}:PORT")
     } else {
         String::new()
     }
@@ -111,6 +117,9 @@ impl FromStr for Link {
             Some((kind, rest)) => (kind, Some(rest)),
             None => (s, None),
         };
+        if matches!(kind, "tcp" | "tcp-listen") && rest.is_some_and(|r| r.starts_with("//")) {
+            return Err(LinkParseError::UrlForm(kind.to_owned()));
+        }
         match kind {
             "pty" => match rest {
                 None => Ok(Link::Pty),
@@ -276,6 +285,9 @@ mod tests {
             ("tcp:host:65536", InvalidPort("65536".into())),
             ("tcp-listen:host:http", InvalidPort("http".into())),
             ("pty:/dev/pts/3", TrailingPty("/dev/pts/3".into())),
+            ("tcp://127.0.0.1:9750", UrlForm("tcp".into())),
+            ("tcp-listen://0.0.0.0:9750", UrlForm("tcp-listen".into())),
+            ("127.0.0.1:9750", UnknownKind("127.0.0.1".into())),
         ];
         for (text, expected) in cases {
             assert_eq!(text.parse::<Link>().as_ref(), Err(expected), "{text:?}");
@@ -295,6 +307,15 @@ mod tests {
         }
         let message = "udp:1.2.3.4:5".parse::<Link>().unwrap_err().to_string();
         assert!(!message.contains("write serial:"), "{message}");
+        assert!(!message.contains("write tcp:"), "{message}");
+        for (text, hint) in [
+            ("127.0.0.1:9750", "write tcp:127.0.0.1:PORT"),
+            ("localhost:9750", "write tcp:localhost:PORT"),
+            ("tcp://127.0.0.1:9750", "write tcp:HOST:PORT, without //"),
+        ] {
+            let message = text.parse::<Link>().unwrap_err().to_string();
+            assert!(message.contains(hint), "{message}");
+        }
     }
 
     #[test]

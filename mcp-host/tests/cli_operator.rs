@@ -52,10 +52,15 @@ fn rest(lines: &Receiver<String>) -> Vec<String> {
 
 /// What an operator's Ctrl-C sends.
 fn interrupt(child: &std::process::Child) {
+    send_signal(child, libc::SIGINT);
+}
+
+/// Sends `signal` to `child`.
+fn send_signal(child: &std::process::Child, signal: libc::c_int) {
     let pid = i32::try_from(child.id()).expect("pid");
     // SAFETY: kill(2) with a pid of a child of this process and a valid signal.
-    let r = unsafe { libc::kill(pid, libc::SIGINT) };
-    assert_eq!(r, 0, "kill -INT {pid}");
+    let r = unsafe { libc::kill(pid, signal) };
+    assert_eq!(r, 0, "kill -{signal} {pid}");
 }
 
 /// The exit code of `child` (failure guard: [`GUARD`]).
@@ -84,6 +89,24 @@ fn link_after(line: &str, words: &str) -> String {
         + words.len();
     let end = line[start..].find(')').expect("a closing parenthesis");
     line[start..start + end].to_owned()
+}
+
+#[test]
+fn sigterm_and_sighup_stop_a_running_command_as_ctrl_c_does() {
+    for signal in [libc::SIGTERM, libc::SIGHUP] {
+        let (child, lines) =
+            spawn_lines(&["sim", "--link", "tcp-listen:127.0.0.1:0", "--duration", "0"]);
+        let mut sim = Running(child);
+        let link = tcp_link(&line_with(&lines, "listening on"));
+        line_with(&lines, "running; Ctrl-C stops");
+        let (child, lines) = spawn_lines(&["monitor", "--link", &link]);
+        let mut monitor = Running(child);
+        line_with(&lines, "link connected");
+        send_signal(&monitor.0, signal);
+        assert_eq!(exit_code(&mut monitor.0), Some(0), "signal {signal}");
+        send_signal(&sim.0, signal);
+        assert_eq!(exit_code(&mut sim.0), Some(0), "signal {signal}");
+    }
 }
 
 #[test]

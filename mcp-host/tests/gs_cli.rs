@@ -1018,3 +1018,26 @@ fn modem_status_recording(n: usize) -> Vec<u8> {
     }
     bytes
 }
+
+#[test]
+fn a_negative_number_gets_the_options_own_message() {
+    for (args, expected) in [
+        (
+            &["demo", "--duration", "-1"][..],
+            "expected a number of seconds from 0",
+        ),
+        (
+            &["monitor", "--link", "pty", "--count", "-5"][..],
+            "expected a number of events, 1 or more, got `-5`",
+        ),
+        (
+            &["sim", "--link", "pty", "--loss", "-0.1"][..],
+            "expected a probability from 0 to 1",
+        ),
+    ] {
+        let output = run(args);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(expected), "{args:?}: {stderr}");
+    }
+}

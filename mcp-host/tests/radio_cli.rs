@@ -399,3 +399,33 @@ fn sim_on_a_pty_is_connected_while_a_ground_station_has_it_open() {
         sim.line(|l| l.contains("0000000000000000 disconnected: the peer closed the link"));
     }
 }
+
+#[test]
+fn a_serial_link_that_is_not_there_fails_at_once() {
+    for (args, expected) in [
+        (
+            &["sim", "--link", "serial:/dev/no-such-port"][..],
+            "cannot open serial:/dev/no-such-port:115200: no such device (`mcp-gs ports`",
+        ),
+        (
+            &[
+                "radio",
+                "--coordinator",
+                "pty",
+                "--node",
+                "0013A20040B599B9=serial:/",
+            ][..],
+            "cannot open serial:/:115200: / is a directory, not a serial device",
+        ),
+    ] {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+            .args(args)
+            .args(["--duration", "5"])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(3), "{args:?}: {err}");
+        assert!(out.stdout.is_empty(), "{args:?}: {out:?}");
+        assert!(err.contains(expected), "{err}");
+    }
+}

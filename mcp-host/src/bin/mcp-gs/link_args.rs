@@ -106,7 +106,8 @@ impl LinkArgs {
             return Err(Failure::input(
                 "--link pty makes a new pseudo-terminal, with no radio on it yet: this \
                  subcommand needs one that is there, serial:PATH (e.g. the path `mcp-gs sim \
-                 --link pty` prints) or tcp:HOST:PORT",
+                 --link pty` prints) or tcp:HOST:PORT, or tcp-listen:ADDR:PORT to wait for \
+                 a peer to connect",
             ));
         }
         let options = self.options(reconnect).await?;
@@ -356,6 +357,34 @@ pub(crate) fn diagnosed(failure: Failure, link: &LinkArgs, stats: &Stats) -> Fai
                 .to_owned(),
         }),
         None => failure,
+    }
+}
+
+/// For a serial link: that its path is there and is no directory. `radio` and `sim`
+/// keep trying a link that cannot be opened yet (a USB adapter plugged in late), which
+/// for a mistyped path would be forever.
+pub(crate) fn check_serial_path(link: &Link) -> Result<(), Failure> {
+    let Link::Serial { path, .. } = link else {
+        return Ok(());
+    };
+    match std::fs::metadata(path) {
+        Ok(meta) if meta.is_dir() => Err(Failure::link(format!(
+            "cannot open {link}: {path} is a directory, not a serial device"
+        ))),
+        Ok(_) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            let hint = match misread_baud(link) {
+                Some((path, baud)) => format!(
+                    "`{baud}` was read as part of the path: a baud rate is digits alone, as in \
+                     serial:{path}:9600"
+                ),
+                None => "`mcp-gs ports` lists the serial ports present".to_owned(),
+            };
+            Err(Failure::link(format!(
+                "cannot open {link}: no such device ({hint})"
+            )))
+        }
+        Err(e) => Err(Failure::link(format!("cannot open {link}: {e}"))),
     }
 }
 

@@ -32,7 +32,7 @@ use std::process::ExitCode;
 
 use std::ffi::OsString;
 
-use clap::{CommandFactory, Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use xbee_api::ApiMode;
 
 /// MCP ground station: talk to MAVs through an XBee radio, or to a simulated one.
@@ -74,6 +74,15 @@ enum Sub {
     Hub(hub::HubArgs),
     /// A ground station and a simulated MAV in one process: no hardware needed.
     Demo(demo::DemoArgs),
+}
+
+/// The command line parsed, or the process ended with clap's message. A negative number
+/// is taken as an option's value (`--duration -1`), for the option's own message on what
+/// it takes, not as an unknown option.
+fn parse(args: Vec<OsString>) -> Cli {
+    let command = Cli::command().mut_subcommands(|sub| sub.allow_negative_numbers(true));
+    let matches = command.get_matches_from(args);
+    Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit())
 }
 
 /// The subcommands with a COMMAND word of their own (`send`, `encode`) take their options
@@ -246,7 +255,7 @@ pub(crate) fn counted(n: impl Into<u64>, noun: &str) -> String {
 
 #[tokio::main]
 async fn main() -> ExitCode {
-    let cli = Cli::parse_from(hoist_options(std::env::args_os().collect()));
+    let cli = parse(hoist_options(std::env::args_os().collect()));
     tracing_subscriber::fmt()
         .with_env_filter(
             tracing_subscriber::EnvFilter::try_from_env("MCP_LOG")

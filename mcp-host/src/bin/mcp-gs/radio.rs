@@ -609,6 +609,10 @@ pub(crate) async fn watch(
 
 /// Runs `radio`.
 pub(crate) async fn run(args: RadioArgs) -> Result<(), Failure> {
+    let links = std::iter::once(&args.coordinator).chain(args.nodes.iter().map(|n| &n.link));
+    for link in links {
+        crate::link_args::check_serial_path(&link.link)?;
+    }
     let config = args.net.config(MAX_UNICAST)?;
     let addresses: Vec<Address64> = args.nodes.iter().map(|n| n.address).collect();
     check_distinct(&addresses, "node")?;
