@@ -107,14 +107,15 @@ fn start_hub(radio: &str) -> (Running, mpsc::Receiver<String>, mpsc::Receiver<St
     (Running(child), out, err)
 }
 
-/// The hub's "serving RADIO on ADDR:PORT: give other commands ..." line, and the
-/// address in it.
+/// The hub's "serving RADIO on ADDR:PORT: give other commands ..." line (or "will
+/// serve RADIO on ADDR:PORT once a radio is there: ..."), and the address in it.
 fn serving(out: &mpsc::Receiver<String>) -> (String, String) {
-    let serving = line_with(out, "serving");
+    let serving = line_with(out, "serv");
     let addr = serving
         .split(" on ")
         .nth(1)
         .and_then(|rest| rest.split(": ").next())
+        .and_then(|rest| rest.split(" once").next())
         .unwrap_or_else(|| panic!("{serving}"))
         .to_owned();
     (serving, addr)
@@ -133,6 +134,8 @@ fn the_hub_says_when_the_radio_is_lost_and_when_it_is_back() {
         lost.contains("not accepting clients until it is back"),
         "{lost}"
     );
+    // A line like the command's own, not a log record.
+    assert!(lost.starts_with("mcp-gs: hub: radio lost"), "{lost}");
     let (_socket, _) = radio.accept().unwrap();
     let back = line_with(&err, "radio back");
     assert!(
@@ -152,7 +155,11 @@ fn a_hub_on_a_pty_listens_once_a_radio_is_there() {
         .map(|word| word.trim_end_matches([',', ';', ':', ')']))
         .unwrap_or_else(|| panic!("{far_end}"))
         .to_owned();
-    let (_, addr) = serving(&out);
+    let (announced, addr) = serving(&out);
+    assert!(
+        announced.starts_with(&format!("will serve pty on {addr} once a radio is there")),
+        "{announced}"
+    );
     let waiting = line_with(&err, "no radio on pty yet");
     assert!(waiting.contains("clients are refused"), "{waiting}");
     // Nothing to serve yet: a client is refused, not accepted and left without answers.

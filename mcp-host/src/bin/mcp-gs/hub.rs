@@ -67,11 +67,16 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
     crate::link_args::announce_radio_side(hub.radio_link());
     let addr = hub.local_addr();
     let mode = u8::from(hub.api_mode());
-    out!(
-        "serving {radio} on {addr}: give other commands --link tcp:{addr} --api-mode {mode} \
-         (Ctrl-C stops)"
-    );
-    if !hub.stats().listening {
+    if hub.stats().listening {
+        out!(
+            "serving {radio} on {addr}: give other commands --link tcp:{addr} --api-mode \
+             {mode} (Ctrl-C stops)"
+        );
+    } else {
+        out!(
+            "will serve {radio} on {addr} once a radio is there: then give other commands \
+             --link tcp:{addr} --api-mode {mode} (Ctrl-C stops)"
+        );
         eprintln!("mcp-gs: no radio on {radio} yet: clients are refused until one is there");
     }
     tokio::select! {

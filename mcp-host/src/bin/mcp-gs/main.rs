@@ -18,6 +18,7 @@ mod hex_input;
 mod hub;
 mod interrupt;
 mod link_args;
+mod log;
 mod monitor;
 mod nodes;
 mod ports;
@@ -256,15 +257,7 @@ pub(crate) fn counted(n: impl Into<u64>, noun: &str) -> String {
 #[tokio::main]
 async fn main() -> ExitCode {
     let cli = parse(hoist_options(std::env::args_os().collect()));
-    tracing_subscriber::fmt()
-        .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_env("MCP_LOG")
-                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn")),
-        )
-        .with_writer(std::io::stderr)
-        // Colours for a terminal only, not for a pipe or a log file.
-        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
-        .init();
+    log::init();
     // What a bug report needs first.
     tracing::debug!(
         version = env!("CARGO_PKG_VERSION"),
