@@ -25,6 +25,11 @@ pub(crate) enum Which {
 
 /// Arguments of `replay`.
 #[derive(Debug, Args)]
+#[command(mut_arg("link", |arg| arg.help(
+    "Where to play the frames: to a ground station (received frames, the default), \
+     tcp-listen:ADDR:PORT for it to connect to, or serial:PATH on a serial cable to it; \
+     to a radio (--frames tx), serial:PATH[:BAUD] or tcp:HOST:PORT"
+)))]
 pub(crate) struct ReplayArgs {
     /// A recording made by `monitor --record`.
     file: PathBuf,
