@@ -262,6 +262,14 @@ impl<'a> Command<&'a [u8]> {
                         Ok((i, Command::PositionSlaveSet { slot, address }))
                     })
                 }
+                // Byte 3 is 0xFF: the status request, or the spec form with an address
+                // starting with 0xFF (the firmware form has no slot 0xFF).
+                _ if is_status => Err(wrong_length(
+                    t,
+                    true,
+                    Expected::Either(field::STATUS_REQUEST_LEN, field::SLAVE_LEN),
+                    len,
+                )),
                 _ => Err(wrong_length(
                     t,
                     false,
@@ -272,6 +280,13 @@ impl<'a> Command<&'a [u8]> {
             CommandType::Time if is_status && len == field::STATUS_REQUEST_LEN => {
                 Ok(Command::StatusRequest(StatusRequest::Time))
             }
+            // Byte 3 is 0xFF: the status request, or a time whose low byte is 0xFF.
+            CommandType::Time if is_status && len != field::TIME_LEN => Err(wrong_length(
+                t,
+                true,
+                Expected::Either(field::STATUS_REQUEST_LEN, field::TIME_LEN),
+                len,
+            )),
             CommandType::Time => fixed(field::TIME_LEN, false, |i| {
                 let (i, time) = read::u32(i)?;
                 Ok((i, Command::Time(time)))

@@ -67,7 +67,12 @@ pub enum ErrorKind {
         category: Category,
         /// The command or report type, if the category has types.
         packet_type: Option<CommandType>,
-        /// Whether the packet is a status request (its byte 3 is 0xFF).
+        /// Whether the packet's byte 3 is 0xFF, the status request's. For most types
+        /// the packet can then only be a status request, and `expected` is
+        /// [`Expected::Exactly`] its length. Time and position slave set commands may
+        /// also hold 0xFF there as data (a time's low byte, an address's high byte):
+        /// `expected` is then [`Expected::Either`] the status request's length or the
+        /// set command's, and the message says "command or its status request".
         status_request: bool,
         /// The lengths the type allows.
         expected: Expected,
@@ -149,7 +154,10 @@ impl fmt::Display for ErrorKind {
                 }
                 write!(f, "{category}")?;
                 if *status_request {
-                    f.write_str(" status request")?;
+                    f.write_str(match expected {
+                        Expected::Exactly(_) => " status request",
+                        _ => " or its status request",
+                    })?;
                 }
                 write!(f, ": expected {expected}, got {got}")
             }

@@ -90,23 +90,54 @@ impl<B> Waypoints<B> {
 }
 
 impl<B: AsRef<[u8]>> Waypoints<B> {
-    /// Wraps waypoint bytes, checking that they are at most 254 whole waypoints.
+    /// Wraps the waypoint bytes of a trajectory set command, checking that they are
+    /// at most 254 whole waypoints ([`check_len`](Self::check_len)). For a trajectory
+    /// report's, use [`new_checked_for`](Self::new_checked_for).
     pub fn new_checked(bytes: B) -> Result<Self, Error> {
+        Self::new_checked_for(bytes, Category::Command)
+    }
+
+    /// Wraps the waypoint bytes of a trajectory packet of `category`
+    /// ([`Category::Command`] or [`Category::Report`]), checking that they are at most
+    /// 254 whole waypoints ([`check_len_for`](Self::check_len_for)).
+    ///
+    /// ```
+    /// use mcp_core::{Category, ErrorKind, Waypoints};
+    /// let err = Waypoints::new_checked_for(&[0u8; 17][..], Category::Report).unwrap_err();
+    /// assert!(matches!(
+    ///     err.kind(),
+    ///     ErrorKind::WrongLength { category: Category::Report, got: 20, .. }
+    /// ));
+    /// assert_eq!(
+    ///     err.to_string(),
+    ///     "wrong length for trajectory_set report: expected 3 + 16k bytes, got 20 (at offset 19)"
+    /// );
+    /// ```
+    pub fn new_checked_for(bytes: B, category: Category) -> Result<Self, Error> {
         let w = Self::new_unchecked(bytes);
-        w.check_len()?;
+        w.check_len_for(category)?;
         Ok(w)
     }
 
-    /// Checks that the bytes are at most 254 whole waypoints. Error offsets count
-    /// from the packet start, as if the bytes followed a 3-byte header.
+    /// Checks that the bytes are at most 254 whole waypoints, as those of a trajectory
+    /// set command: a length error names a command. For a trajectory report's, use
+    /// [`check_len_for`](Self::check_len_for).
     pub fn check_len(&self) -> Result<(), Error> {
+        self.check_len_for(Category::Command)
+    }
+
+    /// Checks that the bytes are at most 254 whole waypoints, as those of a trajectory
+    /// packet of `category` ([`Category::Command`] or [`Category::Report`]), which a
+    /// length error names. Error offsets count from the packet start, as if the bytes
+    /// followed a 3-byte header.
+    pub fn check_len_for(&self, category: Category) -> Result<(), Error> {
         let len = self.bytes.as_ref().len();
         let partial = len % waypoint::LEN;
         let got = field::WAYPOINTS + len;
         if partial != 0 {
             return Err(Error::new(
                 ErrorKind::WrongLength {
-                    category: Category::Command,
+                    category,
                     packet_type: Some(CommandType::TrajectorySet),
                     status_request: false,
                     expected: Expected::Multiple {

@@ -352,7 +352,25 @@ fn wrong_lengths_are_errors_with_offsets() {
         (b"c\x02\xff\x00", Expected::Exactly(3), true, 3),
         (b"c\x03\x01\x00", Expected::Exactly(3), false, 3),
         (b"c\x05\x01", Expected::Either(10, 11), false, 3),
-        (b"c\x05\xff\x00", Expected::Either(10, 11), false, 4),
+        // Byte 3 0xFF: a status request (3 bytes) or, for the types whose set command
+        // may hold 0xFF there, that command (position slave set's spec form, time).
+        (b"c\x05\xff\x00", Expected::Either(3, 10), true, 4),
+        (
+            b"c\x05\xff\x00\x00\x00\x00\x00\x00\x00\x00\x00",
+            Expected::Either(3, 10),
+            true,
+            10,
+        ),
+        (b"c\x06\xff\x00", Expected::Either(3, 6), true, 4),
+        (
+            b"c\x06\xff\x00\x00\x00\x00",
+            Expected::Either(3, 6),
+            true,
+            6,
+        ),
+        (b"c\x01\xff\x00\x00", Expected::Exactly(4), true, 4),
+        (b"c\x03\xff\x00", Expected::Exactly(3), true, 3),
+        (b"c\x04\xff\x00", Expected::Exactly(3), true, 3),
         // Longer than both forms: the first byte past the longer one.
         (
             b"c\x05\x00\x13\xa2\x00\x40\xb5\x99\xbf\x00\x00",
@@ -391,6 +409,111 @@ fn wrong_lengths_are_errors_with_offsets() {
         let text = e.to_string();
         assert!(text.contains(&format!("got {}", bytes.len())), "{text}");
     }
+}
+
+#[test]
+fn status_request_length_errors_name_the_status_request() {
+    // Every command type with a status request, its byte 3 0xFF and one byte too many.
+    let cases: &[(&[u8], &str)] = &[
+        (
+            b"c\x01\xff\x00\x00",
+            "telemetry_to_coordinator command status request: expected 4 bytes, got 5 (at \
+             offset 4)",
+        ),
+        (
+            b"c\x02\xff\x00",
+            "landing command status request: expected 3 bytes, got 4 (at offset 3)",
+        ),
+        (
+            b"c\x03\xff\x00",
+            "controllers command status request: expected 3 bytes, got 4 (at offset 3)",
+        ),
+        (
+            b"c\x04\xff\x00",
+            "trajectory_set command status request: expected 3 bytes, got 4 (at offset 3)",
+        ),
+        (
+            b"c\x05\xff\x00",
+            "position_slave_set command or its status request: expected 3 or 10 bytes, got 4 \
+             (at offset 4)",
+        ),
+        (
+            b"c\x06\xff\x00",
+            "time command or its status request: expected 3 or 6 bytes, got 4 (at offset 4)",
+        ),
+    ];
+    for &(bytes, message) in cases {
+        assert_eq!(
+            err(bytes).to_string(),
+            format!("wrong length for {message}"),
+            "{bytes:02x?}"
+        );
+        // The status request itself parses.
+        let t = CommandType::from(bytes[1]);
+        let request = StatusRequest::for_type(t, TelemetryId::from(0)).unwrap();
+        let len = if t == CommandType::TelemetryToCoordinator {
+            4
+        } else {
+            3
+        };
+        assert_eq!(
+            parse(&bytes[..len]).unwrap(),
+            Packet::Command(Command::StatusRequest(request))
+        );
+    }
+    // The set commands that may hold 0xFF in byte 3 still parse at their own length.
+    let mut slave = [0u8; 10];
+    (slave[0], slave[1], slave[2]) = (b'c', 0x05, 0xFF);
+    assert!(matches!(
+        parse(&slave),
+        Ok(Packet::Command(Command::PositionSlaveSet {
+            slot: None,
+            ..
+        }))
+    ));
+    let mut slot_slave = [0u8; 11];
+    (slot_slave[0], slot_slave[1], slot_slave[2]) = (b'c', 0x05, 0xFF);
+    assert_eq!(*err(&slot_slave).kind(), ErrorKind::InvalidSlot(0xFF));
+    // Without 0xFF in byte 3 the set command's lengths alone are expected.
+    assert_eq!(
+        err(b"c\x05\x00\x00").to_string(),
+        "wrong length for position_slave_set command: expected 10 or 11 bytes, got 4 (at \
+         offset 4)"
+    );
+    assert_eq!(
+        err(b"c\x06\x00\x00").to_string(),
+        "wrong length for time command: expected 6 bytes, got 4 (at offset 4)"
+    );
+}
+
+#[test]
+fn trajectory_length_errors_name_the_category() {
+    use mcp_core::Waypoints;
+    let partial = [0u8; 17];
+    for (category, name) in [(Category::Command, "command"), (Category::Report, "report")] {
+        let e = Waypoints::new_checked_for(&partial[..], category).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            format!(
+                "wrong length for trajectory_set {name}: expected 3 + 16k bytes, got 20 (at \
+                 offset 19)"
+            )
+        );
+        assert_eq!(
+            Waypoints::new_unchecked(&partial[..]).check_len_for(category),
+            Err(e)
+        );
+        // A packet of that category says the same.
+        let mut packet = vec![u8::from(category), 0x04, 0x01];
+        packet.extend_from_slice(&partial);
+        assert_eq!(err(&packet), e);
+    }
+    // `new_checked` and `check_len` read the bytes as a command's.
+    assert_eq!(
+        Waypoints::new_checked(&partial[..]).unwrap_err(),
+        Waypoints::new_checked_for(&partial[..], Category::Command).unwrap_err()
+    );
+    assert!(Waypoints::new_checked_for(&[0u8; 32][..], Category::Report).is_ok());
 }
 
 #[test]

@@ -97,6 +97,26 @@ enum State {
 ///   candidate whose checksum matches by chance (1 in 256) is a frame in mode 1; nothing
 ///   can tell it apart.
 ///
+/// # Worst case
+///
+/// Mode 2 does a bounded amount of work per input byte. Mode 1 pays for its guarantee:
+/// a failed candidate is scanned again from the byte after its start delimiter, so a
+/// byte can be read once for every candidate that spans it. Input built for it (a start
+/// delimiter and a length near the [`capacity`](Self::capacity) every few bytes, such as
+/// `7E 01 F8` over and over for `Decoder<512>`) fails a candidate of about `capacity`
+/// bytes every three input bytes: one call to [`push`](Self::push),
+/// [`poll`](Self::poll), [`decode`](Self::decode) or [`finish`](Self::finish) (or one
+/// event of [`decode_each`](Self::decode_each)) can then do work proportional to the
+/// capacity, and throughput falls with it: about 15 MB/s for `Decoder<512>` on a
+/// desktop machine, against 1 GB/s and more for ordinary input. The work never exceeds
+/// that bound and nothing is lost, but a mode 1 link open to untrusted bytes should not
+/// accept longer frames than it carries: build the decoder with
+/// [`with_max_len`](Self::with_max_len) set to the largest frame data its radios send
+/// (a payload of at most 255 bytes arrives in frame data of at most 273 bytes, so 273
+/// rather than the 508 of `Decoder<512>`), which turns longer length fields into
+/// [`DecodeError::Oversize`] as soon as they are read and bounds the rescan by that
+/// length instead.
+///
 /// # Loops
 ///
 /// Slice at a time (the `usize` is how many input bytes were taken; it is 0 while
@@ -243,7 +263,9 @@ impl<const N: usize> Decoder<N> {
     /// [`DecodeError::Oversize`] as soon as their length field is read, and in mode 1
     /// they are scanned again from the byte after their start delimiter like any other
     /// failed candidate, so no frame inside one is lost. A `max_len` above what the
-    /// buffer holds is the buffer's limit.
+    /// buffer holds is the buffer's limit. In mode 1 it also bounds what a failed
+    /// candidate costs to scan again, so set it to the largest frame data the link
+    /// carries (see [Worst case](Self#worst-case)).
     ///
     /// ```
     /// use xbee_api::{ApiMode, DecodeError, Decoder};

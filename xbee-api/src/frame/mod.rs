@@ -121,9 +121,15 @@ pub enum Frame<'a> {
     RemoteAtCommand(RemoteAtCommandRepr<'a>),
     /// 0x97 Remote AT Command Response.
     RemoteAtResponse(RemoteAtResponseRepr<'a>),
-    /// Any other frame type, kept intact.
+    /// A frame type this crate does not model, kept intact: [`Frame::parse`] yields it
+    /// for every type byte that no other variant stands for.
+    ///
+    /// It is not meant for the modelled types. One built by hand with such a type byte
+    /// (0x8B, say) encodes as given, but its frame data parses back as that type's
+    /// variant ([`Frame::TransmitStatus`]), or fails to parse when it is too short for
+    /// that type, so it does not round-trip.
     Unknown {
-        /// The frame type byte.
+        /// The frame type byte, one this crate does not model.
         frame_type: u8,
         /// The frame data after the type byte.
         data: &'a [u8],
@@ -190,6 +196,46 @@ impl<'a> Frame<'a> {
             Self::RemoteAtCommand(_) => frame_type::REMOTE_AT_COMMAND,
             Self::RemoteAtResponse(_) => frame_type::REMOTE_AT_RESPONSE,
             Self::Unknown { frame_type, .. } => *frame_type,
+        }
+    }
+
+    /// The frame id, for the frame types that carry one: the requests (AT Command
+    /// 0x08 and 0x09, Transmit Request 0x10, Explicit Addressing Command 0x11, Remote
+    /// AT Command 0x17) and their answers (AT Command Response 0x88, Transmit Status
+    /// 0x8B, Remote AT Command Response 0x97), which repeat the request's id. `None`
+    /// for the frames that carry none (Receive Packet, Explicit Rx Indicator, Modem
+    /// Status) and for [`Frame::Unknown`], whose layout this crate does not know.
+    ///
+    /// ```
+    /// use xbee_api::{Address16, DeliveryStatus, DiscoveryStatus, Frame, ModemStatus};
+    /// use xbee_api::frame::modem_status::ModemStatusRepr;
+    /// use xbee_api::frame::transmit_status::TransmitStatusRepr;
+    ///
+    /// let status = Frame::TransmitStatus(TransmitStatusRepr {
+    ///     frame_id: 0x47,
+    ///     dst16: Address16(0x7D84),
+    ///     retries: 0,
+    ///     delivery: DeliveryStatus::Success,
+    ///     discovery: DiscoveryStatus::NoDiscoveryOverhead,
+    /// });
+    /// assert_eq!(status.frame_id(), Some(0x47));
+    ///
+    /// let modem = Frame::ModemStatus(ModemStatusRepr { status: ModemStatus::JoinedNetwork });
+    /// assert_eq!(modem.frame_id(), None);
+    /// ```
+    pub fn frame_id(&self) -> Option<u8> {
+        match self {
+            Self::TransmitRequest(f) => Some(f.frame_id),
+            Self::TransmitStatus(f) => Some(f.frame_id),
+            Self::AtCommand(f) => Some(f.frame_id),
+            Self::AtCommandResponse(f) => Some(f.frame_id),
+            Self::ExplicitAddressingCommand(f) => Some(f.frame_id),
+            Self::RemoteAtCommand(f) => Some(f.frame_id),
+            Self::RemoteAtResponse(f) => Some(f.frame_id),
+            Self::ReceivePacket(_)
+            | Self::ModemStatus(_)
+            | Self::ExplicitRxIndicator(_)
+            | Self::Unknown { .. } => None,
         }
     }
 }
@@ -269,6 +315,62 @@ mod tests {
             assert_eq!(frame.frame_data_len(), needed);
         }
         assert_eq!(Frame::parse_bytes(&[]), Err(FrameError::Empty));
+    }
+
+    #[test]
+    fn frame_id_of_every_type() {
+        // Frame data of each modelled type with the byte after the type byte set to
+        // 0x5A (the frame id, for the types that carry one), and the frame id expected.
+        let types = [
+            (frame_type::AT_COMMAND, 4, Some(0x5A)),
+            (frame_type::AT_COMMAND_QUEUE, 4, Some(0x5A)),
+            (frame_type::TRANSMIT_REQUEST, 14, Some(0x5A)),
+            (frame_type::EXPLICIT_ADDRESSING_COMMAND, 20, Some(0x5A)),
+            (frame_type::REMOTE_AT_COMMAND, 15, Some(0x5A)),
+            (frame_type::AT_COMMAND_RESPONSE, 5, Some(0x5A)),
+            (frame_type::TRANSMIT_STATUS, 7, Some(0x5A)),
+            (frame_type::REMOTE_AT_RESPONSE, 15, Some(0x5A)),
+            (frame_type::MODEM_STATUS, 2, None),
+            (frame_type::RECEIVE_PACKET, 12, None),
+            (frame_type::EXPLICIT_RX_INDICATOR, 18, None),
+            // TX Status (0x89) and Route Record (0xA1) are not modelled.
+            (0x89, 3, None),
+            (0xA1, 13, None),
+        ];
+        for (t, len, expected) in types {
+            let mut data = [0u8; 32];
+            data[0] = t;
+            data[1] = 0x5A;
+            let frame = Frame::parse_bytes(&data[..len]).unwrap();
+            assert_eq!(frame.frame_type(), t);
+            assert_eq!(frame.frame_id(), expected, "type 0x{t:02X}");
+        }
+        let mut seen = 0;
+        for t in 0..=255u8 {
+            let data = [
+                t, 0x5A, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0,
+            ];
+            let frame = Frame::parse_bytes(&data).unwrap();
+            // Every variant, checked by name so that a new one must be listed here.
+            let expected = match frame {
+                Frame::TransmitRequest(_)
+                | Frame::TransmitStatus(_)
+                | Frame::AtCommand(_)
+                | Frame::AtCommandResponse(_)
+                | Frame::ExplicitAddressingCommand(_)
+                | Frame::RemoteAtCommand(_)
+                | Frame::RemoteAtResponse(_) => Some(0x5A),
+                Frame::ReceivePacket(_)
+                | Frame::ModemStatus(_)
+                | Frame::ExplicitRxIndicator(_)
+                | Frame::Unknown { .. } => None,
+            };
+            if expected.is_some() {
+                seen += 1;
+            }
+            assert_eq!(frame.frame_id(), expected, "type 0x{t:02X}");
+        }
+        assert_eq!(seen, 8);
     }
 
     #[test]

@@ -61,6 +61,6 @@ code_enum! {
 impl DeliveryStatus {
     /// Whether the frame was delivered.
     pub const fn is_success(self) -> bool {
-        matches!(self, Self::Success)
+        matches!(self.normalized(), Self::Success)
     }
 }
