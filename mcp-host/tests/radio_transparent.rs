@@ -58,6 +58,34 @@ async fn send_from_mav(mav: &mut Framed<DuplexStream, XBeeCodec>, data: &[u8]) {
     .unwrap();
 }
 
+/// The next frame the device reads.
+async fn next_frame(device: &mut Framed<DuplexStream, XBeeCodec>) -> mcp_host::OwnedFrame {
+    match device.next().await.expect("the link stays open").unwrap() {
+        CodecItem::Frame(frame) => frame,
+        other => panic!("{other:?}"),
+    }
+}
+
+/// The radio's `AP`, asked in an API frame.
+async fn read_ap(device: &mut Framed<DuplexStream, XBeeCodec>) -> u8 {
+    device
+        .send(&Frame::AtCommand(AtCommandRepr {
+            frame_id: 7,
+            command: *b"AP",
+            parameter: &[],
+            queued: false,
+        }))
+        .await
+        .unwrap();
+    match next_frame(device).await.parse().unwrap() {
+        Frame::AtCommandResponse(at) if at.frame_id == 7 && at.status.is_ok() => match at.data {
+            [ap] => *ap,
+            other => panic!("AP = {other:?}"),
+        },
+        other => panic!("{other:?}"),
+    }
+}
+
 /// A network whose coordinator starts in transparent mode and a MAV in API mode 1.
 fn network(faults: Faults) -> (Network, DuplexStream, Framed<DuplexStream, XBeeCodec>) {
     let network = Network::new(NetworkConfig {
@@ -122,29 +150,10 @@ async fn a_factory_radio_passes_payloads_on_and_is_put_into_api_mode_2() {
 
     // API mode 2 from here on: an AT command frame is answered, payloads come framed.
     let mut ground = Framed::new(ground, XBeeCodec::new(ApiMode::Escaped));
-    ground
-        .send(&Frame::AtCommand(AtCommandRepr {
-            frame_id: 7,
-            command: *b"AP",
-            parameter: &[],
-            queued: false,
-        }))
-        .await
-        .unwrap();
-    let frame = match ground.next().await.unwrap().unwrap() {
-        CodecItem::Frame(frame) => frame,
-        other => panic!("{other:?}"),
-    };
-    match frame.parse().unwrap() {
-        Frame::AtCommandResponse(at) => assert_eq!((at.frame_id, at.data), (7, &[2][..])),
-        other => panic!("{other:?}"),
-    }
+    assert_eq!(read_ap(&mut ground).await, 2);
     // 0x7E and 0x11 in the payload are escaped now.
     send_from_mav(&mut mav, &[0x7E, 0x11]).await;
-    let frame = match ground.next().await.unwrap().unwrap() {
-        CodecItem::Frame(frame) => frame,
-        other => panic!("{other:?}"),
-    };
+    let frame = next_frame(&mut ground).await;
     match frame.parse().unwrap() {
         Frame::ReceivePacket(rx) => {
             assert_eq!((rx.src64, rx.data), (MAV, &[0x7E, 0x11][..]));
@@ -170,22 +179,7 @@ async fn plus_plus_plus_without_silence_is_data_and_command_mode_times_out() {
     // Past CT, counted from when the radio took the command.
     tokio::time::sleep(Duration::from_secs(11)).await;
     let mut ground = Framed::new(ground, XBeeCodec::new(ApiMode::Unescaped));
-    ground
-        .send(&Frame::AtCommand(AtCommandRepr {
-            frame_id: 1,
-            command: *b"AP",
-            parameter: &[],
-            queued: false,
-        }))
-        .await
-        .unwrap();
-    match ground.next().await.unwrap().unwrap() {
-        CodecItem::Frame(frame) => match frame.parse().unwrap() {
-            Frame::AtCommandResponse(at) => assert_eq!(at.data, [1]),
-            other => panic!("{other:?}"),
-        },
-        other => panic!("{other:?}"),
-    }
+    assert_eq!(read_ap(&mut ground).await, 1);
 }
 
 #[tokio::test(start_paused = true)]
