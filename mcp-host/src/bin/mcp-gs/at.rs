@@ -4,7 +4,9 @@ use clap::Args;
 use xbee_api::{Address64, AtStatus, Frame};
 
 use crate::Failure;
-use crate::link_args::{ApiModeChoice, LinkArgs, diagnosed, send_failure, warn_mode_mismatch};
+use crate::link_args::{
+    ApiModeChoice, LinkArgs, diagnosed, send_failure, warn_mode_mismatch, with_mode_hint,
+};
 use mcp_host::render::json::hex;
 
 /// Arguments of `at`.
@@ -174,13 +176,17 @@ async fn broadcast(
         );
     }
     match (answered, refused) {
-        (0, _) => Err(Failure::new(
-            Failure::TIMEOUT,
-            format!(
-                "{name}: no radio answered the broadcast within {:.1} s: the others are off, \
-                 out of range, or in another network (ID, CH)",
-                window.as_secs_f64()
+        (0, _) => Err(with_mode_hint(
+            Failure::new(
+                Failure::TIMEOUT,
+                format!(
+                    "{name}: no radio answered the broadcast within {:.1} s: the others are \
+                     off, out of range, or in another network (ID, CH)",
+                    window.as_secs_f64()
+                ),
             ),
+            &args.link,
+            &sender.stats(),
         )),
         (_, 0) => Ok(()),
         (_, n) => Err(Failure::new(

@@ -318,6 +318,19 @@ pub(crate) fn diagnosis(
     None
 }
 
+/// `failure` (nobody answered), with a hint when frames from the radio failed their
+/// checksum: the radio may be in the other API mode. Nothing is said otherwise, as
+/// nobody in range is an answer too.
+pub(crate) fn with_mode_hint(failure: Failure, link: &LinkArgs, stats: &Stats) -> Failure {
+    match link.api_mode {
+        ApiModeChoice::Fixed(mode) => match diagnosis(mode, stats, 1, false) {
+            Some(hint) => failure.with_hint(hint),
+            None => failure,
+        },
+        ApiModeChoice::Auto => failure,
+    }
+}
+
 /// `failure`, with a hint when it is a timeout: the [`diagnosis`] of the link's
 /// counters if the API mode was given (one found by asking the radio is right), or, if
 /// nothing at all came from the radio, what keeps a radio silent.

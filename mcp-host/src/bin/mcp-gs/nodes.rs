@@ -5,7 +5,7 @@ use std::time::Duration;
 use clap::Args;
 use mcp_host::discovery::{DiscoverError, Node};
 
-use crate::link_args::{ApiModeChoice, LinkArgs, diagnosed, diagnosis, send_failure};
+use crate::link_args::{LinkArgs, diagnosed, send_failure, with_mode_hint};
 use crate::{Failure, Format};
 
 /// Arguments of `nodes`.
@@ -52,13 +52,7 @@ pub(crate) async fn run(args: NodesArgs) -> Result<(), Failure> {
              (ID, CH)",
         );
         // Answers that failed their checksum: the local radio may be in the other mode.
-        return Err(match args.link.api_mode {
-            ApiModeChoice::Fixed(mode) => match diagnosis(mode, &sender.stats(), 1, false) {
-                Some(hint) => failure.with_hint(hint),
-                None => failure,
-            },
-            ApiModeChoice::Auto => failure,
-        });
+        return Err(with_mode_hint(failure, &args.link, &sender.stats()));
     }
     for node in &found.nodes {
         match args.format {
