@@ -277,16 +277,18 @@ impl<'a> Command<&'a [u8]> {
                     len,
                 )),
             },
-            CommandType::Time if is_status && len == field::STATUS_REQUEST_LEN => {
-                Ok(Command::StatusRequest(StatusRequest::Time))
-            }
             // Byte 3 is 0xFF: the status request, or a time whose low byte is 0xFF.
-            CommandType::Time if is_status && len != field::TIME_LEN => Err(wrong_length(
-                t,
-                true,
-                Expected::Either(field::STATUS_REQUEST_LEN, field::TIME_LEN),
-                len,
-            )),
+            CommandType::Time if is_status && len != field::TIME_LEN => {
+                if len == field::STATUS_REQUEST_LEN {
+                    return Ok(Command::StatusRequest(StatusRequest::Time));
+                }
+                Err(wrong_length(
+                    t,
+                    true,
+                    Expected::Either(field::STATUS_REQUEST_LEN, field::TIME_LEN),
+                    len,
+                ))
+            }
             CommandType::Time => fixed(field::TIME_LEN, false, |i| {
                 let (i, time) = read::u32(i)?;
                 Ok((i, Command::Time(time)))
