@@ -299,19 +299,7 @@ async fn the_simulators_factory_radio_is_set_up_and_then_reaches_the_mav() {
         "60",
     ]);
     let _sim = common::Running(child);
-    let announced = loop {
-        let line = lines.recv_timeout(GUARD).expect("sim prints its link");
-        if line.starts_with("ground station link") {
-            break line;
-        }
-    };
-    assert!(announced.contains("transparent mode (AP=0"), "{announced}");
-    let link = announced
-        .split("(open it as ")
-        .nth(1)
-        .and_then(|rest| rest.split(')').next())
-        .expect("the pty's link")
-        .to_owned();
+    let link = sim_link(&lines);
 
     // The emulated radio's guard time is Digi's default, setup's too.
     let out = mcp_gs(&[
@@ -350,4 +338,96 @@ async fn the_simulators_factory_radio_is_set_up_and_then_reaches_the_mav() {
     .await;
     assert!(out.status.success(), "{out:?}");
     assert!(stdout(&out).contains("landing"), "{out:?}");
+}
+
+/// The `serial:` link of a simulator's ground station radio, from its announcement.
+fn sim_link(lines: &std::sync::mpsc::Receiver<String>) -> String {
+    let announced = loop {
+        let line = lines.recv_timeout(GUARD).expect("sim prints its link");
+        if line.starts_with("ground station link") {
+            break line;
+        }
+    };
+    announced
+        .split("(open it as ")
+        .nth(1)
+        .and_then(|rest| rest.split(')').next())
+        .expect("the pty's link")
+        .to_owned()
+}
+
+#[tokio::test]
+async fn probe_finds_a_factory_radio_and_one_in_api_mode_2() {
+    let (child, lines) = common::spawn_lines(&[
+        "sim",
+        "--link",
+        "pty",
+        "--api-mode",
+        "0",
+        "--duration",
+        "60",
+    ]);
+    let _sim = common::Running(child);
+    let link = sim_link(&lines);
+    let out = mcp_gs(&["probe", "--link", &link]).await;
+    assert!(out.status.success(), "{out:?}");
+    assert_eq!(
+        stdout(&out),
+        format!(
+            "{link}:9600: transparent mode (AP=0): `mcp-gs setup --link {link}:9600` puts it \
+             into API mode\n"
+        )
+    );
+
+    let (radio, path) = fake_radio(2).await;
+    let out = mcp_gs(&[
+        "probe",
+        "--link",
+        &format!("serial:{path}"),
+        "--guard-time",
+        "50",
+    ])
+    .await;
+    assert!(out.status.success(), "{out:?}");
+    assert_eq!(
+        stdout(&out),
+        format!("serial:{path}:9600: API mode 2 (use --link serial:{path}:9600 --api-mode 2)\n")
+    );
+    // Asked in an API frame only: no command mode.
+    assert!(radio.lock().unwrap().commands.is_empty());
+}
+
+#[tokio::test]
+async fn probe_says_when_nothing_answers_at_any_rate() {
+    // A pseudo-terminal nobody serves.
+    let silent = Connector::new(&Link::Pty, &LinkOptions::default())
+        .await
+        .unwrap();
+    let path = silent.pty_path().unwrap().display().to_string();
+    let out = mcp_gs(&[
+        "probe",
+        "--link",
+        &format!("serial:{path}"),
+        "--timeout",
+        "0.1",
+        "--guard-time",
+        "20",
+    ])
+    .await;
+    assert_eq!(out.status.code(), Some(4), "{out:?}");
+    assert!(out.stdout.is_empty(), "{out:?}");
+    let err = stderr(&out);
+    for baud in ["9600", "115200", "230400", "1200"] {
+        assert!(err.contains(&format!("mcp-gs: {baud} baud...")), "{err}");
+    }
+    assert!(
+        err.contains(&format!(
+            "no radio answered on serial:{path} at any baud rate"
+        )),
+        "{err}"
+    );
+
+    let out = mcp_gs(&["probe", "--link", "tcp:127.0.0.1:9"]).await;
+    assert_eq!(out.status.code(), Some(2), "{out:?}");
+    assert!(stderr(&out).contains("give serial:PATH"), "{out:?}");
 }

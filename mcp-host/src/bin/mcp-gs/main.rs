@@ -22,6 +22,7 @@ mod log;
 mod monitor;
 mod nodes;
 mod ports;
+mod probe;
 mod radio;
 mod replay;
 mod send;
@@ -64,6 +65,9 @@ enum Sub {
     Nodes(nodes::NodesArgs),
     /// List the serial ports present.
     Ports(ports::PortsArgs),
+    /// Find the baud rate and mode of a radio on a serial port, trying each rate in API
+    /// frames and with +++.
+    Probe(probe::ProbeArgs),
     /// Put the local radio into API mode through its AT command mode (+++), as a radio
     /// in transparent mode (AP=0, as it leaves the factory) needs.
     Setup(setup::SetupArgs),
@@ -272,6 +276,7 @@ async fn main() -> ExitCode {
         Sub::At(args) => at::run(args).await,
         Sub::Nodes(args) => nodes::run(args).await,
         Sub::Ports(args) => ports::run(args),
+        Sub::Probe(args) => probe::run(args).await,
         Sub::Setup(args) => setup::run(args).await,
         Sub::Decode(args) => decode::run(args),
         Sub::Encode(args) => encode::run(args),

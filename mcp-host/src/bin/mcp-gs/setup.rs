@@ -46,7 +46,7 @@ pub(crate) struct SetupArgs {
 }
 
 /// The baud rates `BD` selects, by its value.
-const BAUD_RATES: [u32; 9] = [
+pub(crate) const BAUD_RATES: [u32; 9] = [
     1200, 2400, 4800, 9600, 19_200, 38_400, 57_600, 115_200, 230_400,
 ];
 

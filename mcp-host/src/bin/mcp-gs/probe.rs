@@ -1,0 +1,168 @@
+//! `mcp-gs probe`: find a radio's baud rate and mode on a serial port, as it is before
+//! anything here can talk to it.
+
+use std::time::Duration;
+
+use clap::Args;
+use futures::StreamExt;
+use mcp_host::command_mode::CommandMode;
+use mcp_host::{Connector, Link, LinkOptions, ReconnectPolicy};
+use xbee_api::{ApiMode, Frame};
+
+use crate::Failure;
+use crate::link_args::{connect_failure, parse_seconds};
+
+/// Arguments of `probe`.
+#[derive(Debug, Args)]
+pub(crate) struct ProbeArgs {
+    /// The serial port the radio is on: serial:PATH (a baud rate given is passed over:
+    /// every rate the radio takes is tried).
+    #[arg(long, value_name = "LINK")]
+    link: Link,
+    /// Seconds to wait for the radio's answer at each rate.
+    #[arg(long, value_name = "SECONDS", default_value_t = 0.5, value_parser = parse_seconds)]
+    timeout: f64,
+    /// The radio's guard time (its GT), in milliseconds: the silence it needs before and
+    /// after +++.
+    #[arg(
+        long,
+        value_name = "MS",
+        default_value_t = 1000,
+        value_parser = clap::value_parser!(u64).range(1..=10_000)
+    )]
+    guard_time: u64,
+}
+
+/// The order rates are tried in: the factory's, the links' default, then the others
+/// from the fastest down.
+const ORDER: [u32; 9] = [
+    9600, 115_200, 230_400, 57_600, 38_400, 19_200, 4800, 2400, 1200,
+];
+
+/// What answered at a baud rate.
+#[derive(Debug, PartialEq, Eq)]
+enum Found {
+    /// API frames, in this mode.
+    Api(u8),
+    /// AT command mode: the radio is in transparent mode (`AP` read there).
+    CommandMode(String),
+}
+
+/// Runs `probe`.
+pub(crate) async fn run(args: ProbeArgs) -> Result<(), Failure> {
+    let Link::Serial { path, .. } = &args.link else {
+        return Err(Failure::input(
+            "probe tries the baud rates of a serial port: give serial:PATH",
+        ));
+    };
+    crate::link_args::check_serial_path(&args.link)?;
+    let timeout = Duration::from_secs_f64(args.timeout);
+    let guard = Duration::from_millis(args.guard_time);
+    for baud in ORDER {
+        let link = Link::Serial {
+            path: path.clone(),
+            baud,
+        };
+        eprintln!("mcp-gs: {baud} baud...");
+        let found = match ask_api(&link, timeout).await? {
+            Some(mode) => Found::Api(mode),
+            None => match ask_command_mode(&link, guard, timeout).await? {
+                Some(ap) => Found::CommandMode(ap),
+                None => continue,
+            },
+        };
+        match found {
+            Found::Api(mode @ (1 | 2)) => {
+                let flag = if mode == 2 { " --api-mode 2" } else { "" };
+                out!("{link}: API mode {mode} (use --link {link}{flag})");
+            }
+            Found::Api(mode) => out!(
+                "{link}: the radio answers API frames but reads its API mode as {mode}, which \
+                 this ground station does not speak: `mcp-gs setup --link {link}` sets 1"
+            ),
+            Found::CommandMode(ap) if ap == "0" => out!(
+                "{link}: transparent mode (AP=0): `mcp-gs setup --link {link}` puts it into \
+                 API mode"
+            ),
+            Found::CommandMode(ap) => out!(
+                "{link}: the radio answered +++ and reads AP={ap}: try --link {link} \
+                 --api-mode {ap}"
+            ),
+        }
+        return Ok(());
+    }
+    Err(Failure::new(
+        Failure::TIMEOUT,
+        format!(
+            "no radio answered on serial:{path} at any baud rate, in API frames or to +++: \
+             check that the radio is powered and on this port (`mcp-gs ports`), that no \
+             other program has the port open, and its guard time (--guard-time)"
+        ),
+    ))
+}
+
+/// The link opened at its rate, once, for a short exchange.
+async fn open(link: &Link, timeout: Duration) -> Result<mcp_host::Transport, Failure> {
+    let options = LinkOptions {
+        connect_timeout: timeout.max(Duration::from_secs(3)),
+        reconnect: ReconnectPolicy::disabled(),
+        ..LinkOptions::default()
+    };
+    let opened = async { Connector::new(link, &options).await?.open().await };
+    opened
+        .await
+        .map_err(|e| connect_failure(link, mcp_host::ConnectError::Link(e)))
+}
+
+/// The radio's `AP` asked in an API frame, which reads the same in both modes (no byte
+/// of it needs escaping), as does its answer; `None` if nothing answered in time.
+async fn ask_api(link: &Link, timeout: Duration) -> Result<Option<u8>, Failure> {
+    let options = LinkOptions {
+        api_mode: ApiMode::Unescaped,
+        connect_timeout: timeout.max(Duration::from_secs(3)),
+        send_timeout: timeout,
+        reconnect: ReconnectPolicy::disabled(),
+        ..LinkOptions::default()
+    };
+    let (mut stream, sender) = mcp_host::connect(link, options)
+        .await
+        .map_err(|e| connect_failure(link, e))?;
+    let answer = sender.at(*b"AP", &[], Some(timeout)).await;
+    // Closed and waited for, so that the port is free for the next try.
+    sender.close();
+    while stream.next().await.is_some() {}
+    Ok(answer.ok().and_then(|answer| match answer.parse() {
+        Ok(Frame::AtCommandResponse(at)) if at.status.is_ok() => at.data.last().copied(),
+        _ => None,
+    }))
+}
+
+/// `AP` read in AT command mode, left again at once; `None` if the radio did not answer
+/// `+++`.
+async fn ask_command_mode(
+    link: &Link,
+    guard: Duration,
+    timeout: Duration,
+) -> Result<Option<String>, Failure> {
+    let port = open(link, timeout).await?;
+    let Ok(mut radio) = CommandMode::enter(port, guard, timeout).await else {
+        return Ok(None);
+    };
+    let ap = radio.read(*b"AP").await.ok();
+    // Left as found: nothing was set.
+    let _ = radio.exit().await;
+    Ok(ap)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::setup::BAUD_RATES;
+
+    #[test]
+    fn every_rate_the_radio_takes_is_tried_once() {
+        let mut tried = ORDER.to_vec();
+        tried.sort_unstable();
+        assert_eq!(tried, BAUD_RATES);
+    }
+}
