@@ -302,6 +302,22 @@ fn a_command_sent_in_the_wrong_api_mode_times_out_pointing_at_the_mode() {
 }
 
 #[test]
+fn a_mav_that_does_not_answer_is_no_api_mode_problem() {
+    // The radio delivers the request (its Transmit Status proves the mode right), but
+    // every frame to the MAV is lost: no report, and no hint at the API mode.
+    let sim = Sim::start_with(&["--faults", "0013A20040B599B9=loss=1"]);
+    let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args(["status", "--link", &sim.link, "--to", MAV])
+        .args(["--timeout", "1", "landing"])
+        .output()
+        .expect("run mcp-gs status");
+    assert_eq!(out.status.code(), Some(4), "{out:?}");
+    let err = stderr(&out);
+    assert!(err.contains("the radio delivered the request"), "{err}");
+    assert!(!err.contains("hint"), "{err}");
+}
+
+#[test]
 fn a_broadcast_remote_command_is_carried_out_by_every_radio_and_answered_once() {
     let sim = Sim::start_with(&["--mavs", "2"]);
     let broadcast = |args: &[&str]| {

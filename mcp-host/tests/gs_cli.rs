@@ -1034,6 +1034,11 @@ fn a_negative_number_gets_the_options_own_message() {
             &["sim", "--link", "pty", "--loss", "-0.1"][..],
             "expected a probability from 0 to 1",
         ),
+        // A command word's own argument.
+        (
+            &["encode", "--to", "0013A20040B599B9", "time", "-5"][..],
+            "expected `now`, `+N` (N seconds from now) or seconds since 1970",
+        ),
     ] {
         let output = run(args);
         let stderr = String::from_utf8_lossy(&output.stderr);

@@ -195,3 +195,33 @@ async fn a_transparent_radio_writes_payloads_only_and_corrupts_them_in_place() {
     let changed = got.iter().zip(b"abcdef").filter(|(a, b)| a != b).count();
     assert_eq!(changed, 1, "{got:?}");
 }
+
+#[tokio::test(start_paused = true)]
+async fn nothing_received_is_written_into_command_mode_or_after_it() {
+    // Payloads take half a second to reach the device: one on its way when command mode
+    // begins, and one sent during it, are both dropped, as a radio in command mode
+    // passes nothing on.
+    let faults = Faults {
+        latency: Duration::from_millis(500),
+        ..Faults::default()
+    };
+    let (_network, mut ground, mut mav) = network(faults);
+    ground.write_all(b"+++").await.unwrap();
+    tokio::time::sleep(Duration::from_millis(800)).await;
+    send_from_mav(&mut mav, b"ON ITS WAY").await;
+    assert_eq!(line(&mut ground).await, "OK\r");
+    send_from_mav(&mut mav, b"DURING").await;
+    tokio::time::sleep(Duration::from_secs(1)).await;
+    assert_eq!(command(&mut ground, "ATAP").await, "0\r");
+    assert_eq!(command(&mut ground, "ATAP1").await, "OK\r");
+    assert_eq!(command(&mut ground, "ATCN").await, "OK\r");
+    // API mode 1: the first thing read is the answer to AP, no stray bytes before it.
+    let mut ground = Framed::new(ground, XBeeCodec::new(ApiMode::Unescaped));
+    assert_eq!(read_ap(&mut ground).await, 1);
+    // And payloads come framed from now on.
+    send_from_mav(&mut mav, b"AFTER").await;
+    match next_frame(&mut ground).await.parse().unwrap() {
+        Frame::ReceivePacket(rx) => assert_eq!(rx.data, b"AFTER"),
+        other => panic!("{other:?}"),
+    }
+}

@@ -21,6 +21,8 @@ const LINE_MAX: usize = 64;
 /// What the device's bytes or a passing deadline made the radio do.
 #[derive(Debug, PartialEq, Eq)]
 pub(crate) enum Step {
+    /// Command mode is entered: write `OK` and a carriage return to the device.
+    Enter,
     /// Write these bytes to the device (an answer line).
     Answer(Vec<u8>),
     /// Command mode is over, with `ap` the API mode setting; `rest` are the bytes the
@@ -74,7 +76,7 @@ impl CommandMode {
         }
     }
 
-    /// The deadline passed: command mode is entered (`OK`) or left.
+    /// The deadline passed: command mode is entered or left.
     pub(crate) fn on_deadline(&mut self, now: Instant) -> Option<Step> {
         match &self.command {
             Some(command) if now >= command.deadline => {
@@ -92,7 +94,7 @@ impl CommandMode {
                     ap: 0,
                     deadline: now + self.timeout,
                 });
-                Some(Step::Answer(b"OK\r".to_vec()))
+                Some(Step::Enter)
             }
             _ => None,
         }
@@ -124,7 +126,6 @@ impl CommandMode {
             }
             return steps;
         };
-        command.deadline = now + self.timeout;
         let mut rest = bytes;
         while let Some(end) = rest.iter().position(|&b| b == b'\r') {
             let (head, tail) = rest.split_at(end);
@@ -136,7 +137,11 @@ impl CommandMode {
                     .extend_from_slice(head.get(..room.min(head.len())).unwrap_or_default());
             }
             let line = String::from_utf8_lossy(&std::mem::take(&mut command.line)).into_owned();
-            match parse(&line) {
+            // Each line is a command, good or not: `CT` counts from the last one.
+            command.deadline = now + self.timeout;
+            // A line feed after the carriage return (a terminal's CRLF) and spaces around
+            // the command are no part of it.
+            match parse(line.trim()) {
                 Some((CN, "")) => {
                     steps.push(Step::Answer(b"OK\r".to_vec()));
                     steps.push(Step::Leave {
@@ -209,10 +214,7 @@ mod tests {
         );
         assert_eq!(mode.deadline(), Some(typed + Duration::from_secs(1)));
         let entered = typed + Duration::from_secs(1);
-        assert_eq!(
-            mode.on_deadline(entered),
-            Some(Step::Answer(b"OK\r".to_vec()))
-        );
+        assert_eq!(mode.on_deadline(entered), Some(Step::Enter));
         (mode, entered)
     }
 
@@ -221,7 +223,7 @@ mod tests {
             .iter()
             .filter_map(|s| match s {
                 Step::Answer(bytes) => Some(String::from_utf8_lossy(bytes).into_owned()),
-                Step::Leave { .. } => None,
+                Step::Enter | Step::Leave { .. } => None,
             })
             .collect()
     }
@@ -298,10 +300,30 @@ mod tests {
     }
 
     #[test]
+    fn a_terminals_line_feeds_and_spaces_are_no_part_of_a_command() {
+        let (mut mode, at) = in_command_mode(Instant::now());
+        let steps = mode.on_bytes(at, b"ATAP\r\nATAP1 \r\n ATCN \r", |_, _| unreachable!());
+        assert_eq!(
+            steps,
+            [
+                Step::Answer(b"0\r".to_vec()),
+                Step::Answer(b"OK\r".to_vec()),
+                Step::Answer(b"OK\r".to_vec()),
+                Step::Leave {
+                    ap: 1,
+                    rest: Vec::new()
+                }
+            ]
+        );
+    }
+
+    #[test]
     fn command_mode_times_out_ct_after_the_last_command() {
         let (mut mode, at) = in_command_mode(Instant::now());
         let later = at + Duration::from_secs(5);
         mode.on_bytes(later, b"ATAP1\r", |_, _| unreachable!());
+        // Bytes of no whole command do not hold command mode open.
+        mode.on_bytes(later + Duration::from_secs(5), b"AT", |_, _| unreachable!());
         let timeout = later + Duration::from_secs(10);
         assert_eq!(mode.deadline(), Some(timeout));
         assert_eq!(mode.on_deadline(timeout - Duration::from_millis(1)), None);

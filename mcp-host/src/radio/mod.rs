@@ -491,6 +491,7 @@ impl Network {
                     } else {
                         router::BAUD_RATE_API
                     },
+                    command_mode: false,
                     faults: options.faults,
                     rng: faults::FaultRng::new(seed, address),
                     out: tx,

@@ -303,6 +303,20 @@ async fn serve_until_end(
         };
         for step in steps {
             match step {
+                Step::Enter => {
+                    // What was queued for the device before is not written into the
+                    // answers, and nothing more is queued until command mode ends.
+                    {
+                        let mut state = lock(state);
+                        state.enter_command_mode(addr);
+                        while out.try_recv().is_ok() {}
+                    }
+                    pending.clear();
+                    held = None;
+                    if let Err(e) = write(&mut writer, b"OK\r").await {
+                        return End::Io(e);
+                    }
+                }
                 Step::Answer(line) => {
                     if let Err(e) = write(&mut writer, &line).await {
                         return End::Io(e);

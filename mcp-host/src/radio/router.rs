@@ -81,6 +81,9 @@ pub(crate) struct Node {
     pub(crate) transparent: bool,
     /// Its UART baud rate setting (`BD`).
     pub(crate) baud: u8,
+    /// Its device has it in AT command mode (in transparent mode): received payloads
+    /// are not passed on meanwhile.
+    pub(crate) command_mode: bool,
     pub(crate) faults: Option<Faults>,
     pub(crate) rng: FaultRng,
     pub(crate) out: mpsc::Sender<Out>,
@@ -145,10 +148,16 @@ impl State {
         let Some(node) = self.nodes.get_mut(&to) else {
             return false;
         };
-        if node.transparent && !wire::carried_transparently(frame) {
-            // Only received payloads leave a radio in transparent mode.
-            return false;
-        }
+        // In transparent mode only received payloads leave the radio, as bytes, and
+        // none while its device has it in AT command mode.
+        let payload = if node.transparent {
+            match wire::payload(frame) {
+                Some(payload) if !node.command_mode => Some(payload),
+                _ => return false,
+            }
+        } else {
+            None
+        };
         let faults = node.faults.unwrap_or(default_faults);
         let now = Instant::now();
         let fate = with_faults.then(|| node.rng.decide(&faults));
@@ -170,19 +179,20 @@ impl State {
                     reorder = Some(faults.reorder_window);
                 }
                 at = now + fate.delay;
-                match fate.corrupt {
-                    Some((index, mask)) if node.transparent => {
+                match (fate.corrupt, payload) {
+                    (Some((index, mask)), Some(payload)) => {
                         node.stats.corrupted += 1;
-                        wire::payload_corrupt(frame, index, mask)
+                        Some(wire::corrupt_payload(&payload, index, mask))
                     }
-                    Some((index, mask)) => {
+                    (Some((index, mask)), None) => {
                         node.stats.corrupted += 1;
                         wire::encode_corrupt(frame, node.mode, index, mask)
                     }
-                    None => wire::encode_for(frame, node.mode, node.transparent),
+                    (None, Some(payload)) => Some(payload),
+                    (None, None) => wire::encode(frame, node.mode),
                 }
             }
-            None => wire::encode_for(frame, node.mode, node.transparent),
+            None => payload.or_else(|| wire::encode(frame, node.mode)),
         };
         let Some(bytes) = bytes else {
             return false;
@@ -580,12 +590,21 @@ impl State {
         }
     }
 
+    /// `node`'s radio entered AT command mode: received payloads are not passed on
+    /// until it leaves.
+    pub(crate) fn enter_command_mode(&mut self, node: Address64) {
+        if let Some(radio) = self.nodes.get_mut(&node) {
+            radio.command_mode = true;
+        }
+    }
+
     /// `node`'s radio left AT command mode with `ap` its API mode setting: 0 stays in
     /// transparent mode, 1 and 2 switch to API frames in that mode. Its mode now.
     pub(crate) fn leave_command_mode(&mut self, node: Address64, ap: u8) -> LinkMode {
         let Some(radio) = self.nodes.get_mut(&node) else {
             return LinkMode::Transparent;
         };
+        radio.command_mode = false;
         if let Ok(mode) = ApiMode::try_from(ap) {
             radio.mode = mode;
             radio.transparent = false;

@@ -10,35 +10,11 @@ pub(crate) fn encode<F: EncodeFrame + ?Sized>(frame: &F, mode: ApiMode) -> Optio
     Some(out.freeze())
 }
 
-/// Encodes `frame` for a link in `mode`, or, for a radio in transparent mode, the
-/// payload it carries ([`payload`]).
-pub(crate) fn encode_for<F: EncodeFrame + ?Sized>(
-    frame: &F,
-    mode: ApiMode,
-    transparent: bool,
-) -> Option<Bytes> {
-    if transparent {
-        payload(frame)
-    } else {
-        encode(frame, mode)
-    }
-}
-
 /// The frame data of `frame`.
 fn frame_data<F: EncodeFrame + ?Sized>(frame: &F) -> Vec<u8> {
     let mut data = Vec::with_capacity(frame.frame_data_len());
     frame.write_frame_data(&mut |chunk: &[u8]| data.extend_from_slice(chunk));
     data
-}
-
-/// Whether a radio in transparent mode passes anything of `frame` to its device: the
-/// payload of a Receive Packet (0x90) or of an Explicit Rx Indicator (0x91), as bytes.
-pub(crate) fn carried_transparently<F: EncodeFrame + ?Sized>(frame: &F) -> bool {
-    let mut frame_type = None;
-    frame.write_frame_data(&mut |chunk: &[u8]| {
-        frame_type = frame_type.or_else(|| chunk.first().copied());
-    });
-    matches!(frame_type, Some(0x90 | 0x91))
 }
 
 /// What a radio in transparent mode writes for `frame`: the payload of a Receive Packet
@@ -53,19 +29,15 @@ pub(crate) fn payload<F: EncodeFrame + ?Sized>(frame: &F) -> Option<Bytes> {
     (!payload.is_empty()).then(|| Bytes::copy_from_slice(payload))
 }
 
-/// [`payload`] with one byte XORed with `mask` (non-zero): what a radio in transparent
-/// mode writes for a frame that came in damaged (nothing checks it).
-pub(crate) fn payload_corrupt<F: EncodeFrame + ?Sized>(
-    frame: &F,
-    index: usize,
-    mask: u8,
-) -> Option<Bytes> {
-    let mut bytes = payload(frame)?.to_vec();
-    let i = index % bytes.len();
+/// `payload` (not empty) with one byte XORed with `mask` (non-zero): what a radio in
+/// transparent mode writes for a payload that came in damaged (nothing checks it).
+pub(crate) fn corrupt_payload(payload: &Bytes, index: usize, mask: u8) -> Bytes {
+    let mut bytes = payload.to_vec();
+    let i = index % bytes.len().max(1);
     if let Some(byte) = bytes.get_mut(i) {
         *byte ^= mask.max(1);
     }
-    Some(Bytes::from(bytes))
+    Bytes::from(bytes)
 }
 
 /// Encodes `frame` with one byte of its frame data XORed with `mask` (non-zero) but the

@@ -5,7 +5,7 @@ use xbee_api::{Address64, AtStatus, Frame};
 
 use crate::Failure;
 use crate::link_args::{
-    ApiModeChoice, LinkArgs, diagnosed, send_failure, warn_mode_mismatch, with_mode_hint,
+    ApiModeChoice, LinkArgs, diagnosed_send, warn_mode_mismatch, with_mode_hint,
 };
 use mcp_host::render::json::hex;
 
@@ -137,7 +137,7 @@ async fn broadcast(
 ) -> Result<(), Failure> {
     let window = std::time::Duration::from_secs_f64(args.window);
     crate::link_args::warn_hub_window(&args.link.link, window);
-    let failed = |e| diagnosed(send_failure(e), &args.link, &sender.stats());
+    let failed = |e| diagnosed_send(e, &args.link, &sender.stats());
     let mut answers = sender
         .remote_at_answers(
             Address64::BROADCAST,
@@ -274,7 +274,7 @@ pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
                 .await
         }
     }
-    .map_err(|e| diagnosed(send_failure(e), &args.link, &sender.stats()))?;
+    .map_err(|e| diagnosed_send(e, &args.link, &sender.stats()))?;
     let (status, data) = match response.parse() {
         Ok(Frame::AtCommandResponse(at)) => (at.status, at.data),
         Ok(Frame::RemoteAtResponse(at)) => (at.status, at.data),

@@ -345,17 +345,6 @@ pub(crate) fn diagnosed(failure: Failure, link: &LinkArgs, stats: &Stats) -> Fai
     let silent = stats.frames == 0 && stats.decode_errors() == 0 && stats.bytes_skipped == 0;
     match from_counters {
         Some(hint) => failure.with_hint(hint),
-        None if !silent && stats.frames > 0 => match link.api_mode {
-            ApiModeChoice::Fixed(mode) => failure.with_hint(format!(
-                "hint: other frames came from the radio, but no answer to this one: if the \
-                 radio is not in API mode {} (AP={}), only frames with no byte to escape \
-                 get through; `mcp-gs at --link {} --api-mode auto AP` reads its mode",
-                u8::from(mode),
-                u8::from(mode),
-                link.link
-            )),
-            ApiModeChoice::Auto => failure,
-        },
         None if silent => failure.with_hint(match link.link {
             // A tcp-listen peer (sim, radio) that serves another connection lets this
             // one wait for its turn, silently.
@@ -364,22 +353,51 @@ pub(crate) fn diagnosed(failure: Failure, link: &LinkArgs, stats: &Stats) -> Fai
                 connection (mcp-gs sim and radio serve one at a time and let the next wait; \
                 to share one, use mcp-gs hub)"
                 .to_owned(),
-            _ => "hint: nothing at all came from the radio: check its API mode (--api-mode, \
-                or auto to ask it), the baud rate (serial:PATH:BAUD), and that no other \
-                program reads the port (to share it, use mcp-gs hub)"
-                .to_owned(),
+            _ => format!(
+                "hint: nothing at all came from the radio: check its API mode (--api-mode, \
+                 or auto to ask it), the baud rate (serial:PATH:BAUD), and that no other \
+                 program reads the port (to share it, use mcp-gs hub); a radio new from the \
+                 factory is in transparent mode at 9600 baud: `mcp-gs probe --link {}` \
+                 finds what it is set to",
+                link.link
+            ),
         }),
         None => failure,
     }
 }
 
-/// For a serial link: that its path is there and is no directory. `radio` and `sim`
-/// keep trying a link that cannot be opened yet (a USB adapter plugged in late), which
-/// for a mistyped path would be forever.
+/// A request's failure (no answer to its frame id: not even the local radio's status),
+/// with the [`diagnosed`] hint, or, when other frames from the radio came through, a
+/// pointer to the API mode: a frame with a byte to escape passes in one mode only.
+pub(crate) fn diagnosed_send(error: SendError, link: &LinkArgs, stats: &Stats) -> Failure {
+    let timeout = matches!(error, SendError::Timeout { .. });
+    let failure = diagnosed(send_failure(error), link, stats);
+    match link.api_mode {
+        ApiModeChoice::Fixed(mode) if timeout && !failure.has_hint() && stats.frames > 0 => failure
+            .with_hint(format!(
+                "hint: other frames came from the radio, but no answer to this one: if the \
+                 radio is not in API mode {} (AP={}), only frames with no byte to escape \
+                 get through; `mcp-gs at --link {} --api-mode auto AP` reads its mode",
+                u8::from(mode),
+                u8::from(mode),
+                link.link
+            )),
+        _ => failure,
+    }
+}
+
+/// For a serial link: that its path is there and is no directory. Checked before
+/// `radio` and `sim` start, which keep reopening a link that went away (a USB adapter
+/// pulled out and plugged in again): for a mistyped path, that would be forever.
+///
+/// On Windows, where a port's name (`COM3`) is no file path, nothing is checked.
 pub(crate) fn check_serial_path(link: &Link) -> Result<(), Failure> {
     let Link::Serial { path, .. } = link else {
         return Ok(());
     };
+    if cfg!(windows) {
+        return Ok(());
+    }
     match std::fs::metadata(path) {
         Ok(meta) if meta.is_dir() => Err(Failure::link(format!(
             "cannot open {link}: {path} is a directory, not a serial device"

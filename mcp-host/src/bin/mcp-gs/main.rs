@@ -85,9 +85,15 @@ enum Sub {
 /// is taken as an option's value (`--duration -1`), for the option's own message on what
 /// it takes, not as an unknown option.
 fn parse(args: Vec<OsString>) -> Cli {
-    let command = Cli::command().mut_subcommands(|sub| sub.allow_negative_numbers(true));
+    let command = Cli::command().mut_subcommands(negative_numbers);
     let matches = command.get_matches_from(args);
     Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit())
+}
+
+/// `sub` and its own subcommands (`send`'s COMMAND words) taking negative numbers.
+fn negative_numbers(sub: clap::Command) -> clap::Command {
+    sub.allow_negative_numbers(true)
+        .mut_subcommands(negative_numbers)
 }
 
 /// The subcommands with a COMMAND word of their own (`send`, `encode`) take their options
@@ -241,6 +247,11 @@ impl Failure {
     /// The exit code.
     pub(crate) fn code(&self) -> u8 {
         self.code
+    }
+
+    /// Whether a hint line follows the message.
+    pub(crate) fn has_hint(&self) -> bool {
+        self.message.contains("\nmcp-gs: hint")
     }
 
     /// The same failure with a hint line after its message.

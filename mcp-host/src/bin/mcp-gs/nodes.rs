@@ -5,7 +5,7 @@ use std::time::Duration;
 use clap::Args;
 use mcp_host::discovery::{DiscoverError, Node};
 
-use crate::link_args::{LinkArgs, diagnosed, send_failure, with_mode_hint};
+use crate::link_args::{LinkArgs, diagnosed_send, with_mode_hint};
 use crate::{Failure, Format};
 
 /// Arguments of `nodes`.
@@ -25,7 +25,7 @@ pub(crate) struct NodesArgs {
 /// Runs `nodes`.
 pub(crate) async fn run(args: NodesArgs) -> Result<(), Failure> {
     let (_stream, sender) = args.link.open(false).await?;
-    let failed = |e| diagnosed(send_failure(e), &args.link, &sender.stats());
+    let failed = |e| diagnosed_send(e, &args.link, &sender.stats());
     let window = match args.window {
         Some(seconds) => Duration::from_secs_f64(seconds),
         None => mcp_host::discovery::window(&sender).await.map_err(failed)?,

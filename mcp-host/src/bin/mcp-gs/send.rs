@@ -8,7 +8,7 @@ use xbee_api::{Address64, ReceivePacketRepr};
 
 use crate::Failure;
 use crate::command::CommandArgs;
-use crate::link_args::{LinkArgs, diagnosed, send_failure};
+use crate::link_args::{LinkArgs, diagnosed, diagnosed_send};
 
 /// Arguments of `send`.
 #[derive(Debug, Args)]
@@ -67,7 +67,7 @@ pub(crate) async fn run(args: SendArgs) -> Result<(), Failure> {
     let report = sender
         .send_payload(args.to, payload.clone(), options)
         .await
-        .map_err(|e| diagnosed(send_failure(e), &args.link, &sender.stats()))?;
+        .map_err(|e| diagnosed_send(e, &args.link, &sender.stats()))?;
     let what = mcp_host::render::text::mcp(&payload);
     match report {
         DeliveryReport::Delivered {
