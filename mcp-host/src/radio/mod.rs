@@ -64,7 +64,8 @@
 //!   Receive Packets (and Explicit Rx Indicators) for it as bytes, and nothing else: no
 //!   modem status, no frame. What the device writes is data, which goes nowhere in this
 //!   emulation, except `+++` written alone between two guard times of silence (`GT`,
-//!   1 s), which the radio answers `OK` to: AT command mode. There each line `AT`,
+//!   1 s), which the radio answers `OK` to: AT command mode, where nothing received is
+//!   passed on (what was on its way to the device is dropped). There each line `AT`,
 //!   command, value (hex, text for `NI`) and carriage return is answered with the value
 //!   read (hex), `OK` or `ERROR`, as the radio's API answers the same command (`ND`
 //!   excepted); `AP` takes 0, 1 or 2, and `BD` 0 to 8 (the link is not slowed down).
