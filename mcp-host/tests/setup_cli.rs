@@ -289,17 +289,7 @@ async fn a_link_to_no_radio_is_refused() {
 
 #[tokio::test]
 async fn the_simulators_factory_radio_is_set_up_and_then_reaches_the_mav() {
-    let (child, lines) = common::spawn_lines(&[
-        "sim",
-        "--link",
-        "pty",
-        "--api-mode",
-        "0",
-        "--duration",
-        "60",
-    ]);
-    let _sim = common::Running(child);
-    let link = sim_link(&lines);
+    let (_sim, link) = factory_sim();
 
     // The emulated radio's guard time is Digi's default, setup's too.
     let out = mcp_gs(&[
@@ -340,6 +330,22 @@ async fn the_simulators_factory_radio_is_set_up_and_then_reaches_the_mav() {
     assert!(stdout(&out).contains("landing"), "{out:?}");
 }
 
+/// A simulator whose ground station radio is as from the factory (transparent mode),
+/// and the `serial:` link to it.
+fn factory_sim() -> (common::Running, String) {
+    let args = [
+        "sim",
+        "--link",
+        "pty",
+        "--api-mode",
+        "0",
+        "--duration",
+        "60",
+    ];
+    let (child, lines) = common::spawn_lines(&args);
+    (common::Running(child), sim_link(&lines))
+}
+
 /// The `serial:` link of a simulator's ground station radio, from its announcement.
 fn sim_link(lines: &std::sync::mpsc::Receiver<String>) -> String {
     let announced = loop {
@@ -358,17 +364,7 @@ fn sim_link(lines: &std::sync::mpsc::Receiver<String>) -> String {
 
 #[tokio::test]
 async fn probe_finds_a_factory_radio_and_one_in_api_mode_2() {
-    let (child, lines) = common::spawn_lines(&[
-        "sim",
-        "--link",
-        "pty",
-        "--api-mode",
-        "0",
-        "--duration",
-        "60",
-    ]);
-    let _sim = common::Running(child);
-    let link = sim_link(&lines);
+    let (_sim, link) = factory_sim();
     let out = mcp_gs(&["probe", "--link", &link]).await;
     assert!(out.status.success(), "{out:?}");
     assert_eq!(

@@ -11,6 +11,7 @@ use xbee_api::{ApiMode, Frame};
 
 use crate::Failure;
 use crate::link_args::{connect_failure, parse_seconds};
+use crate::setup::GuardTime;
 
 /// Arguments of `probe`.
 #[derive(Debug, Args)]
@@ -22,15 +23,8 @@ pub(crate) struct ProbeArgs {
     /// Seconds to wait for the radio's answer at each rate.
     #[arg(long, value_name = "SECONDS", default_value_t = 0.5, value_parser = parse_seconds)]
     timeout: f64,
-    /// The radio's guard time (its GT), in milliseconds: the silence it needs before and
-    /// after +++.
-    #[arg(
-        long,
-        value_name = "MS",
-        default_value_t = 1000,
-        value_parser = clap::value_parser!(u64).range(1..=10_000)
-    )]
-    guard_time: u64,
+    #[command(flatten)]
+    guard: GuardTime,
 }
 
 /// The order rates are tried in: the factory's, the links' default, then the others
@@ -57,7 +51,7 @@ pub(crate) async fn run(args: ProbeArgs) -> Result<(), Failure> {
     };
     crate::link_args::check_serial_path(&args.link)?;
     let timeout = Duration::from_secs_f64(args.timeout);
-    let guard = Duration::from_millis(args.guard_time);
+    let guard = args.guard.duration();
     for baud in ORDER {
         let link = Link::Serial {
             path: path.clone(),

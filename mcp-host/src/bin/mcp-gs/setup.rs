@@ -26,15 +26,8 @@ pub(crate) struct SetupArgs {
     /// The API mode to set (AP): 1, as the deployed MAVs use, or 2 (escaped).
     #[arg(long, value_name = "1|2", default_value = "1")]
     api_mode: ApiModeArg,
-    /// The radio's guard time (its GT), in milliseconds: the silence it needs before and
-    /// after +++.
-    #[arg(
-        long,
-        value_name = "MS",
-        default_value_t = 1000,
-        value_parser = clap::value_parser!(u64).range(1..=10_000)
-    )]
-    guard_time: u64,
+    #[command(flatten)]
+    guard: GuardTime,
     /// Also set the radio's UART baud rate (BD): 1200, 2400, 4800, 9600, 19200, 38400,
     /// 57600, 115200 (the links' default) or 230400. A serial link is checked at the new
     /// rate; a serial-to-TCP bridge must be set to it by hand.
@@ -43,6 +36,27 @@ pub(crate) struct SetupArgs {
     /// Seconds to wait for each answer of the radio.
     #[arg(long, value_name = "SECONDS", default_value_t = 3.0, value_parser = parse_seconds)]
     timeout: f64,
+}
+
+/// `--guard-time` of `setup` and `probe`.
+#[derive(Debug, Args)]
+pub(crate) struct GuardTime {
+    /// The radio's guard time (its GT), in milliseconds: the silence it needs before and
+    /// after +++.
+    #[arg(
+        long = "guard-time",
+        value_name = "MS",
+        default_value_t = 1000,
+        value_parser = clap::value_parser!(u64).range(1..=10_000)
+    )]
+    ms: u64,
+}
+
+impl GuardTime {
+    /// The guard time.
+    pub(crate) fn duration(&self) -> Duration {
+        Duration::from_millis(self.ms)
+    }
 }
 
 /// The baud rates `BD` selects, by its value.
@@ -97,7 +111,7 @@ pub(crate) async fn run(args: SetupArgs) -> Result<(), Failure> {
         ));
     }
     let timeout = Duration::from_secs_f64(args.timeout);
-    let guard = Duration::from_millis(args.guard_time);
+    let guard = args.guard.duration();
     let target = ap(args.api_mode.0);
     let options = LinkOptions {
         connect_timeout: timeout,
