@@ -181,6 +181,24 @@ pub(crate) struct PtyStream {
     read: Bytes,
 }
 
+impl PtyStream {
+    /// What tells the baud rate the peer set its end to, for as long as it likes.
+    pub(crate) fn rate_probe(&self) -> Option<RateProbe> {
+        self.port.try_clone_native().ok().map(RateProbe)
+    }
+}
+
+/// The baud rate a pseudo-terminal's peer set its end to: the two ends share their
+/// settings, so the master side reads what the peer's `tcsetattr` set.
+pub(crate) struct RateProbe(TTYPort);
+
+impl RateProbe {
+    /// The peer's baud rate now; `None` if it cannot be read.
+    pub(crate) fn baud_rate(&self) -> Option<u32> {
+        self.0.baud_rate().ok()
+    }
+}
+
 impl AsyncRead for PtyStream {
     fn poll_read(
         self: Pin<&mut Self>,

@@ -291,11 +291,17 @@ async fn a_link_to_no_radio_is_refused() {
 async fn the_simulators_factory_radio_is_set_up_and_then_reaches_the_mav() {
     let (_sim, link) = factory_sim();
 
+    // At another rate than the factory's 9600 baud, the radio does not understand +++.
+    let out = mcp_gs(&["setup", "--link", &link, "--timeout", "1"]).await;
+    assert_eq!(out.status.code(), Some(4), "{out:?}");
+    assert!(stderr(&out).contains("no answer to +++"), "{out:?}");
+
     // The emulated radio's guard time is Digi's default, setup's too.
+    let factory = format!("{link}:9600");
     let out = mcp_gs(&[
         "setup",
         "--link",
-        &link,
+        &factory,
         "--api-mode",
         "2",
         "--baud",
@@ -314,6 +320,21 @@ async fn the_simulators_factory_radio_is_set_up_and_then_reaches_the_mav() {
         "{out:?}"
     );
 
+    // Its UART runs at 115200 baud now: a ground station at 9600 gets no answer.
+    let slow = mcp_gs(&[
+        "status",
+        "--link",
+        &factory,
+        "--api-mode",
+        "2",
+        "--to",
+        "0013A20040B599B9",
+        "--timeout",
+        "1",
+        "landing",
+    ])
+    .await;
+    assert_eq!(slow.status.code(), Some(4), "{slow:?}");
     let link = format!("{link}:115200");
     let out = mcp_gs(&[
         "status",
@@ -330,8 +351,8 @@ async fn the_simulators_factory_radio_is_set_up_and_then_reaches_the_mav() {
     assert!(stdout(&out).contains("landing"), "{out:?}");
 }
 
-/// A simulator whose ground station radio is as from the factory (transparent mode),
-/// and the `serial:` link to it.
+/// A simulator whose ground station radio is as from the factory (transparent mode, its
+/// UART at 9600 baud), and the `serial:` link to its pseudo-terminal without the rate.
 fn factory_sim() -> (common::Running, String) {
     let args = [
         "sim",
@@ -343,7 +364,11 @@ fn factory_sim() -> (common::Running, String) {
         "60",
     ];
     let (child, lines) = common::spawn_lines(&args);
-    (common::Running(child), sim_link(&lines))
+    let link = sim_link(&lines);
+    let path = link
+        .strip_suffix(":9600")
+        .unwrap_or_else(|| panic!("announced at 9600 baud: {link}"));
+    (common::Running(child), path.to_owned())
 }
 
 /// The `serial:` link of a simulator's ground station radio, from its announcement.
@@ -374,6 +399,17 @@ async fn probe_finds_a_factory_radio_and_one_in_api_mode_2() {
              into API mode\n"
         )
     );
+    // Set up for 115200 baud, it is found there, after 9600 is tried in vain.
+    let factory = format!("{link}:9600");
+    let out = mcp_gs(&["setup", "--link", &factory, "--baud", "115200"]).await;
+    assert!(out.status.success(), "{out:?}");
+    let out = mcp_gs(&["probe", "--link", &link]).await;
+    assert!(out.status.success(), "{out:?}");
+    assert_eq!(
+        stdout(&out),
+        format!("{link}:115200: API mode 1 (use --link {link}:115200)\n")
+    );
+    assert!(stderr(&out).contains("mcp-gs: 9600 baud..."), "{out:?}");
 
     let (radio, path) = fake_radio(2).await;
     let out = mcp_gs(&[

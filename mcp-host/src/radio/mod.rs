@@ -72,6 +72,10 @@
 //!   `ATCN`, or `CT` (10 s) without a command, leaves command mode: with `AP` set to 1
 //!   or 2 the radio speaks API frames in that mode from then on, as a node added in API
 //!   mode does (until the network ends). A radio in API mode does not take `+++`.
+//!   Its UART runs at the rate `BD` sets (9600 baud until set; a new one takes effect
+//!   when command mode is left): a device on its `pty` link set to another rate reads
+//!   garbage and is not understood, as on a real serial line (a pseudo-terminal's ends
+//!   share their settings). Other nodes take any rate.
 //! - [`Faults`] (loss, latency, jitter, duplication, reordering, corruption) apply to the
 //!   frames written to a link, network-wide or per node, drawn from a generator seeded
 //!   with [`NetworkConfig::seed`] and the node's address, so that a run replays.
@@ -114,6 +118,7 @@ mod command_mode;
 mod faults;
 mod port;
 mod router;
+mod uart;
 mod wire;
 
 use std::collections::BTreeMap;
@@ -493,6 +498,7 @@ impl Network {
                         router::BAUD_RATE_API
                     },
                     command_mode: false,
+                    uart_baud: options.transparent.then_some(router::BAUD_RATE),
                     faults: options.faults,
                     rng: faults::FaultRng::new(seed, address),
                     out: tx,

@@ -16,6 +16,7 @@ use xbee_api::Address64;
 
 use super::command_mode::{CommandMode, Step};
 use super::router::{LinkMode, OUT_CAPACITY, Out, State};
+use super::uart::Uart;
 use crate::codec::{CodecItem, XBeeCodec};
 use crate::options::ReconnectPolicy;
 use crate::pty::{PtyPort, PtyStream};
@@ -227,7 +228,27 @@ async fn serve_until_end(
     out: &mut mpsc::Receiver<Out>,
     healthy: &mut bool,
 ) -> End {
-    let (reader, mut writer) = tokio::io::split(io);
+    // A device on a pseudo-terminal set to another rate than a fixed-rate UART's.
+    let rate_probe = match &*io {
+        Stream::Pty(pty) => pty.rate_probe(),
+        Stream::Boxed(_) => None,
+    };
+    let mismatched = move || -> bool {
+        let Some(probe) = &rate_probe else {
+            return false;
+        };
+        let radio = lock(state).uart_rate(addr);
+        radio.is_some_and(|radio| probe.baud_rate().is_some_and(|device| device != radio))
+    };
+    let (reader, writer) = tokio::io::split(io);
+    let reader = Uart {
+        inner: reader,
+        mismatched: &mismatched,
+    };
+    let mut writer = Uart {
+        inner: writer,
+        mismatched: &mismatched,
+    };
     let link_mode = lock(state).link_mode(addr);
     let mut command_mode = (link_mode == LinkMode::Transparent).then(CommandMode::new);
     let mut frames = FramedRead::new(reader, NodeCodec::new(link_mode));

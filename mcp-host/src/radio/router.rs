@@ -81,6 +81,10 @@ pub(crate) struct Node {
     pub(crate) transparent: bool,
     /// Its UART baud rate setting (`BD`).
     pub(crate) baud: u8,
+    /// The `BD` its UART runs at, whatever a device's end is set to: for a node started
+    /// in transparent mode (as from the factory), `BD` as it was when AT command mode
+    /// was last left; `None`, any rate, for others.
+    pub(crate) uart_baud: Option<u8>,
     /// Its device has it in AT command mode (in transparent mode): received payloads
     /// are not passed on meanwhile.
     pub(crate) command_mode: bool,
@@ -605,6 +609,10 @@ impl State {
             return LinkMode::Transparent;
         };
         radio.command_mode = false;
+        // A new `BD` takes effect now, as on a radio.
+        if radio.uart_baud.is_some() {
+            radio.uart_baud = Some(radio.baud);
+        }
         if let Ok(mode) = ApiMode::try_from(ap) {
             radio.mode = mode;
             radio.transparent = false;
@@ -615,6 +623,12 @@ impl State {
             status: AtStatus::Ok,
         });
         self.link_mode(node)
+    }
+
+    /// The baud rate `node`'s UART runs at, if it runs at a fixed one.
+    pub(crate) fn uart_rate(&self, node: Address64) -> Option<u32> {
+        let baud = self.nodes.get(&node)?.uart_baud?;
+        super::uart::BAUD_RATES.get(usize::from(baud)).copied()
     }
 
     /// What `node`'s radio speaks to its device.
