@@ -295,9 +295,14 @@ async fn the_simulators_factory_radio_is_set_up_and_then_reaches_the_mav() {
     let out = mcp_gs(&["setup", "--link", &link, "--timeout", "1"]).await;
     assert_eq!(out.status.code(), Some(4), "{out:?}");
     assert!(stderr(&out).contains("no answer to +++"), "{out:?}");
+    // In transparent mode it answers no API frame: the operator is sent to probe.
+    let factory = format!("{link}:9600");
+    let out = mcp_gs(&["at", "--link", &factory, "--timeout", "1", "AP"]).await;
+    assert_eq!(out.status.code(), Some(4), "{out:?}");
+    let probe = format!("`mcp-gs probe --link {factory}` finds what it is set to");
+    assert!(stderr(&out).contains(&probe), "{out:?}");
 
     // The emulated radio's guard time is Digi's default, setup's too.
-    let factory = format!("{link}:9600");
     let out = mcp_gs(&[
         "setup",
         "--link",
