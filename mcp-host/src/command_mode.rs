@@ -33,6 +33,11 @@ use std::time::Duration;
 
 use tokio::io::{AsyncRead, AsyncReadExt, AsyncWrite, AsyncWriteExt};
 
+/// The baud rates the radio's UART runs at for each value of `BD`, 0 to 8.
+pub const BAUD_RATES: [u32; 9] = [
+    1200, 2400, 4800, 9600, 19_200, 38_400, 57_600, 115_200, 230_400,
+];
+
 /// Longest answer line kept; a radio's answers are a few characters.
 const LINE_MAX: usize = 64;
 

@@ -18,6 +18,7 @@ use xbee_api::{
 use super::faults::{FaultRng, Faults};
 use super::wire;
 use super::{NetEvent, NetworkConfig, NodeStats};
+use crate::command_mode::BAUD_RATES;
 
 /// The longest AT command value the emulated radios answer with (`NI`, 20 characters).
 const AT_VALUE_MAX: usize = 20;
@@ -40,9 +41,6 @@ const OPERATING_CHANNEL: u8 = 0x17;
 pub(crate) const BAUD_RATE: u8 = 3;
 /// `BD` of a radio that starts in API mode: 7 (115200 baud, the links' default).
 pub(crate) const BAUD_RATE_API: u8 = 7;
-/// The `BD` settings the emulated radios take: 0 to 8, 1200 to 230400 baud. The links
-/// are not slowed down by them.
-const BAUD_RATES: std::ops::RangeInclusive<u8> = 0..=8;
 /// `GT`: the guard time of AT command mode, in milliseconds (Digi's default, 1 s).
 pub(crate) const GUARD_TIME_MS: u16 = 0x3E8;
 /// `CT`: how long AT command mode waits for a command, in tenths of a second (Digi's
@@ -537,7 +535,8 @@ impl State {
                 (AtStatus::Ok, 0)
             }
             (b"BD", []) => read(&[radio.baud]),
-            (b"BD", [bd]) if BAUD_RATES.contains(bd) => {
+            // 0 to 8, 1200 to 230400 baud.
+            (b"BD", [bd]) if usize::from(*bd) < BAUD_RATES.len() => {
                 radio.baud = *bd;
                 (AtStatus::Ok, 0)
             }
@@ -628,7 +627,7 @@ impl State {
     /// The baud rate `node`'s UART runs at, if it runs at a fixed one.
     pub(crate) fn uart_rate(&self, node: Address64) -> Option<u32> {
         let baud = self.nodes.get(&node)?.uart_baud?;
-        super::uart::BAUD_RATES.get(usize::from(baud)).copied()
+        BAUD_RATES.get(usize::from(baud)).copied()
     }
 
     /// What `node`'s radio speaks to its device.

@@ -6,11 +6,6 @@ use std::task::{Context, Poll};
 
 use tokio::io::{AsyncRead, AsyncWrite, ReadBuf};
 
-/// The baud rates `BD` selects, by its value (0 to 8).
-pub(crate) const BAUD_RATES: [u32; 9] = [
-    1200, 2400, 4800, 9600, 19_200, 38_400, 57_600, 115_200, 230_400,
-];
-
 /// What bytes become between two ends at different rates: garbage, the same for the
 /// same bytes.
 pub(crate) fn garble(bytes: &mut [u8]) {

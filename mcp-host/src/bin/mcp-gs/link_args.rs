@@ -5,8 +5,8 @@ use std::time::Duration;
 use clap::Args;
 use futures::StreamExt;
 use mcp_host::{
-    CommandSender, ConnectError, Link, LinkError, LinkOptions, PacketStream, ReconnectPolicy,
-    SendError, Stats,
+    CommandSender, ConnectError, Connector, Link, LinkError, LinkOptions, PacketStream,
+    ReconnectPolicy, SendError, Stats,
 };
 use xbee_api::{Address64, ApiMode, Frame};
 
@@ -165,32 +165,19 @@ impl LinkArgs {
         }
     }
 
-    async fn connect(
-        &self,
-        mode: ApiMode,
-        reconnect: bool,
-    ) -> Result<(PacketStream, CommandSender), Failure> {
-        mcp_host::connect(&self.link, self.options_in(mode, reconnect))
-            .await
-            .map_err(|e| connect_failure(&self.link, e))
-    }
-
-    /// Asks the radio for its API mode. `AT AP` with frame id 1 reads the same in both
-    /// modes (no byte of it needs escaping), and so does its answer.
+    /// Asks the radio for its API mode ([`ask_ap`]).
     async fn detect_mode(&self) -> Result<ApiMode, Failure> {
         if !matches!(self.link, Link::Serial { .. } | Link::Tcp { .. }) {
             return Err(Failure::input(
                 "--api-mode auto needs a link to a radio (serial: or tcp:); give 1 or 2",
             ));
         }
-        let (mut stream, sender) = self.connect(ApiMode::Unescaped, false).await?;
         let timeout = self.timeout().min(Duration::from_secs(3));
-        let response = sender.at(*b"AP", &[], Some(timeout)).await;
-        // Closed and waited for, so that the port (opened for exclusive use) is free
-        // for the link in the mode found.
-        sender.close();
-        while stream.next().await.is_some() {}
-        let response = response.map_err(|e| match e {
+        let options = LinkOptions {
+            send_timeout: timeout,
+            ..self.options_in(ApiMode::Unescaped, false)
+        };
+        let mode = ask_ap(&self.link, options).await?.map_err(|e| match e {
             SendError::Timeout { .. } => Failure::new(
                 Failure::TIMEOUT,
                 format!(
@@ -202,10 +189,6 @@ impl LinkArgs {
             ),
             other => send_failure(other),
         })?;
-        let mode = match response.parse() {
-            Ok(Frame::AtCommandResponse(at)) if at.status.is_ok() => at.data.last().copied(),
-            _ => None,
-        };
         match mode {
             Some(1) => Ok(ApiMode::Unescaped),
             Some(2) => Ok(ApiMode::Escaped),
@@ -218,6 +201,45 @@ impl LinkArgs {
             )),
         }
     }
+}
+
+/// The radio's `AP`, asked on a link opened with `options` (API mode 1, no reconnection)
+/// for this alone: `AT AP` with frame id 1 reads the same in both modes (no byte of it
+/// needs escaping), and so does its answer. `None` for an answer that is no `AP` value.
+/// The link is closed and waited for, so that the port (opened for exclusive use) is
+/// free again when this returns.
+pub(crate) async fn ask_ap(
+    link: &Link,
+    options: LinkOptions,
+) -> Result<Result<Option<u8>, SendError>, Failure> {
+    let timeout = options.send_timeout;
+    let (mut stream, sender) = mcp_host::connect(link, options)
+        .await
+        .map_err(|e| connect_failure(link, e))?;
+    let response = sender.at(*b"AP", &[], Some(timeout)).await;
+    sender.close();
+    while stream.next().await.is_some() {}
+    Ok(response.map(|response| match response.parse() {
+        Ok(Frame::AtCommandResponse(at)) if at.status.is_ok() => at.data.last().copied(),
+        _ => None,
+    }))
+}
+
+/// The link opened once, as a byte stream (no reconnection), for an exchange outside
+/// API frames (AT command mode).
+pub(crate) async fn open_once(
+    link: &Link,
+    connect_timeout: Duration,
+) -> Result<mcp_host::Transport, Failure> {
+    let options = LinkOptions {
+        connect_timeout,
+        reconnect: ReconnectPolicy::disabled(),
+        ..LinkOptions::default()
+    };
+    let opened = async { Connector::new(link, &options).await?.open().await };
+    opened
+        .await
+        .map_err(|e| connect_failure(link, ConnectError::Link(e)))
 }
 
 /// Warns once when the radio's API mode differs from the configured one: the commonest
@@ -318,34 +340,31 @@ pub(crate) fn diagnosis(
     None
 }
 
+/// The [`diagnosis`] of the link's counters, when its API mode was given (one found by
+/// asking the radio is right).
+fn counters_hint(link: &LinkArgs, stats: &Stats) -> Option<String> {
+    match link.api_mode {
+        ApiModeChoice::Fixed(mode) => diagnosis(mode, stats, 1, false),
+        ApiModeChoice::Auto => None,
+    }
+}
+
 /// `failure` (nobody answered), with a hint when frames from the radio failed their
 /// checksum: the radio may be in the other API mode. Nothing is said otherwise, as
 /// nobody in range is an answer too.
 pub(crate) fn with_mode_hint(failure: Failure, link: &LinkArgs, stats: &Stats) -> Failure {
-    match link.api_mode {
-        ApiModeChoice::Fixed(mode) => match diagnosis(mode, stats, 1, false) {
-            Some(hint) => failure.with_hint(hint),
-            None => failure,
-        },
-        ApiModeChoice::Auto => failure,
+    match counters_hint(link, stats) {
+        Some(hint) => failure.with_hint(hint),
+        None => failure,
     }
 }
 
-/// `failure`, with a hint when it is a timeout: the [`diagnosis`] of the link's
-/// counters if the API mode was given (one found by asking the radio is right), or, if
-/// nothing at all came from the radio, what keeps a radio silent.
-pub(crate) fn diagnosed(failure: Failure, link: &LinkArgs, stats: &Stats) -> Failure {
-    if failure.code() != Failure::TIMEOUT {
-        return failure;
-    }
-    let from_counters = match link.api_mode {
-        ApiModeChoice::Fixed(mode) => diagnosis(mode, stats, 1, false),
-        ApiModeChoice::Auto => None,
-    };
+/// What may be wrong when a wait timed out: the [`counters_hint`], or, if nothing at
+/// all came from the radio, what keeps a radio silent.
+fn timeout_hint(link: &LinkArgs, stats: &Stats) -> Option<String> {
     let silent = stats.frames == 0 && stats.decode_errors() == 0 && stats.bytes_skipped == 0;
-    match from_counters {
-        Some(hint) => failure.with_hint(hint),
-        None if silent => failure.with_hint(match link.link {
+    counters_hint(link, stats).or_else(|| {
+        silent.then(|| match link.link {
             // A tcp-listen peer (sim, radio) that serves another connection lets this
             // one wait for its turn, silently.
             Link::Tcp { .. } => "hint: nothing at all came from the radio: check its API mode \
@@ -361,28 +380,44 @@ pub(crate) fn diagnosed(failure: Failure, link: &LinkArgs, stats: &Stats) -> Fai
                  finds what it is set to",
                 link.link
             ),
-        }),
+        })
+    })
+}
+
+/// `failure`, with the [`timeout_hint`] when it is a timeout.
+pub(crate) fn diagnosed(failure: Failure, link: &LinkArgs, stats: &Stats) -> Failure {
+    if failure.code() != Failure::TIMEOUT {
+        return failure;
+    }
+    match timeout_hint(link, stats) {
+        Some(hint) => failure.with_hint(hint),
         None => failure,
     }
 }
 
 /// A request's failure (no answer to its frame id: not even the local radio's status),
-/// with the [`diagnosed`] hint, or, when other frames from the radio came through, a
+/// with the [`timeout_hint`], or, when other frames from the radio came through, a
 /// pointer to the API mode: a frame with a byte to escape passes in one mode only.
 pub(crate) fn diagnosed_send(error: SendError, link: &LinkArgs, stats: &Stats) -> Failure {
-    let timeout = matches!(error, SendError::Timeout { .. });
-    let failure = diagnosed(send_failure(error), link, stats);
-    match link.api_mode {
-        ApiModeChoice::Fixed(mode) if timeout && !failure.has_hint() && stats.frames > 0 => failure
-            .with_hint(format!(
-                "hint: other frames came from the radio, but no answer to this one: if the \
-                 radio is not in API mode {} (AP={}), only frames with no byte to escape \
-                 get through; `mcp-gs at --link {} --api-mode auto AP` reads its mode",
-                u8::from(mode),
-                u8::from(mode),
-                link.link
-            )),
-        _ => failure,
+    let unanswered = matches!(error, SendError::Timeout { .. });
+    let failure = send_failure(error);
+    if failure.code() != Failure::TIMEOUT {
+        return failure;
+    }
+    let mode_hint = || match link.api_mode {
+        ApiModeChoice::Fixed(mode) if unanswered && stats.frames > 0 => Some(format!(
+            "hint: other frames came from the radio, but no answer to this one: if the \
+             radio is not in API mode {} (AP={}), only frames with no byte to escape get \
+             through; `mcp-gs at --link {} --api-mode auto AP` reads its mode",
+            u8::from(mode),
+            u8::from(mode),
+            link.link
+        )),
+        _ => None,
+    };
+    match timeout_hint(link, stats).or_else(mode_hint) {
+        Some(hint) => failure.with_hint(hint),
+        None => failure,
     }
 }
 

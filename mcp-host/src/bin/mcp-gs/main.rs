@@ -249,11 +249,6 @@ impl Failure {
         self.code
     }
 
-    /// Whether a hint line follows the message.
-    pub(crate) fn has_hint(&self) -> bool {
-        self.message.contains("\nmcp-gs: hint")
-    }
-
     /// The same failure with a hint line after its message.
     pub(crate) fn with_hint(mut self, hint: String) -> Self {
         self.message = format!("{}\nmcp-gs: {hint}", self.message);

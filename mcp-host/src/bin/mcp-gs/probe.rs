@@ -4,13 +4,12 @@
 use std::time::Duration;
 
 use clap::Args;
-use futures::StreamExt;
 use mcp_host::command_mode::CommandMode;
-use mcp_host::{Connector, Link, LinkOptions, ReconnectPolicy};
-use xbee_api::{ApiMode, Frame};
+use mcp_host::{Link, LinkOptions, ReconnectPolicy};
+use xbee_api::ApiMode;
 
 use crate::Failure;
-use crate::link_args::{connect_failure, parse_seconds};
+use crate::link_args::{ask_ap, open_once, parse_seconds};
 use crate::setup::GuardTime;
 
 /// Arguments of `probe`.
@@ -95,40 +94,23 @@ pub(crate) async fn run(args: ProbeArgs) -> Result<(), Failure> {
     ))
 }
 
-/// The link opened at its rate, once, for a short exchange.
-async fn open(link: &Link, timeout: Duration) -> Result<mcp_host::Transport, Failure> {
-    let options = LinkOptions {
-        connect_timeout: timeout.max(Duration::from_secs(3)),
-        reconnect: ReconnectPolicy::disabled(),
-        ..LinkOptions::default()
-    };
-    let opened = async { Connector::new(link, &options).await?.open().await };
-    opened
-        .await
-        .map_err(|e| connect_failure(link, mcp_host::ConnectError::Link(e)))
-}
-
-/// The radio's `AP` asked in an API frame, which reads the same in both modes (no byte
-/// of it needs escaping), as does its answer; `None` if nothing answered in time.
+/// The radio's `AP` asked in an API frame ([`ask_ap`]); `None` if nothing answered in
+/// time.
 async fn ask_api(link: &Link, timeout: Duration) -> Result<Option<u8>, Failure> {
     let options = LinkOptions {
         api_mode: ApiMode::Unescaped,
-        connect_timeout: timeout.max(Duration::from_secs(3)),
+        connect_timeout: connect_timeout(timeout),
         send_timeout: timeout,
         reconnect: ReconnectPolicy::disabled(),
         ..LinkOptions::default()
     };
-    let (mut stream, sender) = mcp_host::connect(link, options)
-        .await
-        .map_err(|e| connect_failure(link, e))?;
-    let answer = sender.at(*b"AP", &[], Some(timeout)).await;
-    // Closed and waited for, so that the port is free for the next try.
-    sender.close();
-    while stream.next().await.is_some() {}
-    Ok(answer.ok().and_then(|answer| match answer.parse() {
-        Ok(Frame::AtCommandResponse(at)) if at.status.is_ok() => at.data.last().copied(),
-        _ => None,
-    }))
+    Ok(ask_ap(link, options).await?.ok().flatten())
+}
+
+/// How long opening the port may take: a serial port opens at once, but not under a
+/// short answer timeout.
+fn connect_timeout(timeout: Duration) -> Duration {
+    timeout.max(Duration::from_secs(3))
 }
 
 /// `AP` read in AT command mode, left again at once; `None` if the radio did not answer
@@ -138,7 +120,7 @@ async fn ask_command_mode(
     guard: Duration,
     timeout: Duration,
 ) -> Result<Option<String>, Failure> {
-    let port = open(link, timeout).await?;
+    let port = open_once(link, connect_timeout(timeout)).await?;
     let Ok(mut radio) = CommandMode::enter(port, guard, timeout).await else {
         return Ok(None);
     };
@@ -151,7 +133,7 @@ async fn ask_command_mode(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::setup::BAUD_RATES;
+    use mcp_host::command_mode::BAUD_RATES;
 
     #[test]
     fn every_rate_the_radio_takes_is_tried_once() {

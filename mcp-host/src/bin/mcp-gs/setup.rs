@@ -6,11 +6,11 @@ use std::time::Duration;
 
 use clap::Args;
 use futures::StreamExt;
-use mcp_host::command_mode::{CommandMode, CommandModeError};
-use mcp_host::{ConnectError, Connector, Link, LinkOptions, ReconnectPolicy};
+use mcp_host::command_mode::{BAUD_RATES, CommandMode, CommandModeError};
+use mcp_host::{Link, LinkOptions, ReconnectPolicy};
 use xbee_api::{ApiMode, Frame};
 
-use crate::link_args::{connect_failure, parse_seconds, send_failure};
+use crate::link_args::{connect_failure, open_once, parse_seconds, send_failure};
 use crate::{ApiModeArg, Failure};
 
 /// Arguments of `setup`.
@@ -58,11 +58,6 @@ impl GuardTime {
         Duration::from_millis(self.ms)
     }
 }
-
-/// The baud rates `BD` selects, by its value.
-pub(crate) const BAUD_RATES: [u32; 9] = [
-    1200, 2400, 4800, 9600, 19_200, 38_400, 57_600, 115_200, 230_400,
-];
 
 fn parse_baud(s: &str) -> Result<u32, String> {
     s.parse::<u32>()
@@ -118,10 +113,7 @@ pub(crate) async fn run(args: SetupArgs) -> Result<(), Failure> {
         reconnect: ReconnectPolicy::disabled(),
         ..LinkOptions::default()
     };
-    let opened = async { Connector::new(&args.link, &options).await?.open().await };
-    let port = opened
-        .await
-        .map_err(|e| connect_failure(&args.link, ConnectError::Link(e)))?;
+    let port = open_once(&args.link, timeout).await?;
     eprintln!("mcp-gs: entering the radio's command mode (+++ between {guard:?} of silence)");
     let failed = |e| command_failure(e, &args.link);
     let mut radio = CommandMode::enter(port, guard, timeout)
