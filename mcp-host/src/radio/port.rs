@@ -11,7 +11,7 @@ use futures::StreamExt;
 use tokio::io::{AsyncRead, AsyncWrite, AsyncWriteExt, ReadBuf};
 use tokio::sync::mpsc;
 use tokio::time::{Instant, sleep_until};
-use tokio_util::codec::{Decoder, FramedRead};
+use tokio_util::codec::{BytesCodec, Decoder, FramedRead};
 use xbee_api::Address64;
 
 use super::command_mode::{CommandMode, Step};
@@ -366,14 +366,14 @@ enum Input {
 /// The decoder of a device's writes, for the radio's mode.
 enum NodeCodec {
     Api(XBeeCodec),
-    Transparent,
+    Transparent(BytesCodec),
 }
 
 impl NodeCodec {
     fn new(mode: LinkMode) -> Self {
         match mode {
             LinkMode::Api(mode) => NodeCodec::Api(XBeeCodec::new(mode)),
-            LinkMode::Transparent => NodeCodec::Transparent,
+            LinkMode::Transparent => NodeCodec::Transparent(BytesCodec::new()),
         }
     }
 }
@@ -385,15 +385,14 @@ impl Decoder for NodeCodec {
     fn decode(&mut self, src: &mut BytesMut) -> Result<Option<Input>, std::io::Error> {
         match self {
             NodeCodec::Api(codec) => Ok(codec.decode(src)?.map(Input::Frame)),
-            NodeCodec::Transparent if src.is_empty() => Ok(None),
-            NodeCodec::Transparent => Ok(Some(Input::Bytes(src.split()))),
+            NodeCodec::Transparent(codec) => Ok(codec.decode(src)?.map(Input::Bytes)),
         }
     }
 
     fn decode_eof(&mut self, src: &mut BytesMut) -> Result<Option<Input>, std::io::Error> {
         match self {
             NodeCodec::Api(codec) => Ok(codec.decode_eof(src)?.map(Input::Frame)),
-            NodeCodec::Transparent => self.decode(src),
+            NodeCodec::Transparent(codec) => Ok(codec.decode_eof(src)?.map(Input::Bytes)),
         }
     }
 }

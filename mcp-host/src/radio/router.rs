@@ -386,12 +386,7 @@ impl State {
             return;
         }
         if broadcast {
-            let others: Vec<Address64> = self
-                .nodes
-                .iter()
-                .filter(|(a, n)| **a != from && n.reachable() && !src_cut)
-                .map(|(a, _)| *a)
-                .collect();
+            let others = self.reached_from(from);
             for to in &others {
                 self.deliver(*to, from, src16, RX_BROADCAST, data, explicit);
             }
@@ -526,12 +521,13 @@ impl State {
                 let nt = radio.discovery_time;
                 read(&nt.to_be_bytes())
             }
-            (b"NT", [hi, lo]) if DISCOVERY_TIME_RANGE.contains(&u16::from_be_bytes([*hi, *lo])) => {
-                radio.discovery_time = u16::from_be_bytes([*hi, *lo]);
-                (AtStatus::Ok, 0)
-            }
-            (b"NT", [lo]) if DISCOVERY_TIME_RANGE.contains(&u16::from(*lo)) => {
-                radio.discovery_time = u16::from(*lo);
+            // One or two bytes, big-endian.
+            (b"NT", [_] | [_, _]) => {
+                let nt = parameter.iter().fold(0u16, |n, &b| (n << 8) | u16::from(b));
+                if !DISCOVERY_TIME_RANGE.contains(&nt) {
+                    return (AtStatus::InvalidParameter, 0);
+                }
+                radio.discovery_time = nt;
                 (AtStatus::Ok, 0)
             }
             (b"BD", []) => read(&[radio.baud]),
