@@ -18,7 +18,6 @@ mod common;
 
 use common::{FakeXBee, next_event};
 
-const COORD: Address64 = Address64::COORDINATOR;
 const MAV_A: Address64 = Address64(0x0013_A200_40B5_99B9);
 const MAV_B: Address64 = Address64(0x0013_A200_40B5_99BF);
 const MAV_C: Address64 = Address64(0x0013_A200_40B5_99BD);
@@ -219,14 +218,7 @@ async fn the_window_is_the_radios_longest_discovery_time_where_it_gives_one() {
 #[tokio::test]
 async fn the_emulated_network_answers_with_every_radio_it_can_reach() {
     let network = Network::new(NetworkConfig::default());
-    let coord = network
-        .add_link(
-            COORD,
-            &"tcp-listen:127.0.0.1:0".parse().unwrap(),
-            NodeOptions::default(),
-        )
-        .await
-        .unwrap();
+    let coord = common::tcp_coordinator(&network).await;
     // Devices kept open: their nodes stay reachable.
     let (a, _dev_a) = network
         .add_in_process(MAV_A, NodeOptions::default())

@@ -1,6 +1,8 @@
 //! The virtual XBee network: devices on pseudo-terminals, TCP and in-process streams
 //! exchange frames through it.
 
+mod common;
+
 use std::time::Duration;
 
 use futures::{SinkExt, StreamExt};
@@ -172,14 +174,7 @@ async fn in_process(config: NetworkConfig, nodes: &[Address64]) -> (Network, Vec
 #[tokio::test]
 async fn unicast_and_broadcast_between_a_tcp_coordinator_and_pty_nodes() {
     let network = Network::new(NetworkConfig::default());
-    let coord = network
-        .add_link(
-            COORD,
-            &"tcp-listen:127.0.0.1:0".parse().unwrap(),
-            NodeOptions::default(),
-        )
-        .await
-        .unwrap();
+    let coord = common::tcp_coordinator(&network).await;
     let a = network
         .add_link(MAV_A, &Link::Pty, NodeOptions::default())
         .await
@@ -394,14 +389,7 @@ async fn local_at_commands_are_answered() {
 #[tokio::test]
 async fn a_ground_station_reads_the_coordinator_through_mcp_host() {
     let network = Network::new(NetworkConfig::default());
-    let coord = network
-        .add_link(
-            COORD,
-            &"tcp-listen:127.0.0.1:0".parse().unwrap(),
-            NodeOptions::default(),
-        )
-        .await
-        .unwrap();
+    let coord = common::tcp_coordinator(&network).await;
     let (_, io) = network
         .add_in_process(MAV_A, NodeOptions::default())
         .unwrap();
@@ -665,14 +653,7 @@ async fn wait_for(
 async fn nodes_that_disconnect_come_back() {
     let network = Network::new(NetworkConfig::default());
     let mut events = network.subscribe();
-    let coord = network
-        .add_link(
-            COORD,
-            &"tcp-listen:127.0.0.1:0".parse().unwrap(),
-            NodeOptions::default(),
-        )
-        .await
-        .unwrap();
+    let coord = common::tcp_coordinator(&network).await;
     // MAV A is a device listening on TCP; its node connects to it.
     let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
     let link: Link = format!("tcp:{}", listener.local_addr().unwrap())

@@ -351,3 +351,16 @@ pub fn far_end_is_exclusive(path: &std::path::Path) -> bool {
     assert_eq!(done, 0, "TIOCGEXCL: {}", std::io::Error::last_os_error());
     exclusive != 0
 }
+
+/// Adds `network`'s coordinator on a TCP port of this machine, found free (its
+/// `local_addr`), for a ground station to connect to.
+pub async fn tcp_coordinator(network: &mcp_host::radio::Network) -> mcp_host::radio::NodeInfo {
+    network
+        .add_link(
+            Address64::COORDINATOR,
+            &"tcp-listen:127.0.0.1:0".parse().unwrap(),
+            mcp_host::radio::NodeOptions::default(),
+        )
+        .await
+        .unwrap()
+}
