@@ -29,7 +29,8 @@
 //!   A request is answered once, but for node discovery (`ND`), active scan (`AS`) and
 //!   a remote AT command to the broadcast address, whose answers keep coming for
 //!   [`ANSWER_WINDOW`] from when the hub writes the request to the radio (not while it
-//!   waits its turn); a request unanswered by then gives its id back. An answer under the id of a request not yet written is dropped.
+//!   waits its turn); a request unanswered by then gives its id back. An answer under the
+//!   id of a request not yet written is dropped.
 //! - **Fairness:** the hub takes its clients' frames in turn, one frame of each client
 //!   with frames waiting, and writes them at the pace of the radio's UART (its baud
 //!   rate on a serial link, [`DEFAULT_RADIO_BAUD`] on others), never more than
