@@ -1028,7 +1028,7 @@ fn a_negative_number_gets_the_options_own_message() {
         ),
         (
             &["monitor", "--link", "pty", "--count", "-5"][..],
-            "expected a number of events, 1 or more, got `-5`",
+            "expected a number of received items, 1 or more, got `-5`",
         ),
         (
             &["sim", "--link", "pty", "--loss", "-0.1"][..],

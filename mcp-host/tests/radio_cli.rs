@@ -246,7 +246,7 @@ fn nonsense_numbers_are_refused_with_a_reason() {
         ),
         (
             &["monitor", "--link", "pty", "--count", "0"],
-            "a number of events, 1 or more",
+            "a number of received items, 1 or more",
         ),
     ] {
         let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))

@@ -31,8 +31,9 @@ pub(crate) struct MonitorArgs {
     /// Overwrite the `--record` file if it exists.
     #[arg(long, requires = "record")]
     force: bool,
-    /// Stop after this many events, 1 or more (default: run until the link closes or
-    /// Ctrl-C).
+    /// Stop after this many received items, 1 or more: packets, other frames and frames
+    /// that failed to decode. Link events (connected, reconnecting) are printed but not
+    /// counted. Default: run until the link closes or Ctrl-C.
     #[arg(long, value_name = "N", value_parser = parse_count)]
     count: Option<u64>,
 }
@@ -42,7 +43,7 @@ fn parse_count(s: &str) -> Result<u64, String> {
     s.parse::<u64>()
         .ok()
         .filter(|n| *n >= 1)
-        .ok_or_else(|| format!("expected a number of events, 1 or more, got `{s}`"))
+        .ok_or_else(|| format!("expected a number of received items, 1 or more, got `{s}`"))
 }
 
 /// After this many failed frames, more than the good ones, suggest what may be wrong
@@ -144,7 +145,10 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
         if let Event::Link(LinkEvent::Closed { reason }) = &event {
             return Err(Failure::link(format!("link closed: {reason}")));
         }
-        seen += 1;
+        // What the radio sent counts; what happened to our own link does not.
+        if !matches!(event, Event::Link(_)) {
+            seen += 1;
+        }
         if args.count.is_some_and(|n| seen >= n) {
             break;
         }
