@@ -5,6 +5,9 @@
 # Needs the thumbv7m-none-eabi target and llvm-size/llvm-nm (Debian: llvm) or
 # arm-none-eabi-size/arm-none-eabi-nm (Debian: binutils-arm-none-eabi); SIZE and NM
 # override the tools.
+#
+# Fails when the receive path takes more flash than its budget, RX_FLASH_BUDGET bytes
+# (default 4096: the 4 KiB the receive path is held to).
 set -euo pipefail
 cd "$(dirname "$0")"
 unset CARGO_TARGET_DIR
@@ -61,3 +64,10 @@ echo "    receive path's own code       $((rx_flash - rx_mem)) bytes"
 echo "  static RAM                      $rx_ram bytes"
 echo "    decoder state (RefCell<Decoder<100>>)  $decoder bytes"
 echo "    payload queue and counters    $inbox bytes"
+
+budget=${RX_FLASH_BUDGET:-4096}
+if ((rx_flash > budget)); then
+    echo "size.sh: the receive path takes $rx_flash bytes of flash, over its budget of $budget" >&2
+    exit 1
+fi
+echo "  within the flash budget of $budget bytes ($((budget - rx_flash)) to spare)"
