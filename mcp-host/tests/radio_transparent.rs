@@ -163,6 +163,26 @@ async fn a_factory_radio_passes_payloads_on_and_is_put_into_api_mode_2() {
 }
 
 #[tokio::test(start_paused = true)]
+async fn commands_chained_on_one_line_set_a_factory_radio_up() {
+    let (_network, mut ground, _mav) = network(Faults::default());
+    tokio::time::sleep(GT).await;
+    ground.write_all(b"+++").await.unwrap();
+    assert_eq!(line(&mut ground).await, "OK\r");
+    // One answer a command, in order; a value in hex may start with 0x.
+    ground
+        .write_all(b"ATNIGS,NT0x20,NT,XX,AP 0x1,WR,CN\r")
+        .await
+        .unwrap();
+    let mut answers = String::new();
+    while answers.matches('\r').count() < 7 {
+        answers += &line(&mut ground).await;
+    }
+    assert_eq!(answers, "OK\rOK\r20\rERROR\rOK\rOK\rOK\r");
+    let mut ground = Framed::new(ground, XBeeCodec::new(ApiMode::Unescaped));
+    assert_eq!(read_ap(&mut ground).await, 1);
+}
+
+#[tokio::test(start_paused = true)]
 async fn plus_plus_plus_without_silence_is_data_and_command_mode_times_out() {
     let (_network, mut ground, _mav) = network(Faults::default());
     // Right after other bytes: no command mode.

@@ -140,30 +140,33 @@ impl CommandMode {
             // Each line is a command, good or not: `CT` counts from the last one.
             command.deadline = now + self.timeout;
             // A line feed after the carriage return (a terminal's CRLF) and spaces around
-            // the command are no part of it.
-            match parse(line.trim()) {
-                Some((CN, "")) => {
-                    steps.push(Step::Answer(b"OK\r".to_vec()));
-                    steps.push(Step::Leave {
-                        ap: command.ap,
-                        rest: rest.to_vec(),
-                    });
-                    self.command = None;
-                    self.last = Some(now);
-                    return steps;
-                }
-                Some((AP, "")) => steps.push(answer(&format!("{:X}", command.ap))),
-                Some((AP, value)) => match value.trim().parse::<u8>() {
-                    Ok(ap @ 0..=2) => {
-                        command.ap = ap;
-                        steps.push(answer("OK"));
+            // the command are no part of it. Commands chained with commas are answered
+            // one by one, as if each had its own line.
+            for parsed in parse(line.trim()) {
+                match parsed {
+                    Some((CN, "")) => {
+                        steps.push(Step::Answer(b"OK\r".to_vec()));
+                        steps.push(Step::Leave {
+                            ap: command.ap,
+                            rest: rest.to_vec(),
+                        });
+                        self.command = None;
+                        self.last = Some(now);
+                        return steps;
                     }
-                    _ => steps.push(answer("ERROR")),
-                },
-                // `AT` alone: the radio is listening.
-                Some((LISTEN, _)) => steps.push(answer("OK")),
-                Some((name, value)) => steps.push(answer(&execute(name, value))),
-                None => steps.push(answer("ERROR")),
+                    Some((AP, "")) => steps.push(answer(&format!("{:X}", command.ap))),
+                    Some((AP, value)) => match hex_u8(value) {
+                        Some(ap @ 0..=2) => {
+                            command.ap = ap;
+                            steps.push(answer("OK"));
+                        }
+                        _ => steps.push(answer("ERROR")),
+                    },
+                    // `AT` alone: the radio is listening.
+                    Some((LISTEN, _)) => steps.push(answer("OK")),
+                    Some((name, value)) => steps.push(answer(&execute(name, value))),
+                    None => steps.push(answer("ERROR")),
+                }
             }
         }
         let room = LINE_MAX.saturating_sub(command.line.len());
@@ -179,17 +182,24 @@ fn answer(text: &str) -> Step {
     Step::Answer(format!("{text}\r").into_bytes())
 }
 
-/// `AT`, a command (two characters, either case) and its value; `AT` alone is command
-/// `\0\0`. `None` for a line that is no AT command.
-fn parse(line: &str) -> Option<([u8; 2], &str)> {
-    let body = line
-        .strip_prefix("AT")
-        .or_else(|| line.strip_prefix("at"))?;
+/// The commands of a line: `AT`, a command (two characters, either case) and its value,
+/// then any further commands after commas, without `AT` (`ATAP1,WR,CN`); a comma always
+/// ends a command, so no value holds one. `AT` alone is command `\0\0`. `None` for a
+/// line that is no AT command, or for a part of one that is no command.
+fn parse(line: &str) -> Vec<Option<([u8; 2], &str)>> {
+    let Some(body) = line.strip_prefix("AT").or_else(|| line.strip_prefix("at")) else {
+        return vec![None];
+    };
     if body.trim().is_empty() {
-        return Some((LISTEN, ""));
+        return vec![Some((LISTEN, ""))];
     }
-    let name = body.get(..2)?;
-    let value = body.get(2..)?;
+    body.split(',').map(|part| command(part.trim())).collect()
+}
+
+/// One command: two characters, either case, then its value as typed.
+fn command(text: &str) -> Option<([u8; 2], &str)> {
+    let name = text.get(..2)?;
+    let value = text.get(2..)?;
     let mut command = [0u8; 2];
     for (slot, c) in command.iter_mut().zip(name.bytes()) {
         if !c.is_ascii_alphanumeric() && c != b'%' && c != b'?' {
@@ -198,6 +208,16 @@ fn parse(line: &str) -> Option<([u8; 2], &str)> {
         *slot = c.to_ascii_uppercase();
     }
     Some((command, value))
+}
+
+/// A one-byte value in hex, with or without `0x`, as a radio takes it.
+fn hex_u8(value: &str) -> Option<u8> {
+    let value = value.trim();
+    let digits = value
+        .strip_prefix("0x")
+        .or_else(|| value.strip_prefix("0X"))
+        .unwrap_or(value);
+    u8::from_str_radix(digits, 16).ok()
 }
 
 #[cfg(test)]
@@ -297,6 +317,51 @@ mod tests {
             ]
         );
         assert_eq!(mode.deadline(), None);
+    }
+
+    #[test]
+    fn commands_chained_with_commas_are_answered_one_by_one() {
+        // Digi's own example, then the usual way to set a factory radio up in one line.
+        let (mut mode, at) = in_command_mode(Instant::now());
+        let mut asked = Vec::new();
+        let steps = mode.on_bytes(
+            at,
+            b"ATNIMy XBee,AC\rATAP0x2,XX?,WR,CN,NIlost\rrest",
+            |c, v| {
+                asked.push((c, v.to_owned()));
+                if c == *b"XX" { "ERROR" } else { "OK" }.to_owned()
+            },
+        );
+        assert_eq!(
+            asked,
+            [
+                (*b"NI", "My XBee".to_owned()),
+                (*b"AC", String::new()),
+                (*b"XX", "?".to_owned()),
+                (*b"WR", String::new()),
+            ]
+        );
+        assert_eq!(
+            steps,
+            [
+                Step::Answer(b"OK\r".to_vec()),
+                Step::Answer(b"OK\r".to_vec()),
+                Step::Answer(b"OK\r".to_vec()),
+                // A command that fails is answered so; the next ones still run.
+                Step::Answer(b"ERROR\r".to_vec()),
+                Step::Answer(b"OK\r".to_vec()),
+                Step::Answer(b"OK\r".to_vec()),
+                // CN leaves at once: what follows it on its line is not run.
+                Step::Leave {
+                    ap: 2,
+                    rest: b"rest".to_vec()
+                }
+            ]
+        );
+        // The line must start with AT; the commands after a comma do without it.
+        let (mut mode, at) = in_command_mode(Instant::now());
+        let steps = mode.on_bytes(at, b"AP1,WR\rATAP1,\r", |_, _| unreachable!());
+        assert_eq!(lines(&steps), ["ERROR\r", "OK\r", "ERROR\r"]);
     }
 
     #[test]

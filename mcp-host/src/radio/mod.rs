@@ -66,9 +66,10 @@
 //!   emulation, except `+++` written alone between two guard times of silence (`GT`,
 //!   1 s), which the radio answers `OK` to: AT command mode, where nothing received is
 //!   passed on (what was on its way to the device is dropped). There each line `AT`,
-//!   command, value (hex, text for `NI`) and carriage return is answered with the value
-//!   read (hex), `OK` or `ERROR`, as the radio's API answers the same command (`ND`
-//!   excepted); `AP` takes 0, 1 or 2, and `BD` 0 to 8 (the link is not slowed down).
+//!   command, value (hex, `0x` allowed; text for `NI`) and carriage return is answered
+//!   with the value read (hex), `OK` or `ERROR`, as the radio's API answers the same
+//!   command (`ND` excepted); commands chained with commas (`ATAP1,WR,CN`) are answered
+//!   one by one; `AP` takes 0, 1 or 2, and `BD` 0 to 8 (the link is not slowed down).
 //!   `ATCN`, or `CT` (10 s) without a command, leaves command mode: with `AP` set to 1
 //!   or 2 the radio speaks API frames in that mode from then on, as a node added in API
 //!   mode does (until the network ends). A radio in API mode does not take `+++`.

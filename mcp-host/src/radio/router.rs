@@ -815,10 +815,15 @@ pub(crate) enum LinkMode {
     Api(ApiMode),
 }
 
-/// A number typed in AT command mode: up to 16 hex digits (spaces ignored), as
-/// big-endian bytes without leading zero bytes (one 0x00 for zero); nothing for no
-/// digits. `None` for anything else.
+/// A number typed in AT command mode: up to 16 hex digits (spaces ignored, `0x` before
+/// them allowed), as big-endian bytes without leading zero bytes (one 0x00 for zero);
+/// nothing for no digits. `None` for anything else.
 fn hex_value(text: &str) -> Option<Vec<u8>> {
+    let text = text.trim_start();
+    let text = text
+        .strip_prefix("0x")
+        .or_else(|| text.strip_prefix("0X"))
+        .unwrap_or(text);
     let digits: String = text.chars().filter(|c| *c != ' ').collect();
     if digits.is_empty() {
         return Some(Vec::new());
