@@ -183,6 +183,49 @@ fn network_parameters_read_and_the_node_identifier_is_set_as_text() {
 }
 
 #[test]
+fn json_prints_each_answer_as_its_frame_with_the_value_read() {
+    let sim = Sim::start();
+    let json = |args: &[&str], code: i32| {
+        let out = sim.at(&[&["--format", "json"], args].concat());
+        assert_eq!(out.status.code(), Some(code), "{out:?}");
+        serde_json::from_str::<serde_json::Value>(&stdout(&out)).unwrap()
+    };
+    // A number, locally.
+    let ch = json(&["CH"], 0);
+    assert_eq!(
+        (&ch["frame"], &ch["command"], &ch["status_name"]),
+        (&"at_response".into(), &"CH".into(), &"ok".into()),
+        "{ch}"
+    );
+    let data = u64::from_str_radix(ch["data"].as_str().unwrap(), 16).unwrap();
+    assert_eq!(ch["value"], data, "{ch}");
+    // Text, remotely, with where it came from.
+    assert_eq!(
+        json(&["--to", MAV, "NI", "Left wing"], 0).get("value"),
+        None
+    );
+    let ni = json(&["--to", MAV, "NI"], 0);
+    assert_eq!(
+        (&ni["frame"], &ni["src64"], &ni["value"]),
+        (
+            &"remote_at_response".into(),
+            &MAV.into(),
+            &"Left wing".into()
+        ),
+        "{ni}"
+    );
+    // A refusal prints its answer too, and fails as in text.
+    let refused = json(&["NI", "twenty-one characters"], 1);
+    assert_eq!(refused["status_name"], "invalid_parameter", "{refused}");
+    // Every answer to a broadcast.
+    let all = json(&["--to", "000000000000ffff", "--window", "1", "NI"], 0);
+    assert_eq!(
+        (&all["src64"], &all["value"]),
+        (&MAV.into(), &"Left wing".into())
+    );
+}
+
+#[test]
 fn a_queued_change_is_applied_with_ac_and_saved_with_wr() {
     let sim = Sim::start();
     // As --no-apply's help says: queue, then AC; WR writes the settings to flash.

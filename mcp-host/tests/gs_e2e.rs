@@ -242,6 +242,42 @@ fn at_commands_and_api_mode_detection() {
     assert!(out.starts_with("AP = 02"), "{out}");
     let out = sim.ok(&["at", "--api-mode", "2", "NP"]);
     assert!(out.starts_with("NP = "), "{out}");
+    let out = sim.ok(&["at", "--api-mode", "2", "--format", "json", "AP"]);
+    let ap: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(
+        (&ap["data"], &ap["value"]),
+        (&"02".into(), &2.into()),
+        "{out}"
+    );
+    // A command sent without a status, in JSON.
+    let args = [
+        "send",
+        "--api-mode",
+        "2",
+        "--to",
+        MAV,
+        "--no-status",
+        "--format",
+        "json",
+        "landing",
+        "on",
+    ];
+    let sent: Value = serde_json::from_str(&sim.ok(&args)).unwrap();
+    assert_eq!(
+        (
+            &sent["result"],
+            &sent["id"],
+            &sent["mcp"]["type"],
+            &sent["mcp"]["on"]
+        ),
+        (
+            &"written".into(),
+            &0.into(),
+            &"landing".into(),
+            &true.into()
+        ),
+        "{sent}"
+    );
     // `auto` asks the radio first and then talks in its mode.
     let report = sim.status_with(&["--api-mode", "auto"], &["landing"]);
     assert_eq!(report["state_name"], "flight");
@@ -509,6 +545,29 @@ fn send_trajectory_checks_the_mavs_report() {
         "{stdout}"
     );
     assert_eq!(String::from_utf8_lossy(&out.stderr), "");
+    // In JSON: one object, delivery and check together.
+    let json = [&two[..], &["--format", "json"]].concat();
+    let out = succeeded(sim.gs(&json), &json);
+    let object: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(
+        (
+            &object["result"],
+            &object["dst64"],
+            &object["trajectory_confirmed"],
+            &object["mcp"]["type"]
+        ),
+        (
+            &"delivered".into(),
+            &MAV.into(),
+            &true.into(),
+            &"trajectory_set".into()
+        ),
+        "{object}"
+    );
+    assert!(
+        object["retries"].is_u64() && object["id"].as_u64() > Some(0),
+        "{object}"
+    );
 
     let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
         .args(["send", "--link", &sim.link, "--timeout", "1", "--to", MAV])

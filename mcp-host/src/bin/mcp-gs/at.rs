@@ -3,10 +3,10 @@
 use clap::Args;
 use xbee_api::{Address64, AtStatus, Frame};
 
-use crate::Failure;
 use crate::link_args::{
     ApiModeChoice, LinkArgs, diagnosed_send, warn_mode_mismatch, with_mode_hint,
 };
+use crate::{Failure, Format};
 use mcp_host::render::json::hex;
 
 /// Arguments of `at`.
@@ -42,6 +42,11 @@ pub(crate) struct AtArgs {
     /// The value to set, in hex (e.g. `2` for AP=2), or text for a text parameter (NI)
     /// or with --text; omit to read.
     value: Option<String>,
+    /// Output format: `json` prints each answer as the response frame's object (as
+    /// `monitor` does), with `value` added: the value read as a number, or as text for a
+    /// text parameter.
+    #[arg(long, value_enum, default_value_t = Format::Text)]
+    format: Format,
 }
 
 /// The AT parameters Digi defines as text (printable ASCII) rather than numbers: the
@@ -126,6 +131,29 @@ fn answer_line(name: &str, command: &[u8; 2], data: &[u8], set: bool) -> String 
     }
 }
 
+/// An answer as a JSON object: the response frame's, with `value` added when the
+/// answer holds one (text for a text parameter, else a number of up to 8 bytes).
+fn answer_json(frame: &Frame<'_>, command: &[u8; 2], data: &[u8]) -> serde_json::Value {
+    let mut json = mcp_host::render::json::frame(frame);
+    let value = if data.is_empty() {
+        None
+    } else if is_text(command) {
+        Some(String::from_utf8_lossy(data).into_owned().into())
+    } else if data.len() <= 8 {
+        Some(
+            data.iter()
+                .fold(0u64, |n, &b| (n << 8) | u64::from(b))
+                .into(),
+        )
+    } else {
+        None
+    };
+    if let (serde_json::Value::Object(map), Some(value)) = (&mut json, value) {
+        map.insert("value".into(), value);
+    }
+    json
+}
+
 /// `at --to 000000000000ffff`: the command to every radio in range, and a line for each
 /// answer handed over, `ADDR: ...`, as they come for `--window` seconds (one in all on
 /// Zigbee). An answer that refuses makes the exit code 1; no answer at all, 4.
@@ -153,18 +181,22 @@ async fn broadcast(
     let (mut answered, mut refused) = (0u32, 0u32);
     while let Some(answer) = answers.next().await {
         let answer = answer.map_err(failed)?;
-        let Ok(Frame::RemoteAtResponse(at)) = answer.parse() else {
+        let Ok(frame @ Frame::RemoteAtResponse(at)) = answer.parse() else {
             continue;
         };
         answered += 1;
-        if at.status.is_ok() {
+        if !at.status.is_ok() {
+            refused += 1;
+        }
+        if args.format == Format::Json {
+            out!("{}", answer_json(&frame, &command, at.data));
+        } else if at.status.is_ok() {
             out!(
                 "{}: {}",
                 at.src64,
                 answer_line(&name, &command, at.data, set)
             );
         } else {
-            refused += 1;
             out!("{}: {}", at.src64, explain(at.status, &name, None, set));
         }
     }
@@ -275,7 +307,8 @@ pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
         }
     }
     .map_err(|e| diagnosed_send(e, &args.link, &sender.stats()))?;
-    let (status, data) = match response.parse() {
+    let frame = response.parse();
+    let (status, data) = match &frame {
         Ok(Frame::AtCommandResponse(at)) => (at.status, at.data),
         Ok(Frame::RemoteAtResponse(at)) => (at.status, at.data),
         _ => {
@@ -286,16 +319,22 @@ pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
         }
     };
     let name = String::from_utf8_lossy(&command).into_owned();
+    // A refusal is an answer too: JSON prints it, with the failure on standard error.
+    if let (Format::Json, Ok(frame)) = (args.format, &frame) {
+        out!("{}", answer_json(frame, &command, data));
+    }
     if !status.is_ok() {
         return Err(Failure::new(
             exit_code(status),
             explain(status, &name, args.to, args.value.is_some()),
         ));
     }
-    out!(
-        "{}",
-        answer_line(&name, &command, data, args.value.is_some())
-    );
+    if args.format == Format::Text {
+        out!(
+            "{}",
+            answer_line(&name, &command, data, args.value.is_some())
+        );
+    }
     // The local radio's API mode, read in another than --api-mode (the AP answer reads
     // the same in both modes): the other frames will not.
     if let (None, b"AP", ApiModeChoice::Fixed(mode), &[ap]) =

@@ -183,7 +183,7 @@ pub(crate) fn output_failure(error: &std::io::Error) -> Option<Failure> {
     })
 }
 
-/// Output format of `monitor` and `decode`.
+/// Output format of the subcommands that print what the radio said.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub(crate) enum Format {
     /// One readable line per frame.

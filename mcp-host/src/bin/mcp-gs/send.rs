@@ -6,9 +6,9 @@ use mcp_core::{Packet, Report, Waypoint};
 use mcp_host::{DeliveryReport, Event, FrameId, PacketStream, SendOptions};
 use xbee_api::{Address64, ReceivePacketRepr};
 
-use crate::Failure;
 use crate::command::CommandArgs;
 use crate::link_args::{LinkArgs, diagnosed, diagnosed_send};
+use crate::{Failure, Format};
 
 /// Arguments of `send`.
 #[derive(Debug, Args)]
@@ -22,6 +22,11 @@ pub(crate) struct SendArgs {
     /// Fire and forget: frame id 0, the radio sends no transmit status.
     #[arg(long)]
     no_status: bool,
+    /// Output format: `json` prints one object, `{"result":"delivered",...}` with the
+    /// transmit status's fields or `{"result":"written",...}`, the packet as `mcp`, and
+    /// for a trajectory `trajectory_confirmed`.
+    #[arg(long, value_enum, default_value_t = Format::Text)]
+    format: Format,
     /// The command.
     #[command(subcommand)]
     command: CommandArgs,
@@ -68,19 +73,22 @@ pub(crate) async fn run(args: SendArgs) -> Result<(), Failure> {
         .send_payload(args.to, payload.clone(), options)
         .await
         .map_err(|e| diagnosed_send(e, &args.link, &sender.stats()))?;
-    let what = mcp_host::render::text::mcp(&payload);
-    match report {
-        DeliveryReport::Delivered {
-            frame_id,
-            dst16,
-            retries,
-            discovery,
-        } => out!(
-            "delivered to {}/{dst16} (frame id {frame_id}, retries {retries}, discovery {discovery}): {what}",
-            args.to
-        ),
-        DeliveryReport::Written => out!("written, no status asked (frame id 0): {what}"),
-        other => out!("{other:?}: {what}"),
+    let mut json = (args.format == Format::Json).then(|| report_json(&report, &args, &payload));
+    if json.is_none() {
+        let what = mcp_host::render::text::mcp(&payload);
+        match report {
+            DeliveryReport::Delivered {
+                frame_id,
+                dst16,
+                retries,
+                discovery,
+            } => out!(
+                "delivered to {}/{dst16} (frame id {frame_id}, retries {retries}, discovery {discovery}): {what}",
+                args.to
+            ),
+            DeliveryReport::Written => out!("written, no status asked (frame id 0): {what}"),
+            other => out!("{other:?}: {what}"),
+        }
     }
     match &args.command {
         // The MAV answers a trajectory set at once with the trajectory it took (unless
@@ -88,16 +96,24 @@ pub(crate) async fn run(args: SendArgs) -> Result<(), Failure> {
         CommandArgs::Trajectory { waypoints }
             if args.to != Address64::BROADCAST && !args.no_status =>
         {
-            check_trajectory(&mut stream, &args, waypoints)
-                .await
-                .map_err(|failure| diagnosed(failure, &args.link, &sender.stats()))?;
-            out!("the MAV reports the trajectory as sent");
+            let checked = check_trajectory(&mut stream, &args, waypoints).await;
+            if let Some(mut json) = json.take() {
+                json["trajectory_confirmed"] = checked.is_ok().into();
+                out!("{json}");
+            }
+            checked.map_err(|failure| diagnosed(failure, &args.link, &sender.stats()))?;
+            if args.format == Format::Text {
+                out!("the MAV reports the trajectory as sent");
+            }
         }
         CommandArgs::Status { .. } => eprintln!(
             "mcp-gs: note: the MAV answers with a report on the link; `mcp-gs status` waits \
              for it and prints it"
         ),
         _ => {}
+    }
+    if let Some(json) = json {
+        out!("{json}");
     }
     // A frame sent without a status is written out before the process ends. (The
     // stream is dropped first: its queue, full of what nobody read, would hold up the
@@ -106,6 +122,36 @@ pub(crate) async fn run(args: SendArgs) -> Result<(), Failure> {
     sender.close();
     sender.closed().await;
     Ok(())
+}
+
+/// The delivery report as a JSON object, with the fields of a transmit status frame's
+/// (`id`, `dst16`, `retries`, `discovery`), where the MAV is and what went.
+fn report_json(report: &DeliveryReport, args: &SendArgs, payload: &[u8]) -> serde_json::Value {
+    let mut json = serde_json::json!({ "dst64": args.to.to_string() });
+    match *report {
+        DeliveryReport::Delivered {
+            frame_id,
+            dst16,
+            retries,
+            discovery,
+        } => {
+            json["result"] = "delivered".into();
+            json["id"] = frame_id.into();
+            json["dst16"] = dst16.to_string().into();
+            json["retries"] = retries.into();
+            json["discovery"] = u8::from(discovery).into();
+            if let Some(name) = discovery.name() {
+                json["discovery_name"] = name.into();
+            }
+        }
+        DeliveryReport::Written => {
+            json["result"] = "written".into();
+            json["id"] = 0.into();
+        }
+        _ => json["result"] = "other".into(),
+    }
+    json["mcp"] = mcp_host::render::json::mcp(payload);
+    json
 }
 
 /// Waits for the MAV's trajectory report holding `sent`. Reports of other trajectories
