@@ -146,6 +146,31 @@ fn decode_tells_queued_at_commands_apart() {
 }
 
 #[test]
+fn decode_reads_a_node_identification() {
+    // Digi's manual: router 0013A20040522BAA, NI " ", announces itself (its
+    // commissioning button was pressed).
+    let hex = "7E 00 20 95 00 13 A2 00 40 52 2B AA 7D 84 02 7D 84 00 13 A2 00 40 52 2B AA \
+               20 00 FF FE 01 01 C1 05 10 1E 1B";
+    assert_eq!(
+        decode_hex(hex, "text"),
+        "node identification 0013a20040522baa/7d84 router \" \" parent fffe: pushbutton \
+         (0x01), from 0013a20040522baa/7d84 opt 02\n"
+    );
+    let json = json_lines(&decode_hex(hex, "json"));
+    assert_eq!(
+        json,
+        [serde_json::json!({
+            "frame": "node_identification",
+            "src64": "0013a20040522baa", "src16": "7d84", "options": 2,
+            "addr64": "0013a20040522baa", "addr16": "7d84", "identifier": " ",
+            "parent": "fffe", "device_type": 1, "device_type_name": "router",
+            "event": 1, "event_name": "pushbutton",
+            "profile": 0xC105, "manufacturer": 0x101E,
+        })]
+    );
+}
+
+#[test]
 fn decode_reports_bad_frames_and_goes_on() {
     // A frame with a wrong checksum between two good modem status frames.
     let stream = [

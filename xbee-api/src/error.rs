@@ -25,6 +25,14 @@ pub enum FrameError {
         /// Frame data length received.
         got: usize,
     },
+    /// The node information a frame carries (a Node Identification Indicator's) does
+    /// not read: its identifier has no 0x00 after it, or bytes are left over.
+    BadNodeInfo {
+        /// The frame type.
+        frame_type: u8,
+        /// What is wrong with the node information.
+        error: crate::NodeInfoError,
+    },
 }
 
 impl fmt::Display for FrameError {
@@ -42,6 +50,9 @@ impl fmt::Display for FrameError {
                 f,
                 "frame type 0x{frame_type:02X} needs at least {needed} bytes of frame data, got {got}"
             ),
+            Self::BadNodeInfo { frame_type, error } => {
+                write!(f, "frame type 0x{frame_type:02X}: {error}")
+            }
         }
     }
 }

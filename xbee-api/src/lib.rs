@@ -68,17 +68,17 @@ mod decode_error;
 mod decoder;
 mod encode;
 mod error;
+#[macro_use]
+mod status;
+// After `status`, whose `code_enum!` they use.
 #[allow(clippy::indexing_slicing)]
 pub mod frame;
 #[cfg(feature = "embedded-io")]
 pub mod io;
 mod mode;
+mod node;
 mod raw;
 mod stats;
-#[macro_use]
-mod status;
-// After `status`, whose `code_enum!` it uses.
-mod node;
 mod unescape;
 #[cfg(target_pointer_width = "64")]
 mod window;
@@ -97,6 +97,9 @@ pub use frame::explicit_addressing_command::{
 };
 pub use frame::explicit_rx_indicator::{ExplicitRxIndicator, ExplicitRxIndicatorRepr};
 pub use frame::modem_status::{ModemStatusFrame, ModemStatusRepr};
+pub use frame::node_identification_indicator::{
+    NodeIdentificationIndicator, NodeIdentificationIndicatorRepr, SourceEvent,
+};
 pub use frame::receive_packet::{ReceivePacket, ReceivePacketRepr};
 pub use frame::remote_at_command::{RemoteAtCommand, RemoteAtCommandRepr};
 pub use frame::remote_at_response::{RemoteAtResponse, RemoteAtResponseRepr};

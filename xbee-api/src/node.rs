@@ -89,7 +89,7 @@ impl core::error::Error for NodeInfoError {}
 /// let n = node.emit(&mut buf).unwrap();
 /// assert_eq!(&buf[..n], &data);
 /// ```
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct NodeInfo<'a> {
     /// Its 16-bit network address (`MY`).
@@ -102,7 +102,8 @@ pub struct NodeInfo<'a> {
     pub parent: Address16,
     /// Its role.
     pub device_type: DeviceType,
-    /// A byte Digi reserves.
+    /// A byte Digi reserves in a node discovery answer; in a Node Identification
+    /// Indicator, the [`SourceEvent`](crate::SourceEvent).
     pub status: u8,
     /// Its profile id (Digi's: `C105`).
     pub profile_id: u16,
@@ -119,6 +120,8 @@ const HEAD_LEN: usize = 10;
 /// Bytes of the fields after the node identifier's 0x00: parent, device type, status,
 /// profile id, manufacturer id.
 const TAIL_LEN: usize = 8;
+/// The least length of node information: an empty identifier, no optional field.
+pub(crate) const MIN_LEN: usize = HEAD_LEN + 1 + TAIL_LEN;
 
 impl<'a> NodeInfo<'a> {
     /// Reads one node discovery answer.
@@ -127,7 +130,7 @@ impl<'a> NodeInfo<'a> {
             needed,
             got: data.len(),
         };
-        let least = HEAD_LEN + 1 + TAIL_LEN;
+        let least = MIN_LEN;
         let (head, rest) = data
             .split_first_chunk::<HEAD_LEN>()
             .ok_or(too_short(least))?;
@@ -191,28 +194,36 @@ impl<'a> NodeInfo<'a> {
             needed: len,
             available,
         })?;
-        let dd = self.device_type_identifier.map(u32::to_be_bytes);
-        let fields: [&[u8]; 10] = [
-            &self.addr16.to_bytes(),
-            &self.addr64.to_bytes(),
-            self.identifier,
-            &[0],
-            &self.parent.to_bytes(),
-            &[u8::from(self.device_type), self.status],
-            &self.profile_id.to_be_bytes(),
-            &self.manufacturer_id.to_be_bytes(),
-            dd.as_ref().map_or(&[], |d| &d[..]),
-            self.rssi.as_slice(),
-        ];
         let mut at = 0;
-        for field in fields {
+        write_fields(self, &mut |field: &[u8]| {
             let end = at + field.len();
             if let Some(slot) = out.get_mut(at..end) {
                 slot.copy_from_slice(field);
             }
             at = end;
-        }
+        });
         Ok(len)
+    }
+}
+
+/// Hands `node`'s fields to `out` in their order on the wire, [`NodeInfo::len`] bytes
+/// in all: for [`NodeInfo::emit`] and the frames that carry node information.
+pub(crate) fn write_fields<F: FnMut(&[u8])>(node: &NodeInfo<'_>, out: &mut F) {
+    let dd = node.device_type_identifier.map(u32::to_be_bytes);
+    let fields: [&[u8]; 10] = [
+        &node.addr16.to_bytes(),
+        &node.addr64.to_bytes(),
+        node.identifier,
+        &[0],
+        &node.parent.to_bytes(),
+        &[u8::from(node.device_type), node.status],
+        &node.profile_id.to_be_bytes(),
+        &node.manufacturer_id.to_be_bytes(),
+        dd.as_ref().map_or(&[], |d| &d[..]),
+        node.rssi.as_slice(),
+    ];
+    for field in fields {
+        out(field);
     }
 }
 

@@ -49,6 +49,28 @@ fn frame_data() -> impl Strategy<Value = Vec<u8>> {
         })
 }
 
+/// Frame data of a random Node Identification Indicator (0x95): random fields around
+/// node information that reads (an identifier without 0x00, then its 0x00, and 0, 1, 4
+/// or 5 bytes of optional fields).
+fn node_identification_data() -> impl Strategy<Value = Vec<u8>> {
+    (
+        proptest::collection::vec(any::<u8>(), 21),
+        proptest::collection::vec(1..=255u8, 0..20),
+        proptest::collection::vec(any::<u8>(), 8),
+        prop_oneof![Just(0usize), Just(1), Just(4), Just(5)],
+        any::<[u8; 5]>(),
+    )
+        .prop_map(|(head, identifier, tail, extra, optional)| {
+            let mut data = vec![0x95];
+            data.extend(&head);
+            data.extend(&identifier);
+            data.push(0);
+            data.extend(&tail);
+            data.extend(&optional[..extra]);
+            data
+        })
+}
+
 /// Wire bytes of frame data with a given checksum byte.
 fn wire(data: &[u8], check: u8, mode: ApiMode) -> Vec<u8> {
     let mut body = (data.len() as u16).to_be_bytes().to_vec();
@@ -194,7 +216,10 @@ proptest! {
     }
 
     #[test]
-    fn encode_then_decode_is_identity(mode in mode(), data in frame_data()) {
+    fn encode_then_decode_is_identity(
+        mode in mode(),
+        data in prop_oneof![4 => frame_data(), 1 => node_identification_data()],
+    ) {
         let frame = Frame::parse_bytes(&data).unwrap();
         prop_assert_eq!(frame.frame_type(), data[0]);
         let mut wire_bytes = vec![0u8; frame.encoded_len(mode)];

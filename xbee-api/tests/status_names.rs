@@ -5,7 +5,7 @@
 use std::collections::HashMap;
 use std::fmt::{Debug, Display};
 
-use xbee_api::{AtStatus, DeliveryStatus, DiscoveryStatus, ModemStatus};
+use xbee_api::{AtStatus, DeliveryStatus, DeviceType, DiscoveryStatus, ModemStatus, SourceEvent};
 
 /// `Debug` of a named variant in snake_case, without the code of a range arm.
 fn snake_case_of_debug(status: &dyn Debug) -> String {
@@ -69,7 +69,14 @@ macro_rules! named {
         })*
     };
 }
-named!(AtStatus, DeliveryStatus, DiscoveryStatus, ModemStatus);
+named!(
+    AtStatus,
+    DeliveryStatus,
+    DiscoveryStatus,
+    ModemStatus,
+    DeviceType,
+    SourceEvent
+);
 
 #[test]
 fn names_are_snake_case_variant_names_and_display_them() {
@@ -77,6 +84,8 @@ fn names_are_snake_case_variant_names_and_display_them() {
     check_names(DeliveryStatus::from);
     check_names(DiscoveryStatus::from);
     check_names(ModemStatus::from);
+    check_names(DeviceType::from);
+    check_names(SourceEvent::from);
 }
 
 #[test]

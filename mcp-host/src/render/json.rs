@@ -157,6 +157,40 @@ pub fn frame(frame: &Frame<'_>) -> Value {
             m.insert("data".into(), hex(rx.data).into());
             m.insert("mcp".into(), mcp(rx.data));
         }
+        Frame::NodeIdentificationIndicator(ni) => {
+            let node = &ni.node;
+            m.insert("frame".into(), "node_identification".into());
+            m.insert("src64".into(), ni.src64.to_string().into());
+            m.insert("src16".into(), ni.src16.to_string().into());
+            m.insert("options".into(), ni.options.into());
+            m.insert("addr64".into(), node.addr64.to_string().into());
+            m.insert("addr16".into(), node.addr16.to_string().into());
+            m.insert(
+                "identifier".into(),
+                String::from_utf8_lossy(node.identifier).into(),
+            );
+            m.insert("parent".into(), node.parent.to_string().into());
+            named(
+                &mut m,
+                "device_type",
+                node.device_type.into(),
+                node.device_type.name(),
+            );
+            named(
+                &mut m,
+                "event",
+                ni.source_event().into(),
+                ni.source_event().name(),
+            );
+            m.insert("profile".into(), node.profile_id.into());
+            m.insert("manufacturer".into(), node.manufacturer_id.into());
+            if let Some(dd) = node.device_type_identifier {
+                m.insert("device_type_identifier".into(), dd.into());
+            }
+            if let Some(rssi) = node.rssi {
+                m.insert("rssi_dbm".into(), (-i16::from(rssi)).into());
+            }
+        }
         Frame::Unknown { frame_type, data } => {
             m.insert("frame".into(), "unknown".into());
             m.insert("type".into(), (*frame_type).into());

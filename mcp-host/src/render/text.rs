@@ -114,6 +114,20 @@ pub fn frame(frame: &Frame<'_>) -> String {
             rx.options,
             mcp(rx.data)
         ),
+        Frame::NodeIdentificationIndicator(ni) => write!(
+            s,
+            "node identification {}/{} {} {:?} parent {}: {} (0x{:02x}), from {}/{} opt {:02x}",
+            ni.node.addr64,
+            ni.node.addr16,
+            ni.node.device_type,
+            String::from_utf8_lossy(ni.node.identifier),
+            ni.node.parent,
+            ni.source_event(),
+            u8::from(ni.source_event()),
+            ni.src64,
+            ni.src16,
+            ni.options
+        ),
         Frame::Unknown { frame_type, data } => {
             write!(s, "frame type 0x{frame_type:02x}{}", data_suffix(data))
         }

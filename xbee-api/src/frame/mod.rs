@@ -10,6 +10,7 @@ pub mod at_command_response;
 pub mod explicit_addressing_command;
 pub mod explicit_rx_indicator;
 pub mod modem_status;
+pub mod node_identification_indicator;
 pub mod receive_packet;
 pub mod remote_at_command;
 pub mod remote_at_response;
@@ -38,6 +39,8 @@ pub mod frame_type {
     pub const RECEIVE_PACKET: u8 = 0x90;
     /// Explicit Rx Indicator.
     pub const EXPLICIT_RX_INDICATOR: u8 = 0x91;
+    /// Node Identification Indicator.
+    pub const NODE_IDENTIFICATION_INDICATOR: u8 = 0x95;
     /// Remote AT Command Response.
     pub const REMOTE_AT_RESPONSE: u8 = 0x97;
 }
@@ -47,6 +50,7 @@ use at_command_response::AtCommandResponseRepr;
 use explicit_addressing_command::ExplicitAddressingCommandRepr;
 use explicit_rx_indicator::ExplicitRxIndicatorRepr;
 use modem_status::ModemStatusRepr;
+use node_identification_indicator::NodeIdentificationIndicatorRepr;
 use receive_packet::ReceivePacketRepr;
 use remote_at_command::RemoteAtCommandRepr;
 use remote_at_response::RemoteAtResponseRepr;
@@ -121,6 +125,8 @@ pub enum Frame<'a> {
     RemoteAtCommand(RemoteAtCommandRepr<'a>),
     /// 0x97 Remote AT Command Response.
     RemoteAtResponse(RemoteAtResponseRepr<'a>),
+    /// 0x95 Node Identification Indicator.
+    NodeIdentificationIndicator(NodeIdentificationIndicatorRepr<'a>),
     /// A frame type this crate does not model, kept intact: [`Frame::parse`] yields it
     /// for every type byte that no other variant stands for.
     ///
@@ -170,6 +176,9 @@ impl<'a> Frame<'a> {
             frame_type::REMOTE_AT_RESPONSE => {
                 Self::RemoteAtResponse(RemoteAtResponseRepr::parse_bytes(data)?)
             }
+            frame_type::NODE_IDENTIFICATION_INDICATOR => Self::NodeIdentificationIndicator(
+                NodeIdentificationIndicatorRepr::parse_bytes(data)?,
+            ),
             other => Self::Unknown {
                 frame_type: other,
                 data: raw.body(),
@@ -195,6 +204,7 @@ impl<'a> Frame<'a> {
             Self::ExplicitRxIndicator(_) => frame_type::EXPLICIT_RX_INDICATOR,
             Self::RemoteAtCommand(_) => frame_type::REMOTE_AT_COMMAND,
             Self::RemoteAtResponse(_) => frame_type::REMOTE_AT_RESPONSE,
+            Self::NodeIdentificationIndicator(_) => frame_type::NODE_IDENTIFICATION_INDICATOR,
             Self::Unknown { frame_type, .. } => *frame_type,
         }
     }
@@ -235,6 +245,7 @@ impl<'a> Frame<'a> {
             Self::ReceivePacket(_)
             | Self::ModemStatus(_)
             | Self::ExplicitRxIndicator(_)
+            | Self::NodeIdentificationIndicator(_)
             | Self::Unknown { .. } => None,
         }
     }
@@ -253,6 +264,7 @@ impl EncodeFrame for Frame<'_> {
             Self::ExplicitRxIndicator(f) => f.frame_data_len(),
             Self::RemoteAtCommand(f) => f.frame_data_len(),
             Self::RemoteAtResponse(f) => f.frame_data_len(),
+            Self::NodeIdentificationIndicator(f) => f.frame_data_len(),
             Self::Unknown { data, .. } => 1 + data.len(),
         }
     }
@@ -269,6 +281,7 @@ impl EncodeFrame for Frame<'_> {
             Self::ExplicitRxIndicator(f) => f.write_frame_data(out),
             Self::RemoteAtCommand(f) => f.write_frame_data(out),
             Self::RemoteAtResponse(f) => f.write_frame_data(out),
+            Self::NodeIdentificationIndicator(f) => f.write_frame_data(out),
             Self::Unknown { frame_type, data } => {
                 out(&[*frame_type]);
                 out(data);
@@ -295,6 +308,7 @@ mod tests {
             (frame_type::EXPLICIT_RX_INDICATOR, 18),
             (frame_type::REMOTE_AT_COMMAND, 15),
             (frame_type::REMOTE_AT_RESPONSE, 15),
+            (frame_type::NODE_IDENTIFICATION_INDICATOR, 31),
         ];
         let zeros = [0u8; 32];
         for (t, needed) in types {
@@ -333,6 +347,7 @@ mod tests {
             (frame_type::MODEM_STATUS, 2, None),
             (frame_type::RECEIVE_PACKET, 12, None),
             (frame_type::EXPLICIT_RX_INDICATOR, 18, None),
+            (frame_type::NODE_IDENTIFICATION_INDICATOR, 31, None),
             // TX Status (0x89) and Route Record (0xA1) are not modelled.
             (0x89, 3, None),
             (0xA1, 13, None),
@@ -347,9 +362,8 @@ mod tests {
         }
         let mut seen = 0;
         for t in 0..=255u8 {
-            let data = [
-                t, 0x5A, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0,
-            ];
+            let mut data = [0u8; 31];
+            data[..2].copy_from_slice(&[t, 0x5A]);
             let frame = Frame::parse_bytes(&data).unwrap();
             // Every variant, checked by name so that a new one must be listed here.
             let expected = match frame {
@@ -363,6 +377,7 @@ mod tests {
                 Frame::ReceivePacket(_)
                 | Frame::ModemStatus(_)
                 | Frame::ExplicitRxIndicator(_)
+                | Frame::NodeIdentificationIndicator(_)
                 | Frame::Unknown { .. } => None,
             };
             if expected.is_some() {
