@@ -17,8 +17,8 @@ use xbee_api::frame::frame_type;
 use xbee_api::{
     Address16, Address64, ApiMode, AtCommandRepr, AtCommandResponseRepr,
     ExplicitAddressingCommandRepr, ExplicitRxIndicatorRepr, Frame, ModemStatusRepr,
-    ReceivePacketRepr, RemoteAtCommandRepr, RemoteAtResponseRepr, TransmitRequestRepr,
-    TransmitStatusRepr,
+    NodeIdentificationIndicatorRepr, NodeInfo, ReceivePacketRepr, RemoteAtCommandRepr,
+    RemoteAtResponseRepr, TransmitRequestRepr, TransmitStatusRepr,
 };
 
 /// Longest data field generated: every frame type then fits the default decoder in
@@ -111,6 +111,21 @@ enum FrameSpec {
         command: [u8; 2],
         status: u8,
         data: Vec<u8>,
+    },
+    NodeIdentificationIndicator {
+        src64: u64,
+        src16: u16,
+        options: u8,
+        addr16: u16,
+        addr64: u64,
+        identifier: Vec<u8>,
+        parent: u16,
+        device_type: u8,
+        event: u8,
+        profile_id: u16,
+        manufacturer_id: u16,
+        device_type_identifier: Option<u32>,
+        rssi: Option<u8>,
     },
     Unknown {
         frame_type: u8,
@@ -302,6 +317,45 @@ fn build_frame(spec: &FrameSpec) -> Option<Frame<'_>> {
             status: (*status).into(),
             data: clip(data),
         }),
+        S::NodeIdentificationIndicator {
+            src64,
+            src16,
+            options,
+            addr16,
+            addr64,
+            identifier,
+            parent,
+            device_type,
+            event,
+            profile_id,
+            manufacturer_id,
+            device_type_identifier,
+            rssi,
+        } => {
+            // The identifier ends at its first 0x00 on the wire: it holds none.
+            let identifier = clip(identifier);
+            let identifier = &identifier[..identifier
+                .iter()
+                .position(|&b| b == 0)
+                .unwrap_or(identifier.len())];
+            Frame::NodeIdentificationIndicator(NodeIdentificationIndicatorRepr {
+                src64: Address64(*src64),
+                src16: Address16(*src16),
+                options: *options,
+                node: NodeInfo {
+                    addr16: Address16(*addr16),
+                    addr64: Address64(*addr64),
+                    identifier,
+                    parent: Address16(*parent),
+                    device_type: (*device_type).into(),
+                    status: *event,
+                    profile_id: *profile_id,
+                    manufacturer_id: *manufacturer_id,
+                    device_type_identifier: *device_type_identifier,
+                    rssi: *rssi,
+                },
+            })
+        }
         S::Unknown { frame_type, data } => {
             if is_known(*frame_type) {
                 return None;
@@ -328,6 +382,7 @@ fn is_known(t: u8) -> bool {
         RECEIVE_PACKET,
         EXPLICIT_RX_INDICATOR,
         REMOTE_AT_RESPONSE,
+        NODE_IDENTIFICATION_INDICATOR,
     ]
     .contains(&t)
 }
