@@ -1053,7 +1053,9 @@ impl Driver {
     /// in the event queue (until the stream is dropped) so that the stream always ends
     /// with it.
     async fn close(&mut self, reason: String) {
-        // The transport is closed by now.
+        // The transport is closed by now; a `tcp-listen` port is freed before anyone
+        // waiting on the state hears of it.
+        self.connector.shutdown().await;
         self.state.send_replace(LinkState::Closed);
         // The stream ends with `LinkEvent::Closed`, which says why: the log only traces
         // it.

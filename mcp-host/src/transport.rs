@@ -231,7 +231,8 @@ const ACCEPT_RETRY: Duration = Duration::from_millis(100);
 struct Listen {
     slot: Arc<Slot>,
     local_addr: Option<SocketAddr>,
-    _accepting: AbortOnDropHandle<()>,
+    /// The task that owns the listener; `None` once [`Listen::shutdown`] ended it.
+    accepting: Option<AbortOnDropHandle<()>>,
 }
 
 /// The place of the peer that waits for its turn.
@@ -281,8 +282,20 @@ impl Listen {
         Listen {
             slot,
             local_addr,
-            _accepting: AbortOnDropHandle::new(task),
+            accepting: Some(AbortOnDropHandle::new(task)),
         }
+    }
+
+    /// Ends the accepting task and waits until it has dropped the listener, so that
+    /// the port is free when this returns (dropping a `Listen` only asks the task to
+    /// stop: on a multi-threaded runtime the socket may outlive it for a moment). The
+    /// peer waiting for its turn, if any, is let go.
+    async fn shutdown(&mut self) {
+        if let Some(task) = self.accepting.take() {
+            task.abort();
+            let _ = task.await;
+        }
+        self.slot.lock().take();
     }
 
     /// The next peer that is still there, and what it wrote while it waited.
@@ -462,6 +475,17 @@ impl Connector {
         }
     }
 
+    /// Lets go of what the connector holds, and waits until it has: a `tcp-listen`
+    /// link's port is free when this returns, and a peer waiting for its turn is let
+    /// go. Dropping the connector does the same, except that the port may stay bound a
+    /// moment longer on a multi-threaded runtime. Opening the connector again after
+    /// this fails.
+    pub async fn shutdown(&mut self) {
+        if let Kind::Listen(listen) = &mut self.kind {
+            listen.shutdown().await;
+        }
+    }
+
     /// Opens a transport once: opens the serial port, connects, accepts the next peer
     /// (waiting for one), or hands out the local side of the pseudo-terminal.
     pub async fn open(&mut self) -> Result<Transport, LinkError> {
@@ -525,6 +549,12 @@ impl Connector {
                 })
             }
             Kind::Listen(listen) => {
+                if listen.accepting.is_none() {
+                    return Err(LinkError::Listen {
+                        addr: self.link.to_string(),
+                        source: io::Error::other("the link was shut down"),
+                    });
+                }
                 let (stream, peer, early) = listen.next_peer().await;
                 let _ = stream.set_nodelay(true);
                 Ok(Transport {

@@ -348,3 +348,42 @@ async fn backoff_starts_again_only_after_a_connection_that_lasted() {
         );
     }
 }
+
+/// A `tcp-listen` port is free as soon as the link has closed or the network that
+/// listened on it has stopped, on a multi-threaded runtime too, and with a peer
+/// connected and one waiting: the same port is listened on again at once.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_listening_port_is_free_once_its_link_closed_or_its_network_stopped() {
+    use mcp_host::radio::{Network, NetworkConfig, NodeOptions};
+    use xbee_api::Address64;
+    let link: Link = "tcp-listen:127.0.0.1:0".parse().unwrap();
+    for round in 0..20 {
+        let (stream, sender) = mcp_host::connect(&link, LinkOptions::default())
+            .await
+            .unwrap();
+        let addr = stream.info().local_addr.unwrap();
+        let _peers = (
+            TcpStream::connect(addr).await.unwrap(),
+            TcpStream::connect(addr).await.unwrap(),
+        );
+        sender.close();
+        sender.closed().await;
+        let again = TcpListener::bind(addr).await;
+        assert!(again.is_ok(), "round {round}, link: {again:?}");
+        drop((again, stream));
+
+        let network = Network::new(NetworkConfig::default());
+        let node = network
+            .add_link(Address64::COORDINATOR, &link, NodeOptions::default())
+            .await
+            .unwrap();
+        let addr = node.local_addr.unwrap();
+        let _peers = (
+            TcpStream::connect(addr).await.unwrap(),
+            TcpStream::connect(addr).await.unwrap(),
+        );
+        network.stop().await;
+        let again = TcpListener::bind(addr).await;
+        assert!(again.is_ok(), "round {round}, network: {again:?}");
+    }
+}

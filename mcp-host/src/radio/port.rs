@@ -137,6 +137,13 @@ impl Source {
         }
     }
 
+    /// Lets go of the link's resources, waiting until they are (a port is free).
+    async fn shutdown(&mut self) {
+        if let Source::Link { connector, .. } = self {
+            connector.shutdown().await;
+        }
+    }
+
     /// Takes back a stream that ended.
     fn give_back(&mut self, stream: Stream) {
         if let (Source::Pty(port), Stream::Pty(io)) = (self, stream) {
@@ -150,19 +157,21 @@ pub(crate) async fn run(
     shutdown: tokio_util::sync::CancellationToken,
     state: Arc<Mutex<State>>,
     addr: Address64,
-    source: Source,
+    mut source: Source,
     out: mpsc::Receiver<Out>,
 ) {
     tokio::select! {
         () = shutdown.cancelled() => {}
-        () = run_node(state, addr, source, out) => {}
+        () = run_node(state, addr, &mut source, out) => {}
     }
+    // Before the network's stop returns: a `tcp-listen` port is free then.
+    source.shutdown().await;
 }
 
 async fn run_node(
     state: Arc<Mutex<State>>,
     addr: Address64,
-    mut source: Source,
+    source: &mut Source,
     mut out: mpsc::Receiver<Out>,
 ) {
     // A single stream is up from the start: the network marked the node connected
