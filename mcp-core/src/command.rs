@@ -37,8 +37,9 @@ pub enum Command<B> {
     Controllers(Controller),
     /// `c 04 size waypoints...` (table 9): set trajectory waypoints. To send one,
     /// write the packet with [`TrajectoryBuilder::command`](crate::TrajectoryBuilder::command)
-    /// (waypoint by waypoint into a buffer) and send those bytes as they are (in
-    /// mcp-host, `CommandSender::send_payload`), or parse them back into a `Command`.
+    /// (waypoint by waypoint into a buffer) and send those bytes as they are, or parse
+    /// them back into a `Command`; in mcp-host, `CommandSender::send_trajectory` takes
+    /// the waypoints.
     TrajectorySet(Waypoints<B>),
     /// Position slave set: spec form `c 05 addr[8]` (table 11) when `slot` is
     /// `None`, firmware form `c 05 slot addr[8]` when it is `Some`.

@@ -135,4 +135,9 @@ pub use trajectory::{MAX_WAYPOINTS, TrajectoryBuilder, Waypoint, WaypointIter, W
 /// Without fragmentation a Zigbee XBee carries at most 84 bytes in a unicast
 /// (`xbee_api::TransmitRequestRepr::MAX_UNICAST_DATA`), as the deployed MAV's radios
 /// do; a firmware that only talks to such radios can size its buffers by that.
+///
+/// The builders ([`TelemetryBuilder`], [`TrajectoryBuilder`]) stop at this limit. The
+/// parser and [`Packet::encode`] do not enforce it: a longer packet (read from a radio
+/// that carries more, or built by hand) parses and encodes, and it is up to the sender
+/// to keep to what its radios carry.
 pub const MAX_PAYLOAD: usize = 255;

@@ -47,6 +47,32 @@ impl Waypoint {
         field::WAYPOINTS.saturating_add(count.saturating_mul(waypoint::LEN))
     }
 
+    /// The waypoint its 16 wire bytes hold (little-endian `u32` time, then `f32`
+    /// elevator, aileron and altitude): the inverse of [`to_bytes`](Self::to_bytes),
+    /// for a firmware that keeps a trajectory as bytes.
+    ///
+    /// ```
+    /// use mcp_core::Waypoint;
+    /// let w = Waypoint { time: 1_763_683_301, elevator: 0.5, aileron: -0.25, altitude: 12.0 };
+    /// assert_eq!(Waypoint::from_bytes(w.to_bytes()), w);
+    /// let bytes = [7, 0, 0, 0, 0, 0, 0x80, 0x3F, 0, 0, 0, 0xC0, 0, 0, 0x40, 0x41];
+    /// assert_eq!(
+    ///     Waypoint::from_bytes(bytes),
+    ///     Waypoint { time: 7, elevator: 1.0, aileron: -2.0, altitude: 12.0 }
+    /// );
+    /// ```
+    pub fn from_bytes(bytes: [u8; waypoint::LEN]) -> Self {
+        // The four little-endian words, lowest first.
+        let n = u128::from_le_bytes(bytes);
+        let word = |i: u32| (n >> (32 * i)) as u32;
+        Waypoint {
+            time: word(0),
+            elevator: f32::from_bits(word(1)),
+            aileron: f32::from_bits(word(2)),
+            altitude: f32::from_bits(word(3)),
+        }
+    }
+
     /// The 16 wire bytes of the waypoint.
     pub fn to_bytes(&self) -> [u8; waypoint::LEN] {
         let mut out = [0; waypoint::LEN];

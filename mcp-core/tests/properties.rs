@@ -179,6 +179,17 @@ fn packet_like_bytes() -> impl Strategy<Value = Vec<u8>> {
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(2000))]
 
+    /// Any 16 bytes are a waypoint, and give back the same bytes (NaN payloads too).
+    #[test]
+    fn waypoint_bytes_round_trip(bytes in any::<[u8; 16]>()) {
+        let waypoint = mcp_core::Waypoint::from_bytes(bytes);
+        prop_assert_eq!(waypoint.to_bytes(), bytes);
+        let view = mcp_core::Waypoints::new_checked(&bytes[..]).unwrap();
+        let read = view.iter().next().unwrap();
+        prop_assert_eq!(read.to_bytes(), bytes);
+        prop_assert_eq!(read.time, waypoint.time);
+    }
+
     #[test]
     fn encode_then_parse_gives_the_value_back(p in packet()) {
         let bytes = encode(&p);

@@ -226,8 +226,12 @@ impl<const N: usize> Decoder<N> {
     /// `const`, so a decoder can be a `static`. A new decoder in mode 1 is all zeros: a
     /// `static` one goes to `.bss` and takes no flash. In mode 2 its mode byte is not
     /// zero, so a `static` one also takes its size in flash, as the initial image of
-    /// `.data`; one initialised at start-up (on `main`'s stack, or in a
-    /// `static_cell::StaticCell`) does not.
+    /// `.data`, and so does everything that shares its `static` (a
+    /// `Mutex<RefCell<(Decoder, Queue)>>`, or an `Option<Decoder>` set to `None`, whose
+    /// tag is not zero either). To keep that flash, give the decoder a `static` of its
+    /// own, and for mode 2 put it where it is initialised at start-up: on `main`'s
+    /// stack, or in a `static_cell::StaticCell` whose `&'static mut` the interrupt
+    /// handler gets once.
     pub const fn new(mode: ApiMode) -> Self {
         const { assert!(N >= 8, "Decoder capacity N must be at least 8") };
         Self {
