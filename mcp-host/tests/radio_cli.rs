@@ -429,3 +429,36 @@ fn a_serial_link_that_is_not_there_fails_at_once() {
         assert!(err.contains(expected), "{err}");
     }
 }
+
+#[test]
+fn the_librarys_warnings_read_as_the_commands_own_lines() {
+    // A coordinator link to a port nobody listens on: the network keeps trying, and
+    // says so in one plain line, with the error after a colon and the node named.
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let link = format!("tcp:127.0.0.1:{port}");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args(["sim", "--link", &link, "--duration", "30"])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let lines = common::stderr_lines(&mut child);
+    let line = loop {
+        let line = lines.recv_timeout(GUARD).expect("a warning");
+        if line.contains("node link not available yet") {
+            break line;
+        }
+    };
+    let _ = child.kill();
+    let _ = child.wait();
+    assert!(
+        line.starts_with("mcp-gs: node link not available yet: cannot connect to ")
+            && line.ends_with(" (node 0000000000000000)")
+            && !line.contains('='),
+        "{line}"
+    );
+}

@@ -504,8 +504,8 @@ fn link_hint(error: &LinkError, link: &Link) -> Option<String> {
             _ => not_a_serial_port(&source.description, link),
         },
         LinkError::Connect { source, .. } if source.kind() == Io::ConnectionRefused => Some(
-            "nothing listens there: is the radio bridge, `mcp-gs hub` or `mcp-gs sim` running \
-             (a hub whose radio is disconnected refuses connections)?"
+            "nothing listens there: is the radio bridge, `mcp-gs hub` or `mcp-gs sim` \
+             running? A hub whose radio is disconnected refuses connections"
                 .into(),
         ),
         _ => None,

@@ -1,10 +1,12 @@
 //! What the library logs, on standard error: by default its warnings, each a line
-//! `mcp-gs: MESSAGE key=value...` like the command's own messages; with `MCP_LOG` set
+//! `mcp-gs: MESSAGE: ERROR (key value, ...)` like the command's own messages; with
+//! `MCP_LOG` set
 //! (`MCP_LOG=debug`, `MCP_LOG=mcp_host::hub=info`), every event it selects, with the
 //! time, the level and where it comes from, for a bug report.
 
 use std::fmt;
 
+use tracing::field::{Field, Visit};
 use tracing::{Event, Level, Subscriber};
 use tracing_subscriber::fmt::format::Writer;
 use tracing_subscriber::fmt::{FmtContext, FormatEvent, FormatFields};
@@ -27,8 +29,49 @@ pub(crate) fn init() {
 }
 
 /// An event as one of the command's own lines: `mcp-gs: `, `error: ` for an error, then
-/// the message and its fields.
+/// the message, its `error` field after a colon, and any other fields in parentheses.
 struct Plain;
+
+/// The fields of an event, as [`Plain`] writes them.
+#[derive(Default)]
+struct Line {
+    message: String,
+    error: Option<String>,
+    others: Vec<String>,
+}
+
+impl Visit for Line {
+    fn record_str(&mut self, field: &Field, value: &str) {
+        self.record(field, value.to_owned());
+    }
+
+    fn record_debug(&mut self, field: &Field, value: &dyn fmt::Debug) {
+        self.record(field, format!("{value:?}"));
+    }
+}
+
+impl Line {
+    fn record(&mut self, field: &Field, value: String) {
+        match field.name() {
+            "message" => self.message = value,
+            "error" => self.error = Some(value),
+            name => self.others.push(format!("{} {value}", name.replace('_', " "))),
+        }
+    }
+}
+
+impl fmt::Display for Line {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.message)?;
+        if let Some(error) = &self.error {
+            write!(f, ": {error}")?;
+        }
+        if !self.others.is_empty() {
+            write!(f, " ({})", self.others.join(", "))?;
+        }
+        Ok(())
+    }
+}
 
 impl<S, N> FormatEvent<S, N> for Plain
 where
@@ -45,7 +88,9 @@ where
         if *event.metadata().level() == Level::ERROR {
             writer.write_str("error: ")?;
         }
-        ctx.field_format().format_fields(writer.by_ref(), event)?;
-        writeln!(writer)
+        let _ = ctx;
+        let mut line = Line::default();
+        event.record(&mut line);
+        writeln!(writer, "{line}")
     }
 }
