@@ -300,7 +300,7 @@ fn a_refused_connection_hints_at_a_hub_without_its_radio() {
     assert_eq!(output.status.code(), Some(3), "{stderr}");
     assert!(stderr.contains("nothing listens there"), "{stderr}");
     assert!(
-        stderr.contains("a hub whose radio is disconnected refuses connections"),
+        stderr.contains("running? A hub whose radio is disconnected refuses connections"),
         "{stderr}"
     );
 }

@@ -55,7 +55,9 @@ impl Line {
         match field.name() {
             "message" => self.message = value,
             "error" => self.error = Some(value),
-            name => self.others.push(format!("{} {value}", name.replace('_', " "))),
+            name => self
+                .others
+                .push(format!("{} {value}", name.replace('_', " "))),
         }
     }
 }
