@@ -55,11 +55,11 @@
 //!
 //! // Ask the landing state and wait for the MAV's report.
 //! let report = sender.request(mav, StatusRequest::Landing).await?;
-//! println!("{report:?}");
+//! println!("{report}");
 //!
 //! while let Some(event) = stream.next().await {
 //!     match event {
-//!         Event::Packet(rx) => println!("{} {:?}", rx.origin.src64, rx.packet),
+//!         Event::Packet(rx) => println!("{} {}", rx.origin.src64, rx.packet.as_borrowed()),
 //!         other => println!("{other:?}"),
 //!     }
 //! }

@@ -294,7 +294,9 @@ impl Simulator {
 
     /// The network settings a simulator should use unless it emulates something else:
     /// defaults, with unicast payloads up to 255 bytes (fragmentation), since MCP packets
-    /// (telemetry of many ids, trajectories) go up to 255 bytes.
+    /// (telemetry of many ids, trajectories) go up to 255 bytes. Its fault `seed` is 0,
+    /// so faults set on it fall the same way every run; set a seed from the clock (as
+    /// `mcp-gs sim` does) for runs that differ.
     pub fn network_config() -> NetworkConfig {
         NetworkConfig {
             max_unicast: crate::radio::MAX_UNICAST_FRAGMENTED,
