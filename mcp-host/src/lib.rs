@@ -147,7 +147,15 @@ pub async fn connect(
     let transport = match link {
         // Their first peer may come at any time: announced by `LinkEvent::Connected`.
         Link::TcpListen { .. } | Link::Pty => None,
-        _ => Some(connector.open().await?),
+        _ => match connector.open().await {
+            Ok(transport) => Some(transport),
+            // Opened in the background, announced the same way.
+            Err(e) if options.wait_for_link && e.is_retryable() => {
+                tracing::info!(error = %e, "link not there yet: waiting for it");
+                None
+            }
+            Err(e) => return Err(e.into()),
+        },
     };
     let info = Arc::new(LinkInfo {
         link: link.clone(),

@@ -94,6 +94,17 @@ pub struct LinkOptions {
     pub send_timeout: Duration,
     /// Reconnection after the transport goes away.
     pub reconnect: ReconnectPolicy,
+    /// `serial` and `tcp` links: when the first open fails in a way a later try may
+    /// fix (the device is not plugged in yet, nothing listens yet),
+    /// [`connect`](crate::connect) returns anyway, in
+    /// [`LinkState::Connecting`](crate::LinkState::Connecting), and the link is opened
+    /// in the background under [`reconnect`](Self::reconnect)'s delays;
+    /// [`LinkEvent::Connected`](crate::LinkEvent::Connected) says when it is up, and
+    /// requests fail at once until then. With reconnection disabled there is one more
+    /// try, in the background, and the link closes if it fails. Default `false`:
+    /// `connect` fails at once. (`tcp-listen` and `pty` links always wait for their
+    /// first peer.)
+    pub wait_for_link: bool,
     /// API mode 1 only: a partial frame that gets no new byte for this long is dropped
     /// (an [`crate::Event::DecodeError`], truncated) and the bytes after its start
     /// delimiter are scanned again. In mode 1 a 0x7E in noise or in the tail of a frame
@@ -117,6 +128,7 @@ impl Default for LinkOptions {
             connect_timeout: DEFAULT_CONNECT_TIMEOUT,
             send_timeout: DEFAULT_SEND_TIMEOUT,
             reconnect: ReconnectPolicy::default(),
+            wait_for_link: false,
             partial_frame_timeout: Some(DEFAULT_PARTIAL_FRAME_TIMEOUT),
             event_capacity: 1024,
         }

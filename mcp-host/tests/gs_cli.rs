@@ -1071,3 +1071,46 @@ fn a_negative_number_gets_the_options_own_message() {
         assert!(stderr.contains(expected), "{args:?}: {stderr}");
     }
 }
+
+#[test]
+fn monitor_waits_for_a_link_that_is_not_there_yet() {
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let link = format!("tcp:127.0.0.1:{port}");
+    // Without --wait: nothing listens, exit 3 at once.
+    assert_eq!(
+        run(&["monitor", "--link", &link, "--count", "1"])
+            .status
+            .code(),
+        Some(3)
+    );
+    let mut child = gs()
+        .args(["monitor", "--link", &link, "--count", "1", "--wait"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let errors = common::stderr_lines(&mut child);
+    let waiting = format!("mcp-gs: {link} is not there yet: waiting for it");
+    while errors
+        .recv_timeout(std::time::Duration::from_secs(30))
+        .expect("the waiting line")
+        != waiting
+    {}
+    // The radio comes: its modem status is the one item counted.
+    let listener = std::net::TcpListener::bind(("127.0.0.1", port)).unwrap();
+    let (mut radio, _) = listener.accept().unwrap();
+    radio
+        .write_all(&[0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F])
+        .unwrap();
+    let output = child.wait_with_output().unwrap();
+    assert_eq!(output.status.code(), Some(0));
+    let out = stdout(&output);
+    assert!(
+        out.contains("link connected") && out.contains("modem status coordinator_started"),
+        "{out}"
+    );
+}

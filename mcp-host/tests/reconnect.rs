@@ -595,3 +595,40 @@ async fn malformed_frames_from_a_peer_are_not_warnings() {
     let text = logs.text();
     assert!(text.is_empty(), "{text}");
 }
+
+#[tokio::test]
+async fn wait_for_link_connects_once_the_peer_is_there() {
+    // A port nobody listens on yet.
+    let port = TcpListener::bind("127.0.0.1:0")
+        .await
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let link: mcp_host::Link = format!("tcp:127.0.0.1:{port}").parse().unwrap();
+    // Without the option, connect fails at once.
+    assert!(
+        mcp_host::connect(&link, options(ApiMode::Escaped, true))
+            .await
+            .is_err()
+    );
+    let waiting = LinkOptions {
+        wait_for_link: true,
+        ..options(ApiMode::Escaped, true)
+    };
+    let (mut stream, sender) = mcp_host::connect(&link, waiting).await.unwrap();
+    assert_eq!(sender.link_state(), LinkState::Connecting);
+    // Meanwhile requests fail at once, saying why.
+    let err = sender.send(MAV, &Command::time(1)).await.unwrap_err();
+    assert!(err.to_string().contains("not connected yet"), "{err}");
+
+    let listener = TcpListener::bind(("127.0.0.1", port)).await.unwrap();
+    let mut fake = accept(&listener, ApiMode::Escaped).await;
+    assert!(matches!(
+        next_link_event(&mut stream).await,
+        LinkEvent::Connected { .. }
+    ));
+    assert_eq!(sender.link_state(), LinkState::Connected);
+    fake.receive(MAV, &time_report(7)).await;
+    expect_time_report(&mut stream, 7).await;
+}

@@ -102,6 +102,17 @@ impl LinkArgs {
         &self,
         reconnect: bool,
     ) -> Result<(PacketStream, CommandSender), Failure> {
+        self.open_with(reconnect, false).await
+    }
+
+    /// [`open`](Self::open); with `wait`, a `serial` or `tcp` link that is not there
+    /// yet is waited for (in the background, with the reconnection delays) instead of
+    /// failing.
+    pub(crate) async fn open_with(
+        &self,
+        reconnect: bool,
+        wait: bool,
+    ) -> Result<(PacketStream, CommandSender), Failure> {
         if !reconnect && matches!(self.link, Link::Pty) {
             return Err(Failure::input(
                 "--link pty makes a new pseudo-terminal, with no radio on it yet: this \
@@ -110,10 +121,18 @@ impl LinkArgs {
                  a peer to connect",
             ));
         }
-        let options = self.options(reconnect).await?;
+        let options = LinkOptions {
+            wait_for_link: wait,
+            ..self.options(reconnect).await?
+        };
         let (mut stream, sender) = mcp_host::connect(&self.link, options)
             .await
             .map_err(|e| connect_failure(&self.link, e))?;
+        if sender.link_state() == mcp_host::LinkState::Connecting
+            && matches!(self.link, Link::Serial { .. } | Link::Tcp { .. })
+        {
+            eprintln!("mcp-gs: {} is not there yet: waiting for it", self.link);
+        }
         if !reconnect {
             if let Some(addr) = stream.info().local_addr {
                 // A one-shot subcommand on `tcp-listen:` waits for its peer first.

@@ -31,6 +31,11 @@ pub(crate) struct MonitorArgs {
     /// Overwrite the `--record` file if it exists.
     #[arg(long, requires = "record")]
     force: bool,
+    /// Wait for a link that is not there yet (a radio not plugged in, a simulator or
+    /// hub not started) instead of failing at once; once up, it is reconnected as
+    /// always.
+    #[arg(long)]
+    wait: bool,
     /// Stop after this many received items, 1 or more: packets, other frames and frames
     /// that failed to decode. Link events (connected, reconnecting) are printed but not
     /// counted. Default: run until the link closes or Ctrl-C.
@@ -65,7 +70,7 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
             return Err(exists(path));
         }
     }
-    let (mut stream, sender) = args.link.open(true).await?;
+    let (mut stream, sender) = args.link.open_with(true, args.wait).await?;
     let mut ctrl_c = std::pin::pin!(crate::interrupt::ctrl_c());
     let mut recorder = match &args.record {
         Some(path) => Some(create_recording(path, args.force)?),
