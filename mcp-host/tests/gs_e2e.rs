@@ -337,6 +337,37 @@ fn monitor_in_the_wrong_api_mode_says_so_over_tcp() {
 }
 
 #[test]
+fn a_status_request_the_radio_never_answers_points_at_the_api_mode() {
+    // The simulator's radio in API mode 1; the request goes out escaped (mode 2), so
+    // the radio reads no frame in it and never confirms delivery, while its modem
+    // status (nothing to escape) came through.
+    let sim = Sim::start("tcp-listen:127.0.0.1:0");
+    let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args([
+            "status",
+            "--link",
+            &sim.link,
+            "--timeout",
+            "1",
+            "--api-mode",
+            "2",
+        ])
+        .args(["--to", MAV, "landing"])
+        .output()
+        .expect("run mcp-gs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(4), "{stderr}");
+    assert!(
+        stderr.contains("the radio did not confirm delivery"),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains("if the radio is not in API mode 2 (AP=2)"),
+        "{stderr}"
+    );
+}
+
+#[test]
 fn api_mode_detection_over_a_serial_port() {
     // A serial port is opened for exclusive use: the link that asks the radio its mode
     // must have let go of the port before the link in that mode opens it.

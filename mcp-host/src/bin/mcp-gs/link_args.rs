@@ -414,17 +414,28 @@ pub(crate) fn diagnosed(failure: Failure, link: &LinkArgs, stats: &Stats) -> Fai
     }
 }
 
-/// A request's failure (no answer to its frame id: not even the local radio's status),
-/// with the [`timeout_hint`], or, when other frames from the radio came through, a
-/// pointer to the API mode: a frame with a byte to escape passes in one mode only.
+/// A request's failure, [`diagnosed_unanswered`] when no answer to its frame id came
+/// (not even the local radio's status), else [`diagnosed`].
 pub(crate) fn diagnosed_send(error: SendError, link: &LinkArgs, stats: &Stats) -> Failure {
     let unanswered = matches!(error, SendError::Timeout { .. });
     let failure = send_failure(error);
+    if unanswered {
+        diagnosed_unanswered(failure, link, stats)
+    } else {
+        diagnosed(failure, link, stats)
+    }
+}
+
+/// A timeout of a frame the local radio never answered (no transmit status, no
+/// response), with the [`timeout_hint`], or, when other frames from the radio came
+/// through, a pointer to the API mode: a frame with a byte to escape passes in one mode
+/// only.
+pub(crate) fn diagnosed_unanswered(failure: Failure, link: &LinkArgs, stats: &Stats) -> Failure {
     if failure.code() != Failure::TIMEOUT {
         return failure;
     }
     let mode_hint = || match link.api_mode {
-        ApiModeChoice::Fixed(mode) if unanswered && stats.frames > 0 => Some(format!(
+        ApiModeChoice::Fixed(mode) if stats.frames > 0 => Some(format!(
             "hint: other frames came from the radio, but no answer to this one: if the \
              radio is not in API mode {} (AP={}), only frames with no byte to escape get \
              through; `mcp-gs at --link {} --api-mode auto AP` reads its mode",

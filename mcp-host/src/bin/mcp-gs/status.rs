@@ -6,7 +6,7 @@ use mcp_host::RequestError;
 use xbee_api::Address64;
 
 use crate::command::status_request;
-use crate::link_args::{LinkArgs, diagnosed, send_failure};
+use crate::link_args::{LinkArgs, diagnosed, diagnosed_unanswered, send_failure};
 use crate::{Failure, Format};
 
 /// Arguments of `status`.
@@ -44,6 +44,14 @@ pub(crate) async fn run(args: StatusArgs) -> Result<(), Failure> {
         .request_with(args.to, request, Some(args.link.timeout()))
         .await;
     let unreadable = sender.stats().decode_errors();
+    // The local radio never confirmed delivery: as for a send nobody answered.
+    let unanswered = matches!(
+        report,
+        Err(RequestError::Timeout {
+            delivered: false,
+            ..
+        })
+    );
     let report = report
         .map_err(|e| match e {
             RequestError::Send(e) => send_failure(e),
@@ -66,7 +74,13 @@ pub(crate) async fn run(args: StatusArgs) -> Result<(), Failure> {
             }
             other => Failure::new(Failure::OTHER, other.to_string()),
         })
-        .map_err(|failure| diagnosed(failure, &args.link, &sender.stats()))?;
+        .map_err(|failure| {
+            if unanswered {
+                diagnosed_unanswered(failure, &args.link, &sender.stats())
+            } else {
+                diagnosed(failure, &args.link, &sender.stats())
+            }
+        })?;
     let received_at = std::time::SystemTime::now();
     let packet = Packet::Report(report);
     match args.format {
