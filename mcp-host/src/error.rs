@@ -82,8 +82,9 @@ pub enum SendError {
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[non_exhaustive]
 pub enum RequestError {
-    /// Sending the request failed (delivery failure, disconnection, ...).
-    #[error("status request not delivered: {0}")]
+    /// Sending the request failed (delivery failure, disconnection, ...). A link that
+    /// went down while the request was in flight may have delivered it first.
+    #[error("status request failed: {0}")]
     Send(#[from] SendError),
     /// The request was delivered (or no status came) but no matching report arrived in
     /// time.
