@@ -30,7 +30,7 @@ impl Running {
     }
 
     /// The next line satisfying `f`.
-    fn line(&self, f: impl Fn(&str) -> bool) -> String {
+    fn line(&self, mut f: impl FnMut(&str) -> bool) -> String {
         loop {
             let line = self.lines.recv_timeout(GUARD).expect("a line in time");
             if f(&line) {
@@ -461,4 +461,24 @@ fn the_librarys_warnings_read_as_the_commands_own_lines() {
             && !line.contains('='),
         "{line}"
     );
+}
+
+#[test]
+fn the_seed_is_printed_when_there_are_faults_to_replay() {
+    for (faults, seeded) in [(&[][..], false), (&["--loss", "0.1"][..], true)] {
+        let mut args = vec!["radio", "--coordinator", "tcp-listen:127.0.0.1:0"];
+        args.extend_from_slice(faults);
+        args.extend_from_slice(&["--duration", "30"]);
+        let radio = Running::start(&args);
+        let mut before = Vec::new();
+        let listening = radio.line(|l| {
+            before.push(l.to_owned());
+            l.starts_with("coordinator ") && l.contains("listening on ")
+        });
+        assert_eq!(
+            before.iter().any(|l| l.starts_with("seed ")),
+            seeded,
+            "{faults:?}: {before:?} then {listening}"
+        );
+    }
 }

@@ -50,7 +50,8 @@ back), pty (the path to open is printed). A link's API mode is given after an @ 
 Faults apply to the frames the network writes to a link: --loss, --latency, --jitter, \
 --duplicate, --reorder and --corrupt for every link, --faults ADDR=SPEC for one (SPEC: \
 comma-separated loss=P, latency=MS, jitter=MS, duplicate=P, reorder=P, corrupt=P; ADDR \
-`coordinator` or a 64-bit address). The seed is printed at start; --seed replays a run. \
+`coordinator` or a 64-bit address). The seed is printed at start when there are faults; \
+--seed replays a run. \
 --cut ADDR@START+LENGTH takes a node out of range for a while (its transmissions and the \
 ones to it fail with 0x21 network ACK failure).
 
@@ -203,9 +204,11 @@ impl NetArgs {
             .map(|f| f.faults)
     }
 
-    /// Prints the seed and the faults.
+    /// Prints the faults, and the seed they are drawn with (when there are any).
     pub(crate) fn describe(&self, config: &NetworkConfig) {
-        out!("seed {} (replay with --seed {})", config.seed, config.seed);
+        if self.seed.is_some() || !config.faults.is_none() || !self.link_faults.is_empty() {
+            out!("seed {} (replay with --seed {})", config.seed, config.seed);
+        }
         out!(
             "unicast payloads up to {} bytes, broadcast up to {}",
             config.max_unicast,
