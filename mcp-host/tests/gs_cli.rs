@@ -1114,3 +1114,16 @@ fn monitor_waits_for_a_link_that_is_not_there_yet() {
         "{out}"
     );
 }
+
+#[test]
+fn a_missing_on_or_off_is_named_so() {
+    for args in [
+        &["encode", "--to", "0013a20040b599b9", "landing"][..],
+        &["encode", "--to", "0013a20040b599b9", "telemetry"][..],
+    ] {
+        let output = run(args);
+        assert_eq!(output.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&output.stderr);
+        assert!(err.contains("<on|off>"), "{args:?}: {err}");
+    }
+}

@@ -227,7 +227,7 @@ pub(crate) enum CommandArgs {
     /// (e.g. `telemetry on altitude`, `telemetry off 0x11`).
     Telemetry {
         /// on or off.
-        #[arg(ignore_case = true)]
+        #[arg(ignore_case = true, value_name = "on|off")]
         state: OnOff,
         /// Telemetry id: a name (e.g. `estimated_altitude`) or a number (0-255).
         #[arg(value_parser = parse_telemetry_id)]
@@ -236,7 +236,7 @@ pub(crate) enum CommandArgs {
     /// Landing: turn autonomous landing on or off.
     Landing {
         /// on or off.
-        #[arg(ignore_case = true)]
+        #[arg(ignore_case = true, value_name = "on|off")]
         state: OnOff,
     },
     /// Controllers: switch the active controller (`manual`, `altitude`, `mpc` or a number).
