@@ -10,7 +10,7 @@ use std::time::{Duration, SystemTime};
 use bytes::{Bytes, BytesMut};
 use futures::StreamExt;
 use tokio::io::AsyncWriteExt;
-use tokio::sync::{Notify, mpsc, oneshot, watch};
+use tokio::sync::{Notify, broadcast, mpsc, oneshot, watch};
 use tokio::time::Instant;
 use tokio_util::codec::FramedRead;
 use xbee_api::{Address64, EncodeFrame};
@@ -262,6 +262,8 @@ pub(crate) struct Driver {
     /// Requests that need no frame id (raw writes, transmits without status).
     pub(crate) writes: mpsc::Receiver<Op>,
     pub(crate) events: mpsc::Sender<Event>,
+    /// The [`Subscription`](crate::Subscription)s' channel: every event goes there too.
+    subscribers: broadcast::Sender<Event>,
     pub(crate) counters: Arc<Counters>,
     /// Notified by [`CommandSender::close`](crate::CommandSender::close).
     close_requested: Arc<Notify>,
@@ -299,7 +301,7 @@ impl Driver {
         options: LinkOptions,
         // Requests that need a frame id, and those that need none.
         (ops, writes): (mpsc::Receiver<Op>, mpsc::Receiver<Op>),
-        events: mpsc::Sender<Event>,
+        (events, subscribers): (mpsc::Sender<Event>, broadcast::Sender<Event>),
         counters: Arc<Counters>,
         close_requested: Arc<Notify>,
         state: watch::Sender<LinkState>,
@@ -310,6 +312,7 @@ impl Driver {
             ops,
             writes,
             events,
+            subscribers,
             counters,
             close_requested,
             state,
@@ -566,6 +569,7 @@ impl Driver {
     /// and delivered once there is room; any other event is dropped and counted (as is
     /// every event while link events are held back, so that none overtakes them).
     fn emit(&mut self, event: Event) {
+        self.publish(&event);
         let event = if self.pending_links.is_empty() {
             match self.events.try_send(event) {
                 Ok(()) | Err(mpsc::error::TrySendError::Closed(_)) => return,
@@ -583,6 +587,13 @@ impl Driver {
         } else {
             bump(&self.counters.events_dropped);
             tracing::debug!(?event, "event queue full, event dropped");
+        }
+    }
+
+    /// Hands `event` to the subscriptions, if there are any.
+    fn publish(&self, event: &Event) {
+        if self.subscribers.receiver_count() > 0 {
+            let _ = self.subscribers.send(event.clone());
         }
     }
 
@@ -1070,11 +1081,13 @@ impl Driver {
         while let Ok(op) = self.ops.try_recv().or_else(|_| self.writes.try_recv()) {
             refuse_closed(op);
         }
+        // The subscriptions end with it now, whether the stream is read or not: their
+        // channel's only sender goes.
+        let closed = Event::Link(LinkEvent::Closed { reason });
+        self.publish(&closed);
+        self.subscribers = broadcast::channel(1).0;
         let held = std::mem::take(&mut self.pending_links);
-        for event in held
-            .into_iter()
-            .chain([Event::Link(LinkEvent::Closed { reason })])
-        {
+        for event in held.into_iter().chain([closed]) {
             if self.events.send(event).await.is_err() {
                 return;
             }

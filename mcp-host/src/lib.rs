@@ -87,6 +87,7 @@ pub mod render;
 mod sender;
 pub mod sim;
 mod stats;
+mod subscription;
 pub mod transport;
 
 use std::net::SocketAddr;
@@ -106,6 +107,7 @@ pub use link::{Link, LinkParseError};
 pub use options::{LinkOptions, ReconnectPolicy};
 pub use sender::{CommandSender, DeliveryReport, FrameId, SendOptions};
 pub use stats::Stats;
+pub use subscription::Subscription;
 pub use transport::{Connector, LinkError, Transport};
 
 /// Capacity of the queue of requests from senders to the background task.
@@ -166,6 +168,9 @@ pub async fn connect(
     let (ops_tx, ops_rx) = mpsc::channel(OPS_CAPACITY);
     let (writes_tx, writes_rx) = mpsc::channel(OPS_CAPACITY);
     let (events_tx, events_rx) = mpsc::channel(options.event_capacity);
+    // For the subscriptions: the driver holds the only strong sender, so that they end
+    // with it.
+    let (subscribers, _) = tokio::sync::broadcast::channel(options.event_capacity);
     let close_requested = Arc::new(tokio::sync::Notify::new());
     // Connected already when the transport is open: `link_state` right after `connect`
     // says so.
@@ -182,12 +187,13 @@ pub async fn connect(
         info: info.clone(),
         close_requested: close_requested.clone(),
         state: state.clone(),
+        subscribers: subscribers.downgrade(),
     };
     let driver = driver::Driver::new(
         connector,
         options,
         (ops_rx, writes_rx),
-        events_tx,
+        (events_tx, subscribers),
         counters.clone(),
         close_requested,
         state_tx,
@@ -211,6 +217,9 @@ pub async fn connect(
 /// frames are dropped and counted ([`Stats::events_dropped`]); link events are held back
 /// and delivered first once there is room (up to 64 of them), so the link's state is
 /// never lost and the stream always ends with [`LinkEvent::Closed`].
+///
+/// It has one reader; other tasks read the same events through
+/// [`CommandSender::subscribe`].
 #[derive(Debug)]
 pub struct PacketStream {
     events: mpsc::Receiver<Event>,

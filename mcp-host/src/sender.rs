@@ -83,6 +83,8 @@ pub struct CommandSender {
     pub(crate) info: Arc<LinkInfo>,
     pub(crate) close_requested: Arc<Notify>,
     pub(crate) state: watch::Receiver<LinkState>,
+    /// Where [`subscribe`](Self::subscribe) takes its receivers; gone with the link.
+    pub(crate) subscribers: tokio::sync::broadcast::WeakSender<crate::Event>,
 }
 
 impl CommandSender {
@@ -546,6 +548,13 @@ impl CommandSender {
     /// ```
     pub fn watch_link_state(&self) -> watch::Receiver<LinkState> {
         self.state.clone()
+    }
+
+    /// Every event of the link from now on, for another reader than the one of the
+    /// [`PacketStream`](crate::PacketStream): see [`Subscription`](crate::Subscription).
+    /// Taken from a link that has ended, it ends at once.
+    pub fn subscribe(&self) -> crate::Subscription {
+        crate::Subscription::new(self.subscribers.upgrade().map(|tx| tx.subscribe()))
     }
 
     /// Waits until the link has ended for good ([`LinkState::Closed`]: after

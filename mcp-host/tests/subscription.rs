@@ -1,0 +1,106 @@
+//! More readers of one link: subscriptions get every event beside the stream, each at
+//! its own pace, and end with the link. Over a real pseudo-terminal, a fake radio on
+//! its far end.
+
+mod common;
+
+use common::*;
+use futures::StreamExt;
+use mcp_core::{Packet, Report};
+use mcp_host::{Event, LinkEvent, LinkOptions, Subscription};
+use xbee_api::ApiMode;
+
+fn time_report(t: u32) -> Vec<u8> {
+    mcp(&Packet::<&[u8]>::Report(Report::Time(t)))
+}
+
+/// The next event of a subscription, within the guard time.
+async fn next(subscription: &mut Subscription) -> Option<Event> {
+    tokio::time::timeout(GUARD, subscription.next())
+        .await
+        .expect("no event in time")
+}
+
+/// The payloads of the packets among `events`.
+fn payloads(events: &[Event]) -> Vec<Vec<u8>> {
+    events
+        .iter()
+        .filter_map(|e| match e {
+            Event::Packet(rx) => Some(rx.payload.to_vec()),
+            _ => None,
+        })
+        .collect()
+}
+
+#[tokio::test]
+async fn every_reader_gets_every_event_in_order_and_ends_with_the_link() {
+    let (mut stream, sender, mut fake) = pty_link(ApiMode::Escaped).await;
+    let (mut ui, mut log) = (sender.subscribe(), sender.subscribe());
+    let sent: Vec<Vec<u8>> = (1..=5).map(time_report).collect();
+    for payload in &sent {
+        fake.receive(MAV, payload).await;
+    }
+    let mut from_stream = Vec::new();
+    for _ in &sent {
+        from_stream.push(next_packet(&mut stream).await.payload.to_vec());
+    }
+    assert_eq!(from_stream, sent);
+    for subscription in [&mut ui, &mut log] {
+        let mut events = Vec::new();
+        while events.len() < sent.len() {
+            events.push(next(subscription).await.expect("an event"));
+        }
+        assert_eq!(payloads(&events), sent);
+        assert_eq!(subscription.missed(), 0);
+    }
+
+    // The link ends: each subscription's last event says so, then it ends, while the
+    // stream is not read.
+    sender.close();
+    for subscription in [&mut ui, &mut log] {
+        assert!(matches!(
+            next(subscription).await,
+            Some(Event::Link(LinkEvent::Closed { .. }))
+        ));
+        assert!(next(subscription).await.is_none());
+    }
+    // One taken afterwards ends at once.
+    sender.closed().await;
+    assert!(next(&mut sender.subscribe()).await.is_none());
+    drop(stream);
+}
+
+#[tokio::test]
+async fn a_reader_that_falls_behind_misses_the_oldest_and_holds_up_nobody() {
+    let (mut stream, sender, mut fake) = pty_link_with(LinkOptions {
+        api_mode: ApiMode::Escaped,
+        event_capacity: 4,
+        ..LinkOptions::default()
+    })
+    .await;
+    let mut slow = sender.subscribe();
+    let mut fast = sender.subscribe();
+    let sent: Vec<Vec<u8>> = (1..=10).map(time_report).collect();
+    let mut fast_got = Vec::new();
+    for payload in &sent {
+        fake.receive(MAV, payload).await;
+        // The stream and the fast reader keep up; the slow one reads nothing yet.
+        assert_eq!(&next_packet(&mut stream).await.payload[..], &payload[..]);
+        fast_got.push(next(&mut fast).await.expect("an event"));
+    }
+    assert_eq!(payloads(&fast_got), sent);
+    assert_eq!(fast.missed(), 0);
+    // The slow reader gets the newest 4 and counts the 6 it missed.
+    let mut slow_got = Vec::new();
+    while slow_got.len() < 4 {
+        slow_got.push(next(&mut slow).await.expect("an event"));
+    }
+    assert_eq!(payloads(&slow_got), sent[6..]);
+    assert_eq!(slow.missed(), 6);
+    // And goes on with what comes next.
+    fake.receive(MAV, &time_report(11)).await;
+    assert_eq!(
+        payloads(&[next(&mut slow).await.expect("an event")]),
+        [time_report(11)]
+    );
+}
