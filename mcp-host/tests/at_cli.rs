@@ -236,6 +236,8 @@ fn a_queued_change_is_applied_with_ac_and_saved_with_wr() {
         assert_eq!(run(&["WR"]), "WR: ok\n");
         assert_eq!(run(&["NI"]), "NI = \"Queued\"\n");
     }
+    // The commissioning button, pressed remotely: an action too.
+    assert_eq!(sim.ok(&["--to", MAV, "CB", "1"]), "CB: ok\n");
     // AC and WR take no value.
     let out = sim.at(&["AC", "1"]);
     assert_eq!(out.status.code(), Some(1), "{out:?}");

@@ -988,3 +988,73 @@ async fn a_pty_peer_that_writes_at_once_is_answered() {
         other => panic!("{other:?}"),
     }
 }
+
+#[tokio::test]
+async fn the_commissioning_button_announces_a_radio_to_the_others() {
+    use xbee_api::{NodeIdentificationIndicatorRepr, RemoteAtCommandRepr, SourceEvent};
+    let (_network, mut devs) = in_process(NetworkConfig::default(), &[COORD, MAV_A, MAV_B]).await;
+    let [ground, dev_a, dev_b] = &mut devs[..] else {
+        unreachable!()
+    };
+    assert_eq!(
+        dev_a.at(1, b"NI", b"Left wing").await,
+        (AtStatus::Ok, vec![])
+    );
+    // The ground station presses MAV A's button remotely (`CB` 1).
+    ground
+        .send(&Frame::RemoteAtCommand(RemoteAtCommandRepr {
+            frame_id: 2,
+            dst64: MAV_A,
+            dst16: Address16::UNKNOWN,
+            options: 0x02,
+            command: *b"CB",
+            parameter: &[1],
+        }))
+        .await;
+    let mut announced = None;
+    let mut answered = false;
+    for _ in 0..2 {
+        match ground.frame().await.parse().unwrap() {
+            Frame::RemoteAtResponse(r) => {
+                assert_eq!((r.frame_id, r.src64, r.status), (2, MAV_A, AtStatus::Ok));
+                answered = true;
+            }
+            Frame::NodeIdentificationIndicator(ni) => announced = Some(ni.node.addr64),
+            other => panic!("{other:?}"),
+        }
+    }
+    assert!(answered);
+    assert_eq!(announced, Some(MAV_A));
+    // Every other radio hears it: MAV B too, with MAV A's name and role.
+    let frame = dev_b.frame().await;
+    let Ok(Frame::NodeIdentificationIndicator(ni)) = frame.parse() else {
+        panic!("{frame:?}")
+    };
+    let a16 = ni.src16;
+    assert_eq!(
+        ni,
+        NodeIdentificationIndicatorRepr {
+            src64: MAV_A,
+            src16: a16,
+            options: 0x02,
+            node: xbee_api::NodeInfo {
+                addr16: a16,
+                addr64: MAV_A,
+                identifier: b"Left wing",
+                parent: Address16::UNKNOWN,
+                device_type: xbee_api::DeviceType::Router,
+                status: 1,
+                profile_id: 0xC105,
+                manufacturer_id: 0x101E,
+                device_type_identifier: None,
+                rssi: None,
+            },
+        }
+    );
+    assert_eq!(ni.source_event(), SourceEvent::Pushbutton);
+    // Only CB 1 is emulated.
+    assert_eq!(
+        dev_a.at(3, b"CB", &[4]).await,
+        (AtStatus::InvalidParameter, vec![])
+    );
+}

@@ -42,8 +42,11 @@
 //!   at once, even when it was queued (AT Command - Queue Parameter Value, 0x09, or a
 //!   remote command without the apply option), as a module's register is; nothing else
 //!   in the emulation depends on it, so `AC` (apply changes) and `WR` (write to
-//!   non-volatile memory) answer ok and have nothing more to do. Any other command gets
-//!   status 2, invalid command.
+//!   non-volatile memory) answer ok and have nothing more to do. `CB` 1 (the
+//!   commissioning button pressed once) makes the radio broadcast its identification:
+//!   every other radio it reaches hands its device a Node Identification Indicator
+//!   (0x95) with the same node information. Any other command gets status 2, invalid
+//!   command.
 //!   Remote AT commands (0x17) get the same answers from the destination's radio
 //!   (0x97), or status 4, transmission failure, when it cannot be reached. One to the
 //!   broadcast address (000000000000FFFF) is carried out by every other node the

@@ -12,7 +12,8 @@ use xbee_api::frame::receive_packet::options::{
 use xbee_api::{
     Address16, Address64, ApiMode, AtCommandRepr, AtCommandResponseRepr, AtStatus, DeliveryStatus,
     DiscoveryStatus, EncodeFrame, ExplicitRxIndicatorRepr, Frame, ModemStatus, ModemStatusRepr,
-    ReceivePacketRepr, RemoteAtCommandRepr, RemoteAtResponseRepr, TransmitStatusRepr,
+    NodeIdentificationIndicatorRepr, ReceivePacketRepr, RemoteAtCommandRepr, RemoteAtResponseRepr,
+    SourceEvent, TransmitStatusRepr,
 };
 
 use super::faults::{FaultRng, Faults};
@@ -469,7 +470,8 @@ impl State {
     /// command.
     /// A value set is read back at once, whether it was applied or queued (nothing else
     /// in the emulation depends on it), so `AC` (apply changes) and `WR` (write to
-    /// non-volatile memory) have nothing to do but answer ok.
+    /// non-volatile memory) have nothing to do but answer ok. `CB` 1 (the commissioning
+    /// button pressed once) broadcasts the node's identification.
     fn at_value(
         &mut self,
         node: Address64,
@@ -539,10 +541,15 @@ impl State {
             (b"GT", []) => read(&GUARD_TIME_MS.to_be_bytes()),
             (b"CT", []) => read(&COMMAND_TIMEOUT.to_be_bytes()),
             (b"AC" | b"WR", []) => (AtStatus::Ok, 0),
+            // The commissioning button pressed once: the node identification goes out.
+            (b"CB", [1]) => {
+                self.node_identification(node);
+                (AtStatus::Ok, 0)
+            }
             (
                 b"AP" | b"NP" | b"SH" | b"SL" | b"MY" | b"AI" | b"CE" | b"SM" | b"HV" | b"VR"
                 | b"NI" | b"NT" | b"ID" | b"OP" | b"OI" | b"CH" | b"BD" | b"GT" | b"CT" | b"AC"
-                | b"WR",
+                | b"WR" | b"CB",
                 _,
             ) => (AtStatus::InvalidParameter, 0),
             _ => (AtStatus::InvalidCommand, 0),
@@ -704,22 +711,7 @@ impl State {
             return;
         }
         for (addr64, addr16, name) in found {
-            let info = xbee_api::NodeInfo {
-                addr16,
-                addr64,
-                identifier: &name,
-                parent: Address16::UNKNOWN,
-                device_type: if addr64 == Address64::COORDINATOR {
-                    xbee_api::DeviceType::Coordinator
-                } else {
-                    xbee_api::DeviceType::Router
-                },
-                status: 0,
-                profile_id: DIGI_PROFILE_ID,
-                manufacturer_id: DIGI_MANUFACTURER_ID,
-                device_type_identifier: None,
-                rssi: None,
-            };
+            let info = node_info(addr64, addr16, &name, 0);
             let mut data = [0u8; 64];
             let Ok(len) = info.emit(&mut data) else {
                 continue;
@@ -731,6 +723,25 @@ impl State {
                 data: data.get(..len).unwrap_or_default(),
             };
             self.send_to(from, &response, true);
+        }
+    }
+
+    /// `from`'s radio broadcasts its node identification (its commissioning button was
+    /// pressed once, `CB` 1): every other radio it reaches hands its device a Node
+    /// Identification Indicator (radios in transparent mode hand over nothing).
+    fn node_identification(&mut self, from: Address64) {
+        let Some(me) = self.nodes.get(&from) else {
+            return;
+        };
+        let (addr16, name) = (me.addr16, me.name.clone());
+        let frame = NodeIdentificationIndicatorRepr {
+            src64: from,
+            src16: addr16,
+            options: RX_BROADCAST,
+            node: node_info(from, addr16, &name, u8::from(SourceEvent::Pushbutton)),
+        };
+        for target in self.reached_from(from) {
+            self.send_to(target, &frame, true);
         }
     }
 
@@ -853,4 +864,31 @@ pub(crate) struct Explicit {
     dst_endpoint: u8,
     cluster_id: u16,
     profile_id: u16,
+}
+
+/// What node discovery and node identification say of a radio of this network:
+/// coordinator or router, no parent named, Digi's profile and manufacturer, and
+/// `status` (0 in a discovery answer, the [`SourceEvent`] in an identification).
+fn node_info(
+    addr64: Address64,
+    addr16: Address16,
+    name: &[u8],
+    status: u8,
+) -> xbee_api::NodeInfo<'_> {
+    xbee_api::NodeInfo {
+        addr16,
+        addr64,
+        identifier: name,
+        parent: Address16::UNKNOWN,
+        device_type: if addr64 == Address64::COORDINATOR {
+            xbee_api::DeviceType::Coordinator
+        } else {
+            xbee_api::DeviceType::Router
+        },
+        status,
+        profile_id: DIGI_PROFILE_ID,
+        manufacturer_id: DIGI_MANUFACTURER_ID,
+        device_type_identifier: None,
+        rssi: None,
+    }
 }
