@@ -899,11 +899,7 @@ fn a_one_shot_command_on_tcp_listen_waits_for_its_peer() {
     let file = dir.join("one.mcprec");
     std::fs::write(&file, modem_status_recording(1)).unwrap();
     // A free port: replay listens there, the peer connects once it does.
-    let port = std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port();
+    let port = common::unused_port();
     let peer = std::thread::spawn(move || {
         let deadline = std::time::Instant::now() + std::time::Duration::from_secs(20);
         let mut socket = loop {
@@ -1074,11 +1070,7 @@ fn a_negative_number_gets_the_options_own_message() {
 
 #[test]
 fn monitor_waits_for_a_link_that_is_not_there_yet() {
-    let port = std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port();
+    let port = common::unused_port();
     let link = format!("tcp:127.0.0.1:{port}");
     // Without --wait: nothing listens, exit 3 at once.
     assert_eq!(

@@ -434,11 +434,7 @@ fn a_serial_link_that_is_not_there_fails_at_once() {
 fn the_librarys_warnings_read_as_the_commands_own_lines() {
     // A coordinator link to a port nobody listens on: the network keeps trying, and
     // says so in one plain line, with the error after a colon and the node named.
-    let port = std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port();
+    let port = common::unused_port();
     let link = format!("tcp:127.0.0.1:{port}");
     let mut child = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
         .args(["sim", "--link", &link, "--duration", "30"])

@@ -202,12 +202,7 @@ async fn without_reconnection_the_link_closes_and_the_stream_ends() {
 
 #[tokio::test]
 async fn connect_fails_fast_when_the_first_connection_fails() {
-    let port = TcpListener::bind("127.0.0.1:0")
-        .await
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port();
+    let port = unused_port();
     let link = format!("tcp:127.0.0.1:{port}").parse().unwrap();
     let err = mcp_host::connect(&link, LinkOptions::default())
         .await
@@ -599,12 +594,7 @@ async fn malformed_frames_from_a_peer_are_not_warnings() {
 #[tokio::test]
 async fn wait_for_link_connects_once_the_peer_is_there() {
     // A port nobody listens on yet.
-    let port = TcpListener::bind("127.0.0.1:0")
-        .await
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port();
+    let port = unused_port();
     let link: mcp_host::Link = format!("tcp:127.0.0.1:{port}").parse().unwrap();
     // Without the option, connect fails at once.
     assert!(

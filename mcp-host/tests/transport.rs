@@ -115,12 +115,7 @@ async fn tcp_reconnects_after_the_peer_goes_away() {
 #[tokio::test]
 async fn tcp_reconnect_retries_until_the_port_listens_again() {
     // Find a free port, then close it so that the first attempts are refused.
-    let port = TcpListener::bind("127.0.0.1:0")
-        .await
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port();
+    let port = common::unused_port();
     let link: Link = format!("tcp:127.0.0.1:{port}").parse().unwrap();
     let options = fast_reconnect();
     let mut connector = Connector::new(&link, &options).await.unwrap();

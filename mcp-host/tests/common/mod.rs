@@ -352,6 +352,15 @@ pub fn far_end_is_exclusive(path: &std::path::Path) -> bool {
     exclusive != 0
 }
 
+/// A TCP port of 127.0.0.1 that nothing listens on: free a moment ago, for a link that
+/// must find nobody there, or a listener to come later.
+pub fn unused_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0")
+        .and_then(|listener| listener.local_addr())
+        .expect("a free port")
+        .port()
+}
+
 /// Adds `network`'s coordinator on a TCP port of this machine, found free (its
 /// `local_addr`), for a ground station to connect to.
 pub async fn tcp_coordinator(network: &mcp_host::radio::Network) -> mcp_host::radio::NodeInfo {
