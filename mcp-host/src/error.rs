@@ -18,6 +18,31 @@ pub enum ConnectError {
     Options(&'static str),
 }
 
+impl ConnectError {
+    /// Whether connecting again later may succeed (the device may come back, a peer
+    /// may start listening), as [`LinkError::is_retryable`] says; never for options
+    /// that are wrong. [`LinkOptions::wait_for_link`](crate::LinkOptions::wait_for_link)
+    /// has `connect` wait through such failures itself.
+    ///
+    /// ```
+    /// # #[tokio::main(flavor = "current_thread")]
+    /// # async fn main() {
+    /// use mcp_host::{Link, LinkOptions};
+    /// let link: Link = "serial:/dev/no-such-radio".parse().unwrap();
+    /// let err = mcp_host::connect(&link, LinkOptions::default()).await.unwrap_err();
+    /// assert!(err.is_retryable(), "{err}"); // it may yet be plugged in
+    /// let bad = LinkOptions { event_capacity: 0, ..LinkOptions::default() };
+    /// assert!(!mcp_host::connect(&link, bad).await.unwrap_err().is_retryable());
+    /// # }
+    /// ```
+    pub fn is_retryable(&self) -> bool {
+        match self {
+            ConnectError::Link(e) => e.is_retryable(),
+            ConnectError::Options(_) => false,
+        }
+    }
+}
+
 /// Why a send did not succeed.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[non_exhaustive]
