@@ -171,6 +171,27 @@ impl<'a> TransmitRequestRepr<'a> {
         }
     }
 
+    /// An answer to the radio a Receive Packet came from: `data` to its 64-bit and
+    /// 16-bit addresses (the 16-bit one known, so the radio skips address discovery),
+    /// frame id 0, radius and options 0, as [`unicast`](Self::unicast).
+    ///
+    /// ```
+    /// use xbee_api::{Address16, Frame, TransmitRequestRepr};
+    /// // Digi's Receive Packet example.
+    /// let data = [0x90, 0x00, 0x13, 0xA2, 0x00, 0x40, 0x52, 0x2B, 0xAA, 0x7D, 0x84, 0x01,
+    ///             b'R', b'x', b'D', b'a', b't', b'a'];
+    /// let Ok(Frame::ReceivePacket(rx)) = Frame::parse_bytes(&data) else { unreachable!() };
+    /// let answer = TransmitRequestRepr::reply(&rx, b"ack");
+    /// assert_eq!((answer.dst64, answer.dst16), (rx.src64, Address16(0x7D84)));
+    /// assert_eq!((answer.frame_id, answer.data), (0, &b"ack"[..]));
+    /// ```
+    pub const fn reply(to: &crate::ReceivePacketRepr<'_>, data: &'a [u8]) -> Self {
+        TransmitRequestRepr {
+            dst16: to.src16,
+            ..Self::unicast(to.src64, data)
+        }
+    }
+
     /// Reads the fields of `frame`, checking it first.
     pub fn parse(frame: &TransmitRequest<&'a [u8]>) -> Result<Self, FrameError> {
         frame.check_len()?;
