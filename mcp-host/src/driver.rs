@@ -328,14 +328,20 @@ impl Driver {
     }
 
     /// Runs until the link ends for good or nobody holds a sender or the stream.
-    pub(crate) async fn run(mut self, mut transport: Option<Transport>) {
+    pub(crate) async fn run(mut self, mut transport: Option<Transport>, tried: bool) {
         let mut ever_connected = false;
+        // The first open, when `connect` tried it already, waits the reconnection delay.
+        let mut tried = tried;
         let mut last_failure = None;
         loop {
             let current = match transport.take() {
                 Some(t) => t,
                 None => match self
-                    .wait_for_transport(ever_connected, last_failure.as_deref())
+                    .wait_for_transport(
+                        ever_connected,
+                        std::mem::take(&mut tried),
+                        last_failure.as_deref(),
+                    )
                     .await
                 {
                     Ok(t) => t,
@@ -389,6 +395,7 @@ impl Driver {
     async fn wait_for_transport(
         &mut self,
         ever_connected: bool,
+        tried: bool,
         last_failure: Option<&str>,
     ) -> Result<Transport, Stop> {
         let down = if ever_connected {
@@ -402,7 +409,7 @@ impl Driver {
         let policy = self.options.reconnect.clone();
         let connector = &mut self.connector;
         let opening = async move {
-            if !ever_connected {
+            if !ever_connected && !tried {
                 match connector.open().await {
                     Ok(t) => return Ok(t),
                     Err(e) if !e.is_retryable() => return Err(e),

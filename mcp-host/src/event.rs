@@ -74,7 +74,9 @@ pub struct InvalidPacket {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[non_exhaustive]
 pub enum LinkState {
-    /// Not connected yet: a `tcp-listen` or `pty` link waiting for its first peer.
+    /// Not connected yet: a `tcp-listen` or `pty` link waiting for its first peer, or a
+    /// `serial` or `tcp` one waiting for its device
+    /// ([`LinkOptions::wait_for_link`](crate::LinkOptions::wait_for_link)).
     Connecting,
     /// The transport is up.
     Connected,

@@ -127,8 +127,9 @@ pub struct LinkInfo {
 /// Opens `link` and starts the background task serving it.
 ///
 /// For `serial` and `tcp` links the first connection is made before this returns (so a
-/// wrong path or a refused connection fails here); `tcp-listen` binds and `pty` creates
-/// the pair, and both return at once, the first peer being announced by
+/// wrong path or a refused connection fails here, unless
+/// [`LinkOptions::wait_for_link`] has it waited for); `tcp-listen` binds and `pty`
+/// creates the pair, and both return at once, the first peer being announced by
 /// [`LinkEvent::Connected`].
 ///
 /// The task runs until the link ends for good ([`LinkEvent::Closed`]) or the stream and
@@ -146,14 +147,17 @@ pub async fn connect(
         ));
     }
     let mut connector = Connector::new(link, &options).await?;
+    // Whether the first open was tried here already (and failed).
+    let mut tried = false;
     let transport = match link {
         // Their first peer may come at any time: announced by `LinkEvent::Connected`.
         Link::TcpListen { .. } | Link::Pty => None,
         _ => match connector.open().await {
             Ok(transport) => Some(transport),
             // Opened in the background, announced the same way.
-            Err(e) if options.wait_for_link && e.is_retryable() => {
-                tracing::info!(error = %e, "link not there yet: waiting for it");
+            Err(e) if options.wait_for_link && options.reconnect.enabled && e.is_retryable() => {
+                tracing::warn!(error = %e, "link not there yet: waiting for it");
+                tried = true;
                 None
             }
             Err(e) => return Err(e.into()),
@@ -200,7 +204,10 @@ pub async fn connect(
     );
     // Everything the link's task logs carries the link: `link{link=serial:...}: ...`.
     let span = tracing::info_span!("link", link = %link);
-    tokio::spawn(tracing::Instrument::instrument(driver.run(transport), span));
+    tokio::spawn(tracing::Instrument::instrument(
+        driver.run(transport, tried),
+        span,
+    ));
     let stream = PacketStream {
         events: events_rx,
         counters,

@@ -100,10 +100,12 @@ pub struct LinkOptions {
     /// [`LinkState::Connecting`](crate::LinkState::Connecting), and the link is opened
     /// in the background under [`reconnect`](Self::reconnect)'s delays;
     /// [`LinkEvent::Connected`](crate::LinkEvent::Connected) says when it is up, and
-    /// requests fail at once until then. With reconnection disabled there is one more
-    /// try, in the background, and the link closes if it fails. Default `false`:
-    /// `connect` fails at once. (`tcp-listen` and `pty` links always wait for their
-    /// first peer.)
+    /// requests fail at once until then. Waiting needs reconnection enabled: without
+    /// it, `connect` fails at once as usual. Any failure a retry may fix counts (see
+    /// [`LinkError::is_retryable`](crate::LinkError::is_retryable)), a mistyped device
+    /// path or host name among them: the first one is logged as a warning. Default
+    /// `false`: `connect` fails at once. (`tcp-listen` and `pty` links always wait for
+    /// their first peer.)
     pub wait_for_link: bool,
     /// API mode 1 only: a partial frame that gets no new byte for this long is dropped
     /// (an [`crate::Event::DecodeError`], truncated) and the bytes after its start

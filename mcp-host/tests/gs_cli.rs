@@ -1086,11 +1086,13 @@ fn monitor_waits_for_a_link_that_is_not_there_yet() {
         .spawn()
         .unwrap();
     let errors = common::stderr_lines(&mut child);
-    let waiting = format!("mcp-gs: {link} is not there yet: waiting for it");
-    while errors
+    // It says why it waits, once.
+    let waiting =
+        format!("mcp-gs: link not there yet: waiting for it: cannot connect to 127.0.0.1:{port}: ");
+    while !errors
         .recv_timeout(std::time::Duration::from_secs(30))
         .expect("the waiting line")
-        != waiting
+        .starts_with(&waiting)
     {}
     // The radio comes: its modem status is the one item counted.
     let listener = std::net::TcpListener::bind(("127.0.0.1", port)).unwrap();

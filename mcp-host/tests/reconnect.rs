@@ -602,6 +602,12 @@ async fn wait_for_link_connects_once_the_peer_is_there() {
             .await
             .is_err()
     );
+    // Nor can it wait without reconnection.
+    let no_reconnect = LinkOptions {
+        wait_for_link: true,
+        ..options(ApiMode::Escaped, false)
+    };
+    assert!(mcp_host::connect(&link, no_reconnect).await.is_err());
     let waiting = LinkOptions {
         wait_for_link: true,
         ..options(ApiMode::Escaped, true)

@@ -128,11 +128,6 @@ impl LinkArgs {
         let (mut stream, sender) = mcp_host::connect(&self.link, options)
             .await
             .map_err(|e| connect_failure(&self.link, e))?;
-        if sender.link_state() == mcp_host::LinkState::Connecting
-            && matches!(self.link, Link::Serial { .. } | Link::Tcp { .. })
-        {
-            eprintln!("mcp-gs: {} is not there yet: waiting for it", self.link);
-        }
         if !reconnect {
             if let Some(addr) = stream.info().local_addr {
                 // A one-shot subcommand on `tcp-listen:` waits for its peer first.
