@@ -10,7 +10,7 @@ use std::time::{Duration, SystemTime};
 use bytes::{Bytes, BytesMut};
 use futures::StreamExt;
 use tokio::io::AsyncWriteExt;
-use tokio::sync::{Notify, broadcast, mpsc, oneshot, watch};
+use tokio::sync::{Notify, mpsc, oneshot, watch};
 use tokio::time::Instant;
 use tokio_util::codec::FramedRead;
 use xbee_api::{Address64, EncodeFrame};
@@ -24,6 +24,7 @@ use crate::ids::IdTable;
 use crate::options::LinkOptions;
 use crate::sender::DeliveryReport;
 use crate::stats::{Counters, bump};
+use crate::subscription::Subscribers;
 use crate::transport::{Connector, Transport};
 
 /// Stop accepting new requests while this many bytes wait to be written.
@@ -262,8 +263,8 @@ pub(crate) struct Driver {
     /// Requests that need no frame id (raw writes, transmits without status).
     pub(crate) writes: mpsc::Receiver<Op>,
     pub(crate) events: mpsc::Sender<Event>,
-    /// The [`Subscription`](crate::Subscription)s' channel: every event goes there too.
-    subscribers: broadcast::Sender<Event>,
+    /// The [`Subscription`](crate::Subscription)s: every event goes there too.
+    subscribers: EndSubscriptions,
     pub(crate) counters: Arc<Counters>,
     /// Notified by [`CommandSender::close`](crate::CommandSender::close).
     close_requested: Arc<Notify>,
@@ -301,7 +302,7 @@ impl Driver {
         options: LinkOptions,
         // Requests that need a frame id, and those that need none.
         (ops, writes): (mpsc::Receiver<Op>, mpsc::Receiver<Op>),
-        (events, subscribers): (mpsc::Sender<Event>, broadcast::Sender<Event>),
+        (events, subscribers): (mpsc::Sender<Event>, Arc<Subscribers>),
         counters: Arc<Counters>,
         close_requested: Arc<Notify>,
         state: watch::Sender<LinkState>,
@@ -312,7 +313,7 @@ impl Driver {
             ops,
             writes,
             events,
-            subscribers,
+            subscribers: EndSubscriptions(subscribers),
             counters,
             close_requested,
             state,
@@ -345,7 +346,7 @@ impl Driver {
                     .await
                 {
                     Ok(t) => t,
-                    Err(Stop::Shutdown) => return,
+                    Err(Stop::Shutdown) => return self.shut_down(),
                     Err(Stop::Fatal(reason)) => {
                         self.close(reason).await;
                         return;
@@ -364,7 +365,7 @@ impl Driver {
             }
             ever_connected = true;
             match self.serve(current).await {
-                Served::Shutdown => return,
+                Served::Shutdown => return self.shut_down(),
                 // The transport is closed by now (`serve` owned it): say so last.
                 Served::Closed => {
                     self.close(CLOSED_BY_APPLICATION.to_owned()).await;
@@ -599,9 +600,15 @@ impl Driver {
 
     /// Hands `event` to the subscriptions, if there are any.
     fn publish(&self, event: &Event) {
-        if self.subscribers.receiver_count() > 0 {
-            let _ = self.subscribers.send(event.clone());
-        }
+        self.subscribers.0.publish(event);
+    }
+
+    /// Nobody holds the stream or a sender any more: the link ends, and the
+    /// subscriptions with it, told why.
+    fn shut_down(&self) {
+        self.subscribers.0.end(Some(&Event::Link(LinkEvent::Closed {
+            reason: DROPPED.to_owned(),
+        })));
     }
 
     fn handle_item(&mut self, item: CodecItem) {
@@ -1088,17 +1095,28 @@ impl Driver {
         while let Ok(op) = self.ops.try_recv().or_else(|_| self.writes.try_recv()) {
             refuse_closed(op);
         }
-        // The subscriptions end with it now, whether the stream is read or not: their
-        // channel's only sender goes.
+        // The subscriptions end with it now, whether the stream is read or not.
         let closed = Event::Link(LinkEvent::Closed { reason });
-        self.publish(&closed);
-        self.subscribers = broadcast::channel(1).0;
+        self.subscribers.0.end(Some(&closed));
         let held = std::mem::take(&mut self.pending_links);
         for event in held.into_iter().chain([closed]) {
             if self.events.send(event).await.is_err() {
                 return;
             }
         }
+    }
+}
+
+/// Why the link ended when its stream and every sender were dropped, as its
+/// subscriptions are told.
+const DROPPED: &str = "the stream and every sender were dropped";
+
+/// The link's subscriptions, ended when the driver goes, however it goes.
+struct EndSubscriptions(Arc<Subscribers>);
+
+impl Drop for EndSubscriptions {
+    fn drop(&mut self) {
+        self.0.end(None);
     }
 }
 

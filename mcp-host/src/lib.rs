@@ -172,9 +172,7 @@ pub async fn connect(
     let (ops_tx, ops_rx) = mpsc::channel(OPS_CAPACITY);
     let (writes_tx, writes_rx) = mpsc::channel(OPS_CAPACITY);
     let (events_tx, events_rx) = mpsc::channel(options.event_capacity);
-    // For the subscriptions: the driver holds the only strong sender, so that they end
-    // with it.
-    let (subscribers, _) = tokio::sync::broadcast::channel(options.event_capacity);
+    let subscribers = Arc::new(subscription::Subscribers::new(options.event_capacity));
     let close_requested = Arc::new(tokio::sync::Notify::new());
     // Connected already when the transport is open: `link_state` right after `connect`
     // says so.
@@ -191,7 +189,7 @@ pub async fn connect(
         info: info.clone(),
         close_requested: close_requested.clone(),
         state: state.clone(),
-        subscribers: subscribers.downgrade(),
+        subscribers: subscribers.clone(),
     };
     let driver = driver::Driver::new(
         connector,

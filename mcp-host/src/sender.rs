@@ -83,8 +83,8 @@ pub struct CommandSender {
     pub(crate) info: Arc<LinkInfo>,
     pub(crate) close_requested: Arc<Notify>,
     pub(crate) state: watch::Receiver<LinkState>,
-    /// Where [`subscribe`](Self::subscribe) takes its receivers; gone with the link.
-    pub(crate) subscribers: tokio::sync::broadcast::WeakSender<crate::Event>,
+    /// Where [`subscribe`](Self::subscribe) takes its subscriptions.
+    pub(crate) subscribers: Arc<crate::subscription::Subscribers>,
 }
 
 impl CommandSender {
@@ -554,7 +554,7 @@ impl CommandSender {
     /// [`PacketStream`](crate::PacketStream): see [`Subscription`](crate::Subscription).
     /// Taken from a link that has ended, it ends at once.
     pub fn subscribe(&self) -> crate::Subscription {
-        crate::Subscription::new(self.subscribers.upgrade().map(|tx| tx.subscribe()))
+        self.subscribers.subscribe()
     }
 
     /// Waits until the link has ended for good ([`LinkState::Closed`]: after

@@ -2,8 +2,8 @@
 //! [`CommandSender::subscribe`](crate::CommandSender::subscribe).
 
 use std::pin::Pin;
-use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex, PoisonError};
 use std::task::{Context, Poll};
 
 use futures::stream::{BoxStream, StreamExt};
@@ -15,11 +15,21 @@ use crate::Event;
 /// one that reads the [`PacketStream`](crate::PacketStream): a user interface, a logger
 /// and a mission script can each have one.
 ///
-/// It holds up to [`LinkOptions::event_capacity`](crate::LinkOptions::event_capacity)
-/// events for its reader. A reader that falls further behind misses the oldest ones and
-/// goes on with the rest ([`missed`](Self::missed) counts them), and it never holds up
-/// the link or the other readers. It ends after [`LinkEvent::Closed`](crate::LinkEvent),
-/// or at once when taken from a link that has ended.
+/// It holds at least [`LinkOptions::event_capacity`](crate::LinkOptions::event_capacity)
+/// events for its reader (that, rounded up to a power of two). A reader that falls
+/// further behind misses the oldest ones and goes on with the rest
+/// ([`missed`](Self::missed) counts them), and it never holds up the link or the other
+/// readers. It ends after [`LinkEvent::Closed`](crate::LinkEvent) (whose reason says
+/// when the link ended because its stream and every sender were dropped), or at once
+/// when taken from a link that has ended.
+///
+/// It starts with the events that come after it was taken: a link that is up already
+/// sent its [`LinkEvent::Connected`](crate::LinkEvent) before, so read
+/// [`CommandSender::link_state`](crate::CommandSender::link_state) after subscribing
+/// to know where the link is.
+///
+/// The channel behind the subscriptions is made when the first is taken: a link
+/// without any costs nothing for them.
 ///
 /// ```
 /// # #[tokio::main(flavor = "current_thread")]
@@ -43,8 +53,72 @@ use crate::Event;
 /// # }
 /// ```
 pub struct Subscription {
-    events: BoxStream<'static, Event>,
+    /// In a mutex only to be `Sync`, as the link's other handles are: polling takes
+    /// `&mut self`, which reaches the stream without locking.
+    events: Mutex<BoxStream<'static, Event>>,
     missed: Arc<AtomicU64>,
+}
+
+/// The subscriptions of one link, shared by its driver and its senders.
+#[derive(Debug)]
+pub(crate) struct Subscribers {
+    capacity: usize,
+    state: Mutex<State>,
+}
+
+#[derive(Debug)]
+enum State {
+    /// No subscription taken yet.
+    Idle,
+    Open(broadcast::Sender<Event>),
+    /// The link has ended: no more subscriptions, no more events.
+    Ended,
+}
+
+impl Subscribers {
+    /// Subscriptions that hold `capacity` events for their readers.
+    pub(crate) fn new(capacity: usize) -> Self {
+        Subscribers {
+            capacity,
+            state: Mutex::new(State::Idle),
+        }
+    }
+
+    fn state(&self) -> std::sync::MutexGuard<'_, State> {
+        self.state.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+
+    /// A new subscription.
+    pub(crate) fn subscribe(&self) -> Subscription {
+        let mut state = self.state();
+        let receiver = match &*state {
+            State::Ended => None,
+            State::Open(tx) => Some(tx.subscribe()),
+            State::Idle => {
+                let (tx, rx) = broadcast::channel(self.capacity);
+                *state = State::Open(tx);
+                Some(rx)
+            }
+        };
+        Subscription::new(receiver)
+    }
+
+    /// Hands `event` to the subscriptions, if there are any.
+    pub(crate) fn publish(&self, event: &Event) {
+        if let State::Open(tx) = &*self.state() {
+            if tx.receiver_count() > 0 {
+                let _ = tx.send(event.clone());
+            }
+        }
+    }
+
+    /// The link has ended, with `last` its last event: the subscriptions end after it.
+    pub(crate) fn end(&self, last: Option<&Event>) {
+        if let Some(last) = last {
+            self.publish(last);
+        }
+        *self.state() = State::Ended;
+    }
 }
 
 impl Subscription {
@@ -68,7 +142,10 @@ impl Subscription {
             }
         })
         .boxed();
-        Subscription { events, missed }
+        Subscription {
+            events: Mutex::new(events),
+            missed,
+        }
     }
 
     /// Events this reader missed by falling too far behind.
@@ -89,6 +166,9 @@ impl futures::Stream for Subscription {
     type Item = Event;
 
     fn poll_next(mut self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<Option<Event>> {
-        self.events.poll_next_unpin(cx)
+        self.events
+            .get_mut()
+            .unwrap_or_else(PoisonError::into_inner)
+            .poll_next_unpin(cx)
     }
 }

@@ -290,6 +290,7 @@ fn handles_are_send_and_sync() {
     fn check<T: Send + Sync + 'static>() {}
     check::<mcp_host::CommandSender>();
     check::<mcp_host::PacketStream>();
+    check::<mcp_host::Subscription>();
     check::<mcp_host::Event>();
     check::<mcp_host::SendError>();
     check::<mcp_host::RequestError>();

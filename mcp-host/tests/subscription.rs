@@ -104,3 +104,17 @@ async fn a_reader_that_falls_behind_misses_the_oldest_and_holds_up_nobody() {
         [time_report(11)]
     );
 }
+
+#[tokio::test]
+async fn a_link_dropped_by_its_owners_ends_its_subscriptions_with_closed() {
+    let (stream, sender, _fake) = pty_link(ApiMode::Escaped).await;
+    let mut watcher = sender.subscribe();
+    drop((stream, sender));
+    match next(&mut watcher).await {
+        Some(Event::Link(LinkEvent::Closed { reason })) => {
+            assert_eq!(reason, "the stream and every sender were dropped");
+        }
+        other => panic!("{other:?}"),
+    }
+    assert!(next(&mut watcher).await.is_none());
+}
