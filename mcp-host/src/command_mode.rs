@@ -69,6 +69,13 @@ pub enum CommandModeError {
         /// The radio's answer line.
         answer: String,
     },
+    /// A value holding a comma or a line end, which the radio would read as the end of
+    /// the command (the rest as another command): nothing was sent.
+    #[error("command mode: {sent:?} was not sent: a value cannot hold a comma or a line end")]
+    InvalidValue {
+        /// What would have been sent, as text.
+        sent: String,
+    },
 }
 
 /// A radio in AT command mode, over `io` (a [`Transport`](crate::Transport), or any
@@ -166,8 +173,11 @@ impl<T: AsyncRead + AsyncWrite + Unpin> CommandMode<T> {
     /// Sends `AT` `command` `value` and a carriage return; the answer line. Lines read
     /// before (a late answer to a command that timed out) are no answer to it.
     async fn send(&mut self, command: [u8; 2], value: &str) -> Result<String, CommandModeError> {
-        self.pending.clear();
         let sent = text(command, value);
+        if value.contains([',', '\r', '\n']) {
+            return Err(CommandModeError::InvalidValue { sent });
+        }
+        self.pending.clear();
         self.io.write_all(format!("{sent}\r").as_bytes()).await?;
         self.io.flush().await?;
         match tokio::time::timeout(self.timeout, self.line()).await {
@@ -258,6 +268,16 @@ mod tests {
             refused.to_string(),
             "command mode: the radio answered ATBD9 with \"ERROR\""
         );
+        // A value that would end the command early is not sent: the radio would run
+        // what follows the comma as a command of its own.
+        for value in ["MAV,WR", "MAV\rATWR"] {
+            assert!(matches!(
+                mode.set(*b"NI", value).await,
+                Err(CommandModeError::InvalidValue { .. })
+            ));
+        }
+        // The exchange goes on as before.
+        assert_eq!(mode.read(*b"AP").await.unwrap(), "0");
         mode.exit().await.unwrap();
     }
 

@@ -168,16 +168,17 @@ async fn commands_chained_on_one_line_set_a_factory_radio_up() {
     tokio::time::sleep(GT).await;
     ground.write_all(b"+++").await.unwrap();
     assert_eq!(line(&mut ground).await, "OK\r");
-    // One answer a command, in order; a value in hex may start with 0x.
+    // One answer a command, in order; a value in hex may start with 0x (but is no
+    // number without digits, nor with a sign).
     ground
-        .write_all(b"ATNIGS,NT0x20,NT,XX,AP 0x1,WR,CN\r")
+        .write_all(b"ATNIGS,NT0x20,NT,XX,NT0x,AP+1,AP 0x1,WR,CN\r")
         .await
         .unwrap();
     let mut answers = String::new();
-    while answers.matches('\r').count() < 7 {
+    while answers.matches('\r').count() < 9 {
         answers += &line(&mut ground).await;
     }
-    assert_eq!(answers, "OK\rOK\r20\rERROR\rOK\rOK\rOK\r");
+    assert_eq!(answers, "OK\rOK\r20\rERROR\rERROR\rERROR\rOK\rOK\rOK\r");
     let mut ground = Framed::new(ground, XBeeCodec::new(ApiMode::Unescaped));
     assert_eq!(read_ap(&mut ground).await, 1);
 }

@@ -217,6 +217,10 @@ fn hex_u8(value: &str) -> Option<u8> {
         .strip_prefix("0x")
         .or_else(|| value.strip_prefix("0X"))
         .unwrap_or(value);
+    // Digits only: no sign, as a radio reads them.
+    if digits.is_empty() || !digits.chars().all(|c| c.is_ascii_hexdigit()) {
+        return None;
+    }
     u8::from_str_radix(digits, 16).ok()
 }
 

@@ -831,13 +831,15 @@ pub(crate) enum LinkMode {
 /// nothing for no digits. `None` for anything else.
 fn hex_value(text: &str) -> Option<Vec<u8>> {
     let text = text.trim_start();
-    let text = text
-        .strip_prefix("0x")
-        .or_else(|| text.strip_prefix("0X"))
-        .unwrap_or(text);
-    let digits: String = text.chars().filter(|c| *c != ' ').collect();
+    let unprefixed = text.strip_prefix("0x").or_else(|| text.strip_prefix("0X"));
+    let digits: String = unprefixed
+        .unwrap_or(text)
+        .chars()
+        .filter(|c| *c != ' ')
+        .collect();
     if digits.is_empty() {
-        return Some(Vec::new());
+        // No value: a read; `0x` alone is no number.
+        return unprefixed.is_none().then(Vec::new);
     }
     if digits.len() > 16 || !digits.chars().all(|c| c.is_ascii_hexdigit()) {
         return None;
