@@ -214,6 +214,12 @@ fn json_prints_each_answer_as_its_frame_with_the_value_read() {
         ),
         "{ni}"
     );
+    // A value longer than 6 bytes is in `data` alone: no JSON number holds every one.
+    let op = json(&["OP"], 0);
+    assert_eq!(
+        (op["data"].as_str().map(str::len), op.get("value")),
+        (Some(16), None)
+    );
     // A refusal prints its answer too, and fails as in text.
     let refused = json(&["NI", "twenty-one characters"], 1);
     assert_eq!(refused["status_name"], "invalid_parameter", "{refused}");

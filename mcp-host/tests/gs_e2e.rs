@@ -232,6 +232,31 @@ fn unknown_mav_is_a_delivery_failure() {
     );
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("address_not_found"), "{stderr}");
+    // In JSON the refusal prints too, and the exit code is the same.
+    let out = sim.gs(&[
+        "send",
+        "--to",
+        "0013a200deadbeef",
+        "--format",
+        "json",
+        "landing",
+        "on",
+    ]);
+    assert_eq!(out.status.code(), Some(5));
+    let failed: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(
+        (
+            &failed["result"],
+            &failed["delivery_name"],
+            &failed["mcp"]["type"]
+        ),
+        (
+            &"failed".into(),
+            &"address_not_found".into(),
+            &"landing".into()
+        ),
+        "{failed}"
+    );
 }
 
 #[test]

@@ -148,7 +148,9 @@ pub struct NodeIdentificationIndicatorRepr<'a> {
     /// Receive options bit field (0x01 acknowledged, 0x02 broadcast...).
     pub options: u8,
     /// The announcing radio: its addresses, node identifier, parent, role, profile and
-    /// manufacturer ids; its `status` byte is the [`SourceEvent`].
+    /// manufacturer ids; its `status` byte is the [`SourceEvent`]. An identifier
+    /// holding a 0x00 encodes as given, and so does not parse back (its 0x00 ends it on
+    /// the wire), as [`NodeInfo::emit`] says.
     pub node: NodeInfo<'a>,
 }
 

@@ -132,14 +132,15 @@ fn answer_line(name: &str, command: &[u8; 2], data: &[u8], set: bool) -> String 
 }
 
 /// An answer as a JSON object: the response frame's, with `value` added when the
-/// answer holds one (text for a text parameter, else a number of up to 8 bytes).
+/// answer holds one (text for a text parameter, else a number of up to 6 bytes, which
+/// every JSON reader takes exactly; a longer one is in `data` alone).
 fn answer_json(frame: &Frame<'_>, command: &[u8; 2], data: &[u8]) -> serde_json::Value {
     let mut json = mcp_host::render::json::frame(frame);
     let value = if data.is_empty() {
         None
     } else if is_text(command) {
         Some(String::from_utf8_lossy(data).into_owned().into())
-    } else if data.len() <= 8 {
+    } else if data.len() <= 6 {
         Some(
             data.iter()
                 .fold(0u64, |n, &b| (n << 8) | u64::from(b))

@@ -3,7 +3,7 @@
 use clap::Args;
 use futures::StreamExt;
 use mcp_core::{Packet, Report, Waypoint};
-use mcp_host::{DeliveryReport, Event, FrameId, PacketStream, SendOptions};
+use mcp_host::{DeliveryReport, Event, FrameId, PacketStream, SendError, SendOptions};
 use xbee_api::{Address64, ReceivePacketRepr};
 
 use crate::command::CommandArgs;
@@ -69,10 +69,13 @@ pub(crate) async fn run(args: SendArgs) -> Result<(), Failure> {
             FrameId::Auto
         },
     };
-    let report = sender
-        .send_payload(args.to, payload.clone(), options)
-        .await
-        .map_err(|e| diagnosed_send(e, &args.link, &sender.stats()))?;
+    let report = sender.send_payload(args.to, payload.clone(), options).await;
+    // The radio's refusal is an answer too: JSON prints it, with the failure on
+    // standard error.
+    if let (Format::Json, Err(error @ SendError::Delivery { .. })) = (args.format, &report) {
+        out!("{}", failure_json(error, &args, &payload));
+    }
+    let report = report.map_err(|e| diagnosed_send(e, &args.link, &sender.stats()))?;
     let mut json = (args.format == Format::Json).then(|| report_json(&report, &args, &payload));
     if json.is_none() {
         let what = mcp_host::render::text::mcp(&payload);
@@ -149,6 +152,31 @@ fn report_json(report: &DeliveryReport, args: &SendArgs, payload: &[u8]) -> serd
             json["id"] = 0.into();
         }
         _ => json["result"] = "other".into(),
+    }
+    json["mcp"] = mcp_host::render::json::mcp(payload);
+    json
+}
+
+/// A delivery failure as a JSON object: `{"result":"failed",...}` with the transmit
+/// status's fields, where the MAV is and what went.
+fn failure_json(error: &SendError, args: &SendArgs, payload: &[u8]) -> serde_json::Value {
+    let mut json = serde_json::json!({ "result": "failed", "dst64": args.to.to_string() });
+    if let SendError::Delivery {
+        status,
+        retries,
+        discovery,
+        ..
+    } = *error
+    {
+        json["delivery"] = u8::from(status).into();
+        if let Some(name) = status.name() {
+            json["delivery_name"] = name.into();
+        }
+        json["retries"] = retries.into();
+        json["discovery"] = u8::from(discovery).into();
+        if let Some(name) = discovery.name() {
+            json["discovery_name"] = name.into();
+        }
     }
     json["mcp"] = mcp_host::render::json::mcp(payload);
     json
