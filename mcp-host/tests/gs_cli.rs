@@ -898,8 +898,9 @@ fn a_one_shot_command_on_tcp_listen_waits_for_its_peer() {
     let dir = tempdir();
     let file = dir.join("one.mcprec");
     std::fs::write(&file, modem_status_recording(1)).unwrap();
-    // A free port: replay listens there, the peer connects once it does.
-    let port = common::unused_port();
+    // A port held free: replay listens there, the peer connects once it does.
+    let reserved = common::ReservedPort::new();
+    let port = reserved.port;
     let peer = std::thread::spawn(move || {
         let deadline = std::time::Instant::now() + std::time::Duration::from_secs(20);
         let mut socket = loop {
@@ -1070,7 +1071,8 @@ fn a_negative_number_gets_the_options_own_message() {
 
 #[test]
 fn monitor_waits_for_a_link_that_is_not_there_yet() {
-    let port = common::unused_port();
+    let reserved = common::ReservedPort::new();
+    let port = reserved.port;
     let link = format!("tcp:127.0.0.1:{port}");
     // Without --wait: nothing listens, exit 3 at once.
     assert_eq!(
@@ -1095,7 +1097,7 @@ fn monitor_waits_for_a_link_that_is_not_there_yet() {
         .starts_with(&waiting)
     {}
     // The radio comes: its modem status is the one item counted.
-    let listener = std::net::TcpListener::bind(("127.0.0.1", port)).unwrap();
+    let listener = reserved.listen();
     let (mut radio, _) = listener.accept().unwrap();
     radio
         .write_all(&[0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F])

@@ -202,7 +202,8 @@ async fn without_reconnection_the_link_closes_and_the_stream_ends() {
 
 #[tokio::test]
 async fn connect_fails_fast_when_the_first_connection_fails() {
-    let port = unused_port();
+    let reserved = ReservedPort::new();
+    let port = reserved.port;
     let link = format!("tcp:127.0.0.1:{port}").parse().unwrap();
     let err = mcp_host::connect(&link, LinkOptions::default())
         .await
@@ -595,7 +596,8 @@ async fn malformed_frames_from_a_peer_are_not_warnings() {
 #[tokio::test]
 async fn wait_for_link_connects_once_the_peer_is_there() {
     // A port nobody listens on yet.
-    let port = unused_port();
+    let reserved = ReservedPort::new();
+    let port = reserved.port;
     let link: mcp_host::Link = format!("tcp:127.0.0.1:{port}").parse().unwrap();
     // Without the option, connect fails at once.
     assert!(
@@ -619,7 +621,7 @@ async fn wait_for_link_connects_once_the_peer_is_there() {
     let err = sender.send(MAV, &Command::time(1)).await.unwrap_err();
     assert!(err.to_string().contains("not connected yet"), "{err}");
 
-    let listener = TcpListener::bind(("127.0.0.1", port)).await.unwrap();
+    let listener = reserved.listen_tokio();
     let mut fake = accept(&listener, ApiMode::Escaped).await;
     assert!(matches!(
         next_link_event(&mut stream).await,

@@ -114,8 +114,9 @@ async fn tcp_reconnects_after_the_peer_goes_away() {
 
 #[tokio::test]
 async fn tcp_reconnect_retries_until_the_port_listens_again() {
-    // Find a free port, then close it so that the first attempts are refused.
-    let port = common::unused_port();
+    // A port held but not listening: the first attempts are refused.
+    let reserved = common::ReservedPort::new();
+    let port = reserved.port;
     let link: Link = format!("tcp:127.0.0.1:{port}").parse().unwrap();
     let options = fast_reconnect();
     let mut connector = Connector::new(&link, &options).await.unwrap();
@@ -131,7 +132,7 @@ async fn tcp_reconnect_retries_until_the_port_listens_again() {
         let transport = connector.reopen(&options.reconnect).await;
         transport.map(|t| t.peer().to_owned())
     });
-    let listener = TcpListener::bind(("127.0.0.1", port)).await.unwrap();
+    let listener = reserved.listen_tokio();
     let (_peer, _) = timeout(GUARD, listener.accept()).await.unwrap().unwrap();
     let peer = timeout(GUARD, reopen).await.unwrap().unwrap().unwrap();
     assert_eq!(peer, format!("127.0.0.1:{port}"));

@@ -352,13 +352,43 @@ pub fn far_end_is_exclusive(path: &std::path::Path) -> bool {
     exclusive != 0
 }
 
-/// A TCP port of 127.0.0.1 that nothing listens on: free a moment ago, for a link that
-/// must find nobody there, or a listener to come later.
-pub fn unused_port() -> u16 {
-    std::net::TcpListener::bind("127.0.0.1:0")
-        .and_then(|listener| listener.local_addr())
-        .expect("a free port")
-        .port()
+/// A TCP port of 127.0.0.1 held bound but not listening: a connection to it is
+/// refused, and no other test can take it meanwhile. [`ReservedPort::listen`] starts
+/// listening on it; a program that binds it with `SO_REUSEADDR` (as tokio does) can
+/// listen there itself.
+pub struct ReservedPort {
+    socket: socket2::Socket,
+    pub port: u16,
+}
+
+impl ReservedPort {
+    pub fn new() -> Self {
+        use socket2::{Domain, Socket, Type};
+        let socket = Socket::new(Domain::IPV4, Type::STREAM, None).expect("a socket");
+        socket.set_reuse_address(true).expect("SO_REUSEADDR");
+        let any: std::net::SocketAddr = "127.0.0.1:0".parse().unwrap();
+        socket.bind(&any.into()).expect("a free port");
+        let port = socket
+            .local_addr()
+            .ok()
+            .and_then(|a| a.as_socket())
+            .expect("a bound address")
+            .port();
+        ReservedPort { socket, port }
+    }
+
+    /// Listens on the port now.
+    pub fn listen(self) -> std::net::TcpListener {
+        self.socket.listen(16).expect("listen");
+        self.socket.into()
+    }
+
+    /// [`listen`](Self::listen), for tokio.
+    pub fn listen_tokio(self) -> tokio::net::TcpListener {
+        let listener = self.listen();
+        listener.set_nonblocking(true).expect("non-blocking");
+        tokio::net::TcpListener::from_std(listener).expect("in the runtime")
+    }
 }
 
 /// Adds `network`'s coordinator on a TCP port of this machine, found free (its
