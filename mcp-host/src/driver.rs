@@ -328,11 +328,11 @@ impl Driver {
         }
     }
 
-    /// Runs until the link ends for good or nobody holds a sender or the stream.
-    pub(crate) async fn run(mut self, mut transport: Option<Transport>, tried: bool) {
+    /// Runs until the link ends for good or nobody holds a sender or the stream. `tried`:
+    /// `connect` tried the first open already (and it failed), so the next waits the
+    /// reconnection delay.
+    pub(crate) async fn run(mut self, mut transport: Option<Transport>, mut tried: bool) {
         let mut ever_connected = false;
-        // The first open, when `connect` tried it already, waits the reconnection delay.
-        let mut tried = tried;
         let mut last_failure = None;
         loop {
             let current = match transport.take() {
