@@ -1,8 +1,7 @@
 //! What the library logs, on standard error: by default its warnings, each a line
 //! `mcp-gs: MESSAGE: ERROR (key value, ...)` like the command's own messages; with
-//! `MCP_LOG` set
-//! (`MCP_LOG=debug`, `MCP_LOG=mcp_host::hub=info`), every event it selects, with the
-//! time, the level and where it comes from, for a bug report.
+//! `MCP_LOG` set (`MCP_LOG=debug`, `MCP_LOG=mcp_host::hub=info`), every event it
+//! selects, with the time, the level and where it comes from, for a bug report.
 
 use std::fmt;
 
@@ -82,7 +81,7 @@ where
 {
     fn format_event(
         &self,
-        ctx: &FmtContext<'_, S, N>,
+        _ctx: &FmtContext<'_, S, N>,
         mut writer: Writer<'_>,
         event: &Event<'_>,
     ) -> fmt::Result {
@@ -90,7 +89,6 @@ where
         if *event.metadata().level() == Level::ERROR {
             writer.write_str("error: ")?;
         }
-        let _ = ctx;
         let mut line = Line::default();
         event.record(&mut line);
         writeln!(writer, "{line}")
