@@ -83,15 +83,28 @@ pub enum LinkError {
 
 impl LinkError {
     /// Whether trying again later may succeed (a device may come back, a peer may start
-    /// listening); false for errors that no retry can fix.
+    /// listening); false for errors that no retry can fix: settings a serial port
+    /// refuses, an address nobody can connect to (port 0, an address of no interface),
+    /// and the listening and pseudo-terminal errors.
+    ///
+    /// The system does not tell a device still to come from a path that will never be
+    /// one (a regular file, a directory): every other serial error counts as
+    /// retryable.
     pub fn is_retryable(&self) -> bool {
-        !matches!(
-            self,
+        use std::io::ErrorKind as Io;
+        match self {
+            LinkError::Serial { source, .. } => {
+                source.kind() != tokio_serial::ErrorKind::InvalidInput
+            }
+            LinkError::Connect { source, .. } => {
+                !matches!(source.kind(), Io::InvalidInput | Io::AddrNotAvailable)
+            }
             LinkError::Listen { .. }
-                | LinkError::Pty(_)
-                | LinkError::PtyClosed
-                | LinkError::ReconnectDisabled
-        )
+            | LinkError::Pty(_)
+            | LinkError::PtyClosed
+            | LinkError::ReconnectDisabled => false,
+            _ => true,
+        }
     }
 }
 

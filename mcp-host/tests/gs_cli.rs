@@ -1071,6 +1071,7 @@ fn a_negative_number_gets_the_options_own_message() {
 
 #[test]
 fn monitor_waits_for_a_link_that_is_not_there_yet() {
+    use std::io::Read;
     let reserved = common::ReservedPort::new();
     let port = reserved.port;
     let link = format!("tcp:127.0.0.1:{port}");
@@ -1081,8 +1082,25 @@ fn monitor_waits_for_a_link_that_is_not_there_yet() {
             .code(),
         Some(3)
     );
+    // --wait cannot ask the radio its mode first, and a path that is no device never
+    // becomes one.
+    let output = run(&["monitor", "--link", &link, "--wait", "--api-mode", "auto"]);
+    assert_eq!(output.status.code(), Some(2));
+    let dir = tempdir();
+    let file = dir.join("not-a-tty");
+    std::fs::write(&file, b"").unwrap();
+    let serial = format!("serial:{}", file.display());
+    let output = run(&["monitor", "--link", &serial, "--wait"]);
+    assert_eq!(output.status.code(), Some(3));
+    assert!(
+        String::from_utf8_lossy(&output.stderr).contains("is not a serial device"),
+        "{output:?}"
+    );
+
+    let record = dir.join("flight.mcprec");
     let mut child = gs()
         .args(["monitor", "--link", &link, "--count", "1", "--wait"])
+        .args(["--record", record.to_str().unwrap()])
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
@@ -1096,9 +1114,28 @@ fn monitor_waits_for_a_link_that_is_not_there_yet() {
         .expect("the waiting line")
         .starts_with(&waiting)
     {}
-    // The radio comes: its modem status is the one item counted.
+    // The recording is made once the link is up, not before.
+    assert!(!record.exists());
+    // The radio comes. Asked its mode, it says 2 (monitor reads mode 1): a warning.
     let listener = reserved.listen();
     let (mut radio, _) = listener.accept().unwrap();
+    let mut asked = [0u8; 8];
+    radio.read_exact(&mut asked).unwrap();
+    assert_eq!(
+        (&asked[..4], &asked[5..7]),
+        (&[0x7E, 0x00, 0x04, 0x08][..], &b"AP"[..])
+    );
+    let answer = [0x88, asked[4], b'A', b'P', 0x00, 0x02];
+    let sum = answer.iter().fold(0u8, |s, b| s.wrapping_add(*b));
+    radio.write_all(&[0x7E, 0x00, 0x06]).unwrap();
+    radio.write_all(&answer).unwrap();
+    radio.write_all(&[0xFF - sum]).unwrap();
+    while !errors
+        .recv_timeout(std::time::Duration::from_secs(30))
+        .expect("the mode warning")
+        .contains("the radio is in API mode 2 (AP=2) but --api-mode is 1")
+    {}
+    // Its modem status is the one item counted.
     radio
         .write_all(&[0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F])
         .unwrap();
@@ -1109,6 +1146,7 @@ fn monitor_waits_for_a_link_that_is_not_there_yet() {
         out.contains("link connected") && out.contains("modem status coordinator_started"),
         "{out}"
     );
+    assert!(record.exists());
 }
 
 #[test]

@@ -624,6 +624,10 @@ fn send_trajectory_checks_the_mavs_report() {
         object["retries"].is_u64() && object["id"].as_u64() > Some(0),
         "{object}"
     );
+    assert_eq!(object["delivery_name"], "success", "{object}");
+    // `result` first, as in the README and as a failure has it.
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.starts_with("{\"result\":\"delivered\","), "{text}");
 
     let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
         .args(["send", "--link", &sim.link, "--timeout", "1", "--to", MAV])

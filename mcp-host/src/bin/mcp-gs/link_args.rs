@@ -113,6 +113,15 @@ impl LinkArgs {
         reconnect: bool,
         wait: bool,
     ) -> Result<(PacketStream, CommandSender), Failure> {
+        if wait {
+            if self.api_mode == ApiModeChoice::Auto {
+                return Err(Failure::input(
+                    "--wait and --api-mode auto do not go together: the mode is asked of the \
+                     radio before anything else, so it must be there; give --api-mode 1 or 2",
+                ));
+            }
+            check_serial_path_to_wait_for(&self.link)?;
+        }
         if !reconnect && matches!(self.link, Link::Pty) {
             return Err(Failure::input(
                 "--link pty makes a new pseudo-terminal, with no radio on it yet: this \
@@ -259,6 +268,15 @@ pub(crate) async fn open_once(
 /// Warns once when the radio's API mode differs from the configured one: the commonest
 /// cause of silently dropped frames.
 pub(crate) async fn check_mode(sender: &CommandSender, configured: ApiMode) {
+    // A link waited for (`--wait`) is asked once it is up.
+    let mut state = sender.watch_link_state();
+    if state
+        .wait_for(|s| *s == mcp_host::LinkState::Connected)
+        .await
+        .is_err()
+    {
+        return;
+    }
     let Ok(response) = sender.at(*b"AP", &[], Some(Duration::from_secs(3))).await else {
         return;
     };
@@ -477,6 +495,26 @@ pub(crate) fn check_serial_path(link: &Link) -> Result<(), Failure> {
         }
         Err(e) => Err(Failure::link(format!("cannot open {link}: {e}"))),
     }
+}
+
+/// For `--wait`: a serial path that is there must be a device (a file or a directory
+/// never becomes one); a path that is not there yet may come (a radio plugged in later).
+pub(crate) fn check_serial_path_to_wait_for(link: &Link) -> Result<(), Failure> {
+    let Link::Serial { path, .. } = link else {
+        return Ok(());
+    };
+    #[cfg(unix)]
+    if let Ok(meta) = std::fs::metadata(path) {
+        use std::os::unix::fs::FileTypeExt;
+        if !meta.file_type().is_char_device() {
+            return Err(Failure::link(format!(
+                "cannot open {link}: {path} is not a serial device (`mcp-gs ports` lists the \
+                 serial ports present)"
+            )));
+        }
+    }
+    let _ = path;
+    Ok(())
 }
 
 /// A failure to open `link`.

@@ -72,9 +72,11 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
     }
     let (mut stream, sender) = args.link.open_with(true, args.wait).await?;
     let mut ctrl_c = std::pin::pin!(crate::interrupt::ctrl_c());
+    // With --wait the link may not be there yet: the file is made once it is.
+    let waiting = args.wait && sender.link_state() != mcp_host::LinkState::Connected;
     let mut recorder = match &args.record {
-        Some(path) => Some(create_recording(path, args.force)?),
-        None => None,
+        Some(path) if !waiting => Some(create_recording(path, args.force)?),
+        _ => None,
     };
     crate::link_args::announce_radio_side(stream.info());
     if let (
@@ -107,6 +109,11 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
             }
         };
         let Some(event) = event else { break };
+        if let (None, Some(path), Event::Link(LinkEvent::Connected { .. })) =
+            (&recorder, &args.record, &event)
+        {
+            recorder = Some(create_recording(path, args.force)?);
+        }
         if let Some(recorder) = &mut recorder {
             if let Some(frame) = frame_data(&event) {
                 recorder

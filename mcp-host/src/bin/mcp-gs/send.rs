@@ -4,7 +4,7 @@ use clap::Args;
 use futures::StreamExt;
 use mcp_core::{Packet, Report, Waypoint};
 use mcp_host::{DeliveryReport, Event, FrameId, PacketStream, SendError, SendOptions};
-use xbee_api::{Address64, ReceivePacketRepr};
+use xbee_api::{Address64, DeliveryStatus, ReceivePacketRepr};
 
 use crate::command::CommandArgs;
 use crate::link_args::{LinkArgs, diagnosed, diagnosed_send};
@@ -22,9 +22,10 @@ pub(crate) struct SendArgs {
     /// Fire and forget: frame id 0, the radio sends no transmit status.
     #[arg(long)]
     no_status: bool,
-    /// Output format: `json` prints one object, `{"result":"delivered",...}` with the
-    /// transmit status's fields or `{"result":"written",...}`, the packet as `mcp`, and
-    /// for a trajectory `trajectory_confirmed`.
+    /// Output format: `json` prints one object, `{"result":"delivered",...}` or
+    /// `{"result":"failed",...}` with the transmit status's fields, or
+    /// `{"result":"written",...}` (--no-status); the packet as `mcp`; and, for a
+    /// trajectory to one MAV with a status asked, `trajectory_confirmed`.
     #[arg(long, value_enum, default_value_t = Format::Text)]
     format: Format,
     /// The command.
@@ -130,7 +131,12 @@ pub(crate) async fn run(args: SendArgs) -> Result<(), Failure> {
 /// The delivery report as a JSON object, with the fields of a transmit status frame's
 /// (`id`, `dst16`, `retries`, `discovery`), where the MAV is and what went.
 fn report_json(report: &DeliveryReport, args: &SendArgs, payload: &[u8]) -> serde_json::Value {
-    let mut json = serde_json::json!({ "dst64": args.to.to_string() });
+    let result = match report {
+        DeliveryReport::Delivered { .. } => "delivered",
+        DeliveryReport::Written => "written",
+        _ => "other",
+    };
+    let mut json = serde_json::json!({ "result": result, "dst64": args.to.to_string() });
     match *report {
         DeliveryReport::Delivered {
             frame_id,
@@ -138,20 +144,19 @@ fn report_json(report: &DeliveryReport, args: &SendArgs, payload: &[u8]) -> serd
             retries,
             discovery,
         } => {
-            json["result"] = "delivered".into();
             json["id"] = frame_id.into();
             json["dst16"] = dst16.to_string().into();
+            let success = DeliveryStatus::Success;
+            json["delivery"] = u8::from(success).into();
+            json["delivery_name"] = success.name().into();
             json["retries"] = retries.into();
             json["discovery"] = u8::from(discovery).into();
             if let Some(name) = discovery.name() {
                 json["discovery_name"] = name.into();
             }
         }
-        DeliveryReport::Written => {
-            json["result"] = "written".into();
-            json["id"] = 0.into();
-        }
-        _ => json["result"] = "other".into(),
+        DeliveryReport::Written => json["id"] = 0.into(),
+        _ => {}
     }
     json["mcp"] = mcp_host::render::json::mcp(payload);
     json
