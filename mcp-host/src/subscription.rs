@@ -17,9 +17,11 @@ use crate::Event;
 ///
 /// It holds at least [`LinkOptions::event_capacity`](crate::LinkOptions::event_capacity)
 /// events for its reader (that, rounded up to a power of two). A reader that falls
-/// further behind misses the oldest ones and goes on with the rest
-/// ([`missed`](Self::missed) counts them), and it never holds up the link or the other
-/// readers. It ends after [`LinkEvent::Closed`](crate::LinkEvent) (whose reason says
+/// further behind misses the oldest ones, link events among them (unlike the
+/// [`PacketStream`](crate::PacketStream), which holds those back), and goes on with the
+/// rest ([`missed`](Self::missed) counts them; read
+/// [`CommandSender::link_state`](crate::CommandSender::link_state) after missing some);
+/// it never holds up the link or the other readers. It ends after [`LinkEvent::Closed`](crate::LinkEvent) (whose reason says
 /// when the link ended because its stream and every sender were dropped), or at once
 /// when taken from a link that has ended.
 ///

@@ -168,6 +168,14 @@ fn decode_reads_a_node_identification() {
             "profile": 0xC105, "manufacturer": 0x101E,
         })]
     );
+    // An identifier byte that is no printable ASCII is kept, as `\xNN`, as in a message.
+    let hex = "7E 00 20 95 00 13 A2 00 40 52 2B AA 7D 84 02 7D 84 00 13 A2 00 40 52 2B AA \
+               E9 00 FF FE 01 01 C1 05 10 1E 52";
+    assert!(decode_hex(hex, "text").contains(r#"router "\xe9" parent"#));
+    assert_eq!(
+        json_lines(&decode_hex(hex, "json"))[0]["identifier"],
+        r"\xe9"
+    );
 }
 
 #[test]

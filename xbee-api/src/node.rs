@@ -23,7 +23,8 @@ code_enum! {
     }
 }
 
-/// Why node discovery data is not a [`NodeInfo`].
+/// Why node information (a node discovery answer, a Node Identification Indicator's) is
+/// not a [`NodeInfo`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
@@ -50,14 +51,14 @@ impl fmt::Display for NodeInfoError {
         match self {
             Self::TooShort { needed, got } => write!(
                 f,
-                "node discovery answer too short: needs {needed} bytes, got {got}"
+                "node information too short: needs {needed} bytes, got {got}"
             ),
             Self::UnterminatedIdentifier => {
-                f.write_str("node discovery answer: the node identifier has no 0x00 after it")
+                f.write_str("node information: the node identifier has no 0x00 after it")
             }
             Self::TrailingBytes { len } => write!(
                 f,
-                "node discovery answer: {len} bytes after the manufacturer id, expected 0, 1, 4 \
+                "node information: {len} bytes after the manufacturer id, expected 0, 1, 4 \
                  or 5"
             ),
         }

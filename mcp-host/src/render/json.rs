@@ -4,8 +4,9 @@
 //! fields are only ever added. Addresses and hex data are lowercase hex; identifiers
 //! and codes are numbers, with their names beside them (`*_name`) where the protocol
 //! or Digi names them; non-finite floats are the strings `"NaN"`, `"Infinity"` and
-//! `"-Infinity"`; message and warning text keeps printable ASCII and writes any other
-//! byte as `\xNN` (a backslash as `\\`), so the original bytes can always be recovered.
+//! `"-Infinity"`; message and warning text (and a node identifier) keeps printable
+//! ASCII and writes any other byte as `\xNN` (a backslash as `\\`), so the original
+//! bytes can always be recovered.
 
 use mcp_core::{
     Command, Packet, Report, SlaveAddresses, StatusRequest, Telemetry, Text, Waypoints,
@@ -165,10 +166,8 @@ pub fn frame(frame: &Frame<'_>) -> Value {
             m.insert("options".into(), ni.options.into());
             m.insert("addr64".into(), node.addr64.to_string().into());
             m.insert("addr16".into(), node.addr16.to_string().into());
-            m.insert(
-                "identifier".into(),
-                String::from_utf8_lossy(node.identifier).into(),
-            );
+            // As message text: any byte not printable ASCII as `\xNN`.
+            m.insert("identifier".into(), text_json(&Text::new(node.identifier)));
             m.insert("parent".into(), node.parent.to_string().into());
             named(
                 &mut m,

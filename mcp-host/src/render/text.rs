@@ -116,11 +116,11 @@ pub fn frame(frame: &Frame<'_>) -> String {
         ),
         Frame::NodeIdentificationIndicator(ni) => write!(
             s,
-            "node identification {}/{} {} {:?} parent {}: {} (0x{:02x}), from {}/{} opt {:02x}",
+            "node identification {}/{} {} \"{}\" parent {}: {} (0x{:02x}), from {}/{} opt {:02x}",
             ni.node.addr64,
             ni.node.addr16,
             ni.node.device_type,
-            String::from_utf8_lossy(ni.node.identifier),
+            mcp_core::Text::new(ni.node.identifier).to_string(),
             ni.node.parent,
             ni.source_event(),
             u8::from(ni.source_event()),
