@@ -784,8 +784,8 @@ impl Serve {
             Event::Link(link) => {
                 match link {
                     LinkEvent::Disconnected { reason } if self.radio_up => tracing::warn!(
-                        "hub: radio lost: {reason} (clients disconnected; not accepting \
-                         clients until it is back)"
+                        "hub: radio lost: {reason}; clients disconnected, and none accepted \
+                         until it is back"
                     ),
                     _ => tracing::info!(?link, "hub: radio link"),
                 }

@@ -131,7 +131,8 @@ fn the_hub_says_when_the_radio_is_lost_and_when_it_is_back() {
     drop(socket);
     let lost = line_with(&err, "radio lost");
     assert!(
-        lost.contains("not accepting clients until it is back"),
+        lost.contains("clients disconnected, and none accepted until it is back")
+            && !lost.contains(") ("),
         "{lost}"
     );
     // A line like the command's own, not a log record.
