@@ -120,7 +120,7 @@ pub fn frame(frame: &Frame<'_>) -> String {
             ni.node.addr64,
             ni.node.addr16,
             ni.node.device_type,
-            mcp_core::Text::new(ni.node.identifier).to_string(),
+            mcp_core::Text::new(ni.node.identifier),
             ni.node.parent,
             ni.source_event(),
             u8::from(ni.source_event()),
