@@ -6,7 +6,7 @@ use std::time::Duration;
 
 use tokio::time::Instant;
 
-use super::router::{COMMAND_TIMEOUT, GUARD_TIME_MS};
+use super::router::{COMMAND_TIMEOUT, GUARD_TIME_MS, hex_value};
 
 /// `CN`: leave command mode.
 const CN: [u8; 2] = *b"CN";
@@ -210,18 +210,12 @@ fn command(text: &str) -> Option<([u8; 2], &str)> {
     Some((command, value))
 }
 
-/// A one-byte value in hex, with or without `0x`, as a radio takes it.
+/// A one-byte value, read as every number typed in command mode is ([`hex_value`]).
 fn hex_u8(value: &str) -> Option<u8> {
-    let value = value.trim();
-    let digits = value
-        .strip_prefix("0x")
-        .or_else(|| value.strip_prefix("0X"))
-        .unwrap_or(value);
-    // Digits only: no sign, as a radio reads them.
-    if digits.is_empty() || !digits.chars().all(|c| c.is_ascii_hexdigit()) {
-        return None;
+    match hex_value(value)?.as_slice() {
+        &[byte] => Some(byte),
+        _ => None,
     }
-    u8::from_str_radix(digits, 16).ok()
 }
 
 #[cfg(test)]

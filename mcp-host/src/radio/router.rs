@@ -829,7 +829,7 @@ pub(crate) enum LinkMode {
 /// A number typed in AT command mode: up to 16 hex digits (spaces ignored, `0x` before
 /// them allowed), as big-endian bytes without leading zero bytes (one 0x00 for zero);
 /// nothing for no digits. `None` for anything else.
-fn hex_value(text: &str) -> Option<Vec<u8>> {
+pub(super) fn hex_value(text: &str) -> Option<Vec<u8>> {
     let text = text.trim_start();
     let unprefixed = text.strip_prefix("0x").or_else(|| text.strip_prefix("0X"));
     let digits: String = unprefixed
