@@ -4,7 +4,7 @@ use clap::Args;
 use futures::StreamExt;
 use mcp_core::{Packet, Report, Waypoint};
 use mcp_host::{DeliveryReport, Event, FrameId, PacketStream, SendError, SendOptions};
-use xbee_api::{Address64, DeliveryStatus, ReceivePacketRepr};
+use xbee_api::{Address64, DeliveryStatus, DiscoveryStatus, ReceivePacketRepr};
 
 use crate::command::CommandArgs;
 use crate::link_args::{LinkArgs, diagnosed, diagnosed_send};
@@ -146,14 +146,7 @@ fn report_json(report: &DeliveryReport, args: &SendArgs, payload: &[u8]) -> serd
         } => {
             json["id"] = frame_id.into();
             json["dst16"] = dst16.to_string().into();
-            let success = DeliveryStatus::Success;
-            json["delivery"] = u8::from(success).into();
-            json["delivery_name"] = success.name().into();
-            json["retries"] = retries.into();
-            json["discovery"] = u8::from(discovery).into();
-            if let Some(name) = discovery.name() {
-                json["discovery_name"] = name.into();
-            }
+            status_fields(&mut json, DeliveryStatus::Success, retries, discovery);
         }
         DeliveryReport::Written => json["id"] = 0.into(),
         _ => {}
@@ -173,18 +166,29 @@ fn failure_json(error: &SendError, args: &SendArgs, payload: &[u8]) -> serde_jso
         ..
     } = *error
     {
-        json["delivery"] = u8::from(status).into();
-        if let Some(name) = status.name() {
-            json["delivery_name"] = name.into();
-        }
-        json["retries"] = retries.into();
-        json["discovery"] = u8::from(discovery).into();
-        if let Some(name) = discovery.name() {
-            json["discovery_name"] = name.into();
-        }
+        status_fields(&mut json, status, retries, discovery);
     }
     json["mcp"] = mcp_host::render::json::mcp(payload);
     json
+}
+
+/// A transmit status's delivery, retries and discovery, codes with their names beside
+/// them, as a `transmit_status` frame's object has them.
+fn status_fields(
+    json: &mut serde_json::Value,
+    delivery: DeliveryStatus,
+    retries: u8,
+    discovery: DiscoveryStatus,
+) {
+    json["delivery"] = u8::from(delivery).into();
+    if let Some(name) = delivery.name() {
+        json["delivery_name"] = name.into();
+    }
+    json["retries"] = retries.into();
+    json["discovery"] = u8::from(discovery).into();
+    if let Some(name) = discovery.name() {
+        json["discovery_name"] = name.into();
+    }
 }
 
 /// Waits for the MAV's trajectory report holding `sent`. Reports of other trajectories
