@@ -120,7 +120,7 @@ impl LinkArgs {
                      radio before anything else, so it must be there; give --api-mode 1 or 2",
                 ));
             }
-            check_serial_path_to_wait_for(&self.link)?;
+            check_serial_path(&self.link, true)?;
         }
         if !reconnect && matches!(self.link, Link::Pty) {
             return Err(Failure::input(
@@ -468,8 +468,12 @@ pub(crate) fn diagnosed_unanswered(failure: Failure, link: &LinkArgs, stats: &St
 /// `radio` and `sim` start, which keep reopening a link that went away (a USB adapter
 /// pulled out and plugged in again): for a mistyped path, that would be forever.
 ///
+/// With `wait` (`monitor --wait`), a path that is not there yet may come (a radio
+/// plugged in later), but one that is there must be a device: a file or a directory
+/// never becomes one.
+///
 /// On Windows, where a port's name (`COM3`) is no file path, nothing is checked.
-pub(crate) fn check_serial_path(link: &Link) -> Result<(), Failure> {
+pub(crate) fn check_serial_path(link: &Link, wait: bool) -> Result<(), Failure> {
     let Link::Serial { path, .. } = link else {
         return Ok(());
     };
@@ -477,10 +481,15 @@ pub(crate) fn check_serial_path(link: &Link) -> Result<(), Failure> {
         return Ok(());
     }
     match std::fs::metadata(path) {
+        Ok(meta) if wait && !is_device(&meta) => Err(Failure::link(format!(
+            "cannot open {link}: {path} is not a serial device (`mcp-gs ports` lists the \
+             serial ports present)"
+        ))),
         Ok(meta) if meta.is_dir() => Err(Failure::link(format!(
             "cannot open {link}: {path} is a directory, not a serial device"
         ))),
         Ok(_) => Ok(()),
+        Err(_) if wait => Ok(()),
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
             let hint = match misread_baud(link) {
                 Some((path, baud)) => format!(
@@ -497,24 +506,17 @@ pub(crate) fn check_serial_path(link: &Link) -> Result<(), Failure> {
     }
 }
 
-/// For `--wait`: a serial path that is there must be a device (a file or a directory
-/// never becomes one); a path that is not there yet may come (a radio plugged in later).
-pub(crate) fn check_serial_path_to_wait_for(link: &Link) -> Result<(), Failure> {
-    let Link::Serial { path, .. } = link else {
-        return Ok(());
-    };
+/// Whether `meta` is a character device's, as a serial port is.
+fn is_device(meta: &std::fs::Metadata) -> bool {
     #[cfg(unix)]
-    if let Ok(meta) = std::fs::metadata(path) {
-        use std::os::unix::fs::FileTypeExt;
-        if !meta.file_type().is_char_device() {
-            return Err(Failure::link(format!(
-                "cannot open {link}: {path} is not a serial device (`mcp-gs ports` lists the \
-                 serial ports present)"
-            )));
-        }
+    {
+        std::os::unix::fs::FileTypeExt::is_char_device(&meta.file_type())
     }
-    let _ = path;
-    Ok(())
+    #[cfg(not(unix))]
+    {
+        let _ = meta;
+        true
+    }
 }
 
 /// A failure to open `link`.

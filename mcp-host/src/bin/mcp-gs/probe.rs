@@ -48,7 +48,7 @@ pub(crate) async fn run(args: ProbeArgs) -> Result<(), Failure> {
             "probe tries the baud rates of a serial port: give serial:PATH",
         ));
     };
-    crate::link_args::check_serial_path(&args.link)?;
+    crate::link_args::check_serial_path(&args.link, false)?;
     let timeout = Duration::from_secs_f64(args.timeout);
     let guard = args.guard.duration();
     for baud in ORDER {

@@ -617,7 +617,7 @@ pub(crate) async fn watch(
 pub(crate) async fn run(args: RadioArgs) -> Result<(), Failure> {
     let links = std::iter::once(&args.coordinator).chain(args.nodes.iter().map(|n| &n.link));
     for link in links {
-        crate::link_args::check_serial_path(&link.link)?;
+        crate::link_args::check_serial_path(&link.link, false)?;
     }
     let config = args.net.config(MAX_UNICAST)?;
     let addresses: Vec<Address64> = args.nodes.iter().map(|n| n.address).collect();

@@ -85,7 +85,7 @@ Example: mcp-gs sim --link pty --mavs 2   (then connect a ground station to the 
 
 /// Runs `sim`.
 pub(crate) async fn run(args: SimArgs) -> Result<(), Failure> {
-    crate::link_args::check_serial_path(&args.link)?;
+    crate::link_args::check_serial_path(&args.link, false)?;
     // Checked as given: the defaults added below never repeat an address.
     check_distinct(&args.addresses, "simulated MAV")?;
     let mut addresses = args.addresses.clone();
