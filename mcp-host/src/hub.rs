@@ -74,9 +74,12 @@
 //! - **Outages:** while the hub's link to the radio is down (a USB radio unplugged), the
 //!   hub disconnects its clients and stops listening (connections are refused), so that
 //!   their links see the outage, stay down quietly, and reconnect once the radio is
-//!   back and the hub listens again on the same address. A radio on a link that waits
-//!   for its first peer (`pty`, `tcp-listen:`) is down until that peer comes: the hub
-//!   listens from then on.
+//!   back and the hub listens again on the same address. The hub holds its port
+//!   meanwhile, so that no other program takes it and its clients' reconnections reach
+//!   nobody else (on Unix; elsewhere it listens again once the port is free). A radio
+//!   on a link that waits for its first peer (`pty`, `tcp-listen:`) is down until that
+//!   peer comes: the hub holds its port from the start and listens once the radio is
+//!   there.
 //!
 //! ```no_run
 //! use mcp_host::hub::Hub;
@@ -92,6 +95,8 @@
 //! # Ok(())
 //! # }
 //! ```
+
+mod port;
 
 use std::cell::Cell;
 use std::net::SocketAddr;
@@ -111,6 +116,7 @@ use tokio_util::sync::CancellationToken;
 use tokio_util::task::TaskTracker;
 use xbee_api::{ApiMode, RawFrame};
 
+use self::port::Port;
 use crate::codec::{CodecItem, XBeeCodec, encode_frame};
 use crate::event::{TX_STATUS_802_15_4, answer_type};
 use crate::ids::IdTable;
@@ -240,16 +246,13 @@ impl Hub {
     /// [`local_addr`](Self::local_addr)). Clients speak the API mode of `options`.
     pub async fn start(link: &Link, options: LinkOptions, listen: &str) -> Result<Hub, HubError> {
         let mode = options.api_mode;
-        let listener = TcpListener::bind(listen)
+        let (port, listener) = Port::bind(listen)
             .await
             .map_err(|source| HubError::Listen {
                 addr: listen.to_owned(),
                 source,
             })?;
-        let local_addr = listener.local_addr().map_err(|source| HubError::Listen {
-            addr: listen.to_owned(),
-            source,
-        })?;
+        let local_addr = port.addr();
         let bytes_per_second = match link {
             Link::Serial { baud, .. } => *baud,
             _ => DEFAULT_RADIO_BAUD,
@@ -291,7 +294,7 @@ impl Hub {
             next_client: 0,
             radio_up,
             radio_seen: radio_up,
-            addr: local_addr,
+            port,
             rebind_failures: 0,
         };
         hub.tasks.spawn(serve.run(stream, listener));
@@ -602,19 +605,19 @@ struct Serve {
     radio_up: bool,
     /// Whether the link to the radio has been up.
     radio_seen: bool,
-    /// Where clients connect, listened on again after an outage.
-    addr: SocketAddr,
+    /// Where clients connect, held during an outage and listened on again after it.
+    port: Port,
     /// Failed attempts to listen again since the radio came back.
     rebind_failures: u32,
 }
 
 impl Serve {
     /// Listens on the hub's address again after an outage of the radio; `None` if that
-    /// fails (another program took the port meanwhile), logged as a warning the first
-    /// time, then at debug level.
+    /// fails (see [`Port::listen`]), logged as a warning the first time, then at debug
+    /// level.
     async fn listen_again(&mut self) -> Option<TcpListener> {
-        let addr = self.addr;
-        match TcpListener::bind(addr).await {
+        let addr = self.port.addr();
+        match self.port.listen().await {
             Ok(listener) => {
                 // As visible as the outage was (warnings are shown by default).
                 if self.radio_seen {
