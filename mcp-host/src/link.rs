@@ -82,6 +82,12 @@ pub enum LinkParseError {
     /// The port is not an integer in 0..=65535.
     #[error("invalid port {0:?} (expected 0-65535)")]
     InvalidPort(String),
+    /// `tcp:HOST:0`: nothing can be connected to port 0 (only `tcp-listen:` takes it,
+    /// for a port the system chooses).
+    #[error(
+        "port 0 in tcp:{0} cannot be connected to (expected 1-65535; port 0 is for tcp-listen, where the system chooses one)"
+    )]
+    PortZero(String),
     /// `pty` followed by anything.
     #[error("unexpected text after pty: {0:?}")]
     TrailingPty(String),
@@ -127,8 +133,11 @@ impl FromStr for Link {
             },
             "serial" => parse_serial(rest.unwrap_or("")),
             "tcp" => {
-                let (host, port) = parse_host_port(rest.unwrap_or(""))?;
-                Ok(Link::Tcp { host, port })
+                let rest = rest.unwrap_or("");
+                match parse_host_port(rest)? {
+                    (_, 0) => Err(LinkParseError::PortZero(rest.to_owned())),
+                    (host, port) => Ok(Link::Tcp { host, port }),
+                }
             }
             "tcp-listen" => {
                 let (addr, port) = parse_host_port(rest.unwrap_or(""))?;
@@ -283,6 +292,8 @@ mod tests {
             ("tcp::80", MissingHost(":80".into())),
             ("tcp:[]:80", MissingHost("[]:80".into())),
             ("tcp:host:65536", InvalidPort("65536".into())),
+            ("tcp:127.0.0.1:0", PortZero("127.0.0.1:0".into())),
+            ("tcp:[::1]:00", PortZero("[::1]:00".into())),
             ("tcp-listen:host:http", InvalidPort("http".into())),
             ("pty:/dev/pts/3", TrailingPty("/dev/pts/3".into())),
             ("tcp://127.0.0.1:9750", UrlForm("tcp".into())),

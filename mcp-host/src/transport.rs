@@ -541,6 +541,17 @@ impl Connector {
             }
             Kind::Tcp { host, port } => {
                 let addr = crate::link::host_port(host, *port);
+                if *port == 0 {
+                    // The system refuses it as it would an absent peer (ECONNREFUSED on
+                    // Linux): retried, it would be waited on for ever.
+                    return Err(LinkError::Connect {
+                        addr,
+                        source: std::io::Error::new(
+                            std::io::ErrorKind::InvalidInput,
+                            "port 0 cannot be connected to",
+                        ),
+                    });
+                }
                 let stream = tokio::time::timeout(
                     self.connect_timeout,
                     TcpStream::connect((host.as_str(), *port)),

@@ -297,6 +297,19 @@ async fn open_errors_are_clear() {
         .unwrap_err();
     assert!(matches!(err, LinkError::Listen { .. }));
     assert!(!err.is_retryable());
+
+    // Port 0 can only be a mistake (`tcp:HOST:0` does not parse): not waited on.
+    let link = Link::Tcp {
+        host: "127.0.0.1".into(),
+        port: 0,
+    };
+    let options = LinkOptions {
+        wait_for_link: true,
+        ..LinkOptions::default()
+    };
+    let err = mcp_host::connect(&link, options).await.unwrap_err();
+    assert!(!err.is_retryable(), "{err}");
+    assert!(err.to_string().contains("port 0"), "{err}");
 }
 
 // Paused clock: the delays below are the reconnection's own sleeps, exactly.
