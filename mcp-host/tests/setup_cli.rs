@@ -2,8 +2,10 @@
 //! in transparent mode (AP=0), as XBee modules leave the factory, is put into API mode
 //! through its AT command mode (`+++`, `ATAP`, `ATAPn`, `ATWR`, `ATCN`) and then answers
 //! API frames; one that does not answer `+++` (here an older radio in API mode, which
-//! takes `+++` in transparent mode only) gets the operator told what to do. And the
-//! simulator's own radio, started as from the factory, is set up and then reaches its MAV.
+//! takes `+++` in transparent mode only) is asked in API frames instead, and found set
+//! up already or the operator told how to set it. And the simulator's own radio, started
+//! as from the factory, is set up, then reaches its MAV, and is found set up the next
+//! time.
 
 mod common;
 
@@ -134,16 +136,20 @@ async fn serve(mut port: Transport, radio: &Mutex<Radio>) {
                 }
             });
             for (frame_id, command) in requests {
-                let value = [ap];
+                let value = match &command {
+                    b"AP" => Some([ap]),
+                    b"BD" => Some([radio.lock().unwrap().bd]),
+                    _ => None,
+                };
                 let response = AtCommandResponseRepr {
                     frame_id,
                     command,
-                    status: if command == *b"AP" {
+                    status: if value.is_some() {
                         AtStatus::Ok
                     } else {
                         AtStatus::InvalidCommand
                     },
-                    data: if command == *b"AP" { &value } else { &[] },
+                    data: value.as_ref().map_or(&[], |value| value),
                 };
                 let mut frame = vec![0u8; response.encoded_len(mode)];
                 let n = response.encode(mode, &mut frame).unwrap();
@@ -264,17 +270,74 @@ async fn transparent_mode_is_no_api_mode_to_set() {
 }
 
 #[tokio::test]
-async fn a_radio_in_api_mode_does_not_answer_plus_plus_plus_and_the_operator_is_told() {
+async fn a_radio_set_up_already_is_checked_and_left_as_it_is() {
+    // An older radio in API mode does not take +++: it is asked in API frames instead.
     let (radio, path) = fake_radio(1).await;
     let out = setup(&format!("serial:{path}"), &["--timeout", "1"]).await;
+    assert!(out.status.success(), "{out:?}");
+    assert_eq!(
+        stdout(&out),
+        format!(
+            "AP = 1 (API mode 1) already\n\
+             checked: the radio answers API frames in mode 1 (use --link serial:{path}:115200)\n"
+        ),
+        "{out:?}"
+    );
+    let slow = format!("serial:{path}:9600");
+    let out = setup(&slow, &["--timeout", "1", "--baud", "9600"]).await;
+    assert!(out.status.success(), "{out:?}");
+    assert_eq!(
+        stdout(&out),
+        format!(
+            "AP = 1 (API mode 1) already\n\
+             BD = 3 (9600 baud) already\n\
+             checked: the radio answers API frames in mode 1 (use --link {slow})\n"
+        ),
+        "{out:?}"
+    );
+    let radio = radio.lock().unwrap();
+    assert!(radio.commands.is_empty(), "{:?}", radio.commands);
+    assert!(!radio.saved);
+}
+
+#[tokio::test]
+async fn a_radio_in_api_mode_set_otherwise_gets_the_commands_that_set_it() {
+    let (radio, path) = fake_radio(2).await;
+    let link = format!("serial:{path}:9600");
+    let out = setup(&link, &["--timeout", "1", "--baud", "115200"]).await;
+    assert_eq!(out.status.code(), Some(1), "{out:?}");
+    assert!(out.stdout.is_empty(), "{out:?}");
+    let err = stderr(&out);
+    assert!(err.contains("answers API frames in mode 2"), "{err}");
+    // Each command as the radio is after the one before: mode 1 after AP, 115200
+    // baud after BD.
+    let commands = format!(
+        "`mcp-gs at --link {link} --api-mode 2 AP 1`, then `mcp-gs at --link {link} BD 7`, \
+         then `mcp-gs at --link serial:{path}:115200 WR`"
+    );
+    assert!(err.contains(&commands), "{err}");
+    let radio = radio.lock().unwrap();
+    assert!(radio.commands.is_empty(), "{:?}", radio.commands);
+    assert_eq!((radio.ap, radio.bd, radio.saved), (2, 3, false));
+}
+
+#[tokio::test]
+async fn a_radio_that_answers_neither_plus_plus_plus_nor_api_frames_sends_the_operator_to_probe() {
+    // A pseudo-terminal nobody serves.
+    let silent = Connector::new(&Link::Pty, &LinkOptions::default())
+        .await
+        .unwrap();
+    let path = silent.pty_path().unwrap().display().to_string();
+    let out = setup(&format!("serial:{path}"), &["--timeout", "0.2"]).await;
     assert_eq!(out.status.code(), Some(4), "{out:?}");
     assert!(out.stdout.is_empty(), "{out:?}");
     let err = stderr(&out);
-    assert!(err.contains("no answer to +++"), "{err}");
-    assert!(err.contains("may be in API mode already"), "{err}");
-    let read_mode = format!("mcp-gs at --link serial:{path}:115200 --api-mode auto AP");
-    assert!(err.contains(&read_mode), "{err}");
-    assert!(radio.lock().unwrap().commands.is_empty());
+    assert!(
+        err.contains("no answer to +++") && err.contains("nor to an API frame"),
+        "{err}"
+    );
+    let probe = format!("`mcp-gs probe --link serial:{path}` tries every rate");
+    assert!(err.contains(&probe), "{err}");
 }
 
 #[tokio::test]
@@ -354,6 +417,31 @@ async fn the_simulators_factory_radio_is_set_up_and_then_reaches_the_mav() {
     .await;
     assert!(out.status.success(), "{out:?}");
     assert!(stdout(&out).contains("landing"), "{out:?}");
+
+    // Set up again, it is found as asked (in API mode, it takes no +++) and left so.
+    let out = mcp_gs(&[
+        "setup",
+        "--link",
+        &link,
+        "--api-mode",
+        "2",
+        "--baud",
+        "115200",
+        "--timeout",
+        "1",
+    ])
+    .await;
+    assert!(out.status.success(), "{out:?}");
+    assert_eq!(
+        stdout(&out),
+        format!(
+            "AP = 2 (API mode 2, escaped) already\n\
+             BD = 7 (115200 baud) already\n\
+             checked: the radio answers API frames in mode 2 (use --link {link} with \
+             --api-mode 2)\n"
+        ),
+        "{out:?}"
+    );
 }
 
 /// A simulator whose ground station radio is as from the factory (transparent mode, its

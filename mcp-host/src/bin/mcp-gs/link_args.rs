@@ -229,17 +229,27 @@ impl LinkArgs {
 /// The radio's `AP`, asked on a link opened with `options` (API mode 1, no reconnection)
 /// for this alone: `AT AP` with frame id 1 reads the same in both modes (no byte of it
 /// needs escaping), and so does its answer. `None` for an answer that is no `AP` value.
-/// The link is closed and waited for, so that the port (opened for exclusive use) is
-/// free again when this returns.
 pub(crate) async fn ask_ap(
     link: &Link,
     options: LinkOptions,
+) -> Result<Result<Option<u8>, SendError>, Failure> {
+    ask_parameter(link, options, *b"AP").await
+}
+
+/// A one-byte parameter of the local radio (its last byte, for a longer answer), asked
+/// on a link opened with `options` for this alone; `None` for an answer that is no
+/// value. The link is closed and waited for, so that the port (opened for exclusive
+/// use) is free again when this returns.
+pub(crate) async fn ask_parameter(
+    link: &Link,
+    options: LinkOptions,
+    command: [u8; 2],
 ) -> Result<Result<Option<u8>, SendError>, Failure> {
     let timeout = options.send_timeout;
     let (mut stream, sender) = mcp_host::connect(link, options)
         .await
         .map_err(|e| connect_failure(link, e))?;
-    let response = sender.at(*b"AP", &[], Some(timeout)).await;
+    let response = sender.at(command, &[], Some(timeout)).await;
     sender.close();
     while stream.next().await.is_some() {}
     Ok(response.map(|response| match response.parse() {

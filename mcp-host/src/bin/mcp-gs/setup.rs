@@ -1,6 +1,8 @@
 //! `mcp-gs setup`: put the local radio into API mode through its AT command mode (`+++`),
 //! as a radio fresh from the factory (transparent mode, `AP=0`) needs before anything
-//! else here can talk to it.
+//! else here can talk to it. A radio that does not take `+++` (older firmware takes it in
+//! transparent mode only) is asked in API frames instead: set up already, it is checked
+//! and left as it is; otherwise the operator gets the `at` commands that set it.
 
 use std::time::Duration;
 
@@ -10,7 +12,9 @@ use mcp_host::command_mode::{BAUD_RATES, CommandMode, CommandModeError};
 use mcp_host::{Link, LinkOptions, ReconnectPolicy};
 use xbee_api::{ApiMode, Frame};
 
-use crate::link_args::{connect_failure, open_once, parse_seconds, send_failure};
+use crate::link_args::{
+    ask_ap, ask_parameter, connect_failure, open_once, parse_seconds, send_failure,
+};
 use crate::{ApiModeArg, Failure};
 
 /// Arguments of `setup`.
@@ -116,9 +120,17 @@ pub(crate) async fn run(args: SetupArgs) -> Result<(), Failure> {
     let port = open_once(&args.link, timeout).await?;
     eprintln!("mcp-gs: entering the radio's command mode (+++ between {guard:?} of silence)");
     let failed = |e| command_failure(e, &args.link);
-    let mut radio = CommandMode::enter(port, guard, timeout)
-        .await
-        .map_err(failed)?;
+    let mut radio = match CommandMode::enter(port, guard, timeout).await {
+        Ok(radio) => radio,
+        // A radio in API mode already may not take +++ (older firmware takes it in
+        // transparent mode only): it may be set up already.
+        Err(error @ CommandModeError::NoAnswer { .. }) => {
+            return set_up_already(&args, options, timeout)
+                .await?
+                .ok_or_else(|| failed(error));
+        }
+        Err(error) => return Err(failed(error)),
+    };
     // What each parameter was, and whether it was changed (then saved below).
     let mut lines: Vec<(String, bool)> = Vec::new();
     let was = radio.read(*b"AP").await.map_err(failed)?;
@@ -178,6 +190,99 @@ pub(crate) async fn run(args: SetupArgs) -> Result<(), Failure> {
     check(&link, args.api_mode.0, options, timeout).await
 }
 
+/// For a radio that did not answer `+++`: whether it answers API frames, set up as
+/// asked already (then checked, as after a change). `None` if it does not answer them
+/// either; an error, saying how to set it, if it answers them with other settings.
+async fn set_up_already(
+    args: &SetupArgs,
+    options: LinkOptions,
+    timeout: Duration,
+) -> Result<Option<()>, Failure> {
+    let target = ap(args.api_mode.0);
+    let asked = LinkOptions {
+        api_mode: ApiMode::Unescaped,
+        send_timeout: timeout,
+        ..options.clone()
+    };
+    let Ok(Some(was)) = ask_ap(&args.link, asked).await? else {
+        return Ok(None);
+    };
+    let mode = match was {
+        1 => ApiMode::Unescaped,
+        2 => ApiMode::Escaped,
+        _ => {
+            return Err(Failure::new(
+                Failure::OTHER,
+                format!(
+                    "the radio did not answer +++ but answers API frames, and reads its AP as \
+                     {was} ({}): this ground station cannot set it",
+                    meaning(&was.to_string())
+                ),
+            ));
+        }
+    };
+    // What is as asked already; the rest is set by `mcp-gs at` commands, each given as
+    // the radio is after the one before (a change made in an API frame applies at once).
+    let mut lines = Vec::new();
+    let mut commands = Vec::new();
+    let mut now = (args.link.clone(), was);
+    let at = |(link, ap): &(Link, u8), command: String| {
+        let flag = if *ap == 2 { " --api-mode 2" } else { "" };
+        format!("`mcp-gs at --link {link}{flag} {command}`")
+    };
+    if was == target {
+        lines.push(format!(
+            "AP = {was} ({}) already",
+            meaning(&was.to_string())
+        ));
+    } else {
+        commands.push(at(&now, format!("AP {target}")));
+        now.1 = target;
+    }
+    if let Some(baud) = args.baud {
+        let asked = LinkOptions {
+            api_mode: mode,
+            send_timeout: timeout,
+            ..options.clone()
+        };
+        let bd = ask_parameter(&args.link, asked, *b"BD")
+            .await?
+            .map_err(send_failure)?;
+        let wanted = BAUD_RATES
+            .iter()
+            .position(|&b| b == baud)
+            .unwrap_or_default();
+        if bd.map(usize::from) == Some(wanted) {
+            lines.push(format!("BD = {wanted:X} ({baud} baud) already"));
+        } else {
+            commands.push(at(&now, format!("BD {wanted:X}")));
+            if let Link::Serial { path, .. } = &args.link {
+                now.0 = Link::Serial {
+                    path: path.clone(),
+                    baud,
+                };
+            }
+        }
+    }
+    if !commands.is_empty() {
+        commands.push(at(&now, "WR".to_owned()));
+        return Err(Failure::new(
+            Failure::OTHER,
+            format!(
+                "the radio did not answer +++ (older firmware takes it in transparent mode \
+                 only) but answers API frames in mode {was}: set it in API frames instead, \
+                 with {}",
+                commands.join(", then ")
+            ),
+        ));
+    }
+    for line in lines {
+        out!("{line}");
+    }
+    check(&args.link, args.api_mode.0, options, timeout).await?;
+    Ok(Some(()))
+}
+
 /// Asks the radio its `AP` in API frames of the mode set: that it answers is the proof.
 async fn check(
     link: &Link,
@@ -229,16 +334,25 @@ async fn check(
 /// A failed command mode exchange, with what the operator can do about it.
 fn command_failure(error: CommandModeError, link: &Link) -> Failure {
     match error {
-        CommandModeError::NoAnswer { ref sent, .. } if sent == "+++" => Failure::new(
-            Failure::TIMEOUT,
-            format!(
-                "{error}: the radio may be at another baud rate (XBee modules leave the \
-                 factory at 9600: serial:PATH:9600), need a longer --guard-time (its GT), \
-                 or still be in command mode from a run less than 10 s ago (try again); \
-                 an older radio takes +++ in transparent mode only, and may be in API mode \
-                 already (`mcp-gs at --link {link} --api-mode auto AP` reads its mode)"
-            ),
-        ),
+        CommandModeError::NoAnswer { ref sent, .. } if sent == "+++" => {
+            let rates = match link {
+                Link::Serial { path, .. } => format!(
+                    "XBee modules leave the factory at 9600: serial:{path}:9600; `mcp-gs probe \
+                     --link serial:{path}` tries every rate"
+                ),
+                _ => "XBee modules leave the factory at 9600: set the bridge's serial side to \
+                      the radio's rate"
+                    .to_owned(),
+            };
+            Failure::new(
+                Failure::TIMEOUT,
+                format!(
+                    "{error}, nor to an API frame asking its mode: the radio may be at \
+                     another baud rate ({rates}), need a longer --guard-time (its GT), or \
+                     still be in command mode from a run less than 10 s ago (try again)"
+                ),
+            )
+        }
         CommandModeError::NoAnswer { .. } => Failure::new(Failure::TIMEOUT, error.to_string()),
         CommandModeError::Io(_) | CommandModeError::Closed => Failure::link(error.to_string()),
         other => Failure::new(Failure::OTHER, other.to_string()),
