@@ -9,7 +9,7 @@ use futures::{SinkExt, StreamExt};
 use mcp_host::codec::{CodecItem, XBeeCodec};
 use mcp_host::radio::{Faults, NetEvent, Network, NetworkConfig, NodeOptions};
 use mcp_host::{Link, OwnedFrame};
-use tokio::io::{AsyncRead, AsyncWrite};
+use tokio::io::{AsyncRead, AsyncReadExt, AsyncWrite};
 use tokio::net::{TcpListener, TcpStream};
 use tokio_util::codec::Framed;
 use xbee_api::{
@@ -51,6 +51,11 @@ impl Dev {
 
     async fn tcp(addr: std::net::SocketAddr, mode: ApiMode) -> Self {
         Dev::new(TcpStream::connect(addr).await.expect("connect"), mode)
+    }
+
+    /// Reads and writes frames in `mode` from now on.
+    fn set_mode(&mut self, mode: ApiMode) {
+        *self.framed.codec_mut() = XBeeCodec::new(mode);
     }
 
     async fn send(&mut self, frame: &Frame<'_>) {
@@ -381,9 +386,38 @@ async fn local_at_commands_are_answered() {
         (AtStatus::InvalidCommand, vec![])
     );
     assert_eq!(
-        dev.at(8, b"AP", &[1]).await,
+        dev.at(8, b"AP", &[3]).await,
         (AtStatus::InvalidParameter, vec![])
     );
+}
+
+#[tokio::test]
+async fn ap_set_in_an_api_frame_changes_the_devices_link_once_answered() {
+    let (_network, mut devs) = in_process(NetworkConfig::default(), &[COORD, MAV_A]).await;
+    let [ground, dev_a] = &mut devs[..] else {
+        unreachable!()
+    };
+    // Answered in API mode 1, the mode it was asked in; escaped frames from then on.
+    assert_eq!(dev_a.at(1, b"AP", &[2]).await, (AtStatus::Ok, vec![]));
+    dev_a.set_mode(ApiMode::Escaped);
+    // `}` is 0x7D, escaped both ways now: a radio still reading mode 1 would store
+    // `}]`, and a device reading mode 1 would not find the frame's end.
+    assert_eq!(dev_a.at(2, b"NI", b"a}b").await, (AtStatus::Ok, vec![]));
+    assert_eq!(
+        dev_a.at(3, b"NI", &[]).await,
+        (AtStatus::Ok, b"a}b".to_vec())
+    );
+    assert_eq!(dev_a.at(4, b"AP", &[]).await, (AtStatus::Ok, vec![2]));
+    // AP 0: transparent mode, where a received payload comes as its bytes alone.
+    assert_eq!(dev_a.at(5, b"AP", &[0]).await, (AtStatus::Ok, vec![]));
+    ground.tx(6, MAV_A, b"raw").await;
+    assert_eq!(ground.status().await.2, DeliveryStatus::Success);
+    let mut raw = [0u8; 3];
+    tokio::time::timeout(GUARD, dev_a.framed.get_mut().read_exact(&mut raw))
+        .await
+        .expect("the payload in time")
+        .unwrap();
+    assert_eq!(&raw, b"raw");
 }
 
 #[tokio::test]

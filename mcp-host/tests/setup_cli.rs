@@ -442,6 +442,40 @@ async fn the_simulators_factory_radio_is_set_up_and_then_reaches_the_mav() {
         ),
         "{out:?}"
     );
+
+    // Asked for mode 1, it gets the at commands that set it in API frames; carried out,
+    // they leave it set up as asked.
+    let to_one = ["setup", "--link", &link, "--timeout", "1"];
+    let out = mcp_gs(&to_one).await;
+    assert_eq!(out.status.code(), Some(1), "{out:?}");
+    let err = stderr(&out);
+    let commands: Vec<&str> = err
+        .split('`')
+        .filter(|part| part.starts_with("mcp-gs at "))
+        .collect();
+    assert_eq!(
+        commands,
+        [
+            format!("mcp-gs at --link {link} --api-mode 2 AP 1"),
+            format!("mcp-gs at --link {link} WR"),
+        ],
+        "{err}"
+    );
+    for command in commands {
+        let args: Vec<&str> = command.split_whitespace().skip(1).collect();
+        let out = mcp_gs(&args).await;
+        assert!(out.status.success(), "{command}: {out:?}");
+    }
+    let out = mcp_gs(&to_one).await;
+    assert!(out.status.success(), "{out:?}");
+    assert_eq!(
+        stdout(&out),
+        format!(
+            "AP = 1 (API mode 1) already\n\
+             checked: the radio answers API frames in mode 1 (use --link {link})\n"
+        ),
+        "{out:?}"
+    );
 }
 
 /// A simulator whose ground station radio is as from the factory (transparent mode, its

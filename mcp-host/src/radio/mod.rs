@@ -29,10 +29,13 @@
 //!   `OI` (the operating 16-bit PAN ID, 4D43), `CH` (the operating channel, 0x17),
 //!   `NT` (the node discovery time, 0x3C tenths of a second) and `NI` (the node
 //!   identifier: a space, the default, until set). `NI` can be set to 1 to 20 printable
-//!   ASCII characters and `NT` to 0x20..=0xFF; the others are read-only: a value gets
-//!   status 3, invalid parameter (but `AP` set to the node's own mode, a no-op). `BD`
-//!   (the UART's baud rate: 3, 9600 baud, on a radio that starts in transparent mode,
-//!   else 7, 115200) can be set to 0..=8; `GT` (0x3E8) and `CT` (0x64) are read-only.
+//!   ASCII characters and `NT` to 0x20..=0xFF; `AP` to 0, 1 or 2: the answer comes in
+//!   the old mode, and from then on the radio speaks the new one to its device (0 is
+//!   transparent mode, below); the others are read-only: a value gets status 3, invalid
+//!   parameter. `BD` (the UART's baud rate: 3, 9600 baud, on a radio that starts in
+//!   transparent mode, else 7, 115200) can be set to 0..=8; `GT` (0x3E8) and `CT`
+//!   (0x64) are read-only. A new `AP` or `BD` applies once answered, even when queued;
+//!   set remotely, its device's link reads the new mode from the next frame it writes.
 //!   Node discovery (`ND`, or `ND NAME` for the node named NAME) is answered at once
 //!   with an AT Command Response for each other node the radio can reach (its
 //!   [`xbee_api::NodeInfo`]: the coordinator as coordinator, the others as routers,
@@ -75,9 +78,10 @@
 //!   one by one; `AP` takes 0, 1 or 2, and `BD` 0 to 8 (the link is not slowed down).
 //!   `ATCN`, or `CT` (10 s) without a command, leaves command mode: with `AP` set to 1
 //!   or 2 the radio speaks API frames in that mode from then on, as a node added in API
-//!   mode does (until the network ends). A radio in API mode does not take `+++`.
-//!   Its UART runs at the rate `BD` sets (9600 baud until set; a new one takes effect
-//!   when command mode is left): a device on its `pty` link set to another rate reads
+//!   mode does, until an `AP` in an API frame changes it. A radio in API mode does not
+//!   take `+++` (as older firmware). Its UART runs at the rate `BD` sets (9600 baud
+//!   until set; a new one takes effect when command mode is left, or once answered in
+//!   an API frame): a device on its `pty` link set to another rate reads
 //!   garbage and is not understood, as on a real serial line (a pseudo-terminal's ends
 //!   share their settings). Other nodes take any rate.
 //! - [`Faults`] (loss, latency, jitter, duplication, reordering, corruption) apply to the
@@ -511,6 +515,7 @@ impl Network {
                     stats: NodeStats::default(),
                     name: router::NODE_IDENTIFIER.to_vec(),
                     discovery_time: router::DISCOVERY_TIME,
+                    new_ap: None,
                 },
             );
             if up_already {

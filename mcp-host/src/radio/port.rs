@@ -258,7 +258,7 @@ async fn serve_until_end(
         inner: writer,
         mismatched: &mismatched,
     };
-    let link_mode = lock(state).link_mode(addr);
+    let mut link_mode = lock(state).link_mode(addr);
     let mut command_mode = (link_mode == LinkMode::Transparent).then(CommandMode::new);
     let mut frames = FramedRead::new(reader, NodeCodec::new(link_mode));
     let mut pending: VecDeque<Out> = VecDeque::new();
@@ -271,7 +271,18 @@ async fn serve_until_end(
             item = frames.next() => match item {
                 Some(Ok(Input::Frame(CodecItem::Frame(frame)))) => {
                     *healthy = true;
-                    lock(state).handle(addr, frame.data());
+                    let now = {
+                        let mut state = lock(state);
+                        state.handle(addr, frame.data());
+                        state.link_mode(addr)
+                    };
+                    if now != link_mode {
+                        // `AP` set in that frame (or remotely, before it): what the
+                        // device writes from here on is read the new way.
+                        link_mode = now;
+                        command_mode = (now == LinkMode::Transparent).then(CommandMode::new);
+                        *frames.decoder_mut() = NodeCodec::new(now);
+                    }
                     continue;
                 }
                 Some(Ok(Input::Frame(CodecItem::Error(error)))) => {
@@ -353,7 +364,7 @@ async fn serve_until_end(
                     }
                 }
                 Step::Leave { ap, rest } => {
-                    let link_mode = lock(state).leave_command_mode(addr, ap);
+                    link_mode = lock(state).leave_command_mode(addr, ap);
                     if let LinkMode::Api(_) = link_mode {
                         // What the device wrote after `ATCN` is for the API decoder.
                         command_mode = None;

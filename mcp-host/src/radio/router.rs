@@ -97,6 +97,8 @@ pub(crate) struct Node {
     pub(crate) name: Vec<u8>,
     /// Its node discovery time (`NT`), in tenths of a second.
     pub(crate) discovery_time: u16,
+    /// An `AP` set in an API frame, applied once its answer is on its way.
+    pub(crate) new_ap: Option<u8>,
 }
 
 impl Node {
@@ -465,9 +467,9 @@ impl State {
 
     /// Executes an AT command on `node`'s radio: its status and the value, written into
     /// `value`, of length returned. Reads answer as an S2C with Zigbee firmware would;
-    /// `NI` and `NT` can be set, `AP` set to the node's own mode (a no-op); any other
-    /// value gets invalid parameter, and a command the radio does not emulate invalid
-    /// command.
+    /// `NI`, `NT`, `BD` and `AP` can be set (the last two change the device's link once
+    /// the answer is on its way: [`Self::apply_to_link`]); any other value gets invalid
+    /// parameter, and a command the radio does not emulate invalid command.
     /// A value set is read back at once, whether it was applied or queued (nothing else
     /// in the emulation depends on it), so `AC` (apply changes) and `WR` (write to
     /// non-volatile memory) have nothing to do but answer ok. `CB` 1 (the commissioning
@@ -494,7 +496,10 @@ impl State {
         match (&command, parameter) {
             (b"AP", []) if radio.transparent => read(&[0]),
             (b"AP", []) => read(&[u8::from(radio.mode)]),
-            (b"AP", [mode]) if *mode == u8::from(radio.mode) => (AtStatus::Ok, 0),
+            (b"AP", [ap @ 0..=2]) => {
+                radio.new_ap = Some(*ap);
+                (AtStatus::Ok, 0)
+            }
             (b"NP", []) => {
                 let np = u16::try_from(max_unicast).unwrap_or(u16::MAX);
                 read(&np.to_be_bytes())
@@ -653,16 +658,37 @@ impl State {
             command: at.command,
             status,
         });
-        if at.frame_id == 0 {
-            return;
+        if at.frame_id != 0 {
+            let response = AtCommandResponseRepr {
+                frame_id: at.frame_id,
+                command: at.command,
+                status,
+                data: &value[..len],
+            };
+            self.send_to(from, &response, true);
         }
-        let response = AtCommandResponseRepr {
-            frame_id: at.frame_id,
-            command: at.command,
-            status,
-            data: &value[..len],
+        self.apply_to_link(from);
+    }
+
+    /// Applies what AT commands in API frames changed in how `node`'s radio speaks to
+    /// its device, once their answers are queued (in the old way), as a radio applies a
+    /// setting after answering: a new `AP` (0 is transparent mode, 1 and 2 API frames in
+    /// that mode), and a new `BD` on a fixed-rate UART.
+    fn apply_to_link(&mut self, node: Address64) {
+        let Some(radio) = self.nodes.get_mut(&node) else {
+            return;
         };
-        self.send_to(from, &response, true);
+        if radio.uart_baud.is_some() {
+            radio.uart_baud = Some(radio.baud);
+        }
+        match radio.new_ap.take().map(ApiMode::try_from) {
+            Some(Ok(mode)) => {
+                radio.mode = mode;
+                radio.transparent = false;
+            }
+            Some(Err(_)) => radio.transparent = true,
+            None => {}
+        }
     }
 
     /// The other nodes `from`'s radio reaches, as a broadcast from it would: none while
@@ -759,6 +785,8 @@ impl State {
         let (src64, src16, status, len) = match target {
             Some(t) => {
                 let (status, len) = self.at_value(t, at.command, at.parameter, &mut value);
+                // The answer goes to `from`'s device, not to `t`'s.
+                self.apply_to_link(t);
                 let src16 = self.nodes.get(&t).map_or(Address16::UNKNOWN, |n| n.addr16);
                 (t, src16, status, len)
             }
@@ -792,6 +820,7 @@ impl State {
         for target in self.reached_from(from) {
             let mut value = [0u8; AT_VALUE_MAX];
             let (status, len) = self.at_value(target, at.command, at.parameter, &mut value);
+            self.apply_to_link(target);
             self.emit(NetEvent::AtCommand {
                 node: target,
                 command: at.command,
