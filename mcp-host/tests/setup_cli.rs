@@ -476,6 +476,14 @@ async fn the_simulators_factory_radio_is_set_up_and_then_reaches_the_mav() {
         ),
         "{out:?}"
     );
+
+    // A BD set in an API frame applies once answered: its UART is back at 9600 baud.
+    let out = mcp_gs(&["at", "--link", &link, "BD", "3"]).await;
+    assert!(out.status.success(), "{out:?}");
+    let out = mcp_gs(&["at", "--link", &factory, "--timeout", "1", "AP"]).await;
+    assert!(out.status.success(), "{out:?}");
+    let out = mcp_gs(&["at", "--link", &link, "--timeout", "1", "AP"]).await;
+    assert_eq!(out.status.code(), Some(4), "{out:?}");
 }
 
 /// A simulator whose ground station radio is as from the factory (transparent mode, its

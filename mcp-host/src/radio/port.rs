@@ -6,7 +6,7 @@ use std::pin::Pin;
 use std::sync::{Arc, Mutex};
 use std::task::{Context, Poll};
 
-use bytes::{Bytes, BytesMut};
+use bytes::BytesMut;
 use futures::StreamExt;
 use tokio::io::{AsyncRead, AsyncWrite, AsyncWriteExt, ReadBuf};
 use tokio::sync::mpsc;
@@ -262,7 +262,7 @@ async fn serve_until_end(
     let mut command_mode = (link_mode == LinkMode::Transparent).then(CommandMode::new);
     let mut frames = FramedRead::new(reader, NodeCodec::new(link_mode));
     let mut pending: VecDeque<Out> = VecDeque::new();
-    let mut held: Option<(Bytes, Instant)> = None;
+    let mut held: Option<(Out, Instant)> = None;
     loop {
         let next_at = pending.front().map(|o| o.at);
         let held_until = held.as_ref().map(|(_, until)| *until);
@@ -320,22 +320,23 @@ async fn serve_until_end(
             () = sleep_until(next_at.unwrap_or_else(Instant::now)), if next_at.is_some() => {
                 let Some(item) = pending.pop_front() else { continue };
                 if let (Some(window), None) = (item.reorder, &held) {
-                    held = Some((item.bytes, crate::options::later(Instant::now(), window)));
+                    let until = crate::options::later(Instant::now(), window);
+                    held = Some((item, until));
                     continue;
                 }
-                if let Err(e) = write(&mut writer, &item.bytes).await {
+                if let Err(e) = write_out(&mut writer, &item, state, addr).await {
                     return End::Io(e);
                 }
-                if let Some((bytes, _)) = held.take() {
-                    if let Err(e) = write(&mut writer, &bytes).await {
+                if let Some((item, _)) = held.take() {
+                    if let Err(e) = write_out(&mut writer, &item, state, addr).await {
                         return End::Io(e);
                     }
                 }
                 continue;
             },
             () = sleep_until(held_until.unwrap_or_else(Instant::now)), if held_until.is_some() => {
-                if let Some((bytes, _)) = held.take() {
-                    if let Err(e) = write(&mut writer, &bytes).await {
+                if let Some((item, _)) = held.take() {
+                    if let Err(e) = write_out(&mut writer, &item, state, addr).await {
                         return End::Io(e);
                     }
                 }
@@ -415,6 +416,20 @@ impl Decoder for NodeCodec {
             NodeCodec::Transparent(codec) => Ok(codec.decode_eof(src)?.map(Input::Bytes)),
         }
     }
+}
+
+/// Writes what the radio queued for its device, then takes the UART rate it comes with.
+async fn write_out<W: AsyncWrite + Unpin>(
+    writer: &mut W,
+    item: &Out,
+    state: &Mutex<State>,
+    addr: Address64,
+) -> std::io::Result<()> {
+    write(writer, &item.bytes).await?;
+    if item.uart_after.is_some() {
+        lock(state).set_uart(addr, item.uart_after);
+    }
+    Ok(())
 }
 
 async fn write<W: AsyncWrite + Unpin>(writer: &mut W, bytes: &[u8]) -> std::io::Result<()> {

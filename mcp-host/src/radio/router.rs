@@ -68,6 +68,9 @@ pub(crate) struct Out {
     pub(crate) bytes: Bytes,
     /// Held back behind the next frame for at most this long.
     pub(crate) reorder: Option<Duration>,
+    /// The `BD` the node's UART runs at once this is written: a rate set by the AT
+    /// command this answers.
+    pub(crate) uart_after: Option<u8>,
 }
 
 /// One radio of the network.
@@ -149,16 +152,37 @@ impl State {
         frame: &F,
         with_faults: bool,
     ) -> bool {
+        self.send_then(to, frame, with_faults, None)
+    }
+
+    /// [`Self::send_to`], with `to`'s UART set to run at `uart_after` once the frame is
+    /// written (at once if it is not written: lost, or not queued).
+    fn send_then<F: EncodeFrame + ?Sized>(
+        &mut self,
+        to: Address64,
+        frame: &F,
+        with_faults: bool,
+        uart_after: Option<u8>,
+    ) -> bool {
         let default_faults = self.config.faults;
         let Some(node) = self.nodes.get_mut(&to) else {
             return false;
+        };
+        // What is not written changes the rate now.
+        let unwritten = |node: &mut Node| {
+            if let Some(bd) = uart_after {
+                node.uart_baud = Some(bd);
+            }
         };
         // In transparent mode only received payloads leave the radio, as bytes, and
         // none while its device has it in AT command mode.
         let payload = if node.transparent {
             match wire::payload(frame) {
                 Some(payload) if !node.command_mode => Some(payload),
-                _ => return false,
+                _ => {
+                    unwritten(node);
+                    return false;
+                }
             }
         } else {
             None
@@ -173,6 +197,7 @@ impl State {
             Some(fate) => {
                 if fate.lost {
                     node.stats.lost += 1;
+                    unwritten(node);
                     return true;
                 }
                 if fate.duplicate {
@@ -200,6 +225,7 @@ impl State {
             None => payload.or_else(|| wire::encode(frame, node.mode)),
         };
         let Some(bytes) = bytes else {
+            unwritten(node);
             return false;
         };
         for i in 0..copies {
@@ -207,9 +233,11 @@ impl State {
                 at,
                 bytes: bytes.clone(),
                 reorder: reorder.filter(|_| i == 0),
+                uart_after: uart_after.filter(|_| i + 1 == copies),
             };
             if node.out.try_send(out).is_err() {
                 node.stats.overflow += 1;
+                unwritten(node);
                 return false;
             }
             node.stats.frames_out += 1;
@@ -468,7 +496,7 @@ impl State {
     /// Executes an AT command on `node`'s radio: its status and the value, written into
     /// `value`, of length returned. Reads answer as an S2C with Zigbee firmware would;
     /// `NI`, `NT`, `BD` and `AP` can be set (the last two change the device's link once
-    /// the answer is on its way: [`Self::apply_to_link`]); any other value gets invalid
+    /// the answer is on its way: [`Self::apply_ap`], [`Self::send_then`]); any other value gets invalid
     /// parameter, and a command the radio does not emulate invalid command.
     /// A value set is read back at once, whether it was applied or queued (nothing else
     /// in the emulation depends on it), so `AC` (apply changes) and `WR` (write to
@@ -658,29 +686,53 @@ impl State {
             command: at.command,
             status,
         });
-        if at.frame_id != 0 {
+        // A new rate on a fixed-rate UART, taken once the answer is written at the old one.
+        let uart_after = self.nodes.get(&from).and_then(|radio| {
+            radio
+                .uart_baud
+                .filter(|&bd| bd != radio.baud)
+                .map(|_| radio.baud)
+        });
+        if at.frame_id == 0 {
+            self.set_uart(from, uart_after);
+        } else {
             let response = AtCommandResponseRepr {
                 frame_id: at.frame_id,
                 command: at.command,
                 status,
                 data: &value[..len],
             };
-            self.send_to(from, &response, true);
+            self.send_then(from, &response, true, uart_after);
         }
-        self.apply_to_link(from);
+        self.apply_ap(from);
     }
 
-    /// Applies what AT commands in API frames changed in how `node`'s radio speaks to
-    /// its device, once their answers are queued (in the old way), as a radio applies a
-    /// setting after answering: a new `AP` (0 is transparent mode, 1 and 2 API frames in
-    /// that mode), and a new `BD` on a fixed-rate UART.
-    fn apply_to_link(&mut self, node: Address64) {
+    /// `node`'s UART runs at `bd` from now on, if given.
+    pub(crate) fn set_uart(&mut self, node: Address64, bd: Option<u8>) {
+        if let (Some(radio), Some(bd)) = (self.nodes.get_mut(&node), bd) {
+            radio.uart_baud = Some(bd);
+        }
+    }
+
+    /// Applies what AT commands in API frames did to `node`'s radio, for the answer
+    /// the destination's device reads from another radio: [`Self::apply_ap`], and a new
+    /// `BD` on a fixed-rate UART at once.
+    fn apply_remote(&mut self, node: Address64) {
+        if let Some(radio) = self.nodes.get_mut(&node) {
+            if radio.uart_baud.is_some() {
+                radio.uart_baud = Some(radio.baud);
+            }
+        }
+        self.apply_ap(node);
+    }
+
+    /// Applies an `AP` set in an API frame to how `node`'s radio speaks to its device,
+    /// once the answer is queued (encoded the old way), as a radio applies a setting
+    /// after answering: 0 is transparent mode, 1 and 2 API frames in that mode.
+    fn apply_ap(&mut self, node: Address64) {
         let Some(radio) = self.nodes.get_mut(&node) else {
             return;
         };
-        if radio.uart_baud.is_some() {
-            radio.uart_baud = Some(radio.baud);
-        }
         match radio.new_ap.take().map(ApiMode::try_from) {
             Some(Ok(mode)) => {
                 radio.mode = mode;
@@ -786,7 +838,7 @@ impl State {
             Some(t) => {
                 let (status, len) = self.at_value(t, at.command, at.parameter, &mut value);
                 // The answer goes to `from`'s device, not to `t`'s.
-                self.apply_to_link(t);
+                self.apply_remote(t);
                 let src16 = self.nodes.get(&t).map_or(Address16::UNKNOWN, |n| n.addr16);
                 (t, src16, status, len)
             }
@@ -820,7 +872,7 @@ impl State {
         for target in self.reached_from(from) {
             let mut value = [0u8; AT_VALUE_MAX];
             let (status, len) = self.at_value(target, at.command, at.parameter, &mut value);
-            self.apply_to_link(target);
+            self.apply_remote(target);
             self.emit(NetEvent::AtCommand {
                 node: target,
                 command: at.command,
