@@ -80,6 +80,8 @@ pub mod hub;
 mod ids;
 pub mod link;
 pub mod options;
+// Pseudo-terminals are Unix's: elsewhere `pty` links fail to open, saying so.
+#[cfg_attr(not(unix), path = "pty_unsupported.rs")]
 mod pty;
 pub mod radio;
 pub mod record;
