@@ -54,15 +54,7 @@ impl Port {
 }
 
 /// Where the system lets a bound socket hold the port.
-#[cfg(all(
-    unix,
-    not(any(
-        target_os = "solaris",
-        target_os = "illumos",
-        target_os = "cygwin",
-        target_os = "nuttx"
-    ))
-))]
+#[cfg(holds_port)]
 mod system {
     use std::io;
     use std::net::SocketAddr;
@@ -105,15 +97,7 @@ mod system {
 }
 
 /// Where it does not: the port is given up during an outage.
-#[cfg(not(all(
-    unix,
-    not(any(
-        target_os = "solaris",
-        target_os = "illumos",
-        target_os = "cygwin",
-        target_os = "nuttx"
-    ))
-)))]
+#[cfg(not(holds_port))]
 mod system {
     use std::io;
     use std::net::SocketAddr;
