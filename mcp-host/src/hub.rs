@@ -74,12 +74,13 @@
 //! - **Outages:** while the hub's link to the radio is down (a USB radio unplugged), the
 //!   hub disconnects its clients and stops listening (connections are refused), so that
 //!   their links see the outage, stay down quietly, and reconnect once the radio is
-//!   back and the hub listens again on the same address. The hub holds its port
-//!   meanwhile, so that no other program takes it and its clients' reconnections reach
-//!   nobody else (on Unix; elsewhere it listens again once the port is free). A radio
-//!   on a link that waits for its first peer (`pty`, `tcp-listen:`) is down until that
-//!   peer comes: the hub holds its port from the start and listens once the radio is
-//!   there.
+//!   back and the hub listens again on the same address. On Linux the hub holds its
+//!   port meanwhile, so that no other program takes it and its clients' reconnections
+//!   reach nobody else (a program of the same user that sets `SO_REUSEPORT` could still
+//!   share it, but no other hub); elsewhere it listens again once the port is free. A
+//!   radio on a link that waits for its first peer (`pty`, `tcp-listen:`) is down until
+//!   that peer comes: the hub holds its port from the start and listens once the radio
+//!   is there. A hub does not start on a port another hub serves or holds.
 //!
 //! ```no_run
 //! use mcp_host::hub::Hub;
@@ -246,7 +247,7 @@ impl Hub {
     /// [`local_addr`](Self::local_addr)). Clients speak the API mode of `options`.
     pub async fn start(link: &Link, options: LinkOptions, listen: &str) -> Result<Hub, HubError> {
         let mode = options.api_mode;
-        let (port, listener) = Port::bind(listen)
+        let (mut port, listener) = Port::bind(listen)
             .await
             .map_err(|source| HubError::Listen {
                 addr: listen.to_owned(),
@@ -267,8 +268,15 @@ impl Hub {
             counters: Arc::default(),
             radio_counters: sender.counters.clone(),
         };
-        // A `pty` or `tcp-listen:` link has no radio on it yet.
+        // A `pty` or `tcp-listen:` link has no radio on it yet: clients are refused from
+        // the moment this returns, the port held.
         let radio_up = sender.link_state() == crate::LinkState::Connected;
+        let listener = if radio_up {
+            Some(listener)
+        } else {
+            port.hold();
+            None
+        };
         hub.counters.listening.store(radio_up, Ordering::Relaxed);
         let to_radio = Arc::new(ToRadio::default());
         let routes = Arc::new(Mutex::new(Routes::new()));
@@ -641,11 +649,11 @@ impl Serve {
         }
     }
 
-    async fn run(mut self, mut stream: PacketStream, listener: TcpListener) {
-        // `None` while the radio's link is down: clients are refused by the system
-        // rather than accepted and dropped, so that their links stay down quietly until
-        // the radio is back (or there for the first time).
-        let mut listener = self.radio_up.then_some(listener);
+    /// Serves until the hub stops or its link ends. `listener` is `None` while the
+    /// radio's link is down: clients are refused by the system then rather than
+    /// accepted and dropped, so that their links stay down quietly until the radio is
+    /// back (or there for the first time).
+    async fn run(mut self, mut stream: PacketStream, mut listener: Option<TcpListener>) {
         let mut rebind = tokio::time::interval(REBIND_RETRY);
         rebind.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
         let mut expire = tokio::time::interval(EXPIRE_EVERY);
@@ -673,6 +681,8 @@ impl Serve {
                         let was_up = self.radio_up;
                         if matches!(&event, Event::Link(link) if !is_up(link)) {
                             // Before the clients are disconnected: none comes back in.
+                            // The port held first, then the listener dropped.
+                            self.port.hold();
                             listener = None;
                             self.counters.listening.store(false, Ordering::Relaxed);
                         }

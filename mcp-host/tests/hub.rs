@@ -415,16 +415,54 @@ async fn clients_see_the_radios_outage_and_come_back_with_it() {
     hub.stop().await;
 }
 
+#[tokio::test]
+async fn a_hub_whose_radio_is_not_there_yet_refuses_clients_from_the_start() {
+    // A `pty` link has no radio until a device opens its far end.
+    let hub = Hub::start(&Link::Pty, LinkOptions::default(), "127.0.0.1:0")
+        .await
+        .unwrap();
+    assert!(!hub.stats().listening);
+    // At once, before the hub's tasks have run (a single-threaded runtime).
+    let refused = tokio::net::TcpStream::connect(hub.local_addr()).await;
+    assert_eq!(
+        refused.map(|_| ()).map_err(|e| e.kind()),
+        Err(std::io::ErrorKind::ConnectionRefused)
+    );
+    hub.stop().await;
+}
+
+/// A second hub on `hub`'s address, which must not start: its radio is never reached.
+async fn second_hub_on(hub: &Hub) -> Result<Hub, mcp_host::hub::HubError> {
+    let radio: Link = "tcp:127.0.0.1:9".parse().unwrap();
+    let addr = hub.local_addr().to_string();
+    Hub::start(&radio, LinkOptions::default(), &addr).await
+}
+
+#[tokio::test]
+async fn no_second_hub_starts_on_a_port_a_hub_serves() {
+    let (_radio, hub) = FakeRadio::with_hub().await;
+    assert!(hub.stats().listening);
+    let second = second_hub_on(&hub).await;
+    assert!(
+        matches!(&second, Err(mcp_host::hub::HubError::Listen { source, .. })
+            if source.kind() == std::io::ErrorKind::AddrInUse),
+        "{:?}",
+        second.map(|hub| hub.local_addr())
+    );
+    hub.stop().await;
+}
+
 /// Where the hub holds its port during an outage (`cfg(holds_port)`, set by the build
-/// script).
+/// script); `clients_see_the_radios_outage_and_come_back_with_it` sees it listen there
+/// again beside the socket that holds it.
 #[cfg(holds_port)]
 #[tokio::test]
-async fn no_other_program_can_take_the_hubs_port_during_an_outage() {
+async fn no_other_program_nor_hub_can_take_the_hubs_port_during_an_outage() {
     let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
     let (hub, _client_stream, client) = hub_in_an_outage(&listener).await;
     assert!(!hub.stats().listening);
-    // Another program tries the port while the hub does not listen there (tokio's
-    // listeners set SO_REUSEADDR, as servers usually do; a plain socket fails too).
+    // Another program tries the port while the hub does not listen there: as servers
+    // usually do (tokio's listeners set SO_REUSEADDR), or with a plain socket.
     let squatter = tokio::net::TcpListener::bind(hub.local_addr()).await;
     assert_eq!(
         squatter.map(|_| ()).map_err(|e| e.kind()),
@@ -435,15 +473,14 @@ async fn no_other_program_can_take_the_hubs_port_during_an_outage() {
         plain.map(|_| ()).map_err(|e| e.kind()),
         Err(std::io::ErrorKind::AddrInUse)
     );
-    // Clients are refused meanwhile.
-    let refused = tokio::net::TcpStream::connect(hub.local_addr()).await;
-    assert_eq!(
-        refused.map(|_| ()).map_err(|e| e.kind()),
-        Err(std::io::ErrorKind::ConnectionRefused)
+    // Nor does another hub, whose listener would share the port (SO_REUSEPORT).
+    let second = second_hub_on(&hub).await;
+    assert!(
+        matches!(&second, Err(mcp_host::hub::HubError::Listen { source, .. })
+            if source.kind() == std::io::ErrorKind::AddrInUse),
+        "{:?}",
+        second.map(|hub| hub.local_addr())
     );
-    // The radio is back: the hub listens on its port again and takes the client back.
-    let (_radio, _) = listener.accept().await.unwrap();
-    until(&hub, |stats| stats.listening && stats.clients >= 2).await;
     client.close();
     hub.stop().await;
 }
