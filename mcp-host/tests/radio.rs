@@ -9,7 +9,7 @@ use futures::{SinkExt, StreamExt};
 use mcp_host::codec::{CodecItem, XBeeCodec};
 use mcp_host::radio::{Faults, NetEvent, Network, NetworkConfig, NodeOptions};
 use mcp_host::{Link, OwnedFrame};
-use tokio::io::{AsyncRead, AsyncReadExt, AsyncWrite};
+use tokio::io::{AsyncRead, AsyncReadExt, AsyncWrite, AsyncWriteExt};
 use tokio::net::{TcpListener, TcpStream};
 use tokio_util::codec::Framed;
 use xbee_api::{
@@ -51,6 +51,16 @@ impl Dev {
 
     async fn tcp(addr: std::net::SocketAddr, mode: ApiMode) -> Self {
         Dev::new(TcpStream::connect(addr).await.expect("connect"), mode)
+    }
+
+    /// The next `N` bytes, as a device in transparent mode reads them.
+    async fn raw<const N: usize>(&mut self) -> [u8; N] {
+        let mut raw = [0u8; N];
+        tokio::time::timeout(GUARD, self.framed.get_mut().read_exact(&mut raw))
+            .await
+            .expect("bytes in time")
+            .expect("the link stays open");
+        raw
     }
 
     /// Reads and writes frames in `mode` from now on.
@@ -412,12 +422,55 @@ async fn ap_set_in_an_api_frame_changes_the_devices_link_once_answered() {
     assert_eq!(dev_a.at(5, b"AP", &[0]).await, (AtStatus::Ok, vec![]));
     ground.tx(6, MAV_A, b"raw").await;
     assert_eq!(ground.status().await.2, DeliveryStatus::Success);
-    let mut raw = [0u8; 3];
-    tokio::time::timeout(GUARD, dev_a.framed.get_mut().read_exact(&mut raw))
-        .await
-        .expect("the payload in time")
-        .unwrap();
-    assert_eq!(&raw, b"raw");
+    assert_eq!(&dev_a.raw::<3>().await, b"raw");
+}
+
+// Paused clock: the guard times around `+++` pass at once.
+#[tokio::test(start_paused = true)]
+async fn ap_set_remotely_changes_the_devices_link_at_once() {
+    use xbee_api::RemoteAtCommandRepr;
+    let (_network, mut devs) = in_process(NetworkConfig::default(), &[COORD, MAV_A]).await;
+    let [ground, dev_a] = &mut devs[..] else {
+        unreachable!()
+    };
+    for (frame_id, ap) in [(1, 0), (2, 1)] {
+        ground
+            .send(&Frame::RemoteAtCommand(RemoteAtCommandRepr {
+                frame_id,
+                dst64: MAV_A,
+                dst16: Address16::UNKNOWN,
+                options: RemoteAtCommandRepr::APPLY_CHANGES,
+                command: *b"AP",
+                parameter: &[ap],
+            }))
+            .await;
+        match ground.frame().await.parse() {
+            Ok(Frame::RemoteAtResponse(r)) => {
+                assert_eq!(
+                    (r.frame_id, r.src64, r.status),
+                    (frame_id, MAV_A, AtStatus::Ok)
+                );
+            }
+            other => panic!("expected a remote AT response, got {other:?}"),
+        }
+        if ap == 0 {
+            // Transparent mode: a received payload comes as its bytes alone, and the
+            // device's `+++` between guard times enters AT command mode.
+            ground.tx(3, MAV_A, b"raw").await;
+            assert_eq!(ground.status().await.2, DeliveryStatus::Success);
+            assert_eq!(&dev_a.raw::<3>().await, b"raw");
+            let guard = Duration::from_millis(1100);
+            tokio::time::sleep(guard).await;
+            dev_a.framed.get_mut().write_all(b"+++").await.unwrap();
+            tokio::time::sleep(guard).await;
+            assert_eq!(&dev_a.raw::<3>().await, b"OK\r");
+            dev_a.framed.get_mut().write_all(b"ATCN\r").await.unwrap();
+            assert_eq!(&dev_a.raw::<3>().await, b"OK\r");
+        }
+    }
+    // Back in API mode 1 without the device writing a frame meanwhile: its first one is
+    // read as a frame, not as transparent mode's data.
+    assert_eq!(dev_a.at(4, b"AP", &[]).await, (AtStatus::Ok, vec![1]));
 }
 
 #[tokio::test]

@@ -34,8 +34,8 @@
 //!   transparent mode, below); the others are read-only: a value gets status 3, invalid
 //!   parameter. `BD` (the UART's baud rate: 3, 9600 baud, on a radio that starts in
 //!   transparent mode, else 7, 115200) can be set to 0..=8; `GT` (0x3E8) and `CT`
-//!   (0x64) are read-only. A new `AP` or `BD` applies once answered, even when queued;
-//!   set remotely, its device's link reads the new mode from the next frame it writes.
+//!   (0x64) are read-only. A new `AP` or `BD` applies once answered (remotely: at once),
+//!   even when queued, unlike on a module, where a queued one waits for `AC`.
 //!   Node discovery (`ND`, or `ND NAME` for the node named NAME) is answered at once
 //!   with an AT Command Response for each other node the radio can reach (its
 //!   [`xbee_api::NodeInfo`]: the coordinator as coordinator, the others as routers,
@@ -516,6 +516,7 @@ impl Network {
                     name: router::NODE_IDENTIFIER.to_vec(),
                     discovery_time: router::DISCOVERY_TIME,
                     new_ap: None,
+                    relink: Arc::default(),
                 },
             );
             if up_already {

@@ -258,7 +258,11 @@ async fn serve_until_end(
         inner: writer,
         mismatched: &mismatched,
     };
-    let mut link_mode = lock(state).link_mode(addr);
+    let (mut link_mode, relink) = {
+        let state = lock(state);
+        let relink = state.nodes.get(&addr).map(|node| node.relink.clone());
+        (state.link_mode(addr), relink.unwrap_or_default())
+    };
     let mut command_mode = (link_mode == LinkMode::Transparent).then(CommandMode::new);
     let mut frames = FramedRead::new(reader, NodeCodec::new(link_mode));
     let mut pending: VecDeque<Out> = VecDeque::new();
@@ -276,13 +280,9 @@ async fn serve_until_end(
                         state.handle(addr, frame.data());
                         state.link_mode(addr)
                     };
-                    if now != link_mode {
-                        // `AP` set in that frame (or remotely, before it): what the
-                        // device writes from here on is read the new way.
-                        link_mode = now;
-                        command_mode = (now == LinkMode::Transparent).then(CommandMode::new);
-                        *frames.decoder_mut() = NodeCodec::new(now);
-                    }
+                    // `AP` set in that frame: what the device writes from here on is
+                    // read the new way.
+                    relink_to(now, &mut link_mode, &mut command_mode, &mut frames);
                     continue;
                 }
                 Some(Ok(Input::Frame(CodecItem::Error(error)))) => {
@@ -298,6 +298,12 @@ async fn serve_until_end(
                 }
                 Some(Err(e)) => return End::Io(e),
                 None => return End::Closed,
+            },
+            // `AP` set remotely (or in the frame just read: nothing left to do then).
+            () = relink.notified() => {
+                let now = lock(state).link_mode(addr);
+                relink_to(now, &mut link_mode, &mut command_mode, &mut frames);
+                continue;
             },
             () = sleep_until(command_due.unwrap_or_else(Instant::now)), if command_due.is_some() => {
                 command_mode
@@ -375,6 +381,21 @@ async fn serve_until_end(
                 }
             }
         }
+    }
+}
+
+/// Reads what the device writes the way its radio speaks `now`, if that is no longer
+/// `link_mode`: with a new decoder, and AT command mode in transparent mode.
+fn relink_to<R>(
+    now: LinkMode,
+    link_mode: &mut LinkMode,
+    command_mode: &mut Option<CommandMode>,
+    frames: &mut FramedRead<R, NodeCodec>,
+) {
+    if now != *link_mode {
+        *link_mode = now;
+        *command_mode = (now == LinkMode::Transparent).then(CommandMode::new);
+        *frames.decoder_mut() = NodeCodec::new(now);
     }
 }
 

@@ -1,10 +1,11 @@
 //! The network's shared state and routing: what a frame from one node turns into.
 
 use std::collections::BTreeMap;
+use std::sync::Arc;
 use std::time::Duration;
 
 use bytes::Bytes;
-use tokio::sync::{broadcast, mpsc};
+use tokio::sync::{Notify, broadcast, mpsc};
 use tokio::time::Instant;
 use xbee_api::frame::receive_packet::options::{
     ACKNOWLEDGED as RX_ACKNOWLEDGED, BROADCAST as RX_BROADCAST,
@@ -102,6 +103,9 @@ pub(crate) struct Node {
     pub(crate) discovery_time: u16,
     /// An `AP` set in an API frame, applied once its answer is on its way.
     pub(crate) new_ap: Option<u8>,
+    /// Told when what it speaks to its device changes (an `AP` applied), for its
+    /// link's task to read its device's writes the new way.
+    pub(crate) relink: Arc<Notify>,
 }
 
 impl Node {
@@ -738,9 +742,11 @@ impl State {
                 radio.mode = mode;
                 radio.transparent = false;
             }
+            // 0, the one other value `at_value` takes.
             Some(Err(_)) => radio.transparent = true,
-            None => {}
+            None => return,
         }
+        radio.relink.notify_one();
     }
 
     /// The other nodes `from`'s radio reaches, as a broadcast from it would: none while
