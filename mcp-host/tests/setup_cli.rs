@@ -47,6 +47,9 @@ struct Radio {
     saved: bool,
     /// The command mode lines it got, in order.
     commands: Vec<String>,
+    /// The AT commands it got in API frames, in order: `AP` for a read, `AP=1` for a
+    /// value (which it does not take: it answers as to a read).
+    api: Vec<String>,
 }
 
 /// Plays the radio on the pseudo-terminal of `connector`, for each device that opens
@@ -131,6 +134,11 @@ async fn serve(mut port: Transport, radio: &Mutex<Radio>) {
             decoder.decode_each(bytes, |event| {
                 if let Ok(frame) = event {
                     if let Ok(at) = AtCommandRepr::parse_bytes(frame.data()) {
+                        let mut text = String::from_utf8_lossy(&at.command).into_owned();
+                        if !at.parameter.is_empty() {
+                            text += &format!("={:X?}", at.parameter);
+                        }
+                        radio.lock().unwrap().api.push(text);
                         requests.push((at.frame_id, at.command));
                     }
                 }
@@ -297,6 +305,8 @@ async fn a_radio_set_up_already_is_checked_and_left_as_it_is() {
     );
     let radio = radio.lock().unwrap();
     assert!(radio.commands.is_empty(), "{:?}", radio.commands);
+    // Read, and read again for the check: nothing set.
+    assert_eq!(radio.api, ["AP", "AP", "AP", "BD", "AP"]);
     assert!(!radio.saved);
 }
 
@@ -318,6 +328,8 @@ async fn a_radio_in_api_mode_set_otherwise_gets_the_commands_that_set_it() {
     assert!(err.contains(&commands), "{err}");
     let radio = radio.lock().unwrap();
     assert!(radio.commands.is_empty(), "{:?}", radio.commands);
+    // Read only: the operator sets it.
+    assert_eq!(radio.api, ["AP", "BD"]);
     assert_eq!((radio.ap, radio.bd, radio.saved), (2, 3, false));
 }
 

@@ -307,7 +307,12 @@ async fn open_errors_are_clear() {
         wait_for_link: true,
         ..LinkOptions::default()
     };
-    let err = mcp_host::connect(&link, options).await.unwrap_err();
+    // Bounded: waited on, it would never end.
+    let connect = mcp_host::connect(&link, options);
+    let err = tokio::time::timeout(Duration::from_secs(20), connect)
+        .await
+        .expect("connect gives up at once")
+        .unwrap_err();
     assert!(!err.is_retryable(), "{err}");
     assert!(err.to_string().contains("port 0"), "{err}");
 }

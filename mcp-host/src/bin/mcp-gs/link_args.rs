@@ -233,18 +233,19 @@ pub(crate) async fn ask_ap(
     link: &Link,
     options: LinkOptions,
 ) -> Result<Result<Option<u8>, SendError>, Failure> {
-    ask_parameter(link, options, *b"AP").await
+    let value = ask_parameter(link, options, *b"AP").await?;
+    Ok(value.map(|value| value.and_then(|bytes| bytes.last().copied())))
 }
 
-/// A one-byte parameter of the local radio (its last byte, for a longer answer), asked
-/// on a link opened with `options` for this alone; `None` for an answer that is no
-/// value. The link is closed and waited for, so that the port (opened for exclusive
-/// use) is free again when this returns.
+/// A parameter of the local radio, asked on a link opened with `options` for this
+/// alone: its value's bytes; `None` for an answer with an error status. The link is
+/// closed and waited for, so that the port (opened for exclusive use) is free again
+/// when this returns.
 pub(crate) async fn ask_parameter(
     link: &Link,
     options: LinkOptions,
     command: [u8; 2],
-) -> Result<Result<Option<u8>, SendError>, Failure> {
+) -> Result<Result<Option<Vec<u8>>, SendError>, Failure> {
     let timeout = options.send_timeout;
     let (mut stream, sender) = mcp_host::connect(link, options)
         .await
@@ -253,7 +254,7 @@ pub(crate) async fn ask_parameter(
     sender.close();
     while stream.next().await.is_some() {}
     Ok(response.map(|response| match response.parse() {
-        Ok(Frame::AtCommandResponse(at)) if at.status.is_ok() => at.data.last().copied(),
+        Ok(Frame::AtCommandResponse(at)) if at.status.is_ok() => Some(at.data.to_vec()),
         _ => None,
     }))
 }

@@ -24,7 +24,8 @@ pub(crate) struct SetupArgs {
         long,
         value_name = "LINK",
         help = "The local radio: serial:PATH[:BAUD] (XBee modules leave the factory at 9600 \
-                baud: serial:/dev/ttyUSB0:9600) or tcp:HOST:PORT (a serial-to-TCP bridge)"
+                baud: serial:/dev/ttyUSB0:9600) or tcp:HOST:PORT (a serial-to-TCP bridge, not \
+                a hub: a radio set to another mode would be cut off from it)"
     )]
     link: Link,
     /// The API mode to set (AP): 1, as the deployed MAVs use, or 2 (escaped).
@@ -74,6 +75,15 @@ fn parse_baud(s: &str) -> Result<u32, String> {
                 rates.join(", ")
             )
         })
+}
+
+/// The `BD` value of `baud`, one of [`BAUD_RATES`] (`parse_baud` took no other).
+fn bd_value(baud: u32) -> u8 {
+    BAUD_RATES
+        .iter()
+        .position(|&b| b == baud)
+        .and_then(|index| u8::try_from(index).ok())
+        .unwrap_or_default()
 }
 
 /// What a `BD` value means: the baud rate, or the value as the radio gave it.
@@ -147,11 +157,7 @@ pub(crate) async fn run(args: SetupArgs) -> Result<(), Failure> {
         lines.push((line, true));
     }
     if let Some(baud) = args.baud {
-        let bd = BAUD_RATES
-            .iter()
-            .position(|&b| b == baud)
-            .unwrap_or_default();
-        let bd = format!("{bd:X}");
+        let bd = format!("{:X}", bd_value(baud));
         let was = radio.read(*b"BD").await.map_err(failed)?;
         if was == bd {
             lines.push((format!("BD = {was} ({baud} baud) already"), false));
@@ -204,8 +210,16 @@ async fn set_up_already(
         send_timeout: timeout,
         ..options.clone()
     };
-    let Ok(Some(was)) = ask_ap(&args.link, asked).await? else {
-        return Ok(None);
+    let was = match ask_ap(&args.link, asked).await? {
+        Ok(Some(was)) => was,
+        Ok(None) => {
+            return Err(Failure::new(
+                Failure::OTHER,
+                "the radio did not answer +++, and answered AT AP in an API frame with an \
+                 error: it does not read its API mode",
+            ));
+        }
+        Err(_) => return Ok(None),
     };
     let mode = match was {
         1 => ApiMode::Unescaped,
@@ -248,19 +262,21 @@ async fn set_up_already(
         let bd = ask_parameter(&args.link, asked, *b"BD")
             .await?
             .map_err(send_failure)?;
-        let wanted = BAUD_RATES
-            .iter()
-            .position(|&b| b == baud)
-            .unwrap_or_default();
-        if bd.map(usize::from) == Some(wanted) {
+        let wanted = bd_value(baud);
+        // The whole value: a radio set to a rate of its own reads more than one byte.
+        let bd = bd.map(|bytes| bytes.iter().fold(0u64, |n, &b| (n << 8) | u64::from(b)));
+        if bd == Some(u64::from(wanted)) {
             lines.push(format!("BD = {wanted:X} ({baud} baud) already"));
         } else {
             commands.push(at(&now, format!("BD {wanted:X}")));
-            if let Link::Serial { path, .. } = &args.link {
-                now.0 = Link::Serial {
-                    path: path.clone(),
-                    baud,
-                };
+            match &args.link {
+                Link::Serial { path, .. } => {
+                    now.0 = Link::Serial {
+                        path: path.clone(),
+                        baud,
+                    };
+                }
+                _ => commands.push(format!("setting the bridge's serial side to {baud} baud")),
             }
         }
     }
