@@ -431,24 +431,25 @@ async fn a_hub_whose_radio_is_not_there_yet_refuses_clients_from_the_start() {
     hub.stop().await;
 }
 
-/// A second hub on `hub`'s address, which must not start: its radio is never reached.
-async fn second_hub_on(hub: &Hub) -> Result<Hub, mcp_host::hub::HubError> {
+/// Starts a second hub on `hub`'s address, which must fail: the port is in use (its
+/// radio is never reached).
+async fn no_second_hub_on(hub: &Hub) {
     let radio: Link = "tcp:127.0.0.1:9".parse().unwrap();
     let addr = hub.local_addr().to_string();
-    Hub::start(&radio, LinkOptions::default(), &addr).await
-}
-
-#[tokio::test]
-async fn no_second_hub_starts_on_a_port_a_hub_serves() {
-    let (_radio, hub) = FakeRadio::with_hub().await;
-    assert!(hub.stats().listening);
-    let second = second_hub_on(&hub).await;
+    let second = Hub::start(&radio, LinkOptions::default(), &addr).await;
     assert!(
         matches!(&second, Err(mcp_host::hub::HubError::Listen { source, .. })
             if source.kind() == std::io::ErrorKind::AddrInUse),
         "{:?}",
         second.map(|hub| hub.local_addr())
     );
+}
+
+#[tokio::test]
+async fn no_second_hub_starts_on_a_port_a_hub_serves() {
+    let (_radio, hub) = FakeRadio::with_hub().await;
+    assert!(hub.stats().listening);
+    no_second_hub_on(&hub).await;
     hub.stop().await;
 }
 
@@ -474,13 +475,7 @@ async fn no_other_program_nor_hub_can_take_the_hubs_port_during_an_outage() {
         Err(std::io::ErrorKind::AddrInUse)
     );
     // Nor does another hub, whose listener would share the port (SO_REUSEPORT).
-    let second = second_hub_on(&hub).await;
-    assert!(
-        matches!(&second, Err(mcp_host::hub::HubError::Listen { source, .. })
-            if source.kind() == std::io::ErrorKind::AddrInUse),
-        "{:?}",
-        second.map(|hub| hub.local_addr())
-    );
+    no_second_hub_on(&hub).await;
     client.close();
     hub.stop().await;
 }
