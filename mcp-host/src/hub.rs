@@ -81,6 +81,11 @@
 //!   radio on a link that waits for its first peer (`pty`, `tcp-listen:`) is down until
 //!   that peer comes: the hub holds its port from the start and listens once the radio
 //!   is there. A hub does not start on a port another hub serves or holds.
+//! - **The radio's mode:** each time the radio is there, before the hub listens, it
+//!   asks the radio's `AP` (waiting [`MODE_CHECK_TIMEOUT`] at most) and logs a warning
+//!   if the radio is in another API mode than the hub, or does not answer (transparent
+//!   mode, another baud rate): the hub drops the frames it cannot read, and its clients
+//!   would hear nothing without knowing why.
 //!
 //! ```no_run
 //! use mcp_host::hub::Hub;
@@ -272,6 +277,7 @@ impl Hub {
         // the moment this returns, the port held.
         let radio_up = sender.link_state() == crate::LinkState::Connected;
         let listener = if radio_up {
+            check_radio_mode(&sender, mode).await;
             Some(listener)
         } else {
             port.hold();
@@ -688,6 +694,7 @@ impl Serve {
                         }
                         self.broadcast(&event);
                         if self.radio_up && !was_up && listener.is_none() {
+                            check_radio_mode(&self.sender, self.mode).await;
                             self.rebind_failures = 0;
                             listener = self.listen_again().await;
                             rebind.reset();
@@ -871,6 +878,39 @@ fn is_up(link: &LinkEvent) -> bool {
         link,
         LinkEvent::Connected { .. } | LinkEvent::Reconnected { .. }
     )
+}
+
+/// How long the radio has to answer the hub's `AT AP`: a local AT command is answered
+/// in milliseconds.
+pub const MODE_CHECK_TIMEOUT: Duration = Duration::from_secs(1);
+
+/// Asks the radio its `AP` each time it is there, before the hub listens (no client is
+/// connected then, so the request's frame id meets none of theirs), and warns if it is
+/// another API mode than the hub's, or if the radio does not answer: the hub drops
+/// what it cannot read, and its clients would hear nothing, not knowing why.
+async fn check_radio_mode(sender: &CommandSender, mode: ApiMode) {
+    let hub = u8::from(mode);
+    match sender.at(*b"AP", &[], Some(MODE_CHECK_TIMEOUT)).await {
+        Ok(response) => {
+            if let Ok(xbee_api::Frame::AtCommandResponse(at)) = response.parse() {
+                match (at.status.is_ok(), at.data) {
+                    (true, &[ap]) if ap == hub => {}
+                    (true, &[ap]) => tracing::warn!(
+                        "hub: the radio is in API mode {ap} (AP={ap}) but the hub speaks \
+                         API mode {hub}: most of its frames will be dropped, and clients \
+                         will hear little; start the hub with API mode {ap}"
+                    ),
+                    _ => {}
+                }
+            }
+        }
+        Err(crate::SendError::Timeout { .. }) => tracing::warn!(
+            "hub: the radio did not answer AT AP within {MODE_CHECK_TIMEOUT:?} in API mode \
+             {hub}: it may be in transparent mode (AP=0), or its baud rate may differ from \
+             the link's; clients will hear nothing until that is fixed"
+        ),
+        Err(_) => {}
+    }
 }
 
 /// The next client of `listener`; never, without one.

@@ -56,6 +56,21 @@ macro_rules! counters {
                 Stats { $($name: self.$name.load(Ordering::Relaxed),)* }
             }
         }
+
+        impl Stats {
+            /// What was counted since `earlier`, a snapshot of the same link taken
+            /// before this one (each counter's difference, 0 rather than negative).
+            ///
+            /// ```
+            /// use mcp_host::Stats;
+            /// let earlier = Stats { frames: 10, bad_checksum: 2, ..Stats::default() };
+            /// let now = Stats { frames: 15, bad_checksum: 2, ..Stats::default() };
+            /// assert_eq!(now.since(&earlier), Stats { frames: 5, ..Stats::default() });
+            /// ```
+            pub fn since(&self, earlier: &Stats) -> Stats {
+                Stats { $($name: self.$name.saturating_sub(earlier.$name),)* }
+            }
+        }
     };
 }
 

@@ -261,6 +261,12 @@ fn reading_ap_in_another_api_mode_warns() {
         "{}",
         stderr(&out)
     );
+    // Over TCP, which may be a hub: the hub must speak the radio's mode too.
+    assert!(
+        stderr(&out).contains("through a hub, the hub itself must be started with --api-mode 1"),
+        "{}",
+        stderr(&out)
+    );
     // In its own mode, no warning.
     let out = sim.at(&["AP"]);
     assert_eq!(stderr(&out), "");

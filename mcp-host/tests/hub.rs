@@ -247,11 +247,11 @@ async fn hub_on(listener: &tokio::net::TcpListener) -> (Hub, tokio::net::TcpStre
     let radio: Link = format!("tcp:{}", listener.local_addr().unwrap())
         .parse()
         .unwrap();
-    let (hub, accepted) = tokio::join!(
+    let (hub, socket) = tokio::join!(
         Hub::start(&radio, LinkOptions::default(), "127.0.0.1:0"),
-        listener.accept()
+        radio_accepted(listener)
     );
-    (hub.unwrap(), accepted.unwrap().0)
+    (hub.unwrap(), socket)
 }
 
 /// A client speaking frames on a raw TCP connection to the hub.
@@ -305,11 +305,12 @@ async fn every_answer_to_a_discovery_goes_to_the_client_that_asked_alone() {
         [0x88, 0x01, b'N', b'I', 0x00, b'G', b'S']
     );
     assert_eq!(next(&mut b).await, packet);
-    // The radio sent four frames, all passed on; the hub's own link claimed none of
-    // the three answers (it wrote the requests as raw frames).
+    // The radio sent four frames, all passed on (and, before, the answer to the hub's
+    // own AT AP); the hub's own link claimed none of the three answers (it wrote the
+    // requests as raw frames).
     let stats = hub.stats();
     assert_eq!(stats.frames_from_radio, 4, "{stats:?}");
-    assert_eq!(stats.radio.frames, 4, "{stats:?}");
+    assert_eq!(stats.radio.frames, 5, "{stats:?}");
     assert_eq!(stats.radio.unclaimed_responses, 3, "{stats:?}");
     hub.stop().await;
 }
@@ -390,7 +391,7 @@ async fn clients_see_the_radios_outage_and_come_back_with_it() {
     );
     assert!(!hub.stats().listening);
     // The radio is back: the hub's link reconnects, and then the client's.
-    let (socket, _) = listener.accept().await.unwrap();
+    let socket = radio_accepted(&listener).await;
     assert!(matches!(
         next_link(&mut client_stream).await,
         mcp_host::LinkEvent::Reconnected { .. }
@@ -491,7 +492,7 @@ async fn a_hub_whose_port_was_taken_during_an_outage_listens_again_once_it_is_fr
     let squatter = tokio::net::TcpListener::bind(hub.local_addr())
         .await
         .unwrap();
-    let (_radio, _) = listener.accept().await.unwrap();
+    let _radio = radio_accepted(&listener).await;
     until(&hub, |stats| stats.radio.reconnects >= 1).await;
     // The hub's clients reach the other program meanwhile, as any would.
     let (to_squatter, _) = tokio::time::timeout(GUARD, squatter.accept())

@@ -172,23 +172,33 @@ fn a_hub_on_a_pty_listens_once_a_radio_is_there() {
         .write(true)
         .open(&path)
         .unwrap();
+    // It says nothing, not even to the hub's AT AP: the hub says so, then listens.
+    let silent = line_with(&err, "hub: the radio did not answer AT AP");
+    assert!(silent.contains("transparent mode (AP=0)"), "{silent}");
     let there = line_with(&err, "radio there");
     assert!(there.contains(&format!("listening on {addr}")), "{there}");
     std::net::TcpStream::connect(&addr).unwrap();
 }
 
-#[test]
-fn node_discovery_and_a_broadcast_at_command_are_answered_through_the_hub() {
-    // A simulated network of two MAVs, its coordinator on TCP.
+/// A simulated network (`sim`, its coordinator on TCP, in API mode `mode`), the link
+/// to its radio, and its standard output (kept read, so that it can write on).
+fn sim_on_tcp(mode: &str) -> (Running, String, mpsc::Receiver<String>) {
     let mut sim = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
-        .args(["sim", "--link", "tcp-listen:127.0.0.1:0", "--mavs", "2"])
+        .args([
+            "sim",
+            "--link",
+            "tcp-listen:127.0.0.1:0",
+            "--mavs",
+            "2",
+            "--api-mode",
+            mode,
+        ])
         .env_remove("MCP_LOG")
         .stdout(Stdio::piped())
         .stderr(Stdio::null())
         .spawn()
         .expect("run mcp-gs sim");
     let sim_out = lines(sim.stdout.take().unwrap());
-    let _sim = Running(sim);
     let announced = line_with(&sim_out, "(connect with ");
     let radio = announced
         .split("(connect with ")
@@ -196,6 +206,40 @@ fn node_discovery_and_a_broadcast_at_command_are_answered_through_the_hub() {
         .and_then(|rest| rest.split(')').next())
         .unwrap_or_else(|| panic!("{announced}"))
         .to_owned();
+    (Running(sim), radio, sim_out)
+}
+
+#[test]
+fn a_hub_in_another_api_mode_than_its_radio_says_so_at_once() {
+    // The radio in API mode 2, the hub in mode 1 (the default): it asks the radio's AP
+    // before it listens, and warns, at the default log level.
+    let (_sim, radio, _sim_out) = sim_on_tcp("2");
+    let (_hub, out, err) = start_hub(&radio);
+    let warning = line_with(&err, "hub: the radio is in API mode 2 (AP=2)");
+    assert!(
+        warning.contains("the hub speaks API mode 1") && warning.contains("API mode 2"),
+        "{warning}"
+    );
+    // Once the radio's escaped frames come (telemetry, asked through the hub), the hub
+    // says too that it drops them.
+    let (_, addr) = serving(&out);
+    let send = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args(["send", "--link", &format!("tcp:{addr}"), "--timeout", "3"])
+        .args(["--to", "0013A20040B599B9", "telemetry", "on", "pitch_angle"])
+        .env_remove("MCP_LOG")
+        .output()
+        .expect("run mcp-gs send");
+    let dropping = line_with(&err, "the hub drops the radio's frames it cannot read");
+    assert!(
+        dropping.contains("failed the checksum") && dropping.contains("try --api-mode 2"),
+        "{dropping} ({send:?})"
+    );
+}
+
+#[test]
+fn node_discovery_and_a_broadcast_at_command_are_answered_through_the_hub() {
+    // A simulated network of two MAVs, its coordinator on TCP.
+    let (_sim, radio, _sim_out) = sim_on_tcp("1");
     let (_hub, out, _err) = start_hub(&radio);
     let (_, addr) = serving(&out);
     let nodes = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))

@@ -45,15 +45,26 @@ pub async fn hub_and_radio() -> (Hub, Wire) {
     let radio: Link = format!("tcp:{}", listener.local_addr().unwrap())
         .parse()
         .unwrap();
-    let (hub, accepted) = tokio::join!(
+    let (hub, socket) = tokio::join!(
         Hub::start(&radio, LinkOptions::default(), "127.0.0.1:0"),
-        listener.accept()
+        radio_accepted(&listener)
     );
-    let socket = accepted.unwrap().0;
     (
         hub.unwrap(),
         Framed::new(socket, XBeeCodec::new(ApiMode::Unescaped)),
     )
+}
+
+/// The hub's link to the radio, accepted on `listener`, once the radio (played here,
+/// in API mode 1) has answered the `AT AP` the hub asks before it listens for clients.
+pub async fn radio_accepted(listener: &TcpListener) -> TcpStream {
+    let (socket, _) = listener.accept().await.unwrap();
+    let mut wire = Framed::new(socket, XBeeCodec::new(ApiMode::Unescaped));
+    let asked = next(&mut wire).await;
+    assert_eq!((asked[0], &asked[2..]), (0x08, &b"AP"[..]), "{asked:02X?}");
+    send(&mut wire, &[0x88, asked[1], b'A', b'P', 0x00, 0x01]).await;
+    // Nothing more comes before the hub listens: no byte read is left behind.
+    wire.into_inner()
 }
 
 /// A simulated MAV (`MAV`) behind a virtual radio, and a hub on the radio's link, both in

@@ -341,7 +341,7 @@ pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
     if let (None, b"AP", ApiModeChoice::Fixed(mode), &[ap]) =
         (args.to, &command, args.link.api_mode, data)
     {
-        warn_mode_mismatch(ap, mode);
+        warn_mode_mismatch(ap, mode, &args.link.link);
     }
     Ok(())
 }

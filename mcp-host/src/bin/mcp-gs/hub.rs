@@ -1,12 +1,15 @@
 //! `mcp-gs hub`: one radio shared by several `mcp-gs` commands (or other programs)
 //! through a TCP port.
 
+use std::time::Duration;
+
 use clap::Args;
 
 use mcp_host::hub::{Hub, HubError};
 
 use crate::Failure;
-use crate::link_args::{LinkArgs, connect_failure};
+use crate::link_args::{ApiModeChoice, LinkArgs, connect_failure, diagnosis};
+use crate::monitor::HINT_ERRORS;
 
 /// Arguments of `hub`.
 #[derive(Debug, Args)]
@@ -79,11 +82,44 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
         );
         eprintln!("mcp-gs: no radio on {radio} yet: clients are refused until one is there");
     }
-    tokio::select! {
-        () = ctrl_c => {}
-        () = hub.finished() => {
-            hub.stop().await;
-            return Err(Failure::link(format!("the link to {radio} closed")));
+    // What is wrong with the radio's settings, said from its link's counters (a radio
+    // in another API mode, at another baud rate, in transparent mode): the hub drops
+    // what it cannot read, and its clients hear nothing. Once for each time the radio
+    // is there; not with `--api-mode auto`, which asked the radio.
+    let fixed = match args.link.api_mode {
+        ApiModeChoice::Fixed(mode) => Some(mode),
+        ApiModeChoice::Auto => None,
+    };
+    let mut since = hub.stats().radio;
+    let mut hinted = false;
+    let mut look = tokio::time::interval(Duration::from_secs(1));
+    tokio::pin!(ctrl_c);
+    loop {
+        tokio::select! {
+            () = &mut ctrl_c => break,
+            () = hub.finished() => {
+                hub.stop().await;
+                return Err(Failure::link(format!("the link to {radio} closed")));
+            }
+            _ = look.tick(), if fixed.is_some() => {
+                let now = hub.stats().radio;
+                if now.reconnects > since.reconnects {
+                    // Another radio, maybe: counted afresh.
+                    since = now;
+                    hinted = false;
+                }
+                let hint = fixed.and_then(|mode| {
+                    diagnosis(mode, &now.since(&since), HINT_ERRORS, true)
+                });
+                if let (Some(hint), false) = (hint, hinted) {
+                    hinted = true;
+                    let reason = hint.strip_prefix("hint: ").unwrap_or(&hint);
+                    eprintln!(
+                        "mcp-gs: the hub drops the radio's frames it cannot read, and its \
+                         clients get none of them: {reason} (restart the hub with it)"
+                    );
+                }
+            }
         }
     }
     let stats = hub.stats();

@@ -293,7 +293,7 @@ pub(crate) async fn check_mode(sender: &CommandSender, configured: ApiMode) {
     };
     if let Ok(Frame::AtCommandResponse(at)) = response.parse() {
         if let (true, &[radio]) = (at.status.is_ok(), at.data) {
-            warn_mode_mismatch(radio, configured);
+            warn_mode_mismatch(radio, configured, &sender.info().link);
         }
     }
 }
@@ -324,14 +324,22 @@ pub(crate) fn announce_radio_side(info: &mcp_host::LinkInfo) {
     }
 }
 
-/// Warns when the radio's AP setting, read as `radio`, is another API mode than the
-/// configured one: its frames will be dropped or garbled.
-pub(crate) fn warn_mode_mismatch(radio: u8, configured: ApiMode) {
+/// Warns when the radio's AP setting, read as `radio` on `link`, is another API mode
+/// than the configured one: its frames will be dropped or garbled. On a `tcp:` link
+/// (a hub, maybe) the hub must speak it too.
+pub(crate) fn warn_mode_mismatch(radio: u8, configured: ApiMode, link: &Link) {
     let configured = u8::from(configured);
     if radio != configured {
+        let hub = match link {
+            Link::Tcp { .. } => format!(
+                " (through a hub, the hub itself must be started with --api-mode {radio}: it \
+                 drops the frames it cannot read)"
+            ),
+            _ => String::new(),
+        };
         eprintln!(
             "mcp-gs: warning: the radio is in API mode {radio} (AP={radio}) but --api-mode is \
-             {configured}: frames will be dropped or garbled; use --api-mode {radio} or auto"
+             {configured}: frames will be dropped or garbled; use --api-mode {radio} or auto{hub}"
         );
     }
 }

@@ -53,7 +53,7 @@ fn parse_count(s: &str) -> Result<u64, String> {
 
 /// After this many failed frames, more than the good ones, suggest what may be wrong
 /// with the radio's settings.
-const HINT_ERRORS: u64 = 5;
+pub(crate) const HINT_ERRORS: u64 = 5;
 
 /// Runs `monitor`.
 pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
