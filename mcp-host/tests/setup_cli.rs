@@ -129,24 +129,40 @@ async fn serve(mut port: Transport, radio: &Mutex<Radio>) {
             } else {
                 ApiMode::Escaped
             };
-            let (_, decoder) = decoder.get_or_insert_with(|| (mode, Decoder::new(mode)));
+            let (_, reading) = decoder.get_or_insert_with(|| (mode, Decoder::new(mode)));
             let mut requests = Vec::new();
-            decoder.decode_each(bytes, |event| {
+            reading.decode_each(bytes, |event| {
                 if let Ok(frame) = event {
                     if let Ok(at) = AtCommandRepr::parse_bytes(frame.data()) {
-                        let mut text = String::from_utf8_lossy(&at.command).into_owned();
-                        if !at.parameter.is_empty() {
-                            text += &format!("={:X?}", at.parameter);
-                        }
-                        radio.lock().unwrap().api.push(text);
-                        requests.push((at.frame_id, at.command));
+                        requests.push((at.frame_id, at.command, at.parameter.to_vec()));
                     }
                 }
             });
-            for (frame_id, command) in requests {
-                let value = match &command {
-                    b"AP" => Some([ap]),
-                    b"BD" => Some([radio.lock().unwrap().bd]),
+            // Taken in API frames as an XBee does, each applied once answered: AP
+            // (then answered and read in the new mode), BD and WR.
+            let mut new_ap = None;
+            for (frame_id, command, parameter) in requests {
+                let mut radio = radio.lock().unwrap();
+                let mut text = String::from_utf8_lossy(&command).into_owned();
+                if !parameter.is_empty() {
+                    text += &format!("={parameter:X?}");
+                }
+                radio.api.push(text);
+                let value = match (&command, &parameter[..]) {
+                    (b"AP", []) => Some(vec![ap]),
+                    (b"BD", []) => Some(vec![radio.bd]),
+                    (b"AP", [1 | 2]) => {
+                        new_ap = Some(parameter[0]);
+                        Some(vec![])
+                    }
+                    (b"BD", [bd]) => {
+                        radio.bd = *bd;
+                        Some(vec![])
+                    }
+                    (b"WR", []) => {
+                        radio.saved = true;
+                        Some(vec![])
+                    }
                     _ => None,
                 };
                 let response = AtCommandResponseRepr {
@@ -157,11 +173,15 @@ async fn serve(mut port: Transport, radio: &Mutex<Radio>) {
                     } else {
                         AtStatus::InvalidCommand
                     },
-                    data: value.as_ref().map_or(&[], |value| value),
+                    data: value.as_deref().unwrap_or_default(),
                 };
                 let mut frame = vec![0u8; response.encoded_len(mode)];
                 let n = response.encode(mode, &mut frame).unwrap();
                 out.extend_from_slice(&frame[..n]);
+            }
+            if let Some(new_ap) = new_ap {
+                radio.lock().unwrap().ap = new_ap;
+                decoder = None;
             }
         }
         if !out.is_empty() && port.write_all(&out).await.is_err() {
@@ -311,26 +331,29 @@ async fn a_radio_set_up_already_is_checked_and_left_as_it_is() {
 }
 
 #[tokio::test]
-async fn a_radio_in_api_mode_set_otherwise_gets_the_commands_that_set_it() {
+async fn a_radio_in_api_mode_set_otherwise_is_set_up_in_api_frames() {
     let (radio, path) = fake_radio(2).await;
     let link = format!("serial:{path}:9600");
     let out = setup(&link, &["--timeout", "1", "--baud", "115200"]).await;
-    assert_eq!(out.status.code(), Some(1), "{out:?}");
-    assert!(out.stdout.is_empty(), "{out:?}");
-    let err = stderr(&out);
-    assert!(err.contains("answers API frames in mode 2"), "{err}");
-    // Each command as the radio is after the one before: mode 1 after AP, 115200
-    // baud after BD.
-    let commands = format!(
-        "`mcp-gs at --link {link} --api-mode 2 AP 1`, then `mcp-gs at --link {link} BD 7`, \
-         then `mcp-gs at --link serial:{path}:115200 WR`"
+    assert!(out.status.success(), "{out:?}");
+    assert!(
+        stderr(&out).contains("answers API frames in mode 2: setting it up in API frames"),
+        "{out:?}"
     );
-    assert!(err.contains(&commands), "{err}");
+    assert_eq!(
+        stdout(&out),
+        format!(
+            "AP = 2 (API mode 2, escaped) -> 1 (API mode 1), saved\n\
+             BD = 3 (9600 baud) -> 7 (115200 baud), saved\n\
+             checked: the radio answers API frames in mode 1 (use --link serial:{path}:115200)\n"
+        ),
+        "{out:?}"
+    );
     let radio = radio.lock().unwrap();
     assert!(radio.commands.is_empty(), "{:?}", radio.commands);
-    // Read only: the operator sets it.
-    assert_eq!(radio.api, ["AP", "BD"]);
-    assert_eq!((radio.ap, radio.bd, radio.saved), (2, 3, false));
+    // Read in mode 2; AP set in mode 2, the rest in mode 1; then checked.
+    assert_eq!(radio.api, ["AP", "BD", "AP=[1]", "BD=[7]", "WR", "AP"]);
+    assert_eq!((radio.ap, radio.bd, radio.saved), (1, 7, true));
 }
 
 #[tokio::test]
@@ -455,29 +478,18 @@ async fn the_simulators_factory_radio_is_set_up_and_then_reaches_the_mav() {
         "{out:?}"
     );
 
-    // Asked for mode 1, it gets the at commands that set it in API frames; carried out,
-    // they leave it set up as asked.
+    // Asked for mode 1, it is set up in API frames, and found so the next time.
     let to_one = ["setup", "--link", &link, "--timeout", "1"];
     let out = mcp_gs(&to_one).await;
-    assert_eq!(out.status.code(), Some(1), "{out:?}");
-    let err = stderr(&out);
-    let commands: Vec<&str> = err
-        .split('`')
-        .filter(|part| part.starts_with("mcp-gs at "))
-        .collect();
+    assert!(out.status.success(), "{out:?}");
     assert_eq!(
-        commands,
-        [
-            format!("mcp-gs at --link {link} --api-mode 2 AP 1"),
-            format!("mcp-gs at --link {link} WR"),
-        ],
-        "{err}"
+        stdout(&out),
+        format!(
+            "AP = 2 (API mode 2, escaped) -> 1 (API mode 1), saved\n\
+             checked: the radio answers API frames in mode 1 (use --link {link})\n"
+        ),
+        "{out:?}"
     );
-    for command in commands {
-        let args: Vec<&str> = command.split_whitespace().skip(1).collect();
-        let out = mcp_gs(&args).await;
-        assert!(out.status.success(), "{command}: {out:?}");
-    }
     let out = mcp_gs(&to_one).await;
     assert!(out.status.success(), "{out:?}");
     assert_eq!(

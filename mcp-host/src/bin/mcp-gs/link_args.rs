@@ -246,11 +246,22 @@ pub(crate) async fn ask_parameter(
     options: LinkOptions,
     command: [u8; 2],
 ) -> Result<Result<Option<Vec<u8>>, SendError>, Failure> {
+    at_exchange(link, options, command, &[]).await
+}
+
+/// [`ask_parameter`], with `value` given: the parameter set (or the command carried
+/// out), the answer's value (usually none) if the radio took it.
+pub(crate) async fn at_exchange(
+    link: &Link,
+    options: LinkOptions,
+    command: [u8; 2],
+    value: &[u8],
+) -> Result<Result<Option<Vec<u8>>, SendError>, Failure> {
     let timeout = options.send_timeout;
     let (mut stream, sender) = mcp_host::connect(link, options)
         .await
         .map_err(|e| connect_failure(link, e))?;
-    let response = sender.at(command, &[], Some(timeout)).await;
+    let response = sender.at(command, value, Some(timeout)).await;
     sender.close();
     while stream.next().await.is_some() {}
     Ok(response.map(|response| match response.parse() {

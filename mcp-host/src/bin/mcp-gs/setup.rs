@@ -1,8 +1,8 @@
 //! `mcp-gs setup`: put the local radio into API mode through its AT command mode (`+++`),
 //! as a radio fresh from the factory (transparent mode, `AP=0`) needs before anything
 //! else here can talk to it. A radio that does not take `+++` (older firmware takes it in
-//! transparent mode only) is asked in API frames instead: set up already, it is checked
-//! and left as it is; otherwise the operator gets the `at` commands that set it.
+//! transparent mode only) is set up in API frames instead, and left as it is if it is
+//! set up already.
 
 use std::time::Duration;
 
@@ -13,7 +13,7 @@ use mcp_host::{Link, LinkOptions, ReconnectPolicy};
 use xbee_api::{ApiMode, Frame};
 
 use crate::link_args::{
-    ask_ap, ask_parameter, connect_failure, open_once, parse_seconds, send_failure,
+    ask_ap, ask_parameter, at_exchange, connect_failure, open_once, parse_seconds, send_failure,
 };
 use crate::{ApiModeArg, Failure};
 
@@ -135,7 +135,7 @@ pub(crate) async fn run(args: SetupArgs) -> Result<(), Failure> {
         // A radio in API mode already may not take +++ (older firmware takes it in
         // transparent mode only): it may be set up already.
         Err(error @ CommandModeError::NoAnswer { .. }) => {
-            return set_up_already(&args, options, timeout)
+            return set_up_in_api_frames(&args, options, timeout)
                 .await?
                 .ok_or_else(|| failed(error));
         }
@@ -196,21 +196,27 @@ pub(crate) async fn run(args: SetupArgs) -> Result<(), Failure> {
     check(&link, args.api_mode.0, options, timeout).await
 }
 
-/// For a radio that did not answer `+++`: whether it answers API frames, set up as
-/// asked already (then checked, as after a change). `None` if it does not answer them
-/// either; an error, saying how to set it, if it answers them with other settings.
-async fn set_up_already(
+/// For a radio that did not answer `+++` (older firmware takes it in transparent mode
+/// only): if it answers API frames, it is set up in them instead, as in command mode,
+/// each frame in the mode and at the rate the one before left (a change made in an API
+/// frame applies once answered), and checked. `None` if it does not answer them either.
+async fn set_up_in_api_frames(
     args: &SetupArgs,
     options: LinkOptions,
     timeout: Duration,
 ) -> Result<Option<()>, Failure> {
     let target = ap(args.api_mode.0);
-    let asked = LinkOptions {
-        api_mode: ApiMode::Unescaped,
-        send_timeout: timeout,
-        ..options.clone()
+    // The radio as it is now: its link (the rate) and its API mode.
+    let asked = |link: &Link, mode: ApiMode| {
+        let options = LinkOptions {
+            api_mode: mode,
+            send_timeout: timeout,
+            ..options.clone()
+        };
+        (link.clone(), options)
     };
-    let was = match ask_ap(&args.link, asked).await? {
+    let (link, first) = asked(&args.link, ApiMode::Unescaped);
+    let was = match ask_ap(&link, first).await? {
         Ok(Some(was)) => was,
         Ok(None) => {
             return Err(Failure::new(
@@ -221,82 +227,129 @@ async fn set_up_already(
         }
         Err(_) => return Ok(None),
     };
-    let mode = match was {
-        1 => ApiMode::Unescaped,
-        2 => ApiMode::Escaped,
-        _ => {
-            return Err(Failure::new(
-                Failure::OTHER,
-                format!(
-                    "the radio did not answer +++ but answers API frames, and reads its AP as \
-                     {was} ({}): this ground station cannot set it",
-                    meaning(&was.to_string())
-                ),
-            ));
-        }
-    };
-    // What is as asked already; the rest is set by `mcp-gs at` commands, each given as
-    // the radio is after the one before (a change made in an API frame applies at once).
-    let mut lines = Vec::new();
-    let mut commands = Vec::new();
-    let mut now = (args.link.clone(), was);
-    let at = |(link, ap): &(Link, u8), command: String| {
-        let flag = if *ap == 2 { " --api-mode 2" } else { "" };
-        format!("`mcp-gs at --link {link}{flag} {command}`")
-    };
-    if was == target {
-        lines.push(format!(
-            "AP = {was} ({}) already",
-            meaning(&was.to_string())
-        ));
-    } else {
-        commands.push(at(&now, format!("AP {target}")));
-        now.1 = target;
-    }
-    if let Some(baud) = args.baud {
-        let asked = LinkOptions {
-            api_mode: mode,
-            send_timeout: timeout,
-            ..options.clone()
-        };
-        let bd = ask_parameter(&args.link, asked, *b"BD")
-            .await?
-            .map_err(send_failure)?;
-        let wanted = bd_value(baud);
-        // The whole value: a radio set to a rate of its own reads more than one byte.
-        let bd = bd.map(|bytes| bytes.iter().fold(0u64, |n, &b| (n << 8) | u64::from(b)));
-        if bd == Some(u64::from(wanted)) {
-            lines.push(format!("BD = {wanted:X} ({baud} baud) already"));
-        } else {
-            commands.push(at(&now, format!("BD {wanted:X}")));
-            match &args.link {
-                Link::Serial { path, .. } => {
-                    now.0 = Link::Serial {
-                        path: path.clone(),
-                        baud,
-                    };
-                }
-                _ => commands.push(format!("setting the bridge's serial side to {baud} baud")),
-            }
-        }
-    }
-    if !commands.is_empty() {
-        commands.push(at(&now, "WR".to_owned()));
+    let Ok(mode) = ApiMode::try_from(was) else {
         return Err(Failure::new(
             Failure::OTHER,
             format!(
-                "the radio did not answer +++ (older firmware takes it in transparent mode \
-                 only) but answers API frames in mode {was}: set it in API frames instead, \
-                 with {}",
-                commands.join(", then ")
+                "the radio did not answer +++ but answers API frames, and reads its AP as \
+                 {was} ({}): this ground station cannot set it",
+                meaning(&was.to_string())
+            ),
+        ));
+    };
+    eprintln!(
+        "mcp-gs: the radio did not answer +++ (older firmware takes it in transparent mode \
+         only) but answers API frames in mode {was}: setting it up in API frames"
+    );
+    let bd = match args.baud {
+        Some(_) => {
+            let (link, options) = asked(&args.link, mode);
+            let value = ask_parameter(&link, options, *b"BD")
+                .await?
+                .map_err(send_failure)?;
+            // The whole value: a radio set to a rate of its own reads more than one byte.
+            value.map(|bytes| bytes.iter().fold(0u64, |n, &b| (n << 8) | u64::from(b)))
+        }
+        None => None,
+    };
+    let new_bd = args
+        .baud
+        .map(|baud| (baud, bd_value(baud)))
+        .filter(|(_, wanted)| bd != Some(u64::from(*wanted)));
+    if let (Some((baud, wanted)), Link::Tcp { .. }) = (new_bd, &args.link) {
+        // The bridge's serial side would have to follow between two frames.
+        let flag = if target == 2 { " --api-mode 2" } else { "" };
+        let link = &args.link;
+        let ap = if was == target {
+            String::new()
+        } else {
+            let flag = if was == 2 { " --api-mode 2" } else { "" };
+            format!("`mcp-gs at --link {link}{flag} AP {target}`, then ")
+        };
+        return Err(Failure::new(
+            Failure::OTHER,
+            format!(
+                "the radio did not answer +++ but answers API frames in mode {was}; through \
+                 a bridge its baud rate is set by hand: {ap}`mcp-gs at --link {link}{flag} \
+                 BD {wanted:X}`, then set the bridge's serial side to {baud} baud, then \
+                 `mcp-gs at --link {link}{flag} WR`"
             ),
         ));
     }
-    for line in lines {
-        out!("{line}");
+    // What each parameter was, and whether it was changed (then saved below).
+    let mut lines: Vec<(String, bool)> = Vec::new();
+    let mut now = (args.link.clone(), mode);
+    if was == target {
+        lines.push((
+            format!("AP = {was} ({}) already", meaning(&was.to_string())),
+            false,
+        ));
+    } else {
+        set(&now, &asked, *b"AP", &[target]).await?;
+        now.1 = args.api_mode.0;
+        let line = format!(
+            "AP = {was} ({}) -> {target} ({})",
+            meaning(&was.to_string()),
+            meaning(&target.to_string())
+        );
+        lines.push((line, true));
     }
-    check(&args.link, args.api_mode.0, options, timeout).await?;
+    match (args.baud, new_bd, &args.link) {
+        (Some(baud), None, _) => {
+            let wanted = bd_value(baud);
+            lines.push((format!("BD = {wanted:X} ({baud} baud) already"), false));
+        }
+        (_, Some((baud, wanted)), Link::Serial { path, .. }) => {
+            set(&now, &asked, *b"BD", &[wanted]).await?;
+            now.0 = Link::Serial {
+                path: path.clone(),
+                baud,
+            };
+            let was = bd.map_or_else(|| "?".to_owned(), |bd| format!("{bd:X}"));
+            let line = format!(
+                "BD = {was} ({} baud) -> {wanted:X} ({baud} baud)",
+                baud_of(&was)
+            );
+            lines.push((line, true));
+        }
+        _ => {}
+    }
+    if lines.iter().any(|(_, changed)| *changed) {
+        set(&now, &asked, *b"WR", &[]).await?;
+    }
+    for (line, changed) in &lines {
+        if *changed {
+            out!("{line}, saved");
+        } else {
+            out!("{line}");
+        }
+    }
+    check(&now.0, args.api_mode.0, options, timeout).await?;
     Ok(Some(()))
+}
+
+/// Sets `command` to `value` in an API frame, on the radio as `now` (its link and API
+/// mode) has it; an error if the radio does not answer or refuses it.
+async fn set(
+    now: &(Link, ApiMode),
+    asked: &impl Fn(&Link, ApiMode) -> (Link, LinkOptions),
+    command: [u8; 2],
+    value: &[u8],
+) -> Result<(), Failure> {
+    let (link, options) = asked(&now.0, now.1);
+    match at_exchange(&link, options, command, value)
+        .await?
+        .map_err(send_failure)?
+    {
+        Some(_) => Ok(()),
+        None => Err(Failure::new(
+            Failure::OTHER,
+            format!(
+                "the radio refused {} {value:02X?} in an API frame",
+                String::from_utf8_lossy(&command)
+            ),
+        )),
+    }
 }
 
 /// Asks the radio its `AP` in API frames of the mode set: that it answers is the proof.
