@@ -2,6 +2,8 @@
 //! the default log level, and a client's node discovery and broadcast remote AT command
 //! answered through it.
 
+mod common;
+
 use std::io::{BufRead, BufReader};
 use std::process::{Child, Command, Stdio};
 use std::sync::mpsc;
@@ -95,8 +97,17 @@ fn line_with(lines: &mpsc::Receiver<String>, text: &str) -> String {
 /// A hub on `radio`, listening on a free port of 127.0.0.1: the process, and its
 /// standard output and error line by line.
 fn start_hub(radio: &str) -> (Running, mpsc::Receiver<String>, mpsc::Receiver<String>) {
+    start_hub_with(radio, &[])
+}
+
+/// [`start_hub`], with more arguments.
+fn start_hub_with(
+    radio: &str,
+    more: &[&str],
+) -> (Running, mpsc::Receiver<String>, mpsc::Receiver<String>) {
     let mut child = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
         .args(["hub", "--link", radio, "--listen", "127.0.0.1:0"])
+        .args(more)
         .env_remove("MCP_LOG")
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -234,6 +245,25 @@ fn a_hub_in_another_api_mode_than_its_radio_says_so_at_once() {
         dropping.contains("failed the checksum") && dropping.contains("try --api-mode 2"),
         "{dropping} ({send:?})"
     );
+}
+
+#[test]
+fn a_hub_with_wait_waits_for_its_radio_refusing_clients_meanwhile() {
+    // Nothing listens on the radio's port yet (a bridge not started).
+    let reserved = common::ReservedPort::new();
+    let radio = format!("tcp:127.0.0.1:{}", reserved.port);
+    let (_hub, out, err) = start_hub_with(&radio, &["--wait"]);
+    let (announced, addr) = serving(&out);
+    assert!(announced.starts_with("will serve"), "{announced}");
+    line_with(&err, "link not there yet: waiting for it");
+    let refused = std::net::TcpStream::connect(&addr).unwrap_err();
+    assert_eq!(refused.kind(), std::io::ErrorKind::ConnectionRefused);
+    // The radio comes: the hub listens.
+    let listener = reserved.listen();
+    let (_radio, _) = listener.accept().unwrap();
+    let there = line_with(&err, "radio there");
+    assert!(there.contains(&format!("listening on {addr}")), "{there}");
+    std::net::TcpStream::connect(&addr).unwrap();
 }
 
 #[test]

@@ -19,6 +19,11 @@ pub(crate) struct HubArgs {
     /// Where to serve the radio: other commands then take `--link tcp:ADDR:PORT`.
     #[arg(long, value_name = "ADDR:PORT", default_value = "127.0.0.1:9750", value_parser = parse_listen)]
     listen: String,
+    /// Wait for a radio that is not there yet (not plugged in, a simulator not
+    /// started) instead of failing at once, refusing clients meanwhile: for a hub
+    /// started at boot.
+    #[arg(long)]
+    wait: bool,
 }
 
 /// `--listen`: an address and a port (`127.0.0.1:9750`, `localhost:9750`, `[::1]:9750`,
@@ -57,7 +62,11 @@ fn listen_failure(addr: &str, error: &std::io::Error) -> Failure {
 
 /// Runs `hub` until Ctrl-C, or until the link to the radio ends.
 pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
-    let options = args.link.options(true).await?;
+    args.link.check_wait(args.wait)?;
+    let options = mcp_host::LinkOptions {
+        wait_for_link: args.wait,
+        ..args.link.options(true).await?
+    };
     let radio = &args.link.link;
     let hub = Hub::start(radio, options, &args.listen)
         .await

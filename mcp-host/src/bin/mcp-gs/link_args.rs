@@ -113,15 +113,7 @@ impl LinkArgs {
         reconnect: bool,
         wait: bool,
     ) -> Result<(PacketStream, CommandSender), Failure> {
-        if wait {
-            if self.api_mode == ApiModeChoice::Auto {
-                return Err(Failure::input(
-                    "--wait and --api-mode auto do not go together: the mode is asked of the \
-                     radio before anything else, so it must be there; give --api-mode 1 or 2",
-                ));
-            }
-            check_serial_path(&self.link, true)?;
-        }
+        self.check_wait(wait)?;
         if !reconnect && matches!(self.link, Link::Pty) {
             return Err(Failure::input(
                 "--link pty makes a new pseudo-terminal, with no radio on it yet: this \
@@ -166,6 +158,21 @@ impl LinkArgs {
 
     /// The link options these arguments give, the API mode asked of the radio for
     /// `--api-mode auto`. `reconnect` as for [`open`](Self::open).
+    /// Refuses what `--wait` cannot do: wait for a radio whose mode is to be asked
+    /// (`--api-mode auto`), or for a path that is no serial device.
+    pub(crate) fn check_wait(&self, wait: bool) -> Result<(), Failure> {
+        if !wait {
+            return Ok(());
+        }
+        if self.api_mode == ApiModeChoice::Auto {
+            return Err(Failure::input(
+                "--wait and --api-mode auto do not go together: the mode is asked of the \
+                 radio before anything else, so it must be there; give --api-mode 1 or 2",
+            ));
+        }
+        check_serial_path(&self.link, true)
+    }
+
     pub(crate) async fn options(&self, reconnect: bool) -> Result<LinkOptions, Failure> {
         let mode = match self.api_mode {
             ApiModeChoice::Fixed(mode) => mode,
