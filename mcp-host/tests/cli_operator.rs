@@ -225,6 +225,20 @@ fn a_path_that_is_no_serial_port_says_so() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+#[test]
+fn a_baud_rate_no_xbee_is_set_to_is_warned_of() {
+    // A zero too many: 96000 for 9600.
+    let output = run(&["at", "--link", "serial:/dev/null:96000", "AP"]);
+    let warned = stderr(&output);
+    assert!(
+        warned.starts_with("mcp-gs: warning: 96000 baud is none of the standard XBee rates (1200,"),
+        "{warned}"
+    );
+    // A standard one is not.
+    let output = run(&["at", "--link", "serial:/dev/null:9600", "AP"]);
+    assert!(!stderr(&output).contains("warning"), "{}", stderr(&output));
+}
+
 /// A ground station killed (SIGKILL) while it holds a simulator's pseudo-terminal
 /// leaves it free: the next command opens it and talks to the MAV behind it.
 #[cfg(target_os = "linux")]

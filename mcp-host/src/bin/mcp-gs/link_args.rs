@@ -174,6 +174,7 @@ impl LinkArgs {
     }
 
     pub(crate) async fn options(&self, reconnect: bool) -> Result<LinkOptions, Failure> {
+        warn_unusual_baud(&self.link);
         let mode = match self.api_mode {
             ApiModeChoice::Fixed(mode) => mode,
             ApiModeChoice::Auto => self.detect_mode().await?,
@@ -339,6 +340,22 @@ pub(crate) fn announce_radio_side(info: &mcp_host::LinkInfo) {
     }
     if let Some(addr) = info.local_addr {
         eprintln!("mcp-gs: listening for the radio side on {addr} (connect with tcp:{addr})");
+    }
+}
+
+/// Warns when a serial link's baud rate is none of the standard ones an XBee is set to
+/// (`BD` 0 to 8): a typo, most likely (`96000`), though a radio can be set to another.
+pub(crate) fn warn_unusual_baud(link: &Link) {
+    use mcp_host::command_mode::BAUD_RATES;
+    if let Link::Serial { baud, .. } = link {
+        if !BAUD_RATES.contains(baud) {
+            let rates: Vec<String> = BAUD_RATES.iter().map(u32::to_string).collect();
+            eprintln!(
+                "mcp-gs: warning: {baud} baud is none of the standard XBee rates ({}): \
+                 nothing will be understood unless the radio was set to exactly that",
+                rates.join(", ")
+            );
+        }
     }
 }
 
