@@ -573,7 +573,8 @@ fn a_port_another_program_holds_is_named_as_busy() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(3), "{stderr}");
     assert!(
-        stderr.contains("another program has the port open"),
+        stderr.contains("another program has the port open")
+            && stderr.contains("stop the other (a hub, say: setup and probe need the port itself)"),
         "{stderr}"
     );
 }

@@ -373,6 +373,12 @@ async fn a_radio_that_answers_neither_plus_plus_plus_nor_api_frames_sends_the_op
     );
     let probe = format!("`mcp-gs probe --link serial:{path}` tries every rate");
     assert!(err.contains(&probe), "{err}");
+    assert!(err.contains(&format!("serial:{path}:9600;")), "{err}");
+    // At 9600 baud already, the factory's rate is not suggested again.
+    let out = setup(&format!("serial:{path}:9600"), &["--timeout", "0.2"]).await;
+    let err = stderr(&out);
+    assert!(err.contains(&probe), "{err}");
+    assert!(!err.contains("leave the factory at 9600"), "{err}");
 }
 
 #[tokio::test]

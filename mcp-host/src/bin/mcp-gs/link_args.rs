@@ -610,9 +610,10 @@ fn link_hint(error: &LinkError, link: &Link) -> Option<String> {
             // On Windows, serialport also reports a port that does not exist (or may
             // not be opened) as NoDevice: the hint cannot claim it is in use.
             Serial::NoDevice => Some(format!(
-                "{}: one program at a time can use a serial port; to share the radio, let \
-                 `mcp-gs hub --link {link}` hold it and give the other commands --link \
-                 tcp:127.0.0.1:9750",
+                "{}: one program at a time can use a serial port: stop the other (a hub, \
+                 say: setup and probe need the port itself); to share the radio among \
+                 monitor, send, status and the like, let `mcp-gs hub --link {link}` hold it \
+                 and give them --link tcp:127.0.0.1:9750",
                 if cfg!(windows) {
                     "the port is missing (`mcp-gs ports` lists the serial ports present), or \
                      another program, perhaps another mcp-gs, has it open"

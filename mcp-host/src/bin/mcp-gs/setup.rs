@@ -405,6 +405,10 @@ fn command_failure(error: CommandModeError, link: &Link) -> Failure {
     match error {
         CommandModeError::NoAnswer { ref sent, .. } if sent == "+++" => {
             let rates = match link {
+                // The factory's rate, unless it was the one tried.
+                Link::Serial { path, baud: 9600 } => {
+                    format!("`mcp-gs probe --link serial:{path}` tries every rate")
+                }
                 Link::Serial { path, .. } => format!(
                     "XBee modules leave the factory at 9600: serial:{path}:9600; `mcp-gs probe \
                      --link serial:{path}` tries every rate"
