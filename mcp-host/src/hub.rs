@@ -79,13 +79,15 @@
 //!   reach nobody else (a program of the same user that sets `SO_REUSEPORT` could still
 //!   share it, but no other hub); elsewhere it listens again once the port is free. A
 //!   radio on a link that waits for its first peer (`pty`, `tcp-listen:`) is down until
-//!   that peer comes: the hub holds its port from the start and listens once the radio
-//!   is there. A hub does not start on a port another hub serves or holds.
+//!   that peer comes: the hub refuses clients from the start (holding its port, on
+//!   Linux) and listens once the radio is there. A hub does not start on a port
+//!   another hub serves or holds (a small window remains for two hubs started at the
+//!   same moment).
 //! - **The radio's mode:** each time the radio is there, before the hub listens, it
-//!   asks the radio's `AP` (waiting [`MODE_CHECK_TIMEOUT`] at most) and logs a warning
-//!   if the radio is in another API mode than the hub, or does not answer (transparent
-//!   mode, another baud rate): the hub drops the frames it cannot read, and its clients
-//!   would hear nothing without knowing why.
+//!   asks the radio's `AP` (twice at most, waiting [`MODE_CHECK_TIMEOUT`] each time) and
+//!   logs a warning if the radio is in another API mode than the hub, or does not
+//!   answer (transparent mode, another baud rate): the hub drops the frames it cannot
+//!   read, and its clients would hear nothing without knowing why.
 //!
 //! ```no_run
 //! use mcp_host::hub::Hub;
@@ -250,6 +252,11 @@ impl Hub {
     /// Opens the link to the radio (with `options`: API mode, reconnection, ...) and
     /// listens on `listen` (`HOST:PORT`; port 0 picks a free one, see
     /// [`local_addr`](Self::local_addr)). Clients speak the API mode of `options`.
+    ///
+    /// With the radio there, it is asked its `AP` first (up to twice
+    /// [`MODE_CHECK_TIMEOUT`]: see the module's docs). Without it (a `pty` or
+    /// `tcp-listen:` link, or `wait_for_link`), clients are refused from the moment this
+    /// returns, the port held on Linux, until the radio is there.
     pub async fn start(link: &Link, options: LinkOptions, listen: &str) -> Result<Hub, HubError> {
         let mode = options.api_mode;
         let (mut port, listener) = Port::bind(listen)
@@ -695,9 +702,15 @@ impl Serve {
                         self.broadcast(&event);
                         if self.radio_up && !was_up && listener.is_none() {
                             check_radio_mode(&self.sender, self.mode).await;
-                            self.rebind_failures = 0;
-                            listener = self.listen_again().await;
-                            rebind.reset();
+                            // Unless the radio went away again, or the hub was stopped,
+                            // while it was asked.
+                            let still_up =
+                                self.sender.link_state() == crate::LinkState::Connected;
+                            if still_up && !self.stop.is_cancelled() {
+                                self.rebind_failures = 0;
+                                listener = self.listen_again().await;
+                                rebind.reset();
+                            }
                         }
                     }
                     None => break,
@@ -890,12 +903,18 @@ pub const MODE_CHECK_TIMEOUT: Duration = Duration::from_secs(1);
 /// what it cannot read, and its clients would hear nothing, not knowing why.
 async fn check_radio_mode(sender: &CommandSender, mode: ApiMode) {
     let hub = u8::from(mode);
-    match sender.at(*b"AP", &[], Some(MODE_CHECK_TIMEOUT)).await {
+    let mut answer = sender.at(*b"AP", &[], Some(MODE_CHECK_TIMEOUT)).await;
+    if matches!(answer, Err(crate::SendError::Timeout { .. })) {
+        // Asked once more: a radio just plugged in may still be starting.
+        answer = sender.at(*b"AP", &[], Some(MODE_CHECK_TIMEOUT)).await;
+    }
+    match answer {
         Ok(response) => {
+            // An answer under the request's id, of another command, is a late one to a
+            // client's request from before an outage: nothing is said of it.
             if let Ok(xbee_api::Frame::AtCommandResponse(at)) = response.parse() {
-                match (at.status.is_ok(), at.data) {
-                    (true, &[ap]) if ap == hub => {}
-                    (true, &[ap]) => tracing::warn!(
+                match (at.command == *b"AP" && at.status.is_ok(), at.data) {
+                    (true, &[ap]) if ap != hub => tracing::warn!(
                         "hub: the radio is in API mode {ap} (AP={ap}) but the hub speaks \
                          API mode {hub}: most of its frames will be dropped, and clients \
                          will hear little; start the hub with API mode {ap}"
@@ -905,9 +924,9 @@ async fn check_radio_mode(sender: &CommandSender, mode: ApiMode) {
             }
         }
         Err(crate::SendError::Timeout { .. }) => tracing::warn!(
-            "hub: the radio did not answer AT AP within {MODE_CHECK_TIMEOUT:?} in API mode \
-             {hub}: it may be in transparent mode (AP=0), or its baud rate may differ from \
-             the link's; clients will hear nothing until that is fixed"
+            "hub: the radio did not answer AT AP (asked twice, {MODE_CHECK_TIMEOUT:?} each) \
+             in API mode {hub}: it may be in transparent mode (AP=0), or its baud rate may \
+             differ from the link's; clients will hear nothing until that is fixed"
         ),
         Err(_) => {}
     }

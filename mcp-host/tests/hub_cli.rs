@@ -5,22 +5,14 @@
 mod common;
 
 use std::io::{BufRead, BufReader};
-use std::process::{Child, Command, Stdio};
+use std::process::{Command, Stdio};
+
+use common::Running;
 use std::sync::mpsc;
 use std::time::Duration;
 
 /// Failure guard only: every wait ends on a line long before this.
 const GUARD: Duration = Duration::from_secs(20);
-
-/// Kills the hub when the test ends, passed or not.
-struct Running(Child);
-
-impl Drop for Running {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
 
 #[test]
 fn a_listen_address_without_a_host_is_a_usage_error() {
@@ -46,7 +38,7 @@ fn a_listen_address_that_cannot_be_had_says_why() {
     for (listen, hint) in [
         (
             taken.as_str(),
-            "another hub, or another program, serves there",
+            "another hub serves there or holds the port while its radio is away",
         ),
         (
             "192.0.2.1:9750",

@@ -47,9 +47,11 @@ struct Radio {
     saved: bool,
     /// The command mode lines it got, in order.
     commands: Vec<String>,
-    /// The AT commands it got in API frames, in order: `AP` for a read, `AP=1` for a
-    /// value (which it does not take: it answers as to a read).
+    /// The AT commands it got in API frames, in order: `AP` for a read, `AP=[1]` for a
+    /// value.
     api: Vec<String>,
+    /// `WR` in an API frame is refused (a radio that cannot save).
+    refuse_wr: bool,
 }
 
 /// Plays the radio on the pseudo-terminal of `connector`, for each device that opens
@@ -159,7 +161,7 @@ async fn serve(mut port: Transport, radio: &Mutex<Radio>) {
                         radio.bd = *bd;
                         Some(vec![])
                     }
-                    (b"WR", []) => {
+                    (b"WR", []) if !radio.refuse_wr => {
                         radio.saved = true;
                         Some(vec![])
                     }
@@ -354,6 +356,23 @@ async fn a_radio_in_api_mode_set_otherwise_is_set_up_in_api_frames() {
     // Read in mode 2; AP set in mode 2, the rest in mode 1; then checked.
     assert_eq!(radio.api, ["AP", "BD", "AP=[1]", "BD=[7]", "WR", "AP"]);
     assert_eq!((radio.ap, radio.bd, radio.saved), (1, 7, true));
+}
+
+#[tokio::test]
+async fn a_change_in_api_frames_that_cannot_be_saved_is_said_to_be_in_effect() {
+    let (radio, path) = fake_radio(2).await;
+    radio.lock().unwrap().refuse_wr = true;
+    let out = setup(&format!("serial:{path}"), &["--timeout", "1"]).await;
+    assert_eq!(out.status.code(), Some(1), "{out:?}");
+    let err = stderr(&out);
+    assert!(err.contains("the radio refused WR"), "{err}");
+    assert!(
+        err.contains(
+            "made already, in effect but not saved: AP = 2 (API mode 2, escaped) -> 1 (API mode 1)"
+        ),
+        "{err}"
+    );
+    assert_eq!(radio.lock().unwrap().ap, 1);
 }
 
 #[tokio::test]

@@ -47,8 +47,8 @@ fn listen_failure(addr: &str, error: &std::io::Error) -> Failure {
     use std::io::ErrorKind;
     let hint = match error.kind() {
         ErrorKind::AddrInUse => {
-            " (another hub, or another program, serves there: give this one another \
-             --listen ADDR:PORT)"
+            " (another hub serves there or holds the port while its radio is away, or \
+             another program serves there: give this one another --listen ADDR:PORT)"
         }
         ErrorKind::AddrNotAvailable => {
             " (no network interface of this machine has that address: give 127.0.0.1 for \
@@ -125,7 +125,8 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
                     let reason = hint.strip_prefix("hint: ").unwrap_or(&hint);
                     eprintln!(
                         "mcp-gs: the hub drops the radio's frames it cannot read, and its \
-                         clients get none of them: {reason} (restart the hub with it)"
+                         clients get none of them: {reason} (stop the hub, and start it \
+                         again with that fixed)"
                     );
                 }
             }

@@ -156,8 +156,6 @@ impl LinkArgs {
         Ok((stream, sender))
     }
 
-    /// The link options these arguments give, the API mode asked of the radio for
-    /// `--api-mode auto`. `reconnect` as for [`open`](Self::open).
     /// Refuses what `--wait` cannot do: wait for a radio whose mode is to be asked
     /// (`--api-mode auto`), or for a path that is no serial device.
     pub(crate) fn check_wait(&self, wait: bool) -> Result<(), Failure> {
@@ -173,6 +171,8 @@ impl LinkArgs {
         check_serial_path(&self.link, true)
     }
 
+    /// The link options these arguments give, the API mode asked of the radio for
+    /// `--api-mode auto`. `reconnect` as for [`open`](Self::open).
     pub(crate) async fn options(&self, reconnect: bool) -> Result<LinkOptions, Failure> {
         warn_unusual_baud(&self.link);
         let mode = match self.api_mode {

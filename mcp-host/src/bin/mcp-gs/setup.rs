@@ -119,6 +119,7 @@ pub(crate) async fn run(args: SetupArgs) -> Result<(), Failure> {
             "setup needs a link to a radio that is there: serial:PATH[:BAUD] or tcp:HOST:PORT",
         ));
     }
+    crate::link_args::warn_unusual_baud(&args.link);
     let timeout = Duration::from_secs_f64(args.timeout);
     let guard = args.guard.duration();
     let target = ap(args.api_mode.0);
@@ -221,8 +222,8 @@ async fn set_up_in_api_frames(
         Ok(None) => {
             return Err(Failure::new(
                 Failure::OTHER,
-                "the radio did not answer +++, and answered AT AP in an API frame with an \
-                 error: it does not read its API mode",
+                "the radio did not answer +++, and answered AT AP in an API frame with no \
+                 value (an error status, or another frame): its API mode is unknown",
             ));
         }
         Err(_) => return Ok(None),
@@ -237,10 +238,6 @@ async fn set_up_in_api_frames(
             ),
         ));
     };
-    eprintln!(
-        "mcp-gs: the radio did not answer +++ (older firmware takes it in transparent mode \
-         only) but answers API frames in mode {was}: setting it up in API frames"
-    );
     let bd = match args.baud {
         Some(_) => {
             let (link, options) = asked(&args.link, mode);
@@ -276,6 +273,12 @@ async fn set_up_in_api_frames(
             ),
         ));
     }
+    if was != target || new_bd.is_some() {
+        eprintln!(
+            "mcp-gs: the radio did not answer +++ (older firmware takes it in transparent \
+             mode only) but answers API frames in mode {was}: setting it up in API frames"
+        );
+    }
     // What each parameter was, and whether it was changed (then saved below).
     let mut lines: Vec<(String, bool)> = Vec::new();
     let mut now = (args.link.clone(), mode);
@@ -300,22 +303,29 @@ async fn set_up_in_api_frames(
             lines.push((format!("BD = {wanted:X} ({baud} baud) already"), false));
         }
         (_, Some((baud, wanted)), Link::Serial { path, .. }) => {
-            set(&now, &asked, *b"BD", &[wanted]).await?;
+            set(&now, &asked, *b"BD", &[wanted])
+                .await
+                .map_err(unsaved(&lines))?;
             now.0 = Link::Serial {
                 path: path.clone(),
                 baud,
             };
-            let was = bd.map_or_else(|| "?".to_owned(), |bd| format!("{bd:X}"));
-            let line = format!(
-                "BD = {was} ({} baud) -> {wanted:X} ({baud} baud)",
-                baud_of(&was)
-            );
+            let line = match bd {
+                Some(bd) => {
+                    let was = format!("{bd:X}");
+                    let rate = baud_of(&was);
+                    format!("BD = {was} ({rate} baud) -> {wanted:X} ({baud} baud)")
+                }
+                None => format!("BD (unknown) -> {wanted:X} ({baud} baud)"),
+            };
             lines.push((line, true));
         }
         _ => {}
     }
     if lines.iter().any(|(_, changed)| *changed) {
-        set(&now, &asked, *b"WR", &[]).await?;
+        set(&now, &asked, *b"WR", &[])
+            .await
+            .map_err(unsaved(&lines))?;
     }
     for (line, changed) in &lines {
         if *changed {
@@ -326,6 +336,26 @@ async fn set_up_in_api_frames(
     }
     check(&now.0, args.api_mode.0, options, timeout).await?;
     Ok(Some(()))
+}
+
+/// A failure after the changes in `lines` were made in API frames, saying that they
+/// are in effect but not saved.
+fn unsaved(lines: &[(String, bool)]) -> impl Fn(Failure) -> Failure + '_ {
+    move |failure| {
+        let made: Vec<&str> = lines
+            .iter()
+            .filter(|(_, changed)| *changed)
+            .map(|(line, _)| line.as_str())
+            .collect();
+        if made.is_empty() {
+            return failure;
+        }
+        failure.with_hint(format!(
+            "made already, in effect but not saved: {} (powering the radio off and on \
+             undoes it; setup can be run again as the radio is now)",
+            made.join("; ")
+        ))
+    }
 }
 
 /// Sets `command` to `value` in an API frame, on the radio as `now` (its link and API
