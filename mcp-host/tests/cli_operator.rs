@@ -226,6 +226,31 @@ fn a_path_that_is_no_serial_port_says_so() {
 }
 
 #[test]
+fn a_silent_radio_asked_its_mode_over_tcp_sends_the_operator_to_its_serial_port() {
+    // A peer that takes the connection and never answers (a hub in front of a radio
+    // in transparent mode, say).
+    let silent = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let link = format!("tcp:{}", silent.local_addr().unwrap());
+    let output = run(&[
+        "at",
+        "--link",
+        &link,
+        "--api-mode",
+        "auto",
+        "--timeout",
+        "0.3",
+        "AP",
+    ]);
+    let said = stderr(&output);
+    assert_eq!(output.status.code(), Some(4), "{said}");
+    assert!(said.contains("did not answer AT AP"), "{said}");
+    assert!(
+        said.contains("through a hub, stop it and run `mcp-gs probe` on the radio's serial port"),
+        "{said}"
+    );
+}
+
+#[test]
 fn a_baud_rate_no_xbee_is_set_to_is_warned_of() {
     // A zero too many: 96000 for 9600.
     let output = run(&["at", "--link", "serial:/dev/null:96000", "AP"]);

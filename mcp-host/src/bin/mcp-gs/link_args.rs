@@ -209,15 +209,26 @@ impl LinkArgs {
             ..self.options_in(ApiMode::Unescaped, false)
         };
         let mode = ask_ap(&self.link, options).await?.map_err(|e| match e {
-            SendError::Timeout { .. } => Failure::new(
-                Failure::TIMEOUT,
-                format!(
-                    "the radio on {} did not answer AT AP within {timeout:?}: it may be in \
-                     transparent mode (AP=0: `mcp-gs setup --link {}` puts it into API mode) \
-                     or at another baud rate",
-                    self.link, self.link
-                ),
-            ),
+            SendError::Timeout { .. } => {
+                let link = &self.link;
+                let fix = match link {
+                    Link::Serial { path, .. } => format!(
+                        "`mcp-gs probe --link serial:{path}` finds its rate and mode, and \
+                         `mcp-gs setup` puts it into API mode"
+                    ),
+                    // A hub, maybe: setup and probe need the radio's own port.
+                    _ => "through a hub, stop it and run `mcp-gs probe` on the radio's \
+                          serial port; through a bridge, `mcp-gs setup --link` it"
+                        .to_owned(),
+                };
+                Failure::new(
+                    Failure::TIMEOUT,
+                    format!(
+                        "the radio on {link} did not answer AT AP within {timeout:?}: it may \
+                         be in transparent mode (AP=0) or at another baud rate ({fix})"
+                    ),
+                )
+            }
             other => send_failure(other),
         })?;
         match mode {
