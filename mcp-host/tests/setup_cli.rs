@@ -614,6 +614,23 @@ async fn probe_finds_a_factory_radio_and_one_in_api_mode_2() {
 }
 
 #[tokio::test]
+async fn a_simulated_radio_in_api_mode_is_found_at_115200_baud_only() {
+    // Its UART runs at its BD, 7: at 9600 baud (tried first) it is not understood.
+    let (child, lines) = common::spawn_lines(&["sim", "--link", "pty", "--duration", "60"]);
+    let _sim = common::Running(child);
+    let link = sim_link(&lines);
+    let out = mcp_gs(&["probe", "--link", &link, "--timeout", "0.3"]).await;
+    assert!(out.status.success(), "{out:?}");
+    let path = link.trim_end_matches(":115200");
+    assert_eq!(
+        stdout(&out),
+        format!("{path}:115200: API mode 1 (use --link {path}:115200)\n"),
+        "{out:?}"
+    );
+    assert!(stderr(&out).contains("mcp-gs: 9600 baud..."), "{out:?}");
+}
+
+#[tokio::test]
 async fn probe_says_when_nothing_answers_at_any_rate() {
     // A pseudo-terminal nobody serves.
     let silent = Connector::new(&Link::Pty, &LinkOptions::default())

@@ -79,11 +79,13 @@
 //!   `ATCN`, or `CT` (10 s) without a command, leaves command mode: with `AP` set to 1
 //!   or 2 the radio speaks API frames in that mode from then on, as a node added in API
 //!   mode does, until an `AP` in an API frame changes it. A radio in API mode does not
-//!   take `+++` (as older firmware). Its UART runs at the rate `BD` sets (9600 baud
-//!   until set; a new one takes effect when command mode is left, or once answered in
-//!   an API frame): a device on its `pty` link set to another rate reads
-//!   garbage and is not understood, as on a real serial line (a pseudo-terminal's ends
-//!   share their settings). Other nodes take any rate.
+//!   take `+++` (as older firmware).
+//! - Every radio's UART runs at the rate `BD` sets: 9600 baud for a node started in
+//!   transparent mode, 115200 for one started in API mode, until set (a new one takes
+//!   effect when command mode is left, or once answered in an API frame). A device on
+//!   a `pty` link set to another rate reads garbage and is not understood, as on a real
+//!   serial line (a pseudo-terminal's ends share their settings); links of other kinds
+//!   have no rate.
 //! - [`Faults`] (loss, latency, jitter, duplication, reordering, corruption) apply to the
 //!   frames written to a link, network-wide or per node, drawn from a generator seeded
 //!   with [`NetworkConfig::seed`] and the node's address, so that a run replays.
@@ -506,7 +508,11 @@ impl Network {
                         router::BAUD_RATE_API
                     },
                     command_mode: false,
-                    uart_baud: options.transparent.then_some(router::BAUD_RATE),
+                    uart_baud: Some(if options.transparent {
+                        router::BAUD_RATE
+                    } else {
+                        router::BAUD_RATE_API
+                    }),
                     faults: options.faults,
                     rng: faults::FaultRng::new(seed, address),
                     out: tx,

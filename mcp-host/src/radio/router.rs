@@ -84,9 +84,9 @@ pub(crate) struct Node {
     pub(crate) transparent: bool,
     /// Its UART baud rate setting (`BD`).
     pub(crate) baud: u8,
-    /// The `BD` its UART runs at, whatever a device's end is set to: for a node started
-    /// in transparent mode (as from the factory), `BD` as it was when AT command mode
-    /// was last left; `None`, any rate, for others.
+    /// The `BD` its UART runs at, whatever a device's end is set to: `BD` as it was
+    /// when AT command mode was last left or an API frame last set it (`None`: any
+    /// rate).
     pub(crate) uart_baud: Option<u8>,
     /// Its device has it in AT command mode (in transparent mode): received payloads
     /// are not passed on meanwhile.

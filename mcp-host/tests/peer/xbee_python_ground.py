@@ -25,7 +25,7 @@ READ_TIMEOUT_S = 20
 
 
 def main(port, mav, steps):
-    device = ZigBeeDevice(port, 9600)
+    device = ZigBeeDevice(port, 115200)
     device.open()
     try:
         print(

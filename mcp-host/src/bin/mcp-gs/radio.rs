@@ -435,8 +435,9 @@ pub(crate) fn parse_address(s: &str) -> Result<Address64, String> {
 
 /// Where a node's device connects, as a line.
 pub(crate) fn describe_node(name: &str, info: &NodeInfo, link: &Link) -> String {
-    // A radio as from the factory runs its UART at 9600 baud, and a pseudo-terminal
-    // set to another rate gets garbage; other emulated radios take any rate.
+    // A radio as from the factory runs its UART at 9600 baud, one in API mode at
+    // 115200 (the links' default), and a pseudo-terminal set to another rate gets
+    // garbage.
     let rate = if info.transparent { ":9600" } else { "" };
     let at = match (&info.pty_path, &info.local_addr) {
         (Some(path), _) => format!(
