@@ -11,8 +11,9 @@ use tracing_subscriber::fmt::format::Writer;
 use tracing_subscriber::fmt::{FmtContext, FormatEvent, FormatFields};
 use tracing_subscriber::registry::LookupSpan;
 
-/// Installs the logger.
-pub(crate) fn init() {
+/// Installs the logger; with `timed`, each library line carries the time of day (UTC),
+/// for a command that runs for hours (`hub`), whose outages are read back later.
+pub(crate) fn init(timed: bool) {
     // Colours for a terminal only, not for a pipe or a log file.
     let ansi = std::io::IsTerminal::is_terminal(&std::io::stderr());
     let builder = tracing_subscriber::fmt()
@@ -22,14 +23,17 @@ pub(crate) fn init() {
         Ok(filter) => builder.with_env_filter(filter).init(),
         Err(_) => builder
             .with_env_filter(tracing_subscriber::EnvFilter::new("warn"))
-            .event_format(Plain)
+            .event_format(Plain { timed })
             .init(),
     }
 }
 
-/// An event as one of the command's own lines: `mcp-gs: `, `error: ` for an error, then
-/// the message, its `error` field after a colon, and any other fields in parentheses.
-struct Plain;
+/// An event as one of the command's own lines: `mcp-gs: `, the time of day if `timed`,
+/// `error: ` for an error, then the message, its `error` field after a colon, and any
+/// other fields in parentheses.
+struct Plain {
+    timed: bool,
+}
 
 /// The fields of an event, as [`Plain`] writes them.
 #[derive(Default)]
@@ -86,6 +90,10 @@ where
         event: &Event<'_>,
     ) -> fmt::Result {
         writer.write_str("mcp-gs: ")?;
+        if self.timed {
+            let now = mcp_host::render::text::time(std::time::SystemTime::now());
+            write!(writer, "{now} ")?;
+        }
         if *event.metadata().level() == Level::ERROR {
             writer.write_str("error: ")?;
         }

@@ -267,7 +267,7 @@ pub(crate) fn counted(n: impl Into<u64>, noun: &str) -> String {
 #[tokio::main]
 async fn main() -> ExitCode {
     let cli = parse(hoist_options(std::env::args_os().collect()));
-    log::init();
+    log::init(matches!(cli.command, Sub::Hub(_)));
     // What a bug report needs first.
     tracing::debug!(
         version = env!("CARGO_PKG_VERSION"),
