@@ -496,23 +496,21 @@ impl Network {
             }
             let addr16 = state.derive_addr16(address);
             let seed = state.config.seed;
+            // Its `BD`, and the rate its UART runs at until that is set.
+            let baud = if options.transparent {
+                router::BAUD_RATE
+            } else {
+                router::BAUD_RATE_API
+            };
             state.nodes.insert(
                 address,
                 Node {
                     addr16,
                     mode: options.api_mode,
                     transparent: options.transparent,
-                    baud: if options.transparent {
-                        router::BAUD_RATE
-                    } else {
-                        router::BAUD_RATE_API
-                    },
+                    baud,
                     command_mode: false,
-                    uart_baud: Some(if options.transparent {
-                        router::BAUD_RATE
-                    } else {
-                        router::BAUD_RATE_API
-                    }),
+                    uart_baud: baud,
                     faults: options.faults,
                     rng: faults::FaultRng::new(seed, address),
                     out: tx,

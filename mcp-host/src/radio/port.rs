@@ -237,7 +237,7 @@ async fn serve_until_end(
     out: &mut mpsc::Receiver<Out>,
     healthy: &mut bool,
 ) -> End {
-    // A device on a pseudo-terminal set to another rate than a fixed-rate UART's.
+    // A device on a pseudo-terminal set to another rate than its radio's UART's.
     let rate_probe = match &*io {
         Stream::Pty(pty) => pty.rate_probe(),
         Stream::Boxed(_) => None,

@@ -85,9 +85,8 @@ pub(crate) struct Node {
     /// Its UART baud rate setting (`BD`).
     pub(crate) baud: u8,
     /// The `BD` its UART runs at, whatever a device's end is set to: `BD` as it was
-    /// when AT command mode was last left or an API frame last set it (`None`: any
-    /// rate).
-    pub(crate) uart_baud: Option<u8>,
+    /// when AT command mode was last left or an API frame last set it.
+    pub(crate) uart_baud: u8,
     /// Its device has it in AT command mode (in transparent mode): received payloads
     /// are not passed on meanwhile.
     pub(crate) command_mode: bool,
@@ -175,7 +174,7 @@ impl State {
         // What is not written changes the rate now.
         let unwritten = |node: &mut Node| {
             if let Some(bd) = uart_after {
-                node.uart_baud = Some(bd);
+                node.uart_baud = bd;
             }
         };
         // In transparent mode only received payloads leave the radio, as bytes, and
@@ -649,9 +648,7 @@ impl State {
         };
         radio.command_mode = false;
         // A new `BD` takes effect now, as on a radio.
-        if radio.uart_baud.is_some() {
-            radio.uart_baud = Some(radio.baud);
-        }
+        radio.uart_baud = radio.baud;
         if let Ok(mode) = ApiMode::try_from(ap) {
             radio.mode = mode;
             radio.transparent = false;
@@ -664,9 +661,9 @@ impl State {
         self.link_mode(node)
     }
 
-    /// The baud rate `node`'s UART runs at, if it runs at a fixed one.
+    /// The baud rate `node`'s UART runs at.
     pub(crate) fn uart_rate(&self, node: Address64) -> Option<u32> {
-        let baud = self.nodes.get(&node)?.uart_baud?;
+        let baud = self.nodes.get(&node)?.uart_baud;
         BAUD_RATES.get(usize::from(baud)).copied()
     }
 
@@ -690,13 +687,11 @@ impl State {
             command: at.command,
             status,
         });
-        // A new rate on a fixed-rate UART, taken once the answer is written at the old one.
-        let uart_after = self.nodes.get(&from).and_then(|radio| {
-            radio
-                .uart_baud
-                .filter(|&bd| bd != radio.baud)
-                .map(|_| radio.baud)
-        });
+        // A new rate, taken once the answer is written at the old one.
+        let uart_after = self
+            .nodes
+            .get(&from)
+            .and_then(|radio| (radio.uart_baud != radio.baud).then_some(radio.baud));
         if at.frame_id == 0 {
             self.set_uart(from, uart_after);
         } else {
@@ -714,18 +709,16 @@ impl State {
     /// `node`'s UART runs at `bd` from now on, if given.
     pub(crate) fn set_uart(&mut self, node: Address64, bd: Option<u8>) {
         if let (Some(radio), Some(bd)) = (self.nodes.get_mut(&node), bd) {
-            radio.uart_baud = Some(bd);
+            radio.uart_baud = bd;
         }
     }
 
     /// Applies what AT commands in API frames did to `node`'s radio, for the answer
     /// the destination's device reads from another radio: [`Self::apply_ap`], and a new
-    /// `BD` on a fixed-rate UART at once.
+    /// `BD` at once.
     fn apply_remote(&mut self, node: Address64) {
         if let Some(radio) = self.nodes.get_mut(&node) {
-            if radio.uart_baud.is_some() {
-                radio.uart_baud = Some(radio.baud);
-            }
+            radio.uart_baud = radio.baud;
         }
         self.apply_ap(node);
     }

@@ -141,11 +141,7 @@ fn answer_json(frame: &Frame<'_>, command: &[u8; 2], data: &[u8]) -> serde_json:
     } else if is_text(command) {
         Some(String::from_utf8_lossy(data).into_owned().into())
     } else if data.len() <= 6 {
-        Some(
-            data.iter()
-                .fold(0u64, |n, &b| (n << 8) | u64::from(b))
-                .into(),
-        )
+        Some(crate::link_args::at_number(data).into())
     } else {
         None
     };

@@ -268,6 +268,12 @@ pub(crate) async fn ask_parameter(
     at_exchange(link, options, command, &[]).await
 }
 
+/// An AT parameter's value as a number: its bytes, big-endian, as the radio gives them
+/// (more than 8 keep their last 8).
+pub(crate) fn at_number(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0u64, |n, &b| (n << 8) | u64::from(b))
+}
+
 /// [`ask_parameter`], with `value` given: the parameter set (or the command carried
 /// out), the answer's value (usually none) if the radio took it.
 pub(crate) async fn at_exchange(

@@ -13,7 +13,8 @@ use mcp_host::{Link, LinkOptions, ReconnectPolicy};
 use xbee_api::{ApiMode, Frame};
 
 use crate::link_args::{
-    ask_ap, ask_parameter, at_exchange, connect_failure, open_once, parse_seconds, send_failure,
+    ask_ap, ask_parameter, at_exchange, at_number, connect_failure, open_once, parse_seconds,
+    send_failure,
 };
 use crate::{ApiModeArg, Failure};
 
@@ -102,6 +103,47 @@ fn ap(mode: ApiMode) -> u8 {
     }
 }
 
+/// The line saying what `AP` was (`was`, as the radio reads it) and becomes (`target`),
+/// and whether it changes.
+fn ap_line(was: &str, target: &str) -> (String, bool) {
+    if was == target {
+        (format!("AP = {was} ({}) already", meaning(was)), false)
+    } else {
+        let line = format!(
+            "AP = {was} ({}) -> {target} ({})",
+            meaning(was),
+            meaning(target)
+        );
+        (line, true)
+    }
+}
+
+/// The line saying what `BD` was (`was`, in hex as the radio reads it; `None` if it did
+/// not say) and becomes (the value of `baud`), and whether it changes.
+fn bd_line(was: Option<&str>, baud: u32) -> (String, bool) {
+    let wanted = format!("{:X}", bd_value(baud));
+    match was {
+        Some(was) if was == wanted => (format!("BD = {was} ({baud} baud) already"), false),
+        Some(was) => {
+            let rate = baud_of(was);
+            let line = format!("BD = {was} ({rate} baud) -> {wanted} ({baud} baud)");
+            (line, true)
+        }
+        None => (format!("BD (unknown) -> {wanted} ({baud} baud)"), true),
+    }
+}
+
+/// Prints the lines of what was set up, those of changes marked as saved.
+fn print_lines(lines: &[(String, bool)]) {
+    for (line, changed) in lines {
+        if *changed {
+            out!("{line}, saved");
+        } else {
+            out!("{line}");
+        }
+    }
+}
+
 /// What an `AP` value means.
 fn meaning(ap: &str) -> &'static str {
     match ap {
@@ -146,38 +188,24 @@ pub(crate) async fn run(args: SetupArgs) -> Result<(), Failure> {
     let mut lines: Vec<(String, bool)> = Vec::new();
     let was = radio.read(*b"AP").await.map_err(failed)?;
     let target_text = target.to_string();
-    if was == target_text {
-        lines.push((format!("AP = {was} ({}) already", meaning(&was)), false));
-    } else {
+    let (line, change) = ap_line(&was, &target_text);
+    if change {
         radio.set(*b"AP", &target_text).await.map_err(failed)?;
-        let line = format!(
-            "AP = {was} ({}) -> {target} ({})",
-            meaning(&was),
-            meaning(&target_text)
-        );
-        lines.push((line, true));
     }
+    lines.push((line, change));
     if let Some(baud) = args.baud {
-        let bd = format!("{:X}", bd_value(baud));
         let was = radio.read(*b"BD").await.map_err(failed)?;
-        if was == bd {
-            lines.push((format!("BD = {was} ({baud} baud) already"), false));
-        } else {
+        let (line, change) = bd_line(Some(&was), baud);
+        if change {
+            let bd = format!("{:X}", bd_value(baud));
             radio.set(*b"BD", &bd).await.map_err(failed)?;
-            let line = format!("BD = {was} ({} baud) -> {bd} ({baud} baud)", baud_of(&was));
-            lines.push((line, true));
         }
+        lines.push((line, change));
     }
     if lines.iter().any(|(_, changed)| *changed) {
         radio.set(*b"WR", "").await.map_err(failed)?;
     }
-    for (line, changed) in &lines {
-        if *changed {
-            out!("{line}, saved");
-        } else {
-            out!("{line}");
-        }
-    }
+    print_lines(&lines);
     // Leaving command mode applies the changes; the port is closed for the check.
     drop(radio.exit().await.map_err(failed)?);
     let link = match (&args.link, args.baud) {
@@ -245,7 +273,7 @@ async fn set_up_in_api_frames(
                 .await?
                 .map_err(send_failure)?;
             // The whole value: a radio set to a rate of its own reads more than one byte.
-            value.map(|bytes| bytes.iter().fold(0u64, |n, &b| (n << 8) | u64::from(b)))
+            value.map(|bytes| at_number(&bytes))
         }
         None => None,
     };
@@ -282,58 +310,33 @@ async fn set_up_in_api_frames(
     // What each parameter was, and whether it was changed (then saved below).
     let mut lines: Vec<(String, bool)> = Vec::new();
     let mut now = (args.link.clone(), mode);
-    if was == target {
-        lines.push((
-            format!("AP = {was} ({}) already", meaning(&was.to_string())),
-            false,
-        ));
-    } else {
+    let (line, change) = ap_line(&was.to_string(), &target.to_string());
+    if change {
         set(&now, &asked, *b"AP", &[target]).await?;
         now.1 = args.api_mode.0;
-        let line = format!(
-            "AP = {was} ({}) -> {target} ({})",
-            meaning(&was.to_string()),
-            meaning(&target.to_string())
-        );
-        lines.push((line, true));
     }
-    match (args.baud, new_bd, &args.link) {
-        (Some(baud), None, _) => {
-            let wanted = bd_value(baud);
-            lines.push((format!("BD = {wanted:X} ({baud} baud) already"), false));
-        }
-        (_, Some((baud, wanted)), Link::Serial { path, .. }) => {
-            set(&now, &asked, *b"BD", &[wanted])
+    lines.push((line, change));
+    if let Some(baud) = args.baud {
+        let was = bd.map(|bd| format!("{bd:X}"));
+        let (line, change) = bd_line(was.as_deref(), baud);
+        // Through a bridge, a change was refused above.
+        if let (true, Link::Serial { path, .. }) = (change, &args.link) {
+            set(&now, &asked, *b"BD", &[bd_value(baud)])
                 .await
                 .map_err(unsaved(&lines))?;
             now.0 = Link::Serial {
                 path: path.clone(),
                 baud,
             };
-            let line = match bd {
-                Some(bd) => {
-                    let was = format!("{bd:X}");
-                    let rate = baud_of(&was);
-                    format!("BD = {was} ({rate} baud) -> {wanted:X} ({baud} baud)")
-                }
-                None => format!("BD (unknown) -> {wanted:X} ({baud} baud)"),
-            };
-            lines.push((line, true));
         }
-        _ => {}
+        lines.push((line, change));
     }
     if lines.iter().any(|(_, changed)| *changed) {
         set(&now, &asked, *b"WR", &[])
             .await
             .map_err(unsaved(&lines))?;
     }
-    for (line, changed) in &lines {
-        if *changed {
-            out!("{line}, saved");
-        } else {
-            out!("{line}");
-        }
-    }
+    print_lines(&lines);
     check(&now.0, args.api_mode.0, options, timeout).await?;
     Ok(Some(()))
 }
