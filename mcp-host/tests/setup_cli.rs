@@ -618,16 +618,19 @@ async fn a_simulated_radio_in_api_mode_is_found_at_115200_baud_only() {
     // Its UART runs at its BD, 7: at 9600 baud (tried first) it is not understood.
     let (child, lines) = common::spawn_lines(&["sim", "--link", "pty", "--duration", "60"]);
     let _sim = common::Running(child);
-    let link = sim_link(&lines);
+    // Printed as `serial:PATH`: 115200 is the links' default rate.
+    let path = sim_link(&lines);
+    let found = format!("{path}:115200: API mode 1 (use --link {path}:115200)\n");
+    let out = mcp_gs(&["probe", "--link", &path, "--timeout", "0.3"]).await;
+    assert!(out.status.success(), "{out:?}");
+    assert_eq!(stdout(&out), found, "{out:?}");
+    assert!(stderr(&out).contains("mcp-gs: 9600 baud..."), "{out:?}");
+    // With the rate in the link, that rate is tried first: found at once.
+    let link = format!("{path}:115200");
     let out = mcp_gs(&["probe", "--link", &link, "--timeout", "0.3"]).await;
     assert!(out.status.success(), "{out:?}");
-    let path = link.trim_end_matches(":115200");
-    assert_eq!(
-        stdout(&out),
-        format!("{path}:115200: API mode 1 (use --link {path}:115200)\n"),
-        "{out:?}"
-    );
-    assert!(stderr(&out).contains("mcp-gs: 9600 baud..."), "{out:?}");
+    assert_eq!(stdout(&out), found, "{out:?}");
+    assert_eq!(stderr(&out), "mcp-gs: 115200 baud...\n", "{out:?}");
 }
 
 #[tokio::test]

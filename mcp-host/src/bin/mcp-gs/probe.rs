@@ -15,10 +15,10 @@ use crate::setup::GuardTime;
 /// Arguments of `probe`.
 #[derive(Debug, Args)]
 pub(crate) struct ProbeArgs {
-    /// The serial port the radio is on: serial:PATH (a baud rate given is passed over:
-    /// every rate the radio takes is tried).
-    #[arg(long, value_name = "LINK")]
-    link: Link,
+    /// The serial port the radio is on: serial:PATH, or serial:PATH:BAUD to try that
+    /// rate first (then every other rate the radio takes).
+    #[arg(long, value_name = "LINK", value_parser = parse_probe_link)]
+    link: ProbeLink,
     /// Seconds to wait for the radio's answer at each rate.
     #[arg(long, value_name = "SECONDS", default_value_t = 0.5, value_parser = parse_seconds)]
     timeout: f64,
@@ -32,6 +32,33 @@ const ORDER: [u32; 9] = [
     9600, 115_200, 230_400, 57_600, 38_400, 19_200, 4800, 2400, 1200,
 ];
 
+/// `--link`: the link, and the baud rate written in it, if one is.
+#[derive(Debug, Clone)]
+struct ProbeLink {
+    link: Link,
+    given: Option<u32>,
+}
+
+fn parse_probe_link(s: &str) -> Result<ProbeLink, String> {
+    let link: Link = s.parse().map_err(|e| format!("{e}"))?;
+    // A rate is written as a trailing `:DIGITS`, as the link parser reads it.
+    let written = s
+        .rsplit_once(':')
+        .is_some_and(|(_, b)| !b.is_empty() && b.bytes().all(|b| b.is_ascii_digit()));
+    let given = match &link {
+        Link::Serial { baud, .. } if written => Some(*baud),
+        _ => None,
+    };
+    Ok(ProbeLink { link, given })
+}
+
+/// The rates to try, in order: `given` first, then [`ORDER`] without it.
+fn rates(given: Option<u32>) -> impl Iterator<Item = u32> {
+    given
+        .into_iter()
+        .chain(ORDER.into_iter().filter(move |&baud| Some(baud) != given))
+}
+
 /// What answered at a baud rate.
 #[derive(Debug, PartialEq, Eq)]
 enum Found {
@@ -43,15 +70,15 @@ enum Found {
 
 /// Runs `probe`.
 pub(crate) async fn run(args: ProbeArgs) -> Result<(), Failure> {
-    let Link::Serial { path, .. } = &args.link else {
+    let Link::Serial { path, .. } = &args.link.link else {
         return Err(Failure::input(
             "probe tries the baud rates of a serial port: give serial:PATH",
         ));
     };
-    crate::link_args::check_serial_path(&args.link, false)?;
+    crate::link_args::check_serial_path(&args.link.link, false)?;
     let timeout = Duration::from_secs_f64(args.timeout);
     let guard = args.guard.duration();
-    for baud in ORDER {
+    for baud in rates(args.link.given) {
         let link = Link::Serial {
             path: path.clone(),
             baud,
@@ -140,5 +167,25 @@ mod tests {
         let mut tried = ORDER.to_vec();
         tried.sort_unstable();
         assert_eq!(tried, BAUD_RATES);
+        // A rate given is tried first, and not again.
+        for given in [None, Some(9600), Some(115_200), Some(1200)] {
+            let mut tried: Vec<u32> = rates(given).collect();
+            assert_eq!(tried.first(), Some(&given.unwrap_or(9600)));
+            tried.sort_unstable();
+            assert_eq!(tried, BAUD_RATES, "{given:?}");
+        }
+        // One the radio does not list (a BD set to a rate of its own) is tried too.
+        assert_eq!(rates(Some(250_000)).count(), ORDER.len() + 1);
+    }
+
+    #[test]
+    fn a_rate_is_given_only_when_written() {
+        let given = |s: &str| parse_probe_link(s).unwrap().given;
+        assert_eq!(given("serial:/dev/ttyUSB0"), None);
+        assert_eq!(given("serial:/dev/ttyUSB0:115200"), Some(115_200));
+        assert_eq!(given("serial:COM3:9600"), Some(9600));
+        assert_eq!(given("serial:COM3"), None);
+        assert_eq!(given("tcp:127.0.0.1:9750"), None);
+        assert!(parse_probe_link("serial:/dev/ttyUSB0:0").is_err());
     }
 }
