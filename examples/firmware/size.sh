@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Builds the firmware (release profile: opt-level "s", LTO) and prints its footprint
-# and that of the receive path alone (rx_path minus baseline).
+# and that of the receive path alone (rx_path minus baseline), and, for comparison, of
+# the receive path on the slice decoder (rx_slice minus baseline).
 #
 # Needs the thumbv7m-none-eabi target and llvm-size/llvm-nm (Debian: llvm) or
 # arm-none-eabi-size/arm-none-eabi-nm (Debian: binutils-arm-none-eabi); SIZE and NM
@@ -44,7 +45,7 @@ symbols() {
 }
 
 printf '%-14s %8s %8s %8s %8s %8s %10s %8s\n' binary .vectors .text .rodata .data .bss flash "RAM"
-for bin in mav-firmware rx_path baseline; do
+for bin in mav-firmware rx_path rx_slice baseline; do
     printf '%-14s %8d %8d %8d %8d %8d %10d %8d\n' "$bin" \
         "$(section $bin .vector_table)" "$(section $bin .text)" "$(section $bin .rodata)" \
         "$(section $bin .data)" "$(section $bin .bss)" "$(flash $bin)" "$(ram $bin)"
@@ -64,6 +65,9 @@ echo "    receive path's own code       $((rx_flash - rx_mem)) bytes"
 echo "  static RAM                      $rx_ram bytes"
 echo "    decoder state (RefCell<Decoder<100>>)  $decoder bytes"
 echo "    payload queue and counters    $inbox bytes"
+echo
+echo "receive path on the slice decoder, decode_each per FIFO's worth (rx_slice - baseline):"
+echo "  flash                           $(($(flash rx_slice) - $(flash baseline))) bytes"
 
 budget=${RX_FLASH_BUDGET:-4096}
 if ((rx_flash > budget)); then

@@ -1,0 +1,65 @@
+//! The receive path with the slice decoder, to measure its footprint against
+//! `baseline` and `rx_path`: the UART0 interrupt drains the RX FIFO into a chunk and
+//! hands the chunk to `Decoder::decode_each`, which views each Receive Packet and
+//! parses its MCP payload in place. Parsed packets are only counted.
+#![no_std]
+#![no_main]
+
+use core::cell::RefCell;
+use core::hint::black_box;
+
+use cortex_m_rt::entry;
+use critical_section::Mutex;
+use lm3s6965::interrupt;
+use mav_firmware::rx::XbeeDecoder;
+use mav_firmware::{app, hw};
+use panic_halt as _;
+use xbee_api::{ApiMode, Decoder, ReceivePacket};
+
+/// The RX FIFO's depth on the LM3S6965: the most one interrupt finds.
+const CHUNK: usize = 16;
+
+static DECODER: Mutex<RefCell<XbeeDecoder>> =
+    Mutex::new(RefCell::new(Decoder::new(ApiMode::Unescaped)));
+
+/// Packets that parsed, and those that did not.
+static COUNTS: Mutex<RefCell<[u32; 2]>> = Mutex::new(RefCell::new([0; 2]));
+
+#[entry]
+fn main() -> ! {
+    hw::init_clock();
+    hw::init_uart0();
+    loop {
+        app::wait_for(|_| true);
+    }
+}
+
+#[interrupt]
+fn UART0() {
+    critical_section::with(|cs| {
+        let mut chunk = [0u8; CHUNK];
+        let mut len = 0;
+        while len < CHUNK {
+            match hw::uart0_read() {
+                Some(Ok(byte)) => {
+                    chunk[len] = byte;
+                    len += 1;
+                }
+                Some(Err(_)) => {}
+                None => break,
+            }
+        }
+        let mut counts = COUNTS.borrow_ref_mut(cs);
+        DECODER
+            .borrow_ref_mut(cs)
+            .decode_each(&chunk[..len], |event| {
+                if let Ok(frame) = event {
+                    if let Ok(packet) = ReceivePacket::new_checked(frame.data()) {
+                        let valid = mcp_core::parse(packet.data()).is_ok();
+                        counts[usize::from(valid)] += 1;
+                    }
+                }
+            });
+        black_box(&*counts);
+    });
+}
