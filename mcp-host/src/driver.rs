@@ -120,22 +120,30 @@ impl Op {
         }
     }
 
-    /// Answers a request that timed out before it was sent: it waited for a frame id
-    /// (or its deadline had passed when it was taken).
-    fn time_out(self) {
+    /// Answers a request that timed out before it was sent: if `parked`, it waited
+    /// for a frame id ([`SendError::NoFreeFrameId`]); else its deadline had passed when
+    /// it was taken ([`SendError::NotSent`]).
+    fn time_out(self, parked: bool) {
+        let error = |timeout| {
+            if parked {
+                SendError::NoFreeFrameId { timeout }
+            } else {
+                SendError::NotSent { timeout }
+            }
+        };
         match self {
             Op::Transmit { timeout, reply, .. } => {
-                let _ = reply.send(Err(SendError::NoFreeFrameId { timeout }));
+                let _ = reply.send(Err(error(timeout)));
             }
             Op::Request { timeout, reply, .. } => {
-                let _ = reply.send(Err(SendError::NoFreeFrameId { timeout }.into()));
+                let _ = reply.send(Err(error(timeout).into()));
             }
             Op::Frame { timeout, reply, .. } => {
-                let _ = reply.send(Err(SendError::NoFreeFrameId { timeout }));
+                let _ = reply.send(Err(error(timeout)));
             }
             Op::Answers {
                 timeout, answers, ..
-            } => fail_answers(&answers, SendError::NoFreeFrameId { timeout }),
+            } => fail_answers(&answers, error(timeout)),
             // Never parked nor timed out: it needs no frame id and waits for nothing.
             Op::Write { .. } => {}
         }
@@ -805,7 +813,7 @@ impl Driver {
             self.parked.push_back(op);
             return;
         }
-        self.begin(op, out);
+        self.begin(op, out, false);
     }
 
     /// Frees the frame ids of requests whose callers stopped waiting (a `send` in a
@@ -841,20 +849,20 @@ impl Driver {
             let Some(op) = self.parked.pop_front() else {
                 return;
             };
-            self.begin(op, out);
+            self.begin(op, out, true);
         }
     }
 
     /// Starts a request: allocates a frame id where needed and queues its frame. A
     /// request whose caller is gone is dropped; one whose deadline has passed already is
-    /// answered with its timeout error.
-    fn begin(&mut self, op: Op, out: &mut BytesMut) {
+    /// answered with its timeout error (`parked`: it waited for a frame id).
+    fn begin(&mut self, op: Op, out: &mut BytesMut, parked: bool) {
         if op.caller_gone() {
             return;
         }
         if op.deadline().is_some_and(|d| d <= Instant::now()) {
             bump(&self.counters.timeouts);
-            op.time_out();
+            op.time_out(parked);
             return;
         }
         match op {
@@ -982,7 +990,7 @@ impl Driver {
         self.parked = parked;
         for op in expired {
             bump(&self.counters.timeouts);
-            op.time_out();
+            op.time_out(true);
         }
         let counters = &self.counters;
         self.ids.remove_where(

@@ -78,6 +78,14 @@ pub enum SendError {
         /// The timeout that expired.
         timeout: Duration,
     },
+    /// The request's timeout ran out before it was sent, without waiting for a frame
+    /// id: a timeout too short to hand the request to the link in (zero, say), or a
+    /// link whose queue stayed full (it writes more slowly than requests come).
+    #[error("not sent: its timeout of {timeout:?} ran out before the link took it")]
+    NotSent {
+        /// The timeout that expired.
+        timeout: Duration,
+    },
     /// The transport went away while the request was in flight, or is down now.
     #[error("link disconnected: {reason}")]
     Disconnected {

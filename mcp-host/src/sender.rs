@@ -234,13 +234,7 @@ impl CommandSender {
             match tokio::time::timeout_at(deadline, self.queue(&op).send(op)).await {
                 Ok(Ok(())) => {}
                 Ok(Err(_)) => return Err(SendError::Closed.into()),
-                Err(_) => {
-                    return Err(SendError::Timeout {
-                        frame_id: 0,
-                        timeout,
-                    }
-                    .into());
-                }
+                Err(_) => return Err(SendError::NotSent { timeout }.into()),
             }
             // The background task answers by the deadline; the grace only guards
             // against a stalled task.
@@ -459,10 +453,7 @@ impl CommandSender {
         match tokio::time::timeout_at(deadline, self.queue(&op).send(op)).await {
             Ok(Ok(())) => Ok(Answers { answers: receiver }),
             Ok(Err(_)) => Err(SendError::Closed),
-            Err(_) => Err(SendError::Timeout {
-                frame_id: 0,
-                timeout: window,
-            }),
+            Err(_) => Err(SendError::NotSent { timeout: window }),
         }
     }
 
@@ -598,12 +589,7 @@ impl CommandSender {
         match tokio::time::timeout_at(deadline, self.queue(&op).send(op)).await {
             Ok(Ok(())) => {}
             Ok(Err(_)) => return Err(SendError::Closed),
-            Err(_) => {
-                return Err(SendError::Timeout {
-                    frame_id: 0,
-                    timeout,
-                });
-            }
+            Err(_) => return Err(SendError::NotSent { timeout }),
         }
         // The background task answers by the deadline (freeing the frame id); the grace
         // only guards against a stalled task.

@@ -711,6 +711,37 @@ async fn timeouts_of_any_length_mean_a_long_wait_not_a_panic() {
 }
 
 #[tokio::test]
+async fn a_timeout_too_short_to_send_in_says_so_not_that_frame_ids_ran_out() {
+    let (_stream, sender, mut fake) = pty_link(ApiMode::Unescaped).await;
+    let zero = SendOptions {
+        timeout: Some(Duration::ZERO),
+        frame_id: FrameId::Auto,
+    };
+    let not_sent = SendError::NotSent {
+        timeout: Duration::ZERO,
+    };
+    // Every frame id is free: none of these waited for one.
+    let sent = sender.send_with(MAV, &Command::landing(true), zero).await;
+    assert_eq!(sent, Err(not_sent.clone()));
+    let asked = sender
+        .request_with(MAV, StatusRequest::Landing, Some(Duration::ZERO))
+        .await;
+    assert!(
+        matches!(&asked, Err(RequestError::Send(e)) if *e == not_sent),
+        "{asked:?}"
+    );
+    let at = sender.at(*b"AP", &[], Some(Duration::ZERO)).await;
+    assert_eq!(at.err(), Some(not_sent.clone()));
+    assert_eq!(
+        not_sent.to_string(),
+        "not sent: its timeout of 0ns ran out before the link took it"
+    );
+    // None went out: the next frame the radio reads is the next request's.
+    sender.write_frame(&[0x08, 0x00, b'N', b'I']).await.unwrap();
+    assert_eq!(fake.next_frame().await, [0x08, 0x00, b'N', b'I']);
+}
+
+#[tokio::test]
 async fn sends_without_status_go_out_while_requests_wait_for_frame_ids() {
     let (_stream, sender, mut fake) = pty_link(ApiMode::Unescaped).await;
     // A radio that answers nothing: all 255 ids in flight, then more requests than

@@ -238,7 +238,7 @@ impl Script {
 fn send_failure(e: &SendError) -> Failure {
     match e {
         SendError::Delivery { .. } => Failure::new(Failure::DELIVERY, e.to_string()),
-        SendError::Timeout { .. } | SendError::NoFreeFrameId { .. } => {
+        SendError::Timeout { .. } | SendError::NoFreeFrameId { .. } | SendError::NotSent { .. } => {
             Failure::new(Failure::TIMEOUT, e.to_string())
         }
         SendError::Disconnected { .. } | SendError::Closed => Failure::link(e.to_string()),
