@@ -36,6 +36,25 @@
 //! and serves it on a TCP port to any number of programs (`tcp:HOST:PORT` links), each
 //! getting every received frame and the answers to its own requests.
 //!
+//! # Dependencies
+//!
+//! Packets, commands and identifiers are [`mcp_core`]'s, addresses and frames
+//! [`xbee_api`]'s, payloads [`bytes::Bytes`]: all three are re-exported here, so that a
+//! program that depends on this crate alone names them at the versions it uses
+//! (`use mcp_host::mcp_core::Command;`). The example below names them as a program
+//! that depends on them itself does.
+//!
+//! ```
+//! use mcp_host::bytes::Bytes;
+//! use mcp_host::mcp_core::{Command, Packet};
+//! use mcp_host::xbee_api::Address64;
+//!
+//! let mav: Address64 = "0013A20040B599B9".parse().unwrap();
+//! let payload = Bytes::from_static(b"c\x02\x01");
+//! assert_eq!(mcp_host::mcp_core::parse(&payload), Ok(Packet::Command(Command::landing(true))));
+//! # let _ = mav;
+//! ```
+//!
 //! # Example
 //!
 //! ```no_run
@@ -99,6 +118,10 @@ use std::sync::Arc;
 use std::task::{Context, Poll};
 
 use tokio::sync::mpsc;
+
+pub use bytes;
+pub use mcp_core;
+pub use xbee_api;
 
 pub use answers::Answers;
 pub use error::{ConnectError, RequestError, SendError};
