@@ -172,13 +172,15 @@ fn parse_serial(rest: &str) -> Result<Link, LinkParseError> {
 }
 
 fn parse_host_port(rest: &str) -> Result<(String, u16), LinkParseError> {
-    let (host, port) = rest
-        .rsplit_once(':')
-        .ok_or_else(|| LinkParseError::MissingPort(rest.to_owned()))?;
-    let host = host
-        .strip_prefix('[')
-        .and_then(|h| h.strip_suffix(']'))
-        .unwrap_or(host);
+    let missing_port = || LinkParseError::MissingPort(rest.to_owned());
+    // An IPv6 host is in brackets, `[::1]:9750`: its colons are not the port's.
+    let (host, port) = match rest.strip_prefix('[') {
+        Some(bracketed) => {
+            let (host, after) = bracketed.split_once(']').ok_or_else(missing_port)?;
+            (host, after.strip_prefix(':').ok_or_else(missing_port)?)
+        }
+        None => rest.rsplit_once(':').ok_or_else(missing_port)?,
+    };
     if host.is_empty() {
         return Err(LinkParseError::MissingHost(rest.to_owned()));
     }
@@ -291,6 +293,10 @@ mod tests {
             ("tcp:localhost:", MissingPort("localhost:".into())),
             ("tcp::80", MissingHost(":80".into())),
             ("tcp:[]:80", MissingHost("[]:80".into())),
+            ("tcp:[::1]", MissingPort("[::1]".into())),
+            ("tcp:[::1]:", MissingPort("[::1]:".into())),
+            ("tcp:[::1:9750", MissingPort("[::1:9750".into())),
+            ("tcp-listen:[::]", MissingPort("[::]".into())),
             ("tcp:host:65536", InvalidPort("65536".into())),
             ("tcp:127.0.0.1:0", PortZero("127.0.0.1:0".into())),
             ("tcp:[::1]:00", PortZero("[::1]:00".into())),

@@ -84,17 +84,18 @@ pub enum LinkError {
 impl LinkError {
     /// Whether trying again later may succeed (a device may come back, a peer may start
     /// listening); false for errors that no retry can fix: settings a serial port
-    /// refuses, an address nobody can connect to (port 0, an address of no interface),
-    /// and the listening and pseudo-terminal errors.
+    /// refuses, a serial path that is there but is no device (a regular file, a
+    /// directory: on Unix, anything but a character device), an address nobody can
+    /// connect to (port 0, an address of no interface), and the listening and
+    /// pseudo-terminal errors.
     ///
-    /// The system does not tell a device still to come from a path that will never be
-    /// one (a regular file, a directory): every other serial error counts as
-    /// retryable.
+    /// A serial path that is not there may be a device still to come (a USB adapter
+    /// plugged in later): that counts as retryable, as does any other serial error.
     pub fn is_retryable(&self) -> bool {
         use std::io::ErrorKind as Io;
         match self {
-            LinkError::Serial { source, .. } => {
-                source.kind() != tokio_serial::ErrorKind::InvalidInput
+            LinkError::Serial { path, source, .. } => {
+                source.kind() != tokio_serial::ErrorKind::InvalidInput && !is_no_device(path)
             }
             LinkError::Connect { source, .. } => {
                 !matches!(source.kind(), Io::InvalidInput | Io::AddrNotAvailable)
@@ -105,6 +106,22 @@ impl LinkError {
             | LinkError::ReconnectDisabled => false,
             _ => true,
         }
+    }
+}
+
+/// Whether `path` is there but is not a device a serial port can be: on Unix, anything
+/// but a character device. A path that is not there, or cannot be looked at, is not
+/// known to be none.
+fn is_no_device(path: &str) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        std::fs::metadata(path).is_ok_and(|meta| !meta.file_type().is_char_device())
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = path;
+        false
     }
 }
 

@@ -315,6 +315,33 @@ async fn open_errors_are_clear() {
         .unwrap_err();
     assert!(!err.is_retryable(), "{err}");
     assert!(err.to_string().contains("port 0"), "{err}");
+
+    // A path that is there but is no device (a directory, a regular file) never
+    // becomes one: not waited on either.
+    let dir = std::env::temp_dir();
+    let file = dir.join(format!("mcp-not-a-device-{}", std::process::id()));
+    std::fs::write(&file, b"").unwrap();
+    for path in [dir.clone(), file.clone()] {
+        let link = Link::Serial {
+            path: path.display().to_string(),
+            baud: 9600,
+        };
+        let options = LinkOptions {
+            wait_for_link: true,
+            ..LinkOptions::default()
+        };
+        let connect = mcp_host::connect(&link, options);
+        let err = tokio::time::timeout(Duration::from_secs(20), connect)
+            .await
+            .expect("connect gives up at once")
+            .unwrap_err();
+        assert!(!err.is_retryable(), "{err}");
+        assert!(
+            err.to_string().contains(&path.display().to_string()),
+            "{err}"
+        );
+    }
+    std::fs::remove_file(&file).unwrap();
 }
 
 // Paused clock: the delays below are the reconnection's own sleeps, exactly.
