@@ -49,6 +49,8 @@
 //!
 //! let mut sim = Sim { landing: LandingState::Flight, controller: Controller::Manual, time: 0 };
 //! let mut mav = Mav::new(&sim);
+//! // Room for any packet; 84 bytes keep each in one Zigbee radio packet (see
+//! // `Mav::telemetry`).
 //! let mut buf = [0u8; mcp_core::MAX_PAYLOAD];
 //!
 //! // Landing on: no direct reply, then the unsolicited landing report.
@@ -336,7 +338,43 @@ impl Mav {
     /// its value from [`Vehicle::telemetry`]. Returns `None` (send nothing) when no id
     /// is enabled. Records that do not fit `buf` or the 255-byte payload are left out;
     /// if not even one fits `buf`, the error (a packet with no record would say that
-    /// none is enabled).
+    /// none is enabled), which needs room for one record, 6 bytes.
+    ///
+    /// `buf` sets how many records a packet takes: each is 5 bytes after a 1-byte
+    /// header. A buffer of [`MAX_PAYLOAD`](crate::MAX_PAYLOAD) takes 50, in a packet of
+    /// up to 251 bytes, which a Zigbee XBee carries only in fragments; one of 84 bytes
+    /// (`xbee_api::TransmitRequestRepr::MAX_UNICAST_DATA`) takes 16, in one radio
+    /// packet.
+    ///
+    /// ```
+    /// # use mcp_core::mav::{Mav, Vehicle};
+    /// # use mcp_core::{Controller, LandingState, TelemetryId, Waypoint, Waypoints};
+    /// # struct Sim;
+    /// # impl Vehicle for Sim {
+    /// #     fn landing_state(&self) -> LandingState { LandingState::Flight }
+    /// #     fn set_landing(&mut self, _on: bool) {}
+    /// #     fn controller(&self) -> Controller { Controller::Manual }
+    /// #     fn set_controller(&mut self, _c: Controller) {}
+    /// #     fn time(&self) -> u32 { 0 }
+    /// #     fn set_time(&mut self, _t: u32) {}
+    /// #     fn set_position(&mut self, _elevator: f32, _aileron: f32) {}
+    /// #     fn telemetry(&self, _id: TelemetryId) -> f32 { 1.5 }
+    /// #     fn set_trajectory(&mut self, _waypoints: Waypoints<&[u8]>) {}
+    /// #     fn waypoint(&self, _index: usize) -> Option<Waypoint> { None }
+    /// # }
+    /// let mut mav = Mav::with_state(LandingState::Flight, Controller::Manual);
+    /// for id in 1..=20 {
+    ///     mav.enabled_mut().insert(TelemetryId::from(id));
+    /// }
+    /// // One radio packet: the first 16 ids of the 20.
+    /// let mut buf = [0u8; 84];
+    /// assert_eq!(mav.telemetry(&Sim, &mut buf), Ok(Some(1 + 16 * 5)));
+    /// // No room for a record.
+    /// for len in [0, 5] {
+    ///     let error = mav.telemetry(&Sim, &mut buf[..len]).unwrap_err();
+    ///     assert_eq!((error.needed, error.available), (6, len));
+    /// }
+    /// ```
     pub fn telemetry<V: Vehicle + ?Sized>(
         &self,
         vehicle: &V,
@@ -345,18 +383,18 @@ impl Mav {
         if self.enabled.is_empty() {
             return Ok(None);
         }
-        let available = buf.len();
-        let mut builder = TelemetryBuilder::new(buf)?;
+        let too_small = BufferTooSmall {
+            needed: field::RECORDS + field::record::LEN,
+            available: buf.len(),
+        };
+        let mut builder = TelemetryBuilder::new(buf).map_err(|_| too_small)?;
         for id in self.enabled.iter() {
             if builder.push(id, vehicle.telemetry(id)).is_err() {
                 break;
             }
         }
         if builder.count() == 0 {
-            return Err(BufferTooSmall {
-                needed: field::RECORDS + field::record::LEN,
-                available,
-            });
+            return Err(too_small);
         }
         Ok(Some(builder.finish()))
     }

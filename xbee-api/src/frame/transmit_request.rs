@@ -137,11 +137,15 @@ impl<'a> TransmitRequestRepr<'a> {
     pub const FRAME_TYPE: u8 = frame_type::TRANSMIT_REQUEST;
     /// Frame data before the RF data: type, frame id, addresses, radius, options.
     pub const HEADER_LEN: usize = field::HEADER_LEN;
-    /// The most RF data a unicast carries without fragmentation: `NP` of a Zigbee
-    /// XBee (84 bytes; less with APS encryption or source routing). Longer unicasts
-    /// fail with delivery status 0x74, payload too large.
+    /// The most RF data a unicast carries in one radio packet, without
+    /// fragmentation: `NP` of a Zigbee XBee (84 bytes; less with APS encryption or
+    /// source routing). A longer unicast goes out in fragments, up to
+    /// [`MAX_UNICAST_DATA_FRAGMENTED`](Self::MAX_UNICAST_DATA_FRAGMENTED): more
+    /// airtime, and lost whole if one fragment is. Size a MAV's packets by this to keep
+    /// each in one radio packet.
     pub const MAX_UNICAST_DATA: usize = 84;
-    /// The most RF data a unicast carries with fragmentation.
+    /// The most RF data a unicast carries with fragmentation; longer ones fail with
+    /// delivery status 0x74, payload too large.
     pub const MAX_UNICAST_DATA_FRAGMENTED: usize = 255;
     /// The most RF data a broadcast carries.
     pub const MAX_BROADCAST_DATA: usize = 92;
