@@ -16,6 +16,7 @@ use tokio_util::codec::FramedRead;
 use xbee_api::{Address64, EncodeFrame};
 
 use crate::codec::{CodecItem, XBeeCodec, encode_frame};
+use crate::diagnosis::WARN_AFTER;
 use crate::error::{RequestError, SendError};
 use crate::event::{
     Event, InvalidPacket, LinkEvent, LinkState, Origin, OwnedFrame, Received, is_response,
@@ -23,7 +24,7 @@ use crate::event::{
 use crate::ids::IdTable;
 use crate::options::LinkOptions;
 use crate::sender::DeliveryReport;
-use crate::stats::{Counters, bump};
+use crate::stats::{Counters, Stats, bump};
 use crate::subscription::Subscribers;
 use crate::transport::{Connector, Transport};
 
@@ -244,6 +245,8 @@ struct Waiter {
     timeout: Duration,
     /// The radio confirmed delivery of the request (Transmit Status success).
     delivered: bool,
+    /// Frames dropped undecodable when the request was taken.
+    undecodable_before: u64,
     reply: oneshot::Sender<Result<mcp_core::Report<Bytes>, RequestError>>,
 }
 
@@ -286,6 +289,10 @@ pub(crate) struct Driver {
     waiters: Vec<Waiter>,
     next_waiter: u64,
     healthy: bool,
+    /// The counters when the transport being served came, and whether they were
+    /// warned about since ([`Self::watch_decoding`]).
+    serving_since: Stats,
+    warned: bool,
     /// Link events that found the event queue full, delivered (in order, before any
     /// other event) as soon as it has room: a slow consumer loses packets, never link
     /// state.
@@ -332,6 +339,8 @@ impl Driver {
             waiters: Vec::new(),
             next_waiter: 0,
             healthy: false,
+            serving_since: Stats::default(),
+            warned: false,
             pending_links: VecDeque::new(),
         }
     }
@@ -465,6 +474,8 @@ impl Driver {
         let mut reader = FramedRead::new(rd, codec);
         let mut out = BytesMut::new();
         self.healthy = false;
+        self.serving_since = self.counters.snapshot();
+        self.warned = false;
         loop {
             self.unpark(&mut out);
             let deadline = self.next_deadline();
@@ -625,6 +636,7 @@ impl Driver {
                 // The event is how it is reported; the log only traces it.
                 tracing::debug!(%error, "dropped a corrupt frame");
                 self.emit(Event::DecodeError(error));
+                self.watch_decoding();
             }
             CodecItem::Frame(frame) => {
                 if !self.healthy {
@@ -633,6 +645,24 @@ impl Driver {
                 }
                 self.dispatch(frame);
             }
+        }
+    }
+
+    /// Warns, once a connection, when the frames that failed to decode on it say that
+    /// the radio's settings differ from the link's ([`Stats::diagnose`]): nothing else
+    /// would tell, as its frames are dropped.
+    fn watch_decoding(&mut self) {
+        if self.warned {
+            return;
+        }
+        let counted = self.counters.snapshot().since(&self.serving_since);
+        if let Some(diagnosis) = counted.diagnose(self.options.api_mode, WARN_AFTER) {
+            self.warned = true;
+            tracing::warn!(
+                target: "mcp_host::diagnosis",
+                link = %self.connector.link(),
+                "frames from the radio fail to decode: {diagnosis}"
+            );
         }
     }
 
@@ -938,6 +968,7 @@ impl Driver {
                     deadline,
                     timeout,
                     delivered: false,
+                    undecodable_before: self.counters.snapshot().decode_errors(),
                     reply,
                 });
             }
@@ -1021,11 +1052,13 @@ impl Driver {
             if self.waiters[i].deadline <= now {
                 let w = self.waiters.swap_remove(i);
                 bump(&self.counters.timeouts);
+                let undecodable = self.counters.snapshot().decode_errors();
                 let _ = w.reply.send(Err(RequestError::Timeout {
                     from: w.from,
                     what: w.key.to_string(),
                     timeout: w.timeout,
                     delivered: w.delivered,
+                    undecodable: undecodable.saturating_sub(w.undecodable_before),
                 }));
             } else {
                 i += 1;

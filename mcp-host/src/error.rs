@@ -123,11 +123,7 @@ pub enum RequestError {
     /// time.
     #[error(
         "no {what} report from {from} within {timeout:?} ({})",
-        if *delivered {
-            "the radio delivered the request: the MAV did not answer"
-        } else {
-            "the radio did not confirm delivery"
-        }
+        timeout_cause(*delivered, *undecodable)
     )]
     Timeout {
         /// Whom the request went to.
@@ -140,5 +136,30 @@ pub enum RequestError {
         /// success): if it did, the MAV got it and did not answer in time; if not, the
         /// radio itself did not answer (off, another API mode or baud rate, ...).
         delivered: bool,
+        /// Frames from the radio dropped undecodable while the report was awaited: if
+        /// any, the report may have been one of them ([`Stats::diagnose`] on the link's
+        /// counters says why they failed).
+        ///
+        /// [`Stats::diagnose`]: crate::Stats::diagnose
+        undecodable: u64,
     },
+}
+
+/// Why a report did not come, as far as the link can tell.
+fn timeout_cause(delivered: bool, undecodable: u64) -> String {
+    let lost = match undecodable {
+        0 => None,
+        1 => Some("1 frame from the radio could not be decoded meanwhile".to_owned()),
+        n => Some(format!(
+            "{n} frames from the radio could not be decoded meanwhile"
+        )),
+    };
+    match (delivered, lost) {
+        (true, None) => "the radio delivered the request: the MAV did not answer".to_owned(),
+        (true, Some(lost)) => {
+            format!("the radio delivered the request, but {lost}: the report may have been one")
+        }
+        (false, None) => "the radio did not confirm delivery".to_owned(),
+        (false, Some(lost)) => format!("the radio did not confirm delivery, and {lost}"),
+    }
 }

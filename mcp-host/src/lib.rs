@@ -25,6 +25,12 @@
 //! in order for the first free id (or their deadline), and raw writes and transmits
 //! without status still go out at once.
 //!
+//! A radio in another API mode than the link's, at another baud rate or in transparent
+//! mode sends frames that fail to decode, and they are dropped: the link logs a warning
+//! (target `mcp_host::diagnosis`) once a connection when its counters show the signs,
+//! [`Stats::diagnose`] reads them at any time, and a [`RequestError::Timeout`] counts
+//! the frames dropped while its report was awaited.
+//!
 //! A radio in transparent mode (`AP=0`, as XBee modules leave the factory) speaks no API
 //! frames: [`command_mode`] puts it into API mode through its AT command mode (`+++`).
 //!
@@ -91,6 +97,7 @@
 mod answers;
 pub mod codec;
 pub mod command_mode;
+mod diagnosis;
 pub mod discovery;
 mod driver;
 mod error;
@@ -124,6 +131,7 @@ pub use mcp_core;
 pub use xbee_api;
 
 pub use answers::Answers;
+pub use diagnosis::Diagnosis;
 pub use error::{ConnectError, RequestError, SendError};
 pub use event::{
     Event, InvalidPacket, LinkEvent, LinkState, Origin, OwnedFrame, OwnedPacket, Received,

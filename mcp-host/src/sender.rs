@@ -247,6 +247,7 @@ impl CommandSender {
                     what: key.to_string(),
                     timeout,
                     delivered: false,
+                    undecodable: 0,
                 }),
             }
         };

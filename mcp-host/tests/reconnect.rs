@@ -631,3 +631,91 @@ async fn wait_for_link_connects_once_the_peer_is_there() {
     fake.receive(MAV, &time_report(7)).await;
     expect_time_report(&mut stream, 7).await;
 }
+
+/// A Receive Packet of `payload` from the MAV as a radio in API mode 2 writes it: its
+/// 16-bit address 0x7D33 escaped, which a link in mode 1 reads as a bad frame.
+fn escaped_rx(payload: &[u8]) -> Vec<u8> {
+    use xbee_api::EncodeFrame;
+    let frame = rx(MAV, payload);
+    let mut buf = vec![0u8; frame.encoded_len(ApiMode::Escaped)];
+    let n = frame.encode(ApiMode::Escaped, &mut buf).unwrap();
+    buf.truncate(n);
+    buf
+}
+
+#[tokio::test]
+async fn a_radio_in_the_other_api_mode_is_warned_about_once_a_connection() {
+    let (logs, _guard) = Captured::at(tracing::Level::WARN);
+    let warnings = |text: &str| {
+        text.lines()
+            .filter(|l| l.contains("frames from the radio fail to decode"))
+            .count()
+    };
+    let (listener, mut stream, sender, mut fake) =
+        tcp_radio(options(ApiMode::Unescaped, true)).await;
+    for round in 0..2u32 {
+        for _ in 0..10 {
+            fake.write_raw(&escaped_rx(&time_report(1))).await;
+        }
+        // A frame with nothing to escape reads the same in both modes: once it is
+        // here, so are the failures before it.
+        fake.receive(OTHER_MAV, b"mx").await;
+        loop {
+            if let Event::Packet(rx) = next_event(&mut stream).await {
+                assert_eq!(rx.origin.src64, OTHER_MAV);
+                break;
+            }
+        }
+        let text = logs.text();
+        assert_eq!(warnings(&text), round as usize + 1, "{text}");
+        let line = text.lines().rev().find(|l| l.contains("fail to decode"));
+        assert!(
+            line.is_some_and(|l| l.contains("the radio may be in API mode 2 (AP=2)")),
+            "{text}"
+        );
+        if round == 0 {
+            // Once a connection: a new one is watched afresh.
+            drop(fake);
+            assert!(matches!(
+                next_link_event(&mut stream).await,
+                LinkEvent::Disconnected { .. }
+            ));
+            fake = accept(&listener, ApiMode::Unescaped).await;
+            assert!(matches!(
+                next_link_event(&mut stream).await,
+                LinkEvent::Reconnected { .. }
+            ));
+        }
+    }
+
+    // A request whose report came in a frame that could not be decoded says so, and
+    // does not blame the MAV.
+    let request = tokio::spawn({
+        let sender = sender.clone();
+        async move {
+            sender
+                .request_with(MAV, StatusRequest::Time, Some(Duration::from_millis(500)))
+                .await
+        }
+    });
+    let tx = fake.next_tx().await;
+    fake.status(tx.frame_id, DeliveryStatus::Success).await;
+    fake.write_raw(&escaped_rx(&time_report(7))).await;
+    let error = request.await.unwrap().unwrap_err();
+    assert!(
+        matches!(
+            error,
+            RequestError::Timeout {
+                delivered: true,
+                undecodable: 1,
+                ..
+            }
+        ),
+        "{error:?}"
+    );
+    let text = error.to_string();
+    assert!(
+        text.contains("the radio delivered the request, but 1 frame from the radio could not be decoded meanwhile: the report may have been one"),
+        "{text}"
+    );
+}

@@ -118,7 +118,7 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
                     hinted = false;
                 }
                 let hint = fixed.and_then(|mode| {
-                    diagnosis(mode, &now.since(&since), HINT_ERRORS, true)
+                    diagnosis(mode, &now.since(&since), HINT_ERRORS)
                 });
                 if let (Some(hint), false) = (hint, hinted) {
                     hinted = true;

@@ -5,7 +5,7 @@ use std::time::Duration;
 use clap::Args;
 use futures::StreamExt;
 use mcp_host::{
-    CommandSender, ConnectError, Connector, Link, LinkError, LinkOptions, PacketStream,
+    CommandSender, ConnectError, Connector, Diagnosis, Link, LinkError, LinkOptions, PacketStream,
     ReconnectPolicy, SendError, Stats,
 };
 use xbee_api::{Address64, ApiMode, Frame};
@@ -396,58 +396,29 @@ pub(crate) fn warn_mode_mismatch(radio: u8, configured: ApiMode, link: &Link) {
     }
 }
 
-/// What the link's counters say is wrong with the radio's settings, if anything: frames
-/// that fail their checksum (another API mode), only frames of impossible lengths and
-/// bytes that were no frames (another baud rate, or transparent mode), or only bytes
-/// that were no frames (16 for each of `min_errors`). `min_errors`:
-/// how many failed frames it takes; with `majority`, also more failed frames than good
-/// ones (a frame with no byte to escape passes in either mode: a long-running command
-/// waits for most to fail, one that timed out has seen too few to count).
-pub(crate) fn diagnosis(
-    mode: ApiMode,
-    stats: &Stats,
-    min_errors: u64,
-    majority: bool,
-) -> Option<String> {
-    let other = other_mode(mode);
-    let checksum = stats.bad_checksum + stats.bad_escape;
-    if checksum >= min_errors && (!majority || checksum > stats.frames) {
-        return Some(format!(
-            "hint: {} failed the checksum and {} passed: the radio may be in API mode \
-             {other} (AP={other}); try --api-mode {other} or --api-mode auto",
-            crate::counted(checksum, "frame"),
-            stats.frames
-        ));
-    }
-    let nonsense = stats.oversize + stats.empty + stats.truncated;
-    if stats.frames == 0 && nonsense == 0 && checksum == 0 && stats.bytes_skipped >= 16 * min_errors
-    {
-        return Some(format!(
-            "hint: {} came from the radio and none began a frame: the radio may be in \
-             transparent mode (AP=0; `mcp-gs setup` puts it into API mode), or the link's baud rate \
-             may differ from the radio's (give it as serial:PATH:BAUD; XBee modules ship at \
-             9600)",
-            crate::counted(stats.bytes_skipped, "byte")
-        ));
-    }
-    if nonsense >= min_errors && stats.frames == 0 {
-        return Some(format!(
-            "hint: {} of impossible length, {} bytes that were no frames, and \
-             no good frame: the link's baud rate may differ from the radio's (give it as \
-             serial:PATH:BAUD; XBee modules ship at 9600), or the radio may be in transparent \
-             mode (AP=0)",
-            crate::counted(nonsense, "frame"),
-            stats.bytes_skipped
-        ));
-    }
-    None
+/// What the link's counters say is wrong with the radio's settings, if anything
+/// ([`Stats::diagnose`] with `min_failed`), as a hint with what to give on the command
+/// line.
+pub(crate) fn diagnosis(mode: ApiMode, stats: &Stats, min_failed: u64) -> Option<String> {
+    let found = stats.diagnose(mode, min_failed)?;
+    let advice = match found {
+        Diagnosis::OtherApiMode { radio, .. } => {
+            let radio = u8::from(radio);
+            format!("try --api-mode {radio} or --api-mode auto")
+        }
+        Diagnosis::NoFrames { .. } => "`mcp-gs setup` puts a radio in transparent mode into \
+            API mode; give a baud rate as serial:PATH:BAUD (XBee modules ship at 9600)"
+            .to_owned(),
+        _ => "give the baud rate as serial:PATH:BAUD (XBee modules ship at 9600)".to_owned(),
+    };
+    Some(format!("hint: {found}; {advice}"))
 }
 
 /// The [`diagnosis`] of the link's counters, when its API mode was given (one found by
 /// asking the radio is right).
 fn counters_hint(link: &LinkArgs, stats: &Stats) -> Option<String> {
     match link.api_mode {
-        ApiModeChoice::Fixed(mode) => diagnosis(mode, stats, 1, false),
+        ApiModeChoice::Fixed(mode) => diagnosis(mode, stats, 1),
         ApiModeChoice::Auto => None,
     }
 }

@@ -22,7 +22,11 @@ pub(crate) fn init(timed: bool) {
     match tracing_subscriber::EnvFilter::try_from_env("MCP_LOG") {
         Ok(filter) => builder.with_env_filter(filter).init(),
         Err(_) => builder
-            .with_env_filter(tracing_subscriber::EnvFilter::new("warn"))
+            // The library's warnings about the radio's settings are said here as
+            // hints with the options to give.
+            .with_env_filter(tracing_subscriber::EnvFilter::new(
+                "warn,mcp_host::diagnosis=off",
+            ))
             .event_format(Plain { timed })
             .init(),
     }

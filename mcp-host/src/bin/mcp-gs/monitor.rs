@@ -100,7 +100,7 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
             () = &mut ctrl_c => None,
             _ = look.tick(), if !hinted => {
                 if let ApiModeChoice::Fixed(mode) = args.link.api_mode {
-                    if let Some(hint) = diagnosis(mode, &stream.stats(), HINT_ERRORS, true) {
+                    if let Some(hint) = diagnosis(mode, &stream.stats(), HINT_ERRORS) {
                         hinted = true;
                         eprintln!("mcp-gs: {hint}");
                     }
@@ -149,7 +149,7 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
         {
             // A frame with no byte to escape passes in either mode (a modem status,
             // say): the hint counts on most frames failing, not on all of them.
-            if let Some(hint) = diagnosis(mode, &stream.stats(), HINT_ERRORS, true) {
+            if let Some(hint) = diagnosis(mode, &stream.stats(), HINT_ERRORS) {
                 hinted = true;
                 eprintln!("mcp-gs: {hint}");
             }

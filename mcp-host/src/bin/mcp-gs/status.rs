@@ -43,7 +43,6 @@ pub(crate) async fn run(args: StatusArgs) -> Result<(), Failure> {
     let report = sender
         .request_with(args.to, request, Some(args.link.timeout()))
         .await;
-    let unreadable = sender.stats().decode_errors();
     // The local radio never confirmed delivery: as for a send nobody answered.
     let unanswered = matches!(
         report,
@@ -55,20 +54,6 @@ pub(crate) async fn run(args: StatusArgs) -> Result<(), Failure> {
     let report = report
         .map_err(|e| match e {
             RequestError::Send(e) => send_failure(e),
-            // The MAV may well have answered: frames came that could not be read.
-            RequestError::Timeout {
-                from,
-                what,
-                timeout,
-                delivered: true,
-            } if unreadable > 0 => Failure::new(
-                Failure::TIMEOUT,
-                format!(
-                    "no {what} report from {from} within {timeout:?} (the radio delivered the \
-                     request, and {} that came back could not be read)",
-                    crate::counted(unreadable, "frame")
-                ),
-            ),
             timeout @ RequestError::Timeout { .. } => {
                 Failure::new(Failure::TIMEOUT, timeout.to_string())
             }

@@ -1,0 +1,220 @@
+//! What a link's counters say may be wrong with the radio's settings: [`Stats::diagnose`].
+//!
+//! A radio in the other API mode, at another baud rate or in transparent mode sends
+//! bytes that fail to decode in ways of their own, and nothing else tells: frames
+//! are dropped, answers never come. The link logs a warning (target
+//! `mcp_host::diagnosis`) once per connection when its counters show the signs, and a
+//! program can ask at any time, e.g. when a request timed out.
+
+use std::fmt;
+
+use xbee_api::ApiMode;
+
+use crate::stats::Stats;
+
+/// The failed frames it takes before a connection's counters are warned about in the
+/// log, most of its frames failing.
+pub(crate) const WARN_AFTER: u64 = 5;
+
+/// Bytes skipped, for each failed frame `min_failed` asks for, before bytes that begin
+/// no frame count as a sign.
+const BYTES_PER_FAILURE: u64 = 16;
+
+/// What a link's counters say may be wrong with the radio's settings.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Diagnosis {
+    /// Frames failed their checksum (or, in API mode 2, held a bad escape): the radio
+    /// may be in the other API mode. A frame with no byte to escape reads the same in
+    /// both, so some may pass.
+    OtherApiMode {
+        /// Frames that failed.
+        failed: u64,
+        /// Frames that passed.
+        passed: u64,
+        /// The mode the radio may be in.
+        radio: ApiMode,
+    },
+    /// Bytes came and none began a frame: the radio may be in transparent mode
+    /// (`AP=0`), or at another baud rate.
+    NoFrames {
+        /// Bytes skipped.
+        bytes: u64,
+    },
+    /// Only frames of impossible lengths (too long, empty, cut off) and bytes that were
+    /// no frames: the link's baud rate may differ from the radio's, or the radio may be
+    /// in transparent mode.
+    ImpossibleFrames {
+        /// Frames dropped for their length.
+        frames: u64,
+        /// Bytes skipped.
+        bytes: u64,
+    },
+}
+
+impl Stats {
+    /// What these counters say may be wrong with the settings of a radio read in
+    /// `mode`, if anything. `min_failed`: how many failed frames it takes (and 16
+    /// skipped bytes for each, when no frame began); from 2 on, also more failed frames
+    /// than good ones, for counters over a long time, where frames with no byte to
+    /// escape pass in either mode. Take 1 for the counters of a short exchange that
+    /// went unanswered; [`since`](Stats::since) gives those.
+    ///
+    /// ```
+    /// use mcp_host::{Diagnosis, Stats};
+    /// use xbee_api::ApiMode;
+    ///
+    /// let stats = Stats { frames: 2, bad_checksum: 6, ..Stats::default() };
+    /// assert_eq!(
+    ///     stats.diagnose(ApiMode::Unescaped, 5),
+    ///     Some(Diagnosis::OtherApiMode { failed: 6, passed: 2, radio: ApiMode::Escaped })
+    /// );
+    /// // Most frames pass: a few failures are noise on the line.
+    /// let stats = Stats { frames: 100, bad_checksum: 6, ..Stats::default() };
+    /// assert_eq!(stats.diagnose(ApiMode::Unescaped, 5), None);
+    /// ```
+    pub fn diagnose(&self, mode: ApiMode, min_failed: u64) -> Option<Diagnosis> {
+        let min_failed = min_failed.max(1);
+        let majority = min_failed > 1;
+        let failed = self.bad_checksum + self.bad_escape;
+        if failed >= min_failed && (!majority || failed > self.frames) {
+            return Some(Diagnosis::OtherApiMode {
+                failed,
+                passed: self.frames,
+                radio: other(mode),
+            });
+        }
+        let impossible = self.oversize + self.empty + self.truncated;
+        if self.frames == 0
+            && impossible == 0
+            && failed == 0
+            && self.bytes_skipped >= BYTES_PER_FAILURE.saturating_mul(min_failed)
+        {
+            return Some(Diagnosis::NoFrames {
+                bytes: self.bytes_skipped,
+            });
+        }
+        if impossible >= min_failed && self.frames == 0 {
+            return Some(Diagnosis::ImpossibleFrames {
+                frames: impossible,
+                bytes: self.bytes_skipped,
+            });
+        }
+        None
+    }
+}
+
+/// The API mode that is not `mode`.
+fn other(mode: ApiMode) -> ApiMode {
+    match mode {
+        ApiMode::Unescaped => ApiMode::Escaped,
+        ApiMode::Escaped => ApiMode::Unescaped,
+    }
+}
+
+/// `n noun`, with an `s` unless `n` is 1.
+fn counted(n: u64, noun: &str) -> String {
+    match n {
+        1 => format!("1 {noun}"),
+        n => format!("{n} {noun}s"),
+    }
+}
+
+/// One sentence, for a log line or an error's hint.
+///
+/// ```
+/// use mcp_host::Diagnosis;
+/// use xbee_api::ApiMode;
+///
+/// let diagnosis = Diagnosis::OtherApiMode { failed: 6, passed: 2, radio: ApiMode::Escaped };
+/// assert_eq!(
+///     diagnosis.to_string(),
+///     "6 frames failed the checksum and 2 passed: the radio may be in API mode 2 (AP=2)"
+/// );
+/// ```
+impl fmt::Display for Diagnosis {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Diagnosis::OtherApiMode {
+                failed,
+                passed,
+                radio,
+            } => {
+                let radio = u8::from(radio);
+                write!(
+                    f,
+                    "{} failed the checksum and {passed} passed: the radio may be in API \
+                     mode {radio} (AP={radio})",
+                    counted(failed, "frame")
+                )
+            }
+            Diagnosis::NoFrames { bytes } => write!(
+                f,
+                "{} came from the radio and none began a frame: the radio may be in \
+                 transparent mode (AP=0), or the link's baud rate may differ from the \
+                 radio's",
+                counted(bytes, "byte")
+            ),
+            Diagnosis::ImpossibleFrames { frames, bytes } => write!(
+                f,
+                "{} of impossible length, {bytes} bytes that were no frames, and no good \
+                 frame: the link's baud rate may differ from the radio's, or the radio may \
+                 be in transparent mode (AP=0)",
+                counted(frames, "frame")
+            ),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_sign_is_read_as_its_cause() {
+        let mode = ApiMode::Escaped;
+        let checksums = Stats {
+            bad_checksum: 1,
+            ..Stats::default()
+        };
+        assert_eq!(
+            checksums.diagnose(mode, 1),
+            Some(Diagnosis::OtherApiMode {
+                failed: 1,
+                passed: 0,
+                radio: ApiMode::Unescaped
+            })
+        );
+        // Over a long time it takes `min_failed` of them, and most frames failing.
+        assert_eq!(checksums.diagnose(mode, 5), None);
+        let skipped = Stats {
+            bytes_skipped: 80,
+            ..Stats::default()
+        };
+        assert_eq!(
+            skipped.diagnose(mode, 5),
+            Some(Diagnosis::NoFrames { bytes: 80 })
+        );
+        assert_eq!(skipped.diagnose(mode, 6), None);
+        let lengths = Stats {
+            oversize: 3,
+            truncated: 2,
+            bytes_skipped: 7,
+            ..Stats::default()
+        };
+        assert_eq!(
+            lengths.diagnose(mode, 5),
+            Some(Diagnosis::ImpossibleFrames {
+                frames: 5,
+                bytes: 7
+            })
+        );
+        // A good frame says the rate and mode are right.
+        let good = Stats {
+            frames: 1,
+            ..lengths
+        };
+        assert_eq!(good.diagnose(mode, 1), None);
+        assert_eq!(Stats::default().diagnose(mode, 0), None);
+    }
+}
