@@ -92,7 +92,9 @@ pub enum SendError {
         /// Why the transport went away.
         reason: String,
     },
-    /// The link has ended for good.
+    /// The link has ended for good (a request made after it ended; one in flight when
+    /// it ended fails with [`Disconnected`](Self::Disconnected), as it may have gone
+    /// out).
     #[error("link closed")]
     Closed,
     /// The packet does not fit the payload limit.

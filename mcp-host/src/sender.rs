@@ -492,6 +492,11 @@ impl CommandSender {
     /// the [`PacketStream`](crate::PacketStream) yields
     /// [`LinkEvent::Closed`](crate::LinkEvent::Closed) and ends. Returns at once.
     ///
+    /// Requests in flight fail as in any disconnection, with
+    /// [`SendError::Disconnected`](crate::SendError::Disconnected) (reason `closed by the
+    /// application`): they may have gone out. Later ones fail with
+    /// [`SendError::Closed`](crate::SendError::Closed).
+    ///
     /// The transport is closed before that event, so once the stream has yielded it (or
     /// ended) the same device can be opened again at once: a serial port is opened for
     /// exclusive use, and merely dropping the handles closes it a moment later, in the

@@ -21,12 +21,12 @@ use crate::Event;
 /// [`PacketStream`](crate::PacketStream), which holds those back), and goes on with the
 /// rest ([`missed`](Self::missed) counts them; read
 /// [`CommandSender::link_state`](crate::CommandSender::link_state) after missing some);
-/// it never holds up the link or the other readers. It ends after [`LinkEvent::Closed`](crate::LinkEvent) (whose reason says
+/// it never holds up the link or the other readers. It ends after [`LinkEvent::Closed`](crate::LinkEvent::Closed) (whose reason says
 /// when the link ended because its stream and every sender were dropped), or at once
 /// when taken from a link that has ended.
 ///
 /// It starts with the events that come after it was taken: a link that is up already
-/// sent its [`LinkEvent::Connected`](crate::LinkEvent) before, so read
+/// sent its [`LinkEvent::Connected`](crate::LinkEvent::Connected) before, so read
 /// [`CommandSender::link_state`](crate::CommandSender::link_state) after subscribing
 /// to know where the link is.
 ///
