@@ -465,6 +465,12 @@ impl CommandSender {
     /// them, unless its `NO` has it answer for itself. Answers are read as Zigbee and
     /// DigiMesh radios give them; one that cannot be read is left out and counted.
     ///
+    /// It returns when the window ends, however soon the radios answered: with `NT`
+    /// at Digi's default that is 7 s (the simulator's radios keep that default too). To
+    /// act on each radio as it answers, or to stop at the one looked for, read the
+    /// answers to `ND` as they come with [`at_answers`](Self::at_answers) and
+    /// [`NodeInfo::parse`](xbee_api::NodeInfo::parse).
+    ///
     /// ```no_run
     /// # async fn run(sender: mcp_host::CommandSender) -> Result<(), Box<dyn std::error::Error>> {
     /// for node in sender.discover(None).await?.nodes {
