@@ -275,6 +275,23 @@ async fn a_serial_link_holds_a_pseudo_terminal_by_its_lock_alone() {
     second.open().await.unwrap();
 }
 
+/// The error of a `connect` to `link` that waits for a link not there yet, which gives
+/// up at once all the same: no retry can make `link` work.
+async fn refused_at_once(link: &Link) -> mcp_host::ConnectError {
+    let options = LinkOptions {
+        wait_for_link: true,
+        ..LinkOptions::default()
+    };
+    // Bounded: waited on, it would never end.
+    let connect = mcp_host::connect(link, options);
+    let err = tokio::time::timeout(Duration::from_secs(20), connect)
+        .await
+        .expect("connect gives up at once")
+        .unwrap_err();
+    assert!(!err.is_retryable(), "{err}");
+    err
+}
+
 #[tokio::test]
 async fn open_errors_are_clear() {
     let link: Link = "serial:/dev/does-not-exist-mcp:9600".parse().unwrap();
@@ -303,17 +320,7 @@ async fn open_errors_are_clear() {
         host: "127.0.0.1".into(),
         port: 0,
     };
-    let options = LinkOptions {
-        wait_for_link: true,
-        ..LinkOptions::default()
-    };
-    // Bounded: waited on, it would never end.
-    let connect = mcp_host::connect(&link, options);
-    let err = tokio::time::timeout(Duration::from_secs(20), connect)
-        .await
-        .expect("connect gives up at once")
-        .unwrap_err();
-    assert!(!err.is_retryable(), "{err}");
+    let err = refused_at_once(&link).await;
     assert!(err.to_string().contains("port 0"), "{err}");
 
     // A path that is there but is no device (a directory, a regular file) never
@@ -326,16 +333,7 @@ async fn open_errors_are_clear() {
             path: path.display().to_string(),
             baud: 9600,
         };
-        let options = LinkOptions {
-            wait_for_link: true,
-            ..LinkOptions::default()
-        };
-        let connect = mcp_host::connect(&link, options);
-        let err = tokio::time::timeout(Duration::from_secs(20), connect)
-            .await
-            .expect("connect gives up at once")
-            .unwrap_err();
-        assert!(!err.is_retryable(), "{err}");
+        let err = refused_at_once(&link).await;
         assert!(
             err.to_string().contains(&path.display().to_string()),
             "{err}"
