@@ -134,8 +134,17 @@ fn an_at_command_without_answer_exits_4() {
             .output()
             .unwrap();
         assert_eq!(out.status.code(), Some(4), "{args:?}: {out:?}");
-        assert!(stderr(&out).contains("within"), "{out:?}");
+        assert!(stderr(&out).contains("within 500ms"), "{out:?}");
     }
+    peer.join().unwrap();
+    // Without --timeout a local command is waited for 3 s: the radio answers at once.
+    let (link, peer) = common::silent_peer(1);
+    let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args(["at", "--link", &link, "AP"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(4), "{out:?}");
+    assert!(stderr(&out).contains("within 3s"), "{out:?}");
     peer.join().unwrap();
 }
 

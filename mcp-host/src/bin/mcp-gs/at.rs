@@ -1,5 +1,7 @@
 //! `mcp-gs at`: read or set an AT parameter of the local radio or of a remote one.
 
+use std::time::Duration;
+
 use clap::Args;
 use xbee_api::{Address64, AtStatus, Frame};
 
@@ -60,6 +62,25 @@ const TEXT_PARAMETERS: [&[u8; 2]; 4] = [b"NI", b"DN", b"BI", b"VL"];
 /// network reset, exit command mode, sleep immediately and the commissioning button.
 /// Their success prints as `AC: ok`, not as a read that found no value.
 const ACTIONS: [&[u8; 2]; 8] = [b"AC", b"WR", b"RE", b"FR", b"NR", b"CN", b"SI", b"CB"];
+
+/// How long a local AT command is waited for when `--timeout` is not given: the local
+/// radio answers at once, so a longer wait only delays the hint of what is wrong.
+const LOCAL_TIMEOUT: Duration = Duration::from_secs(3);
+
+/// The local AT commands whose answer waits on the network: node discovery, a
+/// destination node looked up, the active and energy scans, find neighbours. They get
+/// the usual timeout.
+const NETWORK_COMMANDS: [&[u8; 2]; 5] = [b"ND", b"DN", b"AS", b"ED", b"FN"];
+
+/// How long to wait for the answer to `command`: `--timeout` if given, else
+/// [`LOCAL_TIMEOUT`] for a local command that waits on nothing else, else the default.
+fn answer_timeout(args: &AtArgs, command: &[u8; 2]) -> Duration {
+    match (args.link.given_timeout(), args.to) {
+        (Some(given), _) => given,
+        (None, None) if !NETWORK_COMMANDS.contains(&command) => LOCAL_TIMEOUT,
+        (None, _) => args.link.timeout(),
+    }
+}
 
 /// Whether `command`'s value is text.
 fn is_text(command: &[u8; 2]) -> bool {
@@ -293,7 +314,7 @@ pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
     if args.to == Some(Address64::BROADCAST) {
         return broadcast(&args, &sender, command, &parameter).await;
     }
-    let timeout = Some(args.link.timeout());
+    let timeout = Some(answer_timeout(&args, &command));
     let response = match args.to {
         None if args.no_apply => sender.at_queued(command, &parameter, timeout).await,
         None => sender.at(command, &parameter, timeout).await,
@@ -371,6 +392,34 @@ mod tests {
         for name in [b"?N", b"V%", b"A ", b"-1"] {
             assert!(!is_command_name(name), "{name:?}");
         }
+    }
+
+    #[test]
+    fn a_local_command_is_waited_for_3_s_unless_it_waits_on_the_network() {
+        #[derive(clap::Parser)]
+        struct Cli {
+            #[command(flatten)]
+            at: AtArgs,
+        }
+        let timeout = |args: &[&str]| {
+            let mut argv = vec!["at", "--link", "tcp:127.0.0.1:9750"];
+            argv.extend(args);
+            let args = <Cli as clap::Parser>::try_parse_from(&argv).unwrap().at;
+            let command = args.command.as_bytes().try_into().unwrap();
+            answer_timeout(&args, &command)
+        };
+        assert_eq!(timeout(&["AP"]), Duration::from_secs(3));
+        assert_eq!(timeout(&["NI", "MAV"]), Duration::from_secs(3));
+        for command in ["ND", "DN", "AS", "ED", "FN"] {
+            assert_eq!(timeout(&[command]), Duration::from_secs(12), "{command}");
+        }
+        let remote = ["--to", "0013a20040b599b9", "AP"];
+        assert_eq!(timeout(&remote), Duration::from_secs(12));
+        assert_eq!(
+            timeout(&["--timeout", "0.5", "AP"]),
+            Duration::from_millis(500)
+        );
+        assert_eq!(timeout(&["--timeout", "30", "ND"]), Duration::from_secs(30));
     }
 
     #[test]

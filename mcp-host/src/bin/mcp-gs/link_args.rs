@@ -47,10 +47,13 @@ pub(crate) struct LinkArgs {
     #[arg(long, value_name = "1|2|auto", default_value = "1")]
     pub(crate) api_mode: ApiModeChoice,
     /// Seconds to wait to connect, and for each transmit status, response or report a
-    /// subcommand waits for.
-    #[arg(long, value_name = "SECONDS", default_value_t = 12.0, value_parser = parse_seconds)]
-    pub(crate) timeout: f64,
+    /// subcommand waits for [default: 12; for a local AT command, 3].
+    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
+    pub(crate) timeout: Option<f64>,
 }
+
+/// The `--timeout` when none is given.
+const DEFAULT_TIMEOUT: Duration = Duration::from_secs(12);
 
 /// A 64-bit address on the command line: exactly 16 hex digits (an optional `0x`; spaces
 /// between them, as XCTU shows SH and SL, are allowed), so that a digit left out is an
@@ -93,7 +96,12 @@ pub(crate) fn parse_seconds(s: &str) -> Result<f64, String> {
 impl LinkArgs {
     /// The timeout as a duration.
     pub(crate) fn timeout(&self) -> Duration {
-        Duration::from_secs_f64(self.timeout)
+        self.given_timeout().unwrap_or(DEFAULT_TIMEOUT)
+    }
+
+    /// The timeout, if `--timeout` was given.
+    pub(crate) fn given_timeout(&self) -> Option<Duration> {
+        self.timeout.map(Duration::from_secs_f64)
     }
 
     /// Opens the link. `reconnect` keeps it alive across disconnections (for long-running
