@@ -7,6 +7,12 @@
 //! once one opens it the read waits for data instead. The link looks every
 //! [`PEER_POLL`] while no peer is there, and reads until EIO while one is.
 //!
+//! A peer may open the far end, write and close it again between two looks (a program
+//! that sends a few commands and exits). What it wrote stays on the master side, and a
+//! serial port's close sends what was written: so the link serves it as a peer that
+//! came and left, its bytes read at once and then the end of the stream. Nothing of it
+//! waits for the next peer; if its bytes cannot be read, they are dropped.
+//!
 //! Writes to the master side succeed even with nobody on the far end: the kernel keeps
 //! the bytes for the next process that opens it. So nothing is written while no peer is
 //! there (the link is down: nothing is queued for it), and when a peer leaves, what it
@@ -20,8 +26,8 @@ use std::pin::Pin;
 use std::task::{Context, Poll};
 use std::time::Duration;
 
-use bytes::{Buf, Bytes};
-use serialport::{SerialPort, TTYPort};
+use bytes::{Buf, Bytes, BytesMut};
+use serialport::{ClearBuffer, SerialPort, TTYPort};
 use tokio::io::{AsyncRead, AsyncWrite, ReadBuf};
 use tokio_serial::SerialStream;
 
@@ -33,6 +39,20 @@ pub(crate) const PEER_POLL: Duration = Duration::from_millis(20);
 /// Errno of a read on a master side whose far end nobody has open (EIO on Linux and
 /// the BSDs).
 const EIO: i32 = 5;
+
+/// More than the master side of a pseudo-terminal holds (a few dozen KiB): a peer that
+/// has written that much is still there, writing.
+const LEFT_MAX: usize = 1 << 17;
+
+/// What a look at the master side found.
+enum Look {
+    /// Nobody has the far end open, and nobody left anything on it.
+    Nobody,
+    /// A peer has the far end open; what it wrote already comes first.
+    Peer(Bytes),
+    /// A peer opened the far end, wrote this and closed it since the last look.
+    Left(Bytes),
+}
 
 /// A pseudo-terminal pair of which the link holds the master side.
 pub(crate) struct PtyPort {
@@ -88,25 +108,94 @@ impl PtyPort {
             // Straight from the file: a hang-up (BrokenPipe, or EIO from the read) while
             // nobody has the far end open, a timeout once someone does and has not
             // written yet.
-            let read = match master.read(&mut buf) {
-                Err(e) if e.kind() == io::ErrorKind::TimedOut => Some(Bytes::new()),
+            let look = match master.read(&mut buf) {
+                Err(e) if e.kind() == io::ErrorKind::TimedOut => Look::Peer(Bytes::new()),
                 // It wrote already: keep what it wrote.
-                Ok(n) if n > 0 => Some(Bytes::copy_from_slice(&buf[..n])),
-                Ok(_) => None,
-                Err(e) if e.kind() == io::ErrorKind::BrokenPipe => None,
-                Err(e) if e.raw_os_error() == Some(EIO) => None,
+                Ok(n) if n > 0 => Look::Peer(Bytes::copy_from_slice(&buf[..n])),
+                Ok(_) => Look::Nobody,
+                Err(e)
+                    if e.kind() == io::ErrorKind::BrokenPipe || e.raw_os_error() == Some(EIO) =>
+                {
+                    // Also when a peer came and left, with bytes waiting.
+                    self.left_behind().unwrap_or_else(|e| {
+                        failed(&self.path, &e, "cannot read what a peer left");
+                        self.drop_left_behind();
+                        Look::Nobody
+                    })
+                }
                 Err(e) => {
                     failed(&self.path, &e, "read failed");
-                    None
+                    Look::Nobody
                 }
             };
-            if let Some(read) = read {
-                match self.lend(read) {
+            match look {
+                Look::Nobody => {}
+                Look::Peer(read) => match self.lend(read) {
                     Ok(stream) => return Some(stream),
                     Err(e) => failed(&self.path, &e, "cannot wait for its input"),
+                },
+                Look::Left(read) => {
+                    // Not registered with the runtime: there is nothing more to wait
+                    // for, and a registration made now would see the hang-up, which the
+                    // runtime keeps (see `lend`) should a new peer come before the end.
+                    let port = self.master.take()?;
+                    return Some(PtyStream {
+                        master: None,
+                        port,
+                        read,
+                    });
                 }
             }
             tokio::time::sleep(PEER_POLL).await;
+        }
+    }
+
+    /// What a peer that came and left since the last look wrote, after a read found no
+    /// peer ([`Look::Left`]); [`Look::Nobody`] if it wrote nothing (or nobody came). If
+    /// a new peer has opened the far end meanwhile, what was read comes first in its
+    /// stream ([`Look::Peer`]).
+    fn left_behind(&self) -> io::Result<Look> {
+        let Some(master) = self.master.as_ref() else {
+            return Ok(Look::Nobody);
+        };
+        // Counted after the read that found the hang-up: its poll pushed what the peer
+        // wrote through to the input the count sees (counted sooner, bytes still on
+        // their way may be missed). A peer that comes after that poll is counted in
+        // part or not at all: the read below, or the next look, takes the rest.
+        if master.bytes_to_read()? == 0 {
+            return Ok(Look::Nobody);
+        }
+        // Read from the file itself: the port's read polls first and fails on the
+        // hang-up before reading. The registration this takes goes on return, before
+        // any peer is served (see [`Self::lend`]).
+        let mut file = SerialStream::try_from(master.try_clone_native()?)?;
+        let mut left = BytesMut::new();
+        let mut buf = [0u8; 4096];
+        while left.len() < LEFT_MAX {
+            match file.try_read(&mut buf) {
+                Ok(n) if n > 0 => left.extend_from_slice(&buf[..n]),
+                // All read: nobody has the far end open.
+                Ok(_) => return Ok(Look::Left(left.freeze())),
+                Err(e) if e.raw_os_error() == Some(EIO) => return Ok(Look::Left(left.freeze())),
+                // All read, and a new peer has the far end open.
+                Err(e) if e.kind() == io::ErrorKind::WouldBlock => {
+                    return Ok(Look::Peer(left.freeze()));
+                }
+                Err(e) => return Err(e),
+            }
+        }
+        Ok(Look::Peer(left.freeze()))
+    }
+
+    /// Drops what a peer that left wrote, when it cannot be read: never for the next
+    /// peer.
+    fn drop_left_behind(&self) {
+        let Some(master) = self.master.as_ref() else {
+            return;
+        };
+        if let Err(e) = master.clear(ClearBuffer::Input) {
+            tracing::debug!(path = %self.path.display(), error = %e,
+                "pseudo-terminal: what a peer left not dropped");
         }
     }
 
@@ -124,7 +213,11 @@ impl PtyPort {
         };
         let registered = port.try_clone_native().and_then(SerialStream::try_from);
         match registered {
-            Ok(master) => Ok(PtyStream { master, port, read }),
+            Ok(master) => Ok(PtyStream {
+                master: Some(master),
+                port,
+                read,
+            }),
             Err(e) => {
                 self.master = Some(port);
                 Err(e)
@@ -174,10 +267,12 @@ impl PtyPort {
 /// (returns no bytes) when the peer closes it; bytes read while looking for
 /// the peer come first.
 pub(crate) struct PtyStream {
-    /// The master side, registered while this peer is there.
-    master: SerialStream,
+    /// The master side, registered while this peer is there; `None` for a peer that
+    /// left before it was seen, whose stream is [`Self::read`] only.
+    master: Option<SerialStream>,
     /// The master side as the port keeps it.
     port: TTYPort,
+    /// What the peer wrote before it was seen.
     read: Bytes,
 }
 
@@ -212,7 +307,11 @@ impl AsyncRead for PtyStream {
             this.read.advance(n);
             return Poll::Ready(Ok(()));
         }
-        match Pin::new(&mut this.master).poll_read(cx, buf) {
+        let Some(master) = &mut this.master else {
+            // The peer left before it was seen: all it wrote is read.
+            return Poll::Ready(Ok(()));
+        };
+        match Pin::new(master).poll_read(cx, buf) {
             // The far end is closed: the peer left.
             Poll::Ready(Err(e)) if e.raw_os_error() == Some(EIO) => Poll::Ready(Ok(())),
             other => other,
@@ -226,15 +325,26 @@ impl AsyncWrite for PtyStream {
         cx: &mut Context<'_>,
         buf: &[u8],
     ) -> Poll<io::Result<usize>> {
-        Pin::new(&mut self.get_mut().master).poll_write(cx, buf)
+        match &mut self.get_mut().master {
+            Some(master) => Pin::new(master).poll_write(cx, buf),
+            // Nobody is listening: lost, as a UART's output is (not kept by the kernel
+            // for the next peer).
+            None => Poll::Ready(Ok(buf.len())),
+        }
     }
 
     fn poll_flush(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<io::Result<()>> {
-        Pin::new(&mut self.get_mut().master).poll_flush(cx)
+        match &mut self.get_mut().master {
+            Some(master) => Pin::new(master).poll_flush(cx),
+            None => Poll::Ready(Ok(())),
+        }
     }
 
     fn poll_shutdown(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<io::Result<()>> {
-        Pin::new(&mut self.get_mut().master).poll_shutdown(cx)
+        match &mut self.get_mut().master {
+            Some(master) => Pin::new(master).poll_shutdown(cx),
+            None => Poll::Ready(Ok(())),
+        }
     }
 }
 

@@ -1050,6 +1050,62 @@ async fn a_pty_node_is_up_only_while_a_peer_has_it_open() {
 }
 
 #[tokio::test]
+async fn a_pty_peer_that_writes_and_leaves_at_once_is_served_now() {
+    // A program that opens the pty, writes and closes it (its close drains what it
+    // wrote, as a serial port's does) between two of the radio's looks for a peer.
+    use bytes::BytesMut;
+    use tokio_util::codec::Encoder;
+
+    let network = Network::new(NetworkConfig::default());
+    let mut events = network.subscribe();
+    let coord = network
+        .add_link(COORD, &Link::Pty, NodeOptions::default())
+        .await
+        .unwrap();
+    let path = coord.pty_path.clone().unwrap();
+    let (_, io) = network
+        .add_in_process(MAV_A, NodeOptions::default())
+        .unwrap();
+    let mut mav = Dev::new(io, ApiMode::Unescaped);
+    assert_eq!(mav.modem_status().await, ModemStatus::JoinedNetwork);
+    let disconnected =
+        |e: &NetEvent| matches!(e, NetEvent::Disconnected { node, .. } if *node == COORD);
+    let rounds = 20u8;
+    for round in 0..rounds {
+        // Fire and forget: no transmit status asked for.
+        let mut frame = BytesMut::new();
+        XBeeCodec::new(ApiMode::Unescaped)
+            .encode(
+                &Frame::TransmitRequest(TransmitRequestRepr {
+                    frame_id: 0,
+                    dst64: MAV_A,
+                    dst16: Address16::UNKNOWN,
+                    radius: 0,
+                    options: 0,
+                    data: &[b'c', round],
+                }),
+                &mut frame,
+            )
+            .unwrap();
+        // At the radio's rate, as a ground station opens it.
+        let mut far = open_far_end(&path);
+        far.write_all(&frame).await.unwrap();
+        drop(far);
+        // Delivered now, not when the next program opens the pty; and the link saw
+        // the peer come and go.
+        assert_eq!(mav.rx().await.3, [b'c', round], "round {round}");
+        wait_for(&mut events, disconnected).await;
+    }
+    assert_eq!(network.stats(COORD).unwrap().connections, u64::from(rounds));
+    // The next ground station starts afresh: its first frame is the modem status, and
+    // the MAV gets what it sends, nothing left from before.
+    let mut ground = Dev::new(open_far_end(&path), ApiMode::Unescaped);
+    assert_eq!(ground.modem_status().await, ModemStatus::CoordinatorStarted);
+    ground.tx(0, MAV_A, b"fresh").await;
+    assert_eq!(mav.rx().await.3, b"fresh");
+}
+
+#[tokio::test]
 async fn a_pty_peer_that_writes_at_once_is_answered() {
     // The peer's first frame may arrive before the radio has seen it open the far end.
     let network = Network::new(NetworkConfig::default());

@@ -84,6 +84,54 @@ async fn pty_is_up_while_a_device_has_the_far_end_open_and_nothing_stale_reaches
     }
 }
 
+/// Opens the far end of a pseudo-terminal as a short-lived program does (`echo > PATH`),
+/// writes `bytes` and closes it again at once.
+fn write_and_leave(path: &std::path::Path, bytes: &[u8]) {
+    use std::io::Write;
+    use std::os::unix::fs::OpenOptionsExt;
+    let mut far = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .custom_flags(libc::O_NOCTTY)
+        .open(path)
+        .unwrap();
+    far.write_all(bytes).unwrap();
+}
+
+#[tokio::test]
+async fn pty_serves_a_device_that_writes_and_leaves_between_two_looks() {
+    let mut connector = Connector::new(&Link::Pty, &LinkOptions::default())
+        .await
+        .unwrap();
+    let path = connector.pty_path().unwrap().to_owned();
+    // Many times: the link looks for a peer now and then, and a device that is gone
+    // before the next look must be served all the same.
+    for round in 0..20u8 {
+        let open = tokio::spawn(async move {
+            let local = connector.open().await;
+            (connector, local)
+        });
+        write_and_leave(&path, &[0x7E, round, 0x22]);
+        let (back, local) = timeout(GUARD, open)
+            .await
+            .unwrap_or_else(|_| panic!("round {round}: the device was not seen"))
+            .unwrap();
+        connector = back;
+        let mut local = local.unwrap();
+        // What it wrote now, then the end of the stream: it left.
+        assert_eq!(read_exact_n(&mut local, 3).await, [0x7E, round, 0x22]);
+        reads_end(&mut local).await;
+    }
+    // The next device finds nothing stale, and what it writes comes first.
+    let open = tokio::spawn(async move { connector.open().await });
+    let mut far =
+        tokio_serial::SerialStream::open(&tokio_serial::new(path.to_str().unwrap(), 115_200))
+            .unwrap();
+    let mut local = timeout(GUARD, open).await.unwrap().unwrap().unwrap();
+    far.write_all(&[0x7E, 0xFF]).await.unwrap();
+    assert_eq!(read_exact_n(&mut local, 2).await, [0x7E, 0xFF]);
+}
+
 #[tokio::test]
 async fn tcp_reconnects_after_the_peer_goes_away() {
     let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
