@@ -3,8 +3,9 @@
 //! A radio in the other API mode, at another baud rate or in transparent mode sends
 //! bytes that fail to decode in ways of their own, and nothing else tells: frames
 //! are dropped, answers never come. The link logs a warning (target
-//! `mcp_host::diagnosis`) once per connection when its counters show the signs, and a
-//! program can ask at any time, e.g. when a request timed out.
+//! `mcp_host::diagnosis`) once a connection when its counters show the signs (looked
+//! at when a frame fails to decode and when a request times out), and a program can
+//! ask at any time.
 
 use std::fmt;
 
@@ -12,12 +13,12 @@ use xbee_api::ApiMode;
 
 use crate::stats::Stats;
 
-/// The failed frames it takes before a connection's counters are warned about in the
-/// log, most of its frames failing.
-pub(crate) const WARN_AFTER: u64 = 5;
+/// The failed frames it takes for [`Stats::diagnose_running`] (and skipped bytes
+/// [`BYTES_PER_FAILURE`] times as many).
+const RUNNING_FAILURES: u64 = 5;
 
-/// Bytes skipped, for each failed frame `min_failed` asks for, before bytes that begin
-/// no frame count as a sign.
+/// Bytes skipped, for each failed frame asked for, before bytes that begin no frame
+/// count as a sign.
 const BYTES_PER_FAILURE: u64 = 16;
 
 /// What a link's counters say may be wrong with the radio's settings.
@@ -27,6 +28,7 @@ pub enum Diagnosis {
     /// Frames failed their checksum (or, in API mode 2, held a bad escape): the radio
     /// may be in the other API mode. A frame with no byte to escape reads the same in
     /// both, so some may pass.
+    #[non_exhaustive]
     OtherApiMode {
         /// Frames that failed.
         failed: u64,
@@ -37,6 +39,7 @@ pub enum Diagnosis {
     },
     /// Bytes came and none began a frame: the radio may be in transparent mode
     /// (`AP=0`), or at another baud rate.
+    #[non_exhaustive]
     NoFrames {
         /// Bytes skipped.
         bytes: u64,
@@ -44,6 +47,7 @@ pub enum Diagnosis {
     /// Only frames of impossible lengths (too long, empty, cut off) and bytes that were
     /// no frames: the link's baud rate may differ from the radio's, or the radio may be
     /// in transparent mode.
+    #[non_exhaustive]
     ImpossibleFrames {
         /// Frames dropped for their length.
         frames: u64,
@@ -54,28 +58,49 @@ pub enum Diagnosis {
 
 impl Stats {
     /// What these counters say may be wrong with the settings of a radio read in
-    /// `mode`, if anything. `min_failed`: how many failed frames it takes (and 16
-    /// skipped bytes for each, when no frame began); from 2 on, also more failed frames
-    /// than good ones, for counters over a long time, where frames with no byte to
-    /// escape pass in either mode. Take 1 for the counters of a short exchange that
-    /// went unanswered; [`since`](Stats::since) gives those.
+    /// `mode`, if anything, taking any sign as one: for the counters of a short
+    /// exchange that went unanswered ([`since`](Stats::since) gives those).
+    ///
+    /// ```
+    /// use mcp_host::{Diagnosis, Stats};
+    /// use xbee_api::ApiMode;
+    ///
+    /// // What came while a request waited for its answer, which never came.
+    /// let stats = Stats { frames: 3, bad_checksum: 1, ..Stats::default() };
+    /// assert!(matches!(
+    ///     stats.diagnose(ApiMode::Unescaped),
+    ///     Some(Diagnosis::OtherApiMode { failed: 1, passed: 3, radio: ApiMode::Escaped, .. })
+    /// ));
+    /// ```
+    pub fn diagnose(&self, mode: ApiMode) -> Option<Diagnosis> {
+        self.diagnose_with(mode, 1, false)
+    }
+
+    /// What these counters say may be wrong, for the counters of a link over a long
+    /// time: it takes 5 failed frames, and more failed than good ones (a frame with no
+    /// byte to escape passes in either mode, and a line may corrupt a few), or 80
+    /// skipped bytes and no frame. The link's own warning reads its counters so.
     ///
     /// ```
     /// use mcp_host::{Diagnosis, Stats};
     /// use xbee_api::ApiMode;
     ///
     /// let stats = Stats { frames: 2, bad_checksum: 6, ..Stats::default() };
-    /// assert_eq!(
-    ///     stats.diagnose(ApiMode::Unescaped, 5),
-    ///     Some(Diagnosis::OtherApiMode { failed: 6, passed: 2, radio: ApiMode::Escaped })
-    /// );
+    /// assert!(matches!(
+    ///     stats.diagnose_running(ApiMode::Unescaped),
+    ///     Some(Diagnosis::OtherApiMode { failed: 6, passed: 2, radio: ApiMode::Escaped, .. })
+    /// ));
     /// // Most frames pass: a few failures are noise on the line.
     /// let stats = Stats { frames: 100, bad_checksum: 6, ..Stats::default() };
-    /// assert_eq!(stats.diagnose(ApiMode::Unescaped, 5), None);
+    /// assert_eq!(stats.diagnose_running(ApiMode::Unescaped), None);
     /// ```
-    pub fn diagnose(&self, mode: ApiMode, min_failed: u64) -> Option<Diagnosis> {
-        let min_failed = min_failed.max(1);
-        let majority = min_failed > 1;
+    pub fn diagnose_running(&self, mode: ApiMode) -> Option<Diagnosis> {
+        self.diagnose_with(mode, RUNNING_FAILURES, true)
+    }
+
+    /// [`diagnose`](Self::diagnose) with `min_failed` failed frames (and 16 skipped
+    /// bytes for each), and with `majority` more failed frames than good ones.
+    fn diagnose_with(&self, mode: ApiMode, min_failed: u64, majority: bool) -> Option<Diagnosis> {
         let failed = self.bad_checksum + self.bad_escape;
         if failed >= min_failed && (!majority || failed > self.frames) {
             return Some(Diagnosis::OtherApiMode {
@@ -113,7 +138,7 @@ fn other(mode: ApiMode) -> ApiMode {
 }
 
 /// `n noun`, with an `s` unless `n` is 1.
-fn counted(n: u64, noun: &str) -> String {
+pub(crate) fn counted(n: u64, noun: &str) -> String {
     match n {
         1 => format!("1 {noun}"),
         n => format!("{n} {noun}s"),
@@ -123,10 +148,11 @@ fn counted(n: u64, noun: &str) -> String {
 /// One sentence, for a log line or an error's hint.
 ///
 /// ```
-/// use mcp_host::Diagnosis;
+/// use mcp_host::Stats;
 /// use xbee_api::ApiMode;
 ///
-/// let diagnosis = Diagnosis::OtherApiMode { failed: 6, passed: 2, radio: ApiMode::Escaped };
+/// let stats = Stats { frames: 2, bad_checksum: 6, ..Stats::default() };
+/// let diagnosis = stats.diagnose(ApiMode::Unescaped).unwrap();
 /// assert_eq!(
 ///     diagnosis.to_string(),
 ///     "6 frames failed the checksum and 2 passed: the radio may be in API mode 2 (AP=2)"
@@ -157,10 +183,11 @@ impl fmt::Display for Diagnosis {
             ),
             Diagnosis::ImpossibleFrames { frames, bytes } => write!(
                 f,
-                "{} of impossible length, {bytes} bytes that were no frames, and no good \
-                 frame: the link's baud rate may differ from the radio's, or the radio may \
-                 be in transparent mode (AP=0)",
-                counted(frames, "frame")
+                "{} of impossible length, {} that were no frames, and no good frame: the \
+                 link's baud rate may differ from the radio's, or the radio may be in \
+                 transparent mode (AP=0)",
+                counted(frames, "frame"),
+                counted(bytes, "byte")
             ),
         }
     }
@@ -178,24 +205,29 @@ mod tests {
             ..Stats::default()
         };
         assert_eq!(
-            checksums.diagnose(mode, 1),
+            checksums.diagnose(mode),
             Some(Diagnosis::OtherApiMode {
                 failed: 1,
                 passed: 0,
                 radio: ApiMode::Unescaped
             })
         );
-        // Over a long time it takes `min_failed` of them, and most frames failing.
-        assert_eq!(checksums.diagnose(mode, 5), None);
+        // Over a long time it takes 5 of them, and most frames failing.
+        assert_eq!(checksums.diagnose_running(mode), None);
         let skipped = Stats {
             bytes_skipped: 80,
             ..Stats::default()
         };
         assert_eq!(
-            skipped.diagnose(mode, 5),
+            skipped.diagnose_running(mode),
             Some(Diagnosis::NoFrames { bytes: 80 })
         );
-        assert_eq!(skipped.diagnose(mode, 6), None);
+        let fewer = Stats {
+            bytes_skipped: 79,
+            ..skipped
+        };
+        assert_eq!(fewer.diagnose_running(mode), None);
+        assert!(fewer.diagnose(mode).is_some());
         let lengths = Stats {
             oversize: 3,
             truncated: 2,
@@ -203,7 +235,7 @@ mod tests {
             ..Stats::default()
         };
         assert_eq!(
-            lengths.diagnose(mode, 5),
+            lengths.diagnose_running(mode),
             Some(Diagnosis::ImpossibleFrames {
                 frames: 5,
                 bytes: 7
@@ -214,7 +246,7 @@ mod tests {
             frames: 1,
             ..lengths
         };
-        assert_eq!(good.diagnose(mode, 1), None);
-        assert_eq!(Stats::default().diagnose(mode, 0), None);
+        assert_eq!(good.diagnose(mode), None);
+        assert_eq!(Stats::default().diagnose(mode), None);
     }
 }

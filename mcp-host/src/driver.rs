@@ -16,7 +16,6 @@ use tokio_util::codec::FramedRead;
 use xbee_api::{Address64, EncodeFrame};
 
 use crate::codec::{CodecItem, XBeeCodec, encode_frame};
-use crate::diagnosis::WARN_AFTER;
 use crate::error::{RequestError, SendError};
 use crate::event::{
     Event, InvalidPacket, LinkEvent, LinkState, Origin, OwnedFrame, Received, is_response,
@@ -648,20 +647,22 @@ impl Driver {
         }
     }
 
-    /// Warns, once a connection, when the frames that failed to decode on it say that
-    /// the radio's settings differ from the link's ([`Stats::diagnose`]): nothing else
-    /// would tell, as its frames are dropped.
+    /// Warns, once a connection, when what failed to decode on it says that the radio's
+    /// settings differ from the link's ([`Stats::diagnose_running`]): nothing else would
+    /// tell, as its frames are dropped. Looked at when a frame fails to decode and when
+    /// a request times out (bytes that begin no frame, as from a radio in transparent
+    /// mode, make no event of their own).
     fn watch_decoding(&mut self) {
         if self.warned {
             return;
         }
         let counted = self.counters.snapshot().since(&self.serving_since);
-        if let Some(diagnosis) = counted.diagnose(self.options.api_mode, WARN_AFTER) {
+        if let Some(diagnosis) = counted.diagnose_running(self.options.api_mode) {
             self.warned = true;
             tracing::warn!(
                 target: "mcp_host::diagnosis",
                 link = %self.connector.link(),
-                "frames from the radio fail to decode: {diagnosis}"
+                "what the radio sends is dropped: {diagnosis}"
             );
         }
     }
@@ -1015,6 +1016,7 @@ impl Driver {
     /// Fails every request whose deadline has passed, freeing its frame id, and every
     /// parked one whose deadline has passed.
     fn expire(&mut self, now: Instant) {
+        let timeouts = self.counters.snapshot().timeouts;
         let (expired, parked): (VecDeque<Op>, VecDeque<Op>) = std::mem::take(&mut self.parked)
             .into_iter()
             .partition(|op| op.deadline().is_some_and(|d| d <= now));
@@ -1063,6 +1065,10 @@ impl Driver {
             } else {
                 i += 1;
             }
+        }
+        // A radio that cannot answer: its counters may say why.
+        if self.counters.snapshot().timeouts > timeouts {
+            self.watch_decoding();
         }
     }
 

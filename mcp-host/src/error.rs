@@ -149,13 +149,12 @@ pub enum RequestError {
 
 /// Why a report did not come, as far as the link can tell.
 fn timeout_cause(delivered: bool, undecodable: u64) -> String {
-    let lost = match undecodable {
-        0 => None,
-        1 => Some("1 frame from the radio could not be decoded meanwhile".to_owned()),
-        n => Some(format!(
-            "{n} frames from the radio could not be decoded meanwhile"
-        )),
-    };
+    let lost = (undecodable > 0).then(|| {
+        format!(
+            "{} from the radio could not be decoded meanwhile",
+            crate::diagnosis::counted(undecodable, "frame")
+        )
+    });
     match (delivered, lost) {
         (true, None) => "the radio delivered the request: the MAV did not answer".to_owned(),
         (true, Some(lost)) => {

@@ -27,7 +27,8 @@
 //!
 //! A radio in another API mode than the link's, at another baud rate or in transparent
 //! mode sends frames that fail to decode, and they are dropped: the link logs a warning
-//! (target `mcp_host::diagnosis`) once a connection when its counters show the signs,
+//! (target `mcp_host::diagnosis`) once a connection when its counters show the signs
+//! (looked at when a frame fails to decode and when a request times out),
 //! [`Stats::diagnose`] reads them at any time, and a [`RequestError::Timeout`] counts
 //! the frames dropped while its report was awaited.
 //!
@@ -47,8 +48,8 @@
 //! Packets, commands and identifiers are [`mcp_core`]'s, addresses and frames
 //! [`xbee_api`]'s, payloads [`bytes::Bytes`]: all three are re-exported here, so that a
 //! program that depends on this crate alone names them at the versions it uses
-//! (`use mcp_host::mcp_core::Command;`). The example below names them as a program
-//! that depends on them itself does.
+//! (`use mcp_host::mcp_core::Command;`), as here. The [example](#example) further down
+//! names them as a program that depends on them itself does.
 //!
 //! ```
 //! use mcp_host::bytes::Bytes;

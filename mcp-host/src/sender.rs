@@ -234,7 +234,7 @@ impl CommandSender {
             match tokio::time::timeout_at(deadline, self.queue(&op).send(op)).await {
                 Ok(Ok(())) => {}
                 Ok(Err(_)) => return Err(SendError::Closed.into()),
-                Err(_) => return Err(SendError::NotSent { timeout }.into()),
+                Err(_) => return Err(self.not_sent(timeout).into()),
             }
             // The background task answers by the deadline; the grace only guards
             // against a stalled task.
@@ -454,7 +454,7 @@ impl CommandSender {
         match tokio::time::timeout_at(deadline, self.queue(&op).send(op)).await {
             Ok(Ok(())) => Ok(Answers { answers: receiver }),
             Ok(Err(_)) => Err(SendError::Closed),
-            Err(_) => Err(SendError::NotSent { timeout: window }),
+            Err(_) => Err(self.not_sent(window)),
         }
     }
 
@@ -481,6 +481,13 @@ impl CommandSender {
     /// ```
     pub async fn discover(&self, window: Option<Duration>) -> Result<Discovery, DiscoverError> {
         crate::discovery::discover(self, window).await
+    }
+
+    /// A request whose timeout ran out while it waited for room in the link's queue:
+    /// counted with the timeouts, as one the link's task finds expired is.
+    fn not_sent(&self, timeout: Duration) -> SendError {
+        crate::stats::bump(&self.counters.timeouts);
+        SendError::NotSent { timeout }
     }
 
     /// The link's counters.
@@ -601,7 +608,7 @@ impl CommandSender {
         match tokio::time::timeout_at(deadline, self.queue(&op).send(op)).await {
             Ok(Ok(())) => {}
             Ok(Err(_)) => return Err(SendError::Closed),
-            Err(_) => return Err(SendError::NotSent { timeout }),
+            Err(_) => return Err(self.not_sent(timeout)),
         }
         // The background task answers by the deadline (freeing the frame id); the grace
         // only guards against a stalled task.

@@ -90,7 +90,9 @@ impl LinkError {
     /// pseudo-terminal errors.
     ///
     /// A serial path that is not there may be a device still to come (a USB adapter
-    /// plugged in later): that counts as retryable, as does any other serial error.
+    /// plugged in later): that counts as retryable, as does any other serial error. One
+    /// that has become a regular file while its device was away (written to while
+    /// unplugged) is not: a link waiting for the device back gives up on it.
     pub fn is_retryable(&self) -> bool {
         use std::io::ErrorKind as Io;
         match self {

@@ -648,7 +648,7 @@ async fn a_radio_in_the_other_api_mode_is_warned_about_once_a_connection() {
     let (logs, _guard) = Captured::at(tracing::Level::WARN);
     let warnings = |text: &str| {
         text.lines()
-            .filter(|l| l.contains("frames from the radio fail to decode"))
+            .filter(|l| l.contains("what the radio sends is dropped"))
             .count()
     };
     let (listener, mut stream, sender, mut fake) =
@@ -668,7 +668,7 @@ async fn a_radio_in_the_other_api_mode_is_warned_about_once_a_connection() {
         }
         let text = logs.text();
         assert_eq!(warnings(&text), round as usize + 1, "{text}");
-        let line = text.lines().rev().find(|l| l.contains("fail to decode"));
+        let line = text.lines().rev().find(|l| l.contains("is dropped"));
         assert!(
             line.is_some_and(|l| l.contains("the radio may be in API mode 2 (AP=2)")),
             "{text}"
@@ -716,6 +716,37 @@ async fn a_radio_in_the_other_api_mode_is_warned_about_once_a_connection() {
     let text = error.to_string();
     assert!(
         text.contains("the radio delivered the request, but 1 frame from the radio could not be decoded meanwhile: the report may have been one"),
+        "{text}"
+    );
+}
+
+#[tokio::test]
+async fn a_radio_in_transparent_mode_is_warned_about_when_a_request_times_out() {
+    let (logs, _guard) = Captured::at(tracing::Level::WARN);
+    let (_listener, stream, sender, mut fake) = tcp_radio(options(ApiMode::Unescaped, true)).await;
+    // What a radio in transparent mode passes on: a MAV's console text, no frame.
+    let text = b"MAV booting... IMU ok, GPS waiting for fix\r\n".repeat(4);
+    fake.write_raw(&text).await;
+    let read = async {
+        while stream.stats().bytes_skipped < text.len() as u64 {
+            tokio::task::yield_now().await;
+        }
+    };
+    tokio::time::timeout(GUARD, read)
+        .await
+        .expect("the text is read");
+    // Bytes that begin no frame make no event: the warning waits for a request that
+    // the radio cannot answer.
+    assert!(logs.text().is_empty(), "{}", logs.text());
+    let at = sender
+        .at(*b"AP", &[], Some(Duration::from_millis(100)))
+        .await;
+    assert!(matches!(at, Err(SendError::Timeout { .. })), "{at:?}");
+    let text = logs.text();
+    assert!(
+        text.contains(
+            "what the radio sends is dropped: 176 bytes came from the radio and none began a frame"
+        ),
         "{text}"
     );
 }

@@ -8,8 +8,7 @@ use clap::Args;
 use mcp_host::hub::{Hub, HubError};
 
 use crate::Failure;
-use crate::link_args::{ApiModeChoice, LinkArgs, connect_failure, diagnosis};
-use crate::monitor::HINT_ERRORS;
+use crate::link_args::{ApiModeChoice, LinkArgs, connect_failure, hint};
 
 /// Arguments of `hub`.
 #[derive(Debug, Args)]
@@ -117,9 +116,7 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
                     since = now;
                     hinted = false;
                 }
-                let hint = fixed.and_then(|mode| {
-                    diagnosis(mode, &now.since(&since), HINT_ERRORS)
-                });
+                let hint = fixed.and_then(|mode| now.since(&since).diagnose_running(mode).map(hint));
                 if let (Some(hint), false) = (hint, hinted) {
                     hinted = true;
                     let reason = hint.strip_prefix("hint: ").unwrap_or(&hint);

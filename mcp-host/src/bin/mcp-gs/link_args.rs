@@ -47,7 +47,7 @@ pub(crate) struct LinkArgs {
     #[arg(long, value_name = "1|2|auto", default_value = "1")]
     pub(crate) api_mode: ApiModeChoice,
     /// Seconds to wait to connect, and for each transmit status, response or report a
-    /// subcommand waits for [default: 12; for a local AT command, 3].
+    /// subcommand waits for [default: 12; 3 for `at` reading a local parameter].
     #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
     pub(crate) timeout: Option<f64>,
 }
@@ -404,11 +404,10 @@ pub(crate) fn warn_mode_mismatch(radio: u8, configured: ApiMode, link: &Link) {
     }
 }
 
-/// What the link's counters say is wrong with the radio's settings, if anything
-/// ([`Stats::diagnose`] with `min_failed`), as a hint with what to give on the command
-/// line.
-pub(crate) fn diagnosis(mode: ApiMode, stats: &Stats, min_failed: u64) -> Option<String> {
-    let found = stats.diagnose(mode, min_failed)?;
+/// What the link's counters found wrong with the radio's settings
+/// ([`Stats::diagnose`], [`Stats::diagnose_running`]), as a hint with what to give on
+/// the command line.
+pub(crate) fn hint(found: Diagnosis) -> String {
     let advice = match found {
         Diagnosis::OtherApiMode { radio, .. } => {
             let radio = u8::from(radio);
@@ -419,14 +418,14 @@ pub(crate) fn diagnosis(mode: ApiMode, stats: &Stats, min_failed: u64) -> Option
             .to_owned(),
         _ => "give the baud rate as serial:PATH:BAUD (XBee modules ship at 9600)".to_owned(),
     };
-    Some(format!("hint: {found}; {advice}"))
+    format!("hint: {found}; {advice}")
 }
 
-/// The [`diagnosis`] of the link's counters, when its API mode was given (one found by
+/// The [`hint`] of the link's counters, when its API mode was given (one found by
 /// asking the radio is right).
 fn counters_hint(link: &LinkArgs, stats: &Stats) -> Option<String> {
     match link.api_mode {
-        ApiModeChoice::Fixed(mode) => diagnosis(mode, stats, 1),
+        ApiModeChoice::Fixed(mode) => stats.diagnose(mode).map(hint),
         ApiModeChoice::Auto => None,
     }
 }

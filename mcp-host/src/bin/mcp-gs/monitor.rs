@@ -11,7 +11,7 @@ use mcp_host::record::{Direction, RecordWriter};
 use mcp_host::render;
 use mcp_host::{Event, LinkEvent};
 
-use crate::link_args::{ApiModeChoice, LinkArgs, check_mode, diagnosis};
+use crate::link_args::{ApiModeChoice, LinkArgs, check_mode, hint};
 use crate::{Failure, Format};
 
 /// Arguments of `monitor`.
@@ -50,10 +50,6 @@ fn parse_count(s: &str) -> Result<u64, String> {
         .filter(|n| *n >= 1)
         .ok_or_else(|| format!("expected a number of received items, 1 or more, got `{s}`"))
 }
-
-/// After this many failed frames, more than the good ones, suggest what may be wrong
-/// with the radio's settings.
-pub(crate) const HINT_ERRORS: u64 = 5;
 
 /// Runs `monitor`.
 pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
@@ -100,7 +96,7 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
             () = &mut ctrl_c => None,
             _ = look.tick(), if !hinted => {
                 if let ApiModeChoice::Fixed(mode) = args.link.api_mode {
-                    if let Some(hint) = diagnosis(mode, &stream.stats(), HINT_ERRORS) {
+                    if let Some(hint) = stream.stats().diagnose_running(mode).map(hint) {
                         hinted = true;
                         eprintln!("mcp-gs: {hint}");
                     }
@@ -149,7 +145,7 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
         {
             // A frame with no byte to escape passes in either mode (a modem status,
             // say): the hint counts on most frames failing, not on all of them.
-            if let Some(hint) = diagnosis(mode, &stream.stats(), HINT_ERRORS) {
+            if let Some(hint) = stream.stats().diagnose_running(mode).map(hint) {
                 hinted = true;
                 eprintln!("mcp-gs: {hint}");
             }
