@@ -63,9 +63,11 @@ const TEXT_PARAMETERS: [&[u8; 2]; 4] = [b"NI", b"DN", b"BI", b"VL"];
 /// Their success prints as `AC: ok`, not as a read that found no value.
 const ACTIONS: [&[u8; 2]; 8] = [b"AC", b"WR", b"RE", b"FR", b"NR", b"CN", b"SI", b"CB"];
 
-/// How long a local AT command is waited for when `--timeout` is not given: the local
-/// radio answers at once, so a longer wait only delays the hint of what is wrong.
-const LOCAL_TIMEOUT: Duration = Duration::from_secs(3);
+/// How long a local read is waited for when `--timeout` is not given: the local radio
+/// answers at once, so a longer wait only delays the hint of what is wrong. (A change
+/// or an action may take the radio longer, writing its flash, say, and a timeout would
+/// not tell whether it was carried out: those keep the usual timeout.)
+const LOCAL_READ_TIMEOUT: Duration = Duration::from_secs(3);
 
 /// The local AT commands whose answer waits on the network: node discovery, a
 /// destination node looked up, the active and energy scans, find neighbours. They get
@@ -73,11 +75,13 @@ const LOCAL_TIMEOUT: Duration = Duration::from_secs(3);
 const NETWORK_COMMANDS: [&[u8; 2]; 5] = [b"ND", b"DN", b"AS", b"ED", b"FN"];
 
 /// How long to wait for the answer to `command`: `--timeout` if given, else
-/// [`LOCAL_TIMEOUT`] for a local command that waits on nothing else, else the default.
+/// [`LOCAL_READ_TIMEOUT`] to read a parameter of the local radio that waits on nothing
+/// else, else the default.
 fn answer_timeout(args: &AtArgs, command: &[u8; 2]) -> Duration {
+    let read = args.value.is_none() && !ACTIONS.contains(&command);
     match (args.link.given_timeout(), args.to) {
         (Some(given), _) => given,
-        (None, None) if !NETWORK_COMMANDS.contains(&command) => LOCAL_TIMEOUT,
+        (None, None) if read && !NETWORK_COMMANDS.contains(&command) => LOCAL_READ_TIMEOUT,
         (None, _) => args.link.timeout(),
     }
 }
@@ -395,7 +399,7 @@ mod tests {
     }
 
     #[test]
-    fn a_local_command_is_waited_for_3_s_unless_it_waits_on_the_network() {
+    fn a_local_read_is_waited_for_3_s_unless_it_waits_on_the_network() {
         #[derive(clap::Parser)]
         struct Cli {
             #[command(flatten)]
@@ -409,7 +413,11 @@ mod tests {
             answer_timeout(&args, &command)
         };
         assert_eq!(timeout(&["AP"]), Duration::from_secs(3));
-        assert_eq!(timeout(&["NI", "MAV"]), Duration::from_secs(3));
+        assert_eq!(timeout(&["%V"]), Duration::from_secs(3));
+        // Changes and actions: the usual timeout.
+        assert_eq!(timeout(&["NI", "MAV"]), Duration::from_secs(12));
+        assert_eq!(timeout(&["WR"]), Duration::from_secs(12));
+        assert_eq!(timeout(&["AC"]), Duration::from_secs(12));
         for command in ["ND", "DN", "AS", "ED", "FN"] {
             assert_eq!(timeout(&[command]), Duration::from_secs(12), "{command}");
         }
