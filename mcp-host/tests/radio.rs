@@ -971,11 +971,9 @@ fn open_far_end(path: &std::path::Path) -> tokio_serial::SerialStream {
     .expect("open the pty")
 }
 
-#[tokio::test]
-async fn a_pty_node_is_up_only_while_a_peer_has_it_open() {
-    use tokio_serial::SerialPort;
-    let network = Network::new(NetworkConfig::default());
-    let mut events = network.subscribe();
+/// A coordinator on a `pty` link and MAV A in process, joined: the pseudo-terminal's
+/// far end, and MAV A's device.
+async fn pty_coordinator_and_mav(network: &Network) -> (std::path::PathBuf, Dev) {
     let coord = network
         .add_link(COORD, &Link::Pty, NodeOptions::default())
         .await
@@ -986,6 +984,15 @@ async fn a_pty_node_is_up_only_while_a_peer_has_it_open() {
         .unwrap();
     let mut mav = Dev::new(io, ApiMode::Unescaped);
     assert_eq!(mav.modem_status().await, ModemStatus::JoinedNetwork);
+    (path, mav)
+}
+
+#[tokio::test]
+async fn a_pty_node_is_up_only_while_a_peer_has_it_open() {
+    use tokio_serial::SerialPort;
+    let network = Network::new(NetworkConfig::default());
+    let mut events = network.subscribe();
+    let (path, mut mav) = pty_coordinator_and_mav(&network).await;
     let connected = |e: &NetEvent| matches!(e, NetEvent::Connected { node, .. } if *node == COORD);
     let disconnected =
         |e: &NetEvent| matches!(e, NetEvent::Disconnected { node, .. } if *node == COORD);
@@ -1058,16 +1065,7 @@ async fn a_pty_peer_that_writes_and_leaves_at_once_is_served_now() {
 
     let network = Network::new(NetworkConfig::default());
     let mut events = network.subscribe();
-    let coord = network
-        .add_link(COORD, &Link::Pty, NodeOptions::default())
-        .await
-        .unwrap();
-    let path = coord.pty_path.clone().unwrap();
-    let (_, io) = network
-        .add_in_process(MAV_A, NodeOptions::default())
-        .unwrap();
-    let mut mav = Dev::new(io, ApiMode::Unescaped);
-    assert_eq!(mav.modem_status().await, ModemStatus::JoinedNetwork);
+    let (path, mut mav) = pty_coordinator_and_mav(&network).await;
     let disconnected =
         |e: &NetEvent| matches!(e, NetEvent::Disconnected { node, .. } if *node == COORD);
     let rounds = 20u8;
