@@ -129,6 +129,55 @@ impl Stats {
     }
 }
 
+/// Good frames after which [`Diagnoser::look`] forgets what it counted before: a radio
+/// whose settings change while the link is up is then not outvoted by the frames that
+/// passed before.
+const WINDOW_FRAMES: u64 = 64;
+
+/// Reads a link's counters as they grow ([`Stats::diagnose_running`] on what was
+/// counted since it started, or since its last 64 good frames), so that a radio whose
+/// settings change while the link is up (`AP` set through a hub, say) is told too: the
+/// frames that passed before do not outvote the ones failing now.
+///
+/// ```
+/// use mcp_host::{Diagnoser, Diagnosis, Stats};
+/// use xbee_api::ApiMode;
+///
+/// let start = Stats { frames: 10_000, ..Stats::default() };
+/// let mut diagnoser = Diagnoser::new(ApiMode::Unescaped, start);
+/// // Someone sets the radio to API mode 2: the first frame fails.
+/// let now = Stats { frames: 10_100, bad_checksum: 1, ..Stats::default() };
+/// assert_eq!(diagnoser.look(now), None);
+/// // Most frames fail from then on.
+/// let now = Stats { frames: 10_102, bad_checksum: 7, ..Stats::default() };
+/// assert!(matches!(diagnoser.look(now), Some(Diagnosis::OtherApiMode { .. })));
+/// // Read over the whole run, the good frames before outvote them.
+/// assert_eq!(now.diagnose_running(ApiMode::Unescaped), None);
+/// ```
+#[derive(Debug, Clone)]
+pub struct Diagnoser {
+    mode: ApiMode,
+    since: Stats,
+}
+
+impl Diagnoser {
+    /// Reads the counters of a link in `mode` from `now` on.
+    pub fn new(mode: ApiMode, now: Stats) -> Self {
+        Diagnoser { mode, since: now }
+    }
+
+    /// What the counters counted since the start, or since the last window of good
+    /// frames, say may be wrong; `now`: the link's counters now.
+    pub fn look(&mut self, now: Stats) -> Option<Diagnosis> {
+        let counted = now.since(&self.since);
+        let found = counted.diagnose_running(self.mode);
+        if found.is_none() && counted.frames >= WINDOW_FRAMES {
+            self.since = now;
+        }
+        found
+    }
+}
+
 /// The API mode that is not `mode`.
 fn other(mode: ApiMode) -> ApiMode {
     match mode {

@@ -16,6 +16,7 @@ use tokio_util::codec::FramedRead;
 use xbee_api::{Address64, EncodeFrame};
 
 use crate::codec::{CodecItem, XBeeCodec, encode_frame};
+use crate::diagnosis::Diagnoser;
 use crate::error::{RequestError, SendError};
 use crate::event::{
     Event, InvalidPacket, LinkEvent, LinkState, Origin, OwnedFrame, Received, is_response,
@@ -288,9 +289,9 @@ pub(crate) struct Driver {
     waiters: Vec<Waiter>,
     next_waiter: u64,
     healthy: bool,
-    /// The counters when the transport being served came, and whether they were
-    /// warned about since ([`Self::watch_decoding`]).
-    serving_since: Stats,
+    /// The counters of the transport being served, as they grow, and whether they
+    /// were warned about ([`Self::watch_decoding`]).
+    diagnoser: Diagnoser,
     warned: bool,
     /// Link events that found the event queue full, delivered (in order, before any
     /// other event) as soon as it has room: a slow consumer loses packets, never link
@@ -321,6 +322,7 @@ impl Driver {
         close_requested: Arc<Notify>,
         state: watch::Sender<LinkState>,
     ) -> Self {
+        let api_mode = options.api_mode;
         Driver {
             connector,
             options,
@@ -338,7 +340,8 @@ impl Driver {
             waiters: Vec::new(),
             next_waiter: 0,
             healthy: false,
-            serving_since: Stats::default(),
+            // Started afresh by each transport served.
+            diagnoser: Diagnoser::new(api_mode, Stats::default()),
             warned: false,
             pending_links: VecDeque::new(),
         }
@@ -473,7 +476,7 @@ impl Driver {
         let mut reader = FramedRead::new(rd, codec);
         let mut out = BytesMut::new();
         self.healthy = false;
-        self.serving_since = self.counters.snapshot();
+        self.diagnoser = Diagnoser::new(self.options.api_mode, self.counters.snapshot());
         self.warned = false;
         loop {
             self.unpark(&mut out);
@@ -648,7 +651,7 @@ impl Driver {
     }
 
     /// Warns, once a connection, when what failed to decode on it says that the radio's
-    /// settings differ from the link's ([`Stats::diagnose_running`]): nothing else would
+    /// settings differ from the link's ([`Diagnoser`]): nothing else would
     /// tell, as its frames are dropped. Looked at when a frame fails to decode and when
     /// a request times out (bytes that begin no frame, as from a radio in transparent
     /// mode, make no event of their own).
@@ -656,8 +659,7 @@ impl Driver {
         if self.warned {
             return;
         }
-        let counted = self.counters.snapshot().since(&self.serving_since);
-        if let Some(diagnosis) = counted.diagnose_running(self.options.api_mode) {
+        if let Some(diagnosis) = self.diagnoser.look(self.counters.snapshot()) {
             self.warned = true;
             tracing::warn!(
                 target: "mcp_host::diagnosis",

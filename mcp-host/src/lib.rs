@@ -29,8 +29,8 @@
 //! mode sends frames that fail to decode, and they are dropped: the link logs a warning
 //! (target `mcp_host::diagnosis`) once a connection when its counters show the signs
 //! (looked at when a frame fails to decode and when a request times out),
-//! [`Stats::diagnose`] reads them at any time, and a [`RequestError::Timeout`] counts
-//! the frames dropped while its report was awaited.
+//! [`Stats::diagnose`] reads them at any time ([`Diagnoser`] as they grow), and a
+//! [`RequestError::Timeout`] counts the frames dropped while its report was awaited.
 //!
 //! A radio in transparent mode (`AP=0`, as XBee modules leave the factory) speaks no API
 //! frames: [`command_mode`] puts it into API mode through its AT command mode (`+++`).
@@ -132,7 +132,7 @@ pub use mcp_core;
 pub use xbee_api;
 
 pub use answers::Answers;
-pub use diagnosis::Diagnosis;
+pub use diagnosis::{Diagnoser, Diagnosis};
 pub use error::{ConnectError, RequestError, SendError};
 pub use event::{
     Event, InvalidPacket, LinkEvent, LinkState, Origin, OwnedFrame, OwnedPacket, Received,

@@ -750,3 +750,32 @@ async fn a_radio_in_transparent_mode_is_warned_about_when_a_request_times_out() 
         "{text}"
     );
 }
+
+#[tokio::test]
+async fn a_radio_switched_to_the_other_api_mode_while_the_link_is_up_is_warned_about() {
+    let (logs, _guard) = Captured::at(tracing::Level::WARN);
+    let (_listener, mut stream, _sender, mut fake) =
+        tcp_radio(options(ApiMode::Unescaped, true)).await;
+    // A long while in the right mode...
+    for _ in 0..500 {
+        fake.receive(OTHER_MAV, b"mx").await;
+    }
+    // ... then the radio is set to API mode 2 (AP=2 through a hub, say).
+    for _ in 0..10 {
+        fake.write_raw(&escaped_rx(&time_report(1))).await;
+    }
+    fake.receive(OTHER_MAV, b"my").await;
+    loop {
+        if let Event::Packet(rx) = next_event(&mut stream).await {
+            if rx.payload[..] == b"my"[..] {
+                break;
+            }
+        }
+    }
+    // The 500 good frames before do not outvote the 10 failing now.
+    let text = logs.text();
+    assert!(
+        text.contains("what the radio sends is dropped: 5 frames failed the checksum and 0 passed"),
+        "{text}"
+    );
+}

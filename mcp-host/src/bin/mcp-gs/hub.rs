@@ -5,6 +5,7 @@ use std::time::Duration;
 
 use clap::Args;
 
+use mcp_host::Diagnoser;
 use mcp_host::hub::{Hub, HubError};
 
 use crate::Failure;
@@ -98,7 +99,8 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
         ApiModeChoice::Fixed(mode) => Some(mode),
         ApiModeChoice::Auto => None,
     };
-    let mut since = hub.stats().radio;
+    let mut last = hub.stats().radio;
+    let mut diagnoser = fixed.map(|mode| Diagnoser::new(mode, last));
     let mut hinted = false;
     let mut look = tokio::time::interval(Duration::from_secs(1));
     tokio::pin!(ctrl_c);
@@ -111,12 +113,13 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
             }
             _ = look.tick(), if fixed.is_some() => {
                 let now = hub.stats().radio;
-                if now.reconnects > since.reconnects {
+                if now.reconnects > last.reconnects {
                     // Another radio, maybe: counted afresh.
-                    since = now;
+                    diagnoser = fixed.map(|mode| Diagnoser::new(mode, now));
                     hinted = false;
                 }
-                let hint = fixed.and_then(|mode| now.since(&since).diagnose_running(mode).map(hint));
+                last = now;
+                let hint = diagnoser.as_mut().and_then(|d| d.look(now)).map(hint);
                 if let (Some(hint), false) = (hint, hinted) {
                     hinted = true;
                     let reason = hint.strip_prefix("hint: ").unwrap_or(&hint);

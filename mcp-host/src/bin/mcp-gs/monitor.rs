@@ -9,7 +9,7 @@ use clap::Args;
 use futures::StreamExt;
 use mcp_host::record::{Direction, RecordWriter};
 use mcp_host::render;
-use mcp_host::{Event, LinkEvent};
+use mcp_host::{Diagnoser, Event, LinkEvent};
 
 use crate::link_args::{ApiModeChoice, LinkArgs, check_mode, hint};
 use crate::{Failure, Format};
@@ -85,6 +85,10 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
     }
     let stdout = io::stdout();
     let mut seen = 0u64;
+    let mut diagnoser = match args.link.api_mode {
+        ApiModeChoice::Fixed(mode) => Some(Diagnoser::new(mode, stream.stats())),
+        ApiModeChoice::Auto => None,
+    };
     let mut hinted = false;
     let mut dates = render::text::DateLines::new();
     // Bytes that are no frames at all come as no event: the counters are looked at now
@@ -95,11 +99,9 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
             event = stream.next() => event,
             () = &mut ctrl_c => None,
             _ = look.tick(), if !hinted => {
-                if let ApiModeChoice::Fixed(mode) = args.link.api_mode {
-                    if let Some(hint) = stream.stats().diagnose_running(mode).map(hint) {
-                        hinted = true;
-                        eprintln!("mcp-gs: {hint}");
-                    }
+                if let Some(found) = diagnoser.as_mut().and_then(|d| d.look(stream.stats())) {
+                    hinted = true;
+                    eprintln!("mcp-gs: {}", hint(found));
                 }
                 continue;
             }
@@ -140,14 +142,12 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
             // Closed by its reader (piped into `head`): done; anything else is a failure.
             return crate::output_failure(&e).map_or(Ok(()), Err);
         }
-        if let (ApiModeChoice::Fixed(mode), false, Event::DecodeError(_)) =
-            (args.link.api_mode, hinted, &event)
-        {
+        if let (Some(diagnoser), false, Event::DecodeError(_)) = (&mut diagnoser, hinted, &event) {
             // A frame with no byte to escape passes in either mode (a modem status,
             // say): the hint counts on most frames failing, not on all of them.
-            if let Some(hint) = stream.stats().diagnose_running(mode).map(hint) {
+            if let Some(found) = diagnoser.look(stream.stats()) {
                 hinted = true;
-                eprintln!("mcp-gs: {hint}");
+                eprintln!("mcp-gs: {}", hint(found));
             }
         }
         if let Event::Link(LinkEvent::Closed { reason }) = &event {
