@@ -211,6 +211,9 @@ enum PendingKind {
     },
     Frame {
         reply: oneshot::Sender<Result<OwnedFrame, SendError>>,
+        /// The frame type of its answer, when its request's type has a known one
+        /// (0x88 for an AT command): a frame of another type under its id is none.
+        answer_type: Option<u8>,
     },
     Answers {
         answers: AnswerSender,
@@ -227,7 +230,7 @@ impl PendingKind {
             PendingKind::Transmit { reply, .. } => {
                 let _ = reply.send(Err(error));
             }
-            PendingKind::Frame { reply } => {
+            PendingKind::Frame { reply, .. } => {
                 let _ = reply.send(Err(error));
             }
             PendingKind::Answers { answers, .. } => fail_answers(&answers, error),
@@ -781,7 +784,9 @@ impl Driver {
             }
             // Another type under its id is no answer of its.
             Some(PendingKind::Answers { .. }) => false,
-            Some(PendingKind::Frame { .. }) => true,
+            Some(PendingKind::Frame { answer_type, .. }) => {
+                answer_type.is_none_or(|t| t == frame_type)
+            }
             Some(PendingKind::Transmit { .. } | PendingKind::Request { .. }) => frame_type == 0x8B,
             None => false,
         };
@@ -792,7 +797,7 @@ impl Driver {
             return self.unclaimed(frame);
         };
         match pending.kind {
-            PendingKind::Frame { reply } => {
+            PendingKind::Frame { reply, .. } => {
                 let _ = reply.send(Ok(frame));
             }
             // Taken above.
@@ -860,7 +865,7 @@ impl Driver {
         self.ids.remove_where(
             |p| match &p.kind {
                 PendingKind::Transmit { reply, .. } => reply.is_closed(),
-                PendingKind::Frame { reply } => reply.is_closed(),
+                PendingKind::Frame { reply, .. } => reply.is_closed(),
                 PendingKind::Answers { answers, .. } => answers.is_closed(),
                 PendingKind::Request { waiter, .. } => waiters
                     .iter()
@@ -981,7 +986,8 @@ impl Driver {
                 timeout,
                 reply,
             } => {
-                let kind = PendingKind::Frame { reply };
+                let answer_type = data.first().and_then(|&t| crate::event::answer_type(t));
+                let kind = PendingKind::Frame { reply, answer_type };
                 self.write_under_id(out, &data, deadline, timeout, kind);
             }
             Op::Write { data, reply } => {
@@ -1040,7 +1046,7 @@ impl Driver {
                         bump(&counters.timeouts);
                         let _ = reply.send(Err(error));
                     }
-                    PendingKind::Frame { reply } => {
+                    PendingKind::Frame { reply, .. } => {
                         bump(&counters.timeouts);
                         let _ = reply.send(Err(error));
                     }

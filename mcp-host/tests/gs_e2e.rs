@@ -440,6 +440,10 @@ fn record_decode_and_replay() {
         assert_eq!(d["direction"], "rx");
         assert_eq!(d["frame"], l["frame"]);
         assert_eq!(d["mcp"], l["mcp"]);
+        // A packet is recorded at the time monitor printed for it: when received.
+        if l["frame"] == "receive" {
+            assert_eq!(d["time"], l["time"], "{d} {l}");
+        }
     }
     // As text: the date first, then for each frame the time and `rx` once (packets say
     // it themselves, other frames get it in front).

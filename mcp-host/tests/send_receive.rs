@@ -549,6 +549,38 @@ async fn a_request_the_radio_never_confirms_says_so_when_it_times_out() {
 }
 
 #[tokio::test]
+async fn an_at_command_is_answered_by_an_at_response_only() {
+    let (mut stream, sender, mut fake) = pty_link(ApiMode::Unescaped).await;
+    let at = tokio::spawn({
+        let sender = sender.clone();
+        async move { sender.at(*b"AP", &[], None).await }
+    });
+    let id = fake.next_frame().await[1];
+    // A transmit status under the same id (a stale one, or through a hub another
+    // program's) is no answer to it: it goes to the stream.
+    fake.status(id, DeliveryStatus::Success).await;
+    loop {
+        if let Event::Frame(frame) = next_event(&mut stream).await {
+            assert_eq!((frame.frame_type(), frame.frame_id()), (0x8B, Some(id)));
+            break;
+        }
+    }
+    assert!(!at.is_finished());
+    fake.send(&xbee_api::AtCommandResponseRepr {
+        frame_id: id,
+        command: *b"AP",
+        status: xbee_api::AtStatus::from(0),
+        data: &[1],
+    })
+    .await;
+    let response = at.await.unwrap().unwrap();
+    assert_eq!(
+        (response.frame_type(), response.frame_id()),
+        (0x88, Some(id))
+    );
+}
+
+#[tokio::test]
 async fn at_and_remote_at_commands_get_their_responses() {
     let (_stream, sender, mut fake) = pty_link(ApiMode::Escaped).await;
     let at = tokio::spawn({

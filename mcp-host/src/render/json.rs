@@ -434,11 +434,13 @@ pub fn event(event: &Event) -> Value {
     value
 }
 
-/// A time as the JSON objects carry it: seconds since 1970, with microseconds (0 for a
-/// time before 1970).
+/// A time as the JSON objects carry it: seconds since 1970, to the microsecond, as a
+/// recording keeps it (0 for a time before 1970).
 pub fn seconds(time: std::time::SystemTime) -> f64 {
-    time.duration_since(std::time::UNIX_EPOCH)
-        .map_or(0.0, |d| d.as_secs_f64())
+    time.duration_since(std::time::UNIX_EPOCH).map_or(0.0, |d| {
+        let micros = u64::try_from(d.as_micros()).unwrap_or(u64::MAX);
+        std::time::Duration::from_micros(micros).as_secs_f64()
+    })
 }
 
 fn receive(origin: &Origin, mcp: Value) -> Value {

@@ -336,7 +336,7 @@ pub(crate) async fn check_mode(sender: &CommandSender, configured: ApiMode) {
         return;
     };
     if let Ok(Frame::AtCommandResponse(at)) = response.parse() {
-        if let (true, &[radio]) = (at.status.is_ok(), at.data) {
+        if let (true, true, &[radio]) = (at.command == *b"AP", at.status.is_ok(), at.data) {
             warn_mode_mismatch(radio, configured, &sender.info().link);
         }
     }
@@ -386,10 +386,18 @@ pub(crate) fn warn_unusual_baud(link: &Link) {
 
 /// Warns when the radio's AP setting, read as `radio` on `link`, is another API mode
 /// than the configured one: its frames will be dropped or garbled. On a `tcp:` link
-/// (a hub, maybe) the hub must speak it too.
+/// (a hub, maybe) the hub must speak it too. A value that is neither 1 nor 2 is no mode
+/// to give with --api-mode.
 pub(crate) fn warn_mode_mismatch(radio: u8, configured: ApiMode, link: &Link) {
     let configured = u8::from(configured);
-    if radio != configured {
+    if !matches!(radio, 1 | 2) {
+        // Transparent mode answers no API frame; another value is none of the modes
+        // spoken here (or no answer to AP at all).
+        eprintln!(
+            "mcp-gs: warning: the radio reads its API mode as {radio} (AP={radio}), which \
+             this ground station does not speak: `mcp-gs setup --link {link}` sets 1"
+        );
+    } else if radio != configured {
         let hub = match link {
             Link::Tcp { .. } => format!(
                 " (through a hub, the hub itself must be started with --api-mode {radio}: it \

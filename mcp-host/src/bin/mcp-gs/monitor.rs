@@ -112,10 +112,17 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
         {
             recorder = Some(create_recording(path, args.force)?);
         }
+        // A packet's time is when it was received (as its JSON object says); another
+        // event's, now.
+        let time = match &event {
+            Event::Packet(rx) => rx.origin.received_at,
+            Event::InvalidPacket(rx) => rx.origin.received_at,
+            _ => SystemTime::now(),
+        };
         if let Some(recorder) = &mut recorder {
             if let Some(frame) = frame_data(&event) {
                 recorder
-                    .write(SystemTime::now(), Direction::Received, frame)
+                    .write(time, Direction::Received, frame)
                     .and_then(|()| recorder.flush())
                     .map_err(|e| {
                         Failure::new(Failure::OTHER, format!("cannot write the recording: {e}"))
@@ -125,13 +132,12 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
         let line = match args.format {
             Format::Json => render::json::event(&event).to_string(),
             Format::Text => {
-                let now = SystemTime::now();
                 let line = format!(
                     "{} {}",
-                    render::text::time(now),
+                    render::text::time(time),
                     render::text::event(&event)
                 );
-                match dates.before(now) {
+                match dates.before(time) {
                     Some(date) => format!("{date}\n{line}"),
                     None => line,
                 }
