@@ -923,11 +923,22 @@ async fn check_radio_mode(sender: &CommandSender, mode: ApiMode) {
                 }
             }
         }
-        Err(crate::SendError::Timeout { .. }) => tracing::warn!(
-            "hub: the radio did not answer AT AP (asked twice, {MODE_CHECK_TIMEOUT:?} each) \
-             in API mode {hub}: it may be in transparent mode (AP=0), or its baud rate may \
-             differ from the link's; clients will hear nothing until that is fixed"
-        ),
+        Err(crate::SendError::Timeout { .. }) => {
+            // A peer that serves one connection at a time lets the next wait, silent.
+            let busy = match sender.info().link {
+                crate::Link::Tcp { .. } => {
+                    ", or the peer on the other end of the tcp: link serves another \
+                     connection (a simulator or a bridge that serves one at a time)"
+                }
+                _ => "",
+            };
+            tracing::warn!(
+                "hub: the radio did not answer AT AP (asked twice, {MODE_CHECK_TIMEOUT:?} \
+                 each) in API mode {hub}: it may be in transparent mode (AP=0), or its baud \
+                 rate may differ from the link's{busy}; clients will hear nothing until \
+                 that is fixed"
+            )
+        }
         Err(_) => {}
     }
 }

@@ -200,7 +200,9 @@ impl CommandSender {
     /// report of the matching kind from `to` that arrives after the request is sent
     /// answers it, so one the MAV sent by itself just before it got the request (the
     /// report that follows a trajectory set or a landing change) may be the answer; it
-    /// carries the same state.
+    /// carries the same state. MCP carries no request id: through a hub, a report that
+    /// answers another program's request of the same kind to the same MAV answers this
+    /// one too, even if this request itself was lost on its way.
     pub async fn request(
         &self,
         to: Address64,

@@ -308,9 +308,24 @@ fn nodes_lists_the_radios_that_answer_node_discovery() {
     let out = nodes(&sim.link, &["--window", "2", "--format", "json"]);
     let node: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(node["addr64"], MAV);
+    // As a node identification frame's fields: the role a number with its name, no
+    // RSSI field where the radio gives none.
     assert_eq!(node["identifier"], "MAV 1");
-    assert_eq!(node["device_type"], "router");
-    assert_eq!(node["rssi_dbm"], serde_json::Value::Null);
+    assert_eq!(node["device_type"], 1);
+    assert_eq!(node["device_type_name"], "router");
+    assert_eq!(node.get("rssi_dbm"), None);
+
+    // Text from the radio is written as message text (a backslash doubled, bytes
+    // outside printable ASCII as \xNN), the same by `at` and `nodes`. (A radio takes
+    // printable ASCII alone in its NI.)
+    sim.ok(&["--to", MAV, "NI", "M\\1 \"x\""]);
+    let out = sim.at(&["--format", "json", "--to", MAV, "NI"]);
+    let at: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
+    assert_eq!(at["value"], r#"M\\1 "x""#, "{at}");
+    let out = nodes(&sim.link, &["--window", "2", "--format", "json"]);
+    let node: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(node["identifier"], at["value"], "{node}");
+    sim.ok(&["--to", MAV, "NI", "MAV 1"]);
 
     // Without --window: as long as the radio's NT says, and a second.
     sim.ok(&["NT", "20"]);

@@ -188,6 +188,7 @@ fn a_hub_on_a_pty_listens_once_a_radio_is_there() {
     // It says nothing, not even to the hub's AT AP: the hub says so, then listens.
     let silent = line_with(&err, "hub: the radio did not answer AT AP");
     assert!(silent.contains("transparent mode (AP=0)"), "{silent}");
+    assert!(!silent.contains("serves another connection"), "{silent}");
     let there = line_with(&err, "radio there");
     assert!(there.contains(&format!("listening on {addr}")), "{there}");
     std::net::TcpStream::connect(&addr).unwrap();
@@ -300,5 +301,18 @@ fn node_discovery_and_a_broadcast_at_command_are_answered_through_the_hub() {
     assert_eq!(
         stdout, "0013a20040b599b9: VR = 4060 (0x4060, 16480)\n",
         "{at:?}"
+    );
+}
+
+#[test]
+fn a_hub_whose_tcp_peer_says_nothing_names_a_peer_busy_with_another_connection() {
+    // A peer that takes the connection and never answers, as a simulator serving
+    // another ground station lets the next one wait.
+    let (link, _peer) = common::silent_peer(1);
+    let (_hub, _out, err) = start_hub(&link);
+    let silent = line_with(&err, "hub: the radio did not answer AT AP");
+    assert!(
+        silent.contains("or the peer on the other end of the tcp: link serves another connection"),
+        "{silent}"
     );
 }

@@ -167,7 +167,7 @@ pub fn frame(frame: &Frame<'_>) -> Value {
             m.insert("addr64".into(), node.addr64.to_string().into());
             m.insert("addr16".into(), node.addr16.to_string().into());
             // As message text: any byte not printable ASCII as `\xNN`.
-            m.insert("identifier".into(), text_json(&Text::new(node.identifier)));
+            m.insert("identifier".into(), text(node.identifier));
             m.insert("parent".into(), node.parent.to_string().into());
             named(
                 &mut m,
@@ -289,6 +289,40 @@ pub fn packet_json<B: AsRef<[u8]>>(packet: &Packet<B>) -> Value {
 
 fn text_json<B: AsRef<[u8]>>(text: &Text<B>) -> Value {
     text.as_borrowed().to_string().into()
+}
+
+/// Text from a radio (a node identifier, an AT parameter's text) as message text is
+/// written: printable ASCII as it is, any other byte as `\xNN`, a backslash as `\\`.
+///
+/// ```
+/// use mcp_host::render::json::text;
+/// assert_eq!(text(b"MAV \"1\"\\"), r#"MAV "1"\\"#);
+/// assert_eq!(text("h\u{e9}".as_bytes()), r"h\xc3\xa9");
+/// ```
+pub fn text(bytes: &[u8]) -> Value {
+    text_json(&Text::new(bytes))
+}
+
+/// A radio found by node discovery ([`crate::discovery::Node`]), with the fields and
+/// names a node identification frame has: `addr64`, `addr16`, `identifier` (as
+/// [`text`] writes it), `parent`, `device_type` and `device_type_name`, and `rssi_dbm`
+/// when the radio's `NO` asks for it.
+pub fn node(node: &crate::discovery::Node) -> Value {
+    let mut m = Map::new();
+    m.insert("addr64".into(), node.addr64.to_string().into());
+    m.insert("addr16".into(), node.addr16.to_string().into());
+    m.insert("identifier".into(), text(node.identifier.as_bytes()));
+    m.insert("parent".into(), node.parent.to_string().into());
+    named(
+        &mut m,
+        "device_type",
+        node.device_type.into(),
+        node.device_type.name(),
+    );
+    if let Some(rssi) = node.rssi {
+        m.insert("rssi_dbm".into(), (-i16::from(rssi)).into());
+    }
+    Value::Object(m)
 }
 
 fn telemetry_values<B: AsRef<[u8]>>(telemetry: &Telemetry<B>) -> Value {

@@ -164,7 +164,7 @@ fn answer_json(frame: &Frame<'_>, command: &[u8; 2], data: &[u8]) -> serde_json:
     let value = if data.is_empty() {
         None
     } else if is_text(command) {
-        Some(String::from_utf8_lossy(data).into_owned().into())
+        Some(mcp_host::render::json::text(data))
     } else if data.len() <= 6 {
         Some(crate::link_args::at_number(data).into())
     } else {

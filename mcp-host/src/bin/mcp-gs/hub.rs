@@ -100,7 +100,8 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
         ApiModeChoice::Auto => None,
     };
     let mut last = hub.stats().radio;
-    let mut diagnoser = fixed.map(|mode| Diagnoser::new(mode, last));
+    // From the radio link's first byte on: what came before this line counts too.
+    let mut diagnoser = fixed.map(|mode| Diagnoser::new(mode, mcp_host::Stats::default()));
     let mut hinted = false;
     let mut look = tokio::time::interval(Duration::from_secs(1));
     tokio::pin!(ctrl_c);

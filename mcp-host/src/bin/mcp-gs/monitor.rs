@@ -37,8 +37,9 @@ pub(crate) struct MonitorArgs {
     #[arg(long)]
     wait: bool,
     /// Stop after this many received items, 1 or more: packets, other frames and frames
-    /// that failed to decode. Link events (connected, reconnecting) are printed but not
-    /// counted. Default: run until the link closes or Ctrl-C.
+    /// that failed to decode. Link events (connected, disconnected, reconnected,
+    /// closed) are printed but not counted. Default: run until the link closes or
+    /// Ctrl-C.
     #[arg(long, value_name = "N", value_parser = parse_count)]
     count: Option<u64>,
 }
@@ -86,7 +87,8 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
     let stdout = io::stdout();
     let mut seen = 0u64;
     let mut diagnoser = match args.link.api_mode {
-        ApiModeChoice::Fixed(mode) => Some(Diagnoser::new(mode, stream.stats())),
+        // From the link's first byte on: what came before this line counts too.
+        ApiModeChoice::Fixed(mode) => Some(Diagnoser::new(mode, mcp_host::Stats::default())),
         ApiModeChoice::Auto => None,
     };
     let mut hinted = false;

@@ -3,7 +3,7 @@
 use std::time::Duration;
 
 use clap::Args;
-use mcp_host::discovery::{DiscoverError, Node};
+use mcp_host::discovery::DiscoverError;
 
 use crate::link_args::{LinkArgs, diagnosed_send, with_mode_hint};
 use crate::{Failure, Format};
@@ -40,11 +40,16 @@ pub(crate) async fn run(args: NodesArgs) -> Result<(), Failure> {
         other => Failure::new(Failure::OTHER, other.to_string()),
     })?;
     if found.unreadable > 0 {
-        eprintln!(
-            "mcp-gs: {} could not be read as a Zigbee or DigiMesh radio's (an 802.15.4 \
-             radio's answers are not read here)",
+        let unreadable = format!(
+            "{} could not be read as a Zigbee or DigiMesh radio's (an 802.15.4 radio's \
+             answers are not read here)",
             crate::counted(found.unreadable as u64, "answer")
         );
+        // Radios answered, but none could be listed: no list, and no success.
+        if found.nodes.is_empty() {
+            return Err(Failure::new(Failure::OTHER, unreadable));
+        }
+        eprintln!("mcp-gs: {unreadable}");
     } else if found.nodes.is_empty() {
         let failure = Failure::new(
             Failure::TIMEOUT,
@@ -57,20 +62,8 @@ pub(crate) async fn run(args: NodesArgs) -> Result<(), Failure> {
     for node in &found.nodes {
         match args.format {
             Format::Text => out!("{node}"),
-            Format::Json => out!("{}", json(node)),
+            Format::Json => out!("{}", mcp_host::render::json::node(node)),
         }
     }
     Ok(())
-}
-
-/// A radio found, as a JSON object.
-fn json(node: &Node) -> serde_json::Value {
-    serde_json::json!({
-        "addr64": node.addr64.to_string(),
-        "addr16": node.addr16.to_string(),
-        "identifier": node.identifier,
-        "device_type": node.device_type.to_string(),
-        "parent": node.parent.to_string(),
-        "rssi_dbm": node.rssi.map(|rssi| -i16::from(rssi)),
-    })
 }
