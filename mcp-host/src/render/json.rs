@@ -164,16 +164,11 @@ pub fn frame(frame: &Frame<'_>) -> Value {
             m.insert("src64".into(), ni.src64.to_string().into());
             m.insert("src16".into(), ni.src16.to_string().into());
             m.insert("options".into(), ni.options.into());
-            m.insert("addr64".into(), node.addr64.to_string().into());
-            m.insert("addr16".into(), node.addr16.to_string().into());
-            // As message text: any byte not printable ASCII as `\xNN`.
-            m.insert("identifier".into(), text(node.identifier));
-            m.insert("parent".into(), node.parent.to_string().into());
-            named(
+            node_fields(
                 &mut m,
-                "device_type",
-                node.device_type.into(),
-                node.device_type.name(),
+                (node.addr64, node.addr16, node.parent),
+                node.identifier,
+                node.device_type,
             );
             named(
                 &mut m,
@@ -309,20 +304,36 @@ pub fn text(bytes: &[u8]) -> Value {
 /// when the radio's `NO` asks for it.
 pub fn node(node: &crate::discovery::Node) -> Value {
     let mut m = Map::new();
-    m.insert("addr64".into(), node.addr64.to_string().into());
-    m.insert("addr16".into(), node.addr16.to_string().into());
-    m.insert("identifier".into(), text(node.identifier.as_bytes()));
-    m.insert("parent".into(), node.parent.to_string().into());
-    named(
+    node_fields(
         &mut m,
-        "device_type",
-        node.device_type.into(),
-        node.device_type.name(),
+        (node.addr64, node.addr16, node.parent),
+        node.identifier.as_bytes(),
+        node.device_type,
     );
     if let Some(rssi) = node.rssi {
         m.insert("rssi_dbm".into(), (-i16::from(rssi)).into());
     }
     Value::Object(m)
+}
+
+/// The fields every object of a radio's node information has, in order: `addr64`,
+/// `addr16`, `identifier` (its bytes as [`text`] writes them), `parent`,
+/// `device_type` and `device_type_name`.
+fn node_fields(
+    m: &mut Map<String, Value>,
+    (addr64, addr16, parent): (
+        xbee_api::Address64,
+        xbee_api::Address16,
+        xbee_api::Address16,
+    ),
+    identifier: &[u8],
+    device_type: xbee_api::DeviceType,
+) {
+    m.insert("addr64".into(), addr64.to_string().into());
+    m.insert("addr16".into(), addr16.to_string().into());
+    m.insert("identifier".into(), text(identifier));
+    m.insert("parent".into(), parent.to_string().into());
+    named(m, "device_type", device_type.into(), device_type.name());
 }
 
 fn telemetry_values<B: AsRef<[u8]>>(telemetry: &Telemetry<B>) -> Value {
