@@ -1246,6 +1246,8 @@ fn delivery(
     } else {
         Err(SendError::Delivery {
             to,
+            frame_id: status.frame_id,
+            dst16: status.dst16,
             status: status.delivery,
             retries: status.retries,
             discovery: status.discovery,

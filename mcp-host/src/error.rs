@@ -2,7 +2,7 @@
 
 use std::time::Duration;
 
-use xbee_api::{Address64, DeliveryStatus, DiscoveryStatus};
+use xbee_api::{Address16, Address64, DeliveryStatus, DiscoveryStatus};
 
 use crate::transport::LinkError;
 
@@ -55,6 +55,11 @@ pub enum SendError {
     Delivery {
         /// Destination.
         to: Address64,
+        /// The frame id the request went under (its Transmit Status's).
+        frame_id: u8,
+        /// The 16-bit address the Transmit Status gives (FFFD or FFFE when the radio
+        /// did not find one).
+        dst16: Address16,
         /// Digi's delivery status code (never success).
         status: DeliveryStatus,
         /// Transmit retries the radio made.

@@ -257,6 +257,26 @@ fn unknown_mav_is_a_delivery_failure() {
         ),
         "{failed}"
     );
+    // The fields a delivered one has, in the same order.
+    let keys: Vec<&str> = failed
+        .as_object()
+        .unwrap()
+        .keys()
+        .map(String::as_str)
+        .collect();
+    assert_eq!(
+        keys[..6],
+        [
+            "result",
+            "dst64",
+            "id",
+            "dst16",
+            "delivery",
+            "delivery_name"
+        ],
+        "{failed}"
+    );
+    assert!(failed["id"].as_u64().is_some_and(|id| id > 0), "{failed}");
 }
 
 #[test]

@@ -318,6 +318,8 @@ async fn concurrent_sends_get_their_own_status_and_failures_are_typed() {
                 err,
                 SendError::Delivery {
                     to: MAV,
+                    frame_id: by_value[&i],
+                    dst16: Address16(0x1234),
                     status: DeliveryStatus::AddressNotFound,
                     retries: 0,
                     discovery: xbee_api::DiscoveryStatus::from(0),

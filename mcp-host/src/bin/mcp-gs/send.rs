@@ -160,12 +160,17 @@ fn report_json(report: &DeliveryReport, args: &SendArgs, payload: &[u8]) -> serd
 fn failure_json(error: &SendError, args: &SendArgs, payload: &[u8]) -> serde_json::Value {
     let mut json = serde_json::json!({ "result": "failed", "dst64": args.to.to_string() });
     if let SendError::Delivery {
+        frame_id,
+        dst16,
         status,
         retries,
         discovery,
         ..
     } = *error
     {
+        // As a delivered one says them: the frame id and the 16-bit address first.
+        json["id"] = frame_id.into();
+        json["dst16"] = dst16.to_string().into();
         status_fields(&mut json, status, retries, discovery);
     }
     json["mcp"] = mcp_host::render::json::mcp(payload);
