@@ -41,14 +41,14 @@ struct ProbeLink {
 
 fn parse_probe_link(s: &str) -> Result<ProbeLink, String> {
     let link: Link = s.parse().map_err(|e| format!("{e}"))?;
-    // A rate is written as a trailing `:DIGITS` after the path, as the link parser
-    // reads it (`serial:115200` is a path).
-    let written = s
-        .split_once(':')
-        .and_then(|(_, rest)| rest.rsplit_once(':'))
-        .is_some_and(|(_, b)| !b.is_empty() && b.bytes().all(|b| b.is_ascii_digit()));
+    // Where the link parser took the path to end: a rate was written if more than a
+    // bare `:` follows it (`serial:115200` is a path).
     let given = match &link {
-        Link::Serial { baud, .. } if written => Some(*baud),
+        Link::Serial { path, baud } => s
+            .strip_prefix("serial:")
+            .and_then(|rest| rest.strip_prefix(path.as_str()))
+            .is_some_and(|rest| rest.len() > 1)
+            .then_some(*baud),
         _ => None,
     };
     Ok(ProbeLink { link, given })
@@ -188,6 +188,7 @@ mod tests {
         assert_eq!(given("serial:COM3:9600"), Some(9600));
         assert_eq!(given("serial:COM3"), None);
         assert_eq!(given("serial:115200"), None);
+        assert_eq!(given("serial:/dev/ttyUSB0:"), None);
         assert_eq!(given("tcp:127.0.0.1:9750"), None);
         assert!(parse_probe_link("serial:/dev/ttyUSB0:0").is_err());
     }
