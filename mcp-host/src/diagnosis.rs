@@ -106,7 +106,7 @@ impl Stats {
             return Some(Diagnosis::OtherApiMode {
                 failed,
                 passed: self.frames,
-                radio: other(mode),
+                radio: mode.other(),
             });
         }
         let impossible = self.oversize + self.empty + self.truncated;
@@ -175,14 +175,6 @@ impl Diagnoser {
             self.since = now;
         }
         found
-    }
-}
-
-/// The API mode that is not `mode`.
-fn other(mode: ApiMode) -> ApiMode {
-    match mode {
-        ApiMode::Unescaped => ApiMode::Escaped,
-        ApiMode::Escaped => ApiMode::Unescaped,
     }
 }
 

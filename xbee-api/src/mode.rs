@@ -20,6 +20,23 @@ pub enum ApiMode {
     Escaped,
 }
 
+impl ApiMode {
+    /// The other mode: where frames read in this one fail, the radio may be in it.
+    ///
+    /// ```
+    /// use xbee_api::ApiMode;
+    /// assert_eq!(ApiMode::Unescaped.other(), ApiMode::Escaped);
+    /// assert_eq!(ApiMode::Escaped.other(), ApiMode::Unescaped);
+    /// ```
+    #[must_use]
+    pub const fn other(self) -> ApiMode {
+        match self {
+            ApiMode::Unescaped => ApiMode::Escaped,
+            ApiMode::Escaped => ApiMode::Unescaped,
+        }
+    }
+}
+
 /// An `AP` value that is not an API mode with frames (1 or 2).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

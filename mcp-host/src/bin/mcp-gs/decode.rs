@@ -376,7 +376,7 @@ fn decode_stream(
         let stats = decoder.stats();
         let errors =
             stats.bad_checksum + stats.oversize + stats.empty + stats.truncated + stats.bad_escape;
-        let other = crate::link_args::other_mode(mode);
+        let other = u8::from(mode.other());
         let advice = if errors == 1 && stats.truncated == 1 {
             // One candidate, cut off (by the end of the input, or in mode 2 by a start
             // delimiter): the other mode would not find it whole either.
@@ -417,7 +417,7 @@ fn mode_hint(mode: ApiMode, stats: &xbee_api::Stats) -> Option<String> {
     if failed < 8 || failed * 10 < u64::from(stats.frames_ok) {
         return None;
     }
-    let other = crate::link_args::other_mode(mode);
+    let other = u8::from(mode.other());
     Some(format!(
         "hint: {failed} frames failed their checksum, escapes or length and {} passed: if \
          the stream is in API mode {other}, decode it with --api-mode {other}",

@@ -75,15 +75,6 @@ pub(crate) fn parse_address64(s: &str) -> Result<Address64, String> {
         .map_err(|e| format!("bad 64-bit address `{s}`: {e}"))
 }
 
-/// The number of the API mode that is not `mode`, for hints that the radio or the
-/// stream may be in it.
-pub(crate) fn other_mode(mode: ApiMode) -> u8 {
-    match mode {
-        ApiMode::Unescaped => 2,
-        ApiMode::Escaped => 1,
-    }
-}
-
 pub(crate) fn parse_seconds(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
         Ok(v) if v.is_finite() && v > 0.0 && v <= 86_400.0 => Ok(v),
