@@ -233,11 +233,7 @@ impl CommandSender {
             reply,
         };
         let exchange = async {
-            match tokio::time::timeout_at(deadline, self.queue(&op).send(op)).await {
-                Ok(Ok(())) => {}
-                Ok(Err(_)) => return Err(SendError::Closed.into()),
-                Err(_) => return Err(self.not_sent(timeout).into()),
-            }
+            self.enqueue(op, deadline, timeout).await?;
             // The background task answers by the deadline; the grace only guards
             // against a stalled task.
             match tokio::time::timeout_at(deadline + GRACE, answer).await {
@@ -455,11 +451,8 @@ impl CommandSender {
             timeout: window,
             answers,
         };
-        match tokio::time::timeout_at(deadline, self.queue(&op).send(op)).await {
-            Ok(Ok(())) => Ok(Answers { answers: receiver }),
-            Ok(Err(_)) => Err(SendError::Closed),
-            Err(_) => Err(self.not_sent(window)),
-        }
+        self.enqueue(op, deadline, window).await?;
+        Ok(Answers { answers: receiver })
     }
 
     /// Node discovery: the radios the local one can reach, each once, in the order
@@ -487,11 +480,19 @@ impl CommandSender {
         crate::discovery::discover(self, window).await
     }
 
-    /// A request whose timeout ran out while it waited for room in the link's queue:
-    /// counted with the timeouts, as one the link's task finds expired is.
-    fn not_sent(&self, timeout: Duration) -> SendError {
-        crate::stats::bump(&self.counters.timeouts);
-        SendError::NotSent { timeout }
+    /// Hands `op` to the link's task, waiting for room in its queue until `deadline`.
+    /// A request whose `timeout` ran out meanwhile is not sent
+    /// ([`SendError::NotSent`]), and counted with the timeouts, as one the link's task
+    /// finds expired is.
+    async fn enqueue(&self, op: Op, deadline: Instant, timeout: Duration) -> Result<(), SendError> {
+        match tokio::time::timeout_at(deadline, self.queue(&op).send(op)).await {
+            Ok(Ok(())) => Ok(()),
+            Ok(Err(_)) => Err(SendError::Closed),
+            Err(_) => {
+                crate::stats::bump(&self.counters.timeouts);
+                Err(SendError::NotSent { timeout })
+            }
+        }
     }
 
     /// The link's counters.
@@ -609,11 +610,7 @@ impl CommandSender {
         deadline: Instant,
         timeout: Duration,
     ) -> Result<T, SendError> {
-        match tokio::time::timeout_at(deadline, self.queue(&op).send(op)).await {
-            Ok(Ok(())) => {}
-            Ok(Err(_)) => return Err(SendError::Closed),
-            Err(_) => return Err(self.not_sent(timeout)),
-        }
+        self.enqueue(op, deadline, timeout).await?;
         // The background task answers by the deadline (freeing the frame id); the grace
         // only guards against a stalled task.
         match tokio::time::timeout_at(deadline + GRACE, answer).await {
