@@ -73,7 +73,7 @@ fn checked(command: &mut Process, what: &str) {
     });
     assert!(
         out.status.success(),
-        "{what} failed (this test needs PyPI for {LIBRARY}, or MCP_XBEE_PYTHON set to a Python that has it):\n{}",
+        "{what} failed (this test needs python3 with its venv module, on Debian and Ubuntu the package python3-venv, and PyPI for {LIBRARY}; or MCP_XBEE_PYTHON set to a Python that has it):\n{}",
         String::from_utf8_lossy(&out.stderr)
     );
 }
