@@ -1,6 +1,6 @@
 //! Decoder events as owned values, collected by each way of feeding the decoder.
 
-use xbee_api::{DecodeError, Decoder, Stats};
+use xbee_api::{DecodeError, Decoder, DecoderMode, Stats};
 
 /// One decoder event, owned so that runs can be compared.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -36,8 +36,8 @@ fn push_bounded(out: &mut Vec<Event>, event: Event, bound: usize) {
 }
 
 /// Feeds `input` with `decode` until all of it is taken and nothing is pending.
-pub fn decode_all<const N: usize>(
-    decoder: &mut Decoder<N>,
+pub fn decode_all<const N: usize, M: DecoderMode>(
+    decoder: &mut Decoder<N, M>,
     mut input: &[u8],
     out: &mut Vec<Event>,
     bound: usize,
@@ -61,8 +61,8 @@ pub fn decode_all<const N: usize>(
 }
 
 /// Feeds `input` a byte at a time with `push`, draining with `poll` after each event.
-pub fn push_all<const N: usize>(
-    decoder: &mut Decoder<N>,
+pub fn push_all<const N: usize, M: DecoderMode>(
+    decoder: &mut Decoder<N, M>,
     input: &[u8],
     out: &mut Vec<Event>,
     bound: usize,
@@ -81,8 +81,8 @@ pub fn push_all<const N: usize>(
 
 /// Feeds all of `input` through [`Decoder::decode_each`], collecting events, at most
 /// `bound` in all.
-pub fn decode_each_all<const N: usize>(
-    decoder: &mut Decoder<N>,
+pub fn decode_each_all<const N: usize, M: DecoderMode>(
+    decoder: &mut Decoder<N, M>,
     input: &[u8],
     out: &mut Vec<Event>,
     bound: usize,
@@ -94,7 +94,11 @@ pub fn decode_each_all<const N: usize>(
 
 /// Ends the input: calls `finish` until it returns `None`, then checks the decoder is
 /// idle.
-pub fn finish_all<const N: usize>(decoder: &mut Decoder<N>, out: &mut Vec<Event>, bound: usize) {
+pub fn finish_all<const N: usize, M: DecoderMode>(
+    decoder: &mut Decoder<N, M>,
+    out: &mut Vec<Event>,
+    bound: usize,
+) {
     while let Some(event) = decoder.finish() {
         push_bounded(out, Event::from_decoder(event), bound);
     }

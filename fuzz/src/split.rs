@@ -4,7 +4,9 @@
 //! input after `finish` as if new; every frame it yields encodes and decodes to itself,
 //! and so does a node discovery answer in it.
 
-use xbee_api::{ApiMode, Decoder, EncodeFrame, Frame, NodeInfo, RawFrame};
+use xbee_api::{
+    ApiMode, Decoder, DecoderMode, EncodeFrame, Frame, Mode1, Mode2, NodeInfo, RawFrame,
+};
 
 use crate::events::{
     Event, check_stats, decode_all, decode_each_all, event_bound, finish_all, push_all,
@@ -33,9 +35,19 @@ fn chunks<'a>(stream: &'a [u8], sizes: &'a [u8]) -> impl Iterator<Item = &'a [u8
     })
 }
 
-/// Runs every check on one stream with a decoder of capacity `N`.
+/// Runs every check on one stream with a decoder of capacity `N` given `mode`, and
+/// again with one whose type fixes it ([`Decoder::fixed`]), which must decode exactly
+/// as the first: the same events and counters.
 pub fn check_stream<const N: usize>(mode: ApiMode, sizes: &[u8], stream: &[u8]) {
-    check_stream_with(|| Decoder::<N>::new(mode), mode, sizes, stream);
+    let given = check_stream_with(|| Decoder::<N>::new(mode), mode, sizes, stream);
+    let fixed = match mode {
+        ApiMode::Unescaped => check_stream_with(Decoder::<N, Mode1>::fixed, mode, sizes, stream),
+        ApiMode::Escaped => check_stream_with(Decoder::<N, Mode2>::fixed, mode, sizes, stream),
+    };
+    assert_eq!(
+        fixed, given,
+        "decoder of a fixed mode differs from one given the mode"
+    );
 }
 
 /// Runs every check on one stream with a decoder of capacity `M`, and again with one of
@@ -62,8 +74,8 @@ pub fn check_stream_limited<const N: usize, const M: usize>(
 
 /// Runs every check on one stream with decoders made by `new` (each a fresh decoder in
 /// `mode`); the events and counters of the whole stream.
-pub fn check_stream_with<const N: usize>(
-    new: impl Fn() -> Decoder<N>,
+pub fn check_stream_with<const N: usize, M: DecoderMode>(
+    new: impl Fn() -> Decoder<N, M>,
     mode: ApiMode,
     sizes: &[u8],
     stream: &[u8],

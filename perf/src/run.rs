@@ -4,7 +4,9 @@
 //! (`callgrind.sh` toggles collection on `run_*`).
 
 use mcp_core::Packet;
-use xbee_api::{ApiMode, Decoder, Event, ReceivePacket};
+use xbee_api::{
+    ApiMode, DEFAULT_CAPACITY, Decoder, DecoderMode, Event, Mode1, Mode2, ReceivePacket,
+};
 
 use crate::Totals;
 use crate::floor::{EscapedSplitter, LengthSplitter};
@@ -60,12 +62,33 @@ pub fn run_slice_calls(stream: &[u8], mode: ApiMode) -> Totals {
 /// On a decode error: the streams hold none.
 #[inline(never)]
 pub fn run_fifo(stream: &[u8], mode: ApiMode, chunk: usize) -> Totals {
-    let mut decoder: Decoder = Decoder::new(mode);
+    // The mode fixed in the decoder's type, as a firmware that knows its radio's has it.
+    match mode {
+        ApiMode::Unescaped => fifo_all(
+            &mut Decoder::<DEFAULT_CAPACITY, Mode1>::fixed(),
+            stream,
+            chunk,
+        ),
+        ApiMode::Escaped => fifo_all(
+            &mut Decoder::<DEFAULT_CAPACITY, Mode2>::fixed(),
+            stream,
+            chunk,
+        ),
+    }
+}
+
+/// The loop of [`run_fifo`].
+#[inline(always)]
+fn fifo_all<M: DecoderMode>(
+    decoder: &mut Decoder<DEFAULT_CAPACITY, M>,
+    stream: &[u8],
+    chunk: usize,
+) -> Totals {
     let mut totals = Totals::default();
     for input in stream.chunks(chunk.max(1)) {
         decoder.decode_each(input, |event| count(event, &mut totals));
     }
-    finish(&mut decoder);
+    finish(decoder);
     totals
 }
 
@@ -86,7 +109,7 @@ fn count(event: Event<'_>, totals: &mut Totals) {
 }
 
 /// Ends a stream that holds no partial frame.
-fn finish(decoder: &mut Decoder) {
+fn finish<M: DecoderMode>(decoder: &mut Decoder<DEFAULT_CAPACITY, M>) {
     if let Some(event) = decoder.finish() {
         panic!("stream ends inside a frame: {event:?}");
     }
@@ -100,7 +123,16 @@ fn finish(decoder: &mut Decoder) {
 /// On a decode error: the streams hold none.
 #[inline(never)]
 pub fn run_push(stream: &[u8], mode: ApiMode) -> Totals {
-    let mut decoder: Decoder = Decoder::new(mode);
+    // The mode fixed in the decoder's type, as a firmware that knows its radio's has it.
+    match mode {
+        ApiMode::Unescaped => push_all(&mut Decoder::<DEFAULT_CAPACITY, Mode1>::fixed(), stream),
+        ApiMode::Escaped => push_all(&mut Decoder::<DEFAULT_CAPACITY, Mode2>::fixed(), stream),
+    }
+}
+
+/// The loop of [`run_push`].
+#[inline(always)]
+fn push_all<M: DecoderMode>(decoder: &mut Decoder<DEFAULT_CAPACITY, M>, stream: &[u8]) -> Totals {
     let mut totals = Totals::default();
     for &byte in stream {
         match decoder.push(byte) {

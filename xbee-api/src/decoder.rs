@@ -13,7 +13,8 @@ use crate::unescape::{STEP, is_plain, is_plain_byte, unescape, unescape_byte};
 #[cfg(target_pointer_width = "64")]
 use crate::window::{DATA, MAX_LEN, WINDOW_ROOM, frame_in_window};
 use crate::wire::{ESCAPE, ESCAPE_XOR, START_DELIMITER, checksum_of_sum, needs_escape, sum};
-use crate::{ApiMode, DecodeError, RawFrame, Stats};
+use crate::{AnyMode, ApiMode, DecodeError, DecoderMode, FixedMode, RawFrame, Stats};
+use core::marker::PhantomData;
 
 /// Default buffer capacity of [`Decoder`]: 512 bytes.
 ///
@@ -77,6 +78,22 @@ enum State {
 /// [`DecodeError`] for each candidate frame it drops, and counts both in
 /// [`stats`](Self::stats). At the end of input, call [`finish`](Self::finish) until it
 /// returns `None`.
+///
+/// # API mode
+///
+/// `M` says where the decoder takes its API mode from. The default, [`AnyMode`], takes
+/// it at run time from [`new`](Decoder::new), as a host reading its radio's `AP`
+/// setting does; such a decoder carries the code of both modes. A firmware whose radio
+/// is set once fixes it in the type, [`Mode1`](crate::Mode1) or
+/// [`Mode2`](crate::Mode2), with [`fixed`](Decoder::fixed): the same events come out,
+/// and only that mode's code is linked.
+///
+/// ```
+/// use xbee_api::{ApiMode, Decoder, Mode1};
+/// let given: Decoder<64> = Decoder::new(ApiMode::Unescaped);
+/// let fixed: Decoder<64, Mode1> = Decoder::fixed();
+/// assert_eq!(given.mode(), fixed.mode());
+/// ```
 ///
 /// # Guarantee
 ///
@@ -176,7 +193,7 @@ enum State {
 /// data of up to `N` bytes; mode 1 holds the whole frame, so frame data of up to
 /// `N - 4` bytes ([`capacity`](Self::capacity)).
 #[derive(Debug, Clone)]
-pub struct Decoder<const N: usize = DEFAULT_CAPACITY> {
+pub struct Decoder<const N: usize = DEFAULT_CAPACITY, M: DecoderMode = AnyMode> {
     buf: [u8; N],
     /// Mode 1: index of the candidate's start delimiter in `buf`.
     start: usize,
@@ -198,8 +215,11 @@ pub struct Decoder<const N: usize = DEFAULT_CAPACITY> {
     state: State,
     /// Mode 2: the previous byte was 0x7D.
     escaped: bool,
+    /// The mode of an [`AnyMode`] decoder. A decoder of a fixed mode reads `M`'s and
+    /// keeps mode 1 here, which is 0, so that a new one is all zeros.
     mode: ApiMode,
     stats: Stats,
+    _mode: PhantomData<M>,
 }
 
 /// Marks the path that calls it as the rare one, so that the compiler lays out the
@@ -218,7 +238,7 @@ fn escaped_length(body: &[u8]) -> Option<(usize, usize)> {
     Some((usize::from(u16::from_be_bytes([hi, lo])), i))
 }
 
-impl<const N: usize> Decoder<N> {
+impl<const N: usize> Decoder<N, AnyMode> {
     /// A decoder for `mode`, hunting for a start delimiter.
     ///
     /// `N` must be at least 8 (checked at compile time).
@@ -228,38 +248,11 @@ impl<const N: usize> Decoder<N> {
     /// zero, so a `static` one also takes its size in flash, as the initial image of
     /// `.data`, and so does everything that shares its `static` (a
     /// `Mutex<RefCell<(Decoder, Queue)>>`, or an `Option<Decoder>` set to `None`, whose
-    /// tag is not zero either). To keep that flash, give the decoder a `static` of its
-    /// own, and for mode 2 put it where it is initialised at start-up: on `main`'s
-    /// stack, or in a `static_cell::StaticCell` whose `&'static mut` the interrupt
-    /// handler gets once.
+    /// tag is not zero either). A firmware that knows its radio's mode should rather
+    /// fix it in the type ([`fixed`](Decoder::fixed)): such a decoder is all zeros in
+    /// both modes and carries only its own mode's code.
     pub const fn new(mode: ApiMode) -> Self {
-        const { assert!(N >= 8, "Decoder capacity N must be at least 8") };
-        Self {
-            buf: [0; N],
-            start: 0,
-            pos: 0,
-            end: 0,
-            fill_to: 0,
-            len: 0,
-            cut: 0,
-            state: State::Hunt,
-            escaped: false,
-            mode,
-            stats: Stats {
-                frames_ok: 0,
-                bad_checksum: 0,
-                oversize: 0,
-                empty: 0,
-                truncated: 0,
-                bad_escape: 0,
-                bytes_skipped: 0,
-            },
-        }
-    }
-
-    /// The API mode this decoder reads.
-    pub const fn mode(&self) -> ApiMode {
-        self.mode
+        Self::blank(mode)
     }
 
     /// A decoder for `mode` that takes frame data of at most `max_len` bytes (the
@@ -287,12 +280,100 @@ impl<const N: usize> Decoder<N> {
     /// assert_eq!(events[1], Ok(vec![0x8A, 0x06]));
     /// ```
     pub const fn with_max_len(mode: ApiMode, max_len: usize) -> Self {
-        let mut decoder = Self::new(mode);
-        let full = Self::buffer_capacity(mode);
-        if max_len < full {
-            decoder.cut = full - max_len;
+        Self::new(mode).limited(max_len)
+    }
+}
+
+impl<const N: usize, M: FixedMode> Decoder<N, M> {
+    /// A decoder of the mode its type fixes ([`Mode1`](crate::Mode1) or
+    /// [`Mode2`](crate::Mode2)), hunting for a start delimiter: it decodes exactly as
+    /// [`new`](Decoder::new) with that mode would, and a program that links it carries
+    /// only that mode's code (on a Cortex-M3, the firmware example's mode 1 receive path
+    /// takes 508 bytes less flash on [`push`](Decoder::push), 6 560 less on
+    /// [`decode_each`](Decoder::decode_each)).
+    ///
+    /// `N` must be at least 8 (checked at compile time). `const`, and all zeros in
+    /// either mode: a `static` one goes to `.bss` and takes no flash.
+    ///
+    /// ```
+    /// use xbee_api::{Decoder, Mode2};
+    /// // `const`, for a `static` (in a firmware, behind a `Mutex<RefCell<_>>`).
+    /// static IDLE: Decoder<64, Mode2> = Decoder::fixed();
+    /// assert!(IDLE.is_idle());
+    ///
+    /// let mut decoder: Decoder<64, Mode2> = Decoder::fixed();
+    /// let mut frames = 0;
+    /// // A modem status whose data holds an escaped 0x11 (XON).
+    /// for byte in [0x7E, 0x00, 0x02, 0x8A, 0x7D, 0x31, 0x64] {
+    ///     if let Some(Ok(frame)) = decoder.push(byte) {
+    ///         assert_eq!(frame.data(), &[0x8A, 0x11]);
+    ///         frames += 1;
+    ///     }
+    /// }
+    /// assert_eq!(frames, 1);
+    /// ```
+    pub const fn fixed() -> Self {
+        Self::blank(ApiMode::Unescaped)
+    }
+
+    /// A decoder of the mode its type fixes that takes frame data of at most `max_len`
+    /// bytes, as [`with_max_len`](Decoder::with_max_len) does for a mode given at run
+    /// time.
+    ///
+    /// ```
+    /// use xbee_api::{Decoder, Mode1};
+    /// let decoder: Decoder<100, Mode1> = Decoder::fixed_with_max_len(60);
+    /// assert_eq!(decoder.capacity(), 60);
+    /// ```
+    pub const fn fixed_with_max_len(max_len: usize) -> Self {
+        Self::fixed().limited(max_len)
+    }
+}
+
+impl<const N: usize, M: DecoderMode> Decoder<N, M> {
+    /// A new decoder with `mode` in its mode field (read only by an [`AnyMode`] one).
+    const fn blank(mode: ApiMode) -> Self {
+        const { assert!(N >= 8, "Decoder capacity N must be at least 8") };
+        Self {
+            buf: [0; N],
+            start: 0,
+            pos: 0,
+            end: 0,
+            fill_to: 0,
+            len: 0,
+            cut: 0,
+            state: State::Hunt,
+            escaped: false,
+            mode,
+            stats: Stats {
+                frames_ok: 0,
+                bad_checksum: 0,
+                oversize: 0,
+                empty: 0,
+                truncated: 0,
+                bad_escape: 0,
+                bytes_skipped: 0,
+            },
+            _mode: PhantomData,
         }
-        decoder
+    }
+
+    /// This decoder limited to frame data of at most `max_len` bytes.
+    const fn limited(mut self, max_len: usize) -> Self {
+        let full = Self::buffer_capacity(self.mode());
+        if max_len < full {
+            self.cut = full - max_len;
+        }
+        self
+    }
+
+    /// The API mode this decoder reads.
+    #[inline(always)]
+    pub const fn mode(&self) -> ApiMode {
+        match M::FIXED {
+            Some(mode) => mode,
+            None => self.mode,
+        }
     }
 
     /// The largest frame data a buffer of `N` bytes holds in `mode`.
@@ -307,7 +388,7 @@ impl<const N: usize> Decoder<N> {
     /// `N - 4` in mode 1, or less if set by [`with_max_len`](Self::with_max_len).
     /// Longer frames are [`DecodeError::Oversize`].
     pub const fn capacity(&self) -> usize {
-        Self::buffer_capacity(self.mode) - self.cut
+        Self::buffer_capacity(self.mode()) - self.cut
     }
 
     /// Counters of frames, errors and skipped bytes so far.
@@ -319,7 +400,7 @@ impl<const N: usize> Decoder<N> {
     /// candidate frame or while mode 1 holds bytes to scan again.
     pub const fn is_idle(&self) -> bool {
         matches!(self.state, State::Hunt)
-            && match self.mode {
+            && match self.mode() {
                 ApiMode::Unescaped => self.pos == self.end,
                 ApiMode::Escaped => !self.escaped,
             }
@@ -360,7 +441,7 @@ impl<const N: usize> Decoder<N> {
         if cfg!(target_arch = "arm") {
             unlikely();
         }
-        let outcome = match self.mode {
+        let outcome = match self.mode() {
             ApiMode::Escaped => self.step2(byte),
             ApiMode::Unescaped => self.push_slow(byte),
         };
@@ -391,7 +472,7 @@ impl<const N: usize> Decoder<N> {
     /// Delivers the next pending event (mode 1 rescans of buffered bytes) without new
     /// input; `None` when nothing is pending. Always `None` in mode 2.
     pub fn poll(&mut self) -> Option<Event<'_>> {
-        let outcome = match self.mode {
+        let outcome = match self.mode() {
             ApiMode::Escaped => None,
             ApiMode::Unescaped => self.drain1(),
         };
@@ -411,7 +492,7 @@ impl<const N: usize> Decoder<N> {
     /// The bytes taken are the decoder's from then on (a caller holding a `BytesMut` can
     /// advance past them at once).
     pub fn decode(&mut self, input: &[u8]) -> (usize, Option<Event<'_>>) {
-        let (consumed, outcome) = match self.mode {
+        let (consumed, outcome) = match self.mode() {
             ApiMode::Escaped => self.decode2(input),
             ApiMode::Unescaped => self.decode1(input),
         };
@@ -459,11 +540,13 @@ impl<const N: usize> Decoder<N> {
     /// 17.4 against 18.2 in mode 2 and 14.1 against 20.7 in mode 1; on x86-64 11.6
     /// against 17.7 in mode 2 and 10.1 against 19.9 in mode 1.
     ///
-    /// It costs flash for that: it is put in line in its caller, with the frame loops
-    /// of both modes (the mode is a value). On a Cortex-M3 (`opt-level = "s"`, LTO) the
-    /// firmware example's receive path takes 11 432 bytes of flash with `decode_each`
-    /// against 4 084 with `push` (`examples/firmware`, `size.sh`). Where flash is
-    /// tight, use `push`.
+    /// It costs flash for that: it is put in line in its caller, with the frame loop of
+    /// each mode the decoder may read, so fix the mode in the type
+    /// ([`fixed`](Decoder::fixed)) to link one. On a Cortex-M3 (`opt-level = "s"`,
+    /// LTO) the firmware example's receive path, in a fixed mode 1, takes 4 588 bytes
+    /// of flash with `decode_each` against 3 576 with `push` (`examples/firmware`,
+    /// `size.sh`); with the mode a value, 11 148 against 4 084. Where flash is tight,
+    /// use `push`.
     ///
     /// ```
     /// use xbee_api::{ApiMode, Decoder};
@@ -488,7 +571,7 @@ impl<const N: usize> Decoder<N> {
         if rest.is_empty() && !input.is_empty() {
             return;
         }
-        let escaped = self.mode == ApiMode::Escaped;
+        let escaped = self.mode() == ApiMode::Escaped;
         let limit = self.capacity();
         // Known to be between frames: right after a frame handed over whole.
         let mut between = false;
@@ -544,7 +627,7 @@ impl<const N: usize> Decoder<N> {
                     }
                     i += 16;
                 }
-                if specials != 0 && self.mode == ApiMode::Escaped {
+                if specials != 0 && self.mode() == ApiMode::Escaped {
                     return input;
                 }
             }
@@ -552,7 +635,7 @@ impl<const N: usize> Decoder<N> {
             return &[];
         }
         // Mode 1 stores 0x7D and 0x7E here too.
-        let escaped = self.mode == ApiMode::Escaped;
+        let escaped = self.mode() == ApiMode::Escaped;
         let mut rest = input;
         // Without 16-byte steps: 4 bytes a step while they are frame data (in mode 2,
         // one word tested for 0x7D and 0x7E at once), loaded and stored whole: ARMv7-M
@@ -832,7 +915,7 @@ impl<const N: usize> Decoder<N> {
     /// [`DecodeError::Truncated`] (in mode 1 its bytes are then scanned again). Call it
     /// until it returns `None`; the decoder is then idle and can take new input.
     pub fn finish(&mut self) -> Option<Event<'_>> {
-        let outcome = match self.mode {
+        let outcome = match self.mode() {
             ApiMode::Escaped => {
                 if self.state == State::Hunt {
                     self.escaped = false;

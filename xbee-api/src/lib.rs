@@ -66,6 +66,7 @@
 mod address;
 mod decode_error;
 mod decoder;
+mod decoder_mode;
 mod encode;
 mod error;
 #[macro_use]
@@ -87,6 +88,7 @@ pub mod wire;
 pub use address::{Address16, Address64, ParseAddressError};
 pub use decode_error::DecodeError;
 pub use decoder::{DEFAULT_CAPACITY, Decoder, Event, decoder_buffer_len};
+pub use decoder_mode::{AnyMode, DecoderMode, FixedMode, Mode1, Mode2};
 pub use encode::{EncodeFrame, MAX_FRAME_DATA_LEN, max_encoded_len};
 pub use error::{EncodeError, FrameError};
 pub use frame::Frame;

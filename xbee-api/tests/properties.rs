@@ -10,7 +10,9 @@ use common::{
 };
 use proptest::prelude::*;
 use xbee_api::wire::{checksum, needs_escape};
-use xbee_api::{ApiMode, Decoder, EncodeFrame, Frame, RawFrame, max_encoded_len};
+use xbee_api::{
+    ApiMode, Decoder, DecoderMode, EncodeFrame, Frame, Mode1, Mode2, RawFrame, max_encoded_len,
+};
 
 const N: usize = 512;
 
@@ -476,4 +478,69 @@ proptest! {
         prop_assert_eq!(&events, &expected);
         prop_assert_eq!(stats, expected_stats);
     }
+}
+
+/// Decodes `stream` with a decoder made by `new` in every way (a byte at a time, in
+/// `reads`, through `decode_each`, whole); each run's events and counters.
+fn every_way<M: DecoderMode>(
+    new: impl Fn() -> Decoder<64, M>,
+    stream: &[u8],
+    reads: &[usize],
+) -> [(Vec<common::Owned>, xbee_api::Stats); 4] {
+    [
+        decode_bytes_with(new(), stream),
+        decode_slices_with(new(), stream, reads),
+        decode_each_slices_with(new(), stream, reads),
+        decode_each_slices_with(new(), stream, &[1 << 20]),
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(512))]
+
+    /// A decoder whose type fixes the mode decodes exactly as one given the mode, in
+    /// every way of feeding it, limited or not: the same events and counters.
+    #[test]
+    fn a_mode_fixed_in_the_type_decodes_as_one_given_at_run_time(
+        (mode, frames_data) in mode().prop_flat_map(|mode| (
+            Just(mode),
+            proptest::collection::vec((data_near_limit(mode), any::<bool>()), 1..8),
+        )),
+        garbage in proptest::collection::vec(any::<u8>(), 0..4),
+        noise in proptest::collection::vec(any::<u8>(), 0..64),
+        reads in fifo_reads(),
+        max_len in prop_oneof![Just(usize::MAX), 8..=24usize],
+    ) {
+        let mut stream = noise;
+        for (data, good) in &frames_data {
+            let check = checksum(data).wrapping_add(u8::from(!good));
+            stream.extend(wire(data, check, mode));
+            stream.extend_from_slice(&garbage);
+        }
+        let given = every_way(|| Decoder::<64>::with_max_len(mode, max_len), &stream, &reads);
+        let fixed = match mode {
+            ApiMode::Unescaped => {
+                every_way(|| Decoder::<64, Mode1>::fixed_with_max_len(max_len), &stream, &reads)
+            }
+            ApiMode::Escaped => {
+                every_way(|| Decoder::<64, Mode2>::fixed_with_max_len(max_len), &stream, &reads)
+            }
+        };
+        prop_assert_eq!(fixed, given);
+    }
+}
+
+#[test]
+fn a_decoder_of_a_fixed_mode_says_its_mode_and_capacity() {
+    let one: Decoder<100, Mode1> = Decoder::fixed();
+    let two: Decoder<100, Mode2> = Decoder::fixed();
+    assert_eq!((one.mode(), one.capacity()), (ApiMode::Unescaped, 96));
+    assert_eq!((two.mode(), two.capacity()), (ApiMode::Escaped, 100));
+    let limited: Decoder<100, Mode2> = Decoder::fixed_with_max_len(60);
+    assert_eq!(limited.capacity(), 60);
+    // The mode is the type's, whatever the decoder holds: it costs no byte more.
+    assert_eq!(
+        core::mem::size_of::<Decoder<100, Mode2>>(),
+        core::mem::size_of::<Decoder<100>>()
+    );
 }

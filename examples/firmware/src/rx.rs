@@ -11,7 +11,7 @@ use core::cell::RefCell;
 use critical_section::{CriticalSection, Mutex};
 use heapless::{Deque, Vec};
 use xbee_api::{
-    ApiMode, Decoder, RawFrame, ReceivePacket, ReceivePacketRepr, TransmitRequestRepr,
+    ApiMode, Decoder, Mode1, RawFrame, ReceivePacket, ReceivePacketRepr, TransmitRequestRepr,
     decoder_buffer_len,
 };
 
@@ -37,8 +37,9 @@ pub const QUEUE_LEN: usize = 4;
 /// One received MCP payload.
 pub type Payload = Vec<u8, MAX_PAYLOAD>;
 
-/// The decoder the firmware runs.
-pub type XbeeDecoder = Decoder<DECODER_CAPACITY>;
+/// The decoder the firmware runs: API mode 1, fixed in its type, so that no mode 2
+/// code is linked.
+pub type XbeeDecoder = Decoder<DECODER_CAPACITY, Mode1>;
 
 /// Counters of the receive path, past the decoder's own.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -157,8 +158,7 @@ impl Inbox {
 const _: () = assert!(core::mem::size_of::<XbeeDecoder>() < 300);
 
 /// The decoder, in its own static so that its RAM shows in the symbol table.
-static DECODER: Mutex<RefCell<XbeeDecoder>> =
-    Mutex::new(RefCell::new(Decoder::new(ApiMode::Unescaped)));
+static DECODER: Mutex<RefCell<XbeeDecoder>> = Mutex::new(RefCell::new(Decoder::fixed()));
 
 static INBOX: Mutex<RefCell<Inbox>> = Mutex::new(RefCell::new(Inbox::new()));
 

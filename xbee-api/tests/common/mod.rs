@@ -1,7 +1,7 @@
 //! Helpers shared by the integration tests (included with `mod common;`).
 #![allow(dead_code)]
 
-use xbee_api::{ApiMode, DecodeError, Decoder, Stats};
+use xbee_api::{ApiMode, DecodeError, Decoder, DecoderMode, Stats};
 
 /// Reads a file of the repository's `testdata` folder.
 pub(crate) fn testdata(name: &str) -> Vec<u8> {
@@ -27,8 +27,8 @@ pub(crate) fn decode_slices<const N: usize>(
 }
 
 /// [`decode_slices`] with a decoder made by the caller.
-pub(crate) fn decode_slices_with<const N: usize>(
-    mut decoder: Decoder<N>,
+pub(crate) fn decode_slices_with<const N: usize, M: DecoderMode>(
+    mut decoder: Decoder<N, M>,
     stream: &[u8],
     reads: &[usize],
 ) -> (Vec<Owned>, Stats) {
@@ -77,8 +77,8 @@ pub(crate) fn decode_each_slices<const N: usize>(
 }
 
 /// [`decode_each_slices`] with a decoder made by the caller.
-pub(crate) fn decode_each_slices_with<const N: usize>(
-    mut decoder: Decoder<N>,
+pub(crate) fn decode_each_slices_with<const N: usize, M: DecoderMode>(
+    mut decoder: Decoder<N, M>,
     stream: &[u8],
     reads: &[usize],
 ) -> (Vec<Owned>, Stats) {
@@ -113,8 +113,8 @@ pub(crate) fn decode_bytes<const N: usize>(mode: ApiMode, stream: &[u8]) -> (Vec
 }
 
 /// [`decode_bytes`] with a decoder made by the caller.
-pub(crate) fn decode_bytes_with<const N: usize>(
-    mut decoder: Decoder<N>,
+pub(crate) fn decode_bytes_with<const N: usize, M: DecoderMode>(
+    mut decoder: Decoder<N, M>,
     stream: &[u8],
 ) -> (Vec<Owned>, Stats) {
     let mut out = Vec::new();

@@ -14,13 +14,12 @@ use lm3s6965::interrupt;
 use mav_firmware::rx::XbeeDecoder;
 use mav_firmware::{app, hw};
 use panic_halt as _;
-use xbee_api::{ApiMode, Decoder, ReceivePacket};
+use xbee_api::{Decoder, ReceivePacket};
 
 /// The RX FIFO's depth on the LM3S6965: the most one interrupt finds.
 const CHUNK: usize = 16;
 
-static DECODER: Mutex<RefCell<XbeeDecoder>> =
-    Mutex::new(RefCell::new(Decoder::new(ApiMode::Unescaped)));
+static DECODER: Mutex<RefCell<XbeeDecoder>> = Mutex::new(RefCell::new(Decoder::fixed()));
 
 /// Packets that parsed, and those that did not.
 static COUNTS: Mutex<RefCell<[u32; 2]>> = Mutex::new(RefCell::new([0; 2]));
