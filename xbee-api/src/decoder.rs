@@ -330,6 +330,19 @@ impl<const N: usize, M: FixedMode> Decoder<N, M> {
     }
 }
 
+/// [`Decoder::fixed`]: a decoder of the mode its type fixes.
+///
+/// ```
+/// use xbee_api::{ApiMode, Decoder, Mode2};
+/// let decoder: Decoder<64, Mode2> = Default::default();
+/// assert_eq!(decoder.mode(), ApiMode::Escaped);
+/// ```
+impl<const N: usize, M: FixedMode> Default for Decoder<N, M> {
+    fn default() -> Self {
+        Self::fixed()
+    }
+}
+
 impl<const N: usize, M: DecoderMode> Decoder<N, M> {
     /// A new decoder with `mode` in its mode field (read only by an [`AnyMode`] one).
     const fn blank(mode: ApiMode) -> Self {
