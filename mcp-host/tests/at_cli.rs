@@ -151,15 +151,16 @@ fn an_at_command_without_answer_exits_4() {
 #[test]
 fn refusals_say_what_the_radio_answered() {
     let sim = Sim::start();
+    // A command or value the radio does not take is bad input: exit code 2.
     let out = sim.at(&["HV", "1"]);
-    assert_eq!(out.status.code(), Some(1), "{out:?}");
+    assert_eq!(out.status.code(), Some(2), "{out:?}");
     let message = stderr(&out);
     assert!(
         message.contains("invalid_parameter (0x03)") && message.contains("refused the value"),
         "{message}"
     );
     let out = sim.at(&["ZZ"]);
-    assert_eq!(out.status.code(), Some(1), "{out:?}");
+    assert_eq!(out.status.code(), Some(2), "{out:?}");
     let message = stderr(&out);
     assert!(
         message.contains("invalid_command (0x02)") && message.contains("does not know"),
@@ -187,7 +188,7 @@ fn network_parameters_read_and_the_node_identifier_is_set_as_text() {
     assert_eq!(sim.ok(&["--to", MAV, "NI"]), "NI = \"Left wing\"\n");
     // Too long: the radio refuses it.
     let out = sim.at(&["NI", "twenty-one characters"]);
-    assert_eq!(out.status.code(), Some(1), "{out:?}");
+    assert_eq!(out.status.code(), Some(2), "{out:?}");
     assert!(stderr(&out).contains("refused the value"), "{out:?}");
 }
 
@@ -230,7 +231,7 @@ fn json_prints_each_answer_as_its_frame_with_the_value_read() {
         (Some(16), None)
     );
     // A refusal prints its answer too, and fails as in text.
-    let refused = json(&["NI", "twenty-one characters"], 1);
+    let refused = json(&["NI", "twenty-one characters"], 2);
     assert_eq!(refused["status_name"], "invalid_parameter", "{refused}");
     // Every answer to a broadcast.
     let all = json(&["--to", "000000000000ffff", "--window", "1", "NI"], 0);
@@ -255,7 +256,7 @@ fn a_queued_change_is_applied_with_ac_and_saved_with_wr() {
     assert_eq!(sim.ok(&["--to", MAV, "CB", "1"]), "CB: ok\n");
     // AC and WR take no value.
     let out = sim.at(&["AC", "1"]);
-    assert_eq!(out.status.code(), Some(1), "{out:?}");
+    assert_eq!(out.status.code(), Some(2), "{out:?}");
     assert!(stderr(&out).contains("invalid_parameter (0x03)"), "{out:?}");
 }
 
@@ -423,14 +424,14 @@ fn a_broadcast_remote_command_is_carried_out_by_every_radio_and_answered_once() 
     // Digi's commands with a sign are commands too: N? reaches the radio, which, as a
     // Zigbee radio, does not know it.
     let out = sim.at(&["N?"]);
-    assert_eq!(out.status.code(), Some(1), "{out:?}");
+    assert_eq!(out.status.code(), Some(2), "{out:?}");
     assert!(
         stderr(&out).contains("N?: the radio answered invalid_command"),
         "{out:?}"
     );
-    // A refusal: its line, and the exit code 1.
+    // A refusal: its line, and the exit code a refusal gives (2: an invalid value).
     let out = broadcast(&["HV", "1"]);
-    assert_eq!(out.status.code(), Some(1), "{out:?}");
+    assert_eq!(out.status.code(), Some(2), "{out:?}");
     assert!(
         stdout(&out).starts_with("0013a20040b599b9: HV: the radio answered invalid_parameter"),
         "{out:?}"

@@ -545,6 +545,40 @@ fn status_timeout_exits_4() {
 }
 
 #[test]
+fn send_and_status_in_json_print_a_timeout_object() {
+    // A peer that reads every request but never answers: no transmit status, no report.
+    let (link, peer) = common::silent_peer(2);
+    let json = |sub: &str, args: &[&str]| {
+        let options = ["--link", &link, "--timeout", "0.5", "--format", "json"];
+        let output = run(&[&[sub][..], &options, args].concat());
+        assert_eq!(output.status.code(), Some(4), "{sub} {args:?}: {output:?}");
+        serde_json::from_slice::<Value>(&output.stdout).expect("one JSON object")
+    };
+    let sent = json("send", &["--to", "0013A20040B599B9", "landing", "on"]);
+    assert_eq!(
+        sent,
+        serde_json::json!({
+            "result": "timeout",
+            "dst64": "0013a20040b599b9",
+            "id": 1,
+            "delivered": false,
+            "mcp": {"category": "command", "type": "landing", "on": true},
+        })
+    );
+    let asked = json("status", &["--to", "0013A20040B599B9", "landing"]);
+    assert_eq!(
+        asked,
+        serde_json::json!({
+            "result": "timeout",
+            "dst64": "0013a20040b599b9",
+            "delivered": false,
+            "mcp": {"category": "command", "type": "landing", "status_request": true},
+        })
+    );
+    peer.join().unwrap();
+}
+
+#[test]
 fn every_subcommand_has_help() {
     for sub in [
         "monitor", "send", "status", "decode", "encode", "replay", "at", "ports", "radio", "sim",
@@ -939,21 +973,27 @@ fn a_one_shot_command_on_tcp_listen_waits_for_its_peer() {
         String::from_utf8_lossy(&output.stderr)
     );
     assert_eq!(peer.join().unwrap(), [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F]);
-    // Nobody comes: a timeout.
-    let output = run(&[
-        "send",
-        "--link",
-        "tcp-listen:127.0.0.1:0",
-        "--timeout",
-        "0.3",
-        "--to",
-        "0013A20040B599B9",
-        "landing",
-        "on",
-    ]);
-    assert_eq!(output.status.code(), Some(4));
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(stderr.contains("no peer connected"), "{stderr}");
+    // Nobody comes: no link, as for a `tcp:` link that cannot connect, whichever
+    // command waited.
+    let file = file.to_str().unwrap();
+    for command in [
+        &["send", "--to", "0013A20040B599B9", "landing", "on"][..],
+        &["status", "--to", "0013A20040B599B9", "landing"],
+        &["at", "AP"],
+        &["replay", file],
+    ] {
+        let (sub, rest) = command.split_first().unwrap();
+        let mut args = vec![*sub, "--link", "tcp-listen:127.0.0.1:0", "--timeout", "0.3"];
+        args.extend_from_slice(rest);
+        let output = run(&args);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(3), "{command:?}: {stderr}");
+        assert!(
+            stderr.contains("mcp-gs: no peer connected to 127.0.0.1:")
+                && stderr.contains(" within 300ms"),
+            "{command:?}: {stderr}"
+        );
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -280,6 +280,51 @@ fn unknown_mav_is_a_delivery_failure() {
 }
 
 #[test]
+fn status_in_json_prints_its_failures_as_send_does() {
+    // The MAV's radio is there (its Transmit Status says delivered), but every frame to
+    // the MAV is lost: it never answers.
+    let sim = Sim::start_with(
+        &["--faults", "0013A20040B599B9=loss=1"],
+        "tcp-listen:127.0.0.1:0",
+    );
+    let json = |code: i32, args: &[&str]| {
+        let out = sim.gs(args);
+        assert_eq!(out.status.code(), Some(code), "{args:?}: {out:?}");
+        serde_json::from_slice::<Value>(&out.stdout).expect("one JSON object")
+    };
+    // Nobody has that address: the object `send` prints for the same status request.
+    let nobody = ["--to", "0013a200deadbeef", "--format", "json"];
+    let failed = json(5, &[&["status"][..], &nobody, &["landing"]].concat());
+    let sent = json(
+        5,
+        &[&["send"][..], &nobody, &["status", "landing"]].concat(),
+    );
+    assert_eq!(failed, sent);
+    assert_eq!(
+        (&failed["result"], &failed["delivery_name"]),
+        (&"failed".into(), &"address_not_found".into()),
+        "{failed}"
+    );
+    // No report in time: what was known, that the radio delivered the request.
+    let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args(["status", "--link", &sim.link, "--timeout", "1", "--to", MAV])
+        .args(["--format", "json", "landing"])
+        .output()
+        .expect("run mcp-gs status");
+    assert_eq!(out.status.code(), Some(4), "{out:?}");
+    let timeout: Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    assert_eq!(
+        timeout,
+        serde_json::json!({
+            "result": "timeout",
+            "dst64": MAV,
+            "delivered": true,
+            "mcp": {"category": "command", "type": "landing", "status_request": true},
+        })
+    );
+}
+
+#[test]
 fn at_commands_and_api_mode_detection() {
     // The simulator's coordinator radio speaks API mode 2 here.
     let sim = Sim::start_with(&["--api-mode", "2"], "tcp-listen:127.0.0.1:0");
@@ -326,9 +371,9 @@ fn at_commands_and_api_mode_detection() {
     // `auto` asks the radio first and then talks in its mode.
     let report = sim.status_with(&["--api-mode", "auto"], &["landing"]);
     assert_eq!(report["state_name"], "flight");
-    // An unknown AT command is refused by the radio: a clear error, non-zero exit.
+    // An unknown AT command is refused by the radio: a clear error, bad input.
     let out = sim.gs(&["at", "--api-mode", "2", "ZZ"]);
-    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(out.status.code(), Some(2));
     assert!(
         String::from_utf8_lossy(&out.stderr).contains("ZZ"),
         "{out:?}"

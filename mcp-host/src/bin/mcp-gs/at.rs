@@ -118,10 +118,13 @@ fn explain(status: AtStatus, name: &str, to: Option<Address64>, set: bool) -> St
     }
 }
 
-/// The exit code of an AT status other than ok: a remote command the radio could not
-/// deliver is a delivery failure, anything else a plain failure.
+/// The exit code of an AT status other than ok: a command or value the radio refuses
+/// as invalid is bad input, as an argument mcp-gs refuses itself; a remote command the
+/// radio could not deliver is a delivery failure; anything else (error: the radio
+/// could not carry it out) a plain failure.
 fn exit_code(status: AtStatus) -> u8 {
     match status.meaning() {
+        AtStatus::InvalidCommand | AtStatus::InvalidParameter => Failure::INPUT,
         AtStatus::TxFailure => Failure::DELIVERY,
         _ => Failure::OTHER,
     }
@@ -178,7 +181,8 @@ fn answer_json(frame: &Frame<'_>, command: &[u8; 2], data: &[u8]) -> serde_json:
 
 /// `at --to 000000000000ffff`: the command to every radio in range, and a line for each
 /// answer handed over, `ADDR: ...`, as they come for `--window` seconds (one in all on
-/// Zigbee). An answer that refuses makes the exit code 1; no answer at all, 4.
+/// Zigbee). Answers that refuse give the exit code a refusal gives ([`exit_code`]; 1 when
+/// theirs differ); no answer at all, 4.
 async fn broadcast(
     args: &AtArgs,
     sender: &mcp_host::CommandSender,
@@ -201,6 +205,7 @@ async fn broadcast(
     let name = String::from_utf8_lossy(&command).into_owned();
     let set = args.value.is_some();
     let (mut answered, mut refused) = (0u32, 0u32);
+    let mut refused_code = Failure::OTHER;
     while let Some(answer) = answers.next().await {
         let answer = answer.map_err(failed)?;
         let Ok(frame @ Frame::RemoteAtResponse(at)) = answer.parse() else {
@@ -208,6 +213,12 @@ async fn broadcast(
         };
         answered += 1;
         if !at.status.is_ok() {
+            let code = exit_code(at.status);
+            refused_code = if refused == 0 || code == refused_code {
+                code
+            } else {
+                Failure::OTHER
+            };
             refused += 1;
         }
         if args.format == Format::Json {
@@ -244,7 +255,7 @@ async fn broadcast(
         )),
         (_, 0) => Ok(()),
         (_, n) => Err(Failure::new(
-            Failure::OTHER,
+            refused_code,
             if answered == 1 {
                 format!("{name}: the radio that answered refused the command")
             } else {

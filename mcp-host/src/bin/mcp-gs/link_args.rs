@@ -144,11 +144,13 @@ impl LinkArgs {
                     }
                     false
                 };
+                // As a `tcp:` link that cannot connect within the timeout: no link, not
+                // a radio that did not answer.
                 if tokio::time::timeout(self.timeout(), connected).await != Ok(true) {
-                    return Err(Failure::new(
-                        Failure::TIMEOUT,
-                        format!("no peer connected to {addr} within {:?}", self.timeout()),
-                    ));
+                    return Err(Failure::link(format!(
+                        "no peer connected to {addr} within {:?}",
+                        self.timeout()
+                    )));
                 }
             }
         }

@@ -23,7 +23,8 @@ pub(crate) struct SendArgs {
     #[arg(long)]
     no_status: bool,
     /// Output format: `json` prints one object, `{"result":"delivered",...}` or
-    /// `{"result":"failed",...}` with the transmit status's fields, or
+    /// `{"result":"failed",...}` with the transmit status's fields,
+    /// `{"result":"timeout",...}` when no status came in time, or
     /// `{"result":"written",...}` (--no-status); the packet as `mcp`; and, for a
     /// trajectory to one MAV with a status asked, `trajectory_confirmed`.
     #[arg(long, value_enum, default_value_t = Format::Text)]
@@ -71,10 +72,12 @@ pub(crate) async fn run(args: SendArgs) -> Result<(), Failure> {
         },
     };
     let report = sender.send_payload(args.to, payload.clone(), options).await;
-    // The radio's refusal is an answer too: JSON prints it, with the failure on
-    // standard error.
-    if let (Format::Json, Err(error @ SendError::Delivery { .. })) = (args.format, &report) {
-        out!("{}", failure_json(error, &args, &payload));
+    // The radio's refusal is an answer too, and so is its silence: JSON prints them,
+    // with the failure on standard error.
+    if let (Format::Json, Err(error)) = (args.format, &report) {
+        if let Some(json) = failure_json(error, args.to, mcp_host::render::json::mcp(&payload)) {
+            out!("{json}");
+        }
     }
     let report = report.map_err(|e| diagnosed_send(e, &args.link, &sender.stats()))?;
     let mut json = (args.format == Format::Json).then(|| report_json(&report, &args, &payload));
@@ -155,25 +158,54 @@ fn report_json(report: &DeliveryReport, args: &SendArgs, payload: &[u8]) -> serd
     json
 }
 
-/// A delivery failure as a JSON object: `{"result":"failed",...}` with the transmit
-/// status's fields, where the MAV is and what went.
-fn failure_json(error: &SendError, args: &SendArgs, payload: &[u8]) -> serde_json::Value {
-    let mut json = serde_json::json!({ "result": "failed", "dst64": args.to.to_string() });
-    if let SendError::Delivery {
-        frame_id,
-        dst16,
-        status,
-        retries,
-        discovery,
-        ..
-    } = *error
-    {
-        // As a delivered one says them: the frame id and the 16-bit address first.
-        json["id"] = frame_id.into();
-        json["dst16"] = dst16.to_string().into();
-        status_fields(&mut json, status, retries, discovery);
+/// A send's failure as a JSON object, where the MAV is and what went (`mcp`): a
+/// delivery the radio reported failed as `{"result":"failed",...}` with the transmit
+/// status's fields, no status in time as [`timeout_json`]; `None` for another failure.
+pub(crate) fn failure_json(
+    error: &SendError,
+    to: Address64,
+    mcp: serde_json::Value,
+) -> Option<serde_json::Value> {
+    match *error {
+        SendError::Delivery {
+            frame_id,
+            dst16,
+            status,
+            retries,
+            discovery,
+            ..
+        } => {
+            let mut json = serde_json::json!({ "result": "failed", "dst64": to.to_string() });
+            // As a delivered one says them: the frame id and the 16-bit address first.
+            json["id"] = frame_id.into();
+            json["dst16"] = dst16.to_string().into();
+            status_fields(&mut json, status, retries, discovery);
+            json["mcp"] = mcp;
+            Some(json)
+        }
+        SendError::Timeout { frame_id, .. } => Some(timeout_json(to, Some(frame_id), false, mcp)),
+        SendError::NoFreeFrameId { .. } | SendError::NotSent { .. } => {
+            Some(timeout_json(to, None, false, mcp))
+        }
+        _ => None,
     }
-    json["mcp"] = mcp_host::render::json::mcp(payload);
+}
+
+/// No answer in time as a JSON object: `{"result":"timeout",...}` with where the MAV
+/// is, the frame id when one went out, whether the radio confirmed delivery (`status`
+/// waits for a report after that) and what went (`mcp`).
+pub(crate) fn timeout_json(
+    to: Address64,
+    frame_id: Option<u8>,
+    delivered: bool,
+    mcp: serde_json::Value,
+) -> serde_json::Value {
+    let mut json = serde_json::json!({ "result": "timeout", "dst64": to.to_string() });
+    if let Some(frame_id) = frame_id {
+        json["id"] = frame_id.into();
+    }
+    json["delivered"] = delivered.into();
+    json["mcp"] = mcp;
     json
 }
 

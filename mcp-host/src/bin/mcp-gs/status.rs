@@ -1,12 +1,13 @@
 //! `mcp-gs status`: send a status request and print the report.
 
 use clap::Args;
-use mcp_core::{CommandType, Packet, TelemetryId};
+use mcp_core::{Command, CommandType, Packet, TelemetryId};
 use mcp_host::RequestError;
 use xbee_api::Address64;
 
 use crate::command::status_request;
 use crate::link_args::{LinkArgs, diagnosed, diagnosed_unanswered, send_failure};
+use crate::send::{failure_json, timeout_json};
 use crate::{Failure, Format};
 
 /// Arguments of `status`.
@@ -17,7 +18,10 @@ pub(crate) struct StatusArgs {
     /// The MAV's 64-bit address (16 hex digits).
     #[arg(long, value_name = "ADDR", value_parser = crate::link_args::parse_address64)]
     to: Address64,
-    /// Output format.
+    /// Output format: `json` prints the report's object, with `src64` and `received_at`
+    /// added; a failure as `send` does, `{"result":"failed",...}` with the transmit
+    /// status's fields, or `{"result":"timeout",...}` with whether the radio delivered
+    /// the request.
     #[arg(long, value_enum, default_value_t = Format::Text)]
     format: Format,
     /// What to ask: telemetry_to_coordinator (or telemetry), landing, controllers
@@ -43,6 +47,23 @@ pub(crate) async fn run(args: StatusArgs) -> Result<(), Failure> {
     let report = sender
         .request_with(args.to, request, Some(args.link.timeout()))
         .await;
+    // The radio's refusal is an answer too, and so is a report that did not come: JSON
+    // prints them as `send` does, with the failure on standard error.
+    if let (Format::Json, Err(error)) = (args.format, &report) {
+        let mcp = mcp_host::render::json::packet_json(&Packet::<&[u8]>::Command(
+            Command::StatusRequest(request),
+        ));
+        let json = match error {
+            RequestError::Send(error) => failure_json(error, args.to, mcp),
+            RequestError::Timeout { delivered, .. } => {
+                Some(timeout_json(args.to, None, *delivered, mcp))
+            }
+            _ => None,
+        };
+        if let Some(json) = json {
+            out!("{json}");
+        }
+    }
     // The local radio never confirmed delivery: as for a send nobody answered.
     let unanswered = matches!(
         report,
