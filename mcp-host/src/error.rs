@@ -52,6 +52,7 @@ pub enum SendError {
         "delivery to {to} failed: {status} (Digi status 0x{code:02X}, retries {retries}, discovery {discovery})",
         code = u8::from(*.status)
     )]
+    #[non_exhaustive]
     Delivery {
         /// Destination.
         to: Address64,
@@ -69,6 +70,7 @@ pub enum SendError {
     },
     /// No status or response came before the timeout (the frame id is freed).
     #[error("no answer to frame id {frame_id} within {timeout:?}")]
+    #[non_exhaustive]
     Timeout {
         /// The frame id used.
         frame_id: u8,
@@ -79,6 +81,7 @@ pub enum SendError {
     /// 255 were taken by requests whose answers had not come (a radio that does not
     /// answer, e.g. one in another API mode).
     #[error("not sent: all 255 frame ids were waiting for answers for {timeout:?}")]
+    #[non_exhaustive]
     NoFreeFrameId {
         /// The timeout that expired.
         timeout: Duration,
@@ -87,12 +90,14 @@ pub enum SendError {
     /// id: a timeout too short to hand the request to the link in (zero, say), or a
     /// link whose queue stayed full (it writes more slowly than requests come).
     #[error("not sent: its timeout of {timeout:?} ran out before the link took it")]
+    #[non_exhaustive]
     NotSent {
         /// The timeout that expired.
         timeout: Duration,
     },
     /// The transport went away while the request was in flight, or is down now.
     #[error("link disconnected: {reason}")]
+    #[non_exhaustive]
     Disconnected {
         /// Why the transport went away.
         reason: String,
@@ -104,6 +109,7 @@ pub enum SendError {
     Closed,
     /// The packet does not fit the payload limit.
     #[error("packet of {len} bytes exceeds the {max}-byte payload limit")]
+    #[non_exhaustive]
     TooLarge {
         /// Encoded length.
         len: usize,
@@ -132,6 +138,7 @@ pub enum RequestError {
         "no {what} report from {from} within {timeout:?} ({})",
         timeout_cause(*delivered, *undecodable)
     )]
+    #[non_exhaustive]
     Timeout {
         /// Whom the request went to.
         from: Address64,

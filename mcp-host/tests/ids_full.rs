@@ -111,7 +111,7 @@ async fn a_parked_request_times_out_at_its_deadline() {
     .await
     .expect("the parked transmit is answered at its deadline, not when an id frees");
     assert!(
-        matches!(result, Err(SendError::NoFreeFrameId { timeout }) if timeout == Duration::from_millis(300)),
+        matches!(result, Err(SendError::NoFreeFrameId { timeout, .. }) if timeout == Duration::from_millis(300)),
         "{result:?}"
     );
     assert_eq!(sender.stats().timeouts, 1);

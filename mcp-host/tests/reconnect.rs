@@ -132,7 +132,9 @@ async fn tcp_listen_waits_for_the_next_peer() {
     // Before any peer, requests fail at once with a clear error.
     let err = sender.send(MAV, &Command::landing(true)).await.unwrap_err();
     match &err {
-        SendError::Disconnected { reason } => assert!(reason.contains("not connected"), "{err}"),
+        SendError::Disconnected { reason, .. } => {
+            assert!(reason.contains("not connected"), "{err}")
+        }
         other => panic!("{other}"),
     }
 
@@ -249,7 +251,7 @@ async fn serial_link_reports_the_device_going_away() {
     // While the device is gone, the link keeps retrying and requests fail at once.
     let err = sender.send(MAV, &Command::time(9)).await.unwrap_err();
     match &err {
-        SendError::Disconnected { reason } => assert!(reason.contains("reconnecting"), "{err}"),
+        SendError::Disconnected { reason, .. } => assert!(reason.contains("reconnecting"), "{err}"),
         other => panic!("{other}"),
     }
 }
