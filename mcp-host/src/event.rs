@@ -91,17 +91,20 @@ pub enum LinkState {
 #[non_exhaustive]
 pub enum LinkEvent {
     /// The transport is up for the first time (for `tcp-listen`: the first peer arrived).
+    #[non_exhaustive]
     Connected {
         /// What is at the other end.
         peer: String,
     },
     /// The transport went away; requests in flight failed. Reconnection follows unless
     /// disabled.
+    #[non_exhaustive]
     Disconnected {
         /// Why.
         reason: String,
     },
     /// The transport is up again after a disconnection.
+    #[non_exhaustive]
     Reconnected {
         /// What is at the other end now.
         peer: String,
@@ -109,6 +112,7 @@ pub enum LinkEvent {
     /// The link ended for good (reconnection disabled or impossible, or
     /// [`CommandSender::close`](crate::CommandSender::close)); the stream ends after this
     /// event.
+    #[non_exhaustive]
     Closed {
         /// Why.
         reason: String,

@@ -44,6 +44,7 @@ pub struct SendOptions {
 #[non_exhaustive]
 pub enum DeliveryReport {
     /// The radio reported success in its Transmit Status (0x8B, status 0x00).
+    #[non_exhaustive]
     Delivered {
         /// The frame id used.
         frame_id: u8,

@@ -25,6 +25,7 @@ use crate::pty::{PtyPort, PtyStream};
 pub enum LinkError {
     /// The serial port could not be opened or configured.
     #[error("cannot open serial port {path} at {baud} baud: {source}")]
+    #[non_exhaustive]
     Serial {
         /// Device path.
         path: String,
@@ -36,6 +37,7 @@ pub enum LinkError {
     },
     /// The TCP connection failed.
     #[error("cannot connect to {addr}: {source}")]
+    #[non_exhaustive]
     Connect {
         /// `HOST:PORT` as given.
         addr: String,
@@ -45,6 +47,7 @@ pub enum LinkError {
     },
     /// The TCP connection did not complete within the connect timeout.
     #[error("timed out after {timeout:?} connecting to {addr}")]
+    #[non_exhaustive]
     ConnectTimeout {
         /// `HOST:PORT` as given.
         addr: String,
@@ -53,6 +56,7 @@ pub enum LinkError {
     },
     /// The TCP listener could not be bound.
     #[error("cannot listen on {addr}: {source}")]
+    #[non_exhaustive]
     Listen {
         /// `ADDR:PORT` as given.
         addr: String,
@@ -62,6 +66,7 @@ pub enum LinkError {
     },
     /// Accepting a peer failed.
     #[error("cannot accept a peer on {addr}: {source}")]
+    #[non_exhaustive]
     Accept {
         /// `ADDR:PORT` as given.
         addr: String,

@@ -88,7 +88,7 @@ async fn tcp_link_reconnects_and_fails_requests_in_flight() {
         Event::DecodeError(DecodeError::Truncated { .. }) => {}
         other => panic!("{other:?}"),
     }
-    let LinkEvent::Disconnected { reason } = next_link_event(&mut stream).await else {
+    let LinkEvent::Disconnected { reason, .. } = next_link_event(&mut stream).await else {
         panic!()
     };
     assert!(reason.contains("end of stream"), "{reason}");
@@ -193,7 +193,7 @@ async fn without_reconnection_the_link_closes_and_the_stream_ends() {
         LinkEvent::Disconnected { .. }
     ));
     match next_link_event(&mut stream).await {
-        LinkEvent::Closed { reason } => assert!(reason.contains("disabled"), "{reason}"),
+        LinkEvent::Closed { reason, .. } => assert!(reason.contains("disabled"), "{reason}"),
         other => panic!("{other:?}"),
     }
     let end = tokio::time::timeout(GUARD, futures::StreamExt::next(&mut stream)).await;
@@ -278,7 +278,7 @@ async fn a_closed_serial_link_frees_its_port_at_once() {
 
         sender.close();
         match next_link_event(&mut stream).await {
-            LinkEvent::Closed { reason } => assert_eq!(reason, "closed by the application"),
+            LinkEvent::Closed { reason, .. } => assert_eq!(reason, "closed by the application"),
             other => panic!("round {round}: {other:?}"),
         }
         let end = tokio::time::timeout(GUARD, futures::StreamExt::next(&mut stream)).await;

@@ -111,7 +111,7 @@ async fn a_link_dropped_by_its_owners_ends_its_subscriptions_with_closed() {
     let mut watcher = sender.subscribe();
     drop((stream, sender));
     match next(&mut watcher).await {
-        Some(Event::Link(LinkEvent::Closed { reason })) => {
+        Some(Event::Link(LinkEvent::Closed { reason, .. })) => {
             assert_eq!(reason, "the stream and every sender were dropped");
         }
         other => panic!("{other:?}"),

@@ -142,14 +142,16 @@ async fn print_events(
                 seen.decode_errors += 1;
                 say!("link: frame dropped: {e}");
             }
-            Event::Link(LinkEvent::Closed { reason }) => {
+            Event::Link(LinkEvent::Closed { reason, .. }) => {
                 say!("link closed: {reason}");
                 return;
             }
-            Event::Link(LinkEvent::Connected { peer } | LinkEvent::Reconnected { peer }) => {
+            Event::Link(
+                LinkEvent::Connected { peer, .. } | LinkEvent::Reconnected { peer, .. },
+            ) => {
                 say!("link: connected ({peer})");
             }
-            Event::Link(LinkEvent::Disconnected { reason }) => {
+            Event::Link(LinkEvent::Disconnected { reason, .. }) => {
                 say!("link: disconnected: {reason}");
             }
             other => say!("{other:?}"),

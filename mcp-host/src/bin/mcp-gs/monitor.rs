@@ -158,7 +158,7 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
                 eprintln!("mcp-gs: {}", hint(found));
             }
         }
-        if let Event::Link(LinkEvent::Closed { reason }) = &event {
+        if let Event::Link(LinkEvent::Closed { reason, .. }) = &event {
             return Err(Failure::link(format!("link closed: {reason}")));
         }
         // What the radio sent counts; what happened to our own link does not.

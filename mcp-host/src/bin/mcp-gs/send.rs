@@ -89,6 +89,7 @@ pub(crate) async fn run(args: SendArgs) -> Result<(), Failure> {
                 dst16,
                 retries,
                 discovery,
+                ..
             } => out!(
                 "delivered to {}/{dst16} (frame id {frame_id}, retries {retries}, discovery {discovery}): {what}",
                 args.to
@@ -146,6 +147,7 @@ fn report_json(report: &DeliveryReport, args: &SendArgs, payload: &[u8]) -> serd
             dst16,
             retries,
             discovery,
+            ..
         } => {
             json["id"] = frame_id.into();
             json["dst16"] = dst16.to_string().into();
