@@ -63,7 +63,7 @@ echo "  flash                           $rx_flash bytes"
 echo "    of which memcpy/memmove       $rx_mem bytes (compiler-builtins; every firmware that copies links them)"
 echo "    receive path's own code       $((rx_flash - rx_mem)) bytes"
 echo "  static RAM                      $rx_ram bytes"
-echo "    decoder state (RefCell<Decoder<100>>)  $decoder bytes"
+echo "    decoder state (RefCell<Decoder<100, Mode1>>)  $decoder bytes"
 echo "    payload queue and counters    $inbox bytes"
 echo
 echo "receive path on the slice decoder, decode_each per FIFO's worth (rx_slice - baseline):"

@@ -14,6 +14,7 @@ use crate::unescape::{STEP, is_plain, is_plain_byte, unescape, unescape_byte};
 use crate::window::{DATA, MAX_LEN, WINDOW_ROOM, frame_in_window};
 use crate::wire::{ESCAPE, ESCAPE_XOR, START_DELIMITER, checksum_of_sum, needs_escape, sum};
 use crate::{AnyMode, ApiMode, DecodeError, DecoderMode, FixedMode, RawFrame, Stats};
+use core::fmt;
 use core::marker::PhantomData;
 
 /// Default buffer capacity of [`Decoder`]: 512 bytes.
@@ -29,11 +30,11 @@ pub const DEFAULT_CAPACITY: usize = 512;
 /// time; [`Decoder::capacity`] says what a decoder takes.
 ///
 /// ```
-/// use xbee_api::{ApiMode, Decoder, ReceivePacketRepr, TransmitRequestRepr, decoder_buffer_len};
+/// use xbee_api::{ApiMode, Decoder, Mode1, ReceivePacketRepr, TransmitRequestRepr, decoder_buffer_len};
 /// // A Receive Packet with the largest unfragmented payload: 12 + 84 bytes.
 /// const DATA: usize = ReceivePacketRepr::HEADER_LEN + TransmitRequestRepr::MAX_UNICAST_DATA;
-/// type Mode1Decoder = Decoder<{ decoder_buffer_len(DATA, ApiMode::Unescaped) }>;
-/// assert_eq!(Mode1Decoder::new(ApiMode::Unescaped).capacity(), 96);
+/// type FirmwareDecoder = Decoder<{ decoder_buffer_len(DATA, ApiMode::Unescaped) }, Mode1>;
+/// assert_eq!(FirmwareDecoder::fixed().capacity(), 96);
 /// assert_eq!(decoder_buffer_len(DATA, ApiMode::Unescaped), 100);
 /// assert_eq!(decoder_buffer_len(DATA, ApiMode::Escaped), 96);
 /// ```
@@ -167,8 +168,8 @@ enum State {
 /// [`poll`](Self::poll) until it returns `None` before the next `push`):
 ///
 /// ```
-/// use xbee_api::{ApiMode, Decoder};
-/// let mut decoder: Decoder<64> = Decoder::new(ApiMode::Unescaped);
+/// use xbee_api::{Decoder, Mode1};
+/// let mut decoder: Decoder<64, Mode1> = Decoder::fixed();
 /// let mut frames = 0;
 /// for byte in [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F] {
 ///     let mut event = decoder.push(byte);
@@ -189,10 +190,10 @@ enum State {
 /// `size_of::<Decoder<N>>()` is at most `N` plus the cursors and counters, 56 bytes on
 /// a 32-bit target and 80 on a 64-bit one, rounded up to a multiple of the pointer size
 /// (`Decoder<100>` takes 156 bytes on a Cortex-M, 184 on x86-64; the default
-/// `Decoder<512>` 568 and 592). Mode 2 holds frame
-/// data of up to `N` bytes; mode 1 holds the whole frame, so frame data of up to
-/// `N - 4` bytes ([`capacity`](Self::capacity)).
-#[derive(Debug, Clone)]
+/// `Decoder<512>` 568 and 592), whatever its `M`: fixing the mode saves flash, not
+/// RAM. Mode 2 holds frame data of up to `N` bytes; mode 1 holds the whole frame, so
+/// frame data of up to `N - 4` bytes ([`capacity`](Self::capacity)).
+#[derive(Clone)]
 pub struct Decoder<const N: usize = DEFAULT_CAPACITY, M: DecoderMode = AnyMode> {
     buf: [u8; N],
     /// Mode 1: index of the candidate's start delimiter in `buf`.
@@ -220,6 +221,32 @@ pub struct Decoder<const N: usize = DEFAULT_CAPACITY, M: DecoderMode = AnyMode> 
     mode: ApiMode,
     stats: Stats,
     _mode: PhantomData<M>,
+}
+
+/// The mode, the capacity, where the decoder is, how many bytes it holds and its
+/// counters; not the buffer.
+///
+/// ```
+/// use xbee_api::{Decoder, Mode2};
+/// let mut decoder: Decoder<64, Mode2> = Decoder::fixed();
+/// decoder.push(0x7E);
+/// assert_eq!(
+///     format!("{decoder:?}"),
+///     "Decoder { mode: Escaped, capacity: 64, state: LenHi, buffered: 0, stats: Stats { \
+///      frames_ok: 0, bad_checksum: 0, oversize: 0, empty: 0, truncated: 0, bad_escape: 0, \
+///      bytes_skipped: 0 }, .. }"
+/// );
+/// ```
+impl<const N: usize, M: DecoderMode> fmt::Debug for Decoder<N, M> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Decoder")
+            .field("mode", &self.mode())
+            .field("capacity", &self.capacity())
+            .field("state", &self.state)
+            .field("buffered", &self.end.saturating_sub(self.start))
+            .field("stats", &self.stats)
+            .finish_non_exhaustive()
+    }
 }
 
 /// Marks the path that calls it as the rare one, so that the compiler lays out the
@@ -320,6 +347,11 @@ impl<const N: usize, M: FixedMode> Decoder<N, M> {
     /// bytes, as [`with_max_len`](Decoder::with_max_len) does for a mode given at run
     /// time.
     ///
+    /// A limit below what the buffer holds is kept in the decoder, so such a decoder is
+    /// not all zeros: a `static` one takes its size in flash as well. Where that matters
+    /// and only the buffer's length is in question, a smaller `N` with
+    /// [`fixed`](Decoder::fixed) saves the flash and the RAM.
+    ///
     /// ```
     /// use xbee_api::{Decoder, Mode1};
     /// let decoder: Decoder<100, Mode1> = Decoder::fixed_with_max_len(60);
@@ -330,7 +362,8 @@ impl<const N: usize, M: FixedMode> Decoder<N, M> {
     }
 }
 
-/// [`Decoder::fixed`]: a decoder of the mode its type fixes.
+/// [`Decoder::fixed`]: a decoder of the mode its type fixes. Not `const`: for a
+/// `static`, use `Decoder::fixed()`.
 ///
 /// ```
 /// use xbee_api::{ApiMode, Decoder, Mode2};
@@ -549,9 +582,9 @@ impl<const N: usize, M: DecoderMode> Decoder<N, M> {
     /// a step on 64-bit targets, 4 on 32-bit ones); the rest of a frame split across
     /// chunks is stepped with its cursors in registers. From 16-byte chunks on it costs
     /// less a byte than [`push`](Self::push); single bytes cost more. Instructions a
-    /// byte on a stream of 58-byte frames, 16-byte chunks against `push`: on a Cortex-M3
-    /// 17.4 against 18.2 in mode 2 and 14.1 against 20.7 in mode 1; on x86-64 11.6
-    /// against 17.7 in mode 2 and 10.1 against 19.9 in mode 1.
+    /// byte on a stream of 58-byte frames, 16-byte chunks against `push`, the mode fixed
+    /// in the type: on a Cortex-M3 16.1 against 17.8 in mode 2 and 13.1 against 20.1 in
+    /// mode 1; on x86-64 11.6 against 17.2 in mode 2 and 9.2 against 19.8 in mode 1.
     ///
     /// It costs flash for that: it is put in line in its caller, with the frame loop of
     /// each mode the decoder may read, so fix the mode in the type
@@ -562,9 +595,9 @@ impl<const N: usize, M: DecoderMode> Decoder<N, M> {
     /// use `push`.
     ///
     /// ```
-    /// use xbee_api::{ApiMode, Decoder};
+    /// use xbee_api::{Decoder, Mode2};
     /// let stream = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F, 0x7E, 0x00, 0x02, 0x8A, 0x00, 0x75];
-    /// let mut decoder: Decoder<64> = Decoder::new(ApiMode::Escaped);
+    /// let mut decoder: Decoder<64, Mode2> = Decoder::fixed();
     /// let mut frames = 0;
     /// // What the RX FIFO held at each interrupt.
     /// for fifo in stream.chunks(4) {

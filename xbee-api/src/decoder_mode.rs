@@ -12,15 +12,35 @@ mod sealed {
 
 /// Where a [`Decoder`](crate::Decoder) takes its API mode from: [`AnyMode`], the
 /// default, from its constructor at run time; [`Mode1`] and [`Mode2`] from its type.
+/// It is the decoder's second parameter: `Decoder<N>` is `Decoder<N, AnyMode>`, and
+/// `Decoder<DEFAULT_CAPACITY, Mode2>` is the default buffer in a fixed mode 2.
 ///
 /// Sealed: these three are all there is.
-pub trait DecoderMode: sealed::Sealed {
+pub trait DecoderMode:
+    sealed::Sealed
+    + Copy
+    + Default
+    + core::fmt::Debug
+    + PartialEq
+    + Eq
+    + core::hash::Hash
+    + Send
+    + Sync
+    + 'static
+{
     /// The mode of every decoder of this type; `None` for [`AnyMode`], whose decoders
     /// are each given theirs.
     const FIXED: Option<ApiMode>;
 }
 
-/// A [`DecoderMode`] fixed at compile time: [`Mode1`] or [`Mode2`].
+/// A [`DecoderMode`] fixed at compile time: [`Mode1`] or [`Mode2`] (sealed, as
+/// `DecoderMode` is).
+#[diagnostic::on_unimplemented(
+    message = "`{Self}` does not fix the API mode in the decoder's type",
+    label = "the mode is given at run time here",
+    note = "`Decoder<N>` is `Decoder<N, AnyMode>`: make it with `Decoder::new(ApiMode::...)`, \
+            or name the mode in the type, `Decoder<N, Mode1>` or `Decoder<N, Mode2>`"
+)]
 pub trait FixedMode: DecoderMode {
     /// The mode.
     const MODE: ApiMode;

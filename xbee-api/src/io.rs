@@ -29,7 +29,10 @@
 
 use core::fmt;
 
-use crate::{ApiMode, DEFAULT_CAPACITY, Decoder, EncodeError, EncodeFrame, Event};
+use crate::{
+    AnyMode, ApiMode, DEFAULT_CAPACITY, Decoder, DecoderMode, EncodeError, EncodeFrame, Event,
+    FixedMode,
+};
 
 /// Bytes read from the reader at a time, and written to the writer at a time by
 /// [`write_frame`]: a UART FIFO's worth, kept on the stack for the call.
@@ -45,28 +48,58 @@ const CHUNK: usize = 32;
 ///
 /// Events go to a closure rather than being returned because a frame borrows the
 /// decoder, which the next read feeds again.
+///
+/// `M` is the decoder's [`DecoderMode`]: a firmware whose radio's API mode is set once
+/// fixes it in the type ([`fixed`](FrameReader::fixed)), so that only that mode's code
+/// is linked (the reader feeds the decoder with
+/// [`decode_each`](Decoder::decode_each), which is put in line once for each mode the
+/// decoder may read).
+///
+/// ```
+/// use xbee_api::io::FrameReader;
+/// use xbee_api::Mode2;
+/// let wire = [0x7E, 0x00, 0x02, 0x8A, 0x7D, 0x31, 0x64];
+/// let mut reader: FrameReader<&[u8], 64, Mode2> = FrameReader::fixed(&wire[..]);
+/// let mut frames = 0;
+/// while reader.read_events(|event| frames += usize::from(event.is_ok()))? > 0 {}
+/// assert_eq!(frames, 1);
+/// # Ok::<(), core::convert::Infallible>(())
+/// ```
 #[derive(Debug)]
-pub struct FrameReader<R, const N: usize = DEFAULT_CAPACITY> {
+pub struct FrameReader<R, const N: usize = DEFAULT_CAPACITY, M: DecoderMode = AnyMode> {
     reader: R,
-    decoder: Decoder<N>,
+    decoder: Decoder<N, M>,
 }
 
-impl<R, const N: usize> FrameReader<R, N> {
+impl<R, const N: usize> FrameReader<R, N, AnyMode> {
     /// A reader of frames in `mode` from `reader`.
     pub const fn new(reader: R, mode: ApiMode) -> Self {
-        Self {
-            reader,
-            decoder: Decoder::new(mode),
-        }
+        Self::with_decoder(reader, Decoder::new(mode))
+    }
+}
+
+impl<R, const N: usize, M: FixedMode> FrameReader<R, N, M> {
+    /// A reader of frames in the mode its type fixes ([`Mode1`](crate::Mode1) or
+    /// [`Mode2`](crate::Mode2)) from `reader`.
+    pub const fn fixed(reader: R) -> Self {
+        Self::with_decoder(reader, Decoder::fixed())
+    }
+}
+
+impl<R, const N: usize, M: DecoderMode> FrameReader<R, N, M> {
+    /// A reader of frames from `reader` through `decoder` (one made with
+    /// [`Decoder::with_max_len`], say).
+    pub const fn with_decoder(reader: R, decoder: Decoder<N, M>) -> Self {
+        Self { reader, decoder }
     }
 
     /// The decoder: its [`stats`](Decoder::stats) count frames and errors.
-    pub const fn decoder(&self) -> &Decoder<N> {
+    pub const fn decoder(&self) -> &Decoder<N, M> {
         &self.decoder
     }
 
     /// The decoder, to [`reset`](Decoder::reset) it (after the line was reconfigured).
-    pub fn decoder_mut(&mut self) -> &mut Decoder<N> {
+    pub fn decoder_mut(&mut self) -> &mut Decoder<N, M> {
         &mut self.decoder
     }
 
@@ -98,7 +131,7 @@ impl<R, const N: usize> FrameReader<R, N> {
     }
 }
 
-impl<R: embedded_io::Read, const N: usize> FrameReader<R, N> {
+impl<R: embedded_io::Read, const N: usize, M: DecoderMode> FrameReader<R, N, M> {
     /// Reads once and passes every event the bytes read complete to `f`, in order;
     /// returns how many bytes were read. `Ok(0)` is the end of the input, after the
     /// events of a frame cut off by it.
@@ -114,7 +147,7 @@ impl<R: embedded_io::Read, const N: usize> FrameReader<R, N> {
 }
 
 #[cfg(feature = "embedded-io-async")]
-impl<R: embedded_io_async::Read, const N: usize> FrameReader<R, N> {
+impl<R: embedded_io_async::Read, const N: usize, M: DecoderMode> FrameReader<R, N, M> {
     /// [`read_events`](Self::read_events) from an async reader: waits for the read, then
     /// passes the events to `f`.
     pub async fn read_events_async<F: FnMut(Event<'_>)>(

@@ -7,7 +7,10 @@
 //! as `0x7D, byte ^ 0x20` (length and checksum are computed before escaping).
 //!
 //! - [`Decoder`]: streaming decoder with a fixed buffer, fed a byte or a slice at a
-//!   time, yielding [`RawFrame`]s (untyped frame data) or [`DecodeError`]s.
+//!   time, yielding [`RawFrame`]s (untyped frame data) or [`DecodeError`]s. Its API
+//!   mode is given at run time ([`Decoder::new`]) or, in a firmware whose radio is set
+//!   once, fixed in its type (`Decoder<N, Mode2>` from [`Decoder::fixed`]), which links
+//!   only that mode's code.
 //! - [`Frame`]: typed frames, parsed from a [`RawFrame`]; unknown frame types pass
 //!   through intact. Each frame type has a zero-copy view and a `*Repr` in [`frame`].
 //! - [`EncodeFrame`]: encodes any frame into a caller buffer in either mode.

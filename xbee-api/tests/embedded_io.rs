@@ -5,7 +5,9 @@
 use embedded_io::{ErrorKind, ErrorType, Read, Write};
 use proptest::prelude::*;
 use xbee_api::io::{FrameReader, WriteError, write_frame, write_frame_async};
-use xbee_api::{ApiMode, DecodeError, EncodeError, EncodeFrame, Event, RawFrame};
+use xbee_api::{
+    ApiMode, DecodeError, DecoderMode, EncodeError, EncodeFrame, Event, Mode1, Mode2, RawFrame,
+};
 
 /// A UART that hands over at most the next of `sizes` bytes a read (cycling), and fails
 /// once, with [`ErrorKind::TimedOut`], where `fail_at` says (before that read).
@@ -116,7 +118,9 @@ fn seen(event: Event<'_>) -> Seen {
 }
 
 /// Every event of `reader` to the end of its input; read errors are retried.
-fn read_all<const N: usize>(reader: &mut FrameReader<Uart<'_>, N>) -> (Vec<Seen>, usize) {
+fn read_all<const N: usize, M: DecoderMode>(
+    reader: &mut FrameReader<Uart<'_>, N, M>,
+) -> (Vec<Seen>, usize) {
     let mut events = Vec::new();
     let mut errors = 0;
     loop {
@@ -161,9 +165,18 @@ proptest! {
         let (events, errors) = read_all(&mut reader);
         let expected: Vec<Seen> = frames.into_iter().map(Seen::Frame).collect();
         prop_assert_eq!(reader.decoder().stats().frames_ok as usize, expected.len());
-        prop_assert_eq!(events, expected);
+        prop_assert_eq!(&events, &expected);
         let reads = reader.get_ref().reads;
         prop_assert_eq!(errors, usize::from(fail_at.is_some_and(|at| at <= reads)));
+
+        // A reader whose type fixes the mode reads the same.
+        let mut uart = Uart::new(&wire, &sizes);
+        uart.fail_at = fail_at;
+        let fixed = match mode {
+            ApiMode::Unescaped => read_all(&mut FrameReader::<_, 128, Mode1>::fixed(uart)),
+            ApiMode::Escaped => read_all(&mut FrameReader::<_, 128, Mode2>::fixed(uart)),
+        };
+        prop_assert_eq!(fixed, (expected, errors));
     }
 }
 
