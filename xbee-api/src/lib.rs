@@ -14,6 +14,8 @@
 //! - [`Frame`]: typed frames, parsed from a [`RawFrame`]; unknown frame types pass
 //!   through intact. Each frame type has a zero-copy view and a `*Repr` in [`frame`].
 //! - [`EncodeFrame`]: encodes any frame into a caller buffer in either mode.
+//! - [`InPlaceFrame`]: builds a frame in the buffer it goes out from, the payload
+//!   written after the header by the caller, then framed and escaped where it lies.
 //!
 //! ```
 //! use xbee_api::{Address16, Address64, ApiMode, Decoder, EncodeFrame, Frame};
@@ -72,6 +74,7 @@ mod decoder;
 mod decoder_mode;
 mod encode;
 mod error;
+mod in_place;
 #[macro_use]
 mod status;
 // After `status`, whose `code_enum!` they use.
@@ -112,6 +115,7 @@ pub use frame::transmit_request::{
     TransmitRequest, TransmitRequestRepr, options as transmit_options,
 };
 pub use frame::transmit_status::{TransmitStatus, TransmitStatusRepr};
+pub use in_place::InPlaceFrame;
 pub use mode::{ApiMode, InvalidApiMode};
 pub use node::{DeviceType, NodeInfo, NodeInfoError};
 pub use raw::RawFrame;

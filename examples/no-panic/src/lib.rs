@@ -16,7 +16,7 @@ use mcp_core::{
     TelemetryId, Text, Waypoint, Waypoints, parse,
 };
 use xbee_api::{
-    Address16, Address64, ApiMode, Decoder, EncodeFrame, Event, Frame, ReceivePacket,
+    Address16, Address64, ApiMode, Decoder, EncodeFrame, Event, Frame, InPlaceFrame, ReceivePacket,
     TransmitRequestRepr,
 };
 
@@ -257,5 +257,31 @@ pub extern "C" fn mav_encode(values: &[f32; 4], buf: &mut [u8; 84]) {
         if let Ok(n) = packet.encode(buf) {
             out(buf.get(..n).unwrap_or_default());
         }
+    }
+}
+
+/// Telemetry to the coordinator built in the frame buffer it goes out from: the
+/// Transmit Request's header, the packet written after it, then framed (and in mode 2
+/// escaped) in place.
+#[unsafe(no_mangle)]
+pub extern "C" fn mav_telemetry_in_place(values: &[f32; 4], mode: u8, frame: &mut [u8; 200]) {
+    let mode = ApiMode::try_from(mode).unwrap_or(ApiMode::Unescaped);
+    let header = TransmitRequestRepr::unicast(Address64::COORDINATOR, &[]);
+    let Ok(mut built) = InPlaceFrame::new(frame, &header) else {
+        return;
+    };
+    let room = built.data_mut();
+    let end = room.len().min(84);
+    let Ok(mut builder) = TelemetryBuilder::new(room.get_mut(..end).unwrap_or_default()) else {
+        return;
+    };
+    for (id, value) in (1..).zip(values) {
+        if builder.push(TelemetryId::from(id), *value).is_err() {
+            break;
+        }
+    }
+    let n = builder.finish();
+    if let Ok(wire) = built.finish(n, mode) {
+        out(wire);
     }
 }
