@@ -1,12 +1,14 @@
 //! Checks on encoded frames and the decoding of a single encoded frame.
 
-use xbee_api::{ApiMode, DEFAULT_CAPACITY, Decoder, EncodeFrame, Frame};
+use xbee_api::{ApiMode, DEFAULT_CAPACITY, Decoder, EncodeFrame, Frame, InPlaceFrame, RawFrame};
 
 use crate::events::{Event, decode_all, event_bound, finish_all, push_all};
 
 /// Encodes `frame` in `mode`, checks the encoding (length, delimiter, escaping), then
 /// decodes it whole, in `chunk`-byte reads and a byte at a time: each gives exactly the
-/// frame data, which types back to `frame`. Returns the encoded bytes.
+/// frame data, which types back to `frame`; built in place ([`InPlaceFrame`]) from its
+/// frame data split at a point `chunk` picks, it is the same bytes. Returns the
+/// encoded bytes.
 pub fn roundtrip(frame: &Frame<'_>, mode: ApiMode, chunk: usize) -> Vec<u8> {
     let len = frame.encoded_len(mode);
     let mut wire = vec![0u8; len];
@@ -52,6 +54,18 @@ pub fn roundtrip(frame: &Frame<'_>, mode: ApiMode, chunk: usize) -> Vec<u8> {
     push_all(&mut decoder, &wire, &mut events, bound);
     finish_all(&mut decoder, &mut events, bound);
     assert_eq!(events, expected, "byte-at-a-time decode");
+
+    // Built in its own buffer: the frame data's first bytes (at least the type byte) as
+    // the header, the rest written after it as the payload. The same bytes come out.
+    let split = 1 + chunk % data.len();
+    let header = RawFrame::new(&data[..split]).expect("a type byte");
+    let mut buffer = vec![0u8; len];
+    let mut built = InPlaceFrame::new(&mut buffer, &header).expect("room for the header");
+    built.data_mut()[..data.len() - split].copy_from_slice(&data[split..]);
+    let in_place = built
+        .finish(data.len() - split, mode)
+        .expect("a buffer of encoded_len");
+    assert_eq!(in_place, &wire[..], "frame built in place");
 
     let typed = Frame::parse_bytes(&data).expect("encoded frame types");
     assert_eq!(&typed, frame, "frame types back to another frame");
