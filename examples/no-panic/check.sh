@@ -37,4 +37,10 @@ for target in thumbv7m-none-eabi thumbv7em-none-eabihf; do
         exit 1
     fi
     echo "$target: no panic path from the 7 entry points (opt-level s, LTO)"
+    # A new decoder of a fixed mode is all zeros, so its static takes no flash.
+    if ! grep -qE ' [Bb] MAV_MODE2_DECODER$' <<<"$symbols"; then
+        echo "check.sh: $target: the static Decoder<64, Mode2>::fixed() is not in .bss: $(grep MAV_MODE2_DECODER <<<"$symbols" || echo absent)" >&2
+        exit 1
+    fi
+    echo "$target: a static decoder of a fixed mode 2 is in .bss"
 done

@@ -54,6 +54,7 @@ pub enum CommandModeError {
     /// No answer line came in time: to `+++`, a radio in API mode, at another baud rate
     /// or with a longer guard time (`GT`).
     #[error("command mode: no answer to {sent} within {timeout:?}")]
+    #[non_exhaustive]
     NoAnswer {
         /// What was sent, as text (`+++`, `ATAP`).
         sent: String,
@@ -63,6 +64,7 @@ pub enum CommandModeError {
     /// The radio answered something else than `OK`: `ERROR` for a command it does not
     /// know or a value it refuses.
     #[error("command mode: the radio answered {sent} with {answer:?}")]
+    #[non_exhaustive]
     Refused {
         /// What was sent, as text.
         sent: String,
@@ -72,6 +74,7 @@ pub enum CommandModeError {
     /// A value holding a comma or a line end, which the radio would read as the end of
     /// the command (the rest as another command): nothing was sent.
     #[error("command mode: {sent:?} was not sent: a value cannot hold a comma or a line end")]
+    #[non_exhaustive]
     InvalidValue {
         /// What would have been sent, as text.
         sent: String,

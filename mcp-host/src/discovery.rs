@@ -85,6 +85,7 @@ pub enum DiscoverError {
     Send(#[from] SendError),
     /// The radio answered `ND` with a status other than ok.
     #[error("node discovery: the radio answered {status} (0x{code:02x})", code = u8::from(*.status))]
+    #[non_exhaustive]
     Refused {
         /// The status it answered.
         status: AtStatus,

@@ -179,6 +179,7 @@ pub enum HubError {
     Connect(#[from] ConnectError),
     /// The TCP port could not be listened on.
     #[error("cannot listen on {addr}: {source}")]
+    #[non_exhaustive]
     Listen {
         /// The address as given.
         addr: String,

@@ -322,6 +322,25 @@ fn status_in_json_prints_its_failures_as_send_does() {
             "mcp": {"category": "command", "type": "landing", "status_request": true},
         })
     );
+
+    // Every frame to the ground station corrupted: the Transmit Status and the report
+    // fail to decode, and the object says frames were lost meanwhile.
+    let sim = Sim::start_with(
+        &["--faults", "0000000000000000=corrupt=1"],
+        "tcp-listen:127.0.0.1:0",
+    );
+    let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args(["status", "--link", &sim.link, "--timeout", "1", "--to", MAV])
+        .args(["--format", "json", "landing"])
+        .output()
+        .expect("run mcp-gs status");
+    assert_eq!(out.status.code(), Some(4), "{out:?}");
+    let timeout: Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    assert_eq!(timeout["delivered"], false, "{timeout}");
+    assert!(
+        timeout["undecodable"].as_u64().is_some_and(|n| n >= 1),
+        "{timeout}"
+    );
 }
 
 #[test]

@@ -53,9 +53,12 @@ pub type Event<'a> = Result<RawFrame<'a>, DecodeError>;
 type Outcome = Result<(usize, usize), DecodeError>;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+// Stored as 0 when hunting, as a new decoder is: a new decoder of a fixed mode is then
+// all zeros.
+#[repr(u8)]
 enum State {
     /// Looking for a start delimiter.
-    Hunt,
+    Hunt = 0,
     /// Expecting the high byte of the length.
     LenHi,
     /// Expecting the low byte of the length.
@@ -209,7 +212,8 @@ pub struct Decoder<const N: usize = DEFAULT_CAPACITY, M: DecoderMode = AnyMode> 
     /// Length field of the current candidate.
     len: usize,
     /// How far the largest length field taken ([`capacity`](Self::capacity)) is below
-    /// what the buffer holds: 0 unless set by [`with_max_len`](Self::with_max_len), so
+    /// what the buffer holds: 0 unless set by [`with_max_len`](Self::with_max_len) or
+    /// [`fixed_with_max_len`](Self::fixed_with_max_len), so
     /// that a new decoder is all zeros but for its mode (a `static` one needs no
     /// initialiser in flash).
     cut: usize,
@@ -431,7 +435,8 @@ impl<const N: usize, M: DecoderMode> Decoder<N, M> {
     }
 
     /// Largest frame data length (the length field) this decoder accepts: `N` in mode 2,
-    /// `N - 4` in mode 1, or less if set by [`with_max_len`](Self::with_max_len).
+    /// `N - 4` in mode 1, or less if set by [`with_max_len`](Self::with_max_len) or
+    /// [`fixed_with_max_len`](Self::fixed_with_max_len).
     /// Longer frames are [`DecodeError::Oversize`].
     pub const fn capacity(&self) -> usize {
         Self::buffer_capacity(self.mode()) - self.cut

@@ -82,3 +82,23 @@ impl FixedMode for Mode1 {
 impl FixedMode for Mode2 {
     const MODE: ApiMode = ApiMode::Escaped;
 }
+
+/// The mode a [`Mode1`] decoder reads: `ApiMode::from(Mode1)` is
+/// [`ApiMode::Unescaped`].
+impl From<Mode1> for ApiMode {
+    fn from(_: Mode1) -> ApiMode {
+        Mode1::MODE
+    }
+}
+
+/// The mode a [`Mode2`] decoder reads: `ApiMode::from(Mode2)` is [`ApiMode::Escaped`].
+///
+/// ```
+/// use xbee_api::{ApiMode, Mode2};
+/// assert_eq!(ApiMode::from(Mode2), ApiMode::Escaped);
+/// ```
+impl From<Mode2> for ApiMode {
+    fn from(_: Mode2) -> ApiMode {
+        Mode2::MODE
+    }
+}

@@ -50,7 +50,6 @@ const FRAMING: usize = 3;
 /// assert_eq!(wire, &expected[..n]);
 /// # Ok::<(), xbee_api::EncodeError>(())
 /// ```
-#[derive(Debug)]
 pub struct InPlaceFrame<'b> {
     buf: &'b mut [u8],
     /// Length of the header's frame data.
@@ -62,13 +61,18 @@ impl<'b> InPlaceFrame<'b> {
     /// length; the payload then goes into [`data_mut`](Self::data_mut).
     ///
     /// Fails with [`EncodeError::BufferTooSmall`] when `buf` cannot hold the header and
-    /// the smallest frame around it (the delimiter, the length and the checksum), and
-    /// with [`EncodeError::LengthMismatch`] if `header` writes other than it announces.
+    /// the smallest frame around it (the delimiter, the length and the checksum), with
+    /// [`EncodeError::FrameTooLong`] for a header longer than [`MAX_FRAME_DATA_LEN`],
+    /// and with [`EncodeError::LengthMismatch`] if `header` writes other than it
+    /// announces.
     pub fn new<F: EncodeFrame + ?Sized>(
         buf: &'b mut [u8],
         header: &F,
     ) -> Result<Self, EncodeError> {
         let len = header.frame_data_len();
+        if len > MAX_FRAME_DATA_LEN {
+            return Err(EncodeError::FrameTooLong { len });
+        }
         let needed = FRAMING + len + 1;
         if buf.len() < needed {
             return Err(EncodeError::BufferTooSmall {
@@ -84,8 +88,8 @@ impl<'b> InPlaceFrame<'b> {
     }
 
     /// Where the payload goes: the buffer after the header, less the checksum's byte.
-    /// In API mode 2 the frame also needs room to be escaped into, so a payload that
-    /// fills all of this fits in mode 1 only.
+    /// In API mode 2 the frame also needs room to be escaped into: a payload that fills
+    /// all of this fits only if no byte of the frame needs escaping.
     pub fn data_mut(&mut self) -> &mut [u8] {
         let end = self.buf.len().saturating_sub(1);
         self.buf
@@ -98,13 +102,14 @@ impl<'b> InPlaceFrame<'b> {
     /// the wire.
     ///
     /// Fails with [`EncodeError::BufferTooSmall`] when the frame, escaped in mode 2,
-    /// does not fit the buffer (`needed` is the buffer it takes, and the buffer then
-    /// holds the frame unescaped; a `data_len` past the buffer's end gives the
-    /// unescaped frame's length, at least what it takes), with [`EncodeError::FrameTooLong`] above
+    /// does not fit the buffer: `needed` is the buffer it takes, and the buffer then
+    /// holds the frame unescaped (a `data_len` past the buffer's end gives the
+    /// unescaped frame's length, at least what it takes). Fails with
+    /// [`EncodeError::FrameTooLong`] when the header and `data_len` come to more than
     /// [`MAX_FRAME_DATA_LEN`], and with [`EncodeError::EmptyFrame`] for a header and a
     /// payload of no bytes at all.
     pub fn finish(self, data_len: usize, mode: ApiMode) -> Result<&'b [u8], EncodeError> {
-        let len = self.header + data_len;
+        let len = self.header.saturating_add(data_len);
         if len > MAX_FRAME_DATA_LEN {
             return Err(EncodeError::FrameTooLong { len });
         }
@@ -164,5 +169,15 @@ impl<'b> InPlaceFrame<'b> {
             }
         }
         Ok(buf.get(..needed).unwrap_or_default())
+    }
+}
+
+/// The header's length and the buffer's; not the buffer.
+impl core::fmt::Debug for InPlaceFrame<'_> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("InPlaceFrame")
+            .field("header_len", &self.header)
+            .field("buffer_len", &self.buf.len())
+            .finish()
     }
 }

@@ -12,9 +12,11 @@ use core::fmt;
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+// Mode 1 is stored as 0: a decoder of a fixed mode keeps it, and is then all zeros.
+#[repr(u8)]
 pub enum ApiMode {
     /// API mode 1 (`AP=1`): frames are sent as they are.
-    Unescaped,
+    Unescaped = 0,
     /// API mode 2 (`AP=2`): every byte after the start delimiter that is 0x7E, 0x7D, 0x11
     /// or 0x13 is sent as `0x7D, byte ^ 0x20`.
     Escaped,

@@ -152,3 +152,68 @@ fn the_deployed_mavs_frame_to_the_coordinator_comes_out_escaped() {
     assert_eq!(wire, &encoded(&request, ApiMode::Escaped)[..]);
     assert!(wire.windows(2).any(|w| w == [0x7D, 0x31]));
 }
+
+#[test]
+fn a_payload_length_past_what_a_frame_carries_is_too_long_not_a_wrapped_frame() {
+    let header = TransmitRequestRepr::unicast(Address64::COORDINATOR, &[]);
+    for (data_len, len) in [
+        (usize::MAX, usize::MAX),
+        (usize::MAX - 13, usize::MAX),
+        (0xFFFF - 13, 0xFFFF + 1),
+    ] {
+        for mode in [ApiMode::Unescaped, ApiMode::Escaped] {
+            let mut buffer = [0u8; 64];
+            let frame = InPlaceFrame::new(&mut buffer, &header).unwrap();
+            assert_eq!(
+                frame.finish(data_len, mode),
+                Err(EncodeError::FrameTooLong { len }),
+                "{data_len}"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_frame_that_does_not_fit_escaped_is_left_unescaped_in_the_buffer() {
+    // Every payload byte needs escaping: 3 more bytes than the frame unescaped.
+    let header = TransmitRequestRepr::unicast(Address64::COORDINATOR, &[]);
+    let payload = [0x7E, 0x7D, 0x11];
+    let request = TransmitRequestRepr::unicast(Address64::COORDINATOR, &payload);
+    let plain = encoded(&request, ApiMode::Unescaped);
+    let escaped = encoded(&request, ApiMode::Escaped);
+    let mut buffer = vec![0u8; plain.len() + 1];
+    let mut frame = InPlaceFrame::new(&mut buffer, &header).unwrap();
+    frame.data_mut()[..3].copy_from_slice(&payload);
+    assert_eq!(
+        frame.finish(3, ApiMode::Escaped),
+        Err(EncodeError::BufferTooSmall {
+            needed: escaped.len(),
+            available: plain.len() + 1
+        })
+    );
+    assert_eq!(buffer[..plain.len()], plain[..]);
+}
+
+/// A header that writes fewer bytes than it announces.
+struct Liar;
+
+impl EncodeFrame for Liar {
+    fn frame_data_len(&self) -> usize {
+        4
+    }
+    fn write_frame_data<F: FnMut(&[u8])>(&self, out: &mut F) {
+        out(&[0x10, 0x01]);
+    }
+}
+
+#[test]
+fn a_header_that_writes_other_than_it_announces_is_an_error() {
+    let mut buffer = [0u8; 32];
+    assert_eq!(
+        InPlaceFrame::new(&mut buffer, &Liar).err(),
+        Some(EncodeError::LengthMismatch {
+            announced: 4,
+            written: 2
+        })
+    );
+}

@@ -55,8 +55,17 @@ pub(crate) async fn run(args: StatusArgs) -> Result<(), Failure> {
         ));
         let json = match error {
             RequestError::Send(error) => failure_json(error, args.to, mcp),
-            RequestError::Timeout { delivered, .. } => {
-                Some(timeout_json(args.to, None, *delivered, mcp))
+            RequestError::Timeout {
+                delivered,
+                undecodable,
+                ..
+            } => {
+                let mut json = timeout_json(args.to, None, *delivered, mcp);
+                // Frames that failed to decode meanwhile: the report may have been one.
+                if *undecodable > 0 {
+                    json["undecodable"] = (*undecodable).into();
+                }
+                Some(json)
             }
             _ => None,
         };
