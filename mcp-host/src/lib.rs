@@ -115,6 +115,7 @@ pub mod record;
 pub mod render;
 mod sender;
 pub mod sim;
+mod sink;
 mod stats;
 mod subscription;
 pub mod transport;
@@ -140,6 +141,7 @@ pub use event::{
 pub use link::{Link, LinkParseError};
 pub use options::{LinkOptions, ReconnectPolicy};
 pub use sender::{CommandSender, DeliveryReport, FrameId, SendOptions};
+pub use sink::PacketSink;
 pub use stats::Stats;
 pub use subscription::Subscription;
 pub use transport::{Connector, LinkError, Transport};

@@ -496,6 +496,13 @@ impl CommandSender {
         }
     }
 
+    /// A [`Sink`](futures::Sink) of MCP packets to this link, each item `(to, packet)`
+    /// sent without a transmit status (frame id 0), in order: for feeding a stream of
+    /// packets to the radio (see [`PacketSink`](crate::PacketSink)).
+    pub fn packet_sink<B: AsRef<[u8]>>(&self) -> crate::PacketSink<B> {
+        crate::PacketSink::new(self.writes.clone())
+    }
+
     /// The link's counters.
     pub fn stats(&self) -> Stats {
         self.counters.snapshot()
