@@ -34,8 +34,11 @@ use crate::driver::Op;
 ///
 /// Errors: [`SendError::TooLarge`] for a packet over the 255-byte payload (from
 /// `start_send`; the sink takes the next one), and [`SendError::Closed`] once the link
-/// has ended. A packet written while the link is down (between a disconnection and the
-/// reconnection) is lost, as a radio loses a frame sent without a status.
+/// has ended. A packet sent while the link is not connected (before its first
+/// connection, or between a disconnection and the reconnection) is dropped, as a radio
+/// drops a frame it cannot send without a status: watch
+/// [`CommandSender::link_state`](crate::CommandSender::link_state) to hold a stream back
+/// meanwhile.
 ///
 /// Closing the sink closes it alone: the link and its other senders go on.
 ///
