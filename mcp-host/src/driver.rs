@@ -555,12 +555,17 @@ impl Driver {
     }
 
     /// Writes out what was already reported written (`Written` transmits, raw writes)
-    /// before the link ends, within [`CLOSE_FLUSH`].
+    /// and what waits in the queue of requests without a frame id (a
+    /// [`PacketSink`](crate::PacketSink)'s packets, which were handed over), before the
+    /// link ends, within [`CLOSE_FLUSH`].
     async fn flush_before_end(
-        &self,
+        &mut self,
         wr: &mut (impl tokio::io::AsyncWrite + Unpin),
         out: &mut BytesMut,
     ) {
+        while let Ok(op) = self.writes.try_recv() {
+            self.start(op, out);
+        }
         let flush = async {
             wr.write_all_buf(out).await?;
             wr.flush().await

@@ -500,7 +500,7 @@ impl CommandSender {
     /// sent without a transmit status (frame id 0), in order: for feeding a stream of
     /// packets to the radio (see [`PacketSink`](crate::PacketSink)).
     pub fn packet_sink<B: AsRef<[u8]>>(&self) -> crate::PacketSink<B> {
-        crate::PacketSink::new(self.writes.clone())
+        crate::PacketSink::new(self.writes.clone(), self.state.clone())
     }
 
     /// The link's counters.

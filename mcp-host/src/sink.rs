@@ -7,13 +7,13 @@ use std::pin::Pin;
 use std::task::{Context, Poll};
 
 use bytes::Bytes;
-use futures::Sink;
-use tokio::sync::oneshot;
+use futures::{Sink, Stream};
+use tokio::sync::{mpsc, oneshot, watch};
 use tokio_util::sync::PollSender;
 use xbee_api::{Address64, EncodeFrame, TransmitRequestRepr};
 
-use crate::SendError;
 use crate::driver::Op;
+use crate::{LinkState, SendError};
 
 /// A [`Sink`] of MCP packets, each item `(to, packet)` sent to the MAV `to` (or
 /// [`Address64::BROADCAST`]) in a Transmit Request with frame id 0: the radio sends no
@@ -26,21 +26,38 @@ use crate::driver::Op;
 /// `B` holds a packet's bytes: [`Bytes`], as the [`PacketStream`](crate::PacketStream)'s
 /// packets have them (the default), `&[u8]`, `Vec<u8>`...
 ///
-/// Made by [`CommandSender::packet_sink`](crate::CommandSender::packet_sink). Packets
-/// go out in the order they are sent, behind anything queued before them without a
-/// frame id. The sink waits for room in the link's queue (`poll_ready`), so a fast
-/// stream is held back, never buffered without bound. `poll_flush` is ready once the
-/// packets are in that queue; the link's task writes them in the background.
+/// Made by [`CommandSender::packet_sink`](crate::CommandSender::packet_sink). The sink
+/// waits for room in the link's queue (`poll_ready`), so a fast stream is held back,
+/// never buffered without bound. `poll_flush` is ready once the packets are in that
+/// queue; the link's task writes them in the background.
+///
+/// While the link is not connected (before its first connection, or between a
+/// disconnection and the reconnection) the sink is not ready: a stream fed to it waits,
+/// and goes on once the link is up again. Only packets handed over just as the
+/// transport failed, before the link saw it, are lost with it, as a radio loses a frame
+/// it sent without a status. A packet handed over before
+/// [`CommandSender::close`](crate::CommandSender::close) is written out before the link
+/// ends (within a second).
 ///
 /// Errors: [`SendError::TooLarge`] for a packet over the 255-byte payload (from
-/// `start_send`; the sink takes the next one), and [`SendError::Closed`] once the link
-/// has ended. A packet sent while the link is not connected (before its first
-/// connection, or between a disconnection and the reconnection) is dropped, as a radio
-/// drops a frame it cannot send without a status: watch
-/// [`CommandSender::link_state`](crate::CommandSender::link_state) to hold a stream back
-/// meanwhile.
+/// `start_send`: driving the sink by hand, the next packet goes; `send_all` and
+/// `forward` stop at the first error), and [`SendError::Closed`] once the link has
+/// ended.
 ///
-/// Closing the sink closes it alone: the link and its other senders go on.
+/// Closing the sink closes it alone: the link and its other senders go on. A sink keeps
+/// the link open, as a [`CommandSender`](crate::CommandSender) does, until it is
+/// dropped.
+///
+/// Packets go out in order among themselves and with other writes without a frame id
+/// (`send_with` and [`FrameId::None`](crate::FrameId::None), `write_frame`); requests
+/// that await an answer go through another queue, so no order holds between those and
+/// the sink's packets.
+///
+/// The item's packet holds its bytes in `B`, which the items sent fix: a sink fed
+/// [`Received`](crate::Received) packets takes `Packet<Bytes>`, one fed packets built in
+/// place `Packet<&[u8]>` (`packet.map_bytes(Bytes::copy_from_slice)` makes the first
+/// of the second, `as_borrowed` the second of the first). Name it where nothing else
+/// does: `sender.packet_sink::<Bytes>()`.
 ///
 /// ```no_run
 /// # async fn run(sender: mcp_host::CommandSender) -> Result<(), mcp_host::SendError> {
@@ -57,14 +74,26 @@ use crate::driver::Op;
 /// ```
 pub struct PacketSink<B = Bytes> {
     writes: PollSender<Op>,
+    /// The link's state as last seen.
+    state: LinkState,
+    /// The link's state changes, each as it comes.
+    changes: Pin<Box<dyn Stream<Item = LinkState> + Send>>,
     /// The packets' bytes: `Bytes`, `&[u8]`, `Vec<u8>`...
     packets: PhantomData<fn(B)>,
 }
 
 impl<B> PacketSink<B> {
-    pub(crate) fn new(writes: tokio::sync::mpsc::Sender<Op>) -> Self {
+    pub(crate) fn new(writes: mpsc::Sender<Op>, state: watch::Receiver<LinkState>) -> Self {
+        let now = *state.borrow();
+        let changes = futures::stream::unfold(state, |mut state| async move {
+            state.changed().await.ok()?;
+            let now = *state.borrow_and_update();
+            Some((now, state))
+        });
         Self {
             writes: PollSender::new(writes),
+            state: now,
+            changes: Box::pin(changes),
             packets: PhantomData,
         }
     }
@@ -82,10 +111,24 @@ impl<B: AsRef<[u8]>> Sink<(Address64, mcp_core::Packet<B>)> for PacketSink<B> {
     type Error = SendError;
 
     fn poll_ready(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<Result<(), SendError>> {
-        self.get_mut()
-            .writes
-            .poll_reserve(cx)
-            .map_err(|_| SendError::Closed)
+        let this = self.get_mut();
+        // The newest state, and a wake-up at the next change.
+        loop {
+            match this.changes.as_mut().poll_next(cx) {
+                Poll::Ready(Some(state)) => this.state = state,
+                Poll::Ready(None) => this.state = LinkState::Closed,
+                Poll::Pending => break,
+            }
+            if this.state == LinkState::Closed {
+                break;
+            }
+        }
+        match this.state {
+            LinkState::Connected => this.writes.poll_reserve(cx).map_err(|_| SendError::Closed),
+            LinkState::Closed => Poll::Ready(Err(SendError::Closed)),
+            // Not connected yet, or reconnecting: held back until the link is up.
+            _ => Poll::Pending,
+        }
     }
 
     fn start_send(

@@ -98,3 +98,82 @@ async fn closing_a_sink_leaves_the_link_to_its_other_senders() {
     another.send((MAV, packet)).await.unwrap();
     assert_eq!(radio.next_tx().await, without_status(MAV, &packet));
 }
+
+/// A `tcp-listen` link on a free port, waiting for its radio: the link, its port.
+async fn listening() -> (mcp_host::PacketStream, mcp_host::CommandSender, u16) {
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let port = listener.local_addr().unwrap().port();
+    drop(listener);
+    let link: mcp_host::Link = format!("tcp-listen:127.0.0.1:{port}").parse().unwrap();
+    let options = mcp_host::LinkOptions {
+        wait_for_link: true,
+        ..mcp_host::LinkOptions::default()
+    };
+    let (stream, sender) = mcp_host::connect(&link, options).await.unwrap();
+    (stream, sender, port)
+}
+
+/// A radio connecting to the link on `port`.
+async fn radio_on(port: u16) -> common::FakeXBee {
+    let radio = tokio::net::TcpStream::connect(("127.0.0.1", port))
+        .await
+        .unwrap();
+    common::FakeXBee::new(radio, ApiMode::Unescaped)
+}
+
+#[tokio::test]
+async fn packets_handed_over_before_close_are_written_before_the_link_ends() {
+    // Over TCP, whose end comes after every byte written before it.
+    let (mut stream, sender, port) = listening().await;
+    let mut radio = radio_on(port).await;
+    assert!(matches!(
+        common::next_link_event(&mut stream).await,
+        mcp_host::LinkEvent::Connected { .. }
+    ));
+    let mut sink = sender.packet_sink();
+    let packets: Vec<(Address64, Packet<&[u8]>)> = (0..200u32)
+        .map(|t| (MAV, Packet::Report(Report::Time(t))))
+        .collect();
+    sink.send_all(&mut stream::iter(packets.clone().into_iter().map(Ok)))
+        .await
+        .unwrap();
+    sender.close();
+    for (to, packet) in &packets {
+        assert_eq!(radio.next_tx().await, without_status(*to, packet));
+    }
+    sender.closed().await;
+}
+
+#[tokio::test]
+async fn a_sink_waits_while_the_link_is_down_and_goes_on_once_it_is_back() {
+    // A `tcp-listen` link: down until a radio connects, and again while it is away.
+    let (mut stream, sender, port) = listening().await;
+    let mut sink = sender.packet_sink();
+    let first = Packet::Report(Report::Time(1));
+    // Not connected yet: the sink holds the packet back rather than dropping it.
+    let mut sending = Box::pin(sink.send((MAV, first)));
+    assert!(
+        futures::poll!(sending.as_mut()).is_pending(),
+        "a sink took a packet with no radio there"
+    );
+    let mut radio = radio_on(port).await;
+    sending.await.unwrap();
+    assert_eq!(radio.next_tx().await, without_status(MAV, &first));
+    drop(sink);
+
+    // The radio goes away: the sink waits again until the next one is there.
+    radio.close().await;
+    loop {
+        if let mcp_host::LinkEvent::Disconnected { .. } = common::next_link_event(&mut stream).await
+        {
+            break;
+        }
+    }
+    let mut sink = sender.packet_sink();
+    let second = Packet::Report(Report::Time(2));
+    let mut sending = Box::pin(sink.send((MAV, second)));
+    assert!(futures::poll!(sending.as_mut()).is_pending());
+    let mut radio = radio_on(port).await;
+    sending.await.unwrap();
+    assert_eq!(radio.next_tx().await, without_status(MAV, &second));
+}

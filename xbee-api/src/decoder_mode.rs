@@ -38,8 +38,10 @@ pub trait DecoderMode:
 #[diagnostic::on_unimplemented(
     message = "`{Self}` does not fix the API mode in the decoder's type",
     label = "the mode is given at run time here",
-    note = "`Decoder<N>` is `Decoder<N, AnyMode>`: make it with `Decoder::new(ApiMode::...)`, \
-            or name the mode in the type, `Decoder<N, Mode1>` or `Decoder<N, Mode2>`"
+    note = "a type that leaves its mode out takes `AnyMode` (`Decoder<N>` is \
+            `Decoder<N, AnyMode>`, `FrameReader<R, N>` is `FrameReader<R, N, AnyMode>`): \
+            make it with `new(reader, ApiMode::...)` or `Decoder::new(ApiMode::...)`, or \
+            name the mode in the type, `Mode1` or `Mode2`"
 )]
 pub trait FixedMode: DecoderMode {
     /// The mode.

@@ -17,8 +17,10 @@ const FRAMING: usize = 3;
 /// send (to a UART's DMA, say).
 ///
 /// The header is any [`EncodeFrame`] whose frame data is what comes before the
-/// payload: a [`TransmitRequestRepr`](crate::TransmitRequestRepr) with empty `data`.
-/// What comes out is what encoding that request with the payload as its `data` gives.
+/// payload: a [`TransmitRequestRepr`](crate::TransmitRequestRepr) with empty `data`
+/// (any `data` it has goes before the payload). What comes out is what encoding that
+/// request with the payload as its `data` gives. The mode is an [`ApiMode`], or the
+/// [`Mode1`](crate::Mode1) or [`Mode2`](crate::Mode2) a decoder's type fixes.
 ///
 /// The buffer needs room for the escaped frame:
 /// [`max_encoded_len`](crate::max_encoded_len) of the header and the largest payload
@@ -89,9 +91,38 @@ impl<'b> InPlaceFrame<'b> {
 
     /// Where the payload goes: the buffer after the header, less the checksum's byte.
     /// In API mode 2 the frame also needs room to be escaped into: a payload that fills
-    /// all of this fits only if no byte of the frame needs escaping.
+    /// all of this fits only if no byte of the frame needs escaping. Write it into
+    /// [`data_mut_for`](Self::data_mut_for) to be sure it fits.
     pub fn data_mut(&mut self) -> &mut [u8] {
         let end = self.buf.len().saturating_sub(1);
+        self.buf
+            .get_mut(FRAMING + self.header..end)
+            .unwrap_or_default()
+    }
+
+    /// The start of [`data_mut`](Self::data_mut) that any payload can fill and still
+    /// fit the buffer once framed in `mode`: in mode 2, as if every byte of the frame
+    /// needed escaping. With a buffer of
+    /// [`max_encoded_len`](crate::max_encoded_len)`(header + N, mode)` bytes, `N` bytes:
+    /// an MCP packet builder given this stops where the frame would no longer fit.
+    ///
+    /// ```
+    /// use xbee_api::{Address64, ApiMode, InPlaceFrame, TransmitRequestRepr, max_encoded_len};
+    /// const FRAME: usize = max_encoded_len(TransmitRequestRepr::HEADER_LEN + 84, ApiMode::Escaped);
+    /// let mut buffer = [0u8; FRAME];
+    /// let header = TransmitRequestRepr::unicast(Address64::COORDINATOR, &[]);
+    /// let mut frame = InPlaceFrame::new(&mut buffer, &header)?;
+    /// assert_eq!(frame.data_mut_for(ApiMode::Escaped).len(), 84);
+    /// assert_eq!(frame.data_mut().len(), FRAME - 4 - 14);
+    /// # Ok::<(), xbee_api::EncodeError>(())
+    /// ```
+    pub fn data_mut_for(&mut self, mode: impl Into<ApiMode>) -> &mut [u8] {
+        // Mode 2 at worst: the delimiter, then every byte after it twice.
+        let frame = match mode.into() {
+            ApiMode::Unescaped => self.buf.len(),
+            ApiMode::Escaped => self.buf.len().saturating_sub(1) / 2 + 1,
+        };
+        let end = frame.saturating_sub(1).max(FRAMING + self.header);
         self.buf
             .get_mut(FRAMING + self.header..end)
             .unwrap_or_default()
@@ -108,7 +139,12 @@ impl<'b> InPlaceFrame<'b> {
     /// [`EncodeError::FrameTooLong`] when the header and `data_len` come to more than
     /// [`MAX_FRAME_DATA_LEN`], and with [`EncodeError::EmptyFrame`] for a header and a
     /// payload of no bytes at all.
-    pub fn finish(self, data_len: usize, mode: ApiMode) -> Result<&'b [u8], EncodeError> {
+    pub fn finish(
+        self,
+        data_len: usize,
+        mode: impl Into<ApiMode>,
+    ) -> Result<&'b [u8], EncodeError> {
+        let mode = mode.into();
         let len = self.header.saturating_add(data_len);
         if len > MAX_FRAME_DATA_LEN {
             return Err(EncodeError::FrameTooLong { len });

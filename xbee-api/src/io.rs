@@ -41,10 +41,21 @@ const CHUNK: usize = 32;
 /// A [`Decoder`] fed from a reader: the events of the bytes each read returns.
 ///
 /// Each [`read_events`](Self::read_events) call reads once (blocking until the reader
-/// has bytes, as `embedded-io` readers do) and passes every event those bytes complete
-/// to a closure, frames borrowed from the decoder's buffer. A frame split across reads
-/// comes out whole on the read that completes it. At the end of the input (a read of no
-/// bytes) the decoder is [finished](Decoder::finish): a frame cut off there is reported.
+/// has bytes, as `embedded-io` readers do), at most 32 bytes, and passes every event
+/// those bytes complete to a closure, frames borrowed from the decoder's buffer or from
+/// the bytes read. A frame split across reads comes out whole on the read that
+/// completes it. At the end of the input (a read of no bytes) the decoder is
+/// [finished](Decoder::finish): a frame cut off there is reported.
+///
+/// In mode 2 one read's 32 bytes complete at most 7 frames (a frame takes 5 bytes on
+/// the wire at least, and one begun in an earlier read may end with the read's first
+/// byte): an inbox the closure copies payloads into needs no more places than that for
+/// one call. In mode 1 a failed candidate scanned again can also release frames whose
+/// bytes came in earlier reads, at most one for every 5 bytes the decoder holds.
+///
+/// [`read_events_async`](Self::read_events_async) is cancel safe: dropped before its
+/// read completes (in a `select` with a timer, say), it has taken no byte, and nothing
+/// is lost as long as the reader's own `read` is cancel safe.
 ///
 /// Events go to a closure rather than being returned because a frame borrows the
 /// decoder, which the next read feeds again.
@@ -91,6 +102,11 @@ impl<R, const N: usize, M: DecoderMode> FrameReader<R, N, M> {
     /// [`Decoder::with_max_len`], say).
     pub const fn with_decoder(reader: R, decoder: Decoder<N, M>) -> Self {
         Self { reader, decoder }
+    }
+
+    /// The API mode the reader reads.
+    pub const fn mode(&self) -> ApiMode {
+        self.decoder.mode()
     }
 
     /// The decoder: its [`stats`](Decoder::stats) count frames and errors.
@@ -164,12 +180,19 @@ impl<R: embedded_io_async::Read, const N: usize, M: DecoderMode> FrameReader<R, 
 /// A frame that could not be written: it cannot be encoded, or the writer failed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub enum WriteError<E> {
     /// The frame cannot be encoded (nothing was written), or the buffer given to
     /// [`write_frame_async`] is too small for it.
     Encode(EncodeError),
     /// The writer failed; part of the frame may have been written.
     Io(E),
+    /// The writer took no byte of a write (`Ok(0)`: a full transmitter that does not
+    /// block, say); `written` bytes of the frame had gone out.
+    WriteZero {
+        /// Bytes of the frame written before.
+        written: usize,
+    },
 }
 
 impl<E: fmt::Display> fmt::Display for WriteError<E> {
@@ -177,6 +200,10 @@ impl<E: fmt::Display> fmt::Display for WriteError<E> {
         match self {
             Self::Encode(e) => write!(f, "cannot encode the frame: {e}"),
             Self::Io(e) => write!(f, "cannot write the frame: {e}"),
+            Self::WriteZero { written } => write!(
+                f,
+                "cannot write the frame: the writer took no byte after {written}"
+            ),
         }
     }
 }
@@ -186,6 +213,7 @@ impl<E: core::error::Error + 'static> core::error::Error for WriteError<E> {
         match self {
             Self::Encode(e) => Some(e),
             Self::Io(e) => Some(e),
+            Self::WriteZero { .. } => None,
         }
     }
 }
@@ -195,6 +223,7 @@ impl<E: embedded_io::Error + 'static> embedded_io::Error for WriteError<E> {
         match self {
             Self::Encode(_) => embedded_io::ErrorKind::InvalidInput,
             Self::Io(e) => e.kind(),
+            Self::WriteZero { .. } => embedded_io::ErrorKind::WriteZero,
         }
     }
 }
@@ -205,7 +234,8 @@ impl<E: embedded_io::Error + 'static> embedded_io::Error for WriteError<E> {
 ///
 /// A frame that cannot be encoded ([`EncodeError::EmptyFrame`],
 /// [`EncodeError::FrameTooLong`]) fails before anything is written. After a write
-/// error nothing more is written and the error is returned.
+/// error nothing more is written and the error is returned; a writer that takes no
+/// byte of a write is [`WriteError::WriteZero`] (never a panic, as `write_all` has it).
 pub fn write_frame<W: embedded_io::Write>(
     writer: &mut W,
     mode: ApiMode,
@@ -213,6 +243,7 @@ pub fn write_frame<W: embedded_io::Write>(
 ) -> Result<usize, WriteError<W::Error>> {
     let mut chunk = [0u8; CHUNK];
     let mut len = 0;
+    let mut sent = 0;
     let mut failed = None;
     let mut put = |byte: u8| {
         if failed.is_some() {
@@ -223,19 +254,68 @@ pub fn write_frame<W: embedded_io::Write>(
             len += 1;
         }
         if len == CHUNK {
-            failed = writer.write_all(&chunk).err();
+            match write_all(writer, &chunk, sent) {
+                Ok(n) => sent = n,
+                Err(e) => failed = Some(e),
+            }
             len = 0;
         }
     };
     let written = frame.write_to(mode, &mut put).map_err(WriteError::Encode)?;
     if let Some(e) = failed {
-        return Err(WriteError::Io(e));
+        return Err(e);
     }
-    writer
-        .write_all(chunk.get(..len).unwrap_or(&[]))
-        .and_then(|()| writer.flush())
-        .map_err(WriteError::Io)?;
+    write_all(writer, chunk.get(..len).unwrap_or(&[]), sent)?;
+    writer.flush().map_err(WriteError::Io)?;
     Ok(written)
+}
+
+/// Writes the bytes of a frame already encoded (by [`EncodeFrame::encode`], or built
+/// in its buffer by [`InPlaceFrame::finish`](crate::InPlaceFrame::finish)) to
+/// `writer`, then flushes it; returns how many were written, all of them.
+///
+/// A writer that takes no byte of a write is [`WriteError::WriteZero`].
+///
+/// ```
+/// use xbee_api::io::write_encoded;
+/// use xbee_api::{Address64, ApiMode, InPlaceFrame, TransmitRequestRepr};
+/// let mut buffer = [0u8; 64];
+/// let header = TransmitRequestRepr::unicast(Address64::COORDINATOR, &[]);
+/// let mut frame = InPlaceFrame::new(&mut buffer, &header)?;
+/// frame.data_mut()[..2].copy_from_slice(b"m!");
+/// let wire = frame.finish(2, ApiMode::Escaped)?;
+///
+/// let mut uart = [0u8; 64];
+/// let mut out = &mut uart[..];
+/// assert_eq!(write_encoded(&mut out, wire)?, wire.len());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn write_encoded<W: embedded_io::Write>(
+    writer: &mut W,
+    bytes: &[u8],
+) -> Result<usize, WriteError<W::Error>> {
+    let n = write_all(writer, bytes, 0)?;
+    writer.flush().map_err(WriteError::Io)?;
+    Ok(n)
+}
+
+/// Writes all of `bytes`, `sent` bytes of the frame having gone before; the bytes of
+/// the frame sent after it.
+fn write_all<W: embedded_io::Write>(
+    writer: &mut W,
+    mut bytes: &[u8],
+    mut sent: usize,
+) -> Result<usize, WriteError<W::Error>> {
+    while !bytes.is_empty() {
+        match writer.write(bytes).map_err(WriteError::Io)? {
+            0 => return Err(WriteError::WriteZero { written: sent }),
+            n => {
+                bytes = bytes.get(n..).unwrap_or(&[]);
+                sent += n;
+            }
+        }
+    }
+    Ok(sent)
 }
 
 /// Writes `frame` to an async `writer` in `mode`: encodes it into `buf`, then writes it
@@ -243,7 +323,8 @@ pub fn write_frame<W: embedded_io::Write>(
 ///
 /// `buf` must hold the encoded frame: [`max_encoded_len`](crate::max_encoded_len) of
 /// the largest frame data sizes one at compile time. A frame that does not fit, or that
-/// cannot be encoded, fails with [`WriteError::Encode`] before anything is written.
+/// cannot be encoded, fails with [`WriteError::Encode`] before anything is written; a
+/// writer that takes no byte of a write is [`WriteError::WriteZero`].
 #[cfg(feature = "embedded-io-async")]
 pub async fn write_frame_async<W: embedded_io_async::Write>(
     writer: &mut W,
@@ -252,10 +333,44 @@ pub async fn write_frame_async<W: embedded_io_async::Write>(
     buf: &mut [u8],
 ) -> Result<usize, WriteError<W::Error>> {
     let n = frame.encode(mode, buf).map_err(WriteError::Encode)?;
-    writer
-        .write_all(buf.get(..n).unwrap_or(&[]))
-        .await
-        .map_err(WriteError::Io)?;
+    write_encoded_async(writer, buf.get(..n).unwrap_or(&[])).await
+}
+
+/// [`write_encoded`] to an async `writer`: the bytes of a frame already encoded (an
+/// [`InPlaceFrame`](crate::InPlaceFrame)'s, say: the frame goes out from the buffer it
+/// was built in), then a flush.
+///
+/// ```
+/// # futures::executor::block_on(async {
+/// use xbee_api::io::write_encoded_async;
+/// use xbee_api::{Address64, ApiMode, InPlaceFrame, TransmitRequestRepr};
+/// let mut buffer = [0u8; 64];
+/// let header = TransmitRequestRepr::unicast(Address64::COORDINATOR, &[]);
+/// let mut frame = InPlaceFrame::new(&mut buffer, &header)?;
+/// frame.data_mut()[..2].copy_from_slice(b"m!");
+/// let wire = frame.finish(2, ApiMode::Escaped)?;
+///
+/// let mut uart = [0u8; 64];
+/// let mut out = &mut uart[..];
+/// assert_eq!(write_encoded_async(&mut out, wire).await?, wire.len());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// # }).unwrap();
+/// ```
+#[cfg(feature = "embedded-io-async")]
+pub async fn write_encoded_async<W: embedded_io_async::Write>(
+    writer: &mut W,
+    mut bytes: &[u8],
+) -> Result<usize, WriteError<W::Error>> {
+    let mut sent = 0;
+    while !bytes.is_empty() {
+        match writer.write(bytes).await.map_err(WriteError::Io)? {
+            0 => return Err(WriteError::WriteZero { written: sent }),
+            n => {
+                bytes = bytes.get(n..).unwrap_or(&[]);
+                sent += n;
+            }
+        }
+    }
     writer.flush().await.map_err(WriteError::Io)?;
-    Ok(n)
+    Ok(sent)
 }

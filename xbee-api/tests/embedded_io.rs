@@ -4,7 +4,9 @@
 
 use embedded_io::{ErrorKind, ErrorType, Read, Write};
 use proptest::prelude::*;
-use xbee_api::io::{FrameReader, WriteError, write_frame, write_frame_async};
+use xbee_api::io::{
+    FrameReader, WriteError, write_encoded, write_encoded_async, write_frame, write_frame_async,
+};
 use xbee_api::{
     ApiMode, DecodeError, DecoderMode, EncodeError, EncodeFrame, Event, Mode1, Mode2, RawFrame,
 };
@@ -268,4 +270,103 @@ fn async_reads_and_writes_match_the_blocking_ones() {
         {}
         assert_eq!(events, [Seen::Frame(data.to_vec())]);
     }
+}
+
+/// A transmitter that takes `room` bytes, then takes none (`Ok(0)`) without failing.
+struct Full {
+    sent: Vec<u8>,
+    room: usize,
+}
+
+impl ErrorType for Full {
+    type Error = ErrorKind;
+}
+
+impl Write for Full {
+    fn write(&mut self, buf: &[u8]) -> Result<usize, ErrorKind> {
+        let n = buf.len().min(self.room - self.sent.len());
+        self.sent.extend_from_slice(&buf[..n]);
+        Ok(n)
+    }
+
+    fn flush(&mut self) -> Result<(), ErrorKind> {
+        Ok(())
+    }
+}
+
+impl embedded_io_async::Write for Full {
+    async fn write(&mut self, buf: &[u8]) -> Result<usize, ErrorKind> {
+        Write::write(self, buf)
+    }
+
+    async fn flush(&mut self) -> Result<(), ErrorKind> {
+        Ok(())
+    }
+}
+
+#[test]
+fn a_writer_that_takes_no_byte_is_an_error_not_a_panic() {
+    // 80 bytes on the wire into room for 40: 32 go in the first write, 8 in the next.
+    let data = [0x41u8; 76];
+    let frame = RawFrame::new(&data).unwrap();
+    let mut wire = vec![0; frame.encoded_len(ApiMode::Unescaped)];
+    frame.encode(ApiMode::Unescaped, &mut wire).unwrap();
+    let full = || Full {
+        sent: Vec::new(),
+        room: 40,
+    };
+    let expected = WriteError::WriteZero { written: 40 };
+
+    let mut out = full();
+    assert_eq!(
+        write_frame(&mut out, ApiMode::Unescaped, &frame),
+        Err(expected)
+    );
+    assert_eq!(out.sent, wire[..40]);
+    let mut out = full();
+    assert_eq!(write_encoded(&mut out, &wire), Err(expected));
+    let mut out = full();
+    let mut buf = [0u8; 128];
+    let sent = futures::executor::block_on(write_frame_async(
+        &mut out,
+        ApiMode::Unescaped,
+        &frame,
+        &mut buf,
+    ));
+    assert_eq!(sent, Err(expected));
+    let mut out = full();
+    let sent = futures::executor::block_on(write_encoded_async(&mut out, &wire));
+    assert_eq!(sent, Err(expected));
+    assert_eq!(embedded_io::Error::kind(&expected), ErrorKind::WriteZero);
+    assert_eq!(
+        expected.to_string(),
+        "cannot write the frame: the writer took no byte after 40"
+    );
+}
+
+#[test]
+fn bytes_already_encoded_are_written_whole_and_flushed() {
+    let data = [0x10, 0x01, 0x7E, 0x7D, 0x11, 0x13, 0x00];
+    let frame = RawFrame::new(&data).unwrap();
+    let mut wire = vec![0; frame.encoded_len(ApiMode::Escaped)];
+    frame.encode(ApiMode::Escaped, &mut wire).unwrap();
+    let mut out = tx(usize::MAX, 3);
+    assert_eq!(write_encoded(&mut out, &wire), Ok(wire.len()));
+    assert_eq!(out.sent, wire);
+    assert!(out.flushed);
+    let mut out = tx(usize::MAX, 3);
+    let sent = futures::executor::block_on(write_encoded_async(&mut out, &wire));
+    assert_eq!(sent, Ok(wire.len()));
+    assert_eq!(out.sent, wire);
+    assert!(out.flushed);
+}
+
+#[test]
+fn a_reader_says_its_mode() {
+    let given: FrameReader<&[u8], 64> = FrameReader::new(&[][..], ApiMode::Escaped);
+    let fixed: FrameReader<&[u8], 64, Mode1> = FrameReader::fixed(&[][..]);
+    assert_eq!(
+        (given.mode(), fixed.mode()),
+        (ApiMode::Escaped, ApiMode::Unescaped)
+    );
 }

@@ -15,8 +15,9 @@ use mcp_core::{
     Command, Controller, LandingState, Packet, Report, StatusRequest, TelemetryBuilder,
     TelemetryId, Text, Waypoint, Waypoints, parse,
 };
+use xbee_api::io::{self, FrameReader};
 use xbee_api::{
-    Address16, Address64, ApiMode, Decoder, EncodeFrame, Event, Frame, InPlaceFrame, Mode2,
+    Address16, Address64, ApiMode, Decoder, EncodeFrame, Event, Frame, InPlaceFrame, Mode1, Mode2,
     ReceivePacket, TransmitRequestRepr,
 };
 
@@ -26,6 +27,59 @@ unsafe extern "C" {
     fn no_panic_path_may_remain() -> !;
     /// Where the entry points put what they produce.
     fn sink(bytes: *const u8, len: usize);
+    /// A UART: reads up to `len` bytes into `buf`, returns how many it read.
+    fn uart_read(buf: *mut u8, len: usize) -> usize;
+    /// A UART: writes up to `len` bytes of `buf`, returns how many it took (0 when full).
+    fn uart_write(buf: *const u8, len: usize) -> usize;
+}
+
+/// The UART of [`mav_uart`], an `embedded-io` reader and writer, blocking and async.
+struct Uart;
+
+impl embedded_io::ErrorType for Uart {
+    type Error = core::convert::Infallible;
+}
+
+impl embedded_io::Read for Uart {
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, Self::Error> {
+        // SAFETY: `uart_read` writes at most `len` bytes to `buf`, which has that room.
+        Ok(unsafe { uart_read(buf.as_mut_ptr(), buf.len()) }.min(buf.len()))
+    }
+}
+
+impl embedded_io::Write for Uart {
+    fn write(&mut self, buf: &[u8]) -> Result<usize, Self::Error> {
+        // SAFETY: `uart_write` reads at most `len` bytes of `buf`.
+        Ok(unsafe { uart_write(buf.as_ptr(), buf.len()) }.min(buf.len()))
+    }
+    fn flush(&mut self) -> Result<(), Self::Error> {
+        Ok(())
+    }
+}
+
+impl embedded_io_async::Read for Uart {
+    async fn read(&mut self, buf: &mut [u8]) -> Result<usize, Self::Error> {
+        embedded_io::Read::read(self, buf)
+    }
+}
+
+impl embedded_io_async::Write for Uart {
+    async fn write(&mut self, buf: &[u8]) -> Result<usize, Self::Error> {
+        embedded_io::Write::write(self, buf)
+    }
+    async fn flush(&mut self) -> Result<(), Self::Error> {
+        Ok(())
+    }
+}
+
+/// Polls `future` once, as an executor would on a wake-up.
+fn poll_once<F: core::future::Future>(future: F) -> Option<F::Output> {
+    let mut future = core::pin::pin!(future);
+    let mut cx = core::task::Context::from_waker(core::task::Waker::noop());
+    match future.as_mut().poll(&mut cx) {
+        core::task::Poll::Ready(output) => Some(output),
+        core::task::Poll::Pending => None,
+    }
 }
 
 #[panic_handler]
@@ -290,3 +344,39 @@ pub extern "C" fn mav_telemetry_in_place(values: &[f32; 4], mode: u8, frame: &mu
 /// new, so it goes to `.bss` and takes no flash (`check.sh` checks where it lands).
 #[unsafe(no_mangle)]
 pub static mut MAV_MODE2_DECODER: Decoder<64, Mode2> = Decoder::fixed();
+
+/// Frames read from a UART through `embedded-io` (`io::FrameReader`, blocking and async)
+/// and written to it (`io::write_frame`, `io::write_encoded` and their async forms),
+/// whatever the UART reads and however few bytes it takes a write.
+#[unsafe(no_mangle)]
+pub extern "C" fn mav_uart() {
+    let mut reader: FrameReader<Uart, 100, Mode1> = FrameReader::fixed(Uart);
+    for _ in 0..4 {
+        let _ = reader.read_events(|event| {
+            if let Ok(frame) = event {
+                out(frame.data());
+            }
+        });
+        let _ = poll_once(reader.read_events_async(|event| {
+            if let Ok(frame) = event {
+                out(frame.data());
+            }
+        }));
+    }
+    let request = TransmitRequestRepr::unicast(Address64::COORDINATOR, b"m on the UART");
+    let _ = io::write_frame(&mut Uart, ApiMode::Escaped, &request);
+    let mut buffer = [0u8; 64];
+    if let Ok(n) = request.encode(ApiMode::Escaped, &mut buffer) {
+        let _ = io::write_encoded(&mut Uart, buffer.get(..n).unwrap_or_default());
+        let _ = poll_once(io::write_encoded_async(
+            &mut Uart,
+            buffer.get(..n).unwrap_or_default(),
+        ));
+    }
+    let _ = poll_once(io::write_frame_async(
+        &mut Uart,
+        ApiMode::Unescaped,
+        &request,
+        &mut buffer,
+    ));
+}
