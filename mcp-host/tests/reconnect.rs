@@ -513,7 +513,17 @@ struct Captured(std::sync::Arc<std::sync::Mutex<Vec<u8>>>);
 
 impl Captured {
     /// Log lines up to `level`, captured until the guard is dropped.
+    ///
+    /// tracing decides once for the whole process whether a log line's call site is
+    /// wanted, asking the subscriber of the thread that reaches it first: a test running
+    /// on another thread with none would have it dropped for every thread. A global
+    /// subscriber that takes everything (and prints nothing) answers those threads, so a
+    /// line is never dropped before this thread's subscriber sees it.
     fn at(level: tracing::Level) -> (Self, tracing::subscriber::DefaultGuard) {
+        static GLOBAL: std::sync::Once = std::sync::Once::new();
+        GLOBAL.call_once(|| {
+            let _ = tracing::subscriber::set_global_default(tracing_subscriber::registry());
+        });
         let logs = Captured::default();
         let writer = logs.clone();
         let subscriber = tracing_subscriber::fmt()

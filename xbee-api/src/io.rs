@@ -165,7 +165,30 @@ impl<R: embedded_io::Read, const N: usize, M: DecoderMode> FrameReader<R, N, M> 
 #[cfg(feature = "embedded-io-async")]
 impl<R: embedded_io_async::Read, const N: usize, M: DecoderMode> FrameReader<R, N, M> {
     /// [`read_events`](Self::read_events) from an async reader: waits for the read, then
-    /// passes the events to `f`.
+    /// passes the events to `f`. Cancel safe (see [`FrameReader`]).
+    ///
+    /// ```
+    /// # futures::executor::block_on(async {
+    /// use xbee_api::io::FrameReader;
+    /// use xbee_api::{Mode2, ReceivePacket};
+    /// // A Receive Packet carrying `c 02 FF` (a landing status request), in API mode 2.
+    /// let uart: &[u8] = &[0x7E, 0x00, 0x0F, 0x90, 0x00, 0x7D, 0x33, 0xA2, 0x00, 0x40, 0x52,
+    ///                     0x2B, 0xAA, 0xFF, 0xFE, 0x01, 0x63, 0x02, 0xFF, 0xF1];
+    /// let mut reader: FrameReader<_, 64, Mode2> = FrameReader::fixed(uart);
+    /// let mut payloads = Vec::new(); // a `heapless::Deque` on a microcontroller
+    /// while reader
+    ///     .read_events_async(|event| {
+    ///         if let Some(rx) = event.ok().and_then(|f| ReceivePacket::new_checked(f.data()).ok()) {
+    ///             payloads.push(rx.data().to_vec());
+    ///         }
+    ///     })
+    ///     .await?
+    ///     > 0
+    /// {}
+    /// assert_eq!(payloads, [b"c\x02\xFF".to_vec()]);
+    /// # Ok::<(), core::convert::Infallible>(())
+    /// # }).unwrap();
+    /// ```
     pub async fn read_events_async<F: FnMut(Event<'_>)>(
         &mut self,
         f: F,
