@@ -279,6 +279,18 @@ fn unknown_mav_is_a_delivery_failure() {
     assert!(failed["id"].as_u64().is_some_and(|id| id > 0), "{failed}");
 }
 
+/// A landing status request to the MAV with a 1 s timeout, which it must hit (exit
+/// code 4): the JSON object it prints.
+fn status_timeout(sim: &Sim) -> Value {
+    let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args(["status", "--link", &sim.link, "--timeout", "1", "--to", MAV])
+        .args(["--format", "json", "landing"])
+        .output()
+        .expect("run mcp-gs status");
+    assert_eq!(out.status.code(), Some(4), "{out:?}");
+    serde_json::from_slice(&out.stdout).expect("one JSON object")
+}
+
 #[test]
 fn status_in_json_prints_its_failures_as_send_does() {
     // The MAV's radio is there (its Transmit Status says delivered), but every frame to
@@ -306,13 +318,7 @@ fn status_in_json_prints_its_failures_as_send_does() {
         "{failed}"
     );
     // No report in time: what was known, that the radio delivered the request.
-    let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
-        .args(["status", "--link", &sim.link, "--timeout", "1", "--to", MAV])
-        .args(["--format", "json", "landing"])
-        .output()
-        .expect("run mcp-gs status");
-    assert_eq!(out.status.code(), Some(4), "{out:?}");
-    let timeout: Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    let timeout = status_timeout(&sim);
     assert_eq!(
         timeout,
         serde_json::json!({
@@ -329,13 +335,7 @@ fn status_in_json_prints_its_failures_as_send_does() {
         &["--faults", "0000000000000000=corrupt=1"],
         "tcp-listen:127.0.0.1:0",
     );
-    let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
-        .args(["status", "--link", &sim.link, "--timeout", "1", "--to", MAV])
-        .args(["--format", "json", "landing"])
-        .output()
-        .expect("run mcp-gs status");
-    assert_eq!(out.status.code(), Some(4), "{out:?}");
-    let timeout: Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    let timeout = status_timeout(&sim);
     assert_eq!(timeout["delivered"], false, "{timeout}");
     assert!(
         timeout["undecodable"].as_u64().is_some_and(|n| n >= 1),
