@@ -545,9 +545,9 @@ fn status_timeout_exits_4() {
 }
 
 #[test]
-fn send_and_status_in_json_print_a_timeout_object() {
+fn send_status_and_at_in_json_print_a_timeout_object() {
     // A peer that reads every request but never answers: no transmit status, no report.
-    let (link, peer) = common::silent_peer(2);
+    let (link, peer) = common::silent_peer(4);
     let json = |sub: &str, args: &[&str]| {
         let options = ["--link", &link, "--timeout", "0.5", "--format", "json"];
         let output = run(&[&[sub][..], &options, args].concat());
@@ -573,6 +573,21 @@ fn send_and_status_in_json_print_a_timeout_object() {
             "dst64": "0013a20040b599b9",
             "delivered": false,
             "mcp": {"category": "command", "type": "landing", "status_request": true},
+        })
+    );
+    let local = json("at", &["NI"]);
+    assert_eq!(
+        local,
+        serde_json::json!({"result": "timeout", "command": "NI", "id": 1})
+    );
+    let remote = json("at", &["--to", "0013A20040B599B9", "NI"]);
+    assert_eq!(
+        remote,
+        serde_json::json!({
+            "result": "timeout",
+            "command": "NI",
+            "dst64": "0013a20040b599b9",
+            "id": 1,
         })
     );
     peer.join().unwrap();

@@ -3,6 +3,7 @@
 use std::time::Duration;
 
 use clap::Args;
+use mcp_host::SendError;
 use xbee_api::{Address64, AtStatus, Frame};
 
 use crate::link_args::{
@@ -46,7 +47,7 @@ pub(crate) struct AtArgs {
     value: Option<String>,
     /// Output format: `json` prints each answer as the response frame's object (as
     /// `monitor` does), with `value` added: the value read as a number, or as text for a
-    /// text parameter.
+    /// text parameter; no answer in time as `{"result":"timeout","command":...}`.
     #[arg(long, value_enum, default_value_t = Format::Text)]
     format: Format,
 }
@@ -338,8 +339,16 @@ pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
                 .remote_at(to, command, &parameter, !args.no_apply, timeout)
                 .await
         }
+    };
+    let name = String::from_utf8_lossy(&command).into_owned();
+    // No answer is an outcome too: JSON prints it, as `send` does, with the failure on
+    // standard error.
+    if let (Format::Json, Err(error)) = (args.format, &response) {
+        if let Some(json) = timeout_json(error, &name, args.to) {
+            out!("{json}");
+        }
     }
-    .map_err(|e| diagnosed_send(e, &args.link, &sender.stats()))?;
+    let response = response.map_err(|e| diagnosed_send(e, &args.link, &sender.stats()))?;
     let frame = response.parse();
     let (status, data) = match &frame {
         Ok(Frame::AtCommandResponse(at)) => (at.status, at.data),
@@ -351,7 +360,6 @@ pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
             ));
         }
     };
-    let name = String::from_utf8_lossy(&command).into_owned();
     // A refusal is an answer too: JSON prints it, with the failure on standard error.
     if let (Format::Json, Ok(frame)) = (args.format, &frame) {
         out!("{}", answer_json(frame, &command, data));
@@ -376,6 +384,25 @@ pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
         warn_mode_mismatch(ap, mode, &args.link.link);
     }
     Ok(())
+}
+
+/// No answer in time as a JSON object: `{"result":"timeout","command":"AP"}`, with the
+/// remote radio's `dst64` and the frame id when the command went out; `None` for
+/// another failure.
+fn timeout_json(error: &SendError, name: &str, to: Option<Address64>) -> Option<serde_json::Value> {
+    let frame_id = match *error {
+        SendError::Timeout { frame_id, .. } => Some(frame_id),
+        SendError::NoFreeFrameId { .. } | SendError::NotSent { .. } => None,
+        _ => return None,
+    };
+    let mut json = serde_json::json!({ "result": "timeout", "command": name });
+    if let Some(to) = to {
+        json["dst64"] = to.to_string().into();
+    }
+    if let Some(frame_id) = frame_id {
+        json["id"] = frame_id.into();
+    }
+    Some(json)
 }
 
 #[cfg(test)]
