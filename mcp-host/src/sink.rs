@@ -23,9 +23,6 @@ use crate::{LinkState, SendError};
 /// (`send_all`, `forward`); to know that a packet was delivered, use
 /// [`CommandSender::send_packet`](crate::CommandSender::send_packet).
 ///
-/// `B` holds a packet's bytes: [`Bytes`], as the [`PacketStream`](crate::PacketStream)'s
-/// packets have them (the default), `&[u8]`, `Vec<u8>`...
-///
 /// Made by [`CommandSender::packet_sink`](crate::CommandSender::packet_sink). The sink
 /// waits for room in the link's queue (`poll_ready`), so a fast stream is held back,
 /// never buffered without bound. `poll_flush` is ready once the packets are in that
@@ -53,9 +50,9 @@ use crate::{LinkState, SendError};
 /// that await an answer go through another queue, so no order holds between those and
 /// the sink's packets.
 ///
-/// The item's packet holds its bytes in `B`, which the items sent fix: a sink fed
-/// [`Received`](crate::Received) packets takes `Packet<Bytes>`, one fed packets built in
-/// place `Packet<&[u8]>` (`packet.map_bytes(Bytes::copy_from_slice)` makes the first
+/// The item's packet holds its bytes in `B` (`Bytes`, `&[u8]`, `Vec<u8>`...), which the
+/// items sent fix: a sink fed [`Received`](crate::Received) packets takes
+/// `Packet<Bytes>`, one fed packets built in place `Packet<&[u8]>` (`packet.map_bytes(Bytes::copy_from_slice)` makes the first
 /// of the second, `as_borrowed` the second of the first). Name it where nothing else
 /// does: `sender.packet_sink::<Bytes>()`.
 ///
