@@ -217,3 +217,34 @@ fn a_header_that_writes_other_than_it_announces_is_an_error() {
         })
     );
 }
+
+proptest! {
+    /// A payload that fills what `data_mut_for` gives, whatever its bytes, fits once
+    /// framed in that mode; in a buffer sized by `max_encoded_len`, that room is the
+    /// payload the buffer was sized for.
+    #[test]
+    fn the_room_for_a_mode_always_fits(
+        mode in mode(),
+        payload_max in 0usize..120,
+        slack in 0usize..9,
+        bytes in bytes(200),
+    ) {
+        let header = TransmitRequestRepr::unicast(Address64::COORDINATOR, &[]);
+        let size = xbee_api::max_encoded_len(TransmitRequestRepr::HEADER_LEN + payload_max, mode);
+        let mut buffer = vec![0u8; size + slack];
+        let mut frame = InPlaceFrame::new(&mut buffer, &header).unwrap();
+        let room = frame.data_mut_for(mode);
+        prop_assert!(room.len() >= payload_max);
+        let n = room.len().min(bytes.len());
+        room[..n].copy_from_slice(&bytes[..n]);
+        // Where `bytes` ran short, bytes that all need escaping.
+        room[n..].fill(0x7E);
+        let len = room.len();
+        prop_assert!(frame.finish(len, mode).is_ok());
+        if slack == 0 {
+            let mut exact = vec![0u8; size];
+            let mut frame = InPlaceFrame::new(&mut exact, &header).unwrap();
+            prop_assert_eq!(frame.data_mut_for(mode).len(), payload_max);
+        }
+    }
+}
