@@ -169,7 +169,8 @@ pub struct LinkInfo {
 /// [`LinkEvent::Connected`].
 ///
 /// The task runs until the link ends for good ([`LinkEvent::Closed`]) or the stream and
-/// every sender are dropped. Must be called within a tokio runtime.
+/// every sender (and every [`PacketSink`] made from one) are dropped. Must be called
+/// within a tokio runtime.
 pub async fn connect(
     link: &Link,
     options: LinkOptions,
