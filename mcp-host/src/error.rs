@@ -124,6 +124,37 @@ pub enum SendError {
     EmptyFrame,
 }
 
+impl SendError {
+    /// Whether the request ran out of time: no status or response came
+    /// ([`Timeout`](Self::Timeout)), or it was never sent, waiting for a frame id or for
+    /// room in the link's queue ([`NoFreeFrameId`](Self::NoFreeFrameId),
+    /// [`NotSent`](Self::NotSent)). The radio and the MAV may be fine: a longer timeout
+    /// may do, where a delivery failure, a closed link or a refused frame would not.
+    ///
+    /// ```
+    /// use mcp_host::SendError;
+    /// assert!(!SendError::Closed.is_timeout());
+    /// ```
+    pub fn is_timeout(&self) -> bool {
+        matches!(
+            self,
+            SendError::Timeout { .. } | SendError::NoFreeFrameId { .. } | SendError::NotSent { .. }
+        )
+    }
+
+    /// The frame id the request went out under, when it went out with one and failed
+    /// for want of an answer or of delivery ([`Timeout`](Self::Timeout),
+    /// [`Delivery`](Self::Delivery)); `None` otherwise.
+    pub fn frame_id(&self) -> Option<u8> {
+        match *self {
+            SendError::Timeout { frame_id, .. } | SendError::Delivery { frame_id, .. } => {
+                Some(frame_id)
+            }
+            _ => None,
+        }
+    }
+}
+
 /// Why a status request did not produce a report.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[non_exhaustive]
@@ -174,5 +205,50 @@ fn timeout_cause(delivered: bool, undecodable: u64) -> String {
         }
         (false, None) => "the radio did not confirm delivery".to_owned(),
         (false, Some(lost)) => format!("the radio did not confirm delivery, and {lost}"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::time::Duration;
+
+    use xbee_api::{Address16, Address64, DeliveryStatus, DiscoveryStatus};
+
+    use super::SendError;
+
+    #[test]
+    fn the_timeouts_are_the_requests_that_ran_out_of_time() {
+        let timeout = Duration::from_secs(1);
+        let timed_out = [
+            SendError::Timeout {
+                frame_id: 7,
+                timeout,
+            },
+            SendError::NoFreeFrameId { timeout },
+            SendError::NotSent { timeout },
+        ];
+        let delivery = SendError::Delivery {
+            to: Address64::COORDINATOR,
+            frame_id: 9,
+            dst16: Address16::UNKNOWN,
+            status: DeliveryStatus::from(0x24),
+            retries: 0,
+            discovery: DiscoveryStatus::from(0),
+        };
+        let others = [
+            delivery.clone(),
+            SendError::Closed,
+            SendError::Disconnected {
+                reason: "gone".into(),
+            },
+            SendError::TooLarge { len: 300, max: 255 },
+            SendError::EmptyFrame,
+        ];
+        assert!(timed_out.iter().all(SendError::is_timeout));
+        assert!(!others.iter().any(SendError::is_timeout));
+        let ids: Vec<_> = timed_out.iter().map(SendError::frame_id).collect();
+        assert_eq!(ids, [Some(7), None, None]);
+        assert_eq!(delivery.frame_id(), Some(9));
+        assert_eq!(SendError::Closed.frame_id(), None);
     }
 }

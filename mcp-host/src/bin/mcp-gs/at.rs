@@ -390,16 +390,14 @@ pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
 /// remote radio's `dst64` and the frame id when the command went out; `None` for
 /// another failure.
 fn timeout_json(error: &SendError, name: &str, to: Option<Address64>) -> Option<serde_json::Value> {
-    let frame_id = match *error {
-        SendError::Timeout { frame_id, .. } => Some(frame_id),
-        SendError::NoFreeFrameId { .. } | SendError::NotSent { .. } => None,
-        _ => return None,
-    };
+    if !error.is_timeout() {
+        return None;
+    }
     let mut json = serde_json::json!({ "result": "timeout", "command": name });
     if let Some(to) = to {
         json["dst64"] = to.to_string().into();
     }
-    if let Some(frame_id) = frame_id {
+    if let Some(frame_id) = error.frame_id() {
         json["id"] = frame_id.into();
     }
     Some(json)

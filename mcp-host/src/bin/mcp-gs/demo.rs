@@ -240,9 +240,7 @@ impl Script {
 fn send_failure(e: &SendError) -> Failure {
     match e {
         SendError::Delivery { .. } => Failure::new(Failure::DELIVERY, e.to_string()),
-        SendError::Timeout { .. } | SendError::NoFreeFrameId { .. } | SendError::NotSent { .. } => {
-            Failure::new(Failure::TIMEOUT, e.to_string())
-        }
+        e if e.is_timeout() => Failure::new(Failure::TIMEOUT, e.to_string()),
         SendError::Disconnected { .. } | SendError::Closed => Failure::link(e.to_string()),
         _ => Failure::new(Failure::OTHER, e.to_string()),
     }

@@ -669,9 +669,7 @@ fn not_a_serial_port(description: &str, link: &Link) -> Option<String> {
 pub(crate) fn send_failure(error: SendError) -> Failure {
     let code = match &error {
         SendError::Delivery { .. } => Failure::DELIVERY,
-        SendError::Timeout { .. } | SendError::NoFreeFrameId { .. } | SendError::NotSent { .. } => {
-            Failure::TIMEOUT
-        }
+        e if e.is_timeout() => Failure::TIMEOUT,
         SendError::Disconnected { .. } | SendError::Closed => Failure::LINK,
         SendError::TooLarge { .. } | SendError::NoFrameId(_) | SendError::EmptyFrame => {
             Failure::INPUT

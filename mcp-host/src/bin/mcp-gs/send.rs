@@ -185,10 +185,7 @@ pub(crate) fn failure_json(
             json["mcp"] = mcp;
             Some(json)
         }
-        SendError::Timeout { frame_id, .. } => Some(timeout_json(to, Some(frame_id), false, mcp)),
-        SendError::NoFreeFrameId { .. } | SendError::NotSent { .. } => {
-            Some(timeout_json(to, None, false, mcp))
-        }
+        _ if error.is_timeout() => Some(timeout_json(to, error.frame_id(), false, mcp)),
         _ => None,
     }
 }
