@@ -117,13 +117,7 @@ impl CommandSender {
         packet: &mcp_core::Packet<B>,
         options: SendOptions,
     ) -> Result<DeliveryReport, SendError> {
-        let mut buf = [0u8; mcp_core::MAX_PAYLOAD];
-        let len = packet.encode(&mut buf).map_err(|_| SendError::TooLarge {
-            len: packet.encoded_len(),
-            max: mcp_core::MAX_PAYLOAD,
-        })?;
-        self.send_payload(to, Bytes::copy_from_slice(&buf[..len]), options)
-            .await
+        self.send_payload(to, encode_packet(packet)?, options).await
     }
 
     /// Sends a trajectory set command of `waypoints` (at most 15 fit the 255-byte
@@ -664,6 +658,18 @@ fn frame_data(frame: &impl xbee_api::EncodeFrame) -> Result<Vec<u8>, SendError> 
             max: xbee_api::MAX_FRAME_DATA_LEN,
         })?;
     Ok(data)
+}
+
+/// The payload of `packet`, or [`SendError::TooLarge`].
+pub(crate) fn encode_packet<B: AsRef<[u8]>>(
+    packet: &mcp_core::Packet<B>,
+) -> Result<Bytes, SendError> {
+    let mut buf = [0u8; mcp_core::MAX_PAYLOAD];
+    let len = packet.encode(&mut buf).map_err(|_| SendError::TooLarge {
+        len: packet.encoded_len(),
+        max: mcp_core::MAX_PAYLOAD,
+    })?;
+    Ok(Bytes::copy_from_slice(&buf[..len]))
 }
 
 fn encode_command<B: AsRef<[u8]>>(command: &mcp_core::Command<B>) -> Result<Bytes, SendError> {

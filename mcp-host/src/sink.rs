@@ -156,19 +156,18 @@ fn transmit_frame_data<B: AsRef<[u8]>>(
     to: Address64,
     packet: &mcp_core::Packet<B>,
 ) -> Result<Bytes, SendError> {
-    let too_large = || SendError::TooLarge {
-        len: packet.encoded_len(),
-        max: mcp_core::MAX_PAYLOAD,
-    };
-    let mut payload = [0u8; mcp_core::MAX_PAYLOAD];
-    let len = packet.encode(&mut payload).map_err(|_| too_large())?;
+    let payload = crate::sender::encode_packet(packet)?;
     let request = TransmitRequestRepr {
         frame_id: 0,
-        ..TransmitRequestRepr::unicast(to, payload.get(..len).ok_or_else(too_large)?)
+        ..TransmitRequestRepr::unicast(to, &payload)
     };
     let mut data = vec![0u8; request.frame_data_len()];
+    // Room for the frame data it announces: it cannot fail.
     request
         .emit_frame_data(&mut data)
-        .map_err(|_| too_large())?;
+        .map_err(|_| SendError::TooLarge {
+            len: payload.len(),
+            max: mcp_core::MAX_PAYLOAD,
+        })?;
     Ok(Bytes::from(data))
 }
