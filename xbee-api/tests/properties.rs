@@ -456,28 +456,32 @@ proptest! {
         garbage in proptest::collection::vec(any::<u8>(), 0..4),
         reads in fifo_reads(),
     ) {
-        let mut stream = Vec::new();
-        for (data, good) in &frames_data {
-            let check = checksum(data).wrapping_add(u8::from(!good));
-            stream.extend(wire(data, check, mode));
-            stream.extend_from_slice(&garbage);
-        }
+        let stream = frames_among(Vec::new(), &frames_data, &garbage, mode);
         // 16 bytes of frame data in mode 2, 12 in mode 1 (the frame's 4 other bytes).
         let limited = || Decoder::<64>::with_max_len(mode, 16 - 4 * usize::from(mode == ApiMode::Unescaped));
         let (expected, expected_stats) = decode_bytes::<16>(mode, &stream);
-        let (bytes, bytes_stats) = decode_bytes_with(limited(), &stream);
-        let (each, each_stats) = decode_each_slices_with(limited(), &stream, &reads);
-        let (whole, whole_stats) = decode_each_slices_with(limited(), &stream, &[1 << 20]);
-        let (events, stats) = decode_slices_with(limited(), &stream, &reads);
-        prop_assert_eq!(&bytes, &expected);
-        prop_assert_eq!(bytes_stats, expected_stats);
-        prop_assert_eq!(&each, &expected);
-        prop_assert_eq!(each_stats, expected_stats);
-        prop_assert_eq!(&whole, &expected);
-        prop_assert_eq!(whole_stats, expected_stats);
-        prop_assert_eq!(&events, &expected);
-        prop_assert_eq!(stats, expected_stats);
+        // A byte at a time, in reads, through `decode_each` in reads and whole.
+        for (events, stats) in every_way(limited, &stream, &reads) {
+            prop_assert_eq!(&events, &expected);
+            prop_assert_eq!(stats, expected_stats);
+        }
     }
+}
+
+/// `stream` followed by each frame of `frames` on the wire in `mode` (with a wrong
+/// checksum where it is not `good`), `garbage` after each.
+fn frames_among(
+    mut stream: Vec<u8>,
+    frames: &[(Vec<u8>, bool)],
+    garbage: &[u8],
+    mode: ApiMode,
+) -> Vec<u8> {
+    for (data, good) in frames {
+        let check = checksum(data).wrapping_add(u8::from(!good));
+        stream.extend(wire(data, check, mode));
+        stream.extend_from_slice(garbage);
+    }
+    stream
 }
 
 /// Decodes `stream` with a decoder made by `new` in every way (a byte at a time, in
@@ -511,12 +515,7 @@ proptest! {
         reads in fifo_reads(),
         max_len in prop_oneof![Just(usize::MAX), 8..=24usize],
     ) {
-        let mut stream = noise;
-        for (data, good) in &frames_data {
-            let check = checksum(data).wrapping_add(u8::from(!good));
-            stream.extend(wire(data, check, mode));
-            stream.extend_from_slice(&garbage);
-        }
+        let stream = frames_among(noise, &frames_data, &garbage, mode);
         let given = every_way(|| Decoder::<64>::with_max_len(mode, max_len), &stream, &reads);
         let fixed = match mode {
             ApiMode::Unescaped => {
