@@ -82,7 +82,8 @@ impl Sim {
         let out = self.ok(&args);
         let report: Value = serde_json::from_str(out.trim()).expect("one JSON report");
         assert_eq!(report["category"], "report", "{out}");
-        // Which MAV answered, and when.
+        // That, which MAV answered, and when.
+        assert_eq!(report["result"], "answered", "{out}");
         assert_eq!(report["src64"], MAV.to_lowercase(), "{out}");
         let received_at = report["received_at"].as_f64().expect("received_at");
         let now = std::time::SystemTime::now()

@@ -18,8 +18,8 @@ pub(crate) struct StatusArgs {
     /// The MAV's 64-bit address (16 hex digits).
     #[arg(long, value_name = "ADDR", value_parser = crate::link_args::parse_address64)]
     to: Address64,
-    /// Output format: `json` prints the report's object, with `src64` and `received_at`
-    /// added; a failure as `send` does, `{"result":"failed",...}` with the transmit
+    /// Output format: `json` prints the report's object, with `"result":"answered"`,
+    /// `src64` and `received_at` added; a failure as `send` does, `{"result":"failed",...}` with the transmit
     /// status's fields, or `{"result":"timeout",...}` with whether the radio delivered
     /// the request.
     #[arg(long, value_enum, default_value_t = Format::Text)]
@@ -102,8 +102,10 @@ pub(crate) async fn run(args: StatusArgs) -> Result<(), Failure> {
         Format::Text => out!("{}", packet.as_borrowed()),
         Format::Json => {
             let mut json = mcp_host::render::json::packet_json(&packet);
-            // Which MAV answered, and when (a time report has a `time` field of its own).
+            // That the MAV answered (as a failure says `failed` or `timeout`), which MAV,
+            // and when (a time report has a `time` field of its own).
             if let serde_json::Value::Object(map) = &mut json {
+                map.insert("result".into(), "answered".into());
                 map.insert("src64".into(), args.to.to_string().into());
                 let secs = mcp_host::render::json::seconds(received_at);
                 map.insert("received_at".into(), secs.into());
