@@ -14,7 +14,7 @@ use tokio_util::codec::{Decoder, Encoder};
 use xbee_api::{ApiMode, DecodeError, EncodeFrame};
 
 use crate::event::OwnedFrame;
-use crate::stats::{Counters, add};
+use crate::stats::Counters;
 
 /// Largest frame data length the codec can accept (mode 2; 4 less in mode 1): the
 /// capacity of the underlying decoder, well above the ~273 bytes a radio sends.
@@ -138,21 +138,8 @@ impl XBeeCodec {
     /// Copies the decoder's counters that moved into the shared ones.
     fn sync_counters(&mut self) {
         let now = *self.decoder.stats();
-        let c = &self.counters;
-        let delta = |new: u32, old: u32| u64::from(new.wrapping_sub(old));
-        add(&c.frames, delta(now.frames_ok, self.seen.frames_ok));
-        add(
-            &c.bad_checksum,
-            delta(now.bad_checksum, self.seen.bad_checksum),
-        );
-        add(&c.oversize, delta(now.oversize, self.seen.oversize));
-        add(&c.empty, delta(now.empty, self.seen.empty));
-        add(&c.truncated, delta(now.truncated, self.seen.truncated));
-        add(&c.bad_escape, delta(now.bad_escape, self.seen.bad_escape));
-        add(
-            &c.bytes_skipped,
-            delta(now.bytes_skipped, self.seen.bytes_skipped),
-        );
+        self.counters
+            .add_all(&crate::Stats::decoder_since(&now, &self.seen));
         self.seen = now;
     }
 

@@ -41,6 +41,35 @@ impl Stats {
     pub fn decode_errors(&self) -> u64 {
         self.bad_checksum + self.oversize + self.empty + self.truncated + self.bad_escape
     }
+
+    /// What an [`xbee_api::Decoder`] counted between two snapshots of its counters,
+    /// `earlier` and `now`, as 64-bit counts (the framing counters and
+    /// `bytes_skipped`; the others 0). The decoder's counters are 32-bit and wrap:
+    /// the difference is right as long as fewer than 2^32 of each came between the two,
+    /// so adding up the pieces of a long stream, a read at a time, counts it whole.
+    ///
+    /// ```
+    /// use mcp_host::Stats;
+    /// let earlier = xbee_api::Stats { bytes_skipped: u32::MAX - 1, ..Default::default() };
+    /// let now = xbee_api::Stats { frames_ok: 3, bytes_skipped: 2, ..Default::default() };
+    /// let mut total = Stats { bytes_skipped: u64::from(u32::MAX - 1), ..Stats::default() };
+    /// // 3 frames, and 4 bytes skipped across the wrap of the decoder's counter.
+    /// total += Stats::decoder_since(&now, &earlier);
+    /// assert_eq!((total.frames, total.bytes_skipped), (3, u64::from(u32::MAX) + 3));
+    /// ```
+    pub fn decoder_since(now: &xbee_api::Stats, earlier: &xbee_api::Stats) -> Stats {
+        let delta = |now: u32, earlier: u32| u64::from(now.wrapping_sub(earlier));
+        Stats {
+            frames: delta(now.frames_ok, earlier.frames_ok),
+            bad_checksum: delta(now.bad_checksum, earlier.bad_checksum),
+            oversize: delta(now.oversize, earlier.oversize),
+            empty: delta(now.empty, earlier.empty),
+            truncated: delta(now.truncated, earlier.truncated),
+            bad_escape: delta(now.bad_escape, earlier.bad_escape),
+            bytes_skipped: delta(now.bytes_skipped, earlier.bytes_skipped),
+            ..Stats::default()
+        }
+    }
 }
 
 macro_rules! counters {
@@ -69,6 +98,21 @@ macro_rules! counters {
             /// ```
             pub fn since(&self, earlier: &Stats) -> Stats {
                 Stats { $($name: self.$name.saturating_sub(earlier.$name),)* }
+            }
+        }
+
+        /// Adds each counter of `other` to this one's: totals of several links, or of
+        /// [`Stats::decoder_since`] pieces.
+        impl std::ops::AddAssign for Stats {
+            fn add_assign(&mut self, other: Stats) {
+                $(self.$name += other.$name;)*
+            }
+        }
+
+        impl Counters {
+            /// Adds each counter of `delta`.
+            pub(crate) fn add_all(&self, delta: &Stats) {
+                $(add(&self.$name, delta.$name);)*
             }
         }
     };

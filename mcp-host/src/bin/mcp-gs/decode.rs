@@ -314,6 +314,23 @@ impl Summary {
     }
 }
 
+/// A decoder's counters added up as 64-bit counts.
+#[derive(Default)]
+struct Totals {
+    stats: mcp_host::Stats,
+    /// The decoder's counters when last taken.
+    seen: xbee_api::Stats,
+}
+
+impl Totals {
+    /// Adds what `decoder` counted since the last call.
+    fn take<const N: usize>(&mut self, decoder: &Decoder<N>) {
+        let now = *decoder.stats();
+        self.stats += mcp_host::Stats::decoder_since(&now, &self.seen);
+        self.seen = now;
+    }
+}
+
 fn decode_stream(
     mut input: impl Read,
     mode: ApiMode,
@@ -322,6 +339,10 @@ fn decode_stream(
     let mut decoder: Decoder = Decoder::new(mode);
     let mut chunk = vec![0u8; 1 << 16];
     let mut offset = 0u64;
+    // The decoder's counters are 32-bit and wrap; they are added up here a read at a
+    // time (64 KiB, far fewer than 2^32 of anything), so a capture of any size is
+    // counted whole.
+    let mut totals = Totals::default();
     loop {
         let n = match input.read(&mut chunk) {
             Ok(0) => break,
@@ -337,6 +358,7 @@ fn decode_stream(
                 }
             });
             offset += n as u64;
+            totals.take(&decoder);
             continue;
         }
         let mut rest = &chunk[..n];
@@ -350,6 +372,7 @@ fn decode_stream(
                 None => break,
             }
         }
+        totals.take(&decoder);
         // A read that did not fill the buffer had all there was for now (a pipe, a
         // terminal): what it decoded is shown at once, not when more comes.
         if n < chunk.len() {
@@ -362,20 +385,14 @@ fn decode_stream(
             Err(error) => printer.error(&error, offset)?,
         }
     }
+    totals.take(&decoder);
+    let stats = &totals.stats;
     if let Some(summary) = &printer.summary {
-        print_summary(
-            printer.out,
-            summary,
-            printer.format,
-            offset,
-            decoder.stats(),
-        )?;
+        print_summary(printer.out, summary, printer.format, offset, stats)?;
     }
-    let hint = mode_hint(mode, decoder.stats());
-    if offset > 0 && decoder.stats().frames_ok == 0 {
-        let stats = decoder.stats();
-        let errors =
-            stats.bad_checksum + stats.oversize + stats.empty + stats.truncated + stats.bad_escape;
+    let hint = mode_hint(mode, stats);
+    if offset > 0 && stats.frames == 0 {
+        let errors = stats.decode_errors();
         let other = u8::from(mode.other());
         let advice = if errors == 1 && stats.truncated == 1 {
             // One candidate, cut off (by the end of the input, or in mode 2 by a start
@@ -409,19 +426,16 @@ fn decode_stream(
 /// mode explains: checksums (mode 2 escapes read as data, or the reverse), escapes, and
 /// lengths (a mode 1 stream read in mode 2 loses bytes to what look like escapes), one
 /// frame in ten or more.
-fn mode_hint(mode: ApiMode, stats: &xbee_api::Stats) -> Option<String> {
-    let failed = u64::from(stats.bad_checksum)
-        + u64::from(stats.bad_escape)
-        + u64::from(stats.truncated)
-        + u64::from(stats.oversize);
-    if failed < 8 || failed * 10 < u64::from(stats.frames_ok) {
+fn mode_hint(mode: ApiMode, stats: &mcp_host::Stats) -> Option<String> {
+    let failed = stats.bad_checksum + stats.bad_escape + stats.truncated + stats.oversize;
+    if failed < 8 || failed.saturating_mul(10) < stats.frames {
         return None;
     }
     let other = u8::from(mode.other());
     Some(format!(
         "hint: {failed} frames failed their checksum, escapes or length and {} passed: if \
          the stream is in API mode {other}, decode it with --api-mode {other}",
-        stats.frames_ok
+        stats.frames
     ))
 }
 
@@ -453,7 +467,7 @@ fn decode_recording(
             summary,
             printer.format,
             reader.offset(),
-            &xbee_api::Stats::default(),
+            &mcp_host::Stats::default(),
         )?;
     }
     result
@@ -464,7 +478,7 @@ fn print_summary(
     summary: &Summary,
     format: Format,
     bytes: u64,
-    stats: &xbee_api::Stats,
+    stats: &mcp_host::Stats,
 ) -> io::Result<()> {
     let errors = serde_json::json!({
         "checksum": stats.bad_checksum,
