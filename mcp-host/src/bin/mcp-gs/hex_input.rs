@@ -147,8 +147,13 @@ impl Parser {
             Some(first) => {
                 let pair = [first, c];
                 let text = std::str::from_utf8(&pair).unwrap_or("??");
-                let byte = u8::from_str_radix(text, 16)
-                    .map_err(|_| self.invalid(format_args!("`{text}` is not a hex byte")))?;
+                // Two hex digits: `from_str_radix` alone would take a sign, `+6`.
+                let byte = pair
+                    .iter()
+                    .all(u8::is_ascii_hexdigit)
+                    .then(|| u8::from_str_radix(text, 16).ok())
+                    .flatten()
+                    .ok_or_else(|| self.invalid(format_args!("`{text}` is not a hex byte")))?;
                 self.bytes.push(byte);
             }
         }
@@ -202,6 +207,11 @@ mod tests {
         );
         let e = all("7E zz\n").unwrap_err();
         assert_eq!(e.to_string(), "line 1: `zz` is not a hex byte");
+        // A sign is no digit, though Rust's number parser takes one.
+        let e = all("7E 00 02 8A +6 6F\n").unwrap_err();
+        assert_eq!(e.to_string(), "line 1: `+6` is not a hex byte");
+        let e = all("0x+6\n").unwrap_err();
+        assert_eq!(e.to_string(), "line 1: `+6` is not a hex byte");
         let mut bytes = Vec::new();
         let e = HexReader::new(&b"7E 00\n\x7E\x00\x02\x8A\xFF\n"[..])
             .read_to_end(&mut bytes)
