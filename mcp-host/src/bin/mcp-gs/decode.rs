@@ -1,7 +1,7 @@
 //! `mcp-gs decode`: decode a captured byte stream or a recording.
 
 use std::fs::File;
-use std::io::{self, BufRead, BufReader, IsTerminal, Read, Write};
+use std::io::{self, BufReader, IsTerminal, Read, Write};
 use std::path::PathBuf;
 
 use clap::Args;
@@ -91,50 +91,78 @@ pub(crate) fn run(args: DecodeArgs) -> Result<(), Failure> {
                 Failure::input(format!("cannot open {}: {e}", args.input.display()))
             })?)
         };
-    let mut input = BufReader::with_capacity(1 << 16, input);
     let stdout = io::stdout().lock();
     let mut out = Output {
         inner: io::BufWriter::with_capacity(1 << 16, stdout),
         failed: false,
     };
-    let mut printer = Printer {
-        format: args.format,
-        summary: args.summary.then(Summary::default),
-        out: &mut out,
-        dates: render::text::DateLines::new(),
-    };
-
-    let head = input
-        .fill_buf()
-        .map_err(|e| Failure::input(format!("cannot read {}: {e}", args.input.display())))?;
-    if args.hex && record::is_recording(head) {
-        return Err(Failure::input(format!(
-            "{} is a recording (made by monitor --record), not hex text: decode it without --hex",
-            args.input.display()
-        )));
-    }
-    let result = if args.hex {
-        // Decoded a line at a time, as the text comes.
-        let mut bytes = HexReader::new(input);
-        let head = read_head(&mut bytes).map_err(|e| Failure::input(e.to_string()))?;
-        // A hex dump of a recording is a recording.
-        let recording = record::is_recording(&head);
-        let bytes = io::Cursor::new(head).chain(bytes);
-        if recording {
-            decode_recording(bytes, &mut printer, live)
-        } else {
-            decode_stream(bytes, args.api_mode.0, &mut printer)
-        }
-    } else if record::is_recording(head) {
-        decode_recording(input, &mut printer, live)
-    } else {
-        decode_stream(input, args.api_mode.0, &mut printer)
-    };
-    let result = result.and_then(|()| printer.finish());
+    let result = decode_input(input, &args, &mut out, live);
     match result.and_then(|()| out.flush()) {
         Ok(()) => Ok(()),
         Err(e) if out.failed => crate::output_failure(&e).map_or(Ok(()), Err),
         Err(e) => Err(Failure::input(e.to_string())),
+    }
+}
+
+/// Decodes `input` as `args` say, into `out`: a recording, told by its first bytes,
+/// else a raw capture or hex text.
+fn decode_input(
+    input: impl Read,
+    args: &DecodeArgs,
+    out: &mut impl Write,
+    live: bool,
+) -> io::Result<()> {
+    let mut input = BufReader::with_capacity(1 << 16, input);
+    let mut printer = Printer {
+        format: args.format,
+        summary: args.summary.then(Summary::default),
+        out,
+        dates: render::text::DateLines::new(),
+    };
+    // Read until they tell, not a read's worth: a pipe may give a recording's first
+    // bytes a few at a time.
+    let head = read_head(&mut input).map_err(|e| {
+        io::Error::new(
+            e.kind(),
+            format!("cannot read {}: {e}", args.input.display()),
+        )
+    })?;
+    if args.hex && record::is_recording(&head) {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidData,
+            format!(
+                "{} is a recording (made by monitor --record), not hex text: decode it \
+                 without --hex",
+                args.input.display()
+            ),
+        ));
+    }
+    let input = io::Cursor::new(head).chain(input);
+    let mode = args.api_mode.0;
+    if args.hex {
+        // Decoded a line at a time, as the text comes. A hex dump of a recording is a
+        // recording.
+        decode_bytes(HexReader::new(input), mode, &mut printer, live)?;
+    } else {
+        decode_bytes(input, mode, &mut printer, live)?;
+    }
+    printer.finish()
+}
+
+/// Decodes `bytes`: a recording if they start as one, else a stream in `mode`.
+fn decode_bytes(
+    mut bytes: impl Read,
+    mode: ApiMode,
+    printer: &mut Printer<'_, impl Write>,
+    live: bool,
+) -> io::Result<()> {
+    let head = read_head(&mut bytes)?;
+    let recording = record::is_recording(&head);
+    let bytes = io::Cursor::new(head).chain(bytes);
+    if recording {
+        decode_recording(bytes, printer, live)
+    } else {
+        decode_stream(bytes, mode, printer)
     }
 }
 
@@ -538,4 +566,64 @@ fn read_head(input: &mut impl Read) -> io::Result<Vec<u8>> {
         }
     }
     Ok(head)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mcp_host::record::RecordWriter;
+
+    /// A reader that gives one byte a read, as a slow pipe may.
+    struct ByteAtATime<'a>(&'a [u8]);
+
+    impl Read for ByteAtATime<'_> {
+        fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+            match (self.0.split_first(), buf.first_mut()) {
+                (Some((&byte, rest)), Some(slot)) => {
+                    *slot = byte;
+                    self.0 = rest;
+                    Ok(1)
+                }
+                _ => Ok(0),
+            }
+        }
+    }
+
+    fn args(hex: bool) -> DecodeArgs {
+        DecodeArgs {
+            input: "-".into(),
+            api_mode: ApiModeArg(ApiMode::Unescaped),
+            hex,
+            format: Format::Text,
+            summary: true,
+        }
+    }
+
+    /// The summary of `input` decoded as `args` say.
+    fn summary(input: &[u8], args: &DecodeArgs) -> io::Result<String> {
+        let mut out = Vec::new();
+        decode_input(ByteAtATime(input), args, &mut out, false)?;
+        Ok(String::from_utf8(out).unwrap())
+    }
+
+    #[test]
+    fn a_recording_that_comes_a_byte_at_a_time_is_a_recording() {
+        let mut recording = RecordWriter::new(Vec::new()).unwrap();
+        let now = std::time::SystemTime::now();
+        recording
+            .write(now, Direction::Received, &[0x8A, 0x06])
+            .unwrap();
+        let recording = recording.into_inner();
+        let out = summary(&recording, &args(false)).unwrap();
+        assert!(out.contains("frames: 1\n  type 0x8a: 1\n"), "{out}");
+        // As hex text too, and raw bytes given as hex are refused.
+        let hex: String = recording.iter().map(|b| format!("{b:02x} ")).collect();
+        let out = summary(hex.as_bytes(), &args(true)).unwrap();
+        assert!(out.contains("frames: 1\n  type 0x8a: 1\n"), "{out}");
+        let e = summary(&recording, &args(true)).unwrap_err();
+        assert!(e.to_string().contains("is a recording"), "{e}");
+        // A raw capture is read as one.
+        let out = summary(&[0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F], &args(false)).unwrap();
+        assert!(out.contains("frames: 1\n  type 0x8a: 1\n"), "{out}");
+    }
 }
