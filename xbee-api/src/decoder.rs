@@ -50,7 +50,7 @@ pub const fn decoder_buffer_len(frame_data_len: usize, mode: ApiMode) -> usize {
 pub type Event<'a> = Result<RawFrame<'a>, DecodeError>;
 
 /// An event before it borrows the buffer: a frame as a range of the buffer.
-type Outcome = Result<(usize, usize), DecodeError>;
+pub(crate) type Outcome = Result<(usize, usize), DecodeError>;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 // Stored as 0 when hunting, as a new decoder is: a new decoder of a fixed mode is then
@@ -543,11 +543,17 @@ impl<const N: usize, M: DecoderMode> Decoder<N, M> {
     /// The bytes taken are the decoder's from then on (a caller holding a `BytesMut` can
     /// advance past them at once).
     pub fn decode(&mut self, input: &[u8]) -> (usize, Option<Event<'_>>) {
-        let (consumed, outcome) = match self.mode() {
+        let (consumed, outcome) = self.decode_outcome(input);
+        (consumed, outcome.map(|o| self.event(o)))
+    }
+
+    /// [`decode`](Self::decode), its event not yet borrowing the buffer (a frame is in
+    /// the buffer, at the range given): [`event`](Self::event) makes it one.
+    pub(crate) fn decode_outcome(&mut self, input: &[u8]) -> (usize, Option<Outcome>) {
+        match self.mode() {
             ApiMode::Escaped => self.decode2(input),
             ApiMode::Unescaped => self.decode1(input),
-        };
-        (consumed, outcome.map(|o| self.event(o)))
+        }
     }
 
     /// Decodes all of `input`, calling `f` with every event in order; the fastest way
@@ -966,7 +972,12 @@ impl<const N: usize, M: DecoderMode> Decoder<N, M> {
     /// [`DecodeError::Truncated`] (in mode 1 its bytes are then scanned again). Call it
     /// until it returns `None`; the decoder is then idle and can take new input.
     pub fn finish(&mut self) -> Option<Event<'_>> {
-        let outcome = match self.mode() {
+        self.finish_outcome().map(|o| self.event(o))
+    }
+
+    /// [`finish`](Self::finish), its event not yet borrowing the buffer.
+    pub(crate) fn finish_outcome(&mut self) -> Option<Outcome> {
+        match self.mode() {
             ApiMode::Escaped => {
                 if self.state == State::Hunt {
                     self.escaped = false;
@@ -987,11 +998,11 @@ impl<const N: usize, M: DecoderMode> Decoder<N, M> {
                     Some(Err(self.fail1(error)))
                 }
             },
-        };
-        outcome.map(|o| self.event(o))
+        }
     }
 
-    fn event(&self, outcome: Outcome) -> Event<'_> {
+    /// The event of `outcome`, a frame borrowing the buffer.
+    pub(crate) fn event(&self, outcome: Outcome) -> Event<'_> {
         outcome
             .map(|(start, end)| RawFrame::from_data(self.buf.get(start..end).unwrap_or_default()))
     }

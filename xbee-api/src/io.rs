@@ -2,8 +2,8 @@
 //! the `embedded-io` traits (features `embedded-io`, and `embedded-io-async` for the
 //! async ones that Embassy's drivers implement).
 //!
-//! - [`FrameReader`] reads from a reader and hands every event (frame or dropped
-//!   candidate) to a closure, a read at a time.
+//! - [`FrameReader`] reads from a reader and returns the next event (frame or dropped
+//!   candidate), or hands every event of a read to a closure.
 //! - [`write_frame`] writes a frame to a writer, escaped in API mode 2, through a small
 //!   buffer on the stack; [`write_frame_async`] encodes it into a buffer the caller
 //!   gives and writes it.
@@ -29,6 +29,7 @@
 
 use core::fmt;
 
+use crate::decoder::Outcome;
 use crate::{
     AnyMode, ApiMode, DEFAULT_CAPACITY, Decoder, DecoderMode, EncodeError, EncodeFrame, Event,
     FixedMode,
@@ -38,27 +39,35 @@ use crate::{
 /// [`write_frame`]: a UART FIFO's worth, kept on the stack for the call.
 const CHUNK: usize = 32;
 
-/// A [`Decoder`] fed from a reader: the events of the bytes each read returns.
+/// A [`Decoder`] fed from a reader: the events of the bytes it reads.
 ///
-/// Each [`read_events`](Self::read_events) call reads once (blocking until the reader
-/// has bytes, as `embedded-io` readers do), at most 32 bytes, and passes every event
-/// those bytes complete to a closure, frames borrowed from the decoder's buffer or from
-/// the bytes read. A frame split across reads comes out whole on the read that
-/// completes it. At the end of the input (a read of no bytes) the decoder is
-/// [finished](Decoder::finish): a frame cut off there is reported.
+/// Two ways to take them:
+/// - [`read_event`](Self::read_event) (and [`read_event_async`](Self::read_event_async))
+///   reads until the next event and returns it, the frame borrowed from the decoder
+///   until the next call; bytes read past it wait in the reader. For a loop that
+///   answers each frame as it comes, awaiting its writes in async code.
+/// - [`read_events`](Self::read_events) (and
+///   [`read_events_async`](Self::read_events_async)) reads once and passes every event
+///   those bytes complete to a closure, frames borrowed from the decoder's buffer or
+///   from the bytes read. Fewer instructions a byte: the whole read goes through
+///   [`decode_each`](Decoder::decode_each).
+///
+/// Each read blocks until the reader has bytes (as `embedded-io` readers do) and takes
+/// at most 32. A frame split across reads comes out whole on the read that completes
+/// it. At the end of the input (a read of no bytes) the decoder is
+/// [finished](Decoder::finish): a frame cut off there is reported. The two ways can be
+/// mixed: `read_events` first passes on what `read_event` left.
 ///
 /// In mode 2 one read's 32 bytes complete at most 7 frames (a frame takes 5 bytes on
 /// the wire at least, and one begun in an earlier read may end with the read's first
 /// byte): an inbox the closure copies payloads into needs no more places than that for
-/// one call. In mode 1 a failed candidate scanned again can also release frames whose
+/// one call (and as many more as bytes `read_event` left complete). In mode 1 a failed candidate scanned again can also release frames whose
 /// bytes came in earlier reads, at most one for every 5 bytes the decoder holds.
 ///
-/// [`read_events_async`](Self::read_events_async) is cancel safe: dropped before its
-/// read completes (in a `select` with a timer, say), it has taken no byte, and nothing
-/// is lost as long as the reader's own `read` is cancel safe.
-///
-/// Events go to a closure rather than being returned because a frame borrows the
-/// decoder, which the next read feeds again.
+/// [`read_events_async`](Self::read_events_async) and
+/// [`read_event_async`](Self::read_event_async) are cancel safe: dropped before a read
+/// completes (in a `select` with a timer, say), they have taken no byte of it, and
+/// nothing is lost as long as the reader's own `read` is cancel safe.
 ///
 /// `M` is the decoder's [`DecoderMode`]: a firmware whose radio's API mode is set once
 /// fixes it in the type ([`fixed`](FrameReader::fixed)), so that only that mode's code
@@ -80,6 +89,11 @@ const CHUNK: usize = 32;
 pub struct FrameReader<R, const N: usize = DEFAULT_CAPACITY, M: DecoderMode = AnyMode> {
     reader: R,
     decoder: Decoder<N, M>,
+    /// The last read; `chunk[pos..len]` are its bytes not yet decoded
+    /// ([`read_event`](Self::read_event) stops at an event).
+    chunk: [u8; CHUNK],
+    pos: usize,
+    len: usize,
 }
 
 impl<R, const N: usize> FrameReader<R, N, AnyMode> {
@@ -101,7 +115,13 @@ impl<R, const N: usize, M: DecoderMode> FrameReader<R, N, M> {
     /// A reader of frames from `reader` through `decoder` (one made with
     /// [`Decoder::with_max_len`], say).
     pub const fn with_decoder(reader: R, decoder: Decoder<N, M>) -> Self {
-        Self { reader, decoder }
+        Self {
+            reader,
+            decoder,
+            chunk: [0; CHUNK],
+            pos: 0,
+            len: 0,
+        }
     }
 
     /// The API mode the reader reads.
@@ -129,20 +149,51 @@ impl<R, const N: usize, M: DecoderMode> FrameReader<R, N, M> {
         &mut self.reader
     }
 
-    /// The reader back; a partial frame in the decoder is dropped.
+    /// The reader back; a partial frame in the decoder, and bytes read but not yet
+    /// decoded, are dropped.
     pub fn into_inner(self) -> R {
         self.reader
     }
 
-    /// Passes the events of `bytes` to `f`; at the end of the input (no bytes), those
-    /// of [`Decoder::finish`].
+    /// Passes the events of `bytes`, just read, to `f` (after those of bytes read
+    /// earlier that [`read_event`](Self::read_event) left); at the end of the input (no
+    /// bytes), those of [`Decoder::finish`].
     fn feed<F: FnMut(Event<'_>)>(&mut self, bytes: &[u8], mut f: F) {
+        while let Some(outcome) = self.pending_outcome() {
+            f(self.decoder.event(outcome));
+        }
         if bytes.is_empty() {
             while let Some(event) = self.decoder.finish() {
                 f(event);
             }
         } else {
             self.decoder.decode_each(bytes, f);
+        }
+    }
+
+    /// The next event of the bytes read and not yet decoded, as a range in the
+    /// decoder's buffer; `None` when they hold none (all are then decoded).
+    fn pending_outcome(&mut self) -> Option<Outcome> {
+        while self.pos < self.len {
+            let pending = self.chunk.get(self.pos..self.len).unwrap_or_default();
+            let (taken, outcome) = self.decoder.decode_outcome(pending);
+            self.pos += taken;
+            if outcome.is_some() {
+                return outcome;
+            }
+        }
+        None
+    }
+
+    /// The next event of `n` bytes just read into the chunk; at the end of the input
+    /// (`n` 0), of [`Decoder::finish`].
+    fn read_outcome(&mut self, n: usize) -> Option<Outcome> {
+        self.pos = 0;
+        self.len = n.min(CHUNK);
+        if n == 0 {
+            self.decoder.finish_outcome()
+        } else {
+            self.pending_outcome()
         }
     }
 }
@@ -157,8 +208,49 @@ impl<R: embedded_io::Read, const N: usize, M: DecoderMode> FrameReader<R, N, M> 
     pub fn read_events<F: FnMut(Event<'_>)>(&mut self, f: F) -> Result<usize, R::Error> {
         let mut chunk = [0u8; CHUNK];
         let n = self.reader.read(&mut chunk)?;
-        self.feed(chunk.get(..n).unwrap_or(&[]), f);
+        self.feed(chunk.get(..n).unwrap_or_default(), f);
         Ok(n)
+    }
+
+    /// Reads until the next event and returns it: a frame, borrowed from the decoder,
+    /// or a dropped candidate. `Ok(None)` is the end of the input, after the events of
+    /// a frame cut off by it.
+    ///
+    /// One event a call, for a loop that does more with each than a closure can (in
+    /// async code, [`read_event_async`](Self::read_event_async), whose caller can
+    /// await between frames). Bytes read past the event wait in the reader for the next
+    /// call. A read error is returned as it is; the next call goes on with the frame in
+    /// progress.
+    ///
+    /// ```
+    /// use xbee_api::io::FrameReader;
+    /// use xbee_api::{Frame, Mode1};
+    /// // Two modem statuses, a bad checksum between them.
+    /// let wire = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F, 0x7E, 0x00, 0x02, 0x8A, 0x06, 0x00,
+    ///             0x7E, 0x00, 0x02, 0x8A, 0x00, 0x75];
+    /// let mut reader: FrameReader<&[u8], 64, Mode1> = FrameReader::fixed(&wire[..]);
+    /// let mut events = Vec::new();
+    /// while let Some(event) = reader.read_event()? {
+    ///     events.push(event.map(|frame| Frame::parse(frame).map(|f| f.frame_type())));
+    /// }
+    /// assert_eq!(events.len(), 3);
+    /// assert!(events[1].is_err());
+    /// # Ok::<(), core::convert::Infallible>(())
+    /// ```
+    pub fn read_event(&mut self) -> Result<Option<Event<'_>>, R::Error> {
+        let outcome = loop {
+            if let Some(outcome) = self.pending_outcome() {
+                break Some(outcome);
+            }
+            let n = self.reader.read(&mut self.chunk)?;
+            if let Some(outcome) = self.read_outcome(n) {
+                break Some(outcome);
+            }
+            if n == 0 {
+                break None;
+            }
+        };
+        Ok(outcome.map(|o| self.decoder.event(o)))
     }
 }
 
@@ -195,8 +287,48 @@ impl<R: embedded_io_async::Read, const N: usize, M: DecoderMode> FrameReader<R, 
     ) -> Result<usize, R::Error> {
         let mut chunk = [0u8; CHUNK];
         let n = self.reader.read(&mut chunk).await?;
-        self.feed(chunk.get(..n).unwrap_or(&[]), f);
+        self.feed(chunk.get(..n).unwrap_or_default(), f);
         Ok(n)
+    }
+
+    /// [`read_event`](Self::read_event) from an async reader: reads until the next
+    /// event and returns it, `Ok(None)` at the end of the input. Cancel safe, as
+    /// [`read_events_async`](Self::read_events_async) is: dropped while it waits for a
+    /// read, it has lost nothing.
+    ///
+    /// ```
+    /// # futures::executor::block_on(async {
+    /// use xbee_api::io::FrameReader;
+    /// use xbee_api::{Mode2, ReceivePacket};
+    /// // A Receive Packet carrying `c 02 FF` (a landing status request), in API mode 2.
+    /// let uart: &[u8] = &[0x7E, 0x00, 0x0F, 0x90, 0x00, 0x7D, 0x33, 0xA2, 0x00, 0x40, 0x52,
+    ///                     0x2B, 0xAA, 0xFF, 0xFE, 0x01, 0x63, 0x02, 0xFF, 0xF1];
+    /// let mut reader: FrameReader<_, 64, Mode2> = FrameReader::fixed(uart);
+    /// while let Some(event) = reader.read_event_async().await? {
+    ///     let Ok(frame) = event else { continue };
+    ///     if let Ok(rx) = ReceivePacket::new_checked(frame.data()) {
+    ///         assert_eq!(rx.data(), b"c\x02\xFF");
+    ///         // Answer here, awaiting the UART's writes: the frame borrows the reader
+    ///         // until the next read.
+    ///     }
+    /// }
+    /// # Ok::<(), core::convert::Infallible>(())
+    /// # }).unwrap();
+    /// ```
+    pub async fn read_event_async(&mut self) -> Result<Option<Event<'_>>, R::Error> {
+        let outcome = loop {
+            if let Some(outcome) = self.pending_outcome() {
+                break Some(outcome);
+            }
+            let n = self.reader.read(&mut self.chunk).await?;
+            if let Some(outcome) = self.read_outcome(n) {
+                break Some(outcome);
+            }
+            if n == 0 {
+                break None;
+            }
+        };
+        Ok(outcome.map(|o| self.decoder.event(o)))
     }
 }
 

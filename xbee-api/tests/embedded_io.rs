@@ -106,7 +106,7 @@ fn tx(room: usize, step: usize) -> Tx {
 }
 
 /// What a reader's events come to: frame data, or the error.
-#[derive(Debug, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 enum Seen {
     Frame(Vec<u8>),
     Error(DecodeError),
@@ -132,6 +132,45 @@ fn read_all<const N: usize, M: DecoderMode>(
             Err(_) => errors += 1,
         }
     }
+}
+
+/// How [`read_each`] takes the events.
+#[derive(Debug, Clone, Copy)]
+enum OneAtATime {
+    /// `read_event`.
+    Blocking,
+    /// `read_event_async`.
+    Async,
+    /// `read_event` and `read_events` in turn.
+    Mixed,
+}
+
+/// Every event of `reader` to the end of its input, one a call as `how` says; read
+/// errors are retried.
+fn read_each<const N: usize, M: DecoderMode>(
+    reader: &mut FrameReader<Uart<'_>, N, M>,
+    how: OneAtATime,
+) -> (Vec<Seen>, usize) {
+    let mut events = Vec::new();
+    let mut errors = 0;
+    for call in 0.. {
+        let ended = match how {
+            OneAtATime::Mixed if call % 2 == 1 => reader
+                .read_events(|event| events.push(seen(event)))
+                .map(|n| n == 0),
+            OneAtATime::Async => futures::executor::block_on(reader.read_event_async())
+                .map(|event| event.map(|e| events.push(seen(e))).is_none()),
+            _ => reader
+                .read_event()
+                .map(|event| event.map(|e| events.push(seen(e))).is_none()),
+        };
+        match ended {
+            Ok(true) => break,
+            Ok(false) => {}
+            Err(_) => errors += 1,
+        }
+    }
+    (events, errors)
 }
 
 fn mode() -> impl Strategy<Value = ApiMode> {
@@ -178,7 +217,58 @@ proptest! {
             ApiMode::Unescaped => read_all(&mut FrameReader::<_, 128, Mode1>::fixed(uart)),
             ApiMode::Escaped => read_all(&mut FrameReader::<_, 128, Mode2>::fixed(uart)),
         };
-        prop_assert_eq!(fixed, (expected, errors));
+        prop_assert_eq!(&fixed, &(expected.clone(), errors));
+
+        // One event a call, blocking, async or mixed with `read_events`, reads the same:
+        // the bytes read past an event wait for the next call.
+        for how in [OneAtATime::Blocking, OneAtATime::Async, OneAtATime::Mixed] {
+            let mut uart = Uart::new(&wire, &sizes);
+            uart.fail_at = fail_at;
+            let mut reader: FrameReader<_, 128> = FrameReader::new(uart, mode);
+            let got = read_each(&mut reader, how);
+            prop_assert_eq!(&got, &fixed, "{:?}", how);
+        }
+    }
+
+    /// Garbage, damaged frames and frames in any mix, read one event a call or all
+    /// events of a read at a time: the same events, as the decoder gives them for the
+    /// whole stream at once.
+    #[test]
+    fn one_event_a_call_is_every_event(
+        pieces in prop::collection::vec(
+            (prop::collection::vec(any::<u8>(), 1..=40), any::<bool>(), any::<u8>()),
+            1..10,
+        ),
+        mode in mode(),
+        sizes in prop::collection::vec(1usize..=40, 1..5),
+    ) {
+        let mut wire = Vec::new();
+        for (data, damaged, noise) in &pieces {
+            let frame = RawFrame::new(data).unwrap();
+            let mut bytes = vec![0; frame.encoded_len(mode)];
+            frame.encode(mode, &mut bytes).unwrap();
+            if *damaged {
+                // A bad checksum, or a frame cut off by the next one.
+                *bytes.last_mut().unwrap() ^= 0x55;
+                bytes.truncate(bytes.len() - usize::from(noise % 3));
+            }
+            wire.extend(bytes);
+            wire.push(*noise);
+        }
+        let mut whole: xbee_api::Decoder<64> = xbee_api::Decoder::new(mode);
+        let mut expected = Vec::new();
+        whole.decode_each(&wire, |event| expected.push(seen(event)));
+        while let Some(event) = whole.finish() {
+            expected.push(seen(event));
+        }
+        let mut reader: FrameReader<_, 64> = FrameReader::new(Uart::new(&wire, &sizes), mode);
+        prop_assert_eq!(&read_all(&mut reader).0, &expected);
+        for how in [OneAtATime::Blocking, OneAtATime::Async, OneAtATime::Mixed] {
+            let mut reader: FrameReader<_, 64> =
+                FrameReader::new(Uart::new(&wire, &sizes), mode);
+            prop_assert_eq!(&read_each(&mut reader, how).0, &expected, "{:?}", how);
+            prop_assert_eq!(reader.decoder().stats(), whole.stats());
+        }
     }
 }
 

@@ -345,7 +345,8 @@ pub extern "C" fn mav_telemetry_in_place(values: &[f32; 4], mode: u8, frame: &mu
 #[unsafe(no_mangle)]
 pub static mut MAV_MODE2_DECODER: Decoder<64, Mode2> = Decoder::fixed();
 
-/// Frames read from a UART through `embedded-io` (`io::FrameReader`, blocking and async)
+/// Frames read from a UART through `embedded-io` (`io::FrameReader`, blocking and async,
+/// a read or an event at a time)
 /// and written to it (`io::write_frame`, `io::write_encoded` and their async forms),
 /// whatever the UART reads and however few bytes it takes a write.
 #[unsafe(no_mangle)]
@@ -362,6 +363,13 @@ pub extern "C" fn mav_uart() {
                 out(frame.data());
             }
         }));
+        // One event a call, blocking and async, mixed with the above.
+        if let Ok(Some(Ok(frame))) = reader.read_event() {
+            out(frame.data());
+        }
+        if let Some(Ok(Some(Ok(frame)))) = poll_once(reader.read_event_async()) {
+            out(frame.data());
+        }
     }
     let request = TransmitRequestRepr::unicast(Address64::COORDINATOR, b"m on the UART");
     let _ = io::write_frame(&mut Uart, ApiMode::Escaped, &request);
