@@ -594,6 +594,59 @@ fn send_status_and_at_in_json_print_a_timeout_object() {
 }
 
 #[test]
+fn a_broadcast_nobody_answers_says_so_and_what_keeps_the_radio_silent() {
+    // A peer that reads every request but never answers, as a radio in the other API
+    // mode would not.
+    let (link, peer) = common::silent_peer(2);
+    let options = ["--link", &link, "--window", "0.5"];
+    let output = run(&[&["at"][..], &options, &["--to", "000000000000ffff", "NI"]].concat());
+    assert_eq!(output.status.code(), Some(4), "{output:?}");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("no radio answered the broadcast"),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains("nothing at all came from the local radio either"),
+        "{stderr}"
+    );
+    // Node discovery given a window, which asks the radio nothing first.
+    let output = run(&[&["nodes"][..], &options].concat());
+    assert_eq!(output.status.code(), Some(4), "{output:?}");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("no radio answered"), "{stderr}");
+    assert!(
+        stderr.contains("nothing at all came from the local radio either"),
+        "{stderr}"
+    );
+    peer.join().unwrap();
+}
+
+#[test]
+fn a_broadcast_at_nobody_answers_prints_a_timeout_object() {
+    let (link, peer) = common::silent_peer(1);
+    let output = run(&[
+        "at",
+        "--link",
+        &link,
+        "--window",
+        "0.5",
+        "--format",
+        "json",
+        "--to",
+        "000000000000ffff",
+        "NI",
+    ]);
+    assert_eq!(output.status.code(), Some(4), "{output:?}");
+    let json: Value = serde_json::from_slice(&output.stdout).expect("one JSON object");
+    assert_eq!(
+        json,
+        serde_json::json!({"result": "timeout", "command": "NI", "dst64": "000000000000ffff"})
+    );
+    peer.join().unwrap();
+}
+
+#[test]
 fn every_subcommand_has_help() {
     for sub in [
         "monitor", "send", "status", "decode", "encode", "replay", "at", "ports", "radio", "sim",

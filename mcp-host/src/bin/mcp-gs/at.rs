@@ -241,6 +241,17 @@ async fn broadcast(
              for `--to ADDR` each"
         );
     }
+    if answered == 0 && args.format == Format::Json {
+        // No answer is an outcome too, as for one radio.
+        out!(
+            "{}",
+            serde_json::json!({
+                "result": "timeout",
+                "command": name,
+                "dst64": Address64::BROADCAST.to_string(),
+            })
+        );
+    }
     match (answered, refused) {
         (0, _) => Err(with_mode_hint(
             Failure::new(

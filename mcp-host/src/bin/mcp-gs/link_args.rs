@@ -432,10 +432,13 @@ fn counters_hint(link: &LinkArgs, stats: &Stats) -> Option<String> {
 }
 
 /// `failure` (nobody answered), with a hint when frames from the radio failed their
-/// checksum: the radio may be in the other API mode. Nothing is said otherwise, as
-/// nobody in range is an answer too.
+/// checksum (the radio may be in the other API mode), or when nothing at all came from
+/// it: nobody in range is an answer too, but a local radio not set up for the link
+/// would be as silent.
 pub(crate) fn with_mode_hint(failure: Failure, link: &LinkArgs, stats: &Stats) -> Failure {
-    match counters_hint(link, stats) {
+    let silent = "nothing at all came from the local radio either: if the others are on and in \
+                  range, check its API mode";
+    match counters_hint(link, stats).or_else(|| silence_hint(link, stats, silent)) {
         Some(hint) => failure.with_hint(hint),
         None => failure,
     }
@@ -444,25 +447,29 @@ pub(crate) fn with_mode_hint(failure: Failure, link: &LinkArgs, stats: &Stats) -
 /// What may be wrong when a wait timed out: the [`counters_hint`], or, if nothing at
 /// all came from the radio, what keeps a radio silent.
 fn timeout_hint(link: &LinkArgs, stats: &Stats) -> Option<String> {
+    let silent = "nothing at all came from the radio: check its API mode";
+    counters_hint(link, stats).or_else(|| silence_hint(link, stats, silent))
+}
+
+/// If nothing at all came from the radio, `lead` (which ends asking to check the API
+/// mode) and what else keeps a radio silent.
+fn silence_hint(link: &LinkArgs, stats: &Stats, lead: &str) -> Option<String> {
     let silent = stats.frames == 0 && stats.decode_errors() == 0 && stats.bytes_skipped == 0;
-    counters_hint(link, stats).or_else(|| {
-        silent.then(|| match link.link {
-            // A tcp-listen peer (sim, radio) that serves another connection lets this
-            // one wait for its turn, silently.
-            Link::Tcp { .. } => "hint: nothing at all came from the radio: check its API mode \
-                (--api-mode, or auto to ask it), and whether the peer serves another \
-                connection (mcp-gs sim and radio serve one at a time and let the next wait; \
-                to share one, use mcp-gs hub)"
-                .to_owned(),
-            _ => format!(
-                "hint: nothing at all came from the radio: check its API mode (--api-mode, \
-                 or auto to ask it), the baud rate (serial:PATH:BAUD), and that no other \
-                 program reads the port (to share it, use mcp-gs hub); a radio new from the \
-                 factory is in transparent mode at 9600 baud: `mcp-gs probe --link {}` \
-                 finds what it is set to",
-                link.link
-            ),
-        })
+    silent.then(|| match link.link {
+        // A tcp-listen peer (sim, radio) that serves another connection lets this
+        // one wait for its turn, silently.
+        Link::Tcp { .. } => format!(
+            "hint: {lead} (--api-mode, or auto to ask it), and whether the peer serves \
+             another connection (mcp-gs sim and radio serve one at a time and let the next \
+             wait; to share one, use mcp-gs hub)"
+        ),
+        _ => format!(
+            "hint: {lead} (--api-mode, or auto to ask it), the baud rate (serial:PATH:BAUD), \
+             and that no other program reads the port (to share it, use mcp-gs hub); a radio \
+             new from the factory is in transparent mode at 9600 baud: `mcp-gs probe --link \
+             {}` finds what it is set to",
+            link.link
+        ),
     })
 }
 
