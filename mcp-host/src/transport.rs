@@ -399,7 +399,9 @@ async fn accept_peers(listener: TcpListener, name: String, slot: Arc<Slot>) {
                     drop(waiting);
                     slot.filled.notify_one();
                 } else {
-                    tracing::info!(%peer, "turned away: the link serves another peer, and one more waits");
+                    // Said to the operator of a simulator or an emulated radio: the
+                    // peer sees only its connection closed.
+                    tracing::warn!(%peer, "turned a peer away: the link serves another one, and one more waits its turn (to share the link, use a hub)");
                 }
             }
             Err(error) => {

@@ -623,6 +623,55 @@ fn a_broadcast_nobody_answers_says_so_and_what_keeps_the_radio_silent() {
 }
 
 #[test]
+fn a_peer_that_closes_at_once_is_said_to_turn_us_away() {
+    // As a simulator serving two clients already does to a third.
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let link = format!("tcp:{}", listener.local_addr().unwrap());
+    let peer = std::thread::spawn(move || drop(listener.accept().unwrap()));
+    let output = run(&[
+        "send",
+        "--link",
+        &link,
+        "--to",
+        "0013A20040B599B9",
+        "landing",
+        "on",
+    ]);
+    assert_eq!(output.status.code(), Some(3), "{output:?}");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        stderr.contains("the peer closed the connection before anything came"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("use mcp-gs hub"), "{stderr}");
+    peer.join().unwrap();
+
+    // monitor reconnects, and says it once the peer has done it three times.
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let link = format!("tcp:{}", listener.local_addr().unwrap());
+    let peer = std::thread::spawn(move || {
+        for stream in listener.incoming().take(3) {
+            drop(stream.unwrap());
+        }
+    });
+    let mut monitor = common::Running(
+        gs().args(["monitor", "--link", &link])
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap(),
+    );
+    let lines = common::stderr_lines(&mut monitor.0);
+    let hint = lines.recv_timeout(common::GUARD).expect("monitor hints");
+    assert!(
+        hint.contains("the peer closed the connection before anything came"),
+        "{hint}"
+    );
+    drop(monitor);
+    peer.join().unwrap();
+}
+
+#[test]
 fn a_broadcast_at_nobody_answers_prints_a_timeout_object() {
     let (link, peer) = common::silent_peer(1);
     let output = run(&[

@@ -473,15 +473,28 @@ fn silence_hint(link: &LinkArgs, stats: &Stats, lead: &str) -> Option<String> {
     })
 }
 
-/// `failure`, with the [`timeout_hint`] when it is a timeout.
+/// `failure`, with the [`timeout_hint`] when it is a timeout, or the
+/// [`turned_away_hint`] when a TCP peer ended the link before anything came from it.
 pub(crate) fn diagnosed(failure: Failure, link: &LinkArgs, stats: &Stats) -> Failure {
-    if failure.code() != Failure::TIMEOUT {
-        return failure;
-    }
-    match timeout_hint(link, stats) {
+    let hint = match failure.code() {
+        Failure::TIMEOUT => timeout_hint(link, stats),
+        Failure::LINK if matches!(link.link, Link::Tcp { .. }) && stats.frames == 0 => {
+            Some(turned_away_hint())
+        }
+        _ => None,
+    };
+    match hint {
         Some(hint) => failure.with_hint(hint),
         None => failure,
     }
+}
+
+/// Why a TCP peer may close a connection before anything came from it.
+pub(crate) fn turned_away_hint() -> String {
+    "hint: the peer closed the connection before anything came from the radio: mcp-gs sim \
+     and radio serve one connection at a time, let one more wait its turn and close any \
+     other at once (to share one, use mcp-gs hub)"
+        .to_owned()
 }
 
 /// A request's failure, [`diagnosed_unanswered`] when no answer to its frame id came

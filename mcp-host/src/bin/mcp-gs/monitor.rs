@@ -92,6 +92,8 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
         ApiModeChoice::Auto => None,
     };
     let mut hinted = false;
+    // Connections a TCP peer ended before anything came: it may be turning us away.
+    let mut ended_silent = 0u32;
     let mut dates = render::text::DateLines::new();
     // Bytes that are no frames at all come as no event: the counters are looked at now
     // and then for them.
@@ -161,6 +163,17 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
         if let Event::Link(LinkEvent::Closed { reason, .. }) = &event {
             return Err(Failure::link(format!("link closed: {reason}")));
         }
+        if let (Event::Link(LinkEvent::Disconnected { .. }), mcp_host::Link::Tcp { .. }) =
+            (&event, &args.link.link)
+        {
+            if stream.stats().frames == 0 {
+                ended_silent += 1;
+                // Once, when it is not a one-off.
+                if ended_silent == TURNED_AWAY {
+                    eprintln!("mcp-gs: {}", crate::link_args::turned_away_hint());
+                }
+            }
+        }
         // What the radio sent counts; what happened to our own link does not.
         if !matches!(event, Event::Link(_)) {
             seen += 1;
@@ -171,6 +184,10 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
     }
     Ok(())
 }
+
+/// Connections a TCP peer ends before anything came from it after which `monitor` says
+/// what may be wrong.
+const TURNED_AWAY: u32 = 3;
 
 /// The recording at `path`, created (truncated with `force`, else it must not exist).
 fn create_recording(path: &Path, force: bool) -> Result<RecordWriter<BufWriter<File>>, Failure> {
