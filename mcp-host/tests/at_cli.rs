@@ -334,6 +334,15 @@ fn nodes_lists_the_radios_that_answer_node_discovery() {
     assert!(out.status.success(), "{out:?}");
     assert!(stderr(&out).contains("answers for 4.2 s"), "{out:?}");
     assert_eq!(String::from_utf8(out.stdout).unwrap(), text);
+
+    // `at ND` shows the first answer, and says where the others are.
+    let out = sim.at(&["ND"]);
+    assert!(out.status.success(), "{out:?}");
+    assert!(stdout(&out).starts_with("ND = "), "{out:?}");
+    assert!(
+        stderr(&out).contains("this is the first answer; `mcp-gs nodes` lists them all"),
+        "{out:?}"
+    );
 }
 
 #[test]

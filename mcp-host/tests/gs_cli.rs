@@ -405,6 +405,8 @@ fn bad_arguments_exit_2_with_one_line() {
             "on",
         ],
         &["decode", "--api-mode", "3", "-"],
+        // A window gathers a broadcast's answers: one radio's would be ignored.
+        &["at", "--link", "tcp:127.0.0.1:9", "--window", "5", "NI"],
         // Past what a clock can add (it used to panic).
         &["demo", "--duration", "1e300"],
         // No position a MAV can fly to (`raw` sends any bytes).

@@ -24,14 +24,9 @@ pub(crate) struct AtArgs {
     /// and ask each).
     #[arg(long, value_name = "ADDR", value_parser = crate::link_args::parse_address64)]
     to: Option<Address64>,
-    /// With --to 000000000000ffff: seconds to gather the radios' answers.
-    #[arg(
-        long,
-        value_name = "SECONDS",
-        default_value = "3",
-        value_parser = crate::link_args::parse_seconds
-    )]
-    window: f64,
+    /// With --to 000000000000ffff: seconds to gather the radios' answers [default: 3].
+    #[arg(long, value_name = "SECONDS", value_parser = crate::link_args::parse_seconds)]
+    window: Option<f64>,
     /// VALUE is text, not hex (the default for the text parameters NI, DN, BI and VL).
     #[arg(long)]
     text: bool,
@@ -190,7 +185,7 @@ async fn broadcast(
     command: [u8; 2],
     parameter: &[u8],
 ) -> Result<(), Failure> {
-    let window = std::time::Duration::from_secs_f64(args.window);
+    let window = std::time::Duration::from_secs_f64(args.window.unwrap_or(BROADCAST_WINDOW));
     crate::link_args::warn_hub_window(&args.link.link, window);
     let failed = |e| diagnosed_send(e, &args.link, &sender.stats());
     let mut answers = sender
@@ -315,8 +310,17 @@ fn parse_value(value: &str, text: bool) -> Result<Vec<u8>, String> {
         .collect())
 }
 
+/// Seconds a broadcast's answers are gathered for when `--window` is not given.
+const BROADCAST_WINDOW: f64 = 3.0;
+
 /// Runs `at`.
 pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
+    if args.window.is_some() && args.to != Some(Address64::BROADCAST) {
+        return Err(Failure::input(
+            "--window is for a broadcast, --to 000000000000ffff: one radio's answer is \
+             waited for with --timeout",
+        ));
+    }
     let command: [u8; 2] = args
         .command
         .to_ascii_uppercase()
@@ -385,6 +389,12 @@ pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
         out!(
             "{}",
             answer_line(&name, &command, data, args.value.is_some())
+        );
+    }
+    if command == *b"ND" && !data.is_empty() {
+        eprintln!(
+            "mcp-gs: ND: every radio found answers on its own and this is the first answer; \
+             `mcp-gs nodes` lists them all"
         );
     }
     // The local radio's API mode, read in another than --api-mode (the AP answer reads
