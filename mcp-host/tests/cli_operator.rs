@@ -873,29 +873,30 @@ fn replay_says_how_far_it_got_when_its_peer_leaves() {
 
 #[test]
 fn ctrl_c_stops_the_demo_script_at_once() {
-    let (child, lines) = spawn_lines(&["demo", "--duration", "0"]);
-    let mut demo = Running(child);
-    line_with(&lines, "== Clock");
-    interrupt(&demo.0);
-    let after = rest(&lines);
-    assert_eq!(exit_code(&mut demo.0), Some(0), "{after:?}");
-    let headings: Vec<&String> = after.iter().filter(|l| l.starts_with("== ")).collect();
-    assert_eq!(
-        headings.last().map(|h| h.as_str()),
-        Some("== Summary"),
-        "{after:?}"
-    );
-    // The script stopped: no later step, and no watching after Ctrl-C.
-    for later in ["== Landing", "== Watching"] {
-        assert!(
-            !headings.iter().any(|h| h.starts_with(later)),
-            "{later}: {after:?}"
+    // And a signal to stop does the same, said as what it is.
+    for (signal, name) in [(libc::SIGINT, "Ctrl-C"), (libc::SIGTERM, "SIGTERM")] {
+        let (child, lines) = spawn_lines(&["demo", "--duration", "0"]);
+        let mut demo = Running(child);
+        line_with(&lines, "== Clock");
+        send_signal(&demo.0, signal);
+        let after = rest(&lines);
+        assert_eq!(exit_code(&mut demo.0), Some(0), "{after:?}");
+        let headings: Vec<&String> = after.iter().filter(|l| l.starts_with("== ")).collect();
+        assert_eq!(
+            headings.last().map(|h| h.as_str()),
+            Some("== Summary"),
+            "{after:?}"
         );
+        // The script stopped: no later step, and no watching after Ctrl-C.
+        for later in ["== Landing", "== Watching"] {
+            assert!(
+                !headings.iter().any(|h| h.starts_with(later)),
+                "{later}: {after:?}"
+            );
+        }
+        let said = format!("stopped by {name}");
+        assert!(after.iter().any(|l| l.contains(&said)), "{after:?}");
     }
-    assert!(
-        after.iter().any(|l| l.contains("stopped by Ctrl-C")),
-        "{after:?}"
-    );
 }
 
 #[test]

@@ -828,6 +828,21 @@ fn log_lines_into_a_pipe_carry_no_colour_codes() {
 }
 
 #[test]
+fn a_log_filter_that_cannot_be_read_is_said_so() {
+    let output = gs()
+        .args(["sim", "--link", "pty", "--duration", "0.1"])
+        .env("MCP_LOG", "mcp_host=nonsense")
+        .output()
+        .expect("mcp-gs runs");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(0), "{stderr}");
+    assert!(
+        stderr.contains("mcp-gs: warning: MCP_LOG=mcp_host=nonsense is no log filter"),
+        "{stderr}"
+    );
+}
+
+#[test]
 fn decoding_in_the_wrong_api_mode_hints_at_the_other() {
     // A mode 2 capture read in mode 1 fails checksums; a mode 1 capture read in mode 2
     // loses bytes to what look like escapes, but most of its frames still pass.

@@ -23,6 +23,7 @@ use tokio::time::Instant;
 use xbee_api::{Address64, ApiMode, Frame};
 
 use crate::Failure;
+use crate::interrupt::Interrupt;
 
 /// Arguments of `demo`.
 #[derive(Debug, Args)]
@@ -333,7 +334,7 @@ pub(crate) async fn run(args: DemoArgs) -> Result<(), Failure> {
             result?;
             true
         }
-        _ = interrupt.wait_for(|stop| *stop == Stop::Interrupted) => false,
+        _ = interrupt.wait_for(|stop| matches!(stop, Stop::Interrupted(_))) => false,
     };
     if finished {
         heading(match deadline {
@@ -347,8 +348,8 @@ pub(crate) async fn run(args: DemoArgs) -> Result<(), Failure> {
     printer.abort();
     let seen = seen.lock().unwrap_or_else(|p| p.into_inner());
     heading("Summary");
-    if *stop.borrow() == Stop::Interrupted {
-        out!("  stopped by Ctrl-C");
+    if let Stop::Interrupted(by) = *stop.borrow() {
+        out!("  stopped by {by}");
     }
     out!(
         "  {:.1} s, MAV {MAV}: {} commands delivered, {} status requests answered, {} failures",
@@ -380,7 +381,7 @@ pub(crate) async fn run(args: DemoArgs) -> Result<(), Failure> {
 /// woken by its end.
 fn stop_signal(
     deadline: Option<Instant>,
-    interrupt: impl Future<Output = ()> + Send + 'static,
+    interrupt: impl Future<Output = Interrupt> + Send + 'static,
 ) -> watch::Receiver<Stop> {
     let (stop_tx, stop) = watch::channel(Stop::Running);
     tokio::spawn(async move {
@@ -394,11 +395,13 @@ fn stop_signal(
         tokio::select! {
             () = time_up => {
                 stop_tx.send_replace(Stop::TimeUp);
-                interrupt.await;
+                let by = interrupt.await;
+                stop_tx.send_replace(Stop::Interrupted(by));
             }
-            () = &mut interrupt => {}
+            by = &mut interrupt => {
+                stop_tx.send_replace(Stop::Interrupted(by));
+            }
         }
-        stop_tx.send_replace(Stop::Interrupted);
     });
     stop
 }
@@ -410,8 +413,8 @@ enum Stop {
     Running,
     /// `--duration` is over: the script finishes its steps.
     TimeUp,
-    /// Ctrl-C: everything stops at once.
-    Interrupted,
+    /// Ctrl-C or a signal to stop: everything stops at once.
+    Interrupted(Interrupt),
 }
 
 /// The scripted steps, one after the other.
@@ -525,20 +528,26 @@ mod tests {
         let (ctrl_c, pressed) = tokio::sync::oneshot::channel::<()>();
         let mut stop = stop_signal(Some(Instant::now()), async {
             let _ = pressed.await;
+            Interrupt::CtrlC
         });
         stop.wait_for(|s| *s == Stop::TimeUp).await.unwrap();
         ctrl_c.send(()).unwrap();
-        stop.wait_for(|s| *s == Stop::Interrupted).await.unwrap();
+        stop.wait_for(|s| *s == Stop::Interrupted(Interrupt::CtrlC))
+            .await
+            .unwrap();
     }
 
     #[tokio::test]
     async fn ctrl_c_before_the_time_is_up_interrupts() {
-        let (ctrl_c, pressed) = tokio::sync::oneshot::channel::<()>();
+        let (signal, sent) = tokio::sync::oneshot::channel::<()>();
         let mut stop = stop_signal(None, async {
-            let _ = pressed.await;
+            let _ = sent.await;
+            Interrupt::Terminate
         });
         assert_eq!(*stop.borrow(), Stop::Running);
-        ctrl_c.send(()).unwrap();
-        stop.wait_for(|s| *s == Stop::Interrupted).await.unwrap();
+        signal.send(()).unwrap();
+        stop.wait_for(|s| *s == Stop::Interrupted(Interrupt::Terminate))
+            .await
+            .unwrap();
     }
 }

@@ -107,7 +107,7 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
     tokio::pin!(ctrl_c);
     loop {
         tokio::select! {
-            () = &mut ctrl_c => break,
+            _ = &mut ctrl_c => break,
             () = hub.finished() => {
                 hub.stop().await;
                 return Err(Failure::link(format!("the link to {radio} closed")));
@@ -120,7 +120,10 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
                     hinted = false;
                 }
                 last = now;
-                let hint = diagnoser.as_mut().and_then(|d| d.look(now)).map(hint);
+                let hint = diagnoser
+                    .as_mut()
+                    .and_then(|d| d.look(now))
+                    .map(|found| hint(found, &args.link.link));
                 if let (Some(hint), false) = (hint, hinted) {
                     hinted = true;
                     let reason = hint.strip_prefix("hint: ").unwrap_or(&hint);

@@ -13,7 +13,9 @@ use futures::FutureExt;
 /// printed "Ctrl-C stops" before polling it could still be killed by a Ctrl-C pressed
 /// right then: this one listens at once. A signal whose handler cannot be installed
 /// keeps its default action (it ends the process).
-pub(crate) fn ctrl_c() -> impl Future<Output = ()> + Send + 'static {
+///
+/// It gives which one came, for a command that says why it stopped.
+pub(crate) fn ctrl_c() -> impl Future<Output = Interrupt> + Send + 'static {
     let mut pressed = Box::pin(tokio::signal::ctrl_c());
     let first = (&mut pressed).now_or_never();
     let others = other_signals();
@@ -28,15 +30,37 @@ pub(crate) fn ctrl_c() -> impl Future<Output = ()> + Send + 'static {
             }
         };
         tokio::select! {
-            () = ctrl_c => {}
-            () = others => {}
+            () = ctrl_c => Interrupt::CtrlC,
+            signal = others => signal,
         }
+    }
+}
+
+/// What stopped a command.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Interrupt {
+    /// Ctrl-C (SIGINT).
+    CtrlC,
+    /// SIGTERM.
+    Terminate,
+    /// SIGHUP.
+    HangUp,
+}
+
+/// `Ctrl-C`, `SIGTERM`, `SIGHUP`.
+impl std::fmt::Display for Interrupt {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::CtrlC => "Ctrl-C",
+            Self::Terminate => "SIGTERM",
+            Self::HangUp => "SIGHUP",
+        })
     }
 }
 
 /// SIGTERM or SIGHUP, listened to from this call on.
 #[cfg(unix)]
-fn other_signals() -> impl Future<Output = ()> + Send + 'static {
+fn other_signals() -> impl Future<Output = Interrupt> + Send + 'static {
     use tokio::signal::unix::{SignalKind, signal};
     let term = signal(SignalKind::terminate()).ok();
     let hangup = signal(SignalKind::hangup()).ok();
@@ -50,14 +74,14 @@ fn other_signals() -> impl Future<Output = ()> + Send + 'static {
             }
         };
         tokio::select! {
-            () = wait(term) => {}
-            () = wait(hangup) => {}
+            () = wait(term) => Interrupt::Terminate,
+            () = wait(hangup) => Interrupt::HangUp,
         }
     }
 }
 
 /// No other signal to listen to.
 #[cfg(not(unix))]
-fn other_signals() -> impl Future<Output = ()> + Send + 'static {
-    std::future::pending::<()>()
+fn other_signals() -> impl Future<Output = Interrupt> + Send + 'static {
+    std::future::pending()
 }

@@ -409,25 +409,38 @@ pub(crate) fn warn_mode_mismatch(radio: u8, configured: ApiMode, link: &Link) {
 /// What the link's counters found wrong with the radio's settings
 /// ([`Stats::diagnose`], [`Stats::diagnose_running`]), as a hint with what to give on
 /// the command line.
-pub(crate) fn hint(found: Diagnosis) -> String {
+pub(crate) fn hint(found: Diagnosis, link: &Link) -> String {
     let advice = match found {
         Diagnosis::OtherApiMode { radio, .. } => {
             let radio = u8::from(radio);
             format!("try --api-mode {radio} or --api-mode auto")
         }
-        Diagnosis::NoFrames { .. } => "`mcp-gs setup` puts a radio in transparent mode into \
-            API mode; give a baud rate as serial:PATH:BAUD (XBee modules ship at 9600)"
-            .to_owned(),
-        _ => "give the baud rate as serial:PATH:BAUD (XBee modules ship at 9600)".to_owned(),
+        Diagnosis::NoFrames { .. } => format!(
+            "`mcp-gs setup` puts a radio in transparent mode into API mode; {}",
+            baud_advice(link)
+        ),
+        _ => baud_advice(link),
     };
     format!("hint: {found}; {advice}")
+}
+
+/// What to do about a baud rate that may differ from the radio's, on `link`.
+fn baud_advice(link: &Link) -> String {
+    match link {
+        Link::Serial { path, baud } => format!(
+            "the link runs at {baud} baud: give the radio's rate as serial:{path}:BAUD (XBee \
+             modules ship at 9600), or let `mcp-gs probe --link serial:{path}` find it"
+        ),
+        _ => "the radio's baud rate is set where it is attached (XBee modules ship at 9600)"
+            .to_owned(),
+    }
 }
 
 /// The [`hint`] of the link's counters, when its API mode was given (one found by
 /// asking the radio is right).
 fn counters_hint(link: &LinkArgs, stats: &Stats) -> Option<String> {
     match link.api_mode {
-        ApiModeChoice::Fixed(mode) => stats.diagnose(mode).map(hint),
+        ApiModeChoice::Fixed(mode) => stats.diagnose(mode).map(|found| hint(found, &link.link)),
         ApiModeChoice::Auto => None,
     }
 }
@@ -704,5 +717,46 @@ pub(crate) fn send_failure(error: SendError) -> Failure {
             format!("{error} (the frame may still have gone out and been carried out)"),
         ),
         _ => Failure::new(code, error.to_string()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_baud_rate_hint_says_the_rate_the_link_runs_at_and_how_to_find_the_radios() {
+        // Only frames of impossible lengths and bytes that are no frames.
+        let stats = Stats {
+            oversize: 10,
+            bytes_skipped: 40,
+            ..Stats::default()
+        };
+        let found = stats.diagnose(ApiMode::Unescaped).expect("a diagnosis");
+        let serial = Link::Serial {
+            path: "/dev/ttyUSB0".into(),
+            baud: 9600,
+        };
+        let text = hint(found, &serial);
+        assert!(
+            text.contains(
+                "the link runs at 9600 baud: give the radio's rate as serial:/dev/ttyUSB0:BAUD"
+            ),
+            "{text}"
+        );
+        assert!(
+            text.contains("`mcp-gs probe --link serial:/dev/ttyUSB0` find it"),
+            "{text}"
+        );
+        // Over TCP the rate is not the link's to give.
+        let tcp = Link::Tcp {
+            host: "127.0.0.1".into(),
+            port: 9750,
+        };
+        let text = hint(found, &tcp);
+        assert!(
+            text.contains("the radio's baud rate is set where it is attached"),
+            "{text}"
+        );
     }
 }

@@ -21,14 +21,24 @@ pub(crate) fn init(timed: bool) {
         .with_ansi(ansi);
     match tracing_subscriber::EnvFilter::try_from_env("MCP_LOG") {
         Ok(filter) => builder.with_env_filter(filter).init(),
-        Err(_) => builder
-            // The library's warnings about the radio's settings are said here as
-            // hints with the options to give.
-            .with_env_filter(tracing_subscriber::EnvFilter::new(
-                "warn,mcp_host::diagnosis=off",
-            ))
-            .event_format(Plain { timed })
-            .init(),
+        Err(error) => {
+            // Set, but not a filter: said, rather than logging as if it were not set.
+            if let Some(value) = std::env::var_os("MCP_LOG") {
+                eprintln!(
+                    "mcp-gs: warning: MCP_LOG={} is no log filter ({error}): logging \
+                     warnings only; give levels as `debug` or `mcp_host=debug,warn`",
+                    value.to_string_lossy()
+                );
+            }
+            builder
+                // The library's warnings about the radio's settings are said here as
+                // hints with the options to give.
+                .with_env_filter(tracing_subscriber::EnvFilter::new(
+                    "warn,mcp_host::diagnosis=off",
+                ))
+                .event_format(Plain { timed })
+                .init()
+        }
     }
 }
 

@@ -101,11 +101,11 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
     loop {
         let event = tokio::select! {
             event = stream.next() => event,
-            () = &mut ctrl_c => None,
+            _ = &mut ctrl_c => None,
             _ = look.tick(), if !hinted => {
                 if let Some(found) = diagnoser.as_mut().and_then(|d| d.look(stream.stats())) {
                     hinted = true;
-                    eprintln!("mcp-gs: {}", hint(found));
+                    eprintln!("mcp-gs: {}", hint(found, &args.link.link));
                 }
                 continue;
             }
@@ -157,7 +157,7 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
             // say): the hint counts on most frames failing, not on all of them.
             if let Some(found) = diagnoser.look(stream.stats()) {
                 hinted = true;
-                eprintln!("mcp-gs: {}", hint(found));
+                eprintln!("mcp-gs: {}", hint(found, &args.link.link));
             }
         }
         if let Event::Link(LinkEvent::Closed { reason, .. }) = &event {

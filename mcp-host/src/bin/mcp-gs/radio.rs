@@ -558,7 +558,7 @@ pub(crate) async fn watch(
         };
         tokio::select! {
             () = time_up => {}
-            () = ctrl_c => {}
+            _ = ctrl_c => {}
         }
     };
     tokio::pin!(stop);
