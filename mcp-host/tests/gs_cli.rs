@@ -828,6 +828,29 @@ fn log_lines_into_a_pipe_carry_no_colour_codes() {
 }
 
 #[test]
+fn a_time_before_2000_is_warned_about_once() {
+    let output = run(&[
+        "encode",
+        "--to",
+        "0013a20040b599b9",
+        "trajectory",
+        "--waypoint",
+        "1,0,0,1",
+        "--waypoint",
+        "2,0,0,1",
+        "--waypoint",
+        "3,0,0,1",
+    ]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(0), "{stderr}");
+    assert_eq!(stderr.matches("s after 1970").count(), 1, "{stderr}");
+    assert!(
+        stderr.contains("waypoint time 1 is 1 s after 1970"),
+        "{stderr}"
+    );
+}
+
+#[test]
 fn a_log_filter_that_cannot_be_read_is_said_so() {
     let output = gs()
         .args(["sim", "--link", "pty", "--duration", "0.1"])

@@ -46,7 +46,10 @@ impl TimeArg {
                 .checked_add(seconds)
                 .ok_or_else(|| format!("{what} +{seconds} is past 2106: it does not fit u32")),
             Self::Seconds(time) => {
-                if time < Y2000 {
+                // Once, for the first of them: a trajectory's waypoints are read one by one.
+                static WARNED: std::sync::atomic::AtomicBool =
+                    std::sync::atomic::AtomicBool::new(false);
+                if time < Y2000 && !WARNED.swap(true, std::sync::atomic::Ordering::Relaxed) {
                     eprintln!(
                         "mcp-gs: warning: {what} {time} is {time} s after 1970-01-01 00:00 UTC: \
                          the MAV's clock counts seconds since 1970; for {time} s from now, \
