@@ -596,6 +596,37 @@ fn send_status_and_at_in_json_print_a_timeout_object() {
 }
 
 #[test]
+fn send_status_and_at_in_json_print_a_link_lost_meanwhile() {
+    // A peer that takes each request and hangs up before it answers.
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let link = format!("tcp:{}", listener.local_addr().unwrap());
+    let peer = std::thread::spawn(move || {
+        for stream in listener.incoming().take(3) {
+            let mut stream = stream.unwrap();
+            let mut byte = [0u8];
+            std::io::Read::read_exact(&mut stream, &mut byte).unwrap();
+        }
+    });
+    let json = |sub: &str, args: &[&str]| {
+        let options = ["--link", &link, "--format", "json"];
+        let output = run(&[&[sub][..], &options, args].concat());
+        assert_eq!(output.status.code(), Some(3), "{sub} {args:?}: {output:?}");
+        let json: Value = serde_json::from_slice(&output.stdout).expect("one JSON object");
+        assert_eq!(json["result"], "disconnected", "{json}");
+        assert!(json["reason"].is_string(), "{json}");
+        json
+    };
+    let sent = json("send", &["--to", "0013A20040B599B9", "landing", "on"]);
+    assert_eq!(sent["dst64"], "0013a20040b599b9");
+    assert_eq!(sent["mcp"]["type"], "landing");
+    let asked = json("status", &["--to", "0013A20040B599B9", "landing"]);
+    assert_eq!(asked["mcp"]["status_request"], true);
+    let at = json("at", &["NI"]);
+    assert_eq!(at["command"], "NI");
+    peer.join().unwrap();
+}
+
+#[test]
 fn a_broadcast_nobody_answers_says_so_and_what_keeps_the_radio_silent() {
     // A peer that reads every request but never answers, as a radio in the other API
     // mode would not.

@@ -42,7 +42,8 @@ pub(crate) struct AtArgs {
     value: Option<String>,
     /// Output format: `json` prints each answer as the response frame's object (as
     /// `monitor` does), with `value` added: the value read as a number, or as text for a
-    /// text parameter; no answer in time as `{"result":"timeout","command":...}`.
+    /// text parameter; no answer in time as `{"result":"timeout","command":...}`, a link
+    /// lost meanwhile as `{"result":"disconnected",...}`.
     #[arg(long, value_enum, default_value_t = Format::Text)]
     format: Format,
 }
@@ -408,18 +409,28 @@ pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
 }
 
 /// No answer in time as a JSON object: `{"result":"timeout","command":"AP"}`, with the
-/// remote radio's `dst64` and the frame id when the command went out; `None` for
+/// remote radio's `dst64` and the frame id when the command went out; a link that went
+/// away meanwhile as `{"result":"disconnected",...}` with its `reason`; `None` for
 /// another failure.
 fn timeout_json(error: &SendError, name: &str, to: Option<Address64>) -> Option<serde_json::Value> {
-    if !error.is_timeout() {
+    let lost = crate::send::link_lost(error);
+    if !error.is_timeout() && lost.is_none() {
         return None;
     }
-    let mut json = serde_json::json!({ "result": "timeout", "command": name });
+    let result = if lost.is_some() {
+        "disconnected"
+    } else {
+        "timeout"
+    };
+    let mut json = serde_json::json!({ "result": result, "command": name });
     if let Some(to) = to {
         json["dst64"] = to.to_string().into();
     }
     if let Some(frame_id) = error.frame_id() {
         json["id"] = frame_id.into();
+    }
+    if let Some(reason) = lost {
+        json["reason"] = reason.into();
     }
     Some(json)
 }

@@ -24,7 +24,8 @@ pub(crate) struct SendArgs {
     no_status: bool,
     /// Output format: `json` prints one object, `{"result":"delivered",...}` or
     /// `{"result":"failed",...}` with the transmit status's fields,
-    /// `{"result":"timeout",...}` when no status came in time, or
+    /// `{"result":"timeout",...}` when no status came in time,
+    /// `{"result":"disconnected",...}` when the link went away meanwhile, or
     /// `{"result":"written",...}` (--no-status); the packet as `mcp`; and, for a
     /// trajectory to one MAV with a status asked, `trajectory_confirmed`.
     #[arg(long, value_enum, default_value_t = Format::Text)]
@@ -162,7 +163,8 @@ fn report_json(report: &DeliveryReport, args: &SendArgs, payload: &[u8]) -> serd
 
 /// A send's failure as a JSON object, where the MAV is and what went (`mcp`): a
 /// delivery the radio reported failed as `{"result":"failed",...}` with the transmit
-/// status's fields, no status in time as [`timeout_json`]; `None` for another failure.
+/// status's fields, no status in time as [`timeout_json`], a link that went away as
+/// `{"result":"disconnected",...}` with its `reason`; `None` for another failure.
 pub(crate) fn failure_json(
     error: &SendError,
     to: Address64,
@@ -186,6 +188,21 @@ pub(crate) fn failure_json(
             Some(json)
         }
         _ if error.is_timeout() => Some(timeout_json(to, error.frame_id(), false, mcp)),
+        _ => link_lost(error).map(|reason| {
+            let mut json = serde_json::json!({ "result": "disconnected", "dst64": to.to_string() });
+            json["reason"] = reason.into();
+            json["mcp"] = mcp;
+            json
+        }),
+    }
+}
+
+/// Why the link went away, when that is why `error` came: the request may or may not
+/// have gone out (`"result":"disconnected"` in JSON).
+pub(crate) fn link_lost(error: &SendError) -> Option<String> {
+    match error {
+        SendError::Disconnected { reason, .. } => Some(reason.clone()),
+        SendError::Closed => Some("link closed".to_owned()),
         _ => None,
     }
 }
