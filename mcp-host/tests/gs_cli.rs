@@ -859,6 +859,26 @@ fn log_lines_into_a_pipe_carry_no_colour_codes() {
 }
 
 #[test]
+fn sim_and_radio_on_a_port_in_use_say_what_to_do_and_nothing_else() {
+    let taken = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let link = format!("tcp-listen:{}", taken.local_addr().unwrap());
+    for args in [
+        &["sim", "--link", &link, "--duration", "1"][..],
+        &["radio", "--coordinator", &link, "--duration", "1"],
+    ] {
+        let output = run(args);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(3), "{args:?}: {stderr}");
+        assert!(
+            stderr.contains("perhaps another mcp-gs, listens there: give another port"),
+            "{args:?}: {stderr}"
+        );
+        // No banner of a network that did not start.
+        assert_eq!(String::from_utf8_lossy(&output.stdout), "", "{args:?}");
+    }
+}
+
+#[test]
 fn a_time_before_2000_is_warned_about_once() {
     let output = run(&[
         "encode",

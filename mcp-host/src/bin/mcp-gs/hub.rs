@@ -44,19 +44,14 @@ fn parse_listen(s: &str) -> Result<String, String> {
 /// The failure of a `--listen` address that cannot be listened on, with what to do about
 /// the common causes.
 fn listen_failure(addr: &str, error: &std::io::Error) -> Failure {
-    use std::io::ErrorKind;
     let hint = match error.kind() {
-        ErrorKind::AddrInUse => {
-            " (another hub serves there or holds the port while its radio is away, or \
-             another program serves there: give this one another --listen ADDR:PORT)"
-        }
-        ErrorKind::AddrNotAvailable => {
-            " (no network interface of this machine has that address: give 127.0.0.1 for \
-             this machine alone, or 0.0.0.0 for every interface)"
-        }
-        ErrorKind::PermissionDenied => " (ports below 1024 need privileges: use 1024 or above)",
-        _ => "",
+        std::io::ErrorKind::AddrInUse => Some(
+            "another hub serves there or holds the port while its radio is away, or another \
+             program serves there: give this one another --listen ADDR:PORT",
+        ),
+        _ => crate::link_args::listen_hint(error),
     };
+    let hint = hint.map(|h| format!(" ({h})")).unwrap_or_default();
     Failure::link(format!("cannot listen on {addr}: {error}{hint}"))
 }
 

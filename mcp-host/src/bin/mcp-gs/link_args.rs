@@ -658,7 +658,44 @@ fn link_hint(error: &LinkError, link: &Link) -> Option<String> {
              running? A hub whose radio is disconnected refuses connections"
                 .into(),
         ),
+        LinkError::Listen { source, .. } => match source.kind() {
+            Io::AddrInUse => Some(
+                "another program, perhaps another mcp-gs, listens there: give another port, \
+                 or port 0 for any free one"
+                    .into(),
+            ),
+            _ => listen_hint(source).map(str::to_owned),
+        },
         _ => None,
+    }
+}
+
+/// What to do about an address that cannot be listened on, but for one in use (whose
+/// cause depends on who listens).
+pub(crate) fn listen_hint(error: &std::io::Error) -> Option<&'static str> {
+    use std::io::ErrorKind;
+    match error.kind() {
+        ErrorKind::AddrNotAvailable => Some(
+            "no network interface of this machine has that address: give 127.0.0.1 for this \
+             machine alone, or 0.0.0.0 for every interface",
+        ),
+        ErrorKind::PermissionDenied => Some("ports below 1024 need privileges: use 1024 or above"),
+        _ => None,
+    }
+}
+
+/// The failure of an emulated network (`radio`, `sim`) that could not be set up: a
+/// node's link that cannot be opened, with what to do about it, is a link failure;
+/// anything else, bad input.
+pub(crate) fn network_failure(error: mcp_host::radio::NetworkError, link: &Link) -> Failure {
+    match &error {
+        mcp_host::radio::NetworkError::Link { source, .. } => {
+            let hint = link_hint(source, link)
+                .map(|h| format!(" ({h})"))
+                .unwrap_or_default();
+            Failure::link(format!("{error}{hint}"))
+        }
+        _ => Failure::input(error.to_string()),
     }
 }
 

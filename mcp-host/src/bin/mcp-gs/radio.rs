@@ -624,10 +624,12 @@ pub(crate) async fn run(args: RadioArgs) -> Result<(), Failure> {
     let addresses: Vec<Address64> = args.nodes.iter().map(|n| n.address).collect();
     check_distinct(&addresses, "node")?;
     args.net.check_nodes(&addresses, "node")?;
-    args.net.describe(&config);
+    // Said once the links are open: a link that cannot be opened is the one line.
+    let described = config.clone();
     let network = Network::new(config);
     let events = network.subscribe();
     let default_mode = args.api_mode;
+    let mut opened = Vec::new();
     let coordinator = std::iter::once((Address64::COORDINATOR, args.coordinator.clone()));
     let nodes = args.nodes.iter().map(|n| (n.address, n.link.clone()));
     for (address, link) in coordinator.chain(nodes) {
@@ -641,16 +643,17 @@ pub(crate) async fn run(args: RadioArgs) -> Result<(), Failure> {
         let info = network
             .add_link(address, &link.link, options)
             .await
-            .map_err(|e| match e {
-                mcp_host::radio::NetworkError::Link { .. } => Failure::link(e.to_string()),
-                other => Failure::input(other.to_string()),
-            })?;
+            .map_err(|e| crate::link_args::network_failure(e, &link.link))?;
         let name = if address == Address64::COORDINATOR {
             "coordinator"
         } else {
             "node"
         };
-        out!("{}", describe_node(name, &info, &link.link));
+        opened.push(describe_node(name, &info, &link.link));
+    }
+    args.net.describe(&described);
+    for line in opened {
+        out!("{line}");
     }
     watch(&network, events, &args.net, args.verbose, args.duration).await
 }

@@ -109,7 +109,8 @@ pub(crate) async fn run(args: SimArgs) -> Result<(), Failure> {
     addresses.truncate(wanted);
     args.net.check_nodes(&addresses, "simulated MAV")?;
     let config = args.net.config(MAX_UNICAST_FRAGMENTED)?;
-    args.net.describe(&config);
+    // Said once the links are open: a link that cannot be opened is the one line.
+    let described = config.clone();
     let options = SimOptions {
         rx_buffer: args.rx_buffer,
         coordinator_transparent: args.api_mode.transparent,
@@ -117,7 +118,8 @@ pub(crate) async fn run(args: SimArgs) -> Result<(), Failure> {
     let mode = args.api_mode.api_mode;
     let sim = Simulator::start_with(&args.link, mode, &addresses, config, options)
         .await
-        .map_err(|e| Failure::link(e.to_string()))?;
+        .map_err(|e| crate::link_args::network_failure(e, &args.link))?;
+    args.net.describe(&described);
     let events = sim.network().subscribe();
     for mav in sim.mavs() {
         if let Some(faults) = args.net.faults_of(mav.address) {
