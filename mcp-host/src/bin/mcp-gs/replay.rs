@@ -17,7 +17,9 @@ use crate::link_args::{LinkArgs, send_failure};
 pub(crate) enum Which {
     /// Frames received from the radio (what a ground station saw): the default.
     Rx,
-    /// Frames sent to the radio.
+    /// Frames sent to the radio (`monitor --record` records received frames only; a
+    /// program's own recording, made with `mcp_host::record::RecordWriter`, may hold
+    /// both).
     Tx,
     /// Both.
     Both,
@@ -31,7 +33,8 @@ pub(crate) enum Which {
      to a radio (--frames tx), serial:PATH[:BAUD] or tcp:HOST:PORT"
 )))]
 pub(crate) struct ReplayArgs {
-    /// A recording made by `monitor --record`.
+    /// A recording made by `monitor --record` (or by a program with
+    /// `mcp_host::record::RecordWriter`).
     file: PathBuf,
     #[command(flatten)]
     link: LinkArgs,
