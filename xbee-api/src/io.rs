@@ -61,8 +61,9 @@ const CHUNK: usize = 32;
 /// In mode 2 one read's 32 bytes complete at most 7 frames (a frame takes 5 bytes on
 /// the wire at least, and one begun in an earlier read may end with the read's first
 /// byte): an inbox the closure copies payloads into needs no more places than that for
-/// one call (and as many more as bytes `read_event` left complete). In mode 1 a failed candidate scanned again can also release frames whose
-/// bytes came in earlier reads, at most one for every 5 bytes the decoder holds.
+/// one call (and as many more as bytes `read_event` left complete). In mode 1 a failed
+/// candidate scanned again can also release frames whose bytes came in earlier reads,
+/// at most one for every 5 bytes the decoder holds.
 ///
 /// [`read_events_async`](Self::read_events_async) and
 /// [`read_event_async`](Self::read_event_async) are cancel safe: dropped before a read
@@ -171,18 +172,18 @@ impl<R, const N: usize, M: DecoderMode> FrameReader<R, N, M> {
         }
     }
 
-    /// The next event of the bytes read and not yet decoded, as a range in the
-    /// decoder's buffer; `None` when they hold none (all are then decoded).
+    /// The next event of the bytes read and not yet decoded (or held in the decoder: in
+    /// mode 1, frames a failed candidate released), as a range in the decoder's buffer;
+    /// `None` when they hold none (all are then decoded).
     fn pending_outcome(&mut self) -> Option<Outcome> {
-        while self.pos < self.len {
+        loop {
             let pending = self.chunk.get(self.pos..self.len).unwrap_or_default();
             let (taken, outcome) = self.decoder.decode_outcome(pending);
             self.pos += taken;
-            if outcome.is_some() {
+            if outcome.is_some() || self.pos >= self.len {
                 return outcome;
             }
         }
-        None
     }
 
     /// The next event of `n` bytes just read into the chunk; at the end of the input

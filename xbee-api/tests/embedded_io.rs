@@ -273,6 +273,32 @@ proptest! {
 }
 
 #[test]
+fn a_frame_a_failed_candidate_released_comes_without_another_read() {
+    // Mode 1: a candidate of 6 bytes holds a whole frame and fails its checksum; the
+    // frame inside it comes out of the rescan, from bytes already read.
+    let wire = [0x7E, 0x00, 0x06, 0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F, 0x00];
+    for fixed in [false, true] {
+        let mut uart = Uart::new(&wire, &[64]);
+        // A read now would fail: the frame must come without one.
+        uart.fail_at = Some(2);
+        let (first, second) = if fixed {
+            let mut reader: FrameReader<_, 64, Mode1> = FrameReader::fixed(uart);
+            let first = reader.read_event().unwrap().map(seen);
+            (first, reader.read_event().unwrap().map(seen))
+        } else {
+            let mut reader: FrameReader<_, 64> = FrameReader::new(uart, ApiMode::Unescaped);
+            let first = reader.read_event().unwrap().map(seen);
+            (first, reader.read_event().unwrap().map(seen))
+        };
+        assert!(
+            matches!(first, Some(Seen::Error(DecodeError::BadChecksum { .. }))),
+            "{first:?}"
+        );
+        assert_eq!(second, Some(Seen::Frame(vec![0x8A, 0x06])));
+    }
+}
+
+#[test]
 fn a_frame_cut_off_by_the_end_of_input_is_reported_there() {
     let wire = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F, 0x7E, 0x00, 0x05, 0x8A];
     let mut reader: FrameReader<_, 64> = FrameReader::new(Uart::new(&wire, &[3]), ApiMode::Escaped);
