@@ -14,8 +14,10 @@ use core::str::FromStr;
 /// assert_eq!(a, Address64(0x0013_a200_4052_2baa));
 /// assert_eq!(a.to_string(), "0013a20040522baa");
 /// assert_eq!(Address64::BROADCAST.to_string(), "000000000000ffff");
+/// // Debug, in an error or a struct, is hex too.
+/// assert_eq!(format!("{a:?}"), "Address64(0x0013a20040522baa)");
 /// ```
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
+#[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
 pub struct Address64(pub u64);
 
 /// A 16-bit network address, as sent big-endian on the wire.
@@ -26,8 +28,9 @@ pub struct Address64(pub u64);
 /// use xbee_api::Address16;
 /// assert_eq!("FFFE".parse::<Address16>(), Ok(Address16::UNKNOWN));
 /// assert_eq!(Address16(0x7d84).to_string(), "7d84");
+/// assert_eq!(format!("{:?}", Address16(0x7d84)), "Address16(0x7d84)");
 /// ```
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
+#[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
 pub struct Address16(pub u16);
 
 impl Address64 {
@@ -73,6 +76,21 @@ impl fmt::Display for Address64 {
 impl fmt::Display for Address16 {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "{:04x}", self.0)
+    }
+}
+
+/// `Address64(0x0013a20040522baa)`: in hex, as addresses are read everywhere else (a
+/// decimal address in an error's `Debug` means nothing to anyone).
+impl fmt::Debug for Address64 {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "Address64(0x{:016x})", self.0)
+    }
+}
+
+/// `Address16(0x7d84)`, in hex as [`Address64`]'s.
+impl fmt::Debug for Address16 {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "Address16(0x{:04x})", self.0)
     }
 }
 
