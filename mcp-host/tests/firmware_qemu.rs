@@ -837,3 +837,22 @@ fn frames_found_inside_a_failed_candidate_are_all_answered() {
         assert!(matches!(report, Report::Time(_)), "answer {i}: {report:?}");
     }
 }
+
+#[test]
+fn a_stray_start_delimiter_holds_back_no_command_for_long() {
+    if !qemu_available("a_stray_start_delimiter_holds_back_no_command_for_long") {
+        return;
+    }
+    let mut xbee = Xbee::boot();
+    // Noise that reads as a start delimiter and a length of 95, then one time request
+    // and nothing more: in API mode 1 the request lies inside the candidate, which
+    // would wait for 95 bytes. The line goes quiet: the firmware gives the candidate up
+    // and finds the request in its bytes.
+    let mut wire = vec![0x7E, 0x00, 95];
+    wire.extend_from_slice(&command_frame(McpCommand::status_request(
+        StatusRequest::Time,
+    )));
+    xbee.stream.write_all(&wire).unwrap();
+    let report = xbee.next_report();
+    assert!(matches!(report, Report::Time(_)), "{report:?}");
+}

@@ -34,6 +34,14 @@ pub const DECODER_CAPACITY: usize =
 /// Payloads waiting for the main loop.
 pub const QUEUE_LEN: usize = 4;
 
+/// SysTick ticks (50 ms each) a frame in progress may wait for its next byte before it
+/// is given up. The radio writes a frame's bytes back to back: a line quiet this long
+/// part way through one has lost the rest. In API mode 1 this matters beyond the one
+/// frame: a stray 0x7E (noise, a frame cut off) starts a candidate whose length field
+/// may reach past the real frames behind it, which would wait until that many more
+/// bytes came.
+pub const STALE_TICKS: u32 = 2;
+
 /// One received MCP payload.
 pub type Payload = Vec<u8, MAX_PAYLOAD>;
 
@@ -62,6 +70,8 @@ pub struct Inbox {
     /// The decoder may hold events not taken yet (in API mode 1 one byte can end a
     /// failed candidate and release several frames found inside it).
     pending: bool,
+    /// The tick at which the last byte came.
+    last_byte: u32,
 }
 
 impl Default for Inbox {
@@ -82,6 +92,7 @@ impl Inbox {
                 uart_errors: 0,
             },
             pending: false,
+            last_byte: 0,
         }
     }
 
@@ -112,6 +123,22 @@ impl Inbox {
                 None => self.pending = false,
             }
         }
+    }
+
+    /// Gives up the frame in progress if no byte came for [`STALE_TICKS`] up to `now`,
+    /// as at the end of the input: in API mode 1 the bytes after its start delimiter
+    /// are scanned again, and the frames among them are taken as `drain` takes them.
+    pub fn give_up_stale(&mut self, decoder: &mut XbeeDecoder, now: u32) {
+        let quiet = now.wrapping_sub(self.last_byte) >= STALE_TICKS;
+        if !quiet || self.pending || !self.has_room() || decoder.is_idle() {
+            return;
+        }
+        if let Some(Ok(frame)) = decoder.finish() {
+            self.accept(frame);
+        }
+        // The rescan's frames, as many as the queue has room for; the rest wait.
+        self.pending = true;
+        self.drain(decoder);
     }
 
     /// Queues the payload of a Receive Packet; counts anything else.
@@ -180,6 +207,7 @@ pub fn on_uart0_interrupt() {
             }
             let Some(byte) = hw::uart0_read() else { break };
             inbox.push(&mut decoder, byte);
+            inbox.last_byte = crate::clock::ticks();
         }
         if !inbox.has_room() {
             hw::uart0_rx_interrupts(false);
@@ -199,6 +227,17 @@ pub fn take() -> Option<Payload> {
         }
         payload
     })
+}
+
+/// One SysTick tick: a frame in progress on a line quiet for [`STALE_TICKS`] is given
+/// up ([`Inbox::give_up_stale`]).
+pub fn on_tick(now: u32) {
+    critical_section::with(|cs| {
+        let mut decoder = DECODER.borrow_ref_mut(cs);
+        INBOX
+            .borrow_ref_mut(cs)
+            .give_up_stale(&mut decoder, now);
+    });
 }
 
 /// `true` if a payload is waiting (for the idle check, inside a critical section).
