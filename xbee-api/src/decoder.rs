@@ -972,6 +972,31 @@ impl<const N: usize, M: DecoderMode> Decoder<N, M> {
     /// Ends the input: delivers pending events, then reports a partial frame as
     /// [`DecodeError::Truncated`] (in mode 1 its bytes are then scanned again). Call it
     /// until it returns `None`; the decoder is then idle and can take new input.
+    ///
+    /// Call it too when the line has gone quiet part way through a frame (no byte for
+    /// longer than a frame takes at the baud rate, the decoder not [idle](Self::is_idle)):
+    /// a radio writes a frame's bytes back to back, so the rest is lost. In API mode 1
+    /// this matters beyond the one frame: a stray 0x7E (noise, a frame cut off) starts
+    /// a candidate whose length field may reach past the real frames behind it, and
+    /// those come out only once that many more bytes came, or once the candidate is
+    /// given up here and its bytes scanned again.
+    ///
+    /// ```
+    /// use xbee_api::{DecodeError, Decoder, Mode1};
+    /// // Noise that reads as a start delimiter and a length of 64, then a whole frame.
+    /// let line = [0x7E, 0x00, 0x40, 0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F];
+    /// let mut decoder: Decoder<128, Mode1> = Decoder::fixed();
+    /// let mut frames = 0;
+    /// decoder.decode_each(&line, |event| frames += usize::from(event.is_ok()));
+    /// assert_eq!(frames, 0); // held inside the candidate
+    /// // The line stays quiet: give the candidate up.
+    /// assert!(!decoder.is_idle());
+    /// assert!(matches!(decoder.finish(), Some(Err(DecodeError::Truncated { .. }))));
+    /// while let Some(event) = decoder.finish() {
+    ///     frames += usize::from(event.is_ok());
+    /// }
+    /// assert_eq!(frames, 1);
+    /// ```
     pub fn finish(&mut self) -> Option<Event<'_>> {
         self.finish_outcome().map(|o| self.event(o))
     }

@@ -70,6 +70,11 @@ const CHUNK: usize = 32;
 /// completes (in a `select` with a timer, say), they have taken no byte of it, and
 /// nothing is lost as long as the reader's own `read` is cancel safe.
 ///
+/// A line that goes quiet part way through a frame leaves it waiting for its rest:
+/// give it up with [`drop_partial`](Self::drop_partial) when no event came for longer
+/// than a frame takes (that same `select` with a timer). In API mode 1 a stray 0x7E
+/// can hold real frames back that way (see [`Decoder::finish`]).
+///
 /// `M` is the decoder's [`DecoderMode`]: a firmware whose radio's API mode is set once
 /// fixes it in the type ([`fixed`](FrameReader::fixed)), so that only that mode's code
 /// is linked (the reader feeds the decoder with
@@ -148,6 +153,40 @@ impl<R, const N: usize, M: DecoderMode> FrameReader<R, N, M> {
     /// The reader, to reconfigure it; bytes read from it past this reader are not seen.
     pub fn get_mut(&mut self) -> &mut R {
         &mut self.reader
+    }
+
+    /// Gives up the frame in progress, as at the end of the input: its error
+    /// ([`DecodeError::Truncated`](crate::DecodeError::Truncated)) and, in API mode 1,
+    /// the events of its bytes scanned again (frames a stray 0x7E held back), one a
+    /// call; `None` once there are no more (at once if no frame is in progress). Bytes
+    /// read and not yet decoded (which [`read_event`](Self::read_event) left) are
+    /// decoded first, their events first: they may end the frame.
+    ///
+    /// For a line quiet part way through a frame, from a timer (see [`FrameReader`]).
+    ///
+    /// ```
+    /// use xbee_api::io::FrameReader;
+    /// use xbee_api::Mode1;
+    /// // Noise that reads as a start delimiter and a length of 64, then a whole frame;
+    /// // then the line is quiet.
+    /// let line = [0x7E, 0x00, 0x40, 0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F];
+    /// let mut reader: FrameReader<&[u8], 128, Mode1> = FrameReader::fixed(&line[..]);
+    /// let mut frames = 0;
+    /// reader.read_events(|event| frames += usize::from(event.is_ok()))?;
+    /// assert_eq!(frames, 0); // held inside the candidate
+    /// // No event for a while: give the candidate up.
+    /// while let Some(event) = reader.drop_partial() {
+    ///     frames += usize::from(event.is_ok());
+    /// }
+    /// assert_eq!(frames, 1);
+    /// # Ok::<(), core::convert::Infallible>(())
+    /// ```
+    pub fn drop_partial(&mut self) -> Option<Event<'_>> {
+        let outcome = match self.pending_outcome() {
+            Some(outcome) => Some(outcome),
+            None => self.decoder.finish_outcome(),
+        };
+        outcome.map(|o| self.decoder.event(o))
     }
 
     /// The reader back; a partial frame in the decoder, and bytes read but not yet

@@ -299,6 +299,50 @@ fn a_frame_a_failed_candidate_released_comes_without_another_read() {
 }
 
 #[test]
+fn a_frame_given_up_on_a_quiet_line_releases_the_frames_inside_it() {
+    // Mode 1: noise that reads as a start delimiter and a length of 64, then two whole
+    // frames, in one read; then the line is quiet (a read would fail).
+    let status = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F];
+    let mut wire = vec![0x7E, 0x00, 0x40];
+    wire.extend(status);
+    wire.extend(status);
+    let mut uart = Uart::new(&wire, &[64]);
+    uart.fail_at = Some(2);
+    let mut reader: FrameReader<_, 128, Mode1> = FrameReader::fixed(uart);
+    assert!(
+        reader.read_event().is_err(),
+        "no frame before the line went quiet"
+    );
+    let mut events = Vec::new();
+    while let Some(event) = reader.drop_partial() {
+        events.push(seen(event));
+    }
+    assert_eq!(
+        events,
+        [
+            Seen::Error(DecodeError::Truncated {
+                length: Some(64),
+                received: 12
+            }),
+            Seen::Frame(vec![0x8A, 0x06]),
+            Seen::Frame(vec![0x8A, 0x06]),
+        ]
+    );
+    assert!(reader.decoder().is_idle());
+    // Bytes read and not decoded yet are decoded first: they may end the frame.
+    let mut wire = status.to_vec();
+    wire.extend(status);
+    let mut reader: FrameReader<_, 64, Mode2> = FrameReader::fixed(Uart::new(&wire, &[64]));
+    let first = reader.read_event().unwrap().map(seen);
+    assert_eq!(first, Some(Seen::Frame(vec![0x8A, 0x06])));
+    assert_eq!(
+        reader.drop_partial().map(seen),
+        Some(Seen::Frame(vec![0x8A, 0x06]))
+    );
+    assert_eq!(reader.drop_partial().map(seen), None);
+}
+
+#[test]
 fn a_frame_cut_off_by_the_end_of_input_is_reported_there() {
     let wire = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F, 0x7E, 0x00, 0x05, 0x8A];
     let mut reader: FrameReader<_, 64> = FrameReader::new(Uart::new(&wire, &[3]), ApiMode::Escaped);

@@ -370,6 +370,12 @@ pub extern "C" fn mav_uart() {
         if let Some(Ok(Some(Ok(frame)))) = poll_once(reader.read_event_async()) {
             out(frame.data());
         }
+        // A frame in progress given up, as on a line gone quiet.
+        while let Some(event) = reader.drop_partial() {
+            if let Ok(frame) = event {
+                out(frame.data());
+            }
+        }
     }
     let request = TransmitRequestRepr::unicast(Address64::COORDINATOR, b"m on the UART");
     let _ = io::write_frame(&mut Uart, ApiMode::Escaped, &request);
