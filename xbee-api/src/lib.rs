@@ -53,6 +53,8 @@
 #![no_std]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
+// On docs.rs (nightly, `--cfg docsrs`): each item says which feature it needs.
+#![cfg_attr(docsrs, feature(doc_cfg))]
 // No indexing or slicing that could go out of bounds, no unwrap, no panic, whatever the
 // input (the lints below). Arithmetic keeps to invariants that the fuzz targets check
 // with overflow checks on. The frame views in `frame` index their fields as smoltcp's
