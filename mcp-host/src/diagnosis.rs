@@ -61,6 +61,13 @@ impl Stats {
     /// `mode`, if anything, taking any sign as one: for the counters of a short
     /// exchange that went unanswered ([`since`](Stats::since) gives those).
     ///
+    /// The counters see only what comes from the radio. A radio in the other API mode
+    /// that says nothing meanwhile leaves no sign here, although it drops the frames
+    /// sent to it that have a byte to escape: then the sign is a request it never
+    /// answered itself, [`SendError::Timeout`](crate::SendError::Timeout) (no transmit
+    /// status or response) or [`RequestError::Timeout`](crate::RequestError::Timeout)
+    /// with `delivered` false, which `mcp-gs` turns into its hint to check the mode.
+    ///
     /// ```
     /// use mcp_host::{Diagnosis, Stats};
     /// use xbee_api::ApiMode;
