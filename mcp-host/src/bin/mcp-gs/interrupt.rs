@@ -38,6 +38,8 @@ pub(crate) fn ctrl_c() -> impl Future<Output = Interrupt> + Send + 'static {
 
 /// What stopped a command.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+// Only Ctrl-C is listened to where there are no Unix signals.
+#[cfg_attr(not(unix), allow(dead_code))]
 pub(crate) enum Interrupt {
     /// Ctrl-C (SIGINT).
     CtrlC,
