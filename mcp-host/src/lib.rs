@@ -151,9 +151,12 @@ const OPS_CAPACITY: usize = 256;
 
 /// What a connected link is attached to.
 #[derive(Debug, Clone, PartialEq, Eq)]
+#[non_exhaustive]
 pub struct LinkInfo {
     /// The link.
     pub link: Link,
+    /// The API mode the link reads and writes frames in ([`LinkOptions::api_mode`]).
+    pub api_mode: xbee_api::ApiMode,
     /// For `pty`: the far end's path.
     pub pty_path: Option<PathBuf>,
     /// For `tcp-listen`: the bound address.
@@ -202,6 +205,7 @@ pub async fn connect(
     };
     let info = Arc::new(LinkInfo {
         link: link.clone(),
+        api_mode: options.api_mode,
         pty_path: connector.pty_path().map(PathBuf::from),
         local_addr: connector.local_addr(),
     });
@@ -284,6 +288,14 @@ impl PacketStream {
     /// What the link is attached to.
     pub fn info(&self) -> &LinkInfo {
         &self.info
+    }
+
+    /// What the link's counters say may be wrong with the radio's settings (its API
+    /// mode, its baud rate), read in the link's API mode: [`Stats::diagnose`] of
+    /// [`stats`](Self::stats) since `earlier` (a snapshot taken before a request that
+    /// went unanswered, say; [`Stats::default`] for the whole link).
+    pub fn diagnose(&self, earlier: &Stats) -> Option<Diagnosis> {
+        self.stats().since(earlier).diagnose(self.info.api_mode)
     }
 }
 

@@ -507,6 +507,24 @@ impl CommandSender {
         &self.info
     }
 
+    /// What the link's counters since `earlier` say may be wrong with the radio's
+    /// settings, read in the link's API mode, as
+    /// [`PacketStream::diagnose`](crate::PacketStream::diagnose) says.
+    ///
+    /// ```no_run
+    /// # async fn run(sender: mcp_host::CommandSender) {
+    /// let before = sender.stats();
+    /// if sender.at(*b"NI", &[], None).await.is_err() {
+    ///     if let Some(found) = sender.diagnose(&before) {
+    ///         eprintln!("no answer: {found}");
+    ///     }
+    /// }
+    /// # }
+    /// ```
+    pub fn diagnose(&self, earlier: &Stats) -> Option<crate::Diagnosis> {
+        self.stats().since(earlier).diagnose(self.info.api_mode)
+    }
+
     /// Ends the link for good, for every holder of it: the transport (serial port,
     /// socket, pseudo-terminal) is closed, requests in flight and later ones fail, and
     /// the [`PacketStream`](crate::PacketStream) yields

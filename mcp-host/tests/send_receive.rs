@@ -834,3 +834,34 @@ async fn sends_without_status_go_out_while_requests_wait_for_frame_ids() {
         w.abort();
     }
 }
+
+#[tokio::test]
+async fn the_link_diagnoses_a_radio_in_the_other_api_mode_in_its_own_mode() {
+    let (mut stream, sender, mut fake) = pty_link(ApiMode::Unescaped).await;
+    assert_eq!(stream.info().api_mode, ApiMode::Unescaped);
+    let before = sender.stats();
+    // The radio writes in mode 2: its 16-bit address 7D33 is escaped, which a mode 1
+    // link reads as data, and the checksum fails.
+    let packet = rx(Address64(0x0013_A200_40B5_99B9), b"r\x02\x04");
+    let mut wire = vec![0u8; xbee_api::EncodeFrame::encoded_len(&packet, ApiMode::Escaped)];
+    xbee_api::EncodeFrame::encode(&packet, ApiMode::Escaped, &mut wire).unwrap();
+    fake.write_raw(&wire).await;
+    assert!(matches!(
+        next_event(&mut stream).await,
+        Event::DecodeError(_)
+    ));
+    for found in [stream.diagnose(&before), sender.diagnose(&before)] {
+        assert!(
+            matches!(
+                found,
+                Some(mcp_host::Diagnosis::OtherApiMode {
+                    radio: ApiMode::Escaped,
+                    ..
+                })
+            ),
+            "{found:?}"
+        );
+    }
+    // Since a snapshot taken after it: nothing.
+    assert_eq!(sender.diagnose(&sender.stats()), None);
+}
