@@ -234,9 +234,7 @@ pub fn take() -> Option<Payload> {
 pub fn on_tick(now: u32) {
     critical_section::with(|cs| {
         let mut decoder = DECODER.borrow_ref_mut(cs);
-        INBOX
-            .borrow_ref_mut(cs)
-            .give_up_stale(&mut decoder, now);
+        INBOX.borrow_ref_mut(cs).give_up_stale(&mut decoder, now);
     });
 }
 
