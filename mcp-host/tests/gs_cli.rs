@@ -655,6 +655,20 @@ fn a_broadcast_nobody_answers_says_so_and_what_keeps_the_radio_silent() {
     peer.join().unwrap();
 }
 
+/// The first line `monitor --link LINK` writes to its standard error (it runs until
+/// then, and is stopped after).
+fn first_monitor_hint(link: &str) -> String {
+    let mut monitor = common::Running(
+        gs().args(["monitor", "--link", link])
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap(),
+    );
+    let lines = common::stderr_lines(&mut monitor.0);
+    lines.recv_timeout(common::GUARD).expect("monitor hints")
+}
+
 #[test]
 fn a_peer_that_closes_at_once_is_said_to_turn_us_away() {
     // As a simulator serving two clients already does to a third.
@@ -687,20 +701,11 @@ fn a_peer_that_closes_at_once_is_said_to_turn_us_away() {
             drop(stream.unwrap());
         }
     });
-    let mut monitor = common::Running(
-        gs().args(["monitor", "--link", &link])
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap(),
-    );
-    let lines = common::stderr_lines(&mut monitor.0);
-    let hint = lines.recv_timeout(common::GUARD).expect("monitor hints");
+    let hint = first_monitor_hint(&link);
     assert!(
         hint.contains("the peer closed the connection before anything came"),
         "{hint}"
     );
-    drop(monitor);
     peer.join().unwrap();
 }
 
@@ -1046,20 +1051,11 @@ fn a_radio_in_transparent_mode_is_named_by_status_and_monitor() {
 
     // monitor has no event to show for it, and says it all the same.
     let (link, peer) = common::talking_peer(text);
-    let mut monitor = common::Running(
-        gs().args(["monitor", "--link", &link])
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap(),
-    );
-    let lines = common::stderr_lines(&mut monitor.0);
-    let hint = lines.recv_timeout(common::GUARD).expect("monitor hints");
+    let hint = first_monitor_hint(&link);
     assert!(
         hint.contains("none began a frame") && hint.contains("transparent mode"),
         "{hint}"
     );
-    drop(monitor);
     peer.join().unwrap();
 }
 
