@@ -124,7 +124,7 @@ pub fn run() -> ! {
         }
         while seen != clock::ticks() {
             seen = seen.wrapping_add(1);
-            rx::on_tick(seen);
+            rx::on_tick();
             app.on_tick(&mut send);
         }
         wait_for(|cs| !rx::is_pending(cs) && clock::ticks() == seen);

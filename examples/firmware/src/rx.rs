@@ -220,8 +220,11 @@ pub fn on_uart0_interrupt() {
 /// may come to raise it.
 pub fn take() -> Option<Payload> {
     critical_section::with(|cs| {
-        let payload = INBOX.borrow_ref_mut(cs).pop();
+        let mut inbox = INBOX.borrow_ref_mut(cs);
+        let payload = inbox.pop();
         if payload.is_some() {
+            // The bytes held back in the FIFO meanwhile were no quiet line.
+            inbox.last_byte = crate::clock::ticks();
             hw::uart0_rx_interrupts(true);
             hw::uart0_pend();
         }
@@ -229,12 +232,16 @@ pub fn take() -> Option<Payload> {
     })
 }
 
-/// One SysTick tick: a frame in progress on a line quiet for [`STALE_TICKS`] is given
-/// up ([`Inbox::give_up_stale`]).
-pub fn on_tick(now: u32) {
+/// On a SysTick tick: a frame in progress on a line quiet for [`STALE_TICKS`] is given
+/// up ([`Inbox::give_up_stale`]). The time is read here, with the UART interrupt
+/// masked, so that the last byte's tick is never later than it (a main loop behind
+/// its ticks would otherwise see a byte from the future as one long ago).
+pub fn on_tick() {
     critical_section::with(|cs| {
         let mut decoder = DECODER.borrow_ref_mut(cs);
-        INBOX.borrow_ref_mut(cs).give_up_stale(&mut decoder, now);
+        INBOX
+            .borrow_ref_mut(cs)
+            .give_up_stale(&mut decoder, crate::clock::ticks());
     });
 }
 
