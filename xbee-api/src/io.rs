@@ -71,9 +71,12 @@ const CHUNK: usize = 32;
 /// nothing is lost as long as the reader's own `read` is cancel safe.
 ///
 /// A line that goes quiet part way through a frame leaves it waiting for its rest:
-/// give it up with [`drop_partial`](Self::drop_partial) when no event came for longer
-/// than a frame takes (that same `select` with a timer). In API mode 1 a stray 0x7E
-/// can hold real frames back that way (see [`Decoder::finish`]).
+/// give it up with [`drop_partial`](Self::drop_partial) when no byte came for longer
+/// than a frame takes. With that same `select` and a timer: note
+/// [`bytes_read`](Self::bytes_read) before the wait, and when the timer wins with no
+/// byte read meanwhile (a long frame at a slow baud rate may take longer than the timer
+/// with its bytes still coming), give the frame up. In API mode 1 a stray 0x7E can hold
+/// real frames back that way (see [`Decoder::finish`]).
 ///
 /// `M` is the decoder's [`DecoderMode`]: a firmware whose radio's API mode is set once
 /// fixes it in the type ([`fixed`](FrameReader::fixed)), so that only that mode's code
@@ -100,6 +103,11 @@ pub struct FrameReader<R, const N: usize = DEFAULT_CAPACITY, M: DecoderMode = An
     chunk: [u8; CHUNK],
     pos: usize,
     len: usize,
+    /// Bytes read so far, wrapping.
+    bytes_read: u32,
+    /// [`drop_partial`](Self::drop_partial) gave the frame up; the events of its bytes
+    /// scanned again follow.
+    dropped: bool,
 }
 
 impl<R, const N: usize> FrameReader<R, N, AnyMode> {
@@ -127,6 +135,8 @@ impl<R, const N: usize, M: DecoderMode> FrameReader<R, N, M> {
             chunk: [0; CHUNK],
             pos: 0,
             len: 0,
+            bytes_read: 0,
+            dropped: false,
         }
     }
 
@@ -140,9 +150,25 @@ impl<R, const N: usize, M: DecoderMode> FrameReader<R, N, M> {
         &self.decoder
     }
 
-    /// The decoder, to [`reset`](Decoder::reset) it (after the line was reconfigured).
+    /// The decoder. To start afresh (after the line was reconfigured), use
+    /// [`reset`](Self::reset), which also drops the bytes read and not yet decoded.
     pub fn decoder_mut(&mut self) -> &mut Decoder<N, M> {
         &mut self.decoder
+    }
+
+    /// Starts afresh, as after the line was reconfigured: the frame in progress and
+    /// the bytes read but not yet decoded are dropped (the counters are kept).
+    pub fn reset(&mut self) {
+        self.decoder.reset();
+        self.pos = 0;
+        self.len = 0;
+        self.dropped = false;
+    }
+
+    /// Bytes read from the reader so far (wrapping at `u32::MAX`): compared before and
+    /// after a wait, whether any came, for [`drop_partial`](Self::drop_partial).
+    pub const fn bytes_read(&self) -> u32 {
+        self.bytes_read
     }
 
     /// The reader.
@@ -160,7 +186,9 @@ impl<R, const N: usize, M: DecoderMode> FrameReader<R, N, M> {
     /// the events of its bytes scanned again (frames a stray 0x7E held back), one a
     /// call; `None` once there are no more (at once if no frame is in progress). Bytes
     /// read and not yet decoded (which [`read_event`](Self::read_event) left) are
-    /// decoded first, their events first: they may end the frame.
+    /// decoded first, their events first: they may end the frame. One frame is given
+    /// up a sequence of calls: a new candidate the scan starts among the bytes held is
+    /// kept, for its rest to come or for the next quiet wait to give it up.
     ///
     /// For a line quiet part way through a frame, from a timer (see [`FrameReader`]).
     ///
@@ -184,8 +212,17 @@ impl<R, const N: usize, M: DecoderMode> FrameReader<R, N, M> {
     pub fn drop_partial(&mut self) -> Option<Event<'_>> {
         let outcome = match self.pending_outcome() {
             Some(outcome) => Some(outcome),
-            None => self.decoder.finish_outcome(),
+            // Given up once: a new candidate the scan starts among the bytes held
+            // stays, as a frame begun just before the wait ended may be.
+            None if !self.dropped => {
+                self.dropped = true;
+                self.decoder.finish_outcome()
+            }
+            None => None,
         };
+        if outcome.is_none() {
+            self.dropped = false;
+        }
         outcome.map(|o| self.decoder.event(o))
     }
 
@@ -198,17 +235,34 @@ impl<R, const N: usize, M: DecoderMode> FrameReader<R, N, M> {
     /// Passes the events of `bytes`, just read, to `f` (after those of bytes read
     /// earlier that [`read_event`](Self::read_event) left); at the end of the input (no
     /// bytes), those of [`Decoder::finish`].
-    fn feed<F: FnMut(Event<'_>)>(&mut self, bytes: &[u8], mut f: F) {
-        while let Some(outcome) = self.pending_outcome() {
-            f(self.decoder.event(outcome));
-        }
-        if bytes.is_empty() {
+    fn feed<F: FnMut(Event<'_>)>(&mut self, n: usize, f: F) {
+        self.took(n);
+        self.pos = 0;
+        self.len = 0;
+        if n == 0 {
+            let mut f = f;
             while let Some(event) = self.decoder.finish() {
                 f(event);
             }
         } else {
-            self.decoder.decode_each(bytes, f);
+            self.decoder
+                .decode_each(self.chunk.get(..n).unwrap_or_default(), f);
         }
+    }
+
+    /// Passes the events of what [`read_event`](Self::read_event) left (bytes read and
+    /// not yet decoded, frames the decoder holds) to `f`, before a read.
+    fn pass_left<F: FnMut(Event<'_>)>(&mut self, f: &mut F) {
+        while let Some(outcome) = self.pending_outcome() {
+            f(self.decoder.event(outcome));
+        }
+    }
+
+    /// Counts `n` bytes read.
+    fn took(&mut self, n: usize) {
+        // At most a chunk's worth: the cast keeps every bit that counts.
+        self.bytes_read = self.bytes_read.wrapping_add(n as u32);
+        self.dropped = false;
     }
 
     /// The next event of the bytes read and not yet decoded (or held in the decoder: in
@@ -228,6 +282,7 @@ impl<R, const N: usize, M: DecoderMode> FrameReader<R, N, M> {
     /// The next event of `n` bytes just read into the chunk; at the end of the input
     /// (`n` 0), of [`Decoder::finish`].
     fn read_outcome(&mut self, n: usize) -> Option<Outcome> {
+        self.took(n);
         self.pos = 0;
         self.len = n.min(CHUNK);
         if n == 0 {
@@ -241,14 +296,15 @@ impl<R, const N: usize, M: DecoderMode> FrameReader<R, N, M> {
 impl<R: embedded_io::Read, const N: usize, M: DecoderMode> FrameReader<R, N, M> {
     /// Reads once and passes every event the bytes read complete to `f`, in order;
     /// returns how many bytes were read. `Ok(0)` is the end of the input, after the
-    /// events of a frame cut off by it.
+    /// events of a frame cut off by it. What [`read_event`](Self::read_event) left is
+    /// passed on first, before the read (which may wait for bytes).
     ///
     /// A read error is returned as it is; the decoder keeps what it had, so the next call
     /// goes on with the frame in progress.
-    pub fn read_events<F: FnMut(Event<'_>)>(&mut self, f: F) -> Result<usize, R::Error> {
-        let mut chunk = [0u8; CHUNK];
-        let n = self.reader.read(&mut chunk)?;
-        self.feed(chunk.get(..n).unwrap_or_default(), f);
+    pub fn read_events<F: FnMut(Event<'_>)>(&mut self, mut f: F) -> Result<usize, R::Error> {
+        self.pass_left(&mut f);
+        let n = self.reader.read(&mut self.chunk)?;
+        self.feed(n, f);
         Ok(n)
     }
 
@@ -325,9 +381,10 @@ impl<R: embedded_io_async::Read, const N: usize, M: DecoderMode> FrameReader<R, 
         &mut self,
         f: F,
     ) -> Result<usize, R::Error> {
-        let mut chunk = [0u8; CHUNK];
-        let n = self.reader.read(&mut chunk).await?;
-        self.feed(chunk.get(..n).unwrap_or_default(), f);
+        let mut f = f;
+        self.pass_left(&mut f);
+        let n = self.reader.read(&mut self.chunk).await?;
+        self.feed(n, f);
         Ok(n)
     }
 

@@ -329,6 +329,30 @@ fn a_frame_given_up_on_a_quiet_line_releases_the_frames_inside_it() {
         ]
     );
     assert!(reader.decoder().is_idle());
+    // One frame is given up a sequence of calls: a frame begun among the bytes held
+    // is kept for its rest.
+    let mut wire = vec![0x7E, 0x00, 0x40];
+    wire.extend(status);
+    wire.extend(&status[..3]);
+    let mut reader: FrameReader<_, 128, Mode1> = FrameReader::fixed(Uart::new(&wire, &[64]));
+    reader.read_events(|_| {}).unwrap();
+    let mut events = Vec::new();
+    while let Some(event) = reader.drop_partial() {
+        events.push(seen(event));
+    }
+    assert_eq!(events.len(), 2, "{events:?}");
+    assert_eq!(events[1], Seen::Frame(vec![0x8A, 0x06]));
+    assert!(!reader.decoder().is_idle(), "the begun frame is kept");
+    // Its rest comes.
+    let rest: Vec<u8> = status[3..].to_vec();
+    let mut reader = FrameReader::<_, 128, Mode1>::with_decoder(
+        Uart::new(&rest, &[64]),
+        reader.decoder().clone(),
+    );
+    assert_eq!(
+        reader.read_event().unwrap().map(seen),
+        Some(Seen::Frame(vec![0x8A, 0x06]))
+    );
     // Bytes read and not decoded yet are decoded first: they may end the frame.
     let mut wire = status.to_vec();
     wire.extend(status);
@@ -340,6 +364,26 @@ fn a_frame_given_up_on_a_quiet_line_releases_the_frames_inside_it() {
         Some(Seen::Frame(vec![0x8A, 0x06]))
     );
     assert_eq!(reader.drop_partial().map(seen), None);
+}
+
+#[test]
+fn read_events_passes_on_what_read_event_left_before_it_reads() {
+    // Two frames in one read; the next read fails.
+    let status = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F];
+    let wire = status.repeat(2);
+    let mut uart = Uart::new(&wire, &[64]);
+    uart.fail_at = Some(2);
+    let mut reader: FrameReader<_, 64, Mode2> = FrameReader::fixed(uart);
+    assert!(matches!(reader.read_event(), Ok(Some(Ok(_)))));
+    let mut events = Vec::new();
+    let read = reader.read_events(|event| events.push(seen(event)));
+    assert!(read.is_err(), "the read failed");
+    assert_eq!(
+        events,
+        [Seen::Frame(vec![0x8A, 0x06])],
+        "and the frame read before it came"
+    );
+    assert_eq!(reader.bytes_read(), 12);
 }
 
 #[test]
