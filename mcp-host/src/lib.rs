@@ -163,6 +163,13 @@ pub struct LinkInfo {
     pub local_addr: Option<SocketAddr>,
 }
 
+impl LinkInfo {
+    /// [`Stats::diagnose`] of `stats` in the link's API mode.
+    pub(crate) fn diagnose(&self, stats: &Stats) -> Option<Diagnosis> {
+        stats.diagnose(self.api_mode)
+    }
+}
+
 /// Opens `link` and starts the background task serving it.
 ///
 /// For `serial` and `tcp` links the first connection is made before this returns (so a
@@ -292,10 +299,11 @@ impl PacketStream {
 
     /// What the link's counters say may be wrong with the radio's settings (its API
     /// mode, its baud rate), read in the link's API mode: [`Stats::diagnose`] of
-    /// [`stats`](Self::stats) since `earlier` (a snapshot taken before a request that
-    /// went unanswered, say; [`Stats::default`] for the whole link).
+    /// [`stats`](Self::stats) since `earlier`, a snapshot taken before a short exchange
+    /// that went unanswered. It takes any sign as one: for the counters of a link over
+    /// a long time, [`Stats::diagnose_running`] with [`LinkInfo::api_mode`].
     pub fn diagnose(&self, earlier: &Stats) -> Option<Diagnosis> {
-        self.stats().since(earlier).diagnose(self.info.api_mode)
+        self.info.diagnose(&self.stats().since(earlier))
     }
 }
 

@@ -522,7 +522,7 @@ impl CommandSender {
     /// # }
     /// ```
     pub fn diagnose(&self, earlier: &Stats) -> Option<crate::Diagnosis> {
-        self.stats().since(earlier).diagnose(self.info.api_mode)
+        self.info.diagnose(&self.stats().since(earlier))
     }
 
     /// Ends the link for good, for every holder of it: the transport (serial port,

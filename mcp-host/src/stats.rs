@@ -101,18 +101,21 @@ macro_rules! counters {
             }
         }
 
-        /// Adds each counter of `other` to this one's: totals of several links, or of
+        /// Adds each counter of `other` to this one's (saturating, as
+        /// [`since`](Stats::since) does): totals of several links, or of
         /// [`Stats::decoder_since`] pieces.
         impl std::ops::AddAssign for Stats {
             fn add_assign(&mut self, other: Stats) {
-                $(self.$name += other.$name;)*
+                $(self.$name = self.$name.saturating_add(other.$name);)*
             }
         }
 
         impl Counters {
-            /// Adds each counter of `delta`.
+            /// Adds each counter of `delta` that moved.
             pub(crate) fn add_all(&self, delta: &Stats) {
-                $(add(&self.$name, delta.$name);)*
+                $(if delta.$name > 0 {
+                    add(&self.$name, delta.$name);
+                })*
             }
         }
     };

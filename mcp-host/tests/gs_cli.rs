@@ -601,7 +601,7 @@ fn send_status_and_at_in_json_print_a_link_lost_meanwhile() {
     let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
     let link = format!("tcp:{}", listener.local_addr().unwrap());
     let peer = std::thread::spawn(move || {
-        for stream in listener.incoming().take(3) {
+        for stream in listener.incoming().take(4) {
             let mut stream = stream.unwrap();
             let mut byte = [0u8];
             std::io::Read::read_exact(&mut stream, &mut byte).unwrap();
@@ -623,6 +623,8 @@ fn send_status_and_at_in_json_print_a_link_lost_meanwhile() {
     assert_eq!(asked["mcp"]["status_request"], true);
     let at = json("at", &["NI"]);
     assert_eq!(at["command"], "NI");
+    let all = json("at", &["--to", "000000000000ffff", "NI"]);
+    assert_eq!(all["dst64"], "000000000000ffff");
     peer.join().unwrap();
 }
 

@@ -188,7 +188,17 @@ async fn broadcast(
 ) -> Result<(), Failure> {
     let window = std::time::Duration::from_secs_f64(args.window.unwrap_or(BROADCAST_WINDOW));
     crate::link_args::warn_hub_window(&args.link.link, window);
-    let failed = |e| diagnosed_send(e, &args.link, &sender.stats());
+    let name = String::from_utf8_lossy(&command).into_owned();
+    // A link lost is an outcome too, in JSON as for one radio.
+    let failed = |e: SendError| {
+        if let (Format::Json, Some(json)) = (
+            args.format,
+            timeout_json(&e, &name, Some(Address64::BROADCAST)),
+        ) {
+            out!("{json}");
+        }
+        diagnosed_send(e, &args.link, &sender.stats())
+    };
     let mut answers = sender
         .remote_at_answers(
             Address64::BROADCAST,
@@ -199,7 +209,6 @@ async fn broadcast(
         )
         .await
         .map_err(failed)?;
-    let name = String::from_utf8_lossy(&command).into_owned();
     let set = args.value.is_some();
     let (mut answered, mut refused) = (0u32, 0u32);
     let mut refused_code = Failure::OTHER;
@@ -392,7 +401,7 @@ pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
             answer_line(&name, &command, data, args.value.is_some())
         );
     }
-    if command == *b"ND" && !data.is_empty() {
+    if command == *b"ND" && args.to.is_none() && !data.is_empty() {
         eprintln!(
             "mcp-gs: ND: every radio found answers on its own and this is the first answer; \
              `mcp-gs nodes` lists them all"

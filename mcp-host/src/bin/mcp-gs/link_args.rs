@@ -468,8 +468,7 @@ fn timeout_hint(link: &LinkArgs, stats: &Stats) -> Option<String> {
 /// If nothing at all came from the radio, `lead` (which ends asking to check the API
 /// mode) and what else keeps a radio silent.
 fn silence_hint(link: &LinkArgs, stats: &Stats, lead: &str) -> Option<String> {
-    let silent = stats.frames == 0 && stats.decode_errors() == 0 && stats.bytes_skipped == 0;
-    silent.then(|| match link.link {
+    nothing_came(stats).then(|| match link.link {
         // A tcp-listen peer (sim, radio) that serves another connection lets this
         // one wait for its turn, silently.
         Link::Tcp { .. } => format!(
@@ -492,7 +491,7 @@ fn silence_hint(link: &LinkArgs, stats: &Stats, lead: &str) -> Option<String> {
 pub(crate) fn diagnosed(failure: Failure, link: &LinkArgs, stats: &Stats) -> Failure {
     let hint = match failure.code() {
         Failure::TIMEOUT => timeout_hint(link, stats),
-        Failure::LINK if matches!(link.link, Link::Tcp { .. }) && stats.frames == 0 => {
+        Failure::LINK if matches!(link.link, Link::Tcp { .. }) && nothing_came(stats) => {
             Some(turned_away_hint())
         }
         _ => None,
@@ -501,6 +500,12 @@ pub(crate) fn diagnosed(failure: Failure, link: &LinkArgs, stats: &Stats) -> Fai
         Some(hint) => failure.with_hint(hint),
         None => failure,
     }
+}
+
+/// Whether nothing at all came from the radio: no frame, no failed one, no byte
+/// skipped.
+pub(crate) fn nothing_came(stats: &Stats) -> bool {
+    stats.frames == 0 && stats.decode_errors() == 0 && stats.bytes_skipped == 0
 }
 
 /// Why a TCP peer may close a connection before anything came from it.

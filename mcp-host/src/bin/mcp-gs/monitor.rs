@@ -166,7 +166,7 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
         if let (Event::Link(LinkEvent::Disconnected { .. }), mcp_host::Link::Tcp { .. }) =
             (&event, &args.link.link)
         {
-            if stream.stats().frames == 0 {
+            if crate::link_args::nothing_came(&stream.stats()) {
                 ended_silent += 1;
                 // Once, when it is not a one-off.
                 if ended_silent == TURNED_AWAY {
