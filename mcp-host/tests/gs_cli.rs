@@ -672,6 +672,22 @@ fn first_monitor_hint(link: &str) -> String {
 }
 
 #[test]
+fn monitor_on_a_radio_that_says_nothing_says_what_keeps_it_silent() {
+    // As a simulator serving another client lets this one wait, saying nothing.
+    let (link, peer) = common::silent_peer(1);
+    let hint = first_monitor_hint(&link);
+    assert!(
+        hint.contains("did not answer AT AP within 3s, and nothing at all came from it"),
+        "{hint}"
+    );
+    assert!(
+        hint.contains("whether the peer serves another connection"),
+        "{hint}"
+    );
+    peer.join().unwrap();
+}
+
+#[test]
 fn a_peer_that_closes_at_once_is_said_to_turn_us_away() {
     // As a simulator serving two clients already does to a third.
     let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();

@@ -326,8 +326,21 @@ pub(crate) async fn check_mode(sender: &CommandSender, configured: ApiMode) {
     {
         return;
     }
-    let Ok(response) = sender.at(*b"AP", &[], Some(Duration::from_secs(3))).await else {
-        return;
+    let timeout = Duration::from_secs(3);
+    let response = match sender.at(*b"AP", &[], Some(timeout)).await {
+        Ok(response) => response,
+        // Nothing at all from the radio meanwhile: what keeps a radio silent (or a
+        // peer that lets this connection wait its turn).
+        Err(e) if e.is_timeout() => {
+            let lead = format!(
+                "the radio did not answer AT AP within {timeout:?}, and nothing at all came from it: check its API mode"
+            );
+            if let Some(hint) = silence_hint(&sender.info().link, &sender.stats(), &lead) {
+                eprintln!("mcp-gs: {hint}");
+            }
+            return;
+        }
+        Err(_) => return,
     };
     if let Ok(Frame::AtCommandResponse(at)) = response.parse() {
         if let (true, true, &[radio]) = (at.command == *b"AP", at.status.is_ok(), at.data) {
@@ -452,7 +465,7 @@ fn counters_hint(link: &LinkArgs, stats: &Stats) -> Option<String> {
 pub(crate) fn with_mode_hint(failure: Failure, link: &LinkArgs, stats: &Stats) -> Failure {
     let silent = "nothing at all came from the local radio either: if the others are on and in \
                   range, check its API mode";
-    match counters_hint(link, stats).or_else(|| silence_hint(link, stats, silent)) {
+    match counters_hint(link, stats).or_else(|| silence_hint(&link.link, stats, silent)) {
         Some(hint) => failure.with_hint(hint),
         None => failure,
     }
@@ -462,13 +475,13 @@ pub(crate) fn with_mode_hint(failure: Failure, link: &LinkArgs, stats: &Stats) -
 /// all came from the radio, what keeps a radio silent.
 fn timeout_hint(link: &LinkArgs, stats: &Stats) -> Option<String> {
     let silent = "nothing at all came from the radio: check its API mode";
-    counters_hint(link, stats).or_else(|| silence_hint(link, stats, silent))
+    counters_hint(link, stats).or_else(|| silence_hint(&link.link, stats, silent))
 }
 
 /// If nothing at all came from the radio, `lead` (which ends asking to check the API
 /// mode) and what else keeps a radio silent.
-fn silence_hint(link: &LinkArgs, stats: &Stats, lead: &str) -> Option<String> {
-    nothing_came(stats).then(|| match link.link {
+fn silence_hint(link: &Link, stats: &Stats, lead: &str) -> Option<String> {
+    nothing_came(stats).then(|| match link {
         // A tcp-listen peer (sim, radio) that serves another connection lets this
         // one wait for its turn, silently.
         Link::Tcp { .. } => format!(
@@ -480,8 +493,7 @@ fn silence_hint(link: &LinkArgs, stats: &Stats, lead: &str) -> Option<String> {
             "hint: {lead} (--api-mode, or auto to ask it), the baud rate (serial:PATH:BAUD), \
              and that no other program reads the port (to share it, use mcp-gs hub); a radio \
              new from the factory is in transparent mode at 9600 baud: `mcp-gs probe --link \
-             {}` finds what it is set to",
-            link.link
+             {link}` finds what it is set to"
         ),
     })
 }
