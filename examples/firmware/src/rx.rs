@@ -199,6 +199,10 @@ pub fn on_uart0_interrupt() {
     critical_section::with(|cs| {
         let mut decoder = DECODER.borrow_ref_mut(cs);
         let mut inbox = INBOX.borrow_ref_mut(cs);
+        // Bytes came (the receive interrupts), or a slot was freed for those held back
+        // (`take` raises it, and it runs before the main loop's next tick): the line is
+        // not quiet. Once an interrupt, not once a byte.
+        inbox.last_byte = crate::clock::ticks();
         loop {
             // Frames the decoder still holds come before new bytes.
             inbox.drain(&mut decoder);
@@ -207,7 +211,6 @@ pub fn on_uart0_interrupt() {
             }
             let Some(byte) = hw::uart0_read() else { break };
             inbox.push(&mut decoder, byte);
-            inbox.last_byte = crate::clock::ticks();
         }
         if !inbox.has_room() {
             hw::uart0_rx_interrupts(false);
@@ -220,11 +223,8 @@ pub fn on_uart0_interrupt() {
 /// may come to raise it.
 pub fn take() -> Option<Payload> {
     critical_section::with(|cs| {
-        let mut inbox = INBOX.borrow_ref_mut(cs);
-        let payload = inbox.pop();
+        let payload = INBOX.borrow_ref_mut(cs).pop();
         if payload.is_some() {
-            // The bytes held back in the FIFO meanwhile were no quiet line.
-            inbox.last_byte = crate::clock::ticks();
             hw::uart0_rx_interrupts(true);
             hw::uart0_pend();
         }
