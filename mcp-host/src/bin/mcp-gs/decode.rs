@@ -137,28 +137,30 @@ fn decode_input(
             ),
         ));
     }
-    let input = io::Cursor::new(head).chain(input);
     let mode = args.api_mode.0;
     if args.hex {
         // Decoded a line at a time, as the text comes. A hex dump of a recording is a
-        // recording.
-        decode_bytes(HexReader::new(input), mode, &mut printer, live)?;
+        // recording: its head is read again, as the bytes the text gives.
+        let mut bytes = HexReader::new(io::Cursor::new(head).chain(input));
+        let head = read_head(&mut bytes)?;
+        decode_bytes(head, bytes, mode, &mut printer, live)?;
     } else {
-        decode_bytes(input, mode, &mut printer, live)?;
+        decode_bytes(head, input, mode, &mut printer, live)?;
     }
     printer.finish()
 }
 
-/// Decodes `bytes`: a recording if they start as one, else a stream in `mode`.
+/// Decodes `head` (from [`read_head`]) and the `rest` after it: a recording if the
+/// head is one's, else a stream in `mode`.
 fn decode_bytes(
-    mut bytes: impl Read,
+    head: Vec<u8>,
+    rest: impl Read,
     mode: ApiMode,
     printer: &mut Printer<'_, impl Write>,
     live: bool,
 ) -> io::Result<()> {
-    let head = read_head(&mut bytes)?;
     let recording = record::is_recording(&head);
-    let bytes = io::Cursor::new(head).chain(bytes);
+    let bytes = io::Cursor::new(head).chain(rest);
     if recording {
         decode_recording(bytes, printer, live)
     } else {
