@@ -250,11 +250,7 @@ async fn broadcast(
         // No answer is an outcome too, as for one radio.
         out!(
             "{}",
-            serde_json::json!({
-                "result": "timeout",
-                "command": name,
-                "dst64": Address64::BROADCAST.to_string(),
-            })
+            outcome_json("timeout", &name, Some(Address64::BROADCAST))
         );
     }
     match (answered, refused) {
@@ -417,6 +413,16 @@ pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
     Ok(())
 }
 
+/// An answer that did not come as a JSON object: `{"result":...,"command":"AP"}`, with
+/// the remote radio's `dst64`.
+fn outcome_json(result: &str, name: &str, to: Option<Address64>) -> serde_json::Value {
+    let mut json = serde_json::json!({ "result": result, "command": name });
+    if let Some(to) = to {
+        json["dst64"] = to.to_string().into();
+    }
+    json
+}
+
 /// No answer in time as a JSON object: `{"result":"timeout","command":"AP"}`, with the
 /// remote radio's `dst64` and the frame id when the command went out; a link that went
 /// away meanwhile as `{"result":"disconnected",...}` with its `reason`; `None` for
@@ -431,10 +437,7 @@ fn timeout_json(error: &SendError, name: &str, to: Option<Address64>) -> Option<
     } else {
         "timeout"
     };
-    let mut json = serde_json::json!({ "result": result, "command": name });
-    if let Some(to) = to {
-        json["dst64"] = to.to_string().into();
-    }
+    let mut json = outcome_json(result, name, to);
     if let Some(frame_id) = error.frame_id() {
         json["id"] = frame_id.into();
     }
