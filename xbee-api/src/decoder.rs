@@ -979,7 +979,9 @@ impl<const N: usize, M: DecoderMode> Decoder<N, M> {
     /// this matters beyond the one frame: a stray 0x7E (noise, a frame cut off) starts
     /// a candidate whose length field may reach past the real frames behind it, and
     /// those come out only once that many more bytes came, or once the candidate is
-    /// given up here and its bytes scanned again.
+    /// given up here and its bytes scanned again. For a quiet line, call it once and
+    /// take the rest with [`poll`](Self::poll): a frame begun among the bytes held then
+    /// stays for its rest (calling `finish` again would give it up too).
     ///
     /// ```
     /// use xbee_api::{DecodeError, Decoder, Mode1};
@@ -992,7 +994,7 @@ impl<const N: usize, M: DecoderMode> Decoder<N, M> {
     /// // The line stays quiet: give the candidate up.
     /// assert!(!decoder.is_idle());
     /// assert!(matches!(decoder.finish(), Some(Err(DecodeError::Truncated { .. }))));
-    /// while let Some(event) = decoder.finish() {
+    /// while let Some(event) = decoder.poll() {
     ///     frames += usize::from(event.is_ok());
     /// }
     /// assert_eq!(frames, 1);

@@ -235,12 +235,11 @@ impl<R, const N: usize, M: DecoderMode> FrameReader<R, N, M> {
     /// Passes the events of `bytes`, just read, to `f` (after those of bytes read
     /// earlier that [`read_event`](Self::read_event) left); at the end of the input (no
     /// bytes), those of [`Decoder::finish`].
-    fn feed<F: FnMut(Event<'_>)>(&mut self, n: usize, f: F) {
+    fn feed<F: FnMut(Event<'_>)>(&mut self, n: usize, mut f: F) {
         self.took(n);
         self.pos = 0;
         self.len = 0;
         if n == 0 {
-            let mut f = f;
             while let Some(event) = self.decoder.finish() {
                 f(event);
             }
@@ -379,9 +378,8 @@ impl<R: embedded_io_async::Read, const N: usize, M: DecoderMode> FrameReader<R, 
     /// ```
     pub async fn read_events_async<F: FnMut(Event<'_>)>(
         &mut self,
-        f: F,
+        mut f: F,
     ) -> Result<usize, R::Error> {
-        let mut f = f;
         self.pass_left(&mut f);
         let n = self.reader.read(&mut self.chunk).await?;
         self.feed(n, f);

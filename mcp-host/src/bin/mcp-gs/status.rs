@@ -19,9 +19,10 @@ pub(crate) struct StatusArgs {
     #[arg(long, value_name = "ADDR", value_parser = crate::link_args::parse_address64)]
     to: Address64,
     /// Output format: `json` prints the report's object, with `"result":"answered"`,
-    /// `src64` and `received_at` added; a failure as `send` does, `{"result":"failed",...}` with the transmit
-    /// status's fields, `{"result":"timeout",...}` with whether the radio delivered
-    /// the request, or `{"result":"disconnected",...}` when the link went away.
+    /// `src64` and `received_at` added; a failure as `send` does,
+    /// `{"result":"failed",...}` with the transmit status's fields,
+    /// `{"result":"timeout",...}` with whether the radio delivered the request, or
+    /// `{"result":"disconnected",...}` when the link went away.
     #[arg(long, value_enum, default_value_t = Format::Text)]
     format: Format,
     /// What to ask: telemetry_to_coordinator (or telemetry), landing, controllers
