@@ -690,11 +690,7 @@ pub(crate) fn encode_packet<B: AsRef<[u8]>>(
     Ok(Bytes::copy_from_slice(&buf[..len]))
 }
 
+/// The payload of `command`: [`encode_packet`] of it as a packet.
 fn encode_command<B: AsRef<[u8]>>(command: &mcp_core::Command<B>) -> Result<Bytes, SendError> {
-    let mut buf = [0u8; mcp_core::MAX_PAYLOAD];
-    let len = command.encode(&mut buf).map_err(|_| SendError::TooLarge {
-        len: command.encoded_len(),
-        max: mcp_core::MAX_PAYLOAD,
-    })?;
-    Ok(Bytes::copy_from_slice(&buf[..len]))
+    encode_packet(&mcp_core::Packet::Command(command.as_borrowed()))
 }
