@@ -689,10 +689,7 @@ fn monitor_on_a_radio_that_says_nothing_says_what_keeps_it_silent() {
 
 #[test]
 fn a_peer_that_closes_at_once_is_said_to_turn_us_away() {
-    // As a simulator serving two clients already does to a third.
-    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
-    let link = format!("tcp:{}", listener.local_addr().unwrap());
-    let peer = std::thread::spawn(move || drop(listener.accept().unwrap()));
+    let (link, peer) = common::closing_peer(1);
     let output = run(&[
         "send",
         "--link",
@@ -712,13 +709,7 @@ fn a_peer_that_closes_at_once_is_said_to_turn_us_away() {
     peer.join().unwrap();
 
     // monitor reconnects, and says it once the peer has done it three times.
-    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
-    let link = format!("tcp:{}", listener.local_addr().unwrap());
-    let peer = std::thread::spawn(move || {
-        for stream in listener.incoming().take(3) {
-            drop(stream.unwrap());
-        }
-    });
+    let (link, peer) = common::closing_peer(3);
     let hint = first_monitor_hint(&link);
     assert!(
         hint.contains("the peer closed the connection before anything came"),

@@ -292,6 +292,20 @@ pub fn silent_peer(connections: usize) -> (String, std::thread::JoinHandle<()>) 
     peer_writing(connections, Vec::new())
 }
 
+/// A TCP peer that takes `connections` connections in turn and closes each at once, as
+/// a simulator serving two clients already does to a third. Its `tcp:` link, and the
+/// thread to join.
+pub fn closing_peer(connections: usize) -> (String, std::thread::JoinHandle<()>) {
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let link = format!("tcp:{}", listener.local_addr().unwrap());
+    let peer = std::thread::spawn(move || {
+        for stream in listener.incoming().take(connections) {
+            drop(stream.unwrap());
+        }
+    });
+    (link, peer)
+}
+
 /// A TCP peer that takes one connection, writes `bytes` and then reads until the other
 /// side hangs up: a radio with something to say. Its `tcp:` link, and the thread to
 /// join.
