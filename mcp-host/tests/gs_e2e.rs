@@ -739,6 +739,24 @@ fn send_trajectory_checks_the_mavs_report() {
     assert!(stderr.contains("drops frames over 60 bytes"), "{stderr}");
     assert!(stderr.contains("no trajectory report"), "{stderr}");
     assert_eq!(out.status.code(), Some(4), "{stderr}");
+    // In JSON: delivered, but not confirmed, and no trajectory reported meanwhile.
+    let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args(["send", "--link", &sim.link, "--timeout", "1", "--to", MAV])
+        .args(["--format", "json", "trajectory", "--waypoint", &w1])
+        .args(["--waypoint", &w2, "--waypoint", &w3])
+        .output()
+        .expect("run mcp-gs");
+    let object: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(
+        (
+            &object["result"],
+            &object["trajectory_confirmed"],
+            object.get("trajectory_reported")
+        ),
+        (&"delivered".into(), &false.into(), Some(&Value::Null)),
+        "{object}"
+    );
+    assert_eq!(out.status.code(), Some(4), "{object}");
     // The MAV kept the two waypoints it took before.
     let report = sim.status(&["trajectory"]);
     assert_eq!(report["waypoints"].as_array().unwrap().len(), 2, "{report}");

@@ -9,7 +9,7 @@
 //! bytes can always be recovered.
 
 use mcp_core::{
-    Command, Packet, Report, SlaveAddresses, StatusRequest, Telemetry, Text, Waypoints,
+    Command, Packet, Report, SlaveAddresses, StatusRequest, Telemetry, Text, Waypoint, Waypoints,
 };
 use serde_json::{Map, Value, json};
 use xbee_api::{DecodeError, Frame};
@@ -356,15 +356,19 @@ fn waypoints_json<B: AsRef<[u8]>>(waypoints: &Waypoints<B>) -> Value {
     waypoints
         .as_borrowed()
         .iter()
-        .map(|w| {
-            json!({
-                "time": w.time,
-                "elevator": float(w.elevator),
-                "aileron": float(w.aileron),
-                "altitude": float(w.altitude),
-            })
-        })
+        .map(|w| waypoint(&w))
         .collect()
+}
+
+/// One waypoint as a JSON object, as a trajectory's `waypoints` list has them:
+/// `{"time":...,"elevator":...,"aileron":...,"altitude":...}`.
+pub fn waypoint(w: &Waypoint) -> Value {
+    json!({
+        "time": w.time,
+        "elevator": float(w.elevator),
+        "aileron": float(w.aileron),
+        "altitude": float(w.altitude),
+    })
 }
 
 fn address(address: mcp_core::Address) -> Value {

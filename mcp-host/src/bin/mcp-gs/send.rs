@@ -1,5 +1,7 @@
 //! `mcp-gs send`: send one command and print the delivery status.
 
+use std::time::Duration;
+
 use clap::Args;
 use futures::StreamExt;
 use mcp_core::{Packet, Report, Waypoint};
@@ -27,7 +29,9 @@ pub(crate) struct SendArgs {
     /// `{"result":"timeout",...}` when no status came in time,
     /// `{"result":"disconnected",...}` when the link went away meanwhile, or
     /// `{"result":"written",...}` (--no-status); the packet as `mcp`; and, for a
-    /// trajectory to one MAV with a status asked, `trajectory_confirmed`.
+    /// trajectory to one MAV with a status asked, `trajectory_confirmed` (and, when
+    /// false, `trajectory_reported`: the waypoints the MAV reported instead, or null
+    /// when it reported none in time).
     #[arg(long, value_enum, default_value_t = Format::Text)]
     format: Format,
     /// The command.
@@ -108,9 +112,15 @@ pub(crate) async fn run(args: SendArgs) -> Result<(), Failure> {
             let checked = check_trajectory(&mut stream, &args, waypoints).await;
             if let Some(mut json) = json.take() {
                 json["trajectory_confirmed"] = checked.is_ok().into();
+                if let Err(unconfirmed) = &checked {
+                    json["trajectory_reported"] = unconfirmed.reported_json();
+                }
                 out!("{json}");
             }
-            checked.map_err(|failure| diagnosed(failure, &args.link, &sender.stats()))?;
+            checked.map_err(|unconfirmed| {
+                let failure = unconfirmed.failure(args.to, waypoints);
+                diagnosed(failure, &args.link, &sender.stats())
+            })?;
             if args.format == Format::Text {
                 out!("the MAV reports the trajectory as sent");
             }
@@ -244,6 +254,55 @@ fn status_fields(
     }
 }
 
+/// A trajectory the MAV did not report as sent, within `timeout`: `reported` holds the
+/// waypoints of the last trajectory it reported meanwhile, `None` when it reported none.
+struct Unconfirmed {
+    reported: Option<Vec<Waypoint>>,
+    timeout: Duration,
+}
+
+impl Unconfirmed {
+    /// `trajectory_reported` in JSON: the waypoints the MAV reported instead, as the
+    /// packet's `waypoints` are, or `null` when no report came in time.
+    fn reported_json(&self) -> serde_json::Value {
+        self.reported.as_ref().map_or(serde_json::Value::Null, |w| {
+            w.iter().map(mcp_host::render::json::waypoint).collect()
+        })
+    }
+
+    /// The failure to print: another trajectory (exit 1) or none in time (exit 4).
+    fn failure(&self, to: Address64, sent: &[Waypoint]) -> Failure {
+        let show = |w: &[Waypoint]| {
+            w.iter()
+                .map(|w| format!("{},{},{},{}", w.time, w.elevator, w.aileron, w.altitude))
+                .collect::<Vec<_>>()
+                .join(" ")
+        };
+        match &self.reported {
+            Some(report) => Failure::new(
+                Failure::OTHER,
+                format!(
+                    "the MAV reports another trajectory than the one sent: {} waypoint(s) [{}], \
+                     sent {} [{}] (it may have kept fewer, or another ground station set one \
+                     meanwhile)",
+                    report.len(),
+                    show(report),
+                    sent.len(),
+                    show(sent)
+                ),
+            ),
+            None => Failure::new(
+                Failure::TIMEOUT,
+                format!(
+                    "no trajectory report from {to} within {:?}: the MAV did not take the \
+                     trajectory",
+                    self.timeout
+                ),
+            ),
+        }
+    }
+}
+
 /// Waits for the MAV's trajectory report holding `sent`. Reports of other trajectories
 /// (another ground station may set one meanwhile, or the MAV kept fewer waypoints) are
 /// passed over until the timeout, then the last one is the failure.
@@ -251,49 +310,22 @@ async fn check_trajectory(
     stream: &mut PacketStream,
     args: &SendArgs,
     sent: &[Waypoint],
-) -> Result<(), Failure> {
+) -> Result<(), Unconfirmed> {
     let timeout = args.link.timeout();
-    let mut other = None;
+    let mut reported = None;
     let wait = async {
         while let Some(report) = trajectory_report(stream, args.to).await {
             if report == sent {
                 return true;
             }
-            other = Some(report);
+            reported = Some(report);
         }
         false
     };
     if tokio::time::timeout(timeout, wait).await == Ok(true) {
         return Ok(());
     }
-    let show = |w: &[Waypoint]| {
-        w.iter()
-            .map(|w| format!("{},{},{},{}", w.time, w.elevator, w.aileron, w.altitude))
-            .collect::<Vec<_>>()
-            .join(" ")
-    };
-    Err(match other {
-        Some(report) => Failure::new(
-            Failure::OTHER,
-            format!(
-                "the MAV reports another trajectory than the one sent: {} waypoint(s) [{}], \
-                 sent {} [{}] (it may have kept fewer, or another ground station set one \
-                 meanwhile)",
-                report.len(),
-                show(&report),
-                sent.len(),
-                show(sent)
-            ),
-        ),
-        None => Failure::new(
-            Failure::TIMEOUT,
-            format!(
-                "no trajectory report from {} within {timeout:?}: the MAV did not take the \
-                 trajectory",
-                args.to
-            ),
-        ),
-    })
+    Err(Unconfirmed { reported, timeout })
 }
 
 /// The waypoints of the next trajectory report from `from` on the stream; `None` if
@@ -309,4 +341,50 @@ async fn trajectory_report(stream: &mut PacketStream, from: Address64) -> Option
         }
     }
     None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn waypoint(time: u32) -> Waypoint {
+        Waypoint {
+            time,
+            elevator: 0.5,
+            aileron: -0.25,
+            altitude: 2.0,
+        }
+    }
+
+    #[test]
+    fn another_trajectory_is_reported_with_its_waypoints() {
+        let sent = [waypoint(1), waypoint(2)];
+        let unconfirmed = Unconfirmed {
+            reported: Some(vec![waypoint(1)]),
+            timeout: Duration::from_secs(1),
+        };
+        assert_eq!(
+            unconfirmed.reported_json(),
+            serde_json::json!([{"time": 1, "elevator": 0.5, "aileron": -0.25, "altitude": 2.0}])
+        );
+        let failure = unconfirmed.failure(Address64::BROADCAST, &sent);
+        assert_eq!(failure.code, Failure::OTHER);
+        assert!(
+            failure
+                .message
+                .contains("1 waypoint(s) [1,0.5,-0.25,2], sent 2 [1,0.5,-0.25,2 2,0.5,-0.25,2]"),
+            "{}",
+            failure.message
+        );
+
+        let silent = Unconfirmed {
+            reported: None,
+            ..unconfirmed
+        };
+        assert_eq!(silent.reported_json(), serde_json::Value::Null);
+        assert_eq!(
+            silent.failure(Address64::BROADCAST, &sent).code,
+            Failure::TIMEOUT
+        );
+    }
 }
