@@ -189,9 +189,19 @@ impl<R: Read> RecordReader<R> {
                 self.offset
             )));
         }
+        // Every time a record holds is a `SystemTime` on Unix; Windows' ends in 30828.
+        let time = UNIX_EPOCH
+            .checked_add(Duration::from_micros(micros))
+            .ok_or_else(|| {
+                invalid(&format!(
+                    "record at offset {}: its time ({micros} microseconds since 1970) is \
+                     past the latest this system can hold",
+                    self.offset
+                ))
+            })?;
         self.offset += (head.len() + len) as u64;
         Ok(Some(Record {
-            time: UNIX_EPOCH + Duration::from_micros(micros),
+            time,
             direction,
             frame,
         }))

@@ -476,7 +476,9 @@ fn decode_recording(
     printer: &mut Printer<'_, impl Write>,
     live: bool,
 ) -> io::Result<()> {
-    let mut reader = RecordReader::new(input)?;
+    // The summary counts every byte, a record cut off at the end included.
+    let mut input = Counted { inner: input, n: 0 };
+    let mut reader = RecordReader::new(&mut input)?;
     // A recording cut off or damaged part way: what came before it is still decoded and
     // counted, then the error is reported.
     let result = loop {
@@ -496,11 +498,25 @@ fn decode_recording(
             printer.out,
             summary,
             printer.format,
-            reader.offset(),
+            input.n,
             &mcp_host::Stats::default(),
         )?;
     }
     result
+}
+
+/// A reader counting the bytes read through it.
+struct Counted<R> {
+    inner: R,
+    n: u64,
+}
+
+impl<R: Read> Read for Counted<R> {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        let got = self.inner.read(buf)?;
+        self.n += got as u64;
+        Ok(got)
+    }
 }
 
 fn print_summary(
@@ -627,5 +643,26 @@ mod tests {
         // A raw capture is read as one.
         let out = summary(&[0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F], &args(false)).unwrap();
         assert!(out.contains("frames: 1\n  type 0x8a: 1\n"), "{out}");
+    }
+
+    #[test]
+    fn a_recording_cut_off_counts_the_bytes_of_its_last_record_too() {
+        let mut recording = RecordWriter::new(Vec::new()).unwrap();
+        let now = std::time::SystemTime::now();
+        for _ in 0..2 {
+            recording
+                .write(now, Direction::Received, &[0x8A, 0x06])
+                .unwrap();
+        }
+        let mut recording = recording.into_inner();
+        recording.pop();
+        let mut out = Vec::new();
+        let e = decode_input(ByteAtATime(&recording), &args(false), &mut out, false).unwrap_err();
+        assert!(e.to_string().contains("cut off"), "{e}");
+        let out = String::from_utf8(out).unwrap();
+        assert!(
+            out.starts_with(&format!("bytes: {}\nframes: 1\n", recording.len())),
+            "{out}"
+        );
     }
 }
