@@ -142,6 +142,21 @@ async fn sim_serves_a_fleet_on_the_link_it_prints() {
 }
 
 #[test]
+fn a_fleet_is_listed_a_few_mavs_a_line() {
+    let sim = Running::start(&["sim", "--link", "tcp-listen:127.0.0.1:0", "--mavs", "9"]);
+    sim.line(|l| l == "simulating 9 MAV(s):");
+    let lines: Vec<String> = (0..3).map(|_| sim.line(|_| true)).collect();
+    let addresses: Vec<&str> = lines
+        .iter()
+        .inspect(|l| assert!(l.starts_with("  "), "{lines:?}"))
+        .flat_map(|l| l.trim().split(", "))
+        .collect();
+    assert_eq!(addresses.len(), 9, "{lines:?}");
+    assert!(addresses[0].starts_with("0013a20040b599b9/"), "{lines:?}");
+    assert_eq!(lines[2].trim().split(", ").count(), 1, "{lines:?}");
+}
+
+#[test]
 fn bad_node_arguments_are_input_errors() {
     for args in [
         &["radio", "--coordinator", "pty", "--node", "nonsense"][..],

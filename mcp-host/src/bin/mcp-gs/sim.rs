@@ -83,6 +83,9 @@ packets need; --max-unicast 84 emulates radios without it). Faults options as in
 
 Example: mcp-gs sim --link pty --mavs 2   (then connect a ground station to the printed path)";
 
+/// How many MAVs' addresses a line of the fleet's list holds (as `0013a20040b599b9/7d84`).
+const MAVS_A_LINE: usize = 4;
+
 /// Runs `sim`.
 pub(crate) async fn run(args: SimArgs) -> Result<(), Failure> {
     crate::link_args::check_serial_path(&args.link, false)?;
@@ -143,7 +146,15 @@ pub(crate) async fn run(args: SimArgs) -> Result<(), Failure> {
         .iter()
         .map(|m| format!("{}/{}", m.address, m.addr16))
         .collect();
-    out!("simulating {} MAV(s): {}", list.len(), list.join(", "));
+    if list.len() <= MAVS_A_LINE {
+        out!("simulating {} MAV(s): {}", list.len(), list.join(", "));
+    } else {
+        // A fleet is listed a few to a line, not on one line of thousands of bytes.
+        out!("simulating {} MAV(s):", list.len());
+        for line in list.chunks(MAVS_A_LINE) {
+            out!("  {}", line.join(", "));
+        }
+    }
     watch(
         sim.network(),
         events,
