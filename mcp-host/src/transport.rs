@@ -134,8 +134,14 @@ fn is_no_device(path: &str) -> bool {
 
 enum Inner {
     Tcp(TcpStream),
-    /// A `tcp-listen` peer, with what it wrote while it waited for its turn.
-    Accepted(TcpStream, Bytes),
+    /// A `tcp-listen` peer.
+    Accepted {
+        stream: TcpStream,
+        /// What it wrote while it waited for its turn.
+        early: Bytes,
+        /// Its turn, held until the transport is dropped.
+        _turn: Turn,
+    },
     Serial(SerialStream),
     Pty(Lent),
 }
@@ -171,7 +177,9 @@ impl AsyncRead for Transport {
     ) -> Poll<io::Result<()>> {
         match &mut self.get_mut().inner {
             Inner::Tcp(s) => Pin::new(s).poll_read(cx, buf),
-            Inner::Accepted(s, early) => {
+            Inner::Accepted {
+                stream: s, early, ..
+            } => {
                 if early.is_empty() {
                     Pin::new(s).poll_read(cx, buf)
                 } else {
@@ -193,7 +201,7 @@ impl AsyncWrite for Transport {
         buf: &[u8],
     ) -> Poll<io::Result<usize>> {
         match &mut self.get_mut().inner {
-            Inner::Tcp(s) | Inner::Accepted(s, _) => Pin::new(s).poll_write(cx, buf),
+            Inner::Tcp(s) | Inner::Accepted { stream: s, .. } => Pin::new(s).poll_write(cx, buf),
             Inner::Serial(s) => Pin::new(s).poll_write(cx, buf),
             Inner::Pty(s) => s.stream()?.poll_write(cx, buf),
         }
@@ -201,7 +209,7 @@ impl AsyncWrite for Transport {
 
     fn poll_flush(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<io::Result<()>> {
         match &mut self.get_mut().inner {
-            Inner::Tcp(s) | Inner::Accepted(s, _) => Pin::new(s).poll_flush(cx),
+            Inner::Tcp(s) | Inner::Accepted { stream: s, .. } => Pin::new(s).poll_flush(cx),
             Inner::Serial(s) => Pin::new(s).poll_flush(cx),
             Inner::Pty(s) => s.stream()?.poll_flush(cx),
         }
@@ -209,7 +217,7 @@ impl AsyncWrite for Transport {
 
     fn poll_shutdown(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<io::Result<()>> {
         match &mut self.get_mut().inner {
-            Inner::Tcp(s) | Inner::Accepted(s, _) => Pin::new(s).poll_shutdown(cx),
+            Inner::Tcp(s) | Inner::Accepted { stream: s, .. } => Pin::new(s).poll_shutdown(cx),
             Inner::Serial(s) => Pin::new(s).poll_shutdown(cx),
             Inner::Pty(s) => s.stream()?.poll_shutdown(cx),
         }
@@ -262,9 +270,12 @@ const ACCEPT_RETRY: Duration = Duration::from_millis(100);
 /// A `tcp-listen` link's listener. A task accepts all the time: one peer may wait for
 /// its turn while another is served (a ground station that reconnects at once, before
 /// the link has seen its first connection end, is served next); any more are turned
-/// away at once (their connection closed). A waiting peer that leaves before its turn
-/// is dropped with what it wrote, so that a command whose sender gave up waiting is
-/// never carried out later.
+/// away at once (their connection closed). Its turn comes when the served peer's
+/// transport is dropped, or at once if no peer is served when it connects. A waiting
+/// peer that leaves before its turn is dropped with what it wrote, so that a command
+/// whose sender gave up waiting is never carried out later; one that leaves after its
+/// turn came (a command sent without waiting for an answer) is served, what it wrote
+/// carried out.
 struct Listen {
     slot: Arc<Slot>,
     local_addr: Option<SocketAddr>,
@@ -275,14 +286,37 @@ struct Listen {
 /// The place of the peer that waits for its turn.
 #[derive(Default)]
 struct Slot {
-    waiting: Mutex<Option<Waiting>>,
+    state: Mutex<SlotState>,
     /// Told when a peer takes the place.
     filled: tokio::sync::Notify,
 }
 
+/// Who waits, and whether a peer is being served.
+#[derive(Default)]
+struct SlotState {
+    waiting: Option<Waiting>,
+    /// A transport of a peer is open (from its [`Listen::next_peer`] until it is
+    /// dropped).
+    serving: bool,
+}
+
 impl Slot {
-    fn lock(&self) -> std::sync::MutexGuard<'_, Option<Waiting>> {
-        self.waiting.lock().unwrap_or_else(PoisonError::into_inner)
+    fn lock(&self) -> std::sync::MutexGuard<'_, SlotState> {
+        self.state.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+}
+
+/// A served peer's turn: when the transport is dropped, the peer that waits (if it is
+/// still there) is due, and is served even if it leaves before the link takes it.
+struct Turn(Arc<Slot>);
+
+impl Drop for Turn {
+    fn drop(&mut self) {
+        let mut state = self.0.lock();
+        state.serving = false;
+        if let Some(waiting) = state.waiting.as_mut() {
+            waiting.due |= waiting.still_there();
+        }
     }
 }
 
@@ -291,6 +325,11 @@ struct Waiting {
     stream: TcpStream,
     peer: SocketAddr,
     early: BytesMut,
+    /// Its turn came while it was there: no peer was served when it connected, or the
+    /// served one ended while it waited. What it wrote is carried out even if it has
+    /// left since (a command sent without waiting for an answer), as the link takes it
+    /// only after its reconnection delay.
+    due: bool,
 }
 
 impl Waiting {
@@ -332,20 +371,33 @@ impl Listen {
             task.abort();
             let _ = task.await;
         }
-        self.slot.lock().take();
+        self.slot.lock().waiting.take();
     }
 
-    /// The next peer that is still there, and what it wrote while it waited.
-    async fn next_peer(&mut self) -> (TcpStream, SocketAddr, Bytes) {
+    /// The next peer whose turn came while it was there, what it wrote while it
+    /// waited, and its turn.
+    async fn next_peer(&mut self) -> (TcpStream, SocketAddr, Bytes, Turn) {
         loop {
-            let taken = self.slot.lock().take();
-            match taken {
-                Some(mut waiting) => {
-                    if waiting.still_there() {
-                        return (waiting.stream, waiting.peer, waiting.early.freeze());
+            let taken = {
+                let mut state = self.slot.lock();
+                if let Some(mut waiting) = state.waiting.take() {
+                    // Read ahead even when it is due: what it wrote before it left.
+                    if waiting.still_there() || waiting.due {
+                        state.serving = true;
+                        Some(Ok(waiting))
+                    } else {
+                        Some(Err(waiting.peer))
                     }
-                    left_before_its_turn(waiting.peer);
+                } else {
+                    None
                 }
+            };
+            match taken {
+                Some(Ok(waiting)) => {
+                    let turn = Turn(self.slot.clone());
+                    return (waiting.stream, waiting.peer, waiting.early.freeze(), turn);
+                }
+                Some(Err(peer)) => left_before_its_turn(peer),
                 None => self.slot.filled.notified().await,
             }
         }
@@ -379,8 +431,8 @@ async fn accept_peers(listener: TcpListener, name: String, slot: Arc<Slot>) {
         match listener.accept().await {
             Ok((stream, peer)) => {
                 failures = 0;
-                let mut waiting = slot.lock();
-                let free = match waiting.as_mut() {
+                let mut state = slot.lock();
+                let free = match state.waiting.as_mut() {
                     None => true,
                     Some(w) => {
                         let gone = !w.still_there();
@@ -391,12 +443,15 @@ async fn accept_peers(listener: TcpListener, name: String, slot: Arc<Slot>) {
                     }
                 };
                 if free {
-                    *waiting = Some(Waiting {
+                    // Between two peers, nobody is ahead of this one: its turn has come.
+                    let due = !state.serving;
+                    state.waiting = Some(Waiting {
                         stream,
                         peer,
                         early: BytesMut::new(),
+                        due,
                     });
-                    drop(waiting);
+                    drop(state);
                     slot.filled.notify_one();
                 } else {
                     // Said to the operator of a simulator or an emulated radio: the
@@ -429,8 +484,12 @@ async fn accept_peers(listener: TcpListener, name: String, slot: Arc<Slot>) {
 /// - `tcp`: every open connects again, within the connect timeout.
 /// - `tcp-listen`: every open takes the next peer. One peer is served at a time; while
 ///   one is, the next may wait for its turn and any more are turned away (their
-///   connection closed at once). A waiting peer that leaves before its turn is dropped
-///   with what it wrote, so that nothing it wrote is carried out after it gave up.
+///   connection closed at once). Its turn comes when the served peer's transport is
+///   dropped (at once if none is served). A waiting peer that leaves before its turn is
+///   dropped with what it wrote, so that nothing it wrote is carried out after it gave
+///   up; one that leaves after its turn came, as a command sent without waiting for an
+///   answer does, is served all the same. There is no reconnection delay: the next
+///   open takes the next peer.
 /// - `pty`: every open waits for a device to open the far end (the path stays valid for
 ///   the life of the connector); the transport ends when the device closes it, and what
 ///   it left unread is dropped, so that nothing written for one device reaches the next.
@@ -605,10 +664,14 @@ impl Connector {
                         source: io::Error::other("the link was shut down"),
                     });
                 }
-                let (stream, peer, early) = listen.next_peer().await;
+                let (stream, peer, early, turn) = listen.next_peer().await;
                 let _ = stream.set_nodelay(true);
                 Ok(Transport {
-                    inner: Inner::Accepted(stream, early),
+                    inner: Inner::Accepted {
+                        stream,
+                        early,
+                        _turn: turn,
+                    },
                     peer: peer.to_string(),
                 })
             }
@@ -635,7 +698,7 @@ impl Connector {
 
     /// Opens a transport after a disconnection, following `policy`: waits the current
     /// backoff delay before each attempt and doubles it after each failure (capped at
-    /// `max_delay`). Returns the first error that no retry can fix, and
+    /// `max_delay`); a `tcp-listen` link takes its next peer with no delay. Returns the first error that no retry can fix, and
     /// [`LinkError::ReconnectDisabled`] at once when reconnection is disabled. Failed
     /// attempts are logged at debug level.
     ///
@@ -659,9 +722,13 @@ impl Connector {
             self.delay = None;
         }
         self.healthy = false;
+        // A listener waits for its next peer, who may be there already: no delay.
+        let listens = matches!(self.kind, Kind::Listen(_));
         loop {
             let delay = *self.delay.get_or_insert(policy.initial_delay);
-            tokio::time::sleep(delay).await;
+            if !listens {
+                tokio::time::sleep(delay).await;
+            }
             let next = policy.next_delay(delay);
             self.delay = Some(next);
             match self.open().await {

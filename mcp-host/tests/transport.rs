@@ -294,6 +294,45 @@ async fn tcp_listen_gives_the_waiting_place_of_a_peer_that_left_to_the_next() {
     assert_eq!(read_exact_n(&mut transport, 3).await, b"new");
 }
 
+#[tokio::test]
+async fn tcp_listen_serves_a_peer_that_left_after_its_turn_came() {
+    let link: Link = "tcp-listen:127.0.0.1:0".parse().unwrap();
+    let options = fast_reconnect();
+    let mut connector = Connector::new(&link, &options).await.unwrap();
+    let addr = connector.local_addr().unwrap();
+    let first = TcpStream::connect(addr).await.unwrap();
+    let mut transport = connector.open().await.unwrap();
+
+    // A second peer waits and writes; its turn comes when the first's transport ends,
+    // and it leaves after that, before the link takes it (as a command sent without
+    // waiting for an answer does): what it wrote is carried out.
+    let mut second = TcpStream::connect(addr).await.unwrap();
+    second.write_all(b"2nd").await.unwrap();
+    drop(first);
+    reads_end(&mut transport).await;
+    drop(transport);
+    second.shutdown().await.unwrap();
+    drop(second);
+    let mut transport = timeout(GUARD, connector.reopen(&options.reconnect))
+        .await
+        .unwrap()
+        .unwrap();
+    assert_eq!(read_exact_n(&mut transport, 3).await, b"2nd");
+    reads_end(&mut transport).await;
+    drop(transport);
+
+    // Between peers nobody is ahead of a new one: its turn comes as it connects.
+    let mut third = TcpStream::connect(addr).await.unwrap();
+    third.write_all(b"3rd").await.unwrap();
+    third.shutdown().await.unwrap();
+    drop(third);
+    let mut transport = timeout(GUARD, connector.reopen(&options.reconnect))
+        .await
+        .unwrap()
+        .unwrap();
+    assert_eq!(read_exact_n(&mut transport, 3).await, b"3rd");
+}
+
 /// A serial link on the far end of a pseudo-terminal holds it by its lock alone, not by
 /// the terminal's exclusive flag, which would outlive a process killed while holding
 /// it; the lock still turns away a second link on the same path until the first closes.
