@@ -4,6 +4,7 @@
 
 use std::collections::VecDeque;
 use std::fmt;
+use std::ops::Range;
 use std::sync::Arc;
 use std::time::{Duration, SystemTime};
 
@@ -196,8 +197,60 @@ impl fmt::Display for ReportKey {
 struct Pending {
     deadline: Instant,
     timeout: Duration,
+    /// Where its frame is in the bytes queued for the transport, counted from the
+    /// transport's first (empty until queued): the frame went out once
+    /// [`Driver::written`] reaches its end, and none of it has while that is at most its
+    /// start.
+    bytes: Range<u64>,
     kind: PendingKind,
 }
+
+impl Pending {
+    /// A request under a frame id, its frame not queued yet.
+    fn new(deadline: Instant, timeout: Duration, kind: PendingKind) -> Self {
+        Pending {
+            deadline,
+            timeout,
+            bytes: 0..0,
+            kind,
+        }
+    }
+
+    /// Whether none of its frame has gone out: it can still be taken back.
+    fn unsent(&self, written: u64) -> bool {
+        !self.bytes.is_empty() && written <= self.bytes.start
+    }
+
+    /// What stays under its id once its caller has its timeout, or has gone, after its
+    /// frame went out: the id, kept from new requests until the answer comes or
+    /// [`LATE_ANSWER_WINDOW`] has passed, so that a late answer is never taken for a
+    /// new request's. `None` for a request already in that state.
+    fn expired(&self, now: Instant) -> Option<Pending> {
+        let (answer_type, single) = match &self.kind {
+            PendingKind::Transmit { .. } | PendingKind::Request { .. } => {
+                (Some(xbee_api::frame::frame_type::TRANSMIT_STATUS), true)
+            }
+            PendingKind::Frame { answer_type, .. } => (*answer_type, true),
+            PendingKind::Answers { answer_type, .. } => (Some(*answer_type), false),
+            PendingKind::Expired { .. } => return None,
+        };
+        Some(Pending {
+            deadline: crate::options::later(self.deadline.max(now), LATE_ANSWER_WINDOW),
+            timeout: self.timeout,
+            bytes: self.bytes.clone(),
+            kind: PendingKind::Expired {
+                answer_type,
+                single,
+            },
+        })
+    }
+}
+
+/// How long the frame id of a request that timed out after its frame went out is kept
+/// from new requests, waiting for its late answer: a frame may wait in a serial
+/// bridge's or the radio's buffers, and a radio takes seconds to report a failed
+/// delivery.
+const LATE_ANSWER_WINDOW: Duration = Duration::from_secs(10);
 
 #[derive(Debug)]
 enum PendingKind {
@@ -220,6 +273,14 @@ enum PendingKind {
         /// The frame type of its answers (0x88 for AT commands, 0x97 for remote ones).
         answer_type: u8,
     },
+    /// A request whose caller has its timeout (or is gone), its frame sent: its late
+    /// answer comes as an unclaimed frame ([`Pending::expired`]).
+    Expired {
+        /// The frame type of its answer (`None`: any).
+        answer_type: Option<u8>,
+        /// Whether one answer ends it (not so for answers from every radio).
+        single: bool,
+    },
 }
 
 impl PendingKind {
@@ -234,7 +295,7 @@ impl PendingKind {
                 let _ = reply.send(Err(error));
             }
             PendingKind::Answers { answers, .. } => fail_answers(&answers, error),
-            PendingKind::Request { .. } => {}
+            PendingKind::Request { .. } | PendingKind::Expired { .. } => {}
         }
     }
 }
@@ -287,6 +348,9 @@ pub(crate) struct Driver {
     ops_open: bool,
     writes_open: bool,
     ids: IdTable<Pending>,
+    /// Bytes written to the transports so far: where the bytes queued for the current
+    /// one start ([`Pending::bytes`]).
+    written: u64,
     /// Requests that need a frame id, taken while none was free.
     parked: VecDeque<Op>,
     waiters: Vec<Waiter>,
@@ -339,6 +403,7 @@ impl Driver {
             ops_open: true,
             writes_open: true,
             ids: IdTable::new(),
+            written: 0,
             parked: VecDeque::new(),
             waiters: Vec::new(),
             next_waiter: 0,
@@ -494,7 +559,7 @@ impl Driver {
                 },
                 written = wr.write_buf(&mut out), if !out.is_empty() => match written {
                     Ok(0) => return Served::Failed("the transport accepts no more data".into()),
-                    Ok(_) => {}
+                    Ok(n) => self.written += n as u64,
                     Err(e) => return Served::Failed(format!("write error: {e}")),
                 },
                 op = self.ops.recv(), if accept_ops => match op {
@@ -506,7 +571,7 @@ impl Driver {
                     None => self.writes_open = false,
                 },
                 _ = tokio::time::sleep_until(deadline.unwrap_or_else(Instant::now)), if deadline.is_some() => {
-                    self.expire(Instant::now());
+                    self.expire(Instant::now(), &mut out);
                 }
                 _ = tokio::time::sleep_until(check_stale_at.unwrap_or_else(Instant::now)), if check_stale_at.is_some() => {
                     // Bytes may be waiting unread (this task ran late): they come first,
@@ -773,8 +838,12 @@ impl Driver {
                 answer_type,
             }) if *answer_type == frame_type => {
                 if answers.is_closed() {
-                    // Its caller stopped listening: the id is free again.
-                    self.ids.remove(id);
+                    // Its caller stopped listening: the id waits for the last answers.
+                    if let Some(pending) = self.ids.get_mut(id) {
+                        if let Some(expired) = pending.expired(Instant::now()) {
+                            *pending = expired;
+                        }
+                    }
                     return self.unclaimed(frame);
                 }
                 if answers.capacity() > 1 {
@@ -789,6 +858,16 @@ impl Driver {
             }
             // Another type under its id is no answer of its.
             Some(PendingKind::Answers { .. }) => false,
+            // A late answer: no caller waits for it any more.
+            Some(PendingKind::Expired {
+                answer_type,
+                single,
+            }) => {
+                if *single && answer_type.is_none_or(|t| t == frame_type) {
+                    self.ids.remove(id);
+                }
+                return self.unclaimed(frame);
+            }
             Some(PendingKind::Frame { answer_type, .. }) => {
                 answer_type.is_none_or(|t| t == frame_type)
             }
@@ -806,7 +885,7 @@ impl Driver {
                 let _ = reply.send(Ok(frame));
             }
             // Taken above.
-            PendingKind::Answers { .. } => {}
+            PendingKind::Answers { .. } | PendingKind::Expired { .. } => {}
             PendingKind::Transmit { to, reply } => {
                 let result = match xbee_api::TransmitStatusRepr::parse_bytes(frame.data()) {
                     Ok(status) => delivery(to, &status),
@@ -850,7 +929,7 @@ impl Driver {
     /// transmits without status) start at once even while all ids are in flight.
     fn start(&mut self, op: Op, out: &mut BytesMut) {
         if op.needs_id() && !self.ids.has_free() {
-            self.reclaim_abandoned();
+            self.reclaim_abandoned(out);
         }
         if op.needs_id() && (!self.ids.has_free() || !self.parked.is_empty()) {
             self.parked.push_back(op);
@@ -861,13 +940,15 @@ impl Driver {
 
     /// Frees the frame ids of requests whose callers stopped waiting (a `send` in a
     /// `tokio::time::timeout`, say), when no id is free: without this they would hold
-    /// them to their own deadlines. Their late answers, if any, then come as unclaimed
-    /// frames; the round-robin order keeps a freed id from being reused before the 254
-    /// others.
-    fn reclaim_abandoned(&mut self) {
+    /// them to their own deadlines. A frame not sent yet is taken back; the id of one
+    /// sent is kept for its late answer, which comes as an unclaimed frame
+    /// ([`Pending::expired`]).
+    fn reclaim_abandoned(&mut self, out: &mut BytesMut) {
         let waiters = &self.waiters;
+        let (written, now) = (self.written, Instant::now());
         let mut gone = Vec::new();
-        self.ids.remove_where(
+        let mut cut = Vec::new();
+        self.ids.replace_where(
             |p| match &p.kind {
                 PendingKind::Transmit { reply, .. } => reply.is_closed(),
                 PendingKind::Frame { reply, .. } => reply.is_closed(),
@@ -876,14 +957,48 @@ impl Driver {
                     .iter()
                     .find(|w| w.id == *waiter)
                     .is_none_or(|w| w.reply.is_closed()),
+                PendingKind::Expired { .. } => false,
             },
             |_, p| {
                 if let PendingKind::Request { waiter, .. } = p.kind {
                     gone.push(waiter);
                 }
+                if p.unsent(written) {
+                    cut.push(p.bytes.clone());
+                    return None;
+                }
+                p.expired(now)
             },
         );
         self.waiters.retain(|w| !gone.contains(&w.id));
+        self.take_back(out, cut);
+    }
+
+    /// Takes the frames at `cut` (none of them sent) out of the bytes queued, `out`,
+    /// and moves the frames queued after them back.
+    fn take_back(&mut self, out: &mut BytesMut, mut cut: Vec<Range<u64>>) {
+        if cut.is_empty() {
+            return;
+        }
+        // From the last, so that the places of the others stay as they are.
+        cut.sort_unstable_by_key(|r| std::cmp::Reverse(r.start));
+        for range in &cut {
+            let start = usize::try_from(range.start - self.written).unwrap_or(usize::MAX);
+            let end = usize::try_from(range.end - self.written).unwrap_or(usize::MAX);
+            if start <= end && end <= out.len() {
+                let mut rest = out.split_off(start);
+                let after = rest.split_off(end - start);
+                out.unsplit(after);
+            }
+        }
+        for p in self.ids.values_mut() {
+            let before: u64 = cut
+                .iter()
+                .filter(|r| r.end <= p.bytes.start)
+                .map(|r| r.end - r.start)
+                .sum();
+            p.bytes = p.bytes.start - before..p.bytes.end - before;
+        }
     }
 
     /// Starts parked requests, in order, while frame ids are free.
@@ -923,21 +1038,16 @@ impl Driver {
                     let _ = reply.send(result);
                     return;
                 }
-                let pending = Pending {
-                    deadline,
-                    timeout,
-                    kind: PendingKind::Transmit { to, reply },
-                };
+                let pending = Pending::new(deadline, timeout, PendingKind::Transmit { to, reply });
                 match self.ids.insert(pending) {
                     Ok(id) => {
-                        if let Err(e) = write_transmit(self.options.api_mode, out, id, to, &payload)
-                        {
-                            if let Some(Pending {
-                                kind: PendingKind::Transmit { reply, .. },
-                                ..
-                            }) = self.ids.remove(id)
-                            {
-                                let _ = reply.send(Err(e));
+                        let start = self.queued_end(out);
+                        match write_transmit(self.options.api_mode, out, id, to, &payload) {
+                            Ok(()) => self.queued(id, start, out),
+                            Err(e) => {
+                                if let Some(pending) = self.ids.remove(id) {
+                                    pending.kind.fail(e);
+                                }
                             }
                         }
                     }
@@ -961,19 +1071,17 @@ impl Driver {
             } => {
                 let waiter = self.next_waiter;
                 self.next_waiter += 1;
-                let pending = Pending {
-                    deadline,
-                    timeout,
-                    kind: PendingKind::Request { to, waiter },
-                };
+                let pending = Pending::new(deadline, timeout, PendingKind::Request { to, waiter });
                 // Without a free id (cannot happen: requests that need one are parked
                 // until one is free) the request still goes out, without a delivery status.
                 let id = self.ids.insert(pending).unwrap_or(0);
+                let start = self.queued_end(out);
                 if let Err(e) = write_transmit(self.options.api_mode, out, id, to, &payload) {
                     self.ids.remove(id);
                     let _ = reply.send(Err(e.into()));
                     return;
                 }
+                self.queued(id, start, out);
                 self.waiters.push(Waiter {
                     id: waiter,
                     from: to,
@@ -1019,6 +1127,20 @@ impl Driver {
         }
     }
 
+    /// Where the bytes queued for the transport, `out`, end ([`Pending::bytes`]).
+    fn queued_end(&self, out: &BytesMut) -> u64 {
+        self.written + out.len() as u64
+    }
+
+    /// Notes where the frame of the request under `id` lies: from `start` to the end of
+    /// `out`.
+    fn queued(&mut self, id: u8, start: u64, out: &BytesMut) {
+        let end = self.queued_end(out);
+        if let Some(pending) = self.ids.get_mut(id) {
+            pending.bytes = start..end;
+        }
+    }
+
     fn next_deadline(&self) -> Option<Instant> {
         let ids = self.ids.values().map(|p| p.deadline);
         let waiters = self.waiters.iter().map(|w| w.deadline);
@@ -1026,9 +1148,11 @@ impl Driver {
         ids.chain(waiters).chain(parked).min()
     }
 
-    /// Fails every request whose deadline has passed, freeing its frame id, and every
-    /// parked one whose deadline has passed.
-    fn expire(&mut self, now: Instant) {
+    /// Fails every request whose deadline has passed, and every parked one whose
+    /// deadline has passed. A frame not sent yet is taken back (the request was
+    /// [`NotSent`](SendError::NotSent)); the id of one sent is kept for its late answer
+    /// ([`Pending::expired`]), and freed once that time is over too.
+    fn expire(&mut self, now: Instant, out: &mut BytesMut) {
         let timeouts = self.counters.snapshot().timeouts;
         let (expired, parked): (VecDeque<Op>, VecDeque<Op>) = std::mem::take(&mut self.parked)
             .into_iter()
@@ -1039,13 +1163,23 @@ impl Driver {
             op.time_out(true);
         }
         let counters = &self.counters;
-        self.ids.remove_where(
+        let written = self.written;
+        let mut cut = Vec::new();
+        let mut unsent_waiters = Vec::new();
+        self.ids.replace_where(
             |p| p.deadline <= now,
             |id, p| {
-                let error = SendError::Timeout {
-                    frame_id: id,
-                    timeout: p.timeout,
+                let unsent = p.unsent(written);
+                let error = if unsent {
+                    cut.push(p.bytes.clone());
+                    SendError::NotSent { timeout: p.timeout }
+                } else {
+                    SendError::Timeout {
+                        frame_id: id,
+                        timeout: p.timeout,
+                    }
                 };
+                let kept = if unsent { None } else { p.expired(now) };
                 match p.kind {
                     PendingKind::Transmit { reply, .. } => {
                         bump(&counters.timeouts);
@@ -1055,13 +1189,33 @@ impl Driver {
                         bump(&counters.timeouts);
                         let _ = reply.send(Err(error));
                     }
-                    // Its window is over: dropping the sender ends the answers.
-                    PendingKind::Answers { .. } => {}
-                    // The report waiter has the same deadline and answers below.
-                    PendingKind::Request { .. } => {}
+                    // Its window is over: dropping the sender ends the answers; a
+                    // request that never went out says so.
+                    PendingKind::Answers { answers, .. } => {
+                        if unsent {
+                            fail_answers(&answers, error);
+                        }
+                    }
+                    // The report waiter has the same deadline and answers below (at
+                    // once if its request never went out).
+                    PendingKind::Request { waiter, .. } => {
+                        if unsent {
+                            unsent_waiters.push((waiter, error));
+                        }
+                    }
+                    PendingKind::Expired { .. } => {}
                 }
+                kept
             },
         );
+        self.take_back(out, cut);
+        for (waiter, error) in unsent_waiters {
+            if let Some(pos) = self.waiters.iter().position(|w| w.id == waiter) {
+                let w = self.waiters.swap_remove(pos);
+                bump(&self.counters.timeouts);
+                let _ = w.reply.send(Err(error.into()));
+            }
+        }
         let mut i = 0;
         while i < self.waiters.len() {
             if self.waiters[i].deadline <= now {
@@ -1095,20 +1249,19 @@ impl Driver {
         timeout: Duration,
         kind: PendingKind,
     ) {
-        let pending = Pending {
-            deadline,
-            timeout,
-            kind,
-        };
-        match self.ids.insert(pending) {
+        match self.ids.insert(Pending::new(deadline, timeout, kind)) {
             Ok(id) => {
                 let mut data = BytesMut::from(data);
                 if let Some(slot) = data.get_mut(1) {
                     *slot = id;
                 }
-                if let Err(e) = write_raw(self.options.api_mode, out, &data) {
-                    if let Some(pending) = self.ids.remove(id) {
-                        pending.kind.fail(e);
+                let start = self.queued_end(out);
+                match write_raw(self.options.api_mode, out, &data) {
+                    Ok(()) => self.queued(id, start, out),
+                    Err(e) => {
+                        if let Some(pending) = self.ids.remove(id) {
+                            pending.kind.fail(e);
+                        }
                     }
                 }
             }

@@ -68,7 +68,10 @@ pub enum SendError {
         /// Route discovery the radio did.
         discovery: DiscoveryStatus,
     },
-    /// No status or response came before the timeout (the frame id is freed).
+    /// No status or response came before the timeout. The request went out: the
+    /// radio may still carry it out. Its frame id is kept from new requests for a
+    /// while, so that a late answer is passed on as an unclaimed frame, never taken
+    /// for another request's.
     #[error("no answer to frame id {frame_id} within {timeout:?}")]
     #[non_exhaustive]
     Timeout {
@@ -87,9 +90,11 @@ pub enum SendError {
         timeout: Duration,
     },
     /// The request's timeout ran out before it was sent, without waiting for a frame
-    /// id: a timeout too short to hand the request to the link in (zero, say), or a
-    /// link whose queue stayed full (it writes more slowly than requests come).
-    #[error("not sent: its timeout of {timeout:?} ran out before the link took it")]
+    /// id: a timeout too short to hand the request to the link in (zero, say), a link
+    /// whose queue stayed full, or a frame still waiting to be written when its
+    /// timeout ran out (a transport that takes bytes more slowly than requests come),
+    /// which is then taken back: none of it reaches the radio.
+    #[error("not sent: its timeout of {timeout:?} ran out before it went out to the radio")]
     #[non_exhaustive]
     NotSent {
         /// The timeout that expired.

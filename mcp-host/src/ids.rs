@@ -3,9 +3,10 @@
 /// A table of values keyed by XBee frame id (1..=255).
 ///
 /// Ids are handed out round-robin from the id after the last one given, skipping ids
-/// still in flight, so a late status for an id that timed out is unlikely to meet a new
-/// request with the same id. Freed ids (answered or expired) are reused; the table never
-/// runs out as long as entries are removed.
+/// still in flight (the link keeps the id of a request that timed out after its frame
+/// went out until its late answer comes or can no longer be expected), so a late status
+/// is unlikely to meet a new request with the same id. Freed ids are reused; the table
+/// never runs out as long as entries are removed.
 #[derive(Debug)]
 pub(crate) struct IdTable<T> {
     slots: Vec<Option<T>>,
@@ -65,17 +66,39 @@ impl<T> IdTable<T> {
         self.slots.get(usize::from(id).checked_sub(1)?)?.as_ref()
     }
 
+    /// The value under `id`, if in flight, to change.
+    pub(crate) fn get_mut(&mut self, id: u8) -> Option<&mut T> {
+        self.slots
+            .get_mut(usize::from(id).checked_sub(1)?)?
+            .as_mut()
+    }
+
     /// Removes every entry for which `expired` is true, passing each to `on_removed`.
     pub(crate) fn remove_where(
         &mut self,
-        mut expired: impl FnMut(&T) -> bool,
+        expired: impl FnMut(&T) -> bool,
         mut on_removed: impl FnMut(u8, T),
+    ) {
+        self.replace_where(expired, |id, value| {
+            on_removed(id, value);
+            None
+        });
+    }
+
+    /// Takes every entry for which `expired` is true to `replace`, which gives back
+    /// what stays under its id (`None` frees the id).
+    pub(crate) fn replace_where(
+        &mut self,
+        mut expired: impl FnMut(&T) -> bool,
+        mut replace: impl FnMut(u8, T) -> Option<T>,
     ) {
         for (index, slot) in self.slots.iter_mut().enumerate() {
             if slot.as_ref().is_some_and(&mut expired) {
                 if let Some(value) = slot.take() {
-                    self.len -= 1;
-                    on_removed(id_of(index), value);
+                    *slot = replace(id_of(index), value);
+                    if slot.is_none() {
+                        self.len -= 1;
+                    }
                 }
             }
         }
@@ -89,6 +112,11 @@ impl<T> IdTable<T> {
     /// The values in flight.
     pub(crate) fn values(&self) -> impl Iterator<Item = &T> {
         self.slots.iter().flatten()
+    }
+
+    /// The values in flight, to change.
+    pub(crate) fn values_mut(&mut self) -> impl Iterator<Item = &mut T> {
+        self.slots.iter_mut().flatten()
     }
 }
 

@@ -782,7 +782,7 @@ async fn a_timeout_too_short_to_send_in_says_so_not_that_frame_ids_ran_out() {
     assert_eq!(at.err(), Some(not_sent.clone()));
     assert_eq!(
         not_sent.to_string(),
-        "not sent: its timeout of 0ns ran out before the link took it"
+        "not sent: its timeout of 0ns ran out before it went out to the radio"
     );
     // None went out: the next frame the radio reads is the next request's.
     sender.write_frame(&[0x08, 0x00, b'N', b'I']).await.unwrap();
@@ -864,4 +864,71 @@ async fn the_link_diagnoses_a_radio_in_the_other_api_mode_in_its_own_mode() {
     }
     // Since a snapshot taken after it: nothing.
     assert_eq!(sender.diagnose(&sender.stats()), None);
+}
+
+/// A transport that takes bytes more slowly than requests come (a radio's UART at a low
+/// baud rate, a serial bridge; here a radio that stops reading for a while): frames
+/// wait in the link's queue of bytes, and requests time out there. None of a frame still
+/// queued when its timeout runs out reaches the radio (`NotSent`); the frame id of one
+/// that went out stays taken until its late answer comes, so that a new request never
+/// gets another frame's status under a reused id.
+#[tokio::test]
+async fn a_request_that_times_out_in_a_slow_transport_is_taken_back_or_keeps_its_id() {
+    let (_stream, sender, mut radio) = pty_link_with(LinkOptions::default()).await;
+    let quick = SendOptions {
+        timeout: Some(Duration::from_millis(100)),
+        ..SendOptions::default()
+    };
+    // The radio reads nothing for now: the pseudo-terminal's buffers fill, then the
+    // link's own; every request to MAV times out.
+    let (mut timed_out, mut not_sent) = (0, 0);
+    for _ in 0..20 {
+        let batch: Vec<_> = (0..200)
+            .map(|_| {
+                let sender = sender.clone();
+                tokio::spawn(
+                    async move { sender.send_payload(MAV, &b"c\x02\x01"[..], quick).await },
+                )
+            })
+            .collect();
+        for task in batch {
+            match task.await.unwrap() {
+                Err(SendError::Timeout { .. }) => timed_out += 1,
+                Err(SendError::NotSent { .. } | SendError::NoFreeFrameId { .. }) => not_sent += 1,
+                other => panic!("{other:?}"),
+            }
+        }
+    }
+    assert!(timed_out > 0 && not_sent > 0, "{timed_out} {not_sent}");
+    // Then a request to a radio that is not there: its delivery fails.
+    let doomed = {
+        let sender = sender.clone();
+        tokio::spawn(async move {
+            let options = SendOptions {
+                timeout: Some(GUARD),
+                ..SendOptions::default()
+            };
+            sender
+                .send_payload(OTHER_MAV, &b"c\x02\x01"[..], options)
+                .await
+        })
+    };
+    // The radio catches up: it gets the frames that went out, and no other, and
+    // answers each.
+    let mut received = 0;
+    loop {
+        let tx = radio.next_tx().await;
+        if tx.dst64 == OTHER_MAV {
+            radio.status(tx.frame_id, DeliveryStatus::from(0x24)).await;
+            break;
+        }
+        received += 1;
+        radio.status(tx.frame_id, DeliveryStatus::Success).await;
+    }
+    assert_eq!(received, timed_out, "frames that reached the radio");
+    let result = doomed.await.unwrap();
+    assert!(
+        matches!(result, Err(SendError::Delivery { frame_id, .. }) if frame_id != 0),
+        "{result:?}"
+    );
 }
