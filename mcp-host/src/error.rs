@@ -121,8 +121,12 @@ pub enum SendError {
         /// The limit.
         max: usize,
     },
-    /// A frame given to [`crate::CommandSender::send_frame`] has no frame id field.
-    #[error("frame type 0x{0:02X} carries no frame id, so no response can be matched")]
+    /// A frame given to [`crate::CommandSender::send_frame`] is of no request type
+    /// known to carry a frame id (or has no byte for one).
+    #[error(
+        "frame type 0x{0:02X} is no request known to carry a frame id, so no response can \
+         be matched (write it with write_frame)"
+    )]
     NoFrameId(u8),
     /// A frame given to [`crate::CommandSender::write_frame`] is empty (no frame type).
     #[error("empty frame data (no frame type byte)")]

@@ -138,7 +138,8 @@ impl OwnedFrame {
     }
 
     /// The frame id, for frame types that carry one in their second byte (requests and
-    /// their responses: 0x08, 0x09, 0x10, 0x11, 0x17, 0x88, 0x89, 0x8B, 0x97).
+    /// their responses: 0x00, 0x01, 0x08, 0x09, 0x10, 0x11, 0x17, 0x20, 0x24, 0x88,
+    /// 0x89, 0x8B, 0x97, 0xA4).
     pub fn frame_id(&self) -> Option<u8> {
         if carries_frame_id(self.frame_type()) {
             self.data.get(1).copied()
@@ -168,17 +169,23 @@ impl fmt::Debug for OwnedFrame {
     }
 }
 
-/// Frame types whose second byte is a frame id.
+/// Frame types whose second byte is a frame id: the requests of [`answer_type`] and
+/// their answers.
 pub(crate) fn carries_frame_id(frame_type: u8) -> bool {
-    matches!(
-        frame_type,
-        0x08 | 0x09 | 0x10 | 0x11 | 0x17 | 0x88 | 0x89 | 0x8B | 0x97
-    )
+    answer_type(frame_type).is_some() || is_response(frame_type)
 }
 
-/// Response frame types answering a request by frame id.
+/// Response frame types answering a request by frame id: those [`answer_type`] gives.
 pub(crate) fn is_response(frame_type: u8) -> bool {
-    matches!(frame_type, 0x88 | 0x89 | 0x8B | 0x97)
+    use xbee_api::frame::frame_type::*;
+    matches!(
+        frame_type,
+        TX_STATUS_802_15_4
+            | AT_COMMAND_RESPONSE
+            | TRANSMIT_STATUS
+            | REMOTE_AT_RESPONSE
+            | REGISTER_JOINING_DEVICE_STATUS
+    )
 }
 
 /// The frame type answering requests of type `frame_type` under their frame id; `None`
@@ -194,10 +201,13 @@ pub(crate) fn answer_type(frame_type: u8) -> Option<u8> {
         TRANSMIT_REQUEST | EXPLICIT_ADDRESSING_COMMAND => Some(TRANSMIT_STATUS),
         REMOTE_AT_COMMAND => Some(REMOTE_AT_RESPONSE),
         // Register Joining Device: Register Joining Device Status.
-        0x24 => Some(0xA4),
+        0x24 => Some(REGISTER_JOINING_DEVICE_STATUS),
         _ => None,
     }
 }
 
 /// TX Status (802.15.4, Wi-Fi, Cellular).
 pub(crate) const TX_STATUS_802_15_4: u8 = 0x89;
+
+/// Register Joining Device Status, the answer to a Register Joining Device (0x24).
+pub(crate) const REGISTER_JOINING_DEVICE_STATUS: u8 = 0xA4;

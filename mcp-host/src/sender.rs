@@ -248,8 +248,9 @@ impl CommandSender {
     }
 
     /// Sends any XBee frame that carries a frame id (AT command 0x08, remote AT command
-    /// 0x17, Transmit Request 0x10, ...) and resolves with the response frame that carries
-    /// the same frame id (0x88, 0x97, 0x8B, ...). A frame of another type under that id
+    /// 0x17, Transmit Request 0x10, the 802.15.4 Transmit Requests 0x00 and 0x01, ...)
+    /// and resolves with the response frame that carries the same frame id (0x88, 0x97,
+    /// 0x8B, 0x89, ...). A frame of another type under that id
     /// is no answer (it goes to the stream as any other) when the request's type has a
     /// known answer type; for another request type, the first frame under the id is.
     ///

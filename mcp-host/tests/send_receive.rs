@@ -932,3 +932,27 @@ async fn a_request_that_times_out_in_a_slow_transport_is_taken_back_or_keeps_its
         "{result:?}"
     );
 }
+
+/// The 802.15.4 Transmit Request (0x00, 64-bit address) carries a frame id as the other
+/// requests do, and its TX Status (0x89) answers it.
+#[tokio::test]
+async fn send_frame_takes_an_802_15_4_transmit_request() {
+    let (_stream, sender, mut radio) = pty_link_with(LinkOptions::default()).await;
+    // Frame id, destination, options, payload.
+    let mut tx64 = vec![0x00, 0x00];
+    tx64.extend_from_slice(&MAV.0.to_be_bytes());
+    tx64.extend_from_slice(&[0x00, b'h', b'i']);
+    let asked = tokio::spawn(async move { sender.send_frame(&tx64, None).await });
+    let written = tokio::time::timeout(GUARD, radio.next_frame())
+        .await
+        .expect("the request written");
+    assert_eq!(
+        (written[0], &written[2..10]),
+        (0x00, &MAV.0.to_be_bytes()[..])
+    );
+    assert_ne!(written[1], 0, "a frame id");
+    let status = [0x89, written[1], 0x00];
+    radio.send(&xbee_api::RawFrame::new(&status).unwrap()).await;
+    let answer = asked.await.unwrap().expect("its TX Status");
+    assert_eq!(answer.data()[..], status);
+}
