@@ -139,7 +139,7 @@ pub use event::{
     Event, InvalidPacket, LinkEvent, LinkState, Origin, OwnedFrame, OwnedPacket, Received,
 };
 pub use link::{Link, LinkParseError};
-pub use options::{LinkOptions, ReconnectPolicy};
+pub use options::{LinkOptions, MAX_EVENT_CAPACITY, ReconnectPolicy};
 pub use sender::{CommandSender, DeliveryReport, FrameId, SendOptions};
 pub use sink::PacketSink;
 pub use stats::Stats;
@@ -185,8 +185,10 @@ pub async fn connect(
     link: &Link,
     options: LinkOptions,
 ) -> Result<(PacketStream, CommandSender), ConnectError> {
-    if options.event_capacity == 0 {
-        return Err(ConnectError::Options("event_capacity must be at least 1"));
+    if options.event_capacity == 0 || options.event_capacity > MAX_EVENT_CAPACITY {
+        return Err(ConnectError::Options(
+            "event_capacity must be in 1..=MAX_EVENT_CAPACITY",
+        ));
     }
     if options.max_frame_len == 0 || options.max_frame_len > codec::MAX_FRAME_DATA {
         return Err(ConnectError::Options(

@@ -118,9 +118,15 @@ pub struct LinkOptions {
     /// Capacity of the event queue between the background task and the
     /// [`crate::PacketStream`]; when the consumer falls behind by this many events, newer
     /// packets and frames are dropped and counted ([`crate::Stats::events_dropped`]);
-    /// link events are held back, never dropped.
+    /// link events are held back, never dropped. At most [`MAX_EVENT_CAPACITY`]; each
+    /// [`crate::Subscription`] channel takes room for this many events (rounded up to a
+    /// power of two) when the first is taken.
     pub event_capacity: usize,
 }
+
+/// The largest [`LinkOptions::event_capacity`]: about a million events, minutes of
+/// every frame a radio can pass.
+pub const MAX_EVENT_CAPACITY: usize = 1 << 20;
 
 impl Default for LinkOptions {
     fn default() -> Self {

@@ -956,3 +956,33 @@ async fn send_frame_takes_an_802_15_4_transmit_request() {
     let answer = asked.await.unwrap().expect("its TX Status");
     assert_eq!(answer.data()[..], status);
 }
+
+#[tokio::test]
+async fn options_out_of_range_are_refused_before_the_link_opens() {
+    use mcp_host::{ConnectError, Link, MAX_EVENT_CAPACITY};
+    for options in [
+        LinkOptions {
+            event_capacity: 0,
+            ..LinkOptions::default()
+        },
+        LinkOptions {
+            event_capacity: MAX_EVENT_CAPACITY + 1,
+            ..LinkOptions::default()
+        },
+        // "Unbounded", as someone may try: an error, not a panic in the channel.
+        LinkOptions {
+            event_capacity: usize::MAX,
+            ..LinkOptions::default()
+        },
+        LinkOptions {
+            max_frame_len: 0,
+            ..LinkOptions::default()
+        },
+    ] {
+        let capacity = options.event_capacity;
+        match mcp_host::connect(&Link::Pty, options).await {
+            Err(ConnectError::Options(why)) => assert!(!why.is_empty()),
+            other => panic!("event_capacity {capacity}: {:?}", other.map(|_| ())),
+        }
+    }
+}
