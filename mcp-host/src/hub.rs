@@ -284,8 +284,9 @@ impl Hub {
         // A `pty` or `tcp-listen:` link has no radio on it yet: clients are refused from
         // the moment this returns, the port held.
         let radio_up = sender.link_state() == crate::LinkState::Connected;
+        let routes = Arc::new(Mutex::new(Routes::new()));
         let listener = if radio_up {
-            check_radio_mode(&sender, mode).await;
+            check_radio_mode(&sender, mode, &routes).await;
             Some(listener)
         } else {
             port.hold();
@@ -293,7 +294,6 @@ impl Hub {
         };
         hub.counters.listening.store(radio_up, Ordering::Relaxed);
         let to_radio = Arc::new(ToRadio::default());
-        let routes = Arc::new(Mutex::new(Routes::new()));
         let writer = RadioWriter {
             mode,
             sender: sender.clone(),
@@ -381,7 +381,12 @@ impl Drop for Hub {
 
 /// Where the answers under each of the hub's frame ids go: ids handed out round-robin
 /// (as the link's own), so that a late answer rarely meets a new request under its id.
-struct Routes(IdTable<Route>);
+struct Routes(IdTable<Route>, Held);
+
+/// The frame ids the hub's own requests went out under (its `AT AP`), and until when
+/// they are kept from clients: a late answer under one is no client's.
+#[derive(Default)]
+struct Held(Vec<(u8, Instant)>);
 
 struct Route {
     /// The client's number (see [`Serve::next_client`]).
@@ -408,15 +413,29 @@ struct Route {
 
 impl Routes {
     fn new() -> Self {
-        Routes(IdTable::new())
+        Routes(IdTable::new(), Held::default())
     }
 
-    /// A hub id for `route`; `None` while all 255 wait for answers.
+    /// A hub id for `route`; `None` while all 255 wait for answers (or are held).
     fn insert(&mut self, route: Route, now: Instant) -> Option<u8> {
-        if !self.0.has_free() {
-            self.expire(now);
+        self.1.0.retain(|&(_, until)| until > now);
+        let held = |id| self.1.0.iter().any(|&(held, _)| held == id);
+        match self.0.insert_unless(route, held) {
+            Ok(id) => Some(id),
+            Err(route) => {
+                self.expire(now);
+                let held = |id| self.1.0.iter().any(|&(held, _)| held == id);
+                self.0.insert_unless(route, held).ok()
+            }
         }
-        self.0.insert(route).ok()
+    }
+
+    /// Keeps `ids`, which the hub's own requests went out under, from clients for
+    /// [`ANSWER_WINDOW`]: their late answers then reach no client.
+    fn hold(&mut self, ids: &[u8], now: Instant) {
+        self.1.0.retain(|&(_, until)| until > now);
+        let until = now + ANSWER_WINDOW;
+        self.1.0.extend(ids.iter().map(|&id| (id, until)));
     }
 
     /// Ends the routes whose answers are no longer due, giving their clients' permits
@@ -702,7 +721,7 @@ impl Serve {
                         }
                         self.broadcast(&event);
                         if self.radio_up && !was_up && listener.is_none() {
-                            check_radio_mode(&self.sender, self.mode).await;
+                            check_radio_mode(&self.sender, self.mode, &self.routes).await;
                             // Unless the radio went away again, or the hub was stopped,
                             // while it was asked.
                             let still_up =
@@ -899,16 +918,28 @@ fn is_up(link: &LinkEvent) -> bool {
 pub const MODE_CHECK_TIMEOUT: Duration = Duration::from_secs(1);
 
 /// Asks the radio its `AP` each time it is there, before the hub listens (no client is
-/// connected then, so the request's frame id meets none of theirs), and warns if it is
-/// another API mode than the hub's, or if the radio does not answer: the hub drops
-/// what it cannot read, and its clients would hear nothing, not knowing why.
-async fn check_radio_mode(sender: &CommandSender, mode: ApiMode) {
-    let hub = u8::from(mode);
-    let mut answer = sender.at(*b"AP", &[], Some(MODE_CHECK_TIMEOUT)).await;
+/// connected then), and warns if it is another API mode than the hub's, or if the radio
+/// does not answer: the hub drops what it cannot read, and its clients would hear
+/// nothing, not knowing why. Holds the frame ids of the requests not answered in time
+/// from clients ([`Routes::hold`]): a radio that answers late would answer a client's
+/// request under the same id.
+async fn check_radio_mode(sender: &CommandSender, mode: ApiMode, routes: &Mutex<Routes>) {
+    let mut asked = Vec::new();
+    let mut ask = async || {
+        let answer = sender.at(*b"AP", &[], Some(MODE_CHECK_TIMEOUT)).await;
+        // An answer may still come under the id of a request that had none in time.
+        if let Err(error @ crate::SendError::Timeout { .. }) = &answer {
+            asked.extend(error.frame_id());
+        }
+        answer
+    };
+    let mut answer = ask().await;
     if matches!(answer, Err(crate::SendError::Timeout { .. })) {
         // Asked once more: a radio just plugged in may still be starting.
-        answer = sender.at(*b"AP", &[], Some(MODE_CHECK_TIMEOUT)).await;
+        answer = ask().await;
     }
+    lock(routes).hold(&asked, Instant::now());
+    let hub = u8::from(mode);
     match answer {
         Ok(response) => {
             // An answer under the request's id, of another command, is a late one to a

@@ -38,10 +38,15 @@ impl<T> IdTable<T> {
     /// Stores `value` under a free id and returns the id, or gives the value back when
     /// all 255 ids are in flight.
     pub(crate) fn insert(&mut self, value: T) -> Result<u8, T> {
+        self.insert_unless(value, |_| false)
+    }
+
+    /// [`insert`](Self::insert), passing over the free ids for which `held` is true.
+    pub(crate) fn insert_unless(&mut self, value: T, held: impl Fn(u8) -> bool) -> Result<u8, T> {
         let n = self.slots.len();
         for step in 0..n {
             let index = (self.cursor + step) % n;
-            if self.slots[index].is_none() {
+            if self.slots[index].is_none() && !held(id_of(index)) {
                 self.slots[index] = Some(value);
                 self.cursor = (index + 1) % n;
                 self.len += 1;

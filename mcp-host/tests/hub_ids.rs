@@ -226,3 +226,46 @@ async fn a_request_that_waited_its_turn_longer_than_the_answer_window_gets_its_a
     clock_held.await.unwrap().unwrap();
     hub.stop().await;
 }
+
+/// The hub asks the radio `AT AP` under its link's own frame ids before it takes
+/// clients. A radio that answers late (behind a bridge busy with another connection)
+/// answers after a client has asked: the late answer is dropped, and the client's
+/// request, never under one of those ids, gets its own answer.
+#[tokio::test]
+async fn a_late_answer_to_the_hubs_own_at_ap_goes_to_no_client() {
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let radio_link: Link = format!("tcp:{}", listener.local_addr().unwrap())
+        .parse()
+        .unwrap();
+    let (hub, (mut radio, ap1, ap2)) = tokio::join!(
+        mcp_host::hub::Hub::start(&radio_link, LinkOptions::default(), "127.0.0.1:0"),
+        async {
+            let (socket, _) = listener.accept().await.unwrap();
+            let mut wire = tokio_util::codec::Framed::new(
+                socket,
+                mcp_host::codec::XBeeCodec::new(ApiMode::Unescaped),
+            );
+            // Asked twice, neither answered in time.
+            let first = next(&mut wire).await;
+            let second = next(&mut wire).await;
+            (wire, first[1], second[1])
+        }
+    );
+    let hub = hub.unwrap();
+    let mut client = raw_client(&hub).await;
+    send(&mut client, &[0x08, 0x07, b'N', b'I']).await;
+    let ni = next(&mut radio).await;
+    assert!(
+        ![ap1, ap2].contains(&ni[1]),
+        "{ni:?} under an id of the AT AP"
+    );
+    // The radio catches up: both AT AP answered, late, then the client's NI.
+    send(&mut radio, &[0x88, ap1, b'A', b'P', 0x00, 0x01]).await;
+    send(&mut radio, &[0x88, ap2, b'A', b'P', 0x00, 0x01]).await;
+    send(&mut radio, &[0x88, ni[1], b'N', b'I', 0x00, b'G', b'S']).await;
+    let got = tokio::time::timeout(GUARD, next(&mut client))
+        .await
+        .unwrap();
+    assert_eq!(got, [0x88, 0x07, b'N', b'I', 0x00, b'G', b'S']);
+    hub.stop().await;
+}
