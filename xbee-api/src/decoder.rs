@@ -603,8 +603,17 @@ impl<const N: usize, M: DecoderMode> Decoder<N, M> {
     /// LTO) the firmware example's receive path, in a fixed mode 1, takes 4 588 bytes
     /// of flash with `decode_each` against 3 576 with `push` (`examples/firmware`,
     /// `size.sh`, without the firmware's tick that gives up a stale frame); with the
-    /// mode a value, 11 148 against 4 084. Where flash is tight,
-    /// use `push`.
+    /// mode a value, 11 148 against 4 084. In a fixed mode 2 the difference is larger:
+    /// about 3 300 bytes in a firmware like the README's. Each call site is a copy.
+    /// Where flash is tight, use `push`.
+    ///
+    /// `f` cannot stop the loop: it is called for every event the chunk completes, at
+    /// most one for every 5 bytes of `input` and one more (a frame takes 5 bytes on the
+    /// wire at least; one begun in an earlier chunk may end with its first byte), and in
+    /// mode 1 one for every 5 bytes the decoder held for a failed candidate scanned
+    /// again. An inbox the closure copies into needs that many places; where it may be
+    /// full, take the events one at a time with [`decode`](Self::decode) or
+    /// [`push`](Self::push) and [`poll`](Self::poll) instead.
     ///
     /// ```
     /// use xbee_api::{Decoder, Mode2};

@@ -65,6 +65,10 @@
 //! let len = mav.handle(&mut sim, &cmd, &mut buf).unwrap().unwrap();
 //! assert_eq!(&buf[..len], b"r\x03\x01");
 //! ```
+//!
+//! A length returned is never more than `buf.len()`, but the compiler cannot always see
+//! that across the call: in firmware that must link no panic path, take the reply with
+//! `buf.get(..len)` rather than `&buf[..len]`, whose bounds check stays.
 
 mod telemetry_set;
 mod vehicle;

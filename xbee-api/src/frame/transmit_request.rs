@@ -190,9 +190,23 @@ impl<'a> TransmitRequestRepr<'a> {
     /// assert_eq!((answer.frame_id, answer.data), (0, &b"ack"[..]));
     /// ```
     pub const fn reply(to: &crate::ReceivePacketRepr<'_>, data: &'a [u8]) -> Self {
+        Self::reply_to(to.src64, to.src16, data)
+    }
+
+    /// [`reply`](Self::reply) to the addresses a Receive Packet came from, kept after
+    /// its frame is gone (a firmware's interrupt handler copies them out with the
+    /// payload, and its main loop answers).
+    ///
+    /// ```
+    /// use xbee_api::{Address16, Address64, TransmitRequestRepr};
+    /// let (src64, src16) = (Address64(0x0013_A200_4052_2BAA), Address16(0x7D84));
+    /// let answer = TransmitRequestRepr::reply_to(src64, src16, b"ack");
+    /// assert_eq!((answer.dst64, answer.dst16, answer.frame_id), (src64, src16, 0));
+    /// ```
+    pub const fn reply_to(src64: Address64, src16: Address16, data: &'a [u8]) -> Self {
         TransmitRequestRepr {
-            dst16: to.src16,
-            ..Self::unicast(to.src64, data)
+            dst16: src16,
+            ..Self::unicast(src64, data)
         }
     }
 
