@@ -1082,6 +1082,9 @@ impl Driver {
                     return;
                 }
                 self.queued(id, start, out);
+                // Those whose callers stopped waiting go now, not at their deadlines: a
+                // caller that gives up early and asks again must not grow the list.
+                self.waiters.retain(|w| !w.reply.is_closed());
                 self.waiters.push(Waiter {
                     id: waiter,
                     from: to,
