@@ -234,8 +234,10 @@ impl Pending {
             PendingKind::Answers { answer_type, .. } => (Some(*answer_type), false),
             PendingKind::Expired { .. } => return None,
         };
+        // Answers from every radio keep coming to the end of their window.
+        let from = if single { now } else { self.deadline.max(now) };
         Some(Pending {
-            deadline: crate::options::later(self.deadline.max(now), LATE_ANSWER_WINDOW),
+            deadline: crate::options::later(from, LATE_ANSWER_WINDOW),
             timeout: self.timeout,
             bytes: self.bytes.clone(),
             kind: PendingKind::Expired {

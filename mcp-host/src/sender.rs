@@ -69,10 +69,12 @@ pub enum DeliveryReport {
 /// request is in flight, or is down when it is made.
 ///
 /// Dropping a method's future before it resolves (in a `tokio::time::timeout`, say) does
-/// not take the request back: once queued, its frame may still go out. Its frame id is
-/// taken back as soon as a new request finds none free (its late answer then comes as
-/// an [`Event::Frame`](crate::Event::Frame)); a request still waiting for an id is
-/// dropped unsent.
+/// not take the request back at once: once queued, its frame may still go out. When a
+/// new request finds no frame id free, a dropped request whose frame has not gone out
+/// yet is taken back (none of it is sent), and the frame id of one whose frame went out
+/// is kept until its late answer comes (as an [`Event::Frame`](crate::Event::Frame)) or
+/// for 10 s, so that no answer is ever taken for another request's; a request still
+/// waiting for an id is dropped unsent. A request that times out goes the same way.
 #[derive(Debug, Clone)]
 pub struct CommandSender {
     /// Requests that need a frame id.

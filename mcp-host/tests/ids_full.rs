@@ -122,20 +122,20 @@ async fn a_parked_request_times_out_at_its_deadline() {
 }
 
 #[tokio::test]
-async fn ids_of_requests_nobody_waits_for_are_taken_back() {
+async fn ids_of_requests_nobody_waits_for_stay_taken_until_their_late_answers() {
     let (_stream, sender, mut fake) = pty_link(ApiMode::Unescaped).await;
     // 255 transmits whose callers give up once they went out (dropped, as an outer
     // `tokio::time::timeout` drops them), long before their own 60 s deadline; the radio
-    // never answers.
+    // has not answered them yet.
+    let mut ids = Vec::new();
     for i in 0..255u8 {
         let sender = sender.clone();
         let abandoned =
             tokio::spawn(async move { sender.send_payload(MAV, vec![b'm', i], waiting(60)).await });
-        fake.next_tx().await;
+        ids.push(fake.next_tx().await.frame_id);
         abandoned.abort();
         assert!(abandoned.await.unwrap_err().is_cancelled());
     }
-    // The next one gets an id at once and goes out.
     let next = tokio::spawn({
         let sender = sender.clone();
         async move {
@@ -144,11 +144,15 @@ async fn ids_of_requests_nobody_waits_for_are_taken_back() {
                 .await
         }
     });
+    // The radio answers the first late: that answer is nobody's, and frees its id,
+    // under which the next request goes out. Its own status is the one it gets.
+    fake.status(ids[0], DeliveryStatus::Success).await;
     let tx = fake.next_tx().await;
-    assert_eq!(tx.data, b"mnext");
-    fake.status(tx.frame_id, DeliveryStatus::Success).await;
+    assert_eq!((tx.data.as_slice(), tx.frame_id), (&b"mnext"[..], ids[0]));
+    fake.status(tx.frame_id, DeliveryStatus::from(0x24)).await;
     assert!(matches!(
         next.await.unwrap(),
-        Ok(DeliveryReport::Delivered { frame_id, .. }) if frame_id == tx.frame_id
+        Err(SendError::Delivery { frame_id, .. }) if frame_id == tx.frame_id
     ));
+    assert_eq!(sender.stats().unclaimed_responses, 1);
 }
