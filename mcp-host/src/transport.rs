@@ -139,8 +139,8 @@ enum Inner {
         stream: TcpStream,
         /// What it wrote while it waited for its turn.
         early: Bytes,
-        /// Its turn, held until the transport is dropped.
-        _turn: Turn,
+        /// Its turn, until the transport reads the end of the stream or is dropped.
+        turn: Turn,
     },
     Serial(SerialStream),
     Pty(Lent),
@@ -178,10 +178,21 @@ impl AsyncRead for Transport {
         match &mut self.get_mut().inner {
             Inner::Tcp(s) => Pin::new(s).poll_read(cx, buf),
             Inner::Accepted {
-                stream: s, early, ..
+                stream: s,
+                early,
+                turn,
             } => {
                 if early.is_empty() {
-                    Pin::new(s).poll_read(cx, buf)
+                    let before = buf.filled().len();
+                    let read = Pin::new(s).poll_read(cx, buf);
+                    // The end of its stream (or a failed connection): the next peer's
+                    // turn has come.
+                    match &read {
+                        Poll::Ready(Ok(())) if buf.filled().len() == before => turn.end(),
+                        Poll::Ready(Err(_)) => turn.end(),
+                        _ => {}
+                    }
+                    read
                 } else {
                     let n = early.len().min(buf.remaining());
                     buf.put_slice(&early.split_to(n));
@@ -271,7 +282,8 @@ const ACCEPT_RETRY: Duration = Duration::from_millis(100);
 /// its turn while another is served (a ground station that reconnects at once, before
 /// the link has seen its first connection end, is served next); any more are turned
 /// away at once (their connection closed). Its turn comes when the served peer's
-/// transport is dropped, or at once if no peer is served when it connects. A waiting
+/// transport reads the end of its stream or is dropped, or at once if no peer is
+/// served, or the served one has hung up, when it connects. A waiting
 /// peer that leaves before its turn is dropped with what it wrote, so that a command
 /// whose sender gave up waiting is never carried out later; one that leaves after its
 /// turn came (a command sent without waiting for an answer) is served, what it wrote
@@ -296,8 +308,39 @@ struct Slot {
 struct SlotState {
     waiting: Option<Waiting>,
     /// A transport of a peer is open (from its [`Listen::next_peer`] until it is
-    /// dropped).
+    /// dropped or reads the end of the peer's stream).
     serving: bool,
+    /// The served peer's socket (a second handle on it), to see whether it has hung
+    /// up before the link has read that it did.
+    served: Option<std::net::TcpStream>,
+}
+
+impl SlotState {
+    /// Whether a peer is served that has not hung up: one that connects now waits for
+    /// it (if it leaves first, it gave up). A served peer whose end of stream waits
+    /// behind bytes not read yet counts as there.
+    fn busy(&self) -> bool {
+        self.serving
+            && self
+                .served
+                .as_ref()
+                .is_none_or(|served| match served.peek(&mut [0u8; 1]) {
+                    // Its end of stream: it hung up.
+                    Ok(0) => false,
+                    Ok(_) => true,
+                    // Nothing to read: there; an error: gone.
+                    Err(e) => e.kind() == io::ErrorKind::WouldBlock,
+                })
+    }
+
+    /// The served peer's turn is over: the peer waiting, if still there, is due.
+    fn turn_over(&mut self) {
+        self.serving = false;
+        self.served = None;
+        if let Some(waiting) = self.waiting.as_mut() {
+            waiting.due |= waiting.still_there();
+        }
+    }
 }
 
 impl Slot {
@@ -306,47 +349,73 @@ impl Slot {
     }
 }
 
-/// A served peer's turn: when the transport is dropped, the peer that waits (if it is
-/// still there) is due, and is served even if it leaves before the link takes it.
-struct Turn(Arc<Slot>);
+/// A served peer's turn: when the transport reads the end of the peer's stream or is
+/// dropped, the peer that waits (if it is still there) is due, and is served even if it
+/// leaves before the link takes it.
+struct Turn {
+    slot: Arc<Slot>,
+    over: bool,
+}
+
+impl Turn {
+    fn end(&mut self) {
+        if !std::mem::replace(&mut self.over, true) {
+            self.slot.lock().turn_over();
+        }
+    }
+}
 
 impl Drop for Turn {
     fn drop(&mut self) {
-        let mut state = self.0.lock();
-        state.serving = false;
-        if let Some(waiting) = state.waiting.as_mut() {
-            waiting.due |= waiting.still_there();
-        }
+        self.end();
     }
 }
 
 /// A peer waiting for its turn, and what it wrote meanwhile.
 struct Waiting {
     stream: TcpStream,
+    /// A second handle on its socket, read directly: the runtime's view of whether
+    /// the socket is readable lags until its I/O driver runs, which would take a peer
+    /// that has left for one still there.
+    direct: Option<std::net::TcpStream>,
     peer: SocketAddr,
     early: BytesMut,
-    /// Its turn came while it was there: no peer was served when it connected, or the
-    /// served one ended while it waited. What it wrote is carried out even if it has
-    /// left since (a command sent without waiting for an answer), as the link takes it
-    /// only after its reconnection delay.
+    /// Its turn came while it was there: no peer was served when it connected (or the
+    /// served one had hung up), or the served one ended while it waited. What it wrote
+    /// is carried out even if it has left since (a command sent without waiting for an
+    /// answer) before the link took it.
     due: bool,
 }
 
 impl Waiting {
     /// Reads what the peer wrote since it was last looked at; `false` if it has left
     /// (closed its side, or its connection failed). At most [`WAITED_MAX`] bytes are
-    /// read ahead; beyond that it counts as there.
+    /// read ahead: a peer that wrote more while it waited counts as gone (whether it
+    /// left cannot be seen behind them, and it must not be served if it did).
     fn still_there(&mut self) -> bool {
         while self.early.len() < WAITED_MAX {
-            self.early.reserve(4096);
-            match self.stream.try_read_buf(&mut self.early) {
+            let read = match &self.direct {
+                Some(direct) => {
+                    let mut chunk = [0u8; 4096];
+                    io::Read::read(&mut &*direct, &mut chunk).inspect(|&n| {
+                        self.early
+                            .extend_from_slice(chunk.get(..n).unwrap_or_default());
+                    })
+                }
+                None => {
+                    self.early.reserve(4096);
+                    self.stream.try_read_buf(&mut self.early)
+                }
+            };
+            match read {
                 Ok(0) => return false,
                 Ok(_) => {}
                 Err(e) if e.kind() == io::ErrorKind::WouldBlock => return true,
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
                 Err(_) => return false,
             }
         }
-        true
+        false
     }
 }
 
@@ -384,6 +453,7 @@ impl Listen {
                     // Read ahead even when it is due: what it wrote before it left.
                     if waiting.still_there() || waiting.due {
                         state.serving = true;
+                        state.served = second_handle(&waiting.stream);
                         Some(Ok(waiting))
                     } else {
                         Some(Err(waiting.peer))
@@ -394,7 +464,10 @@ impl Listen {
             };
             match taken {
                 Some(Ok(waiting)) => {
-                    let turn = Turn(self.slot.clone());
+                    let turn = Turn {
+                        slot: self.slot.clone(),
+                        over: false,
+                    };
                     return (waiting.stream, waiting.peer, waiting.early.freeze(), turn);
                 }
                 Some(Err(peer)) => left_before_its_turn(peer),
@@ -402,6 +475,17 @@ impl Listen {
             }
         }
     }
+}
+
+/// A second handle on `stream`'s socket, non-blocking, to look at it from elsewhere.
+fn second_handle(stream: &TcpStream) -> Option<std::net::TcpStream> {
+    #[cfg(unix)]
+    let owned = std::os::fd::AsFd::as_fd(stream).try_clone_to_owned();
+    #[cfg(windows)]
+    let owned = std::os::windows::io::AsSocket::as_socket(stream).try_clone_to_owned();
+    let served = std::net::TcpStream::from(owned.ok()?);
+    served.set_nonblocking(true).ok()?;
+    Some(served)
 }
 
 fn left_before_its_turn(peer: SocketAddr) {
@@ -443,14 +527,19 @@ async fn accept_peers(listener: TcpListener, name: String, slot: Arc<Slot>) {
                     }
                 };
                 if free {
-                    // Between two peers, nobody is ahead of this one: its turn has come.
-                    let due = !state.serving;
-                    state.waiting = Some(Waiting {
+                    let mut waiting = Waiting {
+                        direct: second_handle(&stream),
                         stream,
                         peer,
                         early: BytesMut::new(),
-                        due,
-                    });
+                        due: false,
+                    };
+                    // Its turn has come if nobody is ahead of it: no peer is served, or
+                    // the served one has hung up. (Peers are accepted as they connect:
+                    // one that waited for a served peer and gave up would have to have
+                    // connected long before, its seconds of waiting unseen.)
+                    waiting.due = !state.busy();
+                    state.waiting = Some(waiting);
                     drop(state);
                     slot.filled.notify_one();
                 } else {
@@ -484,8 +573,9 @@ async fn accept_peers(listener: TcpListener, name: String, slot: Arc<Slot>) {
 /// - `tcp`: every open connects again, within the connect timeout.
 /// - `tcp-listen`: every open takes the next peer. One peer is served at a time; while
 ///   one is, the next may wait for its turn and any more are turned away (their
-///   connection closed at once). Its turn comes when the served peer's transport is
-///   dropped (at once if none is served). A waiting peer that leaves before its turn is
+///   connection closed at once). Its turn comes when the served peer hangs up (its
+///   transport reads the end of its stream) or its transport is dropped, at once if
+///   none is served or the served one has hung up. A waiting peer that leaves before its turn is
 ///   dropped with what it wrote, so that nothing it wrote is carried out after it gave
 ///   up; one that leaves after its turn came, as a command sent without waiting for an
 ///   answer does, is served all the same. There is no reconnection delay: the next
@@ -670,7 +760,7 @@ impl Connector {
                     inner: Inner::Accepted {
                         stream,
                         early,
-                        _turn: turn,
+                        turn,
                     },
                     peer: peer.to_string(),
                 })

@@ -242,9 +242,12 @@ async fn tcp_listen_serves_one_peer_at_a_time() {
     assert_eq!(read_exact_n(&mut second, 3).await, b"ack");
 
     // A peer that waits, writes and leaves before its turn is dropped with what it
-    // wrote: the next open takes the peer after it.
+    // wrote: the next open takes the peer after it. (It waits once another is turned
+    // away.)
     let mut gone = TcpStream::connect(addr).await.unwrap();
     gone.write_all(b"old").await.unwrap();
+    let mut turned_away = TcpStream::connect(addr).await.unwrap();
+    reads_end(&mut turned_away).await;
     gone.shutdown().await.unwrap();
     drop(second);
     reads_end(&mut transport).await;
@@ -331,6 +334,35 @@ async fn tcp_listen_serves_a_peer_that_left_after_its_turn_came() {
         .unwrap()
         .unwrap();
     assert_eq!(read_exact_n(&mut transport, 3).await, b"3rd");
+}
+
+#[tokio::test]
+async fn tcp_listen_serves_a_peer_that_came_after_the_served_one_hung_up() {
+    let link: Link = "tcp-listen:127.0.0.1:0".parse().unwrap();
+    let options = fast_reconnect();
+    let mut connector = Connector::new(&link, &options).await.unwrap();
+    let addr = connector.local_addr().unwrap();
+    let first = TcpStream::connect(addr).await.unwrap();
+    let mut transport = connector.open().await.unwrap();
+    // The first hangs up (a one-shot command that ended); the link has not read that
+    // yet when the next connects and writes.
+    drop(first);
+    let mut second = TcpStream::connect(addr).await.unwrap();
+    second.write_all(b"cmd").await.unwrap();
+    // It has taken the waiting place once a third is turned away.
+    let mut third = TcpStream::connect(addr).await.unwrap();
+    reads_end(&mut third).await;
+    // It leaves, done (a command sent without waiting for an answer), before the link
+    // reads the first one's end: nobody was ahead of it, so it is served all the same.
+    second.shutdown().await.unwrap();
+    drop(second);
+    reads_end(&mut transport).await;
+    drop(transport);
+    let mut transport = timeout(GUARD, connector.reopen(&options.reconnect))
+        .await
+        .expect("the peer that came after the first hung up was dropped")
+        .unwrap();
+    assert_eq!(read_exact_n(&mut transport, 3).await, b"cmd");
 }
 
 /// A serial link on the far end of a pseudo-terminal holds it by its lock alone, not by
