@@ -1282,7 +1282,25 @@ impl Driver {
         let error = SendError::Disconnected {
             reason: reason.to_owned(),
         };
-        self.ids.drain(|_, p| p.kind.fail(error.clone()));
+        // A frame that went out may still be answered once the link is back (a radio
+        // behind a serial bridge, or on a port, stays up): its id is kept for that as
+        // after a timeout. One that never went out frees its id.
+        let (written, now) = (self.written, Instant::now());
+        self.ids.replace_where(
+            |_| true,
+            |_, p| {
+                if matches!(p.kind, PendingKind::Expired { .. }) {
+                    return Some(p);
+                }
+                let kept = if p.bytes.is_empty() || p.unsent(written) {
+                    None
+                } else {
+                    p.expired(now)
+                };
+                p.kind.fail(error.clone());
+                kept
+            },
+        );
         for w in self.waiters.drain(..) {
             let _ = w.reply.send(Err(error.clone().into()));
         }

@@ -110,6 +110,7 @@ impl<T> IdTable<T> {
     }
 
     /// Removes every entry.
+    #[cfg(test)]
     pub(crate) fn drain(&mut self, mut on_removed: impl FnMut(u8, T)) {
         self.remove_where(|_| true, &mut on_removed);
     }

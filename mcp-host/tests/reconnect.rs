@@ -791,3 +791,61 @@ async fn a_radio_switched_to_the_other_api_mode_while_the_link_is_up_is_warned_a
         "{text}"
     );
 }
+
+/// A request that went out before the link went down fails, but its frame id stays
+/// taken after the link is back, until its late answer comes (a radio behind a serial
+/// bridge stays up and answers): the answer then reaches no new request, however many
+/// ids were handed out meanwhile.
+#[tokio::test]
+async fn an_answer_late_across_a_reconnection_reaches_no_new_request() {
+    let (listener, mut stream, sender, mut fake) =
+        tcp_radio(options(ApiMode::Unescaped, true)).await;
+    let lost = tokio::spawn({
+        let sender = sender.clone();
+        async move { sender.send(MAV, &Command::time(5)).await }
+    });
+    let old_id = fake.next_tx().await.frame_id;
+    fake.close().await;
+    let err = lost.await.unwrap().unwrap_err();
+    assert!(matches!(err, SendError::Disconnected { .. }), "{err}");
+    let mut fake = accept(&listener, ApiMode::Unescaped).await;
+    assert!(matches!(
+        next_link_event(&mut stream).await,
+        LinkEvent::Disconnected { .. }
+    ));
+    assert!(matches!(
+        next_link_event(&mut stream).await,
+        LinkEvent::Reconnected { .. }
+    ));
+    // Every other id once, answered at once: the next would be the old one again.
+    for _ in 0..254 {
+        let send = tokio::spawn({
+            let sender = sender.clone();
+            async move { sender.send(MAV, &Command::time(6)).await }
+        });
+        let tx = fake.next_tx().await;
+        assert_ne!(
+            tx.frame_id, old_id,
+            "the id of a frame that went out reused"
+        );
+        fake.status(tx.frame_id, DeliveryStatus::Success).await;
+        send.await.unwrap().unwrap();
+    }
+    let doomed = tokio::spawn({
+        let sender = sender.clone();
+        async move { sender.send(OTHER_MAV, &Command::time(7)).await }
+    });
+    let tx = fake.next_tx().await;
+    assert_ne!(
+        tx.frame_id, old_id,
+        "the id of a frame that went out reused"
+    );
+    // The old frame's answer comes late, then the new one's: each is its own.
+    fake.status(old_id, DeliveryStatus::Success).await;
+    fake.status(tx.frame_id, DeliveryStatus::from(0x24)).await;
+    let result = doomed.await.unwrap();
+    assert!(
+        matches!(result, Err(SendError::Delivery { .. })),
+        "{result:?}"
+    );
+}
