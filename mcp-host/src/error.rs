@@ -82,7 +82,9 @@ pub enum SendError {
     },
     /// The request waited for a frame id for all of its timeout and was never sent: all
     /// 255 were taken by requests whose answers had not come (a radio that does not
-    /// answer, e.g. one in another API mode).
+    /// answer, e.g. one in another API mode). The id of a request that timed out after
+    /// its frame went out stays taken 10 s more, for its late answer: against a radio
+    /// that never answers, more than 255 requests in their timeout and 10 s end so.
     #[error("not sent: all 255 frame ids were waiting for answers for {timeout:?}")]
     #[non_exhaustive]
     NoFreeFrameId {

@@ -126,7 +126,7 @@ use xbee_api::{ApiMode, RawFrame};
 
 use self::port::Port;
 use crate::codec::{CodecItem, XBeeCodec, encode_frame};
-use crate::event::{TX_STATUS_802_15_4, answer_type};
+use crate::event::{answer_type, is_response};
 use crate::ids::IdTable;
 use crate::{
     CommandSender, ConnectError, Event, Link, LinkEvent, LinkInfo, LinkOptions, PacketStream, Stats,
@@ -285,8 +285,9 @@ impl Hub {
         // the moment this returns, the port held.
         let radio_up = sender.link_state() == crate::LinkState::Connected;
         let routes = Arc::new(Mutex::new(Routes::new()));
+        let ids = Arc::new(Semaphore::new(usize::from(u8::MAX)));
         let listener = if radio_up {
-            check_radio_mode(&sender, mode, &routes).await;
+            check_radio_mode(&sender, mode, &routes, &ids).await;
             Some(listener)
         } else {
             port.hold();
@@ -311,7 +312,7 @@ impl Hub {
             tasks: hub.tasks.clone(),
             counters: hub.counters.clone(),
             routes,
-            ids: Arc::new(Semaphore::new(usize::from(u8::MAX))),
+            ids,
             clients: Vec::new(),
             next_client: 0,
             radio_up,
@@ -383,10 +384,21 @@ impl Drop for Hub {
 /// (as the link's own), so that a late answer rarely meets a new request under its id.
 struct Routes(IdTable<Route>, Held);
 
-/// The frame ids the hub's own requests went out under (its `AT AP`), and until when
-/// they are kept from clients: a late answer under one is no client's.
+/// The frame ids the hub's own requests went out under (its `AT AP`), until when they
+/// are kept from clients (a late answer under one is no client's), and the permits of
+/// the 255 ids they hold meanwhile.
 #[derive(Default)]
-struct Held(Vec<(u8, Instant)>);
+struct Held(Vec<(u8, Instant, Option<OwnedSemaphorePermit>)>);
+
+impl Held {
+    fn expire(&mut self, now: Instant) {
+        self.0.retain(|(_, until, _)| *until > now);
+    }
+
+    fn contains(&self, id: u8) -> bool {
+        self.0.iter().any(|(held, ..)| *held == id)
+    }
+}
 
 struct Route {
     /// The client's number (see [`Serve::next_client`]).
@@ -418,24 +430,24 @@ impl Routes {
 
     /// A hub id for `route`; `None` while all 255 wait for answers (or are held).
     fn insert(&mut self, route: Route, now: Instant) -> Option<u8> {
-        self.1.0.retain(|&(_, until)| until > now);
-        let held = |id| self.1.0.iter().any(|&(held, _)| held == id);
-        match self.0.insert_unless(route, held) {
-            Ok(id) => Some(id),
-            Err(route) => {
-                self.expire(now);
-                let held = |id| self.1.0.iter().any(|&(held, _)| held == id);
-                self.0.insert_unless(route, held).ok()
-            }
+        if !self.0.has_free() {
+            self.expire(now);
         }
+        let held = &self.1;
+        self.0.insert_unless(route, |id| held.contains(id)).ok()
     }
 
     /// Keeps `ids`, which the hub's own requests went out under, from clients for
-    /// [`ANSWER_WINDOW`]: their late answers then reach no client.
-    fn hold(&mut self, ids: &[u8], now: Instant) {
-        self.1.0.retain(|&(_, until)| until > now);
+    /// [`ANSWER_WINDOW`]: their late answers then reach no client. Each holds one of
+    /// the 255 ids' permits of `permits`, so that clients wait for an id rather than
+    /// find none free.
+    fn hold(&mut self, ids: &[u8], permits: &Arc<Semaphore>, now: Instant) {
+        self.1.expire(now);
         let until = now + ANSWER_WINDOW;
-        self.1.0.extend(ids.iter().map(|&id| (id, until)));
+        for &id in ids {
+            let permit = permits.clone().try_acquire_owned().ok();
+            self.1.0.push((id, until, permit));
+        }
     }
 
     /// Ends the routes whose answers are no longer due, giving their clients' permits
@@ -445,6 +457,7 @@ impl Routes {
             |r| r.until.get().is_some_and(|until| until <= now),
             |_, _| {},
         );
+        self.1.expire(now);
     }
 
     /// The request under hub id `id` goes to the radio at `now`: its answers are due
@@ -480,16 +493,6 @@ impl Routes {
         }
         to
     }
-}
-
-/// Whether frames of type `frame_type` from the radio answer a client's request (see
-/// [`answer_type`]).
-fn is_answer(frame_type: u8) -> bool {
-    use xbee_api::frame::frame_type::*;
-    matches!(
-        frame_type,
-        TX_STATUS_802_15_4 | AT_COMMAND_RESPONSE | TRANSMIT_STATUS | REMOTE_AT_RESPONSE | 0xA4
-    )
 }
 
 /// Whether a request gets several answers under its id: AT (or queued AT) node
@@ -721,7 +724,8 @@ impl Serve {
                         }
                         self.broadcast(&event);
                         if self.radio_up && !was_up && listener.is_none() {
-                            check_radio_mode(&self.sender, self.mode, &self.routes).await;
+                            check_radio_mode(&self.sender, self.mode, &self.routes, &self.ids)
+                                .await;
                             // Unless the radio went away again, or the hub was stopped,
                             // while it was asked.
                             let still_up =
@@ -856,7 +860,7 @@ impl Serve {
         };
         bump(&self.counters.frames_from_radio);
         if let [frame_type, id, ..] = data[..] {
-            if is_answer(frame_type) && id != 0 {
+            if is_response(frame_type) && id != 0 {
                 self.answer(data, frame_type, id);
                 return;
             }
@@ -923,7 +927,12 @@ pub const MODE_CHECK_TIMEOUT: Duration = Duration::from_secs(1);
 /// nothing, not knowing why. Holds the frame ids of the requests not answered in time
 /// from clients ([`Routes::hold`]): a radio that answers late would answer a client's
 /// request under the same id.
-async fn check_radio_mode(sender: &CommandSender, mode: ApiMode, routes: &Mutex<Routes>) {
+async fn check_radio_mode(
+    sender: &CommandSender,
+    mode: ApiMode,
+    routes: &Mutex<Routes>,
+    permits: &Arc<Semaphore>,
+) {
     let mut asked = Vec::new();
     let mut ask = async || {
         let answer = sender.at(*b"AP", &[], Some(MODE_CHECK_TIMEOUT)).await;
@@ -938,7 +947,7 @@ async fn check_radio_mode(sender: &CommandSender, mode: ApiMode, routes: &Mutex<
         // Asked once more: a radio just plugged in may still be starting.
         answer = ask().await;
     }
-    lock(routes).hold(&asked, Instant::now());
+    lock(routes).hold(&asked, permits, Instant::now());
     let hub = u8::from(mode);
     match answer {
         Ok(response) => {

@@ -73,8 +73,9 @@ pub enum DeliveryReport {
 /// new request finds no frame id free, a dropped request whose frame has not gone out
 /// yet is taken back (none of it is sent), and the frame id of one whose frame went out
 /// is kept until its late answer comes (as an [`Event::Frame`](crate::Event::Frame)) or
-/// for 10 s, so that no answer is ever taken for another request's; a request still
-/// waiting for an id is dropped unsent. A request that times out goes the same way.
+/// for 10 s (from the end of its window, for a request every radio answers), so that
+/// no answer is taken for another request's; a request still waiting for an id is
+/// dropped unsent. A request that times out, or fails with the link, goes the same way.
 #[derive(Debug, Clone)]
 pub struct CommandSender {
     /// Requests that need a frame id.
@@ -634,8 +635,8 @@ impl CommandSender {
         timeout: Duration,
     ) -> Result<T, SendError> {
         self.enqueue(op, deadline, timeout).await?;
-        // The background task answers by the deadline (freeing the frame id); the grace
-        // only guards against a stalled task.
+        // The background task answers by the deadline; the grace only guards against a
+        // stalled task.
         match tokio::time::timeout_at(deadline + GRACE, answer).await {
             Ok(result) => result.unwrap_or(Err(SendError::Closed)),
             Err(_) => Err(SendError::Timeout {

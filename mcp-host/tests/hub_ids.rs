@@ -227,17 +227,14 @@ async fn a_request_that_waited_its_turn_longer_than_the_answer_window_gets_its_a
     hub.stop().await;
 }
 
-/// The hub asks the radio `AT AP` under its link's own frame ids before it takes
-/// clients. A radio that answers late (behind a bridge busy with another connection)
-/// answers after a client has asked: the late answer is dropped, and the client's
-/// request, never under one of those ids, gets its own answer.
-#[tokio::test]
-async fn a_late_answer_to_the_hubs_own_at_ap_goes_to_no_client() {
+/// A hub on a radio that left both of the hub's `AT AP` unanswered, with the ids they
+/// went out under.
+async fn hub_whose_radio_did_not_answer_ap() -> (mcp_host::hub::Hub, Wire, [u8; 2]) {
     let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
     let radio_link: Link = format!("tcp:{}", listener.local_addr().unwrap())
         .parse()
         .unwrap();
-    let (hub, (mut radio, ap1, ap2)) = tokio::join!(
+    let (hub, (radio, ap1, ap2)) = tokio::join!(
         mcp_host::hub::Hub::start(&radio_link, LinkOptions::default(), "127.0.0.1:0"),
         async {
             let (socket, _) = listener.accept().await.unwrap();
@@ -251,7 +248,16 @@ async fn a_late_answer_to_the_hubs_own_at_ap_goes_to_no_client() {
             (wire, first[1], second[1])
         }
     );
-    let hub = hub.unwrap();
+    (hub.unwrap(), radio, [ap1, ap2])
+}
+
+/// The hub asks the radio `AT AP` under its link's own frame ids before it takes
+/// clients. A radio that answers late (behind a bridge busy with another connection)
+/// answers after a client has asked: the late answer is dropped, and the client's
+/// request, never under one of those ids, gets its own answer.
+#[tokio::test]
+async fn a_late_answer_to_the_hubs_own_at_ap_goes_to_no_client() {
+    let (hub, mut radio, [ap1, ap2]) = hub_whose_radio_did_not_answer_ap().await;
     let mut client = raw_client(&hub).await;
     send(&mut client, &[0x08, 0x07, b'N', b'I']).await;
     let ni = next(&mut radio).await;
@@ -267,5 +273,43 @@ async fn a_late_answer_to_the_hubs_own_at_ap_goes_to_no_client() {
         .await
         .unwrap();
     assert_eq!(got, [0x88, 0x07, b'N', b'I', 0x00, b'G', b'S']);
+    hub.stop().await;
+}
+
+/// The ids held for the hub's own late answers count among the 255: with the other 253
+/// waiting for answers, requests wait for an id rather than being refused.
+#[tokio::test]
+async fn with_ids_held_for_late_answers_requests_wait_rather_than_being_refused() {
+    let (hub, mut radio, held) = hub_whose_radio_did_not_answer_ap().await;
+    // 16 clients with 16 requests each: 256, more than the 253 ids left.
+    let mut clients = Vec::new();
+    for _ in 0..16 {
+        let mut client = raw_client(&hub).await;
+        for id in 1..=16u8 {
+            client
+                .feed(&RawFrame::new(&[0x08, id, b'S', b'L']).unwrap())
+                .await
+                .unwrap();
+        }
+        SinkExt::<&RawFrame<'_>>::flush(&mut client).await.unwrap();
+        clients.push(client);
+    }
+    // 253 go out, under none of the held ids; then, answered, they let the rest go.
+    let mut ids = Vec::new();
+    for _ in 0..253 {
+        let frame = tokio::time::timeout(GUARD, next(&mut radio)).await.unwrap();
+        assert!(!held.contains(&frame[1]), "{frame:02X?} under a held id");
+        ids.push(frame[1]);
+    }
+    for id in ids {
+        send(&mut radio, &[0x88, id, b'S', b'L', 0x00, 1, 2, 3, 4]).await;
+    }
+    for _ in 0..3 {
+        let frame = tokio::time::timeout(GUARD, next(&mut radio))
+            .await
+            .expect("a request was refused rather than held");
+        assert_eq!(&frame[2..], b"SL");
+    }
+    assert_eq!(hub.stats().frames_refused, 0);
     hub.stop().await;
 }
