@@ -182,22 +182,37 @@ impl AsyncRead for Transport {
                 early,
                 turn,
             } => {
-                if early.is_empty() {
-                    let before = buf.filled().len();
-                    let read = Pin::new(s).poll_read(cx, buf);
-                    // The end of its stream (or a failed connection): the next peer's
-                    // turn has come.
-                    match &read {
-                        Poll::Ready(Ok(())) if buf.filled().len() == before => turn.end(),
-                        Poll::Ready(Err(_)) => turn.end(),
-                        _ => {}
-                    }
-                    read
-                } else {
+                if !early.is_empty() {
                     let n = early.len().min(buf.remaining());
                     buf.put_slice(&early.split_to(n));
-                    Poll::Ready(Ok(()))
+                    return Poll::Ready(Ok(()));
                 }
+                if turn.over {
+                    return Pin::new(s).poll_read(cx, buf);
+                }
+                // Under the lock: what the listener read of the peer's bytes (to see
+                // whether it hung up) comes first, and it reads no more meanwhile.
+                let mut state = turn.slot.lock();
+                if !state.served_early.is_empty() {
+                    let n = state.served_early.len().min(buf.remaining());
+                    buf.put_slice(&state.served_early.split_to(n));
+                    return Poll::Ready(Ok(()));
+                }
+                let (room, before) = (buf.remaining(), buf.filled().len());
+                let read = Pin::new(s).poll_read(cx, buf);
+                // The end of its stream (or a failed connection): the next peer's turn
+                // has come.
+                let ended = match &read {
+                    Poll::Ready(Ok(())) => room > 0 && buf.filled().len() == before,
+                    Poll::Ready(Err(_)) => true,
+                    Poll::Pending => false,
+                };
+                if ended {
+                    state.turn_over();
+                    drop(state);
+                    turn.over = true;
+                }
+                read
             }
             Inner::Serial(s) => Pin::new(s).poll_read(cx, buf),
             Inner::Pty(s) => s.stream()?.poll_read(cx, buf),
@@ -313,30 +328,47 @@ struct SlotState {
     /// The served peer's socket (a second handle on it), to see whether it has hung
     /// up before the link has read that it did.
     served: Option<std::net::TcpStream>,
+    /// The served peer's bytes read through `served` to reach its end of stream, for
+    /// its transport to deliver before it reads on.
+    served_early: BytesMut,
 }
 
 impl SlotState {
     /// Whether a peer is served that has not hung up: one that connects now waits for
     /// it (if it leaves first, it gave up). A served peer whose end of stream waits
     /// behind bytes not read yet counts as there.
-    fn busy(&self) -> bool {
-        self.serving
-            && self
-                .served
-                .as_ref()
-                .is_none_or(|served| match served.peek(&mut [0u8; 1]) {
-                    // Its end of stream: it hung up.
-                    Ok(0) => false,
-                    Ok(_) => true,
-                    // Nothing to read: there; an error: gone.
-                    Err(e) => e.kind() == io::ErrorKind::WouldBlock,
-                })
+    fn busy(&mut self) -> bool {
+        if !self.serving {
+            return false;
+        }
+        let Some(served) = &self.served else {
+            return true;
+        };
+        // Its end of stream may wait behind bytes the link has not read: they are read
+        // here and kept for it (at most [`WAITED_MAX`]; beyond that it counts as there).
+        while self.served_early.len() < WAITED_MAX {
+            let mut chunk = [0u8; 4096];
+            match io::Read::read(&mut &*served, &mut chunk) {
+                // Its end of stream: it hung up.
+                Ok(0) => return false,
+                Ok(n) => self
+                    .served_early
+                    .extend_from_slice(chunk.get(..n).unwrap_or_default()),
+                // Nothing more to read: there.
+                Err(e) if e.kind() == io::ErrorKind::WouldBlock => return true,
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                // Its connection failed: gone.
+                Err(_) => return false,
+            }
+        }
+        true
     }
 
     /// The served peer's turn is over: the peer waiting, if still there, is due.
     fn turn_over(&mut self) {
         self.serving = false;
         self.served = None;
+        self.served_early.clear();
         if let Some(waiting) = self.waiting.as_mut() {
             waiting.due |= waiting.still_there();
         }
@@ -454,6 +486,7 @@ impl Listen {
                     if waiting.still_there() || waiting.due {
                         state.serving = true;
                         state.served = second_handle(&waiting.stream);
+                        state.served_early.clear();
                         Some(Ok(waiting))
                     } else {
                         Some(Err(waiting.peer))
@@ -518,6 +551,8 @@ async fn accept_peers(listener: TcpListener, name: String, slot: Arc<Slot>) {
                 let mut state = slot.lock();
                 let free = match state.waiting.as_mut() {
                     None => true,
+                    // Its turn has come: it is served, whether or not it has left since.
+                    Some(w) if w.due => false,
                     Some(w) => {
                         let gone = !w.still_there();
                         if gone {

@@ -33,6 +33,15 @@ async fn reads_end<R: AsyncReadExt + Unpin>(r: &mut R) {
     assert_eq!(n, 0, "bytes after the peer hung up: {:02X?}", &buf[..n]);
 }
 
+/// A peer turned away reads the end of its stream, or a reset if it wrote first.
+async fn is_turned_away(peer: &mut TcpStream) {
+    let mut buf = [0u8; 8];
+    match timeout(GUARD, peer.read(&mut buf)).await {
+        Ok(Ok(0) | Err(_)) => {}
+        other => panic!("not turned away: {other:?}"),
+    }
+}
+
 async fn read_exact_n<R: AsyncReadExt + Unpin>(r: &mut R, n: usize) -> Vec<u8> {
     let mut buf = vec![0; n];
     timeout(GUARD, r.read_exact(&mut buf))
@@ -363,6 +372,113 @@ async fn tcp_listen_serves_a_peer_that_came_after_the_served_one_hung_up() {
         .expect("the peer that came after the first hung up was dropped")
         .unwrap();
     assert_eq!(read_exact_n(&mut transport, 3).await, b"cmd");
+}
+
+#[tokio::test]
+async fn tcp_listen_serves_two_commands_sent_back_to_back_before_it_read_the_first() {
+    let link: Link = "tcp-listen:127.0.0.1:0".parse().unwrap();
+    let options = fast_reconnect();
+    let mut connector = Connector::new(&link, &options).await.unwrap();
+    let addr = connector.local_addr().unwrap();
+    let mut first = TcpStream::connect(addr).await.unwrap();
+    let mut transport = connector.open().await.unwrap();
+    // Two commands sent without waiting for an answer, one after the other: the link
+    // has read neither the first's bytes nor its end when the second comes.
+    first.write_all(b"1st").await.unwrap();
+    first.shutdown().await.unwrap();
+    drop(first);
+    let mut second = TcpStream::connect(addr).await.unwrap();
+    second.write_all(b"2nd").await.unwrap();
+    let mut turned_away = TcpStream::connect(addr).await.unwrap();
+    reads_end(&mut turned_away).await;
+    second.shutdown().await.unwrap();
+    drop(second);
+    // Both are carried out, in order.
+    assert_eq!(read_exact_n(&mut transport, 3).await, b"1st");
+    reads_end(&mut transport).await;
+    drop(transport);
+    let mut transport = timeout(GUARD, connector.reopen(&options.reconnect))
+        .await
+        .expect("the second command was dropped")
+        .unwrap();
+    assert_eq!(read_exact_n(&mut transport, 3).await, b"2nd");
+}
+
+#[tokio::test]
+async fn tcp_listen_keeps_the_place_of_a_peer_whose_turn_came() {
+    let link: Link = "tcp-listen:127.0.0.1:0".parse().unwrap();
+    let options = fast_reconnect();
+    let mut connector = Connector::new(&link, &options).await.unwrap();
+    let addr = connector.local_addr().unwrap();
+    let first = TcpStream::connect(addr).await.unwrap();
+    let mut transport = connector.open().await.unwrap();
+    let mut second = TcpStream::connect(addr).await.unwrap();
+    second.write_all(b"2nd").await.unwrap();
+    let mut turned_away = TcpStream::connect(addr).await.unwrap();
+    reads_end(&mut turned_away).await;
+    // The first hangs up: the second's turn has come; then it leaves, done.
+    drop(first);
+    reads_end(&mut transport).await;
+    second.shutdown().await.unwrap();
+    drop(second);
+    // A third comes before the link takes the second: it is turned away, not let in
+    // the second's place.
+    let mut third = TcpStream::connect(addr).await.unwrap();
+    let _ = third.write_all(b"3rd").await;
+    is_turned_away(&mut third).await;
+    drop(transport);
+    let mut transport = timeout(GUARD, connector.reopen(&options.reconnect))
+        .await
+        .unwrap()
+        .unwrap();
+    assert_eq!(read_exact_n(&mut transport, 3).await, b"2nd");
+
+    // With nobody served, the same: the first to come is served.
+    drop(transport);
+    let mut fourth = TcpStream::connect(addr).await.unwrap();
+    fourth.write_all(b"4th").await.unwrap();
+    fourth.shutdown().await.unwrap();
+    drop(fourth);
+    let mut fifth = TcpStream::connect(addr).await.unwrap();
+    let _ = fifth.write_all(b"5th").await;
+    is_turned_away(&mut fifth).await;
+    let mut transport = timeout(GUARD, connector.reopen(&options.reconnect))
+        .await
+        .unwrap()
+        .unwrap();
+    assert_eq!(read_exact_n(&mut transport, 3).await, b"4th");
+}
+
+#[tokio::test]
+async fn tcp_listen_a_read_into_no_room_is_no_end_of_stream() {
+    let link: Link = "tcp-listen:127.0.0.1:0".parse().unwrap();
+    let options = fast_reconnect();
+    let mut connector = Connector::new(&link, &options).await.unwrap();
+    let addr = connector.local_addr().unwrap();
+    let mut first = TcpStream::connect(addr).await.unwrap();
+    let mut transport = connector.open().await.unwrap();
+    first.write_all(b"1").await.unwrap();
+    let empty = timeout(GUARD, transport.read(&mut [])).await.unwrap();
+    assert_eq!(empty.unwrap(), 0);
+    assert_eq!(read_exact_n(&mut transport, 1).await, b"1");
+    // The first is still served: a peer that waits, writes and gives up meanwhile is
+    // dropped.
+    let mut gave_up = TcpStream::connect(addr).await.unwrap();
+    gave_up.write_all(b"old").await.unwrap();
+    let mut turned_away = TcpStream::connect(addr).await.unwrap();
+    reads_end(&mut turned_away).await;
+    gave_up.shutdown().await.unwrap();
+    drop(gave_up);
+    drop(first);
+    reads_end(&mut transport).await;
+    drop(transport);
+    let mut last = TcpStream::connect(addr).await.unwrap();
+    last.write_all(b"new").await.unwrap();
+    let mut transport = timeout(GUARD, connector.reopen(&options.reconnect))
+        .await
+        .unwrap()
+        .unwrap();
+    assert_eq!(read_exact_n(&mut transport, 3).await, b"new");
 }
 
 /// A serial link on the far end of a pseudo-terminal holds it by its lock alone, not by
