@@ -234,8 +234,14 @@ impl Pending {
             PendingKind::Answers { answer_type, .. } => (Some(*answer_type), false),
             PendingKind::Expired { .. } => return None,
         };
-        // Answers from every radio keep coming to the end of their window.
-        let from = if single { now } else { self.deadline.max(now) };
+        // Answers from every radio keep coming to the end of their window (held that
+        // long at most: a window may be an hour, or a disconnection cut it short).
+        let from = if single {
+            now
+        } else {
+            self.deadline
+                .clamp(now, crate::options::later(now, LATE_ANSWER_WINDOW))
+        };
         Some(Pending {
             deadline: crate::options::later(from, LATE_ANSWER_WINDOW),
             timeout: self.timeout,
@@ -1460,4 +1466,55 @@ fn write_raw(mode: xbee_api::ApiMode, out: &mut BytesMut, data: &[u8]) -> Result
         len: data.len(),
         max: xbee_api::MAX_FRAME_DATA_LEN,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// How long the id of a request given up (or failed with the link) is kept for its
+    /// late answers, from `now`.
+    fn held_for(kind: PendingKind, deadline: Instant, now: Instant) -> Duration {
+        let pending = Pending::new(deadline, Duration::from_secs(1), kind);
+        let expired = pending.expired(now).expect("kept");
+        expired.deadline - now
+    }
+
+    #[test]
+    fn ids_are_kept_for_late_answers_for_a_bounded_time() {
+        let now = Instant::now();
+        let hour = crate::options::later(now, Duration::from_secs(3600));
+        let (reply, _answer) = oneshot::channel();
+        let transmit = PendingKind::Transmit {
+            to: Address64::COORDINATOR,
+            reply,
+        };
+        // One answer: from now, whatever the request's own deadline.
+        assert_eq!(held_for(transmit, hour, now), LATE_ANSWER_WINDOW);
+        // Answers from every radio: to the end of their window, but not an hour on.
+        let answers = |at| {
+            let (answers, _rx) = mpsc::channel(1);
+            held_for(
+                PendingKind::Answers {
+                    answers,
+                    answer_type: 0x88,
+                },
+                at,
+                now,
+            )
+        };
+        let soon = now + Duration::from_secs(3);
+        assert_eq!(answers(soon), Duration::from_secs(3) + LATE_ANSWER_WINDOW);
+        assert_eq!(answers(hour), LATE_ANSWER_WINDOW * 2);
+        // A request already kept is not kept again.
+        let kept = Pending::new(
+            now,
+            Duration::ZERO,
+            PendingKind::Expired {
+                answer_type: None,
+                single: true,
+            },
+        );
+        assert!(kept.expired(now).is_none());
+    }
 }
