@@ -193,6 +193,12 @@ impl AsyncRead for Transport {
                 // Under the lock: what the listener read of the peer's bytes (to see
                 // whether it hung up) comes first, and it reads no more meanwhile.
                 let mut state = turn.slot.lock();
+                if state.turn != turn.id {
+                    // Another peer's turn (this transport outlived its own).
+                    drop(state);
+                    turn.over = true;
+                    return Pin::new(s).poll_read(cx, buf);
+                }
                 if !state.served_early.is_empty() {
                     let n = state.served_early.len().min(buf.remaining());
                     buf.put_slice(&state.served_early.split_to(n));
@@ -205,7 +211,12 @@ impl AsyncRead for Transport {
                 let ended = match &read {
                     Poll::Ready(Ok(())) => room > 0 && buf.filled().len() == before,
                     Poll::Ready(Err(_)) => true,
-                    Poll::Pending => false,
+                    Poll::Pending => {
+                        // Bytes the listener reads meanwhile raise no readiness of the
+                        // socket: it wakes the reader itself.
+                        state.served_waker = Some(cx.waker().clone());
+                        false
+                    }
                 };
                 if ended {
                     state.turn_over();
@@ -331,6 +342,11 @@ struct SlotState {
     /// The served peer's bytes read through `served` to reach its end of stream, for
     /// its transport to deliver before it reads on.
     served_early: BytesMut,
+    /// The served peer's transport, waiting for bytes: woken when some go to
+    /// `served_early`.
+    served_waker: Option<std::task::Waker>,
+    /// The number of the current turn ([`Turn::id`]).
+    turn: u64,
 }
 
 impl SlotState {
@@ -351,9 +367,13 @@ impl SlotState {
             match io::Read::read(&mut &*served, &mut chunk) {
                 // Its end of stream: it hung up.
                 Ok(0) => return false,
-                Ok(n) => self
-                    .served_early
-                    .extend_from_slice(chunk.get(..n).unwrap_or_default()),
+                Ok(n) => {
+                    self.served_early
+                        .extend_from_slice(chunk.get(..n).unwrap_or_default());
+                    if let Some(waker) = self.served_waker.take() {
+                        waker.wake();
+                    }
+                }
                 // Nothing more to read: there.
                 Err(e) if e.kind() == io::ErrorKind::WouldBlock => return true,
                 Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
@@ -369,6 +389,7 @@ impl SlotState {
         self.serving = false;
         self.served = None;
         self.served_early.clear();
+        self.served_waker = None;
         if let Some(waiting) = self.waiting.as_mut() {
             waiting.due |= waiting.still_there();
         }
@@ -386,13 +407,19 @@ impl Slot {
 /// leaves before the link takes it.
 struct Turn {
     slot: Arc<Slot>,
+    /// Its number: a transport that outlives its turn (opened again meanwhile) ends no
+    /// other.
+    id: u64,
     over: bool,
 }
 
 impl Turn {
     fn end(&mut self) {
         if !std::mem::replace(&mut self.over, true) {
-            self.slot.lock().turn_over();
+            let mut state = self.slot.lock();
+            if state.turn == self.id {
+                state.turn_over();
+            }
         }
     }
 }
@@ -487,7 +514,9 @@ impl Listen {
                         state.serving = true;
                         state.served = second_handle(&waiting.stream);
                         state.served_early.clear();
-                        Some(Ok(waiting))
+                        state.served_waker = None;
+                        state.turn += 1;
+                        Some(Ok((waiting, state.turn)))
                     } else {
                         Some(Err(waiting.peer))
                     }
@@ -496,9 +525,10 @@ impl Listen {
                 }
             };
             match taken {
-                Some(Ok(waiting)) => {
+                Some(Ok((waiting, id))) => {
                     let turn = Turn {
                         slot: self.slot.clone(),
+                        id,
                         over: false,
                     };
                     return (waiting.stream, waiting.peer, waiting.early.freeze(), turn);
@@ -874,5 +904,75 @@ impl Connector {
     /// [`Connector::reopen`]).
     pub fn mark_healthy(&mut self) {
         self.healthy = true;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::task::Wake;
+
+    use super::*;
+
+    struct Flag(AtomicBool);
+
+    impl Wake for Flag {
+        fn wake(self: Arc<Self>) {
+            self.0.store(true, Ordering::SeqCst);
+        }
+    }
+
+    /// The listener reads the served peer's bytes (to see whether it hung up) after its
+    /// transport found none and waits: the socket then raises no readiness for them, so
+    /// the listener wakes the transport, which delivers them.
+    #[tokio::test]
+    async fn bytes_the_listener_reads_wake_the_transport_waiting_for_them() {
+        let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
+        let mut peer = std::net::TcpStream::connect(listener.local_addr().unwrap()).unwrap();
+        let (stream, _) = listener.accept().await.unwrap();
+        let slot = Arc::new(Slot::default());
+        {
+            let mut state = slot.lock();
+            state.serving = true;
+            state.served = second_handle(&stream);
+            state.turn = 1;
+        }
+        let turn = Turn {
+            slot: slot.clone(),
+            id: 1,
+            over: false,
+        };
+        let mut transport = Transport {
+            inner: Inner::Accepted {
+                stream,
+                early: Bytes::new(),
+                turn,
+            },
+            peer: String::new(),
+        };
+        let flag = Arc::new(Flag(AtomicBool::new(false)));
+        let waker = std::task::Waker::from(flag.clone());
+        let mut cx = Context::from_waker(&waker);
+        let mut room = [0u8; 8];
+        let mut buf = ReadBuf::new(&mut room);
+        assert!(
+            Pin::new(&mut transport)
+                .poll_read(&mut cx, &mut buf)
+                .is_pending()
+        );
+        // The peer writes; the listener, looking at it, reads the bytes first.
+        io::Write::write_all(&mut peer, b"cmd").unwrap();
+        let mut state = slot.lock();
+        while state.served_early.is_empty() {
+            assert!(state.busy(), "the peer is there");
+        }
+        drop(state);
+        assert!(flag.0.load(Ordering::SeqCst), "the transport was not woken");
+        assert!(
+            Pin::new(&mut transport)
+                .poll_read(&mut cx, &mut buf)
+                .is_ready()
+        );
+        assert_eq!(buf.filled(), b"cmd");
     }
 }

@@ -481,6 +481,39 @@ async fn tcp_listen_a_read_into_no_room_is_no_end_of_stream() {
     assert_eq!(read_exact_n(&mut transport, 3).await, b"new");
 }
 
+#[tokio::test]
+async fn tcp_listen_a_transport_that_outlives_its_turn_ends_no_other() {
+    let link: Link = "tcp-listen:127.0.0.1:0".parse().unwrap();
+    let options = fast_reconnect();
+    let mut connector = Connector::new(&link, &options).await.unwrap();
+    let addr = connector.local_addr().unwrap();
+    let _first = TcpStream::connect(addr).await.unwrap();
+    let old = connector.open().await.unwrap();
+    // Opened again while the first transport lives: the next peer is served.
+    let mut second = TcpStream::connect(addr).await.unwrap();
+    let mut transport = connector.open().await.unwrap();
+    assert_eq!(transport.peer(), second.local_addr().unwrap().to_string());
+    drop(old);
+    // The second is still served: a peer that waits, writes and gives up meanwhile is
+    // dropped.
+    let mut gave_up = TcpStream::connect(addr).await.unwrap();
+    gave_up.write_all(b"old").await.unwrap();
+    let mut turned_away = TcpStream::connect(addr).await.unwrap();
+    is_turned_away(&mut turned_away).await;
+    gave_up.shutdown().await.unwrap();
+    drop(gave_up);
+    second.shutdown().await.unwrap();
+    reads_end(&mut transport).await;
+    drop(transport);
+    let mut last = TcpStream::connect(addr).await.unwrap();
+    last.write_all(b"new").await.unwrap();
+    let mut transport = timeout(GUARD, connector.reopen(&options.reconnect))
+        .await
+        .unwrap()
+        .unwrap();
+    assert_eq!(read_exact_n(&mut transport, 3).await, b"new");
+}
+
 /// A serial link on the far end of a pseudo-terminal holds it by its lock alone, not by
 /// the terminal's exclusive flag, which would outlive a process killed while holding
 /// it; the lock still turns away a second link on the same path until the first closes.
