@@ -68,6 +68,24 @@ async fn a_client_flooding_the_hub_with_discoveries_leaves_frame_ids_for_the_oth
     sim.stop().await;
 }
 
+/// 16 clients of `hub`, each of which has sent 16 requests (`AT SL`): 256 together, one
+/// more than the frame ids.
+async fn clients_asking_16_each(hub: &mcp_host::hub::Hub) -> Vec<Wire> {
+    let mut clients = Vec::new();
+    for _ in 0..16 {
+        let mut client = raw_client(hub).await;
+        for id in 1..=16u8 {
+            client
+                .feed(&RawFrame::new(&[0x08, id, b'S', b'L']).unwrap())
+                .await
+                .unwrap();
+        }
+        SinkExt::<&RawFrame<'_>>::flush(&mut client).await.unwrap();
+        clients.push(client);
+    }
+    clients
+}
+
 /// Clients that send requests the radio never answers, enough together for every frame
 /// id, and go away: their requests' ids are free again once the hub has seen them go,
 /// long before the answer window ends.
@@ -76,18 +94,7 @@ async fn the_ids_of_a_client_that_left_are_free_again() {
     let (hub, mut radio) = hub_and_radio().await;
 
     // 16 clients with 16 requests each: more than the 255 ids.
-    let mut gone = Vec::new();
-    for _ in 0..16 {
-        let mut client = raw_client(&hub).await;
-        for id in 1..=16u8 {
-            client
-                .feed(&RawFrame::new(&[0x08, id, b'S', b'L']).unwrap())
-                .await
-                .unwrap();
-        }
-        SinkExt::<&RawFrame<'_>>::flush(&mut client).await.unwrap();
-        gone.push(client);
-    }
+    let gone = clients_asking_16_each(&hub).await;
     // The radio got all it will get of them (none answered), then they leave.
     let mut written = 0;
     while written < usize::from(u8::MAX) {
@@ -282,18 +289,7 @@ async fn a_late_answer_to_the_hubs_own_at_ap_goes_to_no_client() {
 async fn with_ids_held_for_late_answers_requests_wait_rather_than_being_refused() {
     let (hub, mut radio, held) = hub_whose_radio_did_not_answer_ap().await;
     // 16 clients with 16 requests each: 256, more than the 253 ids left.
-    let mut clients = Vec::new();
-    for _ in 0..16 {
-        let mut client = raw_client(&hub).await;
-        for id in 1..=16u8 {
-            client
-                .feed(&RawFrame::new(&[0x08, id, b'S', b'L']).unwrap())
-                .await
-                .unwrap();
-        }
-        SinkExt::<&RawFrame<'_>>::flush(&mut client).await.unwrap();
-        clients.push(client);
-    }
+    let _clients = clients_asking_16_each(&hub).await;
     // 253 go out, under none of the held ids; then, answered, they let the rest go.
     let mut ids = Vec::new();
     for _ in 0..253 {

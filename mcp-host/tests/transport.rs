@@ -23,6 +23,22 @@ fn fast_reconnect() -> LinkOptions {
     }
 }
 
+/// A `tcp-listen` connector on a free port of 127.0.0.1, and its address.
+async fn listening() -> (Connector, std::net::SocketAddr) {
+    let link: Link = "tcp-listen:127.0.0.1:0".parse().unwrap();
+    let connector = Connector::new(&link, &fast_reconnect()).await.unwrap();
+    let addr = connector.local_addr().unwrap();
+    (connector, addr)
+}
+
+/// The transport of the next peer the connector serves.
+async fn next_served(connector: &mut Connector) -> mcp_host::Transport {
+    timeout(GUARD, connector.reopen(&fast_reconnect().reconnect))
+        .await
+        .expect("no peer served in time")
+        .unwrap()
+}
+
 /// Waits for the end of `r`'s stream: the peer hung up, with nothing more to read.
 async fn reads_end<R: AsyncReadExt + Unpin>(r: &mut R) {
     let mut buf = [0u8; 8];
@@ -186,7 +202,7 @@ async fn tcp_reconnect_retries_until_the_port_listens_again() {
     );
 
     let reopen = tokio::spawn(async move {
-        let transport = connector.reopen(&options.reconnect).await;
+        let transport = connector.reopen(&fast_reconnect().reconnect).await;
         transport.map(|t| t.peer().to_owned())
     });
     let listener = reserved.listen_tokio();
@@ -213,10 +229,7 @@ async fn disabled_reconnect_gives_up_at_once() {
 
 #[tokio::test]
 async fn tcp_listen_serves_one_peer_at_a_time() {
-    let link: Link = "tcp-listen:127.0.0.1:0".parse().unwrap();
-    let options = fast_reconnect();
-    let mut connector = Connector::new(&link, &options).await.unwrap();
-    let addr = connector.local_addr().unwrap();
+    let (mut connector, addr) = listening().await;
 
     let mut first = TcpStream::connect(addr).await.unwrap();
     let mut transport = connector.open().await.unwrap();
@@ -241,10 +254,7 @@ async fn tcp_listen_serves_one_peer_at_a_time() {
     reads_end(&mut transport).await;
 
     // The next open takes the waiting peer, with what it wrote while it waited.
-    let mut transport = timeout(GUARD, connector.reopen(&options.reconnect))
-        .await
-        .unwrap()
-        .unwrap();
+    let mut transport = next_served(&mut connector).await;
     assert_eq!(transport.peer(), second.local_addr().unwrap().to_string());
     assert_eq!(read_exact_n(&mut transport, 3).await, b"2nd");
     transport.write_all(b"ack").await.unwrap();
@@ -261,7 +271,8 @@ async fn tcp_listen_serves_one_peer_at_a_time() {
     drop(second);
     reads_end(&mut transport).await;
     drop(transport);
-    let reopened = connector.reopen(&options.reconnect);
+    let policy = fast_reconnect().reconnect;
+    let reopened = connector.reopen(&policy);
     tokio::pin!(reopened);
     // The open drops `gone`, which then reads the end of its stream; only then is the
     // waiting place free for the next peer.
@@ -280,10 +291,7 @@ async fn tcp_listen_serves_one_peer_at_a_time() {
 
 #[tokio::test]
 async fn tcp_listen_gives_the_waiting_place_of_a_peer_that_left_to_the_next() {
-    let link: Link = "tcp-listen:127.0.0.1:0".parse().unwrap();
-    let options = fast_reconnect();
-    let mut connector = Connector::new(&link, &options).await.unwrap();
-    let addr = connector.local_addr().unwrap();
+    let (mut connector, addr) = listening().await;
     let mut first = TcpStream::connect(addr).await.unwrap();
     let mut transport = connector.open().await.unwrap();
 
@@ -298,20 +306,14 @@ async fn tcp_listen_gives_the_waiting_place_of_a_peer_that_left_to_the_next() {
     drop(first);
     reads_end(&mut transport).await;
     drop(transport);
-    let mut transport = timeout(GUARD, connector.reopen(&options.reconnect))
-        .await
-        .unwrap()
-        .unwrap();
+    let mut transport = next_served(&mut connector).await;
     assert_eq!(transport.peer(), third.local_addr().unwrap().to_string());
     assert_eq!(read_exact_n(&mut transport, 3).await, b"new");
 }
 
 #[tokio::test]
 async fn tcp_listen_serves_a_peer_that_left_after_its_turn_came() {
-    let link: Link = "tcp-listen:127.0.0.1:0".parse().unwrap();
-    let options = fast_reconnect();
-    let mut connector = Connector::new(&link, &options).await.unwrap();
-    let addr = connector.local_addr().unwrap();
+    let (mut connector, addr) = listening().await;
     let first = TcpStream::connect(addr).await.unwrap();
     let mut transport = connector.open().await.unwrap();
 
@@ -325,10 +327,7 @@ async fn tcp_listen_serves_a_peer_that_left_after_its_turn_came() {
     drop(transport);
     second.shutdown().await.unwrap();
     drop(second);
-    let mut transport = timeout(GUARD, connector.reopen(&options.reconnect))
-        .await
-        .unwrap()
-        .unwrap();
+    let mut transport = next_served(&mut connector).await;
     assert_eq!(read_exact_n(&mut transport, 3).await, b"2nd");
     reads_end(&mut transport).await;
     drop(transport);
@@ -338,19 +337,13 @@ async fn tcp_listen_serves_a_peer_that_left_after_its_turn_came() {
     third.write_all(b"3rd").await.unwrap();
     third.shutdown().await.unwrap();
     drop(third);
-    let mut transport = timeout(GUARD, connector.reopen(&options.reconnect))
-        .await
-        .unwrap()
-        .unwrap();
+    let mut transport = next_served(&mut connector).await;
     assert_eq!(read_exact_n(&mut transport, 3).await, b"3rd");
 }
 
 #[tokio::test]
 async fn tcp_listen_serves_a_peer_that_came_after_the_served_one_hung_up() {
-    let link: Link = "tcp-listen:127.0.0.1:0".parse().unwrap();
-    let options = fast_reconnect();
-    let mut connector = Connector::new(&link, &options).await.unwrap();
-    let addr = connector.local_addr().unwrap();
+    let (mut connector, addr) = listening().await;
     let first = TcpStream::connect(addr).await.unwrap();
     let mut transport = connector.open().await.unwrap();
     // The first hangs up (a one-shot command that ended); the link has not read that
@@ -367,19 +360,13 @@ async fn tcp_listen_serves_a_peer_that_came_after_the_served_one_hung_up() {
     drop(second);
     reads_end(&mut transport).await;
     drop(transport);
-    let mut transport = timeout(GUARD, connector.reopen(&options.reconnect))
-        .await
-        .expect("the peer that came after the first hung up was dropped")
-        .unwrap();
+    let mut transport = next_served(&mut connector).await;
     assert_eq!(read_exact_n(&mut transport, 3).await, b"cmd");
 }
 
 #[tokio::test]
 async fn tcp_listen_serves_two_commands_sent_back_to_back_before_it_read_the_first() {
-    let link: Link = "tcp-listen:127.0.0.1:0".parse().unwrap();
-    let options = fast_reconnect();
-    let mut connector = Connector::new(&link, &options).await.unwrap();
-    let addr = connector.local_addr().unwrap();
+    let (mut connector, addr) = listening().await;
     let mut first = TcpStream::connect(addr).await.unwrap();
     let mut transport = connector.open().await.unwrap();
     // Two commands sent without waiting for an answer, one after the other: the link
@@ -397,19 +384,13 @@ async fn tcp_listen_serves_two_commands_sent_back_to_back_before_it_read_the_fir
     assert_eq!(read_exact_n(&mut transport, 3).await, b"1st");
     reads_end(&mut transport).await;
     drop(transport);
-    let mut transport = timeout(GUARD, connector.reopen(&options.reconnect))
-        .await
-        .expect("the second command was dropped")
-        .unwrap();
+    let mut transport = next_served(&mut connector).await;
     assert_eq!(read_exact_n(&mut transport, 3).await, b"2nd");
 }
 
 #[tokio::test]
 async fn tcp_listen_keeps_the_place_of_a_peer_whose_turn_came() {
-    let link: Link = "tcp-listen:127.0.0.1:0".parse().unwrap();
-    let options = fast_reconnect();
-    let mut connector = Connector::new(&link, &options).await.unwrap();
-    let addr = connector.local_addr().unwrap();
+    let (mut connector, addr) = listening().await;
     let first = TcpStream::connect(addr).await.unwrap();
     let mut transport = connector.open().await.unwrap();
     let mut second = TcpStream::connect(addr).await.unwrap();
@@ -427,10 +408,7 @@ async fn tcp_listen_keeps_the_place_of_a_peer_whose_turn_came() {
     let _ = third.write_all(b"3rd").await;
     is_turned_away(&mut third).await;
     drop(transport);
-    let mut transport = timeout(GUARD, connector.reopen(&options.reconnect))
-        .await
-        .unwrap()
-        .unwrap();
+    let mut transport = next_served(&mut connector).await;
     assert_eq!(read_exact_n(&mut transport, 3).await, b"2nd");
 
     // With nobody served, the same: the first to come is served.
@@ -442,19 +420,13 @@ async fn tcp_listen_keeps_the_place_of_a_peer_whose_turn_came() {
     let mut fifth = TcpStream::connect(addr).await.unwrap();
     let _ = fifth.write_all(b"5th").await;
     is_turned_away(&mut fifth).await;
-    let mut transport = timeout(GUARD, connector.reopen(&options.reconnect))
-        .await
-        .unwrap()
-        .unwrap();
+    let mut transport = next_served(&mut connector).await;
     assert_eq!(read_exact_n(&mut transport, 3).await, b"4th");
 }
 
 #[tokio::test]
 async fn tcp_listen_a_read_into_no_room_is_no_end_of_stream() {
-    let link: Link = "tcp-listen:127.0.0.1:0".parse().unwrap();
-    let options = fast_reconnect();
-    let mut connector = Connector::new(&link, &options).await.unwrap();
-    let addr = connector.local_addr().unwrap();
+    let (mut connector, addr) = listening().await;
     let mut first = TcpStream::connect(addr).await.unwrap();
     let mut transport = connector.open().await.unwrap();
     first.write_all(b"1").await.unwrap();
@@ -474,19 +446,13 @@ async fn tcp_listen_a_read_into_no_room_is_no_end_of_stream() {
     drop(transport);
     let mut last = TcpStream::connect(addr).await.unwrap();
     last.write_all(b"new").await.unwrap();
-    let mut transport = timeout(GUARD, connector.reopen(&options.reconnect))
-        .await
-        .unwrap()
-        .unwrap();
+    let mut transport = next_served(&mut connector).await;
     assert_eq!(read_exact_n(&mut transport, 3).await, b"new");
 }
 
 #[tokio::test]
 async fn tcp_listen_a_transport_that_outlives_its_turn_ends_no_other() {
-    let link: Link = "tcp-listen:127.0.0.1:0".parse().unwrap();
-    let options = fast_reconnect();
-    let mut connector = Connector::new(&link, &options).await.unwrap();
-    let addr = connector.local_addr().unwrap();
+    let (mut connector, addr) = listening().await;
     let _first = TcpStream::connect(addr).await.unwrap();
     let old = connector.open().await.unwrap();
     // Opened again while the first transport lives: the next peer is served.
@@ -507,10 +473,7 @@ async fn tcp_listen_a_transport_that_outlives_its_turn_ends_no_other() {
     drop(transport);
     let mut last = TcpStream::connect(addr).await.unwrap();
     last.write_all(b"new").await.unwrap();
-    let mut transport = timeout(GUARD, connector.reopen(&options.reconnect))
-        .await
-        .unwrap()
-        .unwrap();
+    let mut transport = next_served(&mut connector).await;
     assert_eq!(read_exact_n(&mut transport, 3).await, b"new");
 }
 
