@@ -31,6 +31,16 @@ async fn listening() -> (Connector, std::net::SocketAddr) {
     (connector, addr)
 }
 
+/// A peer that connects to `addr`, writes `bytes` and waits for its turn: it has the
+/// waiting place once a peer after it is turned away.
+async fn waiting_peer(addr: std::net::SocketAddr, bytes: &[u8]) -> TcpStream {
+    let mut peer = TcpStream::connect(addr).await.unwrap();
+    peer.write_all(bytes).await.unwrap();
+    let mut turned_away = TcpStream::connect(addr).await.unwrap();
+    is_turned_away(&mut turned_away).await;
+    peer
+}
+
 /// The transport of the next peer the connector serves.
 async fn next_served(connector: &mut Connector) -> mcp_host::Transport {
     timeout(GUARD, connector.reopen(&fast_reconnect().reconnect))
@@ -263,10 +273,7 @@ async fn tcp_listen_serves_one_peer_at_a_time() {
     // A peer that waits, writes and leaves before its turn is dropped with what it
     // wrote: the next open takes the peer after it. (It waits once another is turned
     // away.)
-    let mut gone = TcpStream::connect(addr).await.unwrap();
-    gone.write_all(b"old").await.unwrap();
-    let mut turned_away = TcpStream::connect(addr).await.unwrap();
-    reads_end(&mut turned_away).await;
+    let mut gone = waiting_peer(addr, b"old").await;
     gone.shutdown().await.unwrap();
     drop(second);
     reads_end(&mut transport).await;
@@ -374,10 +381,7 @@ async fn tcp_listen_serves_two_commands_sent_back_to_back_before_it_read_the_fir
     first.write_all(b"1st").await.unwrap();
     first.shutdown().await.unwrap();
     drop(first);
-    let mut second = TcpStream::connect(addr).await.unwrap();
-    second.write_all(b"2nd").await.unwrap();
-    let mut turned_away = TcpStream::connect(addr).await.unwrap();
-    reads_end(&mut turned_away).await;
+    let mut second = waiting_peer(addr, b"2nd").await;
     second.shutdown().await.unwrap();
     drop(second);
     // Both are carried out, in order.
@@ -393,10 +397,7 @@ async fn tcp_listen_keeps_the_place_of_a_peer_whose_turn_came() {
     let (mut connector, addr) = listening().await;
     let first = TcpStream::connect(addr).await.unwrap();
     let mut transport = connector.open().await.unwrap();
-    let mut second = TcpStream::connect(addr).await.unwrap();
-    second.write_all(b"2nd").await.unwrap();
-    let mut turned_away = TcpStream::connect(addr).await.unwrap();
-    reads_end(&mut turned_away).await;
+    let mut second = waiting_peer(addr, b"2nd").await;
     // The first hangs up: the second's turn has come; then it leaves, done.
     drop(first);
     reads_end(&mut transport).await;
@@ -435,10 +436,7 @@ async fn tcp_listen_a_read_into_no_room_is_no_end_of_stream() {
     assert_eq!(read_exact_n(&mut transport, 1).await, b"1");
     // The first is still served: a peer that waits, writes and gives up meanwhile is
     // dropped.
-    let mut gave_up = TcpStream::connect(addr).await.unwrap();
-    gave_up.write_all(b"old").await.unwrap();
-    let mut turned_away = TcpStream::connect(addr).await.unwrap();
-    reads_end(&mut turned_away).await;
+    let mut gave_up = waiting_peer(addr, b"old").await;
     gave_up.shutdown().await.unwrap();
     drop(gave_up);
     drop(first);
@@ -462,10 +460,7 @@ async fn tcp_listen_a_transport_that_outlives_its_turn_ends_no_other() {
     drop(old);
     // The second is still served: a peer that waits, writes and gives up meanwhile is
     // dropped.
-    let mut gave_up = TcpStream::connect(addr).await.unwrap();
-    gave_up.write_all(b"old").await.unwrap();
-    let mut turned_away = TcpStream::connect(addr).await.unwrap();
-    is_turned_away(&mut turned_away).await;
+    let mut gave_up = waiting_peer(addr, b"old").await;
     gave_up.shutdown().await.unwrap();
     drop(gave_up);
     second.shutdown().await.unwrap();
