@@ -990,9 +990,13 @@ impl Driver {
         }
         // From the last, so that the places of the others stay as they are.
         cut.sort_unstable_by_key(|r| std::cmp::Reverse(r.start));
+        let place = |at: u64| {
+            at.checked_sub(self.written)
+                .and_then(|n| usize::try_from(n).ok())
+                .unwrap_or(usize::MAX)
+        };
         for range in &cut {
-            let start = usize::try_from(range.start - self.written).unwrap_or(usize::MAX);
-            let end = usize::try_from(range.end - self.written).unwrap_or(usize::MAX);
+            let (start, end) = (place(range.start), place(range.end));
             if start <= end && end <= out.len() {
                 let mut rest = out.split_off(start);
                 let after = rest.split_off(end - start);
