@@ -362,26 +362,14 @@ impl SlotState {
         };
         // Its end of stream may wait behind bytes the link has not read: they are read
         // here and kept for it (at most [`WAITED_MAX`]; beyond that it counts as there).
-        while self.served_early.len() < WAITED_MAX {
-            let mut chunk = [0u8; 4096];
-            match io::Read::read(&mut &*served, &mut chunk) {
-                // Its end of stream: it hung up.
-                Ok(0) => return false,
-                Ok(n) => {
-                    self.served_early
-                        .extend_from_slice(chunk.get(..n).unwrap_or_default());
-                    if let Some(waker) = self.served_waker.take() {
-                        waker.wake();
-                    }
-                }
-                // Nothing more to read: there.
-                Err(e) if e.kind() == io::ErrorKind::WouldBlock => return true,
-                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-                // Its connection failed: gone.
-                Err(_) => return false,
+        let before = self.served_early.len();
+        let ahead = read_ahead(&mut self.served_early, |into| read_direct(served, into));
+        if self.served_early.len() > before {
+            if let Some(waker) = self.served_waker.take() {
+                waker.wake();
             }
         }
-        true
+        ahead != Ahead::Gone
     }
 
     /// The served peer's turn is over: the peer waiting, if still there, is due.
@@ -452,30 +440,53 @@ impl Waiting {
     /// read ahead: a peer that wrote more while it waited counts as gone (whether it
     /// left cannot be seen behind them, and it must not be served if it did).
     fn still_there(&mut self) -> bool {
-        while self.early.len() < WAITED_MAX {
-            let read = match &self.direct {
-                Some(direct) => {
-                    let mut chunk = [0u8; 4096];
-                    io::Read::read(&mut &*direct, &mut chunk).inspect(|&n| {
-                        self.early
-                            .extend_from_slice(chunk.get(..n).unwrap_or_default());
-                    })
-                }
-                None => {
-                    self.early.reserve(4096);
-                    self.stream.try_read_buf(&mut self.early)
-                }
-            };
-            match read {
-                Ok(0) => return false,
-                Ok(_) => {}
-                Err(e) if e.kind() == io::ErrorKind::WouldBlock => return true,
-                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-                Err(_) => return false,
+        let (direct, stream) = (&self.direct, &self.stream);
+        let ahead = read_ahead(&mut self.early, |into| match direct {
+            Some(direct) => read_direct(direct, into),
+            None => {
+                into.reserve(4096);
+                stream.try_read_buf(into)
             }
-        }
-        false
+        });
+        ahead == Ahead::There
     }
+}
+
+/// What reading a peer's bytes ahead found.
+#[derive(Debug, PartialEq, Eq)]
+enum Ahead {
+    /// All it wrote is read, and it is still connected.
+    There,
+    /// Its end of stream, or its connection failed.
+    Gone,
+    /// [`WAITED_MAX`] bytes are held: whether more follow, or its end, is not known.
+    Full,
+}
+
+/// Reads a peer's bytes into `into` with `read` (a non-blocking read that appends)
+/// until it has none more, its stream ends, or `into` holds [`WAITED_MAX`] bytes.
+fn read_ahead(
+    into: &mut BytesMut,
+    mut read: impl FnMut(&mut BytesMut) -> io::Result<usize>,
+) -> Ahead {
+    while into.len() < WAITED_MAX {
+        match read(into) {
+            Ok(0) => return Ahead::Gone,
+            Ok(_) => {}
+            Err(e) if e.kind() == io::ErrorKind::WouldBlock => return Ahead::There,
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+            Err(_) => return Ahead::Gone,
+        }
+    }
+    Ahead::Full
+}
+
+/// One non-blocking read of `socket` (a second handle on a peer's), appended to `into`.
+fn read_direct(socket: &std::net::TcpStream, into: &mut BytesMut) -> io::Result<usize> {
+    let mut chunk = [0u8; 4096];
+    let n = io::Read::read(&mut &*socket, &mut chunk)?;
+    into.extend_from_slice(chunk.get(..n).unwrap_or_default());
+    Ok(n)
 }
 
 impl Listen {
