@@ -109,12 +109,6 @@ impl<T> IdTable<T> {
         }
     }
 
-    /// Removes every entry.
-    #[cfg(test)]
-    pub(crate) fn drain(&mut self, mut on_removed: impl FnMut(u8, T)) {
-        self.remove_where(|_| true, &mut on_removed);
-    }
-
     /// The values in flight.
     pub(crate) fn values(&self) -> impl Iterator<Item = &T> {
         self.slots.iter().flatten()
@@ -175,7 +169,7 @@ mod tests {
         table.remove_where(|v| *v < FOREVER, |id, v| expired.push((id, v)));
         assert!(expired.iter().all(|(id, _)| *id > 10));
         assert_eq!(table.len(), 10);
-        table.drain(|_, _| {});
+        table.remove_where(|_| true, |_, _| {});
         assert_eq!(table.len(), 0);
         assert_eq!(table.values().count(), 0);
     }
