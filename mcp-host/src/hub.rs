@@ -80,9 +80,10 @@
 //!   share it, but no other hub); elsewhere it listens again once the port is free. A
 //!   radio on a link that waits for its first peer (`pty`, `tcp-listen:`) is down until
 //!   that peer comes: the hub refuses clients from the start (holding its port, on
-//!   Linux) and listens once the radio is there. A hub does not start on a port
-//!   another hub serves or holds (a small window remains for two hubs started at the
-//!   same moment).
+//!   Linux) and listens once the radio is there. The outage is logged as a warning,
+//!   the radio there or back as a status line ([`STATUS_TARGET`]). A hub does not start
+//!   on a port another hub serves or holds (a small window remains for two hubs started
+//!   at the same moment).
 //! - **The radio's mode:** each time the radio is there, before the hub listens, it
 //!   asks the radio's `AP` (twice at most, waiting [`MODE_CHECK_TIMEOUT`] each time) and
 //!   logs a warning if the radio is in another API mode than the hub, or does not
@@ -663,11 +664,11 @@ impl Serve {
         let addr = self.port.addr();
         match self.port.listen().await {
             Ok(listener) => {
-                // As visible as the outage was (warnings are shown by default).
+                // A status line, not a warning (see `STATUS_TARGET`).
                 if self.radio_seen {
-                    tracing::warn!("hub: radio back: listening on {addr}");
+                    tracing::info!(target: STATUS_TARGET, "hub: radio back: listening on {addr}");
                 } else {
-                    tracing::warn!("hub: radio there: listening on {addr}");
+                    tracing::info!(target: STATUS_TARGET, "hub: radio there: listening on {addr}");
                     self.radio_seen = true;
                 }
                 self.counters.listening.store(true, Ordering::Relaxed);
@@ -844,7 +845,7 @@ impl Serve {
                         "hub: radio lost: {reason}; clients disconnected, and none accepted \
                          until it is back"
                     ),
-                    _ => tracing::info!(?link, "hub: radio link"),
+                    _ => tracing::debug!(?link, "hub: radio link"),
                 }
                 self.radio_up = is_up(link);
                 if !self.radio_up {
@@ -916,6 +917,13 @@ fn is_up(link: &LinkEvent) -> bool {
         LinkEvent::Connected { .. } | LinkEvent::Reconnected { .. }
     )
 }
+
+/// The `tracing` target of the hub's status lines, logged at info level: the radio
+/// there at last and the hub listening (`hub: radio there: listening on ADDR`), the
+/// radio back after an outage (`hub: radio back: listening on ADDR`). The outage itself
+/// is a warning. A program that shows warnings alone shows these too with the filter
+/// `warn,mcp_host::hub::status=info`, as `mcp-gs hub` does.
+pub const STATUS_TARGET: &str = "mcp_host::hub::status";
 
 /// How long the radio has to answer the hub's `AT AP`: a local AT command is answered
 /// in milliseconds.

@@ -1369,8 +1369,9 @@ fn monitor_waits_for_a_link_that_is_not_there_yet() {
         .unwrap();
     let errors = common::stderr_lines(&mut child);
     // It says why it waits, once.
-    let waiting =
-        format!("mcp-gs: link not there yet: waiting for it: cannot connect to 127.0.0.1:{port}: ");
+    let waiting = format!(
+        "mcp-gs: warning: link not there yet: waiting for it: cannot connect to 127.0.0.1:{port}: "
+    );
     while !errors
         .recv_timeout(std::time::Duration::from_secs(30))
         .expect("the waiting line")

@@ -138,11 +138,11 @@ fn the_hub_says_when_the_radio_is_lost_and_when_it_is_back() {
             && !lost.contains(") ("),
         "{lost}"
     );
-    // A line like the command's own, not a log record, with the time of day (UTC) for
-    // an outage read back later: `mcp-gs: HH:MM:SS.mmm hub: radio lost`.
+    // A warning like the command's own, not a log record, with the time of day (UTC) for
+    // an outage read back later: `mcp-gs: HH:MM:SS.mmm warning: hub: radio lost`.
     let time = lost
         .strip_prefix("mcp-gs: ")
-        .and_then(|rest| rest.split_once(" hub: radio lost"))
+        .and_then(|rest| rest.split_once(" warning: hub: radio lost"))
         .map(|(time, _)| time)
         .unwrap_or_else(|| panic!("{lost}"));
     let shape: String = time
@@ -152,8 +152,11 @@ fn the_hub_says_when_the_radio_is_lost_and_when_it_is_back() {
     assert_eq!(shape, "99:99:99.999", "{lost}");
     let (_socket, _) = radio.accept().unwrap();
     let back = line_with(&err, "radio back");
+    // A status line, not a warning.
     assert!(
-        back.contains(&format!("listening on {addr}")),
+        back.starts_with("mcp-gs: ")
+            && back.ends_with(&format!(" hub: radio back: listening on {addr}"))
+            && !back.contains("warning"),
         "{back} ({serving})"
     );
 }

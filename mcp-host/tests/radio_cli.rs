@@ -467,7 +467,7 @@ fn the_librarys_warnings_read_as_the_commands_own_lines() {
     let _ = child.kill();
     let _ = child.wait();
     assert!(
-        line.starts_with("mcp-gs: node link not available yet: cannot connect to ")
+        line.starts_with("mcp-gs: warning: node link not available yet: cannot connect to ")
             && line.ends_with(" (node 0000000000000000)")
             && !line.contains('='),
         "{line}"

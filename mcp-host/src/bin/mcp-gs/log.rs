@@ -1,5 +1,6 @@
 //! What the library logs, on standard error: by default its warnings, each a line
-//! `mcp-gs: MESSAGE: ERROR (key value, ...)` like the command's own messages; with
+//! `mcp-gs: warning: MESSAGE: ERROR (key value, ...)` like the command's own warnings
+//! (and, for `hub`, the hub's status lines: the radio there, the radio back); with
 //! `MCP_LOG` set (`MCP_LOG=debug`, `MCP_LOG=mcp_host::hub=info`), every event it
 //! selects, with the time, the level and where it comes from, for a bug report.
 
@@ -11,9 +12,10 @@ use tracing_subscriber::fmt::format::Writer;
 use tracing_subscriber::fmt::{FmtContext, FormatEvent, FormatFields};
 use tracing_subscriber::registry::LookupSpan;
 
-/// Installs the logger; with `timed`, each library line carries the time of day (UTC),
-/// for a command that runs for hours (`hub`), whose outages are read back later.
-pub(crate) fn init(timed: bool) {
+/// Installs the logger; for `hub`, each library line carries the time of day (UTC), for
+/// a command that runs for hours, whose outages are read back later, and the hub's
+/// status lines are shown beside the warnings.
+pub(crate) fn init(hub: bool) {
     // Colours for a terminal only, not for a pipe or a log file.
     let ansi = std::io::IsTerminal::is_terminal(&std::io::stderr());
     let builder = tracing_subscriber::fmt()
@@ -33,17 +35,22 @@ pub(crate) fn init(timed: bool) {
             builder
                 // The library's warnings about the radio's settings are said here as
                 // hints with the options to give.
-                .with_env_filter(tracing_subscriber::EnvFilter::new(
-                    "warn,mcp_host::diagnosis=off",
-                ))
-                .event_format(Plain { timed })
+                .with_env_filter(tracing_subscriber::EnvFilter::new(if hub {
+                    format!(
+                        "warn,{}=info,mcp_host::diagnosis=off",
+                        mcp_host::hub::STATUS_TARGET
+                    )
+                } else {
+                    "warn,mcp_host::diagnosis=off".to_owned()
+                }))
+                .event_format(Plain { timed: hub })
                 .init()
         }
     }
 }
 
 /// An event as one of the command's own lines: `mcp-gs: `, the time of day if `timed`,
-/// `error: ` for an error, then the message, its `error` field after a colon, and any
+/// `error: ` for an error or `warning: ` for a warning, then the message, its `error` field after a colon, and any
 /// other fields in parentheses.
 struct Plain {
     timed: bool,
@@ -108,8 +115,10 @@ where
             let now = mcp_host::render::text::time(std::time::SystemTime::now());
             write!(writer, "{now} ")?;
         }
-        if *event.metadata().level() == Level::ERROR {
-            writer.write_str("error: ")?;
+        match *event.metadata().level() {
+            Level::ERROR => writer.write_str("error: ")?,
+            Level::WARN => writer.write_str("warning: ")?,
+            _ => {}
         }
         let mut line = Line::default();
         event.record(&mut line);
