@@ -87,7 +87,11 @@ pub enum ErrorKind {
         /// The number of waypoints that the packet length holds.
         waypoints: usize,
     },
-    /// A trajectory report holds more than 254 waypoints (size 0xFF).
+    /// A trajectory packet holds more than 254 waypoints (size 0xFF): a report read by
+    /// [`parse`](crate::Packet::parse), or waypoints checked on their own
+    /// ([`Waypoints::new_checked`](crate::Waypoints::new_checked)). In a command, size
+    /// 0xFF is the trajectory status request (`c 04 FF`), and
+    /// [`WrongLength`](Self::WrongLength) with bytes after it.
     TooManyWaypoints(usize),
     /// A firmware-form position slave set command names a slot other than 0-3.
     InvalidSlot(u8),

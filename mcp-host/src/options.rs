@@ -67,6 +67,34 @@ impl Default for ReconnectPolicy {
 }
 
 /// Options of a link: XBee API mode, framing limit, timeouts and reconnection.
+///
+/// Set the fields that differ from the defaults, the rest with `..Default::default()`:
+///
+/// ```
+/// use std::time::Duration;
+/// use mcp_host::xbee_api::ApiMode;
+/// use mcp_host::{LinkOptions, ReconnectPolicy};
+///
+/// // A radio set to AP=2, plugged in after the program starts, whose statuses take
+/// // long (a network of many hops).
+/// let options = LinkOptions {
+///     api_mode: ApiMode::Escaped,
+///     wait_for_link: true,
+///     send_timeout: Duration::from_secs(20),
+///     ..LinkOptions::default()
+/// };
+/// assert!(options.reconnect.enabled);
+/// assert_eq!(options.reconnect.max_delay, Duration::from_secs(5));
+///
+/// // A one-shot tool: the first disconnection ends the link, no reconnection.
+/// let once = LinkOptions {
+///     reconnect: ReconnectPolicy::disabled(),
+///     ..LinkOptions::default()
+/// };
+/// assert!(!once.reconnect.enabled);
+/// ```
+///
+/// They go to [`connect`](crate::connect) with the link.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct LinkOptions {
     /// XBee API mode of the local radio (`AP` setting): 1 (unescaped, as the deployed
@@ -118,7 +146,9 @@ pub struct LinkOptions {
     /// Capacity of the event queue between the background task and the
     /// [`crate::PacketStream`]; when the consumer falls behind by this many events, newer
     /// packets and frames are dropped and counted ([`crate::Stats::events_dropped`]);
-    /// link events are held back, never dropped. At most [`MAX_EVENT_CAPACITY`]; each
+    /// link events are held back, 64 at most (beyond that the oldest are dropped and
+    /// counted too), and the stream always ends with
+    /// [`LinkEvent::Closed`](crate::LinkEvent::Closed). At most [`MAX_EVENT_CAPACITY`]; each
     /// [`crate::Subscription`] channel takes room for this many events (rounded up to a
     /// power of two) when the first is taken.
     pub event_capacity: usize,

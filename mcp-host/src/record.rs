@@ -17,6 +17,36 @@
 //! Frames are stored without their API-mode framing so that a recording replays onto a
 //! link in either mode. A reader stops with an error at a truncated record, after
 //! handing out every whole record before it.
+//!
+//! # Writing and reading one
+//!
+//! ```
+//! use std::io::{BufWriter, Write};
+//! use std::time::{Duration, UNIX_EPOCH};
+//! use mcp_host::record::{Direction, RecordReader, RecordWriter};
+//!
+//! # fn main() -> std::io::Result<()> {
+//! let time = UNIX_EPOCH + Duration::from_secs(1_790_000_000);
+//! // A file in a real program (`File::create`): buffered, and flushed at the end.
+//! let mut writer = RecordWriter::new(BufWriter::new(Vec::new()))?;
+//! // A Modem Status frame from the radio, and an AT Command (`AP`) sent to it.
+//! writer.write(time, Direction::Received, &[0x8A, 0x06])?;
+//! writer.write(time, Direction::Sent, &[0x08, 0x01, b'A', b'P'])?;
+//! writer.flush()?;
+//! let bytes = writer.into_inner().into_inner().map_err(|e| e.into_error())?;
+//!
+//! let mut records = RecordReader::new(&bytes[..])?;
+//! let first = records.next_record()?.expect("a record");
+//! assert_eq!(first.time, time);
+//! assert_eq!(first.direction, Direction::Received);
+//! assert_eq!(first.frame, [0x8A, 0x06]);
+//! // Or as an iterator of `io::Result<Record>`.
+//! let rest: Vec<_> = records.collect::<Result<_, _>>()?;
+//! assert_eq!(rest.len(), 1);
+//! assert_eq!(rest[0].direction, Direction::Sent);
+//! # Ok(())
+//! # }
+//! ```
 
 use std::io::{self, Read, Write};
 use std::time::{Duration, SystemTime, UNIX_EPOCH};

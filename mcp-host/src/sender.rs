@@ -103,6 +103,35 @@ impl CommandSender {
     }
 
     /// [`CommandSender::send`] with a per-call timeout or frame id 0.
+    ///
+    /// ```no_run
+    /// # async fn run(sender: mcp_host::CommandSender) -> Result<(), Box<dyn std::error::Error>> {
+    /// use std::time::Duration;
+    /// use mcp_core::Command;
+    /// use mcp_host::{DeliveryReport, FrameId, SendError, SendOptions};
+    ///
+    /// let mav = "0013A20040B599B9".parse()?;
+    /// let land: Command<&[u8]> = Command::Landing { on: true };
+    /// // The radio's Transmit Status within 2 s, rather than the link's send timeout.
+    /// let quick = SendOptions {
+    ///     timeout: Some(Duration::from_secs(2)),
+    ///     ..SendOptions::default()
+    /// };
+    /// match sender.send_with(mav, &land, quick).await {
+    ///     Ok(DeliveryReport::Delivered { retries, .. }) => println!("delivered ({retries} retries)"),
+    ///     Err(SendError::Delivery { status, .. }) => println!("not delivered: {status}"),
+    ///     Err(SendError::Timeout { .. }) => println!("no status from the radio in 2 s"),
+    ///     other => println!("{other:?}"),
+    /// }
+    /// // Fire and forget: frame id 0, no status asked for; done once queued.
+    /// let forget = SendOptions {
+    ///     frame_id: FrameId::None,
+    ///     ..SendOptions::default()
+    /// };
+    /// assert_eq!(sender.send_with(mav, &land, forget).await?, DeliveryReport::Written);
+    /// # Ok(())
+    /// # }
+    /// ```
     pub async fn send_with<B: AsRef<[u8]>>(
         &self,
         to: Address64,

@@ -13,7 +13,8 @@ pub struct Stats {
     pub oversize: u64,
     /// Frames dropped for an announced length of 0.
     pub empty: u64,
-    /// Frames cut off (by a new start delimiter, or by a disconnection).
+    /// Frames cut off (by a new start delimiter, by a disconnection, or in API mode 1 by
+    /// [`LinkOptions::partial_frame_timeout`](crate::LinkOptions::partial_frame_timeout)).
     pub truncated: u64,
     /// Frames dropped for an invalid escape (API mode 2).
     pub bad_escape: u64,

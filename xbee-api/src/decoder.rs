@@ -607,13 +607,16 @@ impl<const N: usize, M: DecoderMode> Decoder<N, M> {
     /// about 3 300 bytes in a firmware like the README's. Each call site is a copy.
     /// Where flash is tight, use `push`.
     ///
-    /// `f` cannot stop the loop: it is called for every event the chunk completes, at
-    /// most one for every 5 bytes of `input` and one more (a frame takes 5 bytes on the
-    /// wire at least; one begun in an earlier chunk may end with its first byte), and in
-    /// mode 1 one for every 5 bytes the decoder held for a failed candidate scanned
-    /// again. An inbox the closure copies into needs that many places; where it may be
-    /// full, take the events one at a time with [`decode`](Self::decode) or
-    /// [`push`](Self::push) and [`poll`](Self::poll) instead.
+    /// `f` cannot stop the loop: it is called for every event the chunk completes. Of
+    /// frames (`Ok`) there are at most one for every 5 bytes of `input` and one more (a
+    /// frame takes 5 bytes on the wire at least; one begun in an earlier chunk may end
+    /// with its first byte), and in mode 1 one for every 5 bytes the decoder held for a
+    /// failed candidate scanned again. An inbox the closure copies frames into needs
+    /// that many places; where it may be full, take the events one at a time with
+    /// [`decode`](Self::decode) or [`push`](Self::push) and [`poll`](Self::poll)
+    /// instead. Errors come far more often on noise: a candidate fails 3 bytes in
+    /// (`7E 00 00`, an empty frame), and a run of `0x7E` fails once a byte, so count
+    /// them (as [`stats`](Self::stats) does) rather than queue each.
     ///
     /// ```
     /// use xbee_api::{Decoder, Mode2};

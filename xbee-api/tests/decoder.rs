@@ -292,3 +292,36 @@ fn mode_1_a_read_that_starts_with_a_whole_frame_inside_a_frame() {
         assert_eq!(got, expected, "read from {k}");
     }
 }
+
+/// What `decode_each`'s docs promise an inbox: in one call, at most one frame for every
+/// 5 bytes and one more, while errors can come as often as one a byte.
+#[test]
+fn decode_each_completes_a_frame_per_5_bytes_at_most_and_an_error_per_byte() {
+    let minimal = hex(MODEM).repeat(20);
+    for mode in [ApiMode::Unescaped, ApiMode::Escaped] {
+        for (stream, least_errors) in [
+            (minimal.clone(), 0),
+            // Empty frames and oversize lengths fail 3 bytes in.
+            (hex("7E 00 00").repeat(40), 40),
+            (hex("7E FF 00").repeat(40), 40),
+            // A run of delimiters: each one starts a candidate that fails.
+            (vec![0x7E; 120], 100),
+        ] {
+            let mut decoder: Decoder<64> = Decoder::new(mode);
+            let (mut frames, mut errors) = (0, 0);
+            decoder.decode_each(&stream, |event| match event {
+                Ok(_) => frames += 1,
+                Err(_) => errors += 1,
+            });
+            assert!(frames <= stream.len() / 5 + 1, "{mode:?} {stream:02X?}");
+            assert!(errors <= stream.len(), "{mode:?} {stream:02X?}");
+            assert!(
+                errors >= least_errors,
+                "{mode:?}: {errors} errors {stream:02X?}"
+            );
+            if least_errors == 0 {
+                assert_eq!(frames, 20);
+            }
+        }
+    }
+}

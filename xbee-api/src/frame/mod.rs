@@ -144,7 +144,9 @@ pub enum Frame<'a> {
 
 impl<'a> Frame<'a> {
     /// Types a raw frame. Fails with [`FrameError::TooShort`] when the data is shorter
-    /// than the fixed fields of its (known) type; never panics.
+    /// than the fixed fields of its (known) type, and with [`FrameError::BadNodeInfo`]
+    /// for a Node Identification Indicator (0x95) whose node information does not read
+    /// (see [`NodeInfo::parse`](crate::NodeInfo::parse)); never panics.
     pub fn parse(raw: RawFrame<'a>) -> Result<Self, FrameError> {
         let data = raw.data();
         Ok(match raw.frame_type() {
