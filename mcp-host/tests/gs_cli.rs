@@ -822,6 +822,33 @@ fn standard_output_that_cannot_be_written_is_a_failure() {
 }
 
 #[test]
+fn standard_error_that_cannot_be_written_keeps_the_exit_status() {
+    // A logger that went away, or a full disk: the message is lost, the status is not
+    // (a panic would exit 101).
+    let full = || {
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap()
+    };
+    let missing = gs()
+        .args(["decode", "/nonexistent/recording.mcprec"])
+        .stderr(full())
+        .output()
+        .unwrap();
+    assert_eq!(missing.status.code(), Some(2));
+    // A warning on standard error, then the frame on standard output: success.
+    let encode = gs()
+        .args(["encode", "--to", "0013a20040b599b9", "trajectory"])
+        .args(["--waypoint", "1,0,0,1"])
+        .stderr(full())
+        .output()
+        .unwrap();
+    assert_eq!(encode.status.code(), Some(0));
+    assert!(encode.stdout.starts_with(b"7E"), "{:?}", encode.stdout);
+}
+
+#[test]
 fn a_recording_on_a_pipe_is_decoded_as_it_comes() {
     // As `monitor --record /dev/stdout | decode` or a recording sent over a network:
     // each record is shown while the writer is still at work.

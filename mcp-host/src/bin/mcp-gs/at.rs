@@ -240,7 +240,7 @@ async fn broadcast(
         }
     }
     if answered == 1 {
-        eprintln!(
+        err!(
             "mcp-gs: one radio answered: a Zigbee radio hands over a single answer to a \
              broadcast, however many radios carried it out; `mcp-gs nodes` lists them all, \
              for `--to ADDR` each"
@@ -398,7 +398,7 @@ pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
         );
     }
     if command == *b"ND" && args.to.is_none() && !data.is_empty() {
-        eprintln!(
+        err!(
             "mcp-gs: ND: every radio found answers on its own and this is the first answer; \
              `mcp-gs nodes` lists them all"
         );

@@ -50,7 +50,7 @@ impl TimeArg {
                 static WARNED: std::sync::atomic::AtomicBool =
                     std::sync::atomic::AtomicBool::new(false);
                 if time < Y2000 && !WARNED.swap(true, std::sync::atomic::Ordering::Relaxed) {
-                    eprintln!(
+                    err!(
                         "mcp-gs: warning: {what} {time} is {time} s after 1970-01-01 00:00 UTC: \
                          the MAV's clock counts seconds since 1970; for {time} s from now, \
                          give +{time}"
@@ -132,9 +132,7 @@ pub(crate) fn parse_finite(s: &str) -> Result<f32, String> {
         ));
     }
     if v == 0.0 && s.parse::<f64>().is_ok_and(|wide| wide != 0.0) {
-        eprintln!(
-            "mcp-gs: warning: `{s}` is closer to 0 than a 32-bit float can hold: it is sent as 0"
-        );
+        err!("mcp-gs: warning: `{s}` is closer to 0 than a 32-bit float can hold: it is sent as 0");
     }
     Ok(v)
 }

@@ -83,7 +83,7 @@ pub(crate) fn run(args: DecodeArgs) -> Result<(), Failure> {
             let stdin = io::stdin();
             if stdin.is_terminal() {
                 // Nobody is left waiting on a silent terminal without knowing why.
-                eprintln!("{}", terminal_note(args.hex));
+                err!("{}", terminal_note(args.hex));
             }
             Box::new(stdin.lock())
         } else {
@@ -447,7 +447,7 @@ fn decode_stream(
         ));
     }
     if let Some(hint) = hint {
-        eprintln!("mcp-gs: {hint}");
+        err!("mcp-gs: {hint}");
     }
     Ok(())
 }

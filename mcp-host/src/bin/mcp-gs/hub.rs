@@ -84,7 +84,7 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
             "will serve {radio} on {addr} once a radio is there: then give other commands \
              --link tcp:{addr} --api-mode {mode} (Ctrl-C stops)"
         );
-        eprintln!("mcp-gs: no radio on {radio} yet: clients are refused until one is there");
+        err!("mcp-gs: no radio on {radio} yet: clients are refused until one is there");
     }
     // What is wrong with the radio's settings, said from its link's counters (a radio
     // in another API mode, at another baud rate, in transparent mode): the hub drops
@@ -122,7 +122,7 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
                 if let (Some(hint), false) = (hint, hinted) {
                     hinted = true;
                     let reason = hint.strip_prefix("hint: ").unwrap_or(&hint);
-                    eprintln!(
+                    err!(
                         "mcp-gs: the hub drops the radio's frames it cannot read, and its \
                          clients get none of them: {reason} (stop the hub, and start it \
                          again with that fixed)"

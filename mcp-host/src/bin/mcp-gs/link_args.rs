@@ -132,7 +132,7 @@ impl LinkArgs {
         if !reconnect {
             if let Some(addr) = stream.info().local_addr {
                 // A one-shot subcommand on `tcp-listen:` waits for its peer first.
-                eprintln!(
+                err!(
                     "mcp-gs: waiting up to {:?} for a peer on {addr}",
                     self.timeout()
                 );
@@ -336,7 +336,7 @@ pub(crate) async fn check_mode(sender: &CommandSender, configured: ApiMode) {
                 "the radio did not answer AT AP within {timeout:?}, and nothing at all came from it: check its API mode"
             );
             if let Some(hint) = silence_hint(&sender.info().link, &sender.stats(), &lead) {
-                eprintln!("mcp-gs: {hint}");
+                err!("mcp-gs: {hint}");
             }
             return;
         }
@@ -353,7 +353,7 @@ pub(crate) async fn check_mode(sender: &CommandSender, configured: ApiMode) {
 /// stop coming after the hub's answer window.
 pub(crate) fn warn_hub_window(link: &Link, window: Duration) {
     if matches!(link, Link::Tcp { .. }) && window > mcp_host::hub::ANSWER_WINDOW {
-        eprintln!(
+        err!(
             "mcp-gs: through a hub, answers come for {:?} after it writes the request, \
              not for all of the {window:?} asked",
             mcp_host::hub::ANSWER_WINDOW
@@ -365,13 +365,13 @@ pub(crate) fn warn_hub_window(link: &Link, window: Duration) {
 /// path (`pty`), or the address bound (`tcp-listen:`, where port 0 picks one).
 pub(crate) fn announce_radio_side(info: &mcp_host::LinkInfo) {
     if let Some(path) = &info.pty_path {
-        eprintln!(
+        err!(
             "mcp-gs: pseudo-terminal for the radio side: {}",
             path.display()
         );
     }
     if let Some(addr) = info.local_addr {
-        eprintln!("mcp-gs: listening for the radio side on {addr} (connect with tcp:{addr})");
+        err!("mcp-gs: listening for the radio side on {addr} (connect with tcp:{addr})");
     }
 }
 
@@ -382,7 +382,7 @@ pub(crate) fn warn_unusual_baud(link: &Link) {
     if let Link::Serial { baud, .. } = link {
         if !BAUD_RATES.contains(baud) {
             let rates: Vec<String> = BAUD_RATES.iter().map(u32::to_string).collect();
-            eprintln!(
+            err!(
                 "mcp-gs: warning: {baud} baud is none of the standard XBee rates ({}): \
                  nothing will be understood unless the radio was set to exactly that",
                 rates.join(", ")
@@ -400,7 +400,7 @@ pub(crate) fn warn_mode_mismatch(radio: u8, configured: ApiMode, link: &Link) {
     if !matches!(radio, 1 | 2) {
         // Transparent mode answers no API frame; another value is none of the modes
         // spoken here (or no answer to AP at all).
-        eprintln!(
+        err!(
             "mcp-gs: warning: the radio reads its API mode as {radio} (AP={radio}), which \
              this ground station does not speak: `mcp-gs setup --link {link}` sets 1"
         );
@@ -412,7 +412,7 @@ pub(crate) fn warn_mode_mismatch(radio: u8, configured: ApiMode, link: &Link) {
             ),
             _ => String::new(),
         };
-        eprintln!(
+        err!(
             "mcp-gs: warning: the radio is in API mode {radio} (AP={radio}) but --api-mode is \
              {configured}: frames will be dropped or garbled; use --api-mode {radio} or auto{hub}"
         );

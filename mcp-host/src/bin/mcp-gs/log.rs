@@ -26,7 +26,7 @@ pub(crate) fn init(hub: bool) {
         Err(error) => {
             // Set, but not a filter: said, rather than logging as if it were not set.
             if let Some(value) = std::env::var_os("MCP_LOG") {
-                eprintln!(
+                err!(
                     "mcp-gs: warning: MCP_LOG={} is no log filter ({error}): logging \
                      warnings only; give levels as `debug` or `mcp_host=debug,warn`",
                     value.to_string_lossy()

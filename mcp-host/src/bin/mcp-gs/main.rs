@@ -9,6 +9,14 @@ macro_rules! out {
     };
 }
 
+/// `eprintln!` that cannot panic: a standard error that cannot be written (closed by
+/// the reader of a pipe, a full disk) loses the line, never the exit status.
+macro_rules! err {
+    ($($arg:tt)*) => {
+        $crate::write_err(format_args!($($arg)*))
+    };
+}
+
 mod at;
 mod command;
 mod decode;
@@ -163,11 +171,18 @@ pub(crate) fn write_line(line: std::fmt::Arguments<'_>) {
         match output_failure(&e) {
             None => std::process::exit(0),
             Some(failure) => {
-                eprintln!("mcp-gs: {}", failure.message);
+                err!("mcp-gs: {}", failure.message);
                 std::process::exit(failure.code.into());
             }
         }
     }
+}
+
+/// Writes one line to standard error, losing it if standard error cannot be written:
+/// the command's exit status says what happened.
+pub(crate) fn write_err(line: std::fmt::Arguments<'_>) {
+    use std::io::Write;
+    let _ = writeln!(std::io::stderr().lock(), "{line}");
 }
 
 /// What an error writing standard output ends the program with: `None` when standard
@@ -294,7 +309,7 @@ async fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(failure) => {
-            eprintln!("mcp-gs: {}", failure.message);
+            err!("mcp-gs: {}", failure.message);
             ExitCode::from(failure.code)
         }
     }

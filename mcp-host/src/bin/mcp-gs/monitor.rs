@@ -105,7 +105,7 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
             _ = look.tick(), if !hinted => {
                 if let Some(found) = diagnoser.as_mut().and_then(|d| d.look(stream.stats())) {
                     hinted = true;
-                    eprintln!("mcp-gs: {}", hint(found, &args.link.link));
+                    err!("mcp-gs: {}", hint(found, &args.link.link));
                 }
                 continue;
             }
@@ -157,7 +157,7 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
             // say): the hint counts on most frames failing, not on all of them.
             if let Some(found) = diagnoser.look(stream.stats()) {
                 hinted = true;
-                eprintln!("mcp-gs: {}", hint(found, &args.link.link));
+                err!("mcp-gs: {}", hint(found, &args.link.link));
             }
         }
         if let Event::Link(LinkEvent::Closed { reason, .. }) = &event {
@@ -170,7 +170,7 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
                 ended_silent += 1;
                 // Once, when it is not a one-off.
                 if ended_silent == TURNED_AWAY {
-                    eprintln!("mcp-gs: {}", crate::link_args::turned_away_hint());
+                    err!("mcp-gs: {}", crate::link_args::turned_away_hint());
                 }
             }
         }

@@ -30,7 +30,7 @@ pub(crate) async fn run(args: NodesArgs) -> Result<(), Failure> {
         Some(seconds) => Duration::from_secs_f64(seconds),
         None => mcp_host::discovery::window(&sender).await.map_err(failed)?,
     };
-    eprintln!(
+    err!(
         "mcp-gs: asking who is there (ND), answers for {:.1} s",
         window.as_secs_f64()
     );
@@ -49,7 +49,7 @@ pub(crate) async fn run(args: NodesArgs) -> Result<(), Failure> {
         if found.nodes.is_empty() {
             return Err(Failure::new(Failure::OTHER, unreadable));
         }
-        eprintln!("mcp-gs: {unreadable}");
+        err!("mcp-gs: {unreadable}");
     } else if found.nodes.is_empty() {
         let failure = Failure::new(
             Failure::TIMEOUT,

@@ -85,7 +85,7 @@ pub(crate) async fn run(args: ProbeArgs) -> Result<(), Failure> {
             path: path.clone(),
             baud,
         };
-        eprintln!("mcp-gs: {baud} baud...");
+        err!("mcp-gs: {baud} baud...");
         let found = match ask_api(&link, timeout).await? {
             Some(mode) => Found::Api(mode),
             None => match ask_command_mode(&link, guard, timeout).await? {

@@ -67,7 +67,7 @@ pub(crate) async fn run(args: ReplayArgs) -> Result<(), Failure> {
     check_wanted(&args)?;
     let (stream, sender) = args.link.open(false).await?;
     if let Some(path) = &stream.info().pty_path {
-        eprintln!("mcp-gs: pseudo-terminal: {}", path.display());
+        err!("mcp-gs: pseudo-terminal: {}", path.display());
     }
     let start = tokio::time::Instant::now();
     let mut played = 0u64;
@@ -79,7 +79,7 @@ pub(crate) async fn run(args: ReplayArgs) -> Result<(), Failure> {
     sender.close();
     sender.closed().await;
     result?;
-    eprintln!("mcp-gs: replayed {played} frames");
+    err!("mcp-gs: replayed {played} frames");
     Ok(())
 }
 

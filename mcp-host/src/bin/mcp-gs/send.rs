@@ -61,7 +61,7 @@ pub(crate) async fn run(args: SendArgs) -> Result<(), Failure> {
             }
             _ => format!("a packet of more than {largest} bytes"),
         };
-        eprintln!(
+        err!(
             "mcp-gs: warning: this {}-byte packet reaches the MAV in a {frame}-byte frame; the \
              deployed MAV firmware drops frames over {DEPLOYED_MAV_FRAME} bytes ({what})",
             payload.len(),
@@ -125,7 +125,7 @@ pub(crate) async fn run(args: SendArgs) -> Result<(), Failure> {
                 out!("the MAV reports the trajectory as sent");
             }
         }
-        CommandArgs::Status { .. } => eprintln!(
+        CommandArgs::Status { .. } => err!(
             "mcp-gs: note: the MAV answers with a report on the link; `mcp-gs status` waits \
              for it and prints it"
         ),

@@ -171,7 +171,7 @@ pub(crate) async fn run(args: SetupArgs) -> Result<(), Failure> {
         ..LinkOptions::default()
     };
     let port = open_once(&args.link, timeout).await?;
-    eprintln!("mcp-gs: entering the radio's command mode (+++ between {guard:?} of silence)");
+    err!("mcp-gs: entering the radio's command mode (+++ between {guard:?} of silence)");
     let failed = |e| command_failure(e, &args.link);
     let mut radio = match CommandMode::enter(port, guard, timeout).await {
         Ok(radio) => radio,
@@ -214,7 +214,7 @@ pub(crate) async fn run(args: SetupArgs) -> Result<(), Failure> {
             baud,
         },
         (Link::Tcp { .. }, Some(baud)) => {
-            eprintln!(
+            err!(
                 "mcp-gs: the radio's UART now runs at {baud} baud: set the bridge's serial \
                  side to it before the check below can pass"
             );
@@ -302,7 +302,7 @@ async fn set_up_in_api_frames(
         ));
     }
     if was != target || new_bd.is_some() {
-        eprintln!(
+        err!(
             "mcp-gs: the radio did not answer +++ (older firmware takes it in transparent \
              mode only) but answers API frames in mode {was}: setting it up in API frames"
         );
