@@ -210,7 +210,9 @@ fn timeout_cause(delivered: bool, undecodable: u64) -> String {
         )
     });
     match (delivered, lost) {
-        (true, None) => "the radio delivered the request: the MAV did not answer".to_owned(),
+        (true, None) => "the radio delivered the request; the MAV did not answer, or its \
+                         report was lost on the way"
+            .to_owned(),
         (true, Some(lost)) => {
             format!("the radio delivered the request, but {lost}: the report may have been one")
         }

@@ -254,6 +254,33 @@ fn a_hub_in_another_api_mode_than_its_radio_says_so_at_once() {
 }
 
 #[test]
+fn a_report_lost_by_a_hub_in_another_api_mode_is_not_blamed_on_the_mav() {
+    // The radio in API mode 2, the hub and the client in mode 1: the status request
+    // goes out and is delivered, but the MAV's report (from 0013A2..., escaped) is
+    // dropped by the hub. The client asks the radio's AP and says what to fix.
+    let (_sim, radio, _sim_out) = sim_on_tcp("2");
+    let (_hub, out, _err) = start_hub(&radio);
+    let (_, addr) = serving(&out);
+    let status = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args(["status", "--link", &format!("tcp:{addr}"), "--timeout", "2"])
+        .args(["--to", "0013A20040B599B9", "landing"])
+        .env_remove("MCP_LOG")
+        .output()
+        .expect("run mcp-gs status");
+    let stderr = String::from_utf8_lossy(&status.stderr);
+    assert_eq!(status.status.code(), Some(4), "{stderr}");
+    assert!(
+        stderr.contains("the MAV did not answer, or its report was lost on the way"),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains("the radio is in API mode 2 (AP=2) but --api-mode is 1")
+            && stderr.contains("the hub itself must be started with --api-mode 2"),
+        "{stderr}"
+    );
+}
+
+#[test]
 fn a_hub_with_wait_waits_for_its_radio_refusing_clients_meanwhile() {
     // Nothing listens on the radio's port yet (a bridge not started).
     let reserved = common::ReservedPort::new();

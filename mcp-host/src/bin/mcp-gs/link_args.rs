@@ -245,6 +245,17 @@ impl LinkArgs {
             )),
         }
     }
+
+    /// After a report that did not come although the radio delivered the request (and
+    /// nothing undecodable came meanwhile): asks the radio its `AP` and warns if it is
+    /// in another mode than `--api-mode`. Through a hub in another mode than the radio,
+    /// the request goes out and its status comes back, but the report, from an address
+    /// with bytes to escape (every `0013A2...`), is dropped by the hub, out of sight.
+    pub(crate) async fn check_mode_after_silence(&self, sender: &CommandSender) {
+        if let ApiModeChoice::Fixed(mode) = self.api_mode {
+            check_mode(sender, mode).await;
+        }
+    }
 }
 
 /// The radio's `AP`, asked on a link opened with `options` (API mode 1, no reconnection)

@@ -117,6 +117,9 @@ pub(crate) async fn run(args: SendArgs) -> Result<(), Failure> {
                 }
                 out!("{json}");
             }
+            if let Err(Unconfirmed { reported: None, .. }) = checked {
+                args.link.check_mode_after_silence(&sender).await;
+            }
             checked.map_err(|unconfirmed| {
                 let failure = unconfirmed.failure(args.to, waypoints);
                 diagnosed(failure, &args.link, &sender.stats())
@@ -295,7 +298,7 @@ impl Unconfirmed {
                 Failure::TIMEOUT,
                 format!(
                     "no trajectory report from {to} within {:?}: the MAV did not take the \
-                     trajectory",
+                     trajectory, or its report was lost on the way",
                     self.timeout
                 ),
             ),

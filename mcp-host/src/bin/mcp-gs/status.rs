@@ -82,6 +82,16 @@ pub(crate) async fn run(args: StatusArgs) -> Result<(), Failure> {
             ..
         })
     );
+    // Delivered, no report, and nothing undecodable here: the report may have been
+    // dropped on the way by a hub in another API mode than the radio's.
+    if let Err(RequestError::Timeout {
+        delivered: true,
+        undecodable: 0,
+        ..
+    }) = report
+    {
+        args.link.check_mode_after_silence(&sender).await;
+    }
     let report = report
         .map_err(|e| match e {
             RequestError::Send(e) => send_failure(e),
