@@ -205,6 +205,13 @@ pub(crate) fn counted(n: u64, noun: &str) -> String {
 ///     diagnosis.to_string(),
 ///     "6 frames failed the checksum and 2 passed: the radio may be in API mode 2 (AP=2)"
 /// );
+/// // No more failed than passed: a line that corrupts a frame now and then reads so too.
+/// let stats = Stats { frames: 1, bad_checksum: 1, ..Stats::default() };
+/// assert_eq!(
+///     stats.diagnose(ApiMode::Unescaped).unwrap().to_string(),
+///     "1 frame failed the checksum and 1 passed: the radio may be in API mode 2 (AP=2), \
+///      or the line corrupted it"
+/// );
 /// ```
 impl fmt::Display for Diagnosis {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -220,7 +227,13 @@ impl fmt::Display for Diagnosis {
                     "{} failed the checksum and {passed} passed: the radio may be in API \
                      mode {radio} (AP={radio})",
                     counted(failed, "frame")
-                )
+                )?;
+                // As many good frames as bad: noise on the line reads the same.
+                match failed {
+                    _ if failed > passed => Ok(()),
+                    1 => f.write_str(", or the line corrupted it"),
+                    _ => f.write_str(", or the line corrupted them"),
+                }
             }
             Diagnosis::NoFrames { bytes } => write!(
                 f,
