@@ -1036,6 +1036,41 @@ fn monitor_keeps_an_existing_recording() {
 }
 
 #[test]
+fn monitor_counts_the_frames_that_fail_after_its_hint_rather_than_showing_each() {
+    // A radio in API mode 2 read in mode 1: every Receive Packet from 0013A2... has a
+    // byte escaped, and fails the checksum. After the hint, the failures are counted.
+    let frame = xbee_api::ReceivePacketRepr {
+        src64: "0013A20040B599B9".parse().unwrap(),
+        src16: xbee_api::Address16(0x7B1F),
+        options: 0x01,
+        data: b"t\x01\x00\x00\x80\x3F",
+    };
+    let mut one = [0u8; 64];
+    let n = xbee_api::EncodeFrame::encode(&frame, xbee_api::ApiMode::Escaped, &mut one).unwrap();
+    let (link, peer) = common::talking_peer(one[..n].repeat(40));
+    let output = run(&["monitor", "--link", &link, "--count", "40"]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert_eq!(output.status.code(), Some(0), "{stderr}");
+    assert!(stderr.contains("hint: "), "{stderr}");
+    let shown = stdout
+        .lines()
+        .filter(|l| l.contains("error: bad checksum"))
+        .count();
+    // Those before the hint: it may come before any (the counters are read too).
+    assert!(shown < 10, "{stdout}");
+    // The rest, said in one line at the end, with the hint again.
+    let count = format!(
+        "error: {} more frames failed to decode, not shown",
+        40 - shown
+    );
+    let told = stdout.lines().last().unwrap_or_default();
+    assert!(told.contains(&count), "{stdout}");
+    assert!(told.contains("try --api-mode 2"), "{stdout}");
+    peer.join().unwrap();
+}
+
+#[test]
 fn monitor_hints_at_the_baud_rate_when_nothing_makes_sense() {
     // What a radio at another baud rate looks like: start delimiters with impossible
     // lengths, and no good frame.

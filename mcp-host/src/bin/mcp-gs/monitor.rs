@@ -92,6 +92,8 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
         ApiModeChoice::Auto => None,
     };
     let mut hinted = false;
+    // Once the hint is given, frames that fail to decode are counted, not each shown.
+    let mut quiet: Option<Quiet> = None;
     // Connections a TCP peer ended before anything came: it may be turning us away.
     let mut ended_silent = 0u32;
     let mut dates = render::text::DateLines::new();
@@ -102,10 +104,14 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
         let event = tokio::select! {
             event = stream.next() => event,
             _ = &mut ctrl_c => None,
-            _ = look.tick(), if !hinted => {
-                if let Some(found) = diagnoser.as_mut().and_then(|d| d.look(stream.stats())) {
+            _ = look.tick() => {
+                if let Some(quiet) = &mut quiet {
+                    quiet.tell_if_due(false);
+                } else if let (false, Some(found)) =
+                    (hinted, diagnoser.as_mut().and_then(|d| d.look(stream.stats())))
+                {
                     hinted = true;
-                    err!("mcp-gs: {}", hint(found, &args.link.link));
+                    quiet = Quiet::after(hint(found, &args.link.link), args.format);
                 }
                 continue;
             }
@@ -133,6 +139,14 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
                     })?;
             }
         }
+        if let (Some(quiet), Event::DecodeError(_)) = (&mut quiet, &event) {
+            quiet.count();
+            seen += 1;
+            if args.count.is_some_and(|n| seen >= n) {
+                break;
+            }
+            continue;
+        }
         let line = match args.format {
             Format::Json => render::json::event(&event).to_string(),
             Format::Text => {
@@ -157,7 +171,7 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
             // say): the hint counts on most frames failing, not on all of them.
             if let Some(found) = diagnoser.look(stream.stats()) {
                 hinted = true;
-                err!("mcp-gs: {}", hint(found, &args.link.link));
+                quiet = Quiet::after(hint(found, &args.link.link), args.format);
             }
         }
         if let Event::Link(LinkEvent::Closed { reason, .. }) = &event {
@@ -182,7 +196,61 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
             break;
         }
     }
+    if let Some(quiet) = &mut quiet {
+        quiet.tell_if_due(true);
+    }
     Ok(())
+}
+
+/// How often [`Quiet`] says how many frames it did not show.
+const QUIET_EVERY: std::time::Duration = std::time::Duration::from_secs(5);
+
+/// Text output once the radio's settings are known to differ from the link's: every
+/// frame from the radio may fail to decode, many a second, and a line for each would
+/// push the one line that says what to do off the screen. They are counted instead,
+/// and the count is said every [`QUIET_EVERY`], with the hint again. JSON output shows
+/// every one, for the programs that read it.
+struct Quiet {
+    hint: String,
+    /// Frames not shown since the last count was said.
+    hidden: u64,
+    /// When the count was last said (or the hint first given).
+    told: std::time::Instant,
+}
+
+impl Quiet {
+    /// Gives `hint` on standard error; a `Quiet` for text output.
+    fn after(hint: String, format: Format) -> Option<Quiet> {
+        err!("mcp-gs: {hint}");
+        (format == Format::Text).then(|| Quiet {
+            hint,
+            hidden: 0,
+            told: std::time::Instant::now(),
+        })
+    }
+
+    /// Counts a frame that failed to decode, not shown.
+    fn count(&mut self) {
+        self.hidden += 1;
+        self.tell_if_due(false);
+    }
+
+    /// Says how many frames were not shown, if any, when [`QUIET_EVERY`] has passed
+    /// since it last did (or at once with `now`, at the end).
+    fn tell_if_due(&mut self, now: bool) {
+        if self.hidden == 0 || !(now || self.told.elapsed() >= QUIET_EVERY) {
+            return;
+        }
+        let line = format!(
+            "{} error: {} failed to decode, not shown ({})",
+            render::text::time(SystemTime::now()),
+            crate::counted(self.hidden, "more frame"),
+            self.hint
+        );
+        self.hidden = 0;
+        self.told = std::time::Instant::now();
+        out!("{line}");
+    }
 }
 
 /// Connections a TCP peer ends before anything came from it after which `monitor` says
