@@ -1071,6 +1071,27 @@ fn monitor_counts_the_frames_that_fail_after_its_hint_rather_than_showing_each()
 }
 
 #[test]
+fn a_recording_that_cannot_be_written_is_named() {
+    // A modem status, recorded to a full disk.
+    let (link, peer) = common::talking_peer(vec![0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F]);
+    let output = run(&[
+        "monitor",
+        "--link",
+        &link,
+        "--record",
+        "/dev/full",
+        "--force",
+    ]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.starts_with("mcp-gs: cannot write to /dev/full: "),
+        "{stderr}"
+    );
+    peer.join().unwrap();
+}
+
+#[test]
 fn monitor_hints_at_the_baud_rate_when_nothing_makes_sense() {
     // What a radio at another baud rate looks like: start delimiters with impossible
     // lengths, and no good frame.

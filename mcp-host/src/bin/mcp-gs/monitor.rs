@@ -129,13 +129,14 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
             Event::InvalidPacket(rx) => rx.origin.received_at,
             _ => SystemTime::now(),
         };
-        if let Some(recorder) = &mut recorder {
+        if let (Some(recorder), Some(path)) = (&mut recorder, &args.record) {
             if let Some(frame) = frame_data(&event) {
                 recorder
                     .write(time, Direction::Received, frame)
                     .and_then(|()| recorder.flush())
                     .map_err(|e| {
-                        Failure::new(Failure::OTHER, format!("cannot write the recording: {e}"))
+                        let path = path.display();
+                        Failure::new(Failure::OTHER, format!("cannot write to {path}: {e}"))
                     })?;
             }
         }
