@@ -166,6 +166,28 @@ fn refusals_say_what_the_radio_answered() {
         message.contains("invalid_command (0x02)") && message.contains("does not know"),
         "{message}"
     );
+    // A remote radio's refusal names it.
+    let out = sim.at(&["--to", MAV, "HV", "1"]);
+    assert_eq!(out.status.code(), Some(2), "{out:?}");
+    let message = stderr(&out);
+    assert!(
+        message.starts_with(&format!("mcp-gs: HV on {}: ", MAV.to_lowercase()))
+            && message.contains("invalid_parameter (0x03)"),
+        "{message}"
+    );
+}
+
+#[test]
+fn options_for_a_value_without_one_are_usage_errors() {
+    // Nothing to take as text or to queue: a read, not silently a read.
+    for option in ["--text", "--no-apply"] {
+        let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+            .args(["at", "--link", "tcp:127.0.0.1:9", option, "NI"])
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2), "{out:?}");
+        assert!(stderr(&out).contains("<VALUE>"), "{out:?}");
+    }
 }
 
 #[test]

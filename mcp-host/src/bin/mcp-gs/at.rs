@@ -28,12 +28,12 @@ pub(crate) struct AtArgs {
     #[arg(long, value_name = "SECONDS", value_parser = crate::link_args::parse_seconds)]
     window: Option<f64>,
     /// VALUE is text, not hex (the default for the text parameters NI, DN, BI and VL).
-    #[arg(long)]
+    #[arg(long, requires = "value")]
     text: bool,
     /// Do not apply the change at once: it waits for an AC command (`mcp-gs at AC`),
     /// which applies every queued change together. Sent as AT Command - Queue Parameter
     /// Value (0x09) to the local radio, without the apply option to a remote one.
-    #[arg(long)]
+    #[arg(long, requires = "value")]
     no_apply: bool,
     /// The two-letter AT command, e.g. AP, NP, NI, SH, SL, MY, ID, CH, N?.
     command: String,
@@ -92,6 +92,11 @@ fn is_text(command: &[u8; 2]) -> bool {
 /// remote command was not delivered.
 fn explain(status: AtStatus, name: &str, to: Option<Address64>, set: bool) -> String {
     let code = u8::from(status);
+    // Which radio refused: a remote one is named.
+    let name = &match to {
+        Some(to) if status.meaning() != AtStatus::TxFailure => format!("{name} on {to}"),
+        _ => name.to_owned(),
+    };
     match (status.meaning(), to) {
         (AtStatus::Error, _) => format!(
             "{name}: the radio answered error (0x{code:02x}): it could not carry out the command"
