@@ -783,20 +783,22 @@ fn closed_standard_output_ends_quietly() {
     assert_eq!(output.status.code(), Some(0), "{stderr}");
 }
 
+/// `/dev/full`, opened for writing: every write fails with "no space left on device".
+fn dev_full() -> std::fs::File {
+    std::fs::OpenOptions::new()
+        .write(true)
+        .open("/dev/full")
+        .unwrap()
+}
+
 #[test]
 fn standard_output_that_cannot_be_written_is_a_failure() {
     // A full disk, unlike a reader that went away, loses what was to be printed: a
     // script must not read it as success.
-    let full = || {
-        std::fs::OpenOptions::new()
-            .write(true)
-            .open("/dev/full")
-            .unwrap()
-    };
     let mut decode = gs()
         .args(["decode", "--hex"])
         .stdin(Stdio::piped())
-        .stdout(full())
+        .stdout(dev_full())
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
@@ -808,7 +810,7 @@ fn standard_output_that_cannot_be_written_is_a_failure() {
         .unwrap();
     let encode = gs()
         .args(["encode", "--to", "0013a20040b599b9", "landing", "on"])
-        .stdout(full())
+        .stdout(dev_full())
         .output()
         .unwrap();
     for output in [decode.wait_with_output().unwrap(), encode] {
@@ -825,15 +827,9 @@ fn standard_output_that_cannot_be_written_is_a_failure() {
 fn standard_error_that_cannot_be_written_keeps_the_exit_status() {
     // A logger that went away, or a full disk: the message is lost, the status is not
     // (a panic would exit 101).
-    let full = || {
-        std::fs::OpenOptions::new()
-            .write(true)
-            .open("/dev/full")
-            .unwrap()
-    };
     let missing = gs()
         .args(["decode", "/nonexistent/recording.mcprec"])
-        .stderr(full())
+        .stderr(dev_full())
         .output()
         .unwrap();
     assert_eq!(missing.status.code(), Some(2));
@@ -841,7 +837,7 @@ fn standard_error_that_cannot_be_written_keeps_the_exit_status() {
     let encode = gs()
         .args(["encode", "--to", "0013a20040b599b9", "trajectory"])
         .args(["--waypoint", "1,0,0,1"])
-        .stderr(full())
+        .stderr(dev_full())
         .output()
         .unwrap();
     assert_eq!(encode.status.code(), Some(0));
