@@ -190,8 +190,10 @@ impl<R: Read> RecordReader<R> {
         }
         if got < head.len() {
             return Err(invalid(&format!(
-                "record at offset {} is cut off in its header",
-                self.offset
+                "recording cut off part way through the header of the record at offset {}: \
+                 {got} of its {} bytes are there",
+                self.offset,
+                head.len()
             )));
         }
         let micros = u64::from_le_bytes(head[..8].try_into().expect("8 bytes"));
@@ -213,9 +215,11 @@ impl<R: Read> RecordReader<R> {
             )));
         }
         let mut frame = vec![0u8; len];
-        if read_full(&mut self.input, &mut frame)? < len {
+        let got = read_full(&mut self.input, &mut frame)?;
+        if got < len {
             return Err(invalid(&format!(
-                "record at offset {} is cut off: {len} frame bytes announced",
+                "recording cut off part way through the record at offset {}: {got} of its \
+                 {len} frame bytes are there",
                 self.offset
             )));
         }

@@ -948,12 +948,17 @@ fn decode_from_a_pipe_shows_each_frame_as_it_comes() {
         assert_eq!(rest(&lines), Vec::<String>::new(), "{args:?}");
         assert_eq!(exit_code(&mut decode.0), Some(0), "{args:?}");
     }
-    // Text that is not hex ends it as an input error, after what came before.
+    // A line that is not hex is said and skipped, decoding goes on, and the input is an
+    // input error at the end.
     let (mut decode, mut stdin, lines) = decode_piped(&["--hex", "-"]);
-    stdin.write_all(b"7E 00 02 8A 06 6F\n7E 0G\n").unwrap();
+    stdin
+        .write_all(b"7E 00 02 8A 06 6F\n7E 0G\n7E 00 02 8A 06 6F\n")
+        .unwrap();
     drop(stdin);
     let out = rest(&lines);
-    assert_eq!(out.len(), 1, "{out:?}");
+    assert_eq!(out.len(), 3, "{out:?}");
+    assert!(out[1].contains("line 2: `0G` is not a hex byte"), "{out:?}");
+    assert!(out[2].contains("coordinator_started"), "{out:?}");
     assert_eq!(exit_code(&mut decode.0), Some(2), "{out:?}");
 }
 

@@ -1,5 +1,7 @@
 //! `mcp-gs decode`: decode a captured byte stream or a recording.
 
+use std::collections::VecDeque;
+use std::fmt;
 use std::fs::File;
 use std::io::{self, BufReader, IsTerminal, Read, Write};
 use std::path::PathBuf;
@@ -10,7 +12,7 @@ use xbee_api::{ApiMode, DecodeError, Decoder, Frame};
 use mcp_host::record::{self, Direction, RecordReader};
 use mcp_host::render;
 
-use crate::hex_input::HexReader;
+use crate::hex_input::{BadText, HexReader};
 use crate::{ApiModeArg, Failure, Format};
 
 /// Arguments of `decode`.
@@ -113,6 +115,11 @@ fn decode_input(
     live: bool,
 ) -> io::Result<()> {
     let mut input = BufReader::with_capacity(1 << 16, input);
+    let name = (args.input.as_os_str() != "-").then(|| args.input.display().to_string());
+    let source = Source {
+        name: name.as_deref(),
+        hex: args.hex,
+    };
     let mut printer = Printer {
         format: args.format,
         summary: args.summary.then(Summary::default),
@@ -127,7 +134,7 @@ fn decode_input(
             format!("cannot read {}: {e}", args.input.display()),
         )
     })?;
-    if args.hex && record::is_recording(&head) {
+    if args.hex && record::is_recording(head.data()) {
         return Err(io::Error::new(
             io::ErrorKind::InvalidData,
             format!(
@@ -141,11 +148,13 @@ fn decode_input(
     if args.hex {
         // Decoded a line at a time, as the text comes. A hex dump of a recording is a
         // recording: its head is read again, as the bytes the text gives.
-        let mut bytes = HexReader::new(io::Cursor::new(head).chain(input));
-        let head = read_head(&mut bytes)?;
-        decode_bytes(head, bytes, mode, &mut printer, live)?;
+        // The raw head holds no skipped lines: they come from hex text only.
+        let mut bytes = HexReader::new(head.bytes.chain(input));
+        // Text that is not text at all, in the first line.
+        let head = read_head(&mut bytes).map_err(|e| io::Error::new(e.kind(), source.says(&e)))?;
+        decode_bytes(head, bytes, mode, &mut printer, source, live)?;
     } else {
-        decode_bytes(head, input, mode, &mut printer, live)?;
+        decode_bytes(head, input, mode, &mut printer, source, live)?;
     }
     printer.finish()
 }
@@ -153,18 +162,73 @@ fn decode_input(
 /// Decodes `head` (from [`read_head`]) and the `rest` after it: a recording if the
 /// head is one's, else a stream in `mode`.
 fn decode_bytes(
-    head: Vec<u8>,
+    head: Head,
     rest: impl Read,
     mode: ApiMode,
     printer: &mut Printer<'_, impl Write>,
+    source: Source<'_>,
     live: bool,
 ) -> io::Result<()> {
-    let recording = record::is_recording(&head);
-    let bytes = io::Cursor::new(head).chain(rest);
+    let recording = record::is_recording(head.data());
+    let bytes = head.chain(rest);
     if recording {
-        decode_recording(bytes, printer, live)
+        decode_recording(bytes, printer, source, live)
     } else {
-        decode_stream(bytes, mode, printer)
+        decode_stream(bytes, mode, printer, source)
+    }
+}
+
+/// The input as messages name it.
+#[derive(Debug, Clone, Copy)]
+struct Source<'a> {
+    /// The file's path; none for standard input.
+    name: Option<&'a str>,
+    /// The input is hex text.
+    hex: bool,
+}
+
+impl Source<'_> {
+    /// `message` about the input, after the file's name if it is a file: `FILE: ...`.
+    fn says(&self, message: impl fmt::Display) -> String {
+        match self.name {
+            Some(name) => format!("{name}: {message}"),
+            None => message.to_string(),
+        }
+    }
+}
+
+/// Lines of hex text skipped as not hex: how many, and the first, for the message at
+/// the end.
+#[derive(Debug, Default)]
+struct SkippedLines {
+    count: u64,
+    first: Option<BadText>,
+}
+
+impl SkippedLines {
+    /// Counts `bad`, a line skipped.
+    fn add(&mut self, bad: &BadText) {
+        self.count += 1;
+        self.first.get_or_insert_with(|| bad.clone());
+    }
+
+    /// The message at the end when lines were skipped: bad input, though the rest of it
+    /// was decoded.
+    fn message(&self) -> Option<String> {
+        let first = self.first.as_ref()?;
+        Some(if self.count == 1 {
+            format!(
+                "{first} ({}); the other lines were decoded: correct that line to decode \
+                 it too",
+                first.skipped_note()
+            )
+        } else {
+            format!(
+                "{} lines that are not hex were skipped (the first, {first}); the other \
+                 lines were decoded: correct them to decode them too",
+                self.count
+            )
+        })
     }
 }
 
@@ -289,6 +353,27 @@ impl<W: Write> Printer<'_, W> {
         }
     }
 
+    /// Says a line of hex text skipped as not hex, as a dropped frame is said: with
+    /// where it was in the input.
+    fn bad_text(&mut self, bad: &BadText) -> io::Result<()> {
+        if self.summary.is_some() {
+            return Ok(()); // counted for the summary
+        }
+        let message = format!("{} ({})", bad.problem, bad.skipped_note());
+        match self.format {
+            Format::Json => {
+                let value =
+                    serde_json::json!({"error": "hex", "line": bad.line, "message": message});
+                writeln!(self.out, "{value}")
+            }
+            Format::Text => writeln!(
+                self.out,
+                "error, found at input line {}: {message}",
+                bad.line
+            ),
+        }
+    }
+
     fn finish(&mut self) -> io::Result<()> {
         Ok(())
     }
@@ -361,12 +446,17 @@ impl Totals {
     }
 }
 
+/// Decodes a raw capture, or the bytes of hex text, in `mode`. A line of hex text that
+/// is not hex is said where it was and skipped: the decoder reads on as if it was not
+/// there, and the input is bad input at the end.
 fn decode_stream(
     mut input: impl Read,
     mode: ApiMode,
     printer: &mut Printer<'_, impl Write>,
+    source: Source<'_>,
 ) -> io::Result<()> {
     let mut decoder: Decoder = Decoder::new(mode);
+    let mut skipped = SkippedLines::default();
     let mut chunk = vec![0u8; 1 << 16];
     let mut offset = 0u64;
     // The decoder's counters are 32-bit and wrap; they are added up here a read at a
@@ -378,7 +468,16 @@ fn decode_stream(
             Ok(0) => break,
             Ok(n) => n,
             Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
-            Err(e) => return Err(e),
+            Err(e) => match BadText::of(&e) {
+                Some(bad) if bad.goes_on() => {
+                    skipped.add(bad);
+                    printer.bad_text(bad)?;
+                    printer.out.flush()?;
+                    continue;
+                }
+                Some(bad) => return Err(io::Error::new(e.kind(), source.says(bad))),
+                None => return Err(e),
+            },
         };
         if let Some(summary) = &mut printer.summary {
             // Errors are counted by the decoder; no offsets are needed.
@@ -418,9 +517,19 @@ fn decode_stream(
     totals.take(&decoder);
     let stats = &totals.stats;
     if let Some(summary) = &printer.summary {
-        print_summary(printer.out, summary, printer.format, offset, stats)?;
+        let bad_lines = source.hex.then_some(skipped.count);
+        print_summary(
+            printer.out,
+            summary,
+            printer.format,
+            offset,
+            stats,
+            bad_lines,
+        )?;
     }
     let hint = mode_hint(mode, stats);
+    // Lines skipped make the input bad input, said first.
+    let skipped = skipped.message().map(|message| source.says(message));
     if offset > 0 && stats.frames == 0 {
         let errors = stats.decode_errors();
         let other = u8::from(mode.other());
@@ -437,19 +546,24 @@ fn decode_stream(
              needs --hex)"
                 .to_owned()
         };
+        let none = format!(
+            "no XBee frame in {offset} bytes ({} dropped): {advice}",
+            crate::counted(errors, "candidate frame")
+        );
+        let message = match skipped {
+            Some(skipped) => format!("{skipped}\nmcp-gs: {none}"),
+            None => none,
+        };
         // Input that holds no frame at all is an input error, for scripts to tell.
-        return Err(io::Error::new(
-            io::ErrorKind::InvalidData,
-            format!(
-                "no XBee frame in {offset} bytes ({} dropped): {advice}",
-                crate::counted(errors, "candidate frame")
-            ),
-        ));
+        return Err(io::Error::new(io::ErrorKind::InvalidData, message));
     }
     if let Some(hint) = hint {
         err!("mcp-gs: {hint}");
     }
-    Ok(())
+    match skipped {
+        Some(message) => Err(io::Error::new(io::ErrorKind::InvalidData, message)),
+        None => Ok(()),
+    }
 }
 
 /// A hint when many frames failed in a way that reading the stream in the other API
@@ -474,35 +588,57 @@ fn mode_hint(mode: ApiMode, stats: &mcp_host::Stats) -> Option<String> {
 fn decode_recording(
     input: impl Read,
     printer: &mut Printer<'_, impl Write>,
+    source: Source<'_>,
     live: bool,
 ) -> io::Result<()> {
     // The summary counts every byte, a record cut off at the end included.
     let mut input = Counted { inner: input, n: 0 };
-    let mut reader = RecordReader::new(&mut input)?;
-    // A recording cut off or damaged part way: what came before it is still decoded and
-    // counted, then the error is reported.
+    let mut reader =
+        RecordReader::new(&mut input).map_err(|e| io::Error::new(e.kind(), source.says(&e)))?;
+    // A recording cut off (a power lost mid-flight) or damaged part way: what came
+    // before it is still decoded and counted, then the error is said, with the file and
+    // how many frames came before it. (A line of a hex dump that is not hex ends it too:
+    // records cannot be found again after bytes left out.)
+    let mut decoded = 0u64;
+    let mut bad_lines = 0u64;
     let result = loop {
         match reader.next_record() {
             Ok(Some(record)) => {
                 printer.frame(&record.frame, Some((record.direction, record.time)))?;
+                decoded += 1;
                 if live && printer.summary.is_none() {
                     printer.out.flush()?;
                 }
             }
             Ok(None) => break Ok(()),
-            Err(e) => break Err(e),
+            Err(e) => {
+                bad_lines = u64::from(BadText::of(&e).is_some());
+                let message = format!("{e}; {}", decoded_before(decoded));
+                break Err(io::Error::new(e.kind(), source.says(message)));
+            }
         }
     };
     if let Some(summary) = &printer.summary {
+        let bad_lines = source.hex.then_some(bad_lines);
         print_summary(
             printer.out,
             summary,
             printer.format,
             input.n,
             &mcp_host::Stats::default(),
+            bad_lines,
         )?;
     }
     result
+}
+
+/// What a damaged recording's message says of the `n` frames decoded before the damage.
+fn decoded_before(n: u64) -> String {
+    match n {
+        0 => "no frame came before it".to_owned(),
+        1 => "the 1 frame before it was decoded".to_owned(),
+        n => format!("the {n} frames before it were decoded"),
+    }
 }
 
 /// A reader counting the bytes read through it.
@@ -519,14 +655,17 @@ impl<R: Read> Read for Counted<R> {
     }
 }
 
+/// Prints the counts of `--summary`; `bad_hex_lines`, the lines of hex text skipped as
+/// not hex, are among the errors of hex input.
 fn print_summary(
     out: &mut impl Write,
     summary: &Summary,
     format: Format,
     bytes: u64,
     stats: &mcp_host::Stats,
+    bad_hex_lines: Option<u64>,
 ) -> io::Result<()> {
-    let errors = serde_json::json!({
+    let mut errors = serde_json::json!({
         "checksum": stats.bad_checksum,
         "oversize": stats.oversize,
         "empty_frame": stats.empty,
@@ -535,6 +674,9 @@ fn print_summary(
         "bytes_skipped": stats.bytes_skipped,
         "invalid_frame": summary.invalid_frames,
     });
+    if let (Some(n), Some(errors)) = (bad_hex_lines, errors.as_object_mut()) {
+        errors.insert("bad_hex_line".into(), n.into());
+    }
     match format {
         Format::Json => {
             let types: serde_json::Map<String, serde_json::Value> = summary
@@ -571,19 +713,48 @@ fn print_summary(
 
 /// The first bytes of `input`, enough to tell a recording: as many as a recording's
 /// magic number has, or fewer if they stop matching it (or at the input's end), so that a
-/// frame typed on a terminal is decoded as soon as its line ends, however short.
-fn read_head(input: &mut impl Read) -> io::Result<Vec<u8>> {
+/// frame typed on a terminal is decoded as soon as its line ends, however short. Lines
+/// of hex text skipped on the way are kept, to be said before the bytes.
+fn read_head(input: &mut impl Read) -> io::Result<Head> {
     let mut head = Vec::with_capacity(record::MAGIC.len());
+    let mut skipped = VecDeque::new();
     while head.len() < record::MAGIC.len() && record::MAGIC.starts_with(&head) {
         let mut byte = [0];
         match input.read(&mut byte) {
             Ok(0) => break,
             Ok(_) => head.push(byte[0]),
             Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+            Err(e) if BadText::of(&e).is_some_and(BadText::goes_on) => skipped.push_back(e),
             Err(e) => return Err(e),
         }
     }
-    Ok(head)
+    Ok(Head {
+        skipped,
+        bytes: io::Cursor::new(head),
+    })
+}
+
+/// The first bytes of the input, read ahead to tell a recording, and read again: the
+/// errors of lines of hex text skipped before them first, then the bytes.
+struct Head {
+    skipped: VecDeque<io::Error>,
+    bytes: io::Cursor<Vec<u8>>,
+}
+
+impl Head {
+    /// The bytes.
+    fn data(&self) -> &[u8] {
+        self.bytes.get_ref()
+    }
+}
+
+impl Read for Head {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        match self.skipped.pop_front() {
+            Some(e) => Err(e),
+            None => self.bytes.read(buf),
+        }
+    }
 }
 
 #[cfg(test)]

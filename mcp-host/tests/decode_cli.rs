@@ -1,0 +1,225 @@
+//! `mcp-gs decode` of damaged input: lines of hex text that are not hex, recordings cut
+//! off, and the messages that name the file.
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::process::{Command, Output, Stdio};
+
+use serde_json::Value;
+
+/// A modem status frame, "coordinator started", as hex text.
+const FRAME: &str = "7E 00 02 8A 06 6F";
+
+fn gs() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+}
+
+/// `mcp-gs decode` with `args`, `input` on its standard input.
+fn decode_stdin(args: &[&str], input: &str) -> Output {
+    let mut child = gs()
+        .arg("decode")
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("mcp-gs runs");
+    let mut stdin = child.stdin.take().expect("stdin");
+    stdin.write_all(input.as_bytes()).unwrap();
+    drop(stdin);
+    child.wait_with_output().unwrap()
+}
+
+/// `mcp-gs decode` with `args`.
+fn decode(args: &[&str]) -> Output {
+    gs().arg("decode").args(args).output().expect("mcp-gs runs")
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8(bytes.to_vec()).expect("utf-8 output")
+}
+
+/// A file of this test's own in the temporary directory, removed when dropped.
+struct TempFile(PathBuf);
+
+impl TempFile {
+    fn new(name: &str, bytes: &[u8]) -> Self {
+        let path = std::env::temp_dir().join(format!("mcp-gs-{}-{name}", std::process::id()));
+        std::fs::write(&path, bytes).unwrap();
+        TempFile(path)
+    }
+
+    fn path(&self) -> &str {
+        self.0.to_str().unwrap()
+    }
+}
+
+impl Drop for TempFile {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.0);
+    }
+}
+
+/// A recording of `n` received modem statuses.
+fn recording(n: usize) -> Vec<u8> {
+    let mut writer = mcp_host::record::RecordWriter::new(Vec::new()).unwrap();
+    for _ in 0..n {
+        writer
+            .write(
+                std::time::SystemTime::now(),
+                mcp_host::record::Direction::Received,
+                &[0x8A, 0x06],
+            )
+            .unwrap();
+    }
+    writer.into_inner()
+}
+
+#[test]
+fn a_line_that_is_not_hex_is_said_and_skipped_and_decoding_goes_on() {
+    let input = format!("{FRAME}\nxx\n{FRAME}\n");
+    let output = decode_stdin(&["--hex"], &input);
+    let (out, err) = (text(&output.stdout), text(&output.stderr));
+    let lines: Vec<&str> = out.lines().collect();
+    assert_eq!(lines.len(), 3, "{out}");
+    assert!(lines[0].contains("coordinator_started"), "{out}");
+    assert_eq!(
+        lines[1],
+        "error, found at input line 2: `xx` is not a hex byte (line skipped)"
+    );
+    assert!(lines[2].contains("coordinator_started"), "{out}");
+    // Bad input all the same, said on standard error: from standard input, no file named.
+    assert_eq!(output.status.code(), Some(2), "{err}");
+    assert!(
+        err.starts_with("mcp-gs: line 2: `xx` is not a hex byte (line skipped); the other lines"),
+        "{err}"
+    );
+
+    // In JSON, an error object with the line, as a dropped frame's with its offset.
+    let output = decode_stdin(&["--hex", "--format", "json"], &input);
+    assert_eq!(output.status.code(), Some(2));
+    let values: Vec<Value> = text(&output.stdout)
+        .lines()
+        .map(|line| serde_json::from_str(line).unwrap())
+        .collect();
+    assert_eq!(values.len(), 3, "{values:?}");
+    assert_eq!(values[0]["frame"], "modem_status");
+    assert_eq!(values[1]["error"], "hex");
+    assert_eq!(values[1]["line"], 2);
+    assert_eq!(
+        values[1]["message"],
+        "`xx` is not a hex byte (line skipped)"
+    );
+    assert_eq!(values[2]["frame"], "modem_status");
+}
+
+#[test]
+fn a_frame_split_around_a_bad_line_is_read_without_it() {
+    // The good bytes of a bad line go with it: the decoder reads on as if the line was
+    // not there, and the frame's two halves make it whole.
+    let output = decode_stdin(&["--hex"], "7E 00 02\n8A zz 06\n8A 06 6F\n");
+    let out = text(&output.stdout);
+    let lines: Vec<&str> = out.lines().collect();
+    assert_eq!(lines.len(), 2, "{out}");
+    assert!(
+        lines[0].starts_with("error, found at input line 2: "),
+        "{out}"
+    );
+    assert!(lines[1].contains("coordinator_started"), "{out}");
+    assert_eq!(output.status.code(), Some(2));
+}
+
+#[test]
+fn the_summary_counts_bad_lines_among_errors() {
+    let input = format!("{FRAME}\nxx\n{FRAME} 0\n{FRAME}\n");
+    let output = decode_stdin(&["--hex", "--summary", "--format", "json"], &input);
+    assert_eq!(output.status.code(), Some(2));
+    let summary: Value = serde_json::from_str(text(&output.stdout).trim()).unwrap();
+    assert_eq!(summary["frames"], 2, "{summary}");
+    assert_eq!(summary["errors"]["bad_hex_line"], 2, "{summary}");
+    let err = text(&output.stderr);
+    assert!(
+        err.starts_with("mcp-gs: 2 lines that are not hex were skipped (the first, line 2: "),
+        "{err}"
+    );
+    let output = decode_stdin(&["--hex", "--summary"], &input);
+    let out = text(&output.stdout);
+    assert!(out.contains("\nerrors:\n"), "{out}");
+    assert!(out.contains("\n  bad_hex_line: 2\n"), "{out}");
+    // Good hex counts none, and exits 0.
+    let output = decode_stdin(&["--hex", "--summary"], &format!("{FRAME}\n"));
+    assert_eq!(output.status.code(), Some(0));
+    assert!(text(&output.stdout).contains("\n  bad_hex_line: 0\n"));
+}
+
+#[test]
+fn hex_errors_in_a_file_name_the_file() {
+    let dump = TempFile::new("typo.hex", format!("{FRAME}\n{FRAME}\n7E 0G\n").as_bytes());
+    let output = decode(&["--hex", dump.path()]);
+    let (out, err) = (text(&output.stdout), text(&output.stderr));
+    assert_eq!(output.status.code(), Some(2), "{err}");
+    assert_eq!(out.lines().count(), 3, "{out}");
+    assert!(
+        err.starts_with(&format!(
+            "mcp-gs: {}: line 3: `0G` is not a hex byte",
+            dump.path()
+        )),
+        "{err}"
+    );
+    // A raw capture given as hex still stops at once, and names the file too.
+    let raw = TempFile::new("raw.bin", &[0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F]);
+    let output = decode(&["--hex", raw.path()]);
+    let err = text(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{err}");
+    assert_eq!(
+        err.trim_end(),
+        format!(
+            "mcp-gs: {}: line 1: not text (a raw capture needs no --hex)",
+            raw.path()
+        )
+    );
+}
+
+#[test]
+fn a_recording_cut_off_names_the_file_and_the_frames_decoded_before_it() {
+    let mut bytes = recording(3);
+    bytes.truncate(bytes.len() - 1);
+    let cut = TempFile::new("cut.mcprec", &bytes);
+    let output = decode(&[cut.path()]);
+    let (out, err) = (text(&output.stdout), text(&output.stderr));
+    // Bad input: a script learns the file is damaged, with every frame before it shown.
+    assert_eq!(output.status.code(), Some(2), "{err}");
+    let frames = out.lines().filter(|l| !l.starts_with("-- ")).count();
+    assert_eq!(frames, 2, "{out}");
+    let offset = 8 + 2 * 13;
+    assert_eq!(
+        err.trim_end(),
+        format!(
+            "mcp-gs: {}: recording cut off part way through the record at offset \
+             {offset}: 1 of its 2 frame bytes are there; the 2 frames before it were decoded",
+            cut.path()
+        )
+    );
+    // From standard input, no file is named.
+    let file = std::fs::File::open(&cut.0).unwrap();
+    let output = gs().arg("decode").stdin(file).output().unwrap();
+    let err = text(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{err}");
+    assert!(
+        err.starts_with("mcp-gs: recording cut off part way through the record"),
+        "{err}"
+    );
+    // Cut off in a record's header, before any frame.
+    let header = TempFile::new("head.mcprec", &recording(1)[..12]);
+    let output = decode(&["--summary", header.path()]);
+    let err = text(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{err}");
+    assert_eq!(
+        err.trim_end(),
+        format!(
+            "mcp-gs: {}: recording cut off part way through the header of the record at \
+             offset 8: 4 of its 11 bytes are there; no frame came before it",
+            header.path()
+        )
+    );
+}
