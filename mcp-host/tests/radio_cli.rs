@@ -430,7 +430,7 @@ fn a_serial_link_that_is_not_there_fails_at_once() {
                 "--node",
                 "0013A20040B599B9=serial:/",
             ][..],
-            "cannot open serial:/:115200: / is a directory, not a serial device",
+            "cannot open serial:/:115200: / is not a serial device but a directory",
         ),
     ] {
         let out = std::process::Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
@@ -448,7 +448,8 @@ fn a_serial_link_that_is_not_there_fails_at_once() {
 #[test]
 fn the_librarys_warnings_read_as_the_commands_own_lines() {
     // A coordinator link to a port nobody listens on: the network keeps trying, and
-    // says so in one plain line, with the error after a colon and the node named.
+    // says so in one plain line, with the error after a colon, and the node and its
+    // link as given named.
     let reserved = common::ReservedPort::new();
     let link = format!("tcp:127.0.0.1:{}", reserved.port);
     let mut child = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
@@ -468,7 +469,7 @@ fn the_librarys_warnings_read_as_the_commands_own_lines() {
     let _ = child.wait();
     assert!(
         line.starts_with("mcp-gs: warning: node link not available yet: cannot connect to ")
-            && line.ends_with(" (node 0000000000000000)")
+            && line.ends_with(&format!(" (node 0000000000000000, link {link})"))
             && !line.contains('='),
         "{line}"
     );

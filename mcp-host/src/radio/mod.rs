@@ -59,7 +59,8 @@
 //! - When a link comes up its device gets a Modem Status: 0x06 coordinator started on the
 //!   coordinator, 0x02 joined network on other nodes. Links that go down are reopened
 //!   (a `tcp-listen` node's next peer is the node back); frames for a node whose link is
-//!   down are not queued.
+//!   down are not queued. A link that cannot be opened, and will not be by waiting (a
+//!   serial port's path that is a regular file), ends: [`NetEvent::LinkEnded`].
 //! - A `pty` node's link is up only while a device has the far end of its
 //!   pseudo-terminal open (the radio looks every 20 ms while nobody has): until then,
 //!   and after the device closes it, the node is down and nothing is written for it, and
@@ -285,6 +286,15 @@ pub enum NetEvent {
         node: Address64,
         /// Why.
         reason: String,
+    },
+    /// A node's link ended for good: it cannot be opened, and waiting will not change
+    /// that (a serial port's path that is a regular file, reconnection disabled). The
+    /// node stays in the network, unreachable; [`Network::link_ended`] says why later.
+    LinkEnded {
+        /// The node.
+        node: Address64,
+        /// Why.
+        error: String,
     },
     /// A unicast payload was delivered.
     Delivered {
@@ -521,6 +531,7 @@ impl Network {
                     discovery_time: router::DISCOVERY_TIME,
                     new_ap: None,
                     relink: Arc::default(),
+                    ended: None,
                 },
             );
             if up_already {
@@ -565,7 +576,7 @@ impl Network {
     }
 
     /// Waits until a node's link is up (at once if it is). Returns `false` if the node
-    /// is unknown.
+    /// is unknown, or once its link ended for good ([`NetEvent::LinkEnded`]).
     pub async fn connected(&self, address: Address64) -> bool {
         let mut events = self.subscribe();
         loop {
@@ -574,6 +585,7 @@ impl Network {
                 match state.nodes.get(&address) {
                     None => return false,
                     Some(node) if node.connected => return true,
+                    Some(node) if node.ended.is_some() => return false,
                     Some(_) => {}
                 }
             }
@@ -581,6 +593,16 @@ impl Network {
                 return false;
             }
         }
+    }
+
+    /// Why a node's link ended for good ([`NetEvent::LinkEnded`]), if it did: a
+    /// monitor that subscribed after the node was added asks this first, as the event
+    /// may have come before.
+    pub fn link_ended(&self, address: Address64) -> Option<String> {
+        lock(&self.state)
+            .nodes
+            .get(&address)
+            .and_then(|n| n.ended.clone())
     }
 
     /// Takes a node out of radio range: nothing reaches it (unicasts to it fail with

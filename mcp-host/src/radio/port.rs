@@ -93,8 +93,9 @@ impl AsyncWrite for Stream {
 }
 
 impl Source {
-    /// The next stream and a description of the peer, or `None` when there will be none.
-    async fn next(&mut self, node: Address64) -> Option<(Stream, String)> {
+    /// The next stream and a description of the peer, or `None` when there will be none
+    /// (a link that ended for good is marked so in `state`).
+    async fn next(&mut self, state: &Mutex<State>, node: Address64) -> Option<(Stream, String)> {
         match self {
             Source::Once(io) => io
                 .take()
@@ -120,10 +121,15 @@ impl Source {
                         return Some((Stream::Boxed(Box::new(t)), peer));
                     }
                     Err(e) if e.is_retryable() => {
-                        tracing::warn!(%node, error = %e, "node link not available yet");
+                        let link = connector.link();
+                        tracing::warn!(%node, %link, error = %e, "node link not available yet");
                     }
                     Err(e) => {
-                        tracing::warn!(%node, error = %e, "node link ended");
+                        // Reported as an event, for whoever runs the network to say (and
+                        // to stop, if the node was all it was for).
+                        let link = connector.link();
+                        tracing::debug!(%node, %link, error = %e, "node link ended");
+                        lock(state).link_ended(node, e.to_string());
                         return None;
                     }
                 }
@@ -177,7 +183,7 @@ async fn run_node(
     // A single stream is up from the start: the network marked the node connected
     // when it was added.
     let mut up_already = matches!(source, Source::Once(_));
-    while let Some((mut io, peer)) = source.next(addr).await {
+    while let Some((mut io, peer)) = source.next(&state, addr).await {
         if !std::mem::take(&mut up_already) {
             // Frames queued while the link was down are stale.
             while out.try_recv().is_ok() {}

@@ -105,6 +105,9 @@ pub(crate) struct Node {
     /// Told when what it speaks to its device changes (an `AP` applied), for its
     /// link's task to read its device's writes the new way.
     pub(crate) relink: Arc<Notify>,
+    /// Why its link ended for good (it cannot be opened, and waiting will not change
+    /// that), once it did.
+    pub(crate) ended: Option<String>,
 }
 
 impl Node {
@@ -269,6 +272,15 @@ impl State {
             node.connected = false;
         }
         self.emit(NetEvent::Disconnected { node: addr, reason });
+    }
+
+    /// A link ended for good: it cannot be opened, and waiting will not change that.
+    pub(crate) fn link_ended(&mut self, addr: Address64, error: String) {
+        if let Some(node) = self.nodes.get_mut(&addr) {
+            node.connected = false;
+            node.ended = Some(error.clone());
+        }
+        self.emit(NetEvent::LinkEnded { node: addr, error });
     }
 
     /// A link's decoder dropped a candidate frame.

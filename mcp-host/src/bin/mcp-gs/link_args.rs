@@ -576,13 +576,15 @@ pub(crate) fn diagnosed_unanswered(failure: Failure, link: &LinkArgs, stats: &St
     }
 }
 
-/// For a serial link: that its path is there and is no directory. Checked before
-/// `radio` and `sim` start, which keep reopening a link that went away (a USB adapter
-/// pulled out and plugged in again): for a mistyped path, that would be forever.
+/// For a serial link: that its path is a serial port, or may become one. Checked
+/// before `radio` and `sim` start, which keep reopening a link that went away (a USB
+/// adapter pulled out and plugged in again): for a mistyped path, that would be forever.
 ///
-/// With `wait` (`monitor --wait`), a path that is not there yet may come (a radio
-/// plugged in later), but one that is there must be a device: a file or a directory
-/// never becomes one.
+/// A path that is there must be a terminal device: a regular file (as `echo >
+/// /dev/ttyUSB0` leaves before the adapter is plugged in), a directory or a device that
+/// is no terminal (`/dev/null`) never becomes one. With `wait` (`monitor --wait`), a
+/// path that is not there yet may come (a radio plugged in later), and a device this
+/// user may not open yet is waited for, with what to do about it said once.
 ///
 /// On Windows, where a port's name (`COM3`) is no file path, nothing is checked.
 pub(crate) fn check_serial_path(link: &Link, wait: bool) -> Result<(), Failure> {
@@ -593,14 +595,8 @@ pub(crate) fn check_serial_path(link: &Link, wait: bool) -> Result<(), Failure> 
         return Ok(());
     }
     match std::fs::metadata(path) {
-        Ok(meta) if wait && !is_device(&meta) => Err(Failure::link(format!(
-            "cannot open {link}: {path} is not a serial device (`mcp-gs ports` lists the \
-             serial ports present)"
-        ))),
-        Ok(meta) if meta.is_dir() => Err(Failure::link(format!(
-            "cannot open {link}: {path} is a directory, not a serial device"
-        ))),
-        Ok(_) => Ok(()),
+        Ok(meta) if no_device_kind(&meta).is_some() => Err(no_serial_device(link, path)),
+        Ok(_) => check_terminal(link, path, wait),
         Err(_) if wait => Ok(()),
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
             let hint = match misread_baud(link) {
@@ -618,17 +614,51 @@ pub(crate) fn check_serial_path(link: &Link, wait: bool) -> Result<(), Failure> 
     }
 }
 
-/// Whether `meta` is a character device's, as a serial port is.
-fn is_device(meta: &std::fs::Metadata) -> bool {
+/// For a character device at `path`: that it is a terminal, as a serial port is. It is
+/// opened for a moment, as the link would open it but without waiting for a carrier.
+/// A device this user may not open is refused with what to do about it, or with `wait`
+/// said so once and waited for; any other failure to open it is left to the link to
+/// report.
+fn check_terminal(link: &Link, path: &str, wait: bool) -> Result<(), Failure> {
+    match open_device(path) {
+        Ok(device) if std::io::IsTerminal::is_terminal(&device) => Ok(()),
+        Ok(_) => Err(no_serial_device(link, path)),
+        Err(e) if e.kind() == std::io::ErrorKind::PermissionDenied && wait => {
+            err!("mcp-gs: warning: cannot open {path} yet: {PERMISSION_HINT}");
+            Ok(())
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::PermissionDenied => Err(Failure::link(format!(
+            "cannot open {link}: permission denied ({PERMISSION_HINT})"
+        ))),
+        Err(_) => Ok(()),
+    }
+}
+
+/// Opens the device at `path` for reading and writing, as a serial port is opened, but
+/// without blocking (a serial port may wait for a carrier) and without making it the
+/// process's controlling terminal.
+fn open_device(path: &str) -> std::io::Result<std::fs::File> {
+    let mut options = std::fs::OpenOptions::new();
+    options.read(true).write(true);
     #[cfg(unix)]
-    {
-        std::os::unix::fs::FileTypeExt::is_char_device(&meta.file_type())
-    }
-    #[cfg(not(unix))]
-    {
-        let _ = meta;
-        true
-    }
+    std::os::unix::fs::OpenOptionsExt::custom_flags(
+        &mut options,
+        libc::O_NONBLOCK | libc::O_NOCTTY,
+    );
+    options.open(path)
+}
+
+/// The failure of a serial link whose path is there but is no serial device: what it
+/// is instead, as [`not_a_serial_port`] says it when the link is opened.
+fn no_serial_device(link: &Link, path: &str) -> Failure {
+    let what = std::fs::metadata(path)
+        .ok()
+        .and_then(|meta| no_device_kind(&meta))
+        .unwrap_or(NO_TERMINAL);
+    Failure::link(format!(
+        "cannot open {link}: {path} is not a serial device but {what} (`mcp-gs ports` lists \
+         the serial ports present)"
+    ))
 }
 
 /// A failure to open `link`.
@@ -659,11 +689,7 @@ fn link_hint(error: &LinkError, link: &Link) -> Option<String> {
                 ),
                 None => "no such device: `mcp-gs ports` lists the serial ports present".into(),
             }),
-            Serial::Io(Io::PermissionDenied) => Some(
-                "this user may not open the device: on Linux, add the user to the group that \
-                 owns it (often dialout: `sudo usermod -aG dialout $USER`, then log in again)"
-                    .into(),
-            ),
+            Serial::Io(Io::PermissionDenied) => Some(PERMISSION_HINT.into()),
             // On Unix: the port is open for exclusive use elsewhere (TIOCEXCL or flock).
             // On Windows, serialport also reports a port that does not exist (or may
             // not be opened) as NoDevice: the hint cannot claim it is in use.
@@ -727,6 +753,18 @@ pub(crate) fn network_failure(error: mcp_host::radio::NetworkError, link: &Link)
     }
 }
 
+/// The failure of a node's link (`radio`, `sim`) that ended for good with `error`:
+/// `name`, as "the ground station's link serial:/dev/ttyUSB0:115200", why, and what to
+/// do about a path that is no serial port.
+pub(crate) fn link_ended_failure(name: &str, link: &Link, error: &str) -> Failure {
+    let hint = not_a_serial_port(error, link)
+        .map(|h| format!(" ({h})"))
+        .unwrap_or_default();
+    Failure::link(format!(
+        "{name} ended: it cannot be opened, and waiting will not change that: {error}{hint}"
+    ))
+}
+
 /// For a serial link whose path does not exist but would without its last `:` part (as
 /// in `serial:/dev/ttyUSB0:9600baud`): the path that exists and that part, which was
 /// meant as a baud rate. Paths may hold colons (`/dev/serial/by-path/...`), so only a
@@ -741,6 +779,11 @@ fn misread_baud(link: &Link) -> Option<(&str, &str)> {
         .then_some((device, baud))
 }
 
+/// What to do about a device this user may not open.
+const PERMISSION_HINT: &str = "this user may not open the device: on Linux, add the user to \
+     the group that owns it (often dialout: `sudo usermod -aG dialout $USER`, then log in \
+     again)";
+
 /// The hint for a serial link whose path is no serial port: a regular file, a
 /// directory, or a device that is no terminal (`/dev/null`: opening it fails with
 /// ENOTTY, whose text depends on the C library).
@@ -748,20 +791,57 @@ fn not_a_serial_port(description: &str, link: &Link) -> Option<String> {
     let Link::Serial { path, .. } = link else {
         return None;
     };
-    let what = match std::fs::metadata(path) {
-        Ok(meta) if meta.is_dir() => "a directory",
-        Ok(meta) if meta.is_file() => "a regular file",
-        _ if ["Not a typewriter", "Inappropriate ioctl", "Not a tty"]
-            .iter()
-            .any(|text| description.contains(text)) =>
-        {
-            "a device that is no terminal"
-        }
-        _ => return None,
-    };
+    let what = what_it_is(path, description)?;
     Some(format!(
         "not a serial port ({path} is {what}): `mcp-gs ports` lists the serial ports present"
     ))
+}
+
+/// What `path` is when it is no serial port: what [`no_device_kind`] says of a file
+/// that is no character device, or, when `description` (the error opening it) says it
+/// is no terminal, a device that is none.
+fn what_it_is(path: &str, description: &str) -> Option<&'static str> {
+    let kind = std::fs::metadata(path)
+        .ok()
+        .and_then(|meta| no_device_kind(&meta));
+    kind.or_else(|| {
+        ["Not a typewriter", "Inappropriate ioctl", "Not a tty"]
+            .iter()
+            .any(|text| description.contains(text))
+            .then_some(NO_TERMINAL)
+    })
+}
+
+/// A character device that is no terminal, as `/dev/null`.
+const NO_TERMINAL: &str = "a device that is no terminal";
+
+/// What a file is that can be no serial port, or `None` for a character device (which
+/// is one if it is a terminal).
+fn no_device_kind(meta: &std::fs::Metadata) -> Option<&'static str> {
+    let kind = meta.file_type();
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if kind.is_char_device() {
+            return None;
+        }
+        if kind.is_block_device() {
+            return Some("a block device");
+        }
+        if kind.is_fifo() {
+            return Some("a named pipe");
+        }
+        if kind.is_socket() {
+            return Some("a socket");
+        }
+    }
+    if kind.is_dir() {
+        Some("a directory")
+    } else if kind.is_file() {
+        Some("a regular file")
+    } else {
+        None
+    }
 }
 
 /// A send that did not succeed.

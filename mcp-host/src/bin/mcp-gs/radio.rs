@@ -533,16 +533,55 @@ impl Repeats {
     }
 }
 
+/// A node's link as the operator gave it, and what to call it in a line about it ("the
+/// ground station's link serial:/dev/ttyUSB0:115200").
+pub(crate) struct NamedLink {
+    pub(crate) node: Address64,
+    pub(crate) name: String,
+    pub(crate) link: Link,
+}
+
+impl NamedLink {
+    /// The link of `node`, called `name` and then the link.
+    pub(crate) fn new(node: Address64, name: &str, link: &Link) -> Self {
+        NamedLink {
+            node,
+            name: format!("{name} {link}"),
+            link: link.clone(),
+        }
+    }
+}
+
+/// The failure of the first of `links` that ended for good, if one did before `events`
+/// were subscribed to (after that, the event says it).
+fn ended_before(network: &Network, links: &[NamedLink]) -> Option<Failure> {
+    links.iter().find_map(|named| {
+        let error = network.link_ended(named.node)?;
+        Some(ended_failure(named, &error))
+    })
+}
+
+/// The failure of `named`, whose link ended for good with `error`: `radio` and `sim`
+/// stop, rather than run on with a link that will never be there.
+fn ended_failure(named: &NamedLink, error: &str) -> Failure {
+    crate::link_args::link_ended_failure(&named.name, &named.link, error)
+}
+
 /// Says it runs, then prints network events and carries out the cuts until Ctrl-C or
 /// `duration` (0: no limit), whichever comes first. A failed delivery like one printed
-/// less than five seconds before is counted, not printed.
+/// less than five seconds before is counted, not printed. One of `links` that ends
+/// for good ends the run, as a link failure.
 pub(crate) async fn watch(
     network: &Network,
     mut events: broadcast::Receiver<NetEvent>,
     net: &NetArgs,
     verbose: bool,
     duration: Option<Duration>,
+    links: &[NamedLink],
 ) -> Result<(), Failure> {
+    if let Some(failure) = ended_before(network, links) {
+        return Err(failure);
+    }
     let mut timeline = net.timeline(Instant::now()).into_iter().peekable();
     let deadline = duration
         .filter(|d| !d.is_zero())
@@ -588,6 +627,11 @@ pub(crate) async fn watch(
                 }
             },
             event = events.recv() => match event {
+                Ok(NetEvent::LinkEnded { node, error }) => {
+                    if let Some(named) = links.iter().find(|named| named.node == node) {
+                        return Err(ended_failure(named, &error));
+                    }
+                }
                 Ok(event) => {
                     let repeats = match &event {
                         NetEvent::Failed { from, to, status, .. } => {
@@ -630,6 +674,7 @@ pub(crate) async fn run(args: RadioArgs) -> Result<(), Failure> {
     let events = network.subscribe();
     let default_mode = args.api_mode;
     let mut opened = Vec::new();
+    let mut named = Vec::new();
     let coordinator = std::iter::once((Address64::COORDINATOR, args.coordinator.clone()));
     let nodes = args.nodes.iter().map(|n| (n.address, n.link.clone()));
     for (address, link) in coordinator.chain(nodes) {
@@ -644,18 +689,20 @@ pub(crate) async fn run(args: RadioArgs) -> Result<(), Failure> {
             .add_link(address, &link.link, options)
             .await
             .map_err(|e| crate::link_args::network_failure(e, &link.link))?;
-        let name = if address == Address64::COORDINATOR {
-            "coordinator"
+        let (name, called) = if address == Address64::COORDINATOR {
+            ("coordinator", "the coordinator's link".to_owned())
         } else {
-            "node"
+            ("node", format!("node {address}'s link"))
         };
         opened.push(describe_node(name, &info, &link.link));
+        named.push(NamedLink::new(address, &called, &link.link));
     }
     args.net.describe(&described);
     for line in opened {
         out!("{line}");
     }
-    watch(&network, events, &args.net, args.verbose, args.duration).await
+    let (verbose, duration) = (args.verbose, args.duration);
+    watch(&network, events, &args.net, verbose, duration, &named).await
 }
 
 #[cfg(test)]

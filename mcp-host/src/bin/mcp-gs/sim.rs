@@ -10,7 +10,8 @@ use xbee_api::Address64;
 
 use crate::Failure;
 use crate::radio::{
-    NetArgs, RadioModeArg, check_distinct, describe_node, parse_address, parse_duration, watch,
+    NamedLink, NetArgs, RadioModeArg, check_distinct, describe_node, parse_address, parse_duration,
+    watch,
 };
 
 /// Arguments of `sim`.
@@ -155,12 +156,19 @@ pub(crate) async fn run(args: SimArgs) -> Result<(), Failure> {
             out!("  {}", line.join(", "));
         }
     }
+    // The MAVs are in the process: the ground station's link is the one that can end.
+    let links = [NamedLink::new(
+        Address64::COORDINATOR,
+        "the ground station's link",
+        &args.link,
+    )];
     watch(
         sim.network(),
         events,
         &args.net,
         args.verbose,
         args.duration,
+        &links,
     )
     .await
 }
