@@ -223,3 +223,46 @@ fn a_recording_cut_off_names_the_file_and_the_frames_decoded_before_it() {
         )
     );
 }
+
+#[test]
+fn a_first_line_that_is_not_hex_is_said_as_soon_as_it_ends() {
+    // Typed on a terminal: the error comes before the next line, not with it.
+    let mut child = gs()
+        .args(["decode", "--hex"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("mcp-gs runs");
+    let mut stdin = child.stdin.take().expect("stdin");
+    stdin.write_all(b"zz\n").unwrap();
+    stdin.flush().unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    let stdout = child.stdout.take().expect("stdout");
+    std::thread::spawn(move || {
+        let mut line = String::new();
+        let _ = std::io::BufRead::read_line(&mut std::io::BufReader::new(stdout), &mut line);
+        let _ = tx.send(line);
+    });
+    // Failure guard only: the line comes at once.
+    let line = rx.recv_timeout(std::time::Duration::from_secs(20));
+    drop(stdin);
+    let _ = child.kill();
+    let _ = child.wait();
+    let line = line.expect("the error line while the input is still open");
+    assert!(
+        line.contains("input line 1: `zz` is not a hex byte"),
+        "{line}"
+    );
+}
+
+#[test]
+fn input_with_no_hex_line_says_so() {
+    let out = decode_stdin(&["--hex"], "zz\n");
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = text(&out.stderr);
+    assert!(
+        stderr.contains("; no line was hex: correct that line"),
+        "{stderr}"
+    );
+}

@@ -1,6 +1,5 @@
 //! `mcp-gs decode`: decode a captured byte stream or a recording.
 
-use std::collections::VecDeque;
 use std::fmt;
 use std::fs::File;
 use std::io::{self, BufReader, IsTerminal, Read, Write};
@@ -213,19 +212,23 @@ impl SkippedLines {
     }
 
     /// The message at the end when lines were skipped: bad input, though the rest of it
-    /// was decoded.
-    fn message(&self) -> Option<String> {
+    /// (`bytes` of hex, if any) was decoded.
+    fn message(&self, bytes: u64) -> Option<String> {
         let first = self.first.as_ref()?;
+        let rest = if bytes == 0 {
+            "no line was hex"
+        } else {
+            "the other lines were decoded"
+        };
         Some(if self.count == 1 {
             format!(
-                "{first} ({}); the other lines were decoded: correct that line to decode \
-                 it too",
+                "{first} ({}); {rest}: correct that line to decode it too",
                 first.skipped_note()
             )
         } else {
             format!(
-                "{} lines that are not hex were skipped (the first, {first}); the other \
-                 lines were decoded: correct them to decode them too",
+                "{} lines that are not hex were skipped (the first, {first}); {rest}: \
+                 correct them to decode them too",
                 self.count
             )
         })
@@ -529,7 +532,7 @@ fn decode_stream(
     }
     let hint = mode_hint(mode, stats);
     // Lines skipped make the input bad input, said first.
-    let skipped = skipped.message().map(|message| source.says(message));
+    let skipped = skipped.message(offset).map(|message| source.says(message));
     if offset > 0 && stats.frames == 0 {
         let errors = stats.decode_errors();
         let other = u8::from(mode.other());
@@ -713,18 +716,22 @@ fn print_summary(
 
 /// The first bytes of `input`, enough to tell a recording: as many as a recording's
 /// magic number has, or fewer if they stop matching it (or at the input's end), so that a
-/// frame typed on a terminal is decoded as soon as its line ends, however short. Lines
-/// of hex text skipped on the way are kept, to be said before the bytes.
+/// frame typed on a terminal is decoded as soon as its line ends, however short. A line
+/// of hex text skipped on the way ends it there (a recording's dump does not begin
+/// with one), to be said at once, before the bytes.
 fn read_head(input: &mut impl Read) -> io::Result<Head> {
     let mut head = Vec::with_capacity(record::MAGIC.len());
-    let mut skipped = VecDeque::new();
+    let mut skipped = None;
     while head.len() < record::MAGIC.len() && record::MAGIC.starts_with(&head) {
         let mut byte = [0];
         match input.read(&mut byte) {
             Ok(0) => break,
             Ok(_) => head.push(byte[0]),
             Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-            Err(e) if BadText::of(&e).is_some_and(BadText::goes_on) => skipped.push_back(e),
+            Err(e) if BadText::of(&e).is_some_and(BadText::goes_on) => {
+                skipped = Some(e);
+                break;
+            }
             Err(e) => return Err(e),
         }
     }
@@ -735,9 +742,9 @@ fn read_head(input: &mut impl Read) -> io::Result<Head> {
 }
 
 /// The first bytes of the input, read ahead to tell a recording, and read again: the
-/// errors of lines of hex text skipped before them first, then the bytes.
+/// error of a line of hex text skipped after them first, then the bytes.
 struct Head {
-    skipped: VecDeque<io::Error>,
+    skipped: Option<io::Error>,
     bytes: io::Cursor<Vec<u8>>,
 }
 
@@ -750,7 +757,7 @@ impl Head {
 
 impl Read for Head {
     fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
-        match self.skipped.pop_front() {
+        match self.skipped.take() {
             Some(e) => Err(e),
             None => self.bytes.read(buf),
         }
