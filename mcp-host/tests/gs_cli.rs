@@ -514,6 +514,12 @@ fn missing_device_exits_3() {
     assert_eq!(output.status.code(), Some(3));
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(stderr.contains("nothing listens there"), "{stderr}");
+    // The address once, as the error says it.
+    let addr = link.trim_start_matches("tcp:");
+    assert!(
+        stderr.starts_with(&format!("mcp-gs: cannot connect to {addr}: ")),
+        "{stderr}"
+    );
 }
 
 #[test]

@@ -669,7 +669,19 @@ pub(crate) fn connect_failure(link: &Link, error: ConnectError) -> Failure {
             let hint = link_hint(&e, link)
                 .map(|h| format!(" ({h})"))
                 .unwrap_or_default();
-            Failure::link(format!("cannot open {link}: {e}{hint}"))
+            // Most say what they could not open, and how: once is enough.
+            let names_it = matches!(
+                e,
+                LinkError::Serial { .. }
+                    | LinkError::Connect { .. }
+                    | LinkError::ConnectTimeout { .. }
+                    | LinkError::Listen { .. }
+                    | LinkError::Accept { .. }
+            );
+            match names_it {
+                true => Failure::link(format!("{e}{hint}")),
+                false => Failure::link(format!("cannot open {link}: {e}{hint}")),
+            }
         }
         other => Failure::link(format!("cannot open {link}: {other}")),
     }
