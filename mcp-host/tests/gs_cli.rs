@@ -1073,6 +1073,43 @@ fn monitor_counts_the_frames_that_fail_after_its_hint_rather_than_showing_each()
 }
 
 #[test]
+fn monitor_shows_each_failure_again_once_frames_pass_again() {
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let link = format!("tcp:{}", listener.local_addr().unwrap());
+    let mut monitor = common::Running(
+        gs().args(["monitor", "--link", &link, "--count", "111"])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap(),
+    );
+    let stdout = common::stdout_lines(&mut monitor.0);
+    let stderr = common::stderr_lines(&mut monitor.0);
+    let (mut radio, _) = listener.accept().unwrap();
+    // Ten frames that fail as from a radio in API mode 2 (an escaped byte each), until
+    // the monitor says so.
+    let escaped = [0x7E, 0x00, 0x03, 0x8A, 0x7D, 0x33, 0x00, 0x62];
+    radio.write_all(&escaped.repeat(10)).unwrap();
+    while !stderr
+        .recv_timeout(common::GUARD)
+        .expect("the hint")
+        .contains("hint: ")
+    {}
+    // The radio set right: a hundred good frames, then one the line corrupted.
+    let good = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F];
+    radio.write_all(&good.repeat(100)).unwrap();
+    radio
+        .write_all(&[0x7E, 0x00, 0x02, 0x8A, 0x06, 0x70])
+        .unwrap();
+    let mut lines = Vec::new();
+    while let Ok(line) = stdout.recv_timeout(common::GUARD) {
+        lines.push(line);
+    }
+    let last = lines.last().cloned().unwrap_or_default();
+    assert!(last.contains("error: bad checksum"), "{lines:#?}");
+}
+
+#[test]
 fn a_recording_that_cannot_be_written_is_named() {
     // A modem status, recorded to a full disk.
     let (link, peer) = common::talking_peer(vec![0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F]);

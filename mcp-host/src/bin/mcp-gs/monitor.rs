@@ -100,27 +100,54 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
     // Bytes that are no frames at all come as no event: the counters are looked at now
     // and then for them.
     let mut look = tokio::time::interval(std::time::Duration::from_secs(1));
-    loop {
+    let ended = loop {
         let event = tokio::select! {
             event = stream.next() => event,
             _ = &mut ctrl_c => None,
             _ = look.tick() => {
-                if let Some(quiet) = &mut quiet {
-                    quiet.tell_if_due(false);
-                } else if let (false, Some(found)) =
-                    (hinted, diagnoser.as_mut().and_then(|d| d.look(stream.stats())))
-                {
-                    hinted = true;
-                    quiet = Quiet::after(hint(found, &args.link.link), args.format);
+                let found = diagnoser.as_mut().and_then(|d| d.look(stream.stats()));
+                match (&mut quiet, found) {
+                    // Still wrong: said with the counts as they are now.
+                    (Some(shown), Some(found)) => {
+                        shown.hint = hint(found, &args.link.link);
+                        shown.tell_if_due(false);
+                    }
+                    // Frames pass again (the radio was set right): each failure is
+                    // shown again, and a new hint given if the signs come back.
+                    (Some(shown), None) => {
+                        shown.tell_if_due(true);
+                        quiet = None;
+                        hinted = false;
+                    }
+                    (None, Some(found)) if !hinted => {
+                        hinted = true;
+                        quiet = Quiet::after(hint(found, &args.link.link), args.format);
+                    }
+                    _ => {}
                 }
                 continue;
             }
         };
-        let Some(event) = event else { break };
+        let Some(event) = event else { break Ok(()) };
         if let (None, Some(path), Event::Link(LinkEvent::Connected { .. })) =
             (&recorder, &args.record, &event)
         {
-            recorder = Some(create_recording(path, args.force)?);
+            match create_recording(path, args.force) {
+                Ok(created) => recorder = Some(created),
+                Err(failure) => break Err(failure),
+            }
+        }
+        // The next connection may be to another radio (or to this one set right): read
+        // afresh from here, where none of its frames has come yet.
+        if let Event::Link(LinkEvent::Disconnected { .. }) = &event {
+            if let Some(shown) = &mut quiet {
+                shown.tell_if_due(true);
+            }
+            quiet = None;
+            hinted = false;
+            if let ApiModeChoice::Fixed(mode) = args.link.api_mode {
+                diagnoser = Some(Diagnoser::new(mode, stream.stats()));
+            }
         }
         // A packet's time is when it was received (as its JSON object says); another
         // event's, now.
@@ -129,24 +156,38 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
             Event::InvalidPacket(rx) => rx.origin.received_at,
             _ => SystemTime::now(),
         };
-        if let (Some(recorder), Some(path)) = (&mut recorder, &args.record) {
-            if let Some(frame) = frame_data(&event) {
-                recorder
-                    .write(time, Direction::Received, frame)
-                    .and_then(|()| recorder.flush())
-                    .map_err(|e| {
-                        let path = path.display();
-                        Failure::new(Failure::OTHER, format!("cannot write to {path}: {e}"))
-                    })?;
+        if let (Some(recorder), Some(path), Some(frame)) =
+            (&mut recorder, &args.record, frame_data(&event))
+        {
+            let written = recorder
+                .write(time, Direction::Received, frame)
+                .and_then(|()| recorder.flush());
+            if let Err(e) = written {
+                let path = path.display();
+                break Err(Failure::new(
+                    Failure::OTHER,
+                    format!("cannot write to {path}: {e}"),
+                ));
             }
         }
-        if let (Some(quiet), Event::DecodeError(_)) = (&mut quiet, &event) {
-            quiet.count();
-            seen += 1;
-            if args.count.is_some_and(|n| seen >= n) {
-                break;
+        if let (Some(shown), Event::DecodeError(_)) = (&mut quiet, &event) {
+            // Counted while the signs last; shown once frames pass again.
+            match diagnoser.as_mut().and_then(|d| d.look(stream.stats())) {
+                Some(found) => {
+                    shown.hint = hint(found, &args.link.link);
+                    shown.count();
+                    seen += 1;
+                    if args.count.is_some_and(|n| seen >= n) {
+                        break Ok(());
+                    }
+                    continue;
+                }
+                None => {
+                    shown.tell_if_due(true);
+                    quiet = None;
+                    hinted = false;
+                }
             }
-            continue;
         }
         let line = match args.format {
             Format::Json => render::json::event(&event).to_string(),
@@ -176,7 +217,7 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
             }
         }
         if let Event::Link(LinkEvent::Closed { reason, .. }) = &event {
-            return Err(Failure::link(format!("link closed: {reason}")));
+            break Err(Failure::link(format!("link closed: {reason}")));
         }
         if let (Event::Link(LinkEvent::Disconnected { .. }), mcp_host::Link::Tcp { .. }) =
             (&event, &args.link.link)
@@ -194,13 +235,14 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
             seen += 1;
         }
         if args.count.is_some_and(|n| seen >= n) {
-            break;
+            break Ok(());
         }
+    };
+    // What was not shown is counted, however the monitor ends.
+    if let Some(shown) = &mut quiet {
+        shown.tell_if_due(true);
     }
-    if let Some(quiet) = &mut quiet {
-        quiet.tell_if_due(true);
-    }
-    Ok(())
+    ended
 }
 
 /// How often [`Quiet`] says how many frames it did not show.
