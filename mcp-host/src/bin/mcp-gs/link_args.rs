@@ -246,14 +246,19 @@ impl LinkArgs {
         }
     }
 
-    /// After a report that did not come although the radio delivered the request (and
-    /// nothing undecodable came meanwhile): asks the radio its `AP` and warns if it is
-    /// in another mode than `--api-mode`. Through a hub in another mode than the radio,
-    /// the request goes out and its status comes back, but the report, from an address
-    /// with bytes to escape (every `0013A2...`), is dropped by the hub, out of sight.
+    /// After a report that did not come although the radio delivered the request:
+    /// unless frames failed to decode meanwhile (their hint says more), asks the radio
+    /// its `AP` (for a second at most) and warns if it is in another mode than
+    /// `--api-mode`. Through a hub in another mode than the radio, the request goes out
+    /// and its status comes back, but the report, from an address with bytes to escape
+    /// (every `0013A2...`), is dropped by the hub, out of sight. Not on a link that is
+    /// down.
     pub(crate) async fn check_mode_after_silence(&self, sender: &CommandSender) {
-        if let ApiModeChoice::Fixed(mode) = self.api_mode {
-            check_mode(sender, mode).await;
+        let up = sender.link_state() == mcp_host::LinkState::Connected;
+        if let (ApiModeChoice::Fixed(mode), true, 0) =
+            (self.api_mode, up, sender.stats().decode_errors())
+        {
+            check_mode(sender, mode, mcp_host::hub::MODE_CHECK_TIMEOUT).await;
         }
     }
 }
@@ -326,8 +331,8 @@ pub(crate) async fn open_once(
 }
 
 /// Warns once when the radio's API mode differs from the configured one: the commonest
-/// cause of silently dropped frames.
-pub(crate) async fn check_mode(sender: &CommandSender, configured: ApiMode) {
+/// cause of silently dropped frames. The radio has `timeout` to answer its `AT AP`.
+pub(crate) async fn check_mode(sender: &CommandSender, configured: ApiMode, timeout: Duration) {
     // A link waited for (`--wait`) is asked once it is up.
     let mut state = sender.watch_link_state();
     if state
@@ -337,7 +342,6 @@ pub(crate) async fn check_mode(sender: &CommandSender, configured: ApiMode) {
     {
         return;
     }
-    let timeout = Duration::from_secs(3);
     let response = match sender.at(*b"AP", &[], Some(timeout)).await {
         Ok(response) => response,
         // Nothing at all from the radio meanwhile: what keeps a radio silent (or a

@@ -82,7 +82,8 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
     ) = (args.link.api_mode, &args.link.link)
     {
         let sender = sender.clone();
-        tokio::spawn(async move { check_mode(&sender, mode).await });
+        let timeout = std::time::Duration::from_secs(3);
+        tokio::spawn(async move { check_mode(&sender, mode, timeout).await });
     }
     let stdout = io::stdout();
     let mut seen = 0u64;

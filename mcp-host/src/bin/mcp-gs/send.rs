@@ -262,6 +262,8 @@ fn status_fields(
 struct Unconfirmed {
     reported: Option<Vec<Waypoint>>,
     timeout: Duration,
+    /// The link closed before the timeout ran out.
+    closed: bool,
 }
 
 impl Unconfirmed {
@@ -294,6 +296,10 @@ impl Unconfirmed {
                     show(sent)
                 ),
             ),
+            None if self.closed => Failure::link(format!(
+                "the link closed before a trajectory report came from {to}: whether the MAV \
+                 took the trajectory is not known"
+            )),
             None => Failure::new(
                 Failure::TIMEOUT,
                 format!(
@@ -325,10 +331,17 @@ async fn check_trajectory(
         }
         false
     };
-    if tokio::time::timeout(timeout, wait).await == Ok(true) {
-        return Ok(());
-    }
-    Err(Unconfirmed { reported, timeout })
+    let closed = match tokio::time::timeout(timeout, wait).await {
+        Ok(true) => return Ok(()),
+        // The stream ended: the link closed.
+        Ok(false) => true,
+        Err(_) => false,
+    };
+    Err(Unconfirmed {
+        reported,
+        timeout,
+        closed,
+    })
 }
 
 /// The waypoints of the next trajectory report from `from` on the stream; `None` if
@@ -365,6 +378,7 @@ mod tests {
         let unconfirmed = Unconfirmed {
             reported: Some(vec![waypoint(1)]),
             timeout: Duration::from_secs(1),
+            closed: false,
         };
         assert_eq!(
             unconfirmed.reported_json(),
@@ -388,6 +402,20 @@ mod tests {
         assert_eq!(
             silent.failure(Address64::BROADCAST, &sent).code,
             Failure::TIMEOUT
+        );
+        // The link closed first: no timeout, and no blame on the MAV.
+        let closed = Unconfirmed {
+            closed: true,
+            ..silent
+        };
+        let failure = closed.failure(Address64::BROADCAST, &sent);
+        assert_eq!(failure.code, Failure::LINK);
+        assert!(
+            failure
+                .message
+                .starts_with("the link closed before a trajectory report came"),
+            "{}",
+            failure.message
         );
     }
 }
