@@ -233,6 +233,11 @@ fn unknown_mav_is_a_delivery_failure() {
     );
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("address_not_found"), "{stderr}");
+    // Where to find the addresses there are.
+    assert!(
+        stderr.contains("hint: no radio of the network has that address: `mcp-gs nodes"),
+        "{stderr}"
+    );
     // In JSON the refusal prints too, and the exit code is the same.
     let out = sim.gs(&[
         "send",

@@ -8,7 +8,7 @@ use mcp_host::{
     CommandSender, ConnectError, Connector, Diagnosis, Link, LinkError, LinkOptions, PacketStream,
     ReconnectPolicy, SendError, Stats,
 };
-use xbee_api::{Address64, ApiMode, Frame};
+use xbee_api::{Address64, ApiMode, DeliveryStatus, Frame};
 
 use crate::Failure;
 
@@ -546,8 +546,28 @@ pub(crate) fn turned_away_hint() -> String {
 /// A request's failure, [`diagnosed_unanswered`] when no answer to its frame id came
 /// (not even the local radio's status), else [`diagnosed`].
 pub(crate) fn diagnosed_send(error: SendError, link: &LinkArgs, stats: &Stats) -> Failure {
+    // What the error itself says to do, rather than what the link's counters say.
+    let own = match &error {
+        // The frame never left: the radio's settings have nothing to do with it.
+        SendError::NotSent { .. } => Some(
+            "hint: the link did not take the frame in time: give a longer --timeout (a \
+             slow serial link, a busy hub or many commands at once take longer)"
+                .to_owned(),
+        ),
+        SendError::Delivery { status, .. } if *status == DeliveryStatus::AddressNotFound => {
+            Some(format!(
+                "hint: no radio of the network has that address: `mcp-gs nodes --link {}` \
+                 lists the radios that answer",
+                link.link
+            ))
+        }
+        _ => None,
+    };
     let unanswered = matches!(error, SendError::Timeout { .. });
     let failure = send_failure(error);
+    if let Some(hint) = own {
+        return failure.with_hint(hint);
+    }
     if unanswered {
         diagnosed_unanswered(failure, link, stats)
     } else {
