@@ -245,7 +245,10 @@ fn a_silent_radio_asked_its_mode_over_tcp_sends_the_operator_to_its_serial_port(
     assert_eq!(output.status.code(), Some(4), "{said}");
     assert!(said.contains("did not answer AT AP"), "{said}");
     assert!(
-        said.contains("through a hub, stop it and run `mcp-gs probe` on the radio's serial port"),
+        said.contains(&format!(
+            "if {link} is a hub, stop it and run `mcp-gs probe` on the radio's serial port; \
+             if a serial bridge, `mcp-gs setup --link {link}`"
+        )),
         "{said}"
     );
 }

@@ -218,10 +218,12 @@ impl LinkArgs {
                         "`mcp-gs probe --link serial:{path}` finds its rate and mode, and \
                          `mcp-gs setup` puts it into API mode"
                     ),
-                    // A hub, maybe: setup and probe need the radio's own port.
-                    _ => "through a hub, stop it and run `mcp-gs probe` on the radio's \
-                          serial port; through a bridge, `mcp-gs setup --link` it"
-                        .to_owned(),
+                    // A hub or a bridge (for a command that is a hub itself too): setup
+                    // and probe need the radio's own port, or the bridge.
+                    _ => format!(
+                        "if {link} is a hub, stop it and run `mcp-gs probe` on the radio's \
+                         serial port; if a serial bridge, `mcp-gs setup --link {link}`"
+                    ),
                 };
                 Failure::new(
                     Failure::TIMEOUT,
