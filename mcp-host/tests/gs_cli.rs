@@ -819,7 +819,9 @@ fn standard_output_that_cannot_be_written_is_a_failure() {
         .stdout(dev_full())
         .output()
         .unwrap();
-    for output in [decode.wait_with_output().unwrap(), encode] {
+    // The help asked for, too.
+    let help = gs().arg("--help").stdout(dev_full()).output().unwrap();
+    for output in [decode.wait_with_output().unwrap(), encode, help] {
         let stderr = String::from_utf8_lossy(&output.stderr);
         assert_eq!(output.status.code(), Some(1), "{stderr}");
         assert!(

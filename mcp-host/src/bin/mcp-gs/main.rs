@@ -94,8 +94,33 @@ enum Sub {
 /// it takes, not as an unknown option.
 fn parse(args: Vec<OsString>) -> Cli {
     let command = Cli::command().mut_subcommands(negative_numbers);
-    let matches = command.get_matches_from(args);
-    Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit())
+    let matches = command
+        .try_get_matches_from(args)
+        .unwrap_or_else(|e| exit_on(e));
+    Cli::from_arg_matches(&matches).unwrap_or_else(|e| exit_on(e))
+}
+
+/// Ends the program on what the argument parser says: an error (exit 2), or the help or
+/// version asked for, on standard output, which must take it (as any output: see
+/// [`output_failure`]).
+fn exit_on(e: clap::Error) -> ! {
+    if e.use_stderr() {
+        e.exit()
+    }
+    let code = match e
+        .print()
+        .and_then(|()| std::io::Write::flush(&mut std::io::stdout()))
+    {
+        Ok(()) => 0,
+        Err(error) => match output_failure(&error) {
+            None => 0,
+            Some(failure) => {
+                err!("mcp-gs: {}", failure.message);
+                failure.code.into()
+            }
+        },
+    };
+    std::process::exit(code)
 }
 
 /// `sub` and its own subcommands (`send`'s COMMAND words) taking negative numbers.
