@@ -7,6 +7,8 @@ use std::process::{Command, Output, Stdio};
 
 use serde_json::Value;
 
+mod common;
+
 /// A modem status frame, "coordinator started", as hex text.
 const FRAME: &str = "7E 00 02 8A 06 6F";
 
@@ -58,21 +60,6 @@ impl Drop for TempFile {
     fn drop(&mut self) {
         let _ = std::fs::remove_file(&self.0);
     }
-}
-
-/// A recording of `n` received modem statuses.
-fn recording(n: usize) -> Vec<u8> {
-    let mut writer = mcp_host::record::RecordWriter::new(Vec::new()).unwrap();
-    for _ in 0..n {
-        writer
-            .write(
-                std::time::SystemTime::now(),
-                mcp_host::record::Direction::Received,
-                &[0x8A, 0x06],
-            )
-            .unwrap();
-    }
-    writer.into_inner()
 }
 
 #[test]
@@ -182,7 +169,7 @@ fn hex_errors_in_a_file_name_the_file() {
 
 #[test]
 fn a_recording_cut_off_names_the_file_and_the_frames_decoded_before_it() {
-    let mut bytes = recording(3);
+    let mut bytes = common::modem_status_recording(3);
     bytes.truncate(bytes.len() - 1);
     let cut = TempFile::new("cut.mcprec", &bytes);
     let output = decode(&[cut.path()]);
@@ -210,7 +197,7 @@ fn a_recording_cut_off_names_the_file_and_the_frames_decoded_before_it() {
         "{err}"
     );
     // Cut off in a record's header, before any frame.
-    let header = TempFile::new("head.mcprec", &recording(1)[..12]);
+    let header = TempFile::new("head.mcprec", &common::modem_status_recording(1)[..12]);
     let output = decode(&["--summary", header.path()]);
     let err = text(&output.stderr);
     assert_eq!(output.status.code(), Some(2), "{err}");

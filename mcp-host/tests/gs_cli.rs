@@ -863,7 +863,7 @@ fn a_recording_on_a_pipe_is_decoded_as_it_comes() {
         .spawn()
         .unwrap();
     let mut stdin = child.stdin.take().unwrap();
-    let recording = modem_status_recording(2);
+    let recording = common::modem_status_recording(2);
     // The header and the first record, then nothing more until a line has come out.
     let header = mcp_host::record::HEADER_LEN;
     let first = header + (recording.len() - header) / 2;
@@ -987,7 +987,7 @@ fn decoding_in_the_wrong_api_mode_hints_at_the_other() {
 #[test]
 fn a_cut_off_recording_is_summed_up_to_the_cut_then_an_error() {
     let path = std::env::temp_dir().join(format!("mcp-gs-cut-{}.mcprec", std::process::id()));
-    let mut bytes = modem_status_recording(3);
+    let mut bytes = common::modem_status_recording(3);
     bytes.truncate(bytes.len() - 1);
     std::fs::write(&path, &bytes).unwrap();
     let file = path.to_str().unwrap();
@@ -1205,7 +1205,7 @@ fn decode_says_what_input_it_cannot_read() {
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(stderr.contains("decode it without --hex"), "{stderr}");
     // A hex dump of a recording is read as the recording.
-    let bytes = modem_status_recording(1);
+    let bytes = common::modem_status_recording(1);
     let dump = dir.join("flight.hex");
     let hex: String = bytes.iter().map(|b| format!("{b:02x}")).collect();
     std::fs::write(&dump, hex).unwrap();
@@ -1277,7 +1277,7 @@ fn options_may_follow_the_command_word() {
 fn a_one_shot_command_on_tcp_listen_waits_for_its_peer() {
     let dir = tempdir();
     let file = dir.join("one.mcprec");
-    std::fs::write(&file, modem_status_recording(1)).unwrap();
+    std::fs::write(&file, common::modem_status_recording(1)).unwrap();
     // A port held free: replay listens there, the peer connects once it does.
     let reserved = common::ReservedPort::new();
     let port = reserved.port;
@@ -1407,24 +1407,6 @@ fn a_recorded_frame_that_cannot_be_read_keeps_its_time() {
     assert_eq!(value["time"], 1_795_435_200.0);
     assert_eq!(value["direction"], "rx");
     std::fs::remove_file(&path).unwrap();
-}
-
-/// A recording of `n` received modem statuses ("coordinator started").
-fn modem_status_recording(n: usize) -> Vec<u8> {
-    let mut bytes = Vec::new();
-    {
-        let mut writer = mcp_host::record::RecordWriter::new(&mut bytes).unwrap();
-        for _ in 0..n {
-            writer
-                .write(
-                    std::time::SystemTime::now(),
-                    mcp_host::record::Direction::Received,
-                    &[0x8A, 0x06],
-                )
-                .unwrap();
-        }
-    }
-    bytes
 }
 
 #[test]

@@ -417,3 +417,19 @@ pub async fn tcp_coordinator(network: &mcp_host::radio::Network) -> mcp_host::ra
         .await
         .unwrap()
 }
+
+/// A recording of `n` received modem statuses ("coordinator started"), as `monitor
+/// --record` writes it.
+pub fn modem_status_recording(n: usize) -> Vec<u8> {
+    let mut writer = mcp_host::record::RecordWriter::new(Vec::new()).unwrap();
+    for _ in 0..n {
+        writer
+            .write(
+                std::time::SystemTime::now(),
+                mcp_host::record::Direction::Received,
+                &[0x8A, 0x06],
+            )
+            .unwrap();
+    }
+    writer.into_inner()
+}
