@@ -862,3 +862,46 @@ fn a_hub_lets_monitor_and_send_share_the_radio() {
         }
     });
 }
+
+#[test]
+fn telemetry_to_a_ground_station_gone_is_said_once() {
+    // The MAV sends telemetry on after the command's ground station left: every frame
+    // to the coordinator fails, which the simulator says once, not every five seconds.
+    let (mut sim, lines) =
+        spawn_lines(&["sim", "--link", "tcp-listen:127.0.0.1:0", "--duration", "8"]);
+    let link = loop {
+        let line = lines.recv_timeout(GUARD).expect("sim prints its link");
+        if let Some(rest) = line.split("(connect with ").nth(1) {
+            break rest.split(')').next().unwrap().to_string();
+        }
+    };
+    succeeded(
+        Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+            .args(["send", "--link", &link, "--to", MAV])
+            .args(["telemetry", "on", "altitude"])
+            .output()
+            .expect("run mcp-gs"),
+        &["send", "telemetry", "on"],
+    );
+    // Until the simulator's --duration ends it.
+    let mut said = Vec::new();
+    loop {
+        match lines.recv_timeout(GUARD) {
+            Ok(line) if line.contains("not delivered") => said.push(line),
+            Ok(_) => {}
+            Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => break,
+            Err(timeout) => {
+                let _ = sim.kill();
+                panic!("the simulator ran past its --duration: {timeout}");
+            }
+        }
+    }
+    assert_eq!(said.len(), 1, "{said:#?}");
+    assert!(
+        said[0].contains(&format!(
+            "{MAV} -> 0000000000000000: not delivered while 0000000000000000's link is down"
+        )),
+        "{said:#?}"
+    );
+    assert!(sim.wait().unwrap().success());
+}

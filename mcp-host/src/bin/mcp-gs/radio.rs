@@ -602,6 +602,9 @@ pub(crate) async fn watch(
     };
     tokio::pin!(stop);
     let mut failures = Repeats::default();
+    // Nodes whose link is down that a failed delivery to was said of since: the next
+    // failures to them are not (every frame to such a node fails until it is back).
+    let mut told_down = std::collections::HashSet::new();
     // The date before the first timestamped line and at each new day.
     let mut dates = mcp_host::render::text::DateLines::new();
     let mut date_line = |now: SystemTime| {
@@ -633,6 +636,29 @@ pub(crate) async fn watch(
                     }
                 }
                 Ok(event) => {
+                    if let NetEvent::Connected { node, .. } = &event {
+                        told_down.remove(node);
+                    }
+                    // To a node whose link is down (no ground station on the
+                    // coordinator, say): said once, not every five seconds until it is
+                    // back.
+                    if let NetEvent::Failed { from, to, status, .. } = &event {
+                        if *status == DeliveryStatus::NetworkAckFailure
+                            && !network.is_connected(*to)
+                        {
+                            if told_down.insert(*to) {
+                                let now = SystemTime::now();
+                                date_line(now);
+                                let time = mcp_host::render::text::time(now);
+                                out!(
+                                    "{time} {from} -> {to}: not delivered while {to}'s link is \
+                                     down (network_ack_failure), nor anything more to it \
+                                     until it is back (not shown)"
+                                );
+                            }
+                            continue;
+                        }
+                    }
                     let repeats = match &event {
                         NetEvent::Failed { from, to, status, .. } => {
                             match failures.admit((*from, *to, *status), Instant::now()) {
