@@ -1079,7 +1079,7 @@ fn monitor_shows_each_failure_again_once_frames_pass_again() {
     let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
     let link = format!("tcp:{}", listener.local_addr().unwrap());
     let mut monitor = common::Running(
-        gs().args(["monitor", "--link", &link, "--count", "111"])
+        gs().args(["monitor", "--link", &link, "--count", "301"])
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
             .spawn()
@@ -1088,10 +1088,10 @@ fn monitor_shows_each_failure_again_once_frames_pass_again() {
     let stdout = common::stdout_lines(&mut monitor.0);
     let stderr = common::stderr_lines(&mut monitor.0);
     let (mut radio, _) = listener.accept().unwrap();
-    // Ten frames that fail as from a radio in API mode 2 (an escaped byte each), until
-    // the monitor says so.
+    // Two hundred frames that fail as from a radio in API mode 2 (an escaped byte
+    // each): more than the good ones after them. The monitor says so.
     let escaped = [0x7E, 0x00, 0x03, 0x8A, 0x7D, 0x33, 0x00, 0x62];
-    radio.write_all(&escaped.repeat(10)).unwrap();
+    radio.write_all(&escaped.repeat(200)).unwrap();
     while !stderr
         .recv_timeout(common::GUARD)
         .expect("the hint")
@@ -1109,6 +1109,19 @@ fn monitor_shows_each_failure_again_once_frames_pass_again() {
     }
     let last = lines.last().cloned().unwrap_or_default();
     assert!(last.contains("error: bad checksum"), "{lines:#?}");
+    // The hidden ones were counted before the good frames' lines.
+    assert!(
+        lines
+            .iter()
+            .any(|l| l.contains("failed to decode, not shown")),
+        "{lines:#?}"
+    );
+    // The hint, once.
+    let mut hints = Vec::new();
+    while let Ok(line) = stderr.recv_timeout(common::GUARD) {
+        hints.extend(line.contains("hint: ").then_some(line));
+    }
+    assert!(hints.is_empty(), "{hints:#?}");
 }
 
 #[test]

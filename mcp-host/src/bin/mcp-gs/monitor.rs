@@ -113,16 +113,11 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
                         shown.hint = hint(found, &args.link.link);
                         shown.tell_if_due(false);
                     }
-                    // Frames pass again (the radio was set right): each failure is
-                    // shown again, and a new hint given if the signs come back.
-                    (Some(shown), None) => {
-                        shown.tell_if_due(true);
-                        quiet = None;
-                        hinted = false;
-                    }
-                    (None, Some(found)) if !hinted => {
-                        hinted = true;
-                        quiet = Quiet::after(hint(found, &args.link.link), args.format);
+                    (Some(shown), None) => shown.tell_if_due(false),
+                    // The hint once a connection; failures counted again without it.
+                    (None, Some(found)) if !(hinted && args.format == Format::Json) => {
+                        let said = std::mem::replace(&mut hinted, true);
+                        quiet = Quiet::after(hint(found, &args.link.link), args.format, !said);
                     }
                     _ => {}
                 }
@@ -139,7 +134,8 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
             }
         }
         // The next connection may be to another radio (or to this one set right): read
-        // afresh from here, where none of its frames has come yet.
+        // afresh from here (frames of it this monitor has not read yet may be counted
+        // already, and are left out).
         if let Event::Link(LinkEvent::Disconnected { .. }) = &event {
             if let Some(shown) = &mut quiet {
                 shown.tell_if_due(true);
@@ -172,21 +168,23 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
             }
         }
         if let (Some(shown), Event::DecodeError(_)) = (&mut quiet, &event) {
-            // Counted while the signs last; shown once frames pass again.
-            match diagnoser.as_mut().and_then(|d| d.look(stream.stats())) {
-                Some(found) => {
-                    shown.hint = hint(found, &args.link.link);
-                    shown.count();
-                    seen += 1;
-                    if args.count.is_some_and(|n| seen >= n) {
-                        break Ok(());
-                    }
-                    continue;
-                }
-                None => {
-                    shown.tell_if_due(true);
-                    quiet = None;
-                    hinted = false;
+            // Counted, until frames pass again.
+            shown.count();
+            seen += 1;
+            if args.count.is_some_and(|n| seen >= n) {
+                break Ok(());
+            }
+            continue;
+        }
+        // Frames pass again (the radio set right): failures are shown again, each, and
+        // the signs looked for afresh.
+        if let (Some(shown), Event::Packet(_) | Event::InvalidPacket(_) | Event::Frame(_)) =
+            (&mut quiet, &event)
+        {
+            if shown.passed() {
+                quiet = None;
+                if let ApiModeChoice::Fixed(mode) = args.link.api_mode {
+                    diagnoser = Some(Diagnoser::new(mode, stream.stats()));
                 }
             }
         }
@@ -209,12 +207,15 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
             // Closed by its reader (piped into `head`): done; anything else is a failure.
             return crate::output_failure(&e).map_or(Ok(()), Err);
         }
-        if let (Some(diagnoser), false, Event::DecodeError(_)) = (&mut diagnoser, hinted, &event) {
+        // Text output counts failures again without the hint once it was given; JSON
+        // output shows each, and the hint once a connection.
+        let looking = quiet.is_none() && !(hinted && args.format == Format::Json);
+        if let (Some(diagnoser), true, Event::DecodeError(_)) = (&mut diagnoser, looking, &event) {
             // A frame with no byte to escape passes in either mode (a modem status,
             // say): the hint counts on most frames failing, not on all of them.
             if let Some(found) = diagnoser.look(stream.stats()) {
-                hinted = true;
-                quiet = Quiet::after(hint(found, &args.link.link), args.format);
+                let said = std::mem::replace(&mut hinted, true);
+                quiet = Quiet::after(hint(found, &args.link.link), args.format, !said);
             }
         }
         if let Event::Link(LinkEvent::Closed { reason, .. }) = &event {
@@ -260,23 +261,44 @@ struct Quiet {
     hidden: u64,
     /// When the count was last said (or the hint first given).
     told: std::time::Instant,
+    /// Good frames in a row since the last that failed.
+    good: u64,
 }
 
+/// Good frames in a row after which [`Quiet`] ends: the radio was set right (a line
+/// that corrupts a frame now and then does not fail so many in a row).
+const QUIET_UNTIL_GOOD: u64 = 64;
+
 impl Quiet {
-    /// Gives `hint` on standard error; a `Quiet` for text output.
-    fn after(hint: String, format: Format) -> Option<Quiet> {
-        err!("mcp-gs: {hint}");
+    /// Gives `hint` on standard error if `say`; a `Quiet` for text output.
+    fn after(hint: String, format: Format, say: bool) -> Option<Quiet> {
+        if say {
+            err!("mcp-gs: {hint}");
+        }
         (format == Format::Text).then(|| Quiet {
             hint,
             hidden: 0,
             told: std::time::Instant::now(),
+            good: 0,
         })
     }
 
     /// Counts a frame that failed to decode, not shown.
     fn count(&mut self) {
         self.hidden += 1;
+        self.good = 0;
         self.tell_if_due(false);
+    }
+
+    /// Counts a good frame; whether [`QUIET_UNTIL_GOOD`] came in a row, and the count
+    /// of those not shown was said.
+    fn passed(&mut self) -> bool {
+        self.good += 1;
+        let done = self.good >= QUIET_UNTIL_GOOD;
+        if done {
+            self.tell_if_due(true);
+        }
+        done
     }
 
     /// Says how many frames were not shown, if any, when [`QUIET_EVERY`] has passed
