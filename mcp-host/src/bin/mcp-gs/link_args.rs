@@ -250,7 +250,8 @@ impl LinkArgs {
     }
 
     /// After a report that did not come although the radio delivered the request:
-    /// unless frames failed to decode meanwhile (their hint says more), asks the radio
+    /// unless the link's counters give a hint of their own (frames that failed as in
+    /// another mode), asks the radio
     /// its `AP` (for a second at most) and warns if it is in another mode than
     /// `--api-mode`. Through a hub in another mode than the radio, the request goes out
     /// and its status comes back, but the report, from an address with bytes to escape
@@ -258,9 +259,8 @@ impl LinkArgs {
     /// down.
     pub(crate) async fn check_mode_after_silence(&self, sender: &CommandSender) {
         let up = sender.link_state() == mcp_host::LinkState::Connected;
-        if let (ApiModeChoice::Fixed(mode), true, 0) =
-            (self.api_mode, up, sender.stats().decode_errors())
-        {
+        let hinted = counters_hint(self, &sender.stats()).is_some();
+        if let (ApiModeChoice::Fixed(mode), true, false) = (self.api_mode, up, hinted) {
             check_mode(sender, mode, mcp_host::hub::MODE_CHECK_TIMEOUT).await;
         }
     }
@@ -554,12 +554,18 @@ pub(crate) fn diagnosed_send(error: SendError, link: &LinkArgs, stats: &Stats) -
         // The frame never left: the radio's settings have nothing to do with it.
         SendError::NotSent { .. } => Some(
             "hint: the link did not take the frame in time: give a longer --timeout (a \
-             slow serial link, a busy hub or many commands at once take longer)"
+             slow serial link, a busy hub or many commands at once take longer), or the \
+             link takes no bytes (hardware flow control held, a peer that does not read)"
                 .to_owned(),
         ),
         SendError::Delivery { status, .. } if *status == DeliveryStatus::AddressNotFound => {
+            let mode = match link.api_mode {
+                ApiModeChoice::Fixed(ApiMode::Unescaped) => String::new(),
+                ApiModeChoice::Fixed(mode) => format!(" --api-mode {}", u8::from(mode)),
+                ApiModeChoice::Auto => " --api-mode auto".to_owned(),
+            };
             Some(format!(
-                "hint: no radio of the network has that address: `mcp-gs nodes --link {}` \
+                "hint: no radio of the network has that address: `mcp-gs nodes --link {}{mode}` \
                  lists the radios that answer",
                 link.link
             ))

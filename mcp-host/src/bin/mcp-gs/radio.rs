@@ -636,7 +636,9 @@ pub(crate) async fn watch(
                     }
                 }
                 Ok(event) => {
-                    if let NetEvent::Connected { node, .. } = &event {
+                    if let NetEvent::Connected { node, .. } | NetEvent::Disconnected { node, .. } =
+                        &event
+                    {
                         told_down.remove(node);
                     }
                     // To a node whose link is down (no ground station on the
@@ -677,7 +679,11 @@ pub(crate) async fn watch(
                         }
                     }
                 }
-                Err(broadcast::error::RecvError::Lagged(n)) => out!("({n} events not shown)"),
+                Err(broadcast::error::RecvError::Lagged(n)) => {
+                    // A node's coming back may be among them.
+                    told_down.clear();
+                    out!("({n} events not shown)");
+                }
                 Err(broadcast::error::RecvError::Closed) => return Ok(()),
             },
         }
