@@ -251,12 +251,11 @@ impl LinkArgs {
 
     /// After a report that did not come although the radio delivered the request:
     /// unless the link's counters give a hint of their own (frames that failed as in
-    /// another mode), asks the radio
-    /// its `AP` (for a second at most) and warns if it is in another mode than
-    /// `--api-mode`. Through a hub in another mode than the radio, the request goes out
-    /// and its status comes back, but the report, from an address with bytes to escape
-    /// (every `0013A2...`), is dropped by the hub, out of sight. Not on a link that is
-    /// down.
+    /// another mode), asks the radio its `AP` (for a second at most) and warns if it is
+    /// in another mode than `--api-mode`. Through a hub in another mode than the radio,
+    /// the request goes out and its status comes back, but the report, from an address
+    /// with bytes to escape (every `0013A2...`), is dropped by the hub, out of sight. Not
+    /// on a link that is down.
     pub(crate) async fn check_mode_after_silence(&self, sender: &CommandSender) {
         let up = sender.link_state() == mcp_host::LinkState::Connected;
         let hinted = counters_hint(self, &sender.stats()).is_some();
@@ -628,8 +627,10 @@ pub(crate) fn check_serial_path(link: &Link, wait: bool) -> Result<(), Failure> 
         return Ok(());
     }
     match std::fs::metadata(path) {
-        Ok(meta) if no_device_kind(&meta).is_some() => Err(no_serial_device(link, path)),
-        Ok(_) => check_terminal(link, path, wait),
+        Ok(meta) => match no_device_kind(&meta) {
+            Some(what) => Err(no_serial_device(link, path, what)),
+            None => check_terminal(link, path, wait),
+        },
         Err(_) if wait => Ok(()),
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
             let hint = match misread_baud(link) {
@@ -655,7 +656,7 @@ pub(crate) fn check_serial_path(link: &Link, wait: bool) -> Result<(), Failure> 
 fn check_terminal(link: &Link, path: &str, wait: bool) -> Result<(), Failure> {
     match open_device(path) {
         Ok(device) if std::io::IsTerminal::is_terminal(&device) => Ok(()),
-        Ok(_) => Err(no_serial_device(link, path)),
+        Ok(_) => Err(no_serial_device(link, path, NO_TERMINAL)),
         Err(e) if e.kind() == std::io::ErrorKind::PermissionDenied && wait => {
             err!("mcp-gs: warning: cannot open {path} yet: {PERMISSION_HINT}");
             Ok(())
@@ -681,13 +682,9 @@ fn open_device(path: &str) -> std::io::Result<std::fs::File> {
     options.open(path)
 }
 
-/// The failure of a serial link whose path is there but is no serial device: what it
+/// The failure of a serial link whose path is there but is no serial device: `what` it
 /// is instead, as [`not_a_serial_port`] says it when the link is opened.
-fn no_serial_device(link: &Link, path: &str) -> Failure {
-    let what = std::fs::metadata(path)
-        .ok()
-        .and_then(|meta| no_device_kind(&meta))
-        .unwrap_or(NO_TERMINAL);
+fn no_serial_device(link: &Link, path: &str, what: &str) -> Failure {
     Failure::link(format!(
         "cannot open {link}: {path} is not a serial device but {what} (`mcp-gs ports` lists \
          the serial ports present)"
