@@ -49,6 +49,19 @@ async fn next_served(connector: &mut Connector) -> mcp_host::Transport {
         .unwrap()
 }
 
+/// The transport of the next peer the connector serves, whose first bytes are `bytes`.
+async fn served_next_with(connector: &mut Connector, bytes: &[u8]) -> mcp_host::Transport {
+    let mut transport = next_served(connector).await;
+    assert_eq!(read_exact_n(&mut transport, bytes.len()).await, bytes);
+    transport
+}
+
+/// A peer hangs up: it shuts its sending side (the link reads the end of its stream)
+/// and closes.
+async fn hang_up(mut peer: TcpStream) {
+    peer.shutdown().await.unwrap();
+}
+
 /// Waits for the end of `r`'s stream: the peer hung up, with nothing more to read.
 async fn reads_end<R: AsyncReadExt + Unpin>(r: &mut R) {
     let mut buf = [0u8; 8];
@@ -332,20 +345,16 @@ async fn tcp_listen_serves_a_peer_that_left_after_its_turn_came() {
     drop(first);
     reads_end(&mut transport).await;
     drop(transport);
-    second.shutdown().await.unwrap();
-    drop(second);
-    let mut transport = next_served(&mut connector).await;
-    assert_eq!(read_exact_n(&mut transport, 3).await, b"2nd");
+    hang_up(second).await;
+    let mut transport = served_next_with(&mut connector, b"2nd").await;
     reads_end(&mut transport).await;
     drop(transport);
 
     // Between peers nobody is ahead of a new one: its turn comes as it connects.
     let mut third = TcpStream::connect(addr).await.unwrap();
     third.write_all(b"3rd").await.unwrap();
-    third.shutdown().await.unwrap();
-    drop(third);
-    let mut transport = next_served(&mut connector).await;
-    assert_eq!(read_exact_n(&mut transport, 3).await, b"3rd");
+    hang_up(third).await;
+    served_next_with(&mut connector, b"3rd").await;
 }
 
 #[tokio::test]
@@ -363,12 +372,10 @@ async fn tcp_listen_serves_a_peer_that_came_after_the_served_one_hung_up() {
     reads_end(&mut third).await;
     // It leaves, done (a command sent without waiting for an answer), before the link
     // reads the first one's end: nobody was ahead of it, so it is served all the same.
-    second.shutdown().await.unwrap();
-    drop(second);
+    hang_up(second).await;
     reads_end(&mut transport).await;
     drop(transport);
-    let mut transport = next_served(&mut connector).await;
-    assert_eq!(read_exact_n(&mut transport, 3).await, b"cmd");
+    served_next_with(&mut connector, b"cmd").await;
 }
 
 #[tokio::test]
@@ -379,17 +386,14 @@ async fn tcp_listen_serves_two_commands_sent_back_to_back_before_it_read_the_fir
     // Two commands sent without waiting for an answer, one after the other: the link
     // has read neither the first's bytes nor its end when the second comes.
     first.write_all(b"1st").await.unwrap();
-    first.shutdown().await.unwrap();
-    drop(first);
-    let mut second = waiting_peer(addr, b"2nd").await;
-    second.shutdown().await.unwrap();
-    drop(second);
+    hang_up(first).await;
+    let second = waiting_peer(addr, b"2nd").await;
+    hang_up(second).await;
     // Both are carried out, in order.
     assert_eq!(read_exact_n(&mut transport, 3).await, b"1st");
     reads_end(&mut transport).await;
     drop(transport);
-    let mut transport = next_served(&mut connector).await;
-    assert_eq!(read_exact_n(&mut transport, 3).await, b"2nd");
+    served_next_with(&mut connector, b"2nd").await;
 }
 
 #[tokio::test]
@@ -397,32 +401,28 @@ async fn tcp_listen_keeps_the_place_of_a_peer_whose_turn_came() {
     let (mut connector, addr) = listening().await;
     let first = TcpStream::connect(addr).await.unwrap();
     let mut transport = connector.open().await.unwrap();
-    let mut second = waiting_peer(addr, b"2nd").await;
+    let second = waiting_peer(addr, b"2nd").await;
     // The first hangs up: the second's turn has come; then it leaves, done.
     drop(first);
     reads_end(&mut transport).await;
-    second.shutdown().await.unwrap();
-    drop(second);
+    hang_up(second).await;
     // A third comes before the link takes the second: it is turned away, not let in
     // the second's place.
     let mut third = TcpStream::connect(addr).await.unwrap();
     let _ = third.write_all(b"3rd").await;
     is_turned_away(&mut third).await;
     drop(transport);
-    let mut transport = next_served(&mut connector).await;
-    assert_eq!(read_exact_n(&mut transport, 3).await, b"2nd");
+    let transport = served_next_with(&mut connector, b"2nd").await;
 
     // With nobody served, the same: the first to come is served.
     drop(transport);
     let mut fourth = TcpStream::connect(addr).await.unwrap();
     fourth.write_all(b"4th").await.unwrap();
-    fourth.shutdown().await.unwrap();
-    drop(fourth);
+    hang_up(fourth).await;
     let mut fifth = TcpStream::connect(addr).await.unwrap();
     let _ = fifth.write_all(b"5th").await;
     is_turned_away(&mut fifth).await;
-    let mut transport = next_served(&mut connector).await;
-    assert_eq!(read_exact_n(&mut transport, 3).await, b"4th");
+    served_next_with(&mut connector, b"4th").await;
 }
 
 #[tokio::test]
@@ -436,16 +436,14 @@ async fn tcp_listen_a_read_into_no_room_is_no_end_of_stream() {
     assert_eq!(read_exact_n(&mut transport, 1).await, b"1");
     // The first is still served: a peer that waits, writes and gives up meanwhile is
     // dropped.
-    let mut gave_up = waiting_peer(addr, b"old").await;
-    gave_up.shutdown().await.unwrap();
-    drop(gave_up);
+    let gave_up = waiting_peer(addr, b"old").await;
+    hang_up(gave_up).await;
     drop(first);
     reads_end(&mut transport).await;
     drop(transport);
     let mut last = TcpStream::connect(addr).await.unwrap();
     last.write_all(b"new").await.unwrap();
-    let mut transport = next_served(&mut connector).await;
-    assert_eq!(read_exact_n(&mut transport, 3).await, b"new");
+    served_next_with(&mut connector, b"new").await;
 }
 
 #[tokio::test]
@@ -460,16 +458,14 @@ async fn tcp_listen_a_transport_that_outlives_its_turn_ends_no_other() {
     drop(old);
     // The second is still served: a peer that waits, writes and gives up meanwhile is
     // dropped.
-    let mut gave_up = waiting_peer(addr, b"old").await;
-    gave_up.shutdown().await.unwrap();
-    drop(gave_up);
+    let gave_up = waiting_peer(addr, b"old").await;
+    hang_up(gave_up).await;
     second.shutdown().await.unwrap();
     reads_end(&mut transport).await;
     drop(transport);
     let mut last = TcpStream::connect(addr).await.unwrap();
     last.write_all(b"new").await.unwrap();
-    let mut transport = next_served(&mut connector).await;
-    assert_eq!(read_exact_n(&mut transport, 3).await, b"new");
+    served_next_with(&mut connector, b"new").await;
 }
 
 /// A serial link on the far end of a pseudo-terminal holds it by its lock alone, not by
