@@ -205,13 +205,13 @@ fn a_status_kind_with_no_status_request_says_why() {
 
 #[test]
 fn a_path_that_is_no_serial_port_says_so() {
-    let dir = tempdir("no-serial-port");
-    let file = dir.join("capture.bin");
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("capture.bin");
     std::fs::write(&file, b"not a radio").unwrap();
     for (path, what) in [
         ("/dev/null", "a device that is no terminal"),
         (file.to_str().unwrap(), "a regular file"),
-        (dir.to_str().unwrap(), "a directory"),
+        (dir.path().to_str().unwrap(), "a directory"),
     ] {
         let output = run(&["monitor", "--link", &format!("serial:{path}")]);
         let stderr = stderr(&output);
@@ -222,7 +222,6 @@ fn a_path_that_is_no_serial_port_says_so() {
         );
         assert_eq!(stderr.lines().count(), 1, "{stderr}");
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -345,13 +344,6 @@ fn a_refused_connection_hints_at_a_hub_without_its_radio() {
         stderr.contains("running? A hub whose radio is disconnected refuses connections"),
         "{stderr}"
     );
-}
-
-/// A fresh directory for one test.
-fn tempdir(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("mcp-gs-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
 }
 
 #[test]
@@ -542,8 +534,8 @@ fn every_json_object_of_monitor_has_a_time() {
 
 #[test]
 fn decode_of_input_with_no_frame_is_an_input_error() {
-    let dir = tempdir("no-capture");
-    let file = dir.join("f");
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("f");
     std::fs::write(&file, b"MCPRE").unwrap();
     for summary in [false, true] {
         let mut args = vec!["decode", file.to_str().unwrap()];
@@ -573,7 +565,6 @@ fn decode_of_input_with_no_frame_is_an_input_error() {
         run(&["decode", file.to_str().unwrap()]).status.code(),
         Some(0)
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// `decode --hex` of what `encode` printed for `command`, in `format`.
@@ -782,12 +773,12 @@ fn recording(records: &[(u8, u64)]) -> Vec<u8> {
 
 #[test]
 fn replay_of_no_frame_of_the_chosen_direction_says_so_up_front() {
-    let dir = tempdir("replay-direction");
-    let received = dir.join("monitor.mcprec");
+    let dir = tempfile::tempdir().unwrap();
+    let received = dir.path().join("monitor.mcprec");
     std::fs::write(&received, recording(&[(0, 1), (0, 2)])).unwrap();
-    let sent = dir.join("sent.mcprec");
+    let sent = dir.path().join("sent.mcprec");
     std::fs::write(&sent, recording(&[(1, 1)])).unwrap();
-    let empty = dir.join("empty.mcprec");
+    let empty = dir.path().join("empty.mcprec");
     std::fs::write(&empty, recording(&[])).unwrap();
     // A link nobody listens on: with the fix, never opened.
     for (file, frames, message) in [
@@ -819,13 +810,12 @@ fn replay_of_no_frame_of_the_chosen_direction_says_so_up_front() {
         "tx",
     ]);
     assert!(stderr(&output).contains("records received frames only"));
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
 fn replay_of_a_hostile_recording_is_an_input_error_at_a_slow_speed() {
-    let dir = tempdir("replay-hostile");
-    let file = dir.join("far.mcprec");
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("far.mcprec");
     std::fs::write(&file, recording(&[(0, 0), (0, u64::MAX)])).unwrap();
     for speed in ["0.000001", "1", "1e-300"] {
         let (link, reader) = common::recording_peer();
@@ -845,13 +835,12 @@ fn replay_of_a_hostile_recording_is_an_input_error_at_a_slow_speed() {
         // The first frame went out.
         assert_eq!(reader.join().unwrap(), [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F]);
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
 fn replay_says_how_far_it_got_when_its_peer_leaves() {
-    let dir = tempdir("replay-peer-leaves");
-    let file = dir.join("minute.mcprec");
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("minute.mcprec");
     // The second frame a minute after the first: the replay is waiting for it when the
     // peer leaves, and says so then, not a minute later.
     std::fs::write(&file, recording(&[(0, 0), (0, 60_000_000)])).unwrap();
@@ -871,7 +860,6 @@ fn replay_says_how_far_it_got_when_its_peer_leaves() {
         stderr.trim_end(),
         "mcp-gs: link closed (replayed 1 frames before it)"
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]

@@ -41,24 +41,19 @@ fn text(bytes: &[u8]) -> String {
     String::from_utf8(bytes.to_vec()).expect("utf-8 output")
 }
 
-/// A file of this test's own in the temporary directory, removed when dropped.
-struct TempFile(PathBuf);
+/// A file of this test's own in a temporary directory, removed when dropped.
+struct TempFile(tempfile::TempDir, PathBuf);
 
 impl TempFile {
     fn new(name: &str, bytes: &[u8]) -> Self {
-        let path = std::env::temp_dir().join(format!("mcp-gs-{}-{name}", std::process::id()));
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join(name);
         std::fs::write(&path, bytes).unwrap();
-        TempFile(path)
+        TempFile(dir, path)
     }
 
     fn path(&self) -> &str {
-        self.0.to_str().unwrap()
-    }
-}
-
-impl Drop for TempFile {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_file(&self.0);
+        self.1.to_str().unwrap()
     }
 }
 
@@ -188,7 +183,7 @@ fn a_recording_cut_off_names_the_file_and_the_frames_decoded_before_it() {
         )
     );
     // From standard input, no file is named.
-    let file = std::fs::File::open(&cut.0).unwrap();
+    let file = std::fs::File::open(cut.path()).unwrap();
     let output = gs().arg("decode").stdin(file).output().unwrap();
     let err = text(&output.stderr);
     assert_eq!(output.status.code(), Some(2), "{err}");

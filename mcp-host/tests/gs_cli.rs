@@ -186,8 +186,8 @@ fn decode_reports_bad_frames_and_goes_on() {
         0x7E, 0x00, 0x02, 0x8A, 0x06, 0x00, // bad checksum
         0x7E, 0x00, 0x02, 0x8A, 0x02, 0x73, // good
     ];
-    let dir = tempdir();
-    let path = dir.join("bad.bin");
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("bad.bin");
     std::fs::write(&path, stream).unwrap();
     let out = stdout(&run(&[
         "decode",
@@ -759,16 +759,6 @@ fn every_subcommand_has_help() {
     }
 }
 
-fn tempdir() -> PathBuf {
-    let dir = std::env::temp_dir().join(format!(
-        "mcp-gs-test-{}-{:?}",
-        std::process::id(),
-        std::thread::current().id()
-    ));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
 #[test]
 fn closed_standard_output_ends_quietly() {
     // As `mcp-gs demo | head -1`: the reader goes away after one line.
@@ -986,7 +976,8 @@ fn decoding_in_the_wrong_api_mode_hints_at_the_other() {
 
 #[test]
 fn a_cut_off_recording_is_summed_up_to_the_cut_then_an_error() {
-    let path = std::env::temp_dir().join(format!("mcp-gs-cut-{}.mcprec", std::process::id()));
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("cut.mcprec");
     let mut bytes = common::modem_status_recording(3);
     bytes.truncate(bytes.len() - 1);
     std::fs::write(&path, &bytes).unwrap();
@@ -1014,13 +1005,12 @@ fn a_cut_off_recording_is_summed_up_to_the_cut_then_an_error() {
     assert!(stderr.contains("replayed 2 frames before it"), "{stderr}");
     let modem_status = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F];
     assert_eq!(reader.join().unwrap(), modem_status.repeat(2));
-    std::fs::remove_file(&path).unwrap();
 }
 
 #[test]
 fn monitor_keeps_an_existing_recording() {
-    let dir = tempdir();
-    let file = dir.join("flight.mcprec");
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("flight.mcprec");
     std::fs::write(&file, b"yesterday's flight").unwrap();
     let path = file.to_str().unwrap();
     let missing = "serial:/dev/mcp-gs-test-no-such-device";
@@ -1036,7 +1026,6 @@ fn monitor_keeps_an_existing_recording() {
     let output = run(&["monitor", "--link", missing, "--record", path, "--force"]);
     assert_eq!(output.status.code(), Some(3));
     assert_eq!(std::fs::read(&file).unwrap(), b"yesterday's flight");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -1207,9 +1196,9 @@ fn a_radio_in_transparent_mode_is_named_by_status_and_monitor() {
 
 #[test]
 fn decode_says_what_input_it_cannot_read() {
-    let dir = tempdir();
+    let dir = tempfile::tempdir().unwrap();
     // A recording given as hex text.
-    let recording = dir.join("flight.mcprec");
+    let recording = dir.path().join("flight.mcprec");
     let mut bytes = Vec::new();
     mcp_host::record::RecordWriter::new(&mut bytes).unwrap();
     std::fs::write(&recording, &bytes).unwrap();
@@ -1219,19 +1208,18 @@ fn decode_says_what_input_it_cannot_read() {
     assert!(stderr.contains("decode it without --hex"), "{stderr}");
     // A hex dump of a recording is read as the recording.
     let bytes = common::modem_status_recording(1);
-    let dump = dir.join("flight.hex");
+    let dump = dir.path().join("flight.hex");
     let hex: String = bytes.iter().map(|b| format!("{b:02x}")).collect();
     std::fs::write(&dump, hex).unwrap();
     let out = stdout(&run(&["decode", "--hex", dump.to_str().unwrap()]));
     assert!(out.contains("rx modem status coordinator_started"), "{out}");
     // Bytes with no frame in them: said so, and an input error.
-    let noise = dir.join("noise.bin");
+    let noise = dir.path().join("noise.bin");
     std::fs::write(&noise, b"hello, this is no capture\n").unwrap();
     let output = run(&["decode", noise.to_str().unwrap()]);
     assert_eq!(output.status.code(), Some(2));
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(stderr.contains("no XBee frame in 26 bytes"), "{stderr}");
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -1288,8 +1276,8 @@ fn options_may_follow_the_command_word() {
 
 #[test]
 fn a_one_shot_command_on_tcp_listen_waits_for_its_peer() {
-    let dir = tempdir();
-    let file = dir.join("one.mcprec");
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("one.mcprec");
     std::fs::write(&file, common::modem_status_recording(1)).unwrap();
     // A port held free: replay listens there, the peer connects once it does.
     let reserved = common::ReservedPort::new();
@@ -1344,7 +1332,6 @@ fn a_one_shot_command_on_tcp_listen_waits_for_its_peer() {
             "{command:?}: {stderr}"
         );
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -1365,7 +1352,8 @@ fn decode_of_a_recording_dates_its_lines_at_each_new_day() {
                 .unwrap();
         }
     }
-    let path = std::env::temp_dir().join(format!("mcp-gs-days-{}.mcprec", std::process::id()));
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("days.mcprec");
     std::fs::write(&path, &bytes).unwrap();
     let file = path.to_str().unwrap();
 
@@ -1392,7 +1380,6 @@ fn decode_of_a_recording_dates_its_lines_at_each_new_day() {
         })
         .collect();
     assert_eq!(times, [1_795_391_999.5, 1_795_392_000.25, 1_795_392_001.0]);
-    std::fs::remove_file(&path).unwrap();
 }
 
 #[test]
@@ -1406,7 +1393,8 @@ fn a_recorded_frame_that_cannot_be_read_keeps_its_time() {
             .write(noon, mcp_host::record::Direction::Received, &[0x90, 0x01])
             .unwrap();
     }
-    let path = std::env::temp_dir().join(format!("mcp-gs-bad-{}.mcprec", std::process::id()));
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("bad.mcprec");
     std::fs::write(&path, &bytes).unwrap();
     let file = path.to_str().unwrap();
     let text = stdout(&run(&["decode", file]));
@@ -1419,7 +1407,6 @@ fn a_recorded_frame_that_cannot_be_read_keeps_its_time() {
     assert_eq!(value["error"], "frame");
     assert_eq!(value["time"], 1_795_435_200.0);
     assert_eq!(value["direction"], "rx");
-    std::fs::remove_file(&path).unwrap();
 }
 
 #[test]
@@ -1467,8 +1454,8 @@ fn monitor_waits_for_a_link_that_is_not_there_yet() {
     // becomes one.
     let output = run(&["monitor", "--link", &link, "--wait", "--api-mode", "auto"]);
     assert_eq!(output.status.code(), Some(2));
-    let dir = tempdir();
-    let file = dir.join("not-a-tty");
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("not-a-tty");
     std::fs::write(&file, b"").unwrap();
     let serial = format!("serial:{}", file.display());
     let output = run(&["monitor", "--link", &serial, "--wait"]);
@@ -1478,7 +1465,7 @@ fn monitor_waits_for_a_link_that_is_not_there_yet() {
         "{output:?}"
     );
 
-    let record = dir.join("flight.mcprec");
+    let record = dir.path().join("flight.mcprec");
     let mut child = gs()
         .args(["monitor", "--link", &link, "--count", "1", "--wait"])
         .args(["--record", record.to_str().unwrap()])

@@ -507,9 +507,8 @@ fn api_mode_detection_over_a_serial_port() {
 fn record_decode_and_replay() {
     let sim = Sim::start("tcp-listen:127.0.0.1:0");
     sim.send(&["telemetry", "on", "pitch_angle"]);
-    let dir = std::env::temp_dir().join(format!("mcp-gs-e2e-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let file = dir.join("flight.mcprec");
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("flight.mcprec");
     let file = file.to_str().unwrap();
     let live = sim.ok(&[
         "monitor", "--format", "json", "--count", "5", "--record", file,
@@ -573,7 +572,6 @@ fn record_decode_and_replay() {
         }
     }
     assert_eq!(frames, decoded.len());
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
@@ -606,9 +604,8 @@ fn a_recording_keeps_each_frame_as_it_came() {
         std::io::Write::write_all(&mut socket, &wire).unwrap();
         let _ = std::io::Read::read_to_end(&mut socket, &mut Vec::new());
     });
-    let dir = std::env::temp_dir().join(format!("mcp-gs-rec-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let file = dir.join("frames.mcprec");
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("frames.mcprec");
     mcp_gs_ok(&[
         "monitor",
         "--link",
@@ -655,7 +652,6 @@ fn a_recording_keeps_each_frame_as_it_came() {
         summary.contains("mcp packets:\n  message: 1\n  report: 1\n"),
         "{summary}"
     );
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]

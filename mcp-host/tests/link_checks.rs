@@ -59,20 +59,12 @@ fn line(lines: &Receiver<String>, mut f: impl FnMut(&str) -> bool) -> String {
     }
 }
 
-/// A directory of this test's own, empty.
-fn tempdir(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("mcp-gs-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
 #[cfg(unix)]
 #[test]
 fn a_path_that_can_never_be_a_serial_port_is_refused_at_once() {
-    let dir = tempdir("never-a-port");
+    let dir = tempfile::tempdir().unwrap();
     // What `echo > /dev/ttyUSB0` leaves before the adapter is plugged in.
-    let file = dir.join("ttyUSB0");
+    let file = dir.path().join("ttyUSB0");
     std::fs::write(&file, b"\n").unwrap();
     for (path, what) in [
         (file.to_str().unwrap(), "a regular file"),
@@ -106,7 +98,6 @@ fn a_path_that_can_never_be_a_serial_port_is_refused_at_once() {
             );
         }
     }
-    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// A pseudo-terminal pair: the master side, the far end (held open, so that the master
@@ -147,10 +138,10 @@ fn a_link_that_ends_for_good_stops_sim_and_radio_naming_it() {
         ),
     ];
     for (command, name) in cases {
-        let dir = tempdir("ends-for-good");
+        let dir = tempfile::tempdir().unwrap();
         // The adapter's path, a terminal at first: its master side held here.
         let (mut master, far, terminal) = pseudo_terminal();
-        let port = dir.join("ttyUSB0");
+        let port = dir.path().join("ttyUSB0");
         std::os::unix::fs::symlink(&terminal, &port).unwrap();
         let link = format!("serial:{}", port.display());
         let given = match command[0] {
@@ -168,7 +159,7 @@ fn a_link_that_ends_for_good_stops_sim_and_radio_naming_it() {
         drop(far);
         // The adapter pulled out, and a regular file left where it was: the link goes
         // down, and cannot be opened again.
-        let stray = dir.join("stray");
+        let stray = dir.path().join("stray");
         std::fs::write(&stray, b"\n").unwrap();
         repoint(&port, &stray);
         drop(master);
@@ -186,7 +177,6 @@ fn a_link_that_ends_for_good_stops_sim_and_radio_naming_it() {
             "{args:?}: {said}"
         );
         assert!(!said.contains("warning"), "{args:?}: {said}");
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }
 

@@ -547,10 +547,10 @@ async fn open_errors_are_clear() {
 
     // A path that is there but is no device (a directory, a regular file) never
     // becomes one: not waited on either.
-    let dir = std::env::temp_dir();
-    let file = dir.join(format!("mcp-not-a-device-{}", std::process::id()));
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("not-a-device");
     std::fs::write(&file, b"").unwrap();
-    for path in [dir.clone(), file.clone()] {
+    for path in [dir.path().to_path_buf(), file] {
         let link = Link::Serial {
             path: path.display().to_string(),
             baud: 9600,
@@ -561,7 +561,6 @@ async fn open_errors_are_clear() {
             "{err}"
         );
     }
-    std::fs::remove_file(&file).unwrap();
 }
 
 // Paused clock: the delays below are the reconnection's own sleeps, exactly.
