@@ -42,18 +42,22 @@ fn text(bytes: &[u8]) -> String {
 }
 
 /// A file of this test's own in a temporary directory, removed when dropped.
-struct TempFile(tempfile::TempDir, PathBuf);
+struct TempFile {
+    /// Held for its removal when dropped.
+    _dir: tempfile::TempDir,
+    path: PathBuf,
+}
 
 impl TempFile {
     fn new(name: &str, bytes: &[u8]) -> Self {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join(name);
         std::fs::write(&path, bytes).unwrap();
-        TempFile(dir, path)
+        TempFile { _dir: dir, path }
     }
 
     fn path(&self) -> &str {
-        self.1.to_str().unwrap()
+        self.path.to_str().unwrap()
     }
 }
 
