@@ -252,3 +252,43 @@ fn input_with_no_hex_line_says_so() {
         "{stderr}"
     );
 }
+
+#[test]
+fn a_hex_dump_of_a_recording_under_a_title_line_is_read_as_the_recording() {
+    // A dump pasted under a line of its own that is not hex: the line is said and
+    // skipped, and the recording is found after it (its frames carry their times).
+    let hex: String = common::modem_status_recording(2)
+        .iter()
+        .map(|b| format!("{b:02x} "))
+        .collect();
+    let input = format!("Flight 3, from the hub\n\n{hex}\n");
+    let output = decode_stdin(&["--hex"], &input);
+    let (out, err) = (text(&output.stdout), text(&output.stderr));
+    let lines: Vec<&str> = out.lines().collect();
+    assert_eq!(
+        lines[0], "error, found at input line 1: `Fl` is not a hex byte (line skipped)",
+        "{out}"
+    );
+    let frames: Vec<&&str> = lines[1..]
+        .iter()
+        .filter(|l| !l.starts_with("-- "))
+        .collect();
+    assert_eq!(frames.len(), 2, "{out}");
+    assert!(
+        frames
+            .iter()
+            .all(|l| l.contains(" rx modem status coordinator_started")),
+        "{out}"
+    );
+    assert_eq!(output.status.code(), Some(2), "{err}");
+    assert!(
+        err.starts_with("mcp-gs: line 1: `Fl` is not a hex byte (line skipped); the other lines"),
+        "{err}"
+    );
+
+    let output = decode_stdin(&["--hex", "--summary", "--format", "json"], &input);
+    assert_eq!(output.status.code(), Some(2));
+    let summary: Value = serde_json::from_str(text(&output.stdout).trim()).unwrap();
+    assert_eq!(summary["frames"], 2, "{summary}");
+    assert_eq!(summary["errors"]["bad_hex_line"], 1, "{summary}");
+}

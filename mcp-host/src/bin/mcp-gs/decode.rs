@@ -144,22 +144,37 @@ fn decode_input(
         ));
     }
     let mode = args.api_mode.0;
+    let mut skipped = SkippedLines::default();
     if args.hex {
         // Decoded a line at a time, as the text comes. A hex dump of a recording is a
         // recording: its head is read again, as the bytes the text gives.
         // The raw head holds no skipped lines: they come from hex text only.
         let mut bytes = HexReader::new(head.bytes.chain(input));
-        // Text that is not text at all, in the first line.
-        let head = read_head(&mut bytes).map_err(|e| io::Error::new(e.kind(), source.says(&e)))?;
-        decode_bytes(head, bytes, mode, &mut printer, source, live)?;
+        let head = loop {
+            // Text that is not text at all, in the first line.
+            let head =
+                read_head(&mut bytes).map_err(|e| io::Error::new(e.kind(), source.says(&e)))?;
+            // Lines skipped before the first byte (a title line over a dump) are said
+            // at once, and the head is looked for after them.
+            match head.skipped.as_ref().and_then(BadText::of) {
+                Some(bad) if head.data().is_empty() => {
+                    skipped.add(bad);
+                    printer.bad_text(bad)?;
+                    printer.out.flush()?;
+                }
+                _ => break head,
+            }
+        };
+        decode_bytes(head, bytes, mode, &mut printer, source, live, &mut skipped)?;
     } else {
-        decode_bytes(head, input, mode, &mut printer, source, live)?;
+        decode_bytes(head, input, mode, &mut printer, source, live, &mut skipped)?;
     }
     printer.finish()
 }
 
 /// Decodes `head` (from [`read_head`]) and the `rest` after it: a recording if the
-/// head is one's, else a stream in `mode`.
+/// head is one's, else a stream in `mode`. `skipped` holds the lines of hex text
+/// skipped before it.
 fn decode_bytes(
     head: Head,
     rest: impl Read,
@@ -167,13 +182,14 @@ fn decode_bytes(
     printer: &mut Printer<'_, impl Write>,
     source: Source<'_>,
     live: bool,
+    skipped: &mut SkippedLines,
 ) -> io::Result<()> {
     let recording = record::is_recording(head.data());
     let bytes = head.chain(rest);
     if recording {
-        decode_recording(bytes, printer, source, live)
+        decode_recording(bytes, printer, source, live, skipped)
     } else {
-        decode_stream(bytes, mode, printer, source)
+        decode_stream(bytes, mode, printer, source, skipped)
     }
 }
 
@@ -457,9 +473,9 @@ fn decode_stream(
     mode: ApiMode,
     printer: &mut Printer<'_, impl Write>,
     source: Source<'_>,
+    skipped: &mut SkippedLines,
 ) -> io::Result<()> {
     let mut decoder: Decoder = Decoder::new(mode);
-    let mut skipped = SkippedLines::default();
     let mut chunk = vec![0u8; 1 << 16];
     let mut offset = 0u64;
     // The decoder's counters are 32-bit and wrap; they are added up here a read at a
@@ -587,12 +603,14 @@ fn mode_hint(mode: ApiMode, stats: &mcp_host::Stats) -> Option<String> {
 }
 
 /// Decodes a recording; `live` flushes the output after every record, for a recording
-/// read from a pipe as it is made.
+/// read from a pipe as it is made. `skipped` holds the lines of hex text skipped before
+/// it: they make the input bad input, said at the end.
 fn decode_recording(
     input: impl Read,
     printer: &mut Printer<'_, impl Write>,
     source: Source<'_>,
     live: bool,
+    skipped: &mut SkippedLines,
 ) -> io::Result<()> {
     // The summary counts every byte, a record cut off at the end included.
     let mut input = Counted { inner: input, n: 0 };
@@ -603,7 +621,6 @@ fn decode_recording(
     // how many frames came before it. (A line of a hex dump that is not hex ends it too:
     // records cannot be found again after bytes left out.)
     let mut decoded = 0u64;
-    let mut bad_lines = 0u64;
     let result = loop {
         match reader.next_record() {
             Ok(Some(record)) => {
@@ -613,16 +630,23 @@ fn decode_recording(
                     printer.out.flush()?;
                 }
             }
-            Ok(None) => break Ok(()),
+            Ok(None) => {
+                let skipped = skipped.message(input.n).map(|message| source.says(message));
+                break skipped.map_or(Ok(()), |message| {
+                    Err(io::Error::new(io::ErrorKind::InvalidData, message))
+                });
+            }
             Err(e) => {
-                bad_lines = u64::from(BadText::of(&e).is_some());
+                if let Some(bad) = BadText::of(&e) {
+                    skipped.add(bad);
+                }
                 let message = format!("{e}; {}", decoded_before(decoded));
                 break Err(io::Error::new(e.kind(), source.says(message)));
             }
         }
     };
     if let Some(summary) = &printer.summary {
-        let bad_lines = source.hex.then_some(bad_lines);
+        let bad_lines = source.hex.then_some(skipped.count);
         print_summary(
             printer.out,
             summary,
