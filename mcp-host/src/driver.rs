@@ -8,7 +8,7 @@ use std::ops::Range;
 use std::sync::Arc;
 use std::time::{Duration, SystemTime};
 
-use bytes::{Bytes, BytesMut};
+use bytes::{Buf, Bytes, BytesMut};
 use futures::StreamExt;
 use tokio::io::AsyncWriteExt;
 use tokio::sync::{Notify, mpsc, oneshot, watch};
@@ -24,9 +24,11 @@ use crate::event::{
 };
 use crate::ids::IdTable;
 use crate::options::LinkOptions;
+use crate::record::{Direction, Record};
 use crate::sender::DeliveryReport;
 use crate::stats::{Counters, Stats, bump};
 use crate::subscription::Subscribers;
+use crate::tap::SentFrames;
 use crate::transport::{Connector, Transport};
 
 /// Stop accepting new requests while this many bytes wait to be written.
@@ -551,6 +553,7 @@ impl Driver {
         );
         let mut reader = FramedRead::new(rd, codec);
         let mut out = BytesMut::new();
+        let mut sent = SentFrames::new(self.options.api_mode);
         self.healthy = false;
         self.diagnoser = Diagnoser::new(self.options.api_mode, self.counters.snapshot());
         self.warned = false;
@@ -565,9 +568,14 @@ impl Driver {
                 item = reader.next() => if let Some(failed) = self.on_read(item) {
                     return failed;
                 },
-                written = wr.write_buf(&mut out), if !out.is_empty() => match written {
+                written = wr.write(&out), if !out.is_empty() => match written {
                     Ok(0) => return Served::Failed("the transport accepts no more data".into()),
-                    Ok(n) => self.written += n as u64,
+                    Ok(n) => {
+                        let (done, rest) = out.split_at(n);
+                        sent.written(done, rest, &self.subscribers.0);
+                        out.advance(n);
+                        self.written += n as u64;
+                    }
                     Err(e) => return Served::Failed(format!("write error: {e}")),
                 },
                 op = self.ops.recv(), if accept_ops => match op {
@@ -602,11 +610,11 @@ impl Driver {
                     deliver_pending_link(&mut self.pending_links, permit);
                 }
                 _ = self.events.closed(), if !self.senders_open() => {
-                    self.flush_before_end(&mut wr, &mut out).await;
+                    self.flush_before_end(&mut wr, &mut out, &mut sent).await;
                     return Served::Shutdown;
                 }
                 () = self.close_requested.notified() => {
-                    self.flush_before_end(&mut wr, &mut out).await;
+                    self.flush_before_end(&mut wr, &mut out, &mut sent).await;
                     return Served::Closed;
                 }
             }
@@ -630,15 +638,18 @@ impl Driver {
     /// Writes out what was already reported written (`Written` transmits, raw writes)
     /// and what waits in the queue of requests without a frame id (a
     /// [`PacketSink`](crate::PacketSink)'s packets, which were handed over), before the
-    /// link ends, within [`CLOSE_FLUSH`].
+    /// link ends, within [`CLOSE_FLUSH`]. A tap of the frames is given them as they are
+    /// handed to the transport.
     async fn flush_before_end(
         &mut self,
         wr: &mut (impl tokio::io::AsyncWrite + Unpin),
         out: &mut BytesMut,
+        sent: &mut SentFrames,
     ) {
         while let Ok(op) = self.writes.try_recv() {
             self.start(op, out);
         }
+        sent.written(out, &[], &self.subscribers.0);
         let flush = async {
             wr.write_all_buf(out).await?;
             wr.flush().await
@@ -725,6 +736,13 @@ impl Driver {
                 if !self.healthy {
                     self.healthy = true;
                     self.connector.mark_healthy();
+                }
+                if self.subscribers.0.frames_wanted() {
+                    self.subscribers.0.publish_frame(Record {
+                        time: SystemTime::now(),
+                        direction: Direction::Received,
+                        frame: frame.data().to_vec(),
+                    });
                 }
                 self.dispatch(frame);
             }

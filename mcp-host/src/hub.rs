@@ -248,6 +248,8 @@ pub struct Hub {
     counters: Arc<Counters>,
     /// The counters of the link to the radio.
     radio_counters: Arc<crate::stats::Counters>,
+    /// The subscriptions of the link to the radio, for [`Hub::tap_frames`].
+    radio_subscribers: Arc<crate::subscription::Subscribers>,
 }
 
 impl Hub {
@@ -281,6 +283,7 @@ impl Hub {
             tasks: TaskTracker::new(),
             counters: Arc::default(),
             radio_counters: sender.counters.clone(),
+            radio_subscribers: sender.subscribers.clone(),
         };
         // A `pty` or `tcp-listen:` link has no radio on it yet: clients are refused from
         // the moment this returns, the port held.
@@ -353,6 +356,15 @@ impl Hub {
             requests_held: c.requests_held.load(Ordering::Relaxed),
             radio: self.radio_counters.snapshot(),
         }
+    }
+
+    /// Every frame between the hub and the radio from now on, both ways: the radio's
+    /// frames, and the clients' frames as the hub wrote them (under the frame ids it
+    /// gave them), with the hub's own requests; see [`CommandSender::tap_frames`]. A
+    /// recording of them (`mcp-gs hub --record`) is what the radio heard and said,
+    /// whichever client it was for. It ends when the hub does.
+    pub fn tap_frames(&self) -> crate::Subscription<crate::record::Record> {
+        self.radio_subscribers.tap_frames()
     }
 
     /// Whether the hub has ended (stopped, or its link to the radio closed for good).

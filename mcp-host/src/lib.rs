@@ -118,6 +118,7 @@ pub mod sim;
 mod sink;
 mod stats;
 mod subscription;
+mod tap;
 pub mod transport;
 
 use std::net::SocketAddr;

@@ -1,5 +1,7 @@
-//! Recordings: timestamped raw frames, as `mcp-gs monitor --record` writes them and
-//! `mcp-gs decode` and `mcp-gs replay` read them.
+//! Recordings: timestamped raw frames, as `mcp-gs monitor --record` and `hub --record`
+//! write them (the frames of a link both ways come from
+//! [`CommandSender::tap_frames`](crate::CommandSender::tap_frames)) and `mcp-gs decode`
+//! and `mcp-gs replay` read them.
 //!
 //! # Format, version 1
 //!

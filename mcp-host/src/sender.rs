@@ -625,6 +625,52 @@ impl CommandSender {
         self.subscribers.subscribe()
     }
 
+    /// Every frame of the link from now on, both ways, as a
+    /// [`RecordWriter`](crate::record::RecordWriter) records it: the frames the radio
+    /// sent, as decoded (corrupt ones are [`Event::DecodeError`](crate::Event)s, not
+    /// frames), and the frames written to it, as they went out (with the frame ids the
+    /// link gave them), each with the time it was read or its last byte written. It
+    /// sees what no [`PacketStream`](crate::PacketStream) does: the answers to this
+    /// link's own requests, and its writes. It behaves as a [`subscribe`](Self::subscribe)d
+    /// [`Subscription`](crate::Subscription) does (its reader falls behind by
+    /// [`LinkOptions::event_capacity`](crate::LinkOptions::event_capacity) records at
+    /// most, then misses the oldest, counted in
+    /// [`missed`](crate::Subscription::missed); it ends with the link).
+    ///
+    /// A frame being written when it is taken is not in it (its first bytes went out
+    /// before): it starts with the next frame the link begins to write.
+    ///
+    /// ```
+    /// # #[tokio::main(flavor = "current_thread")]
+    /// # async fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// use futures::StreamExt;
+    /// use tokio::io::{AsyncReadExt, AsyncWriteExt};
+    /// use mcp_host::record::{Direction, RecordWriter};
+    /// use mcp_host::{Link, LinkOptions};
+    ///
+    /// let link: Link = "tcp-listen:127.0.0.1:0".parse()?;
+    /// let (stream, sender) = mcp_host::connect(&link, LinkOptions::default()).await?;
+    /// let mut frames = sender.tap_frames();
+    /// // A radio connects, and says "coordinator started" once it has read a frame.
+    /// let mut radio = tokio::net::TcpStream::connect(stream.info().local_addr.unwrap()).await?;
+    /// sender.write_frame(&[0x08, 0x00, b'A', b'P']).await?;
+    /// radio.read_exact(&mut [0u8; 8]).await?;
+    /// radio.write_all(&[0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F]).await?;
+    ///
+    /// // A recording of both ways, in memory here; a file in a real program.
+    /// let mut recording = RecordWriter::new(Vec::new())?;
+    /// for direction in [Direction::Sent, Direction::Received] {
+    ///     let record = frames.next().await.expect("a frame");
+    ///     assert_eq!(record.direction, direction);
+    ///     recording.write(record.time, record.direction, &record.frame)?;
+    /// }
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub fn tap_frames(&self) -> crate::Subscription<crate::record::Record> {
+        self.subscribers.tap_frames()
+    }
+
     /// Waits until the link has ended for good ([`LinkState::Closed`]: after
     /// [`close`](Self::close), or when reconnection gave up) and its transport is closed,
     /// so that the same device can be opened again. This sender keeps the link alive

@@ -1,5 +1,6 @@
 //! More readers of a link's events: [`Subscription`], from
-//! [`CommandSender::subscribe`](crate::CommandSender::subscribe).
+//! [`CommandSender::subscribe`](crate::CommandSender::subscribe), and of its frames both
+//! ways, from [`CommandSender::tap_frames`](crate::CommandSender::tap_frames).
 
 use std::pin::Pin;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -10,10 +11,13 @@ use futures::stream::{BoxStream, StreamExt};
 use tokio::sync::broadcast;
 
 use crate::Event;
+use crate::record::Record;
 
 /// Every [`Event`] of a link from the moment it was taken, for a task other than the
 /// one that reads the [`PacketStream`](crate::PacketStream): a user interface, a logger
-/// and a mission script can each have one.
+/// and a mission script can each have one. A `Subscription<Record>` from
+/// [`CommandSender::tap_frames`](crate::CommandSender::tap_frames) gives the link's
+/// frames both ways instead, and behaves the same.
 ///
 /// It holds at least [`LinkOptions::event_capacity`](crate::LinkOptions::event_capacity)
 /// events for its reader (that, rounded up to a power of two). A reader that falls
@@ -54,27 +58,62 @@ use crate::Event;
 /// # Ok(())
 /// # }
 /// ```
-pub struct Subscription {
+pub struct Subscription<T = Event> {
     /// In a mutex only to be `Sync`, as the link's other handles are: polling takes
     /// `&mut self`, which reaches the stream without locking.
-    events: Mutex<BoxStream<'static, Event>>,
+    events: Mutex<BoxStream<'static, T>>,
     missed: Arc<AtomicU64>,
 }
 
-/// The subscriptions of one link, shared by its driver and its senders.
+/// The subscriptions of one link, to its events and to its frames, shared by its driver
+/// and its senders.
 #[derive(Debug)]
 pub(crate) struct Subscribers {
     capacity: usize,
-    state: Mutex<State>,
+    events: Mutex<State<Event>>,
+    frames: Mutex<State<Record>>,
 }
 
 #[derive(Debug)]
-enum State {
+enum State<T> {
     /// No subscription taken yet.
     Idle,
-    Open(broadcast::Sender<Event>),
+    Open(broadcast::Sender<T>),
     /// The link has ended: no more subscriptions, no more events.
     Ended,
+}
+
+impl<T: Clone + Send + 'static> State<T> {
+    /// A new subscription, the channel made for the first.
+    fn subscribe(&mut self, capacity: usize) -> Subscription<T> {
+        let receiver = match &*self {
+            State::Ended => None,
+            State::Open(tx) => Some(tx.subscribe()),
+            State::Idle => {
+                let (tx, rx) = broadcast::channel(capacity);
+                *self = State::Open(tx);
+                Some(rx)
+            }
+        };
+        Subscription::new(receiver)
+    }
+
+    /// Whether a subscription would get what is published now.
+    fn wanted(&self) -> bool {
+        matches!(self, State::Open(tx) if tx.receiver_count() > 0)
+    }
+
+    /// Hands `item` to the subscriptions, if there are any.
+    fn publish(&self, item: T) {
+        if let (true, State::Open(tx)) = (self.wanted(), self) {
+            let _ = tx.send(item);
+        }
+    }
+}
+
+/// `state`, locked: its data is consistent however a holder of the lock panicked.
+fn lock<T>(state: &Mutex<State<T>>) -> std::sync::MutexGuard<'_, State<T>> {
+    state.lock().unwrap_or_else(PoisonError::into_inner)
 }
 
 impl Subscribers {
@@ -82,36 +121,37 @@ impl Subscribers {
     pub(crate) fn new(capacity: usize) -> Self {
         Subscribers {
             capacity,
-            state: Mutex::new(State::Idle),
+            events: Mutex::new(State::Idle),
+            frames: Mutex::new(State::Idle),
         }
     }
 
-    fn state(&self) -> std::sync::MutexGuard<'_, State> {
-        self.state.lock().unwrap_or_else(PoisonError::into_inner)
+    /// A new subscription to the events.
+    pub(crate) fn subscribe(&self) -> Subscription {
+        lock(&self.events).subscribe(self.capacity)
     }
 
-    /// A new subscription.
-    pub(crate) fn subscribe(&self) -> Subscription {
-        let mut state = self.state();
-        let receiver = match &*state {
-            State::Ended => None,
-            State::Open(tx) => Some(tx.subscribe()),
-            State::Idle => {
-                let (tx, rx) = broadcast::channel(self.capacity);
-                *state = State::Open(tx);
-                Some(rx)
-            }
-        };
-        Subscription::new(receiver)
+    /// A new subscription to the frames.
+    pub(crate) fn tap_frames(&self) -> Subscription<Record> {
+        lock(&self.frames).subscribe(self.capacity)
     }
 
     /// Hands `event` to the subscriptions, if there are any.
     pub(crate) fn publish(&self, event: &Event) {
-        if let State::Open(tx) = &*self.state() {
-            if tx.receiver_count() > 0 {
-                let _ = tx.send(event.clone());
-            }
+        let state = lock(&self.events);
+        if state.wanted() {
+            state.publish(event.clone());
         }
+    }
+
+    /// Whether a subscription to the frames is there to take them.
+    pub(crate) fn frames_wanted(&self) -> bool {
+        lock(&self.frames).wanted()
+    }
+
+    /// Hands `record` to the subscriptions to the frames, if there are any.
+    pub(crate) fn publish_frame(&self, record: Record) {
+        lock(&self.frames).publish(record);
     }
 
     /// The link has ended, with `last` its last event: the subscriptions end after it.
@@ -119,13 +159,14 @@ impl Subscribers {
         if let Some(last) = last {
             self.publish(last);
         }
-        *self.state() = State::Ended;
+        *lock(&self.events) = State::Ended;
+        *lock(&self.frames) = State::Ended;
     }
 }
 
-impl Subscription {
+impl<T: Clone + Send + 'static> Subscription<T> {
     /// Reads what `receiver` gets, counting what it misses.
-    pub(crate) fn new(receiver: Option<broadcast::Receiver<Event>>) -> Self {
+    pub(crate) fn new(receiver: Option<broadcast::Receiver<T>>) -> Self {
         let missed = Arc::new(AtomicU64::new(0));
         let count = missed.clone();
         let events = futures::stream::unfold(receiver, move |receiver| {
@@ -149,14 +190,16 @@ impl Subscription {
             missed,
         }
     }
+}
 
-    /// Events this reader missed by falling too far behind.
+impl<T> Subscription<T> {
+    /// Events (or frames) this reader missed by falling too far behind.
     pub fn missed(&self) -> u64 {
         self.missed.load(Ordering::Relaxed)
     }
 }
 
-impl std::fmt::Debug for Subscription {
+impl<T> std::fmt::Debug for Subscription<T> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Subscription")
             .field("missed", &self.missed())
@@ -164,10 +207,10 @@ impl std::fmt::Debug for Subscription {
     }
 }
 
-impl futures::Stream for Subscription {
-    type Item = Event;
+impl<T> futures::Stream for Subscription<T> {
+    type Item = T;
 
-    fn poll_next(mut self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<Option<Event>> {
+    fn poll_next(mut self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<Option<T>> {
         self.events
             .get_mut()
             .unwrap_or_else(PoisonError::into_inner)

@@ -118,3 +118,60 @@ async fn a_link_dropped_by_its_owners_ends_its_subscriptions_with_closed() {
     }
     assert!(next(&mut watcher).await.is_none());
 }
+
+#[tokio::test]
+async fn a_tap_gets_every_frame_both_ways_as_it_is_on_the_link() {
+    use mcp_host::record::Direction;
+    let (mut stream, sender, mut fake) = pty_link(ApiMode::Escaped).await;
+    let mut tap = sender.tap_frames();
+    // A request whose bytes need escapes in mode 2: the tap has them unescaped, under
+    // the frame id the link gave the request.
+    let parameter = [0x7E, 0x7D, 0x11, 0x13];
+    let asking = sender.clone();
+    let request = tokio::spawn(async move { asking.at(*b"NI", &parameter, None).await });
+    let written = fake.next_frame().await;
+    assert_eq!(written[0], 0x08);
+    assert_eq!(written[2..], [b'N', b'I', 0x7E, 0x7D, 0x11, 0x13]);
+    // Its answer, which goes to the request and not to the stream, and a packet.
+    let answer = [0x88, written[1], b'N', b'I', 0x00];
+    fake.send(&xbee_api::Frame::parse_bytes(&answer).unwrap())
+        .await;
+    request.await.unwrap().expect("answered");
+    let report = time_report(0x7E7D_1113);
+    fake.receive(MAV, &report).await;
+    assert_eq!(next_packet(&mut stream).await.payload.to_vec(), report);
+
+    let mut records = Vec::new();
+    while records.len() < 3 {
+        let record = tokio::time::timeout(GUARD, tap.next())
+            .await
+            .expect("a frame in time")
+            .expect("the tap goes on");
+        records.push(record);
+    }
+    let ways: Vec<(Direction, Vec<u8>)> = records
+        .iter()
+        .map(|r| (r.direction, r.frame.clone()))
+        .collect();
+    let mut packet = vec![0x90];
+    packet.extend_from_slice(&MAV.0.to_be_bytes());
+    packet.extend_from_slice(&[0x7D, 0x33, 0x01]);
+    packet.extend_from_slice(&report);
+    assert_eq!(
+        ways,
+        [
+            (Direction::Sent, written),
+            (Direction::Received, answer.to_vec()),
+            (Direction::Received, packet),
+        ]
+    );
+    assert!(records.windows(2).all(|w| w[0].time <= w[1].time));
+    assert_eq!(tap.missed(), 0);
+
+    // It ends with the link.
+    sender.close();
+    let end = tokio::time::timeout(GUARD, tap.next())
+        .await
+        .expect("the end in time");
+    assert!(end.is_none(), "{end:?}");
+}
