@@ -346,3 +346,121 @@ fn a_hub_whose_tcp_peer_says_nothing_names_a_peer_busy_with_another_connection()
         "{silent}"
     );
 }
+
+#[cfg(unix)]
+#[test]
+fn a_hub_records_what_its_radio_heard_and_said_for_every_client() {
+    let (_sim, radio, _sim_out) = sim_on_tcp("1");
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("flight.mcprec");
+    let path = file.to_str().unwrap();
+    let (mut hub, out, _err) = start_hub_with(&radio, &["--api-mode", "1", "--record", path]);
+    let (_, addr) = serving(&out);
+    // A client asks the radio its firmware version through the hub.
+    let at = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args([
+            "at",
+            "--link",
+            &format!("tcp:{addr}"),
+            "--api-mode",
+            "1",
+            "VR",
+        ])
+        .env_remove("MCP_LOG")
+        .output()
+        .expect("run mcp-gs at");
+    assert!(at.status.success(), "{at:?}");
+
+    // Ctrl-C: the hub stops, and says what it recorded.
+    let pid = i32::try_from(hub.0.id()).expect("pid");
+    // SAFETY: kill(2) with the pid of a child of this process and a valid signal.
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
+    let recorded = line_with(&out, "recorded ");
+    assert_eq!(recorded, format!("recorded 2 frames to {path}"));
+    assert_eq!(hub.0.wait().unwrap().code(), Some(0));
+
+    // The request as the radio got it (under the hub's frame id), and its answer.
+    let decoded = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args(["decode", path, "--format", "json"])
+        .output()
+        .expect("run mcp-gs decode");
+    assert!(decoded.status.success(), "{decoded:?}");
+    let frames: Vec<serde_json::Value> = String::from_utf8_lossy(&decoded.stdout)
+        .lines()
+        .map(|line| serde_json::from_str(line).unwrap())
+        .collect();
+    assert_eq!(frames.len(), 2, "{frames:?}");
+    let (request, answer) = (&frames[0], &frames[1]);
+    assert_eq!(
+        (
+            &request["direction"],
+            &request["frame"],
+            &request["command"]
+        ),
+        (&"tx".into(), &"at".into(), &"VR".into()),
+        "{request}"
+    );
+    assert_eq!(
+        (&answer["direction"], &answer["frame"], &answer["data"]),
+        (&"rx".into(), &"at_response".into(), &"4060".into()),
+        "{answer}"
+    );
+    assert_eq!(request["id"], answer["id"]);
+
+    // An existing recording is kept, unless --force.
+    let refused = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args([
+            "hub",
+            "--link",
+            &radio,
+            "--listen",
+            "127.0.0.1:0",
+            "--record",
+            path,
+        ])
+        .env_remove("MCP_LOG")
+        .output()
+        .expect("run mcp-gs hub");
+    assert_eq!(refused.status.code(), Some(2), "{refused:?}");
+    assert!(
+        String::from_utf8_lossy(&refused.stderr).contains("exists: choose another file"),
+        "{refused:?}"
+    );
+}
+
+#[cfg(target_os = "linux")]
+#[test]
+fn a_recording_that_cannot_be_written_stops_and_the_hub_goes_on_serving() {
+    let (_sim, radio, _sim_out) = sim_on_tcp("1");
+    // Every write to /dev/full fails: no space left on device.
+    let (mut hub, out, err) = start_hub_with(
+        &radio,
+        &["--api-mode", "1", "--record", "/dev/full", "--force"],
+    );
+    let (_, addr) = serving(&out);
+    let link = format!("tcp:{addr}");
+    for _ in 0..2 {
+        let at = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+            .args(["at", "--link", &link, "--api-mode", "1", "VR"])
+            .env_remove("MCP_LOG")
+            .output()
+            .expect("run mcp-gs at");
+        assert!(at.status.success(), "{at:?}");
+    }
+    let warning = line_with(&err, "recording");
+    assert!(
+        warning.starts_with("mcp-gs: warning: cannot write to /dev/full: ")
+            && warning.ends_with(": the recording stops here, the hub goes on serving"),
+        "{warning}"
+    );
+    let pid = i32::try_from(hub.0.id()).expect("pid");
+    // SAFETY: kill(2) with the pid of a child of this process and a valid signal.
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
+    // Said again at the end, and the exit status says it.
+    let said = line_with(&err, "cannot write to /dev/full");
+    assert!(
+        said.starts_with("mcp-gs: cannot write to /dev/full: "),
+        "{said}"
+    );
+    assert_eq!(hub.0.wait().unwrap().code(), Some(1));
+}

@@ -18,8 +18,9 @@ use crate::{ApiModeArg, Failure, Format};
 #[derive(Debug, Args)]
 pub(crate) struct DecodeArgs {
     /// The capture: a file of raw bytes as read from the radio, a hex dump (`--hex`), or
-    /// a recording made by `monitor --record`; `-` or nothing for standard input, which
-    /// is decoded as it comes (a pipe from a serial port, hex typed a line at a time).
+    /// a recording made by `monitor --record` or `hub --record`; `-` or nothing for
+    /// standard input, which is decoded as it comes (a pipe from a serial port, hex typed
+    /// a line at a time).
     #[arg(default_value = "-")]
     input: PathBuf,
     /// API mode of a raw capture (recordings are stored unescaped).
@@ -137,7 +138,7 @@ fn decode_input(
         return Err(io::Error::new(
             io::ErrorKind::InvalidData,
             format!(
-                "{} is a recording (made by monitor --record), not hex text: decode it \
+                "{} is a recording (made by --record), not hex text: decode it \
                  without --hex",
                 args.input.display()
             ),

@@ -1,15 +1,19 @@
 //! `mcp-gs hub`: one radio shared by several `mcp-gs` commands (or other programs)
 //! through a TCP port.
 
+use std::path::PathBuf;
 use std::time::Duration;
 
 use clap::Args;
+use futures::StreamExt;
 
-use mcp_host::Diagnoser;
 use mcp_host::hub::{Hub, HubError};
+use mcp_host::record::Record;
+use mcp_host::{Diagnoser, Subscription};
 
 use crate::Failure;
 use crate::link_args::{ApiModeChoice, LinkArgs, connect_failure, hint};
+use crate::recording::{Recording, RecordingFile};
 
 /// Arguments of `hub`.
 #[derive(Debug, Args)]
@@ -24,6 +28,14 @@ pub(crate) struct HubArgs {
     /// started at boot.
     #[arg(long)]
     wait: bool,
+    /// Record every frame between the hub and the radio to FILE, both ways: what the
+    /// radio received and what every client sent through it (see `decode` and
+    /// `replay`). An existing FILE is kept unless `--force` is given.
+    #[arg(long, value_name = "FILE")]
+    record: Option<PathBuf>,
+    /// Overwrite the `--record` file if it exists.
+    #[arg(long, requires = "record")]
+    force: bool,
 }
 
 /// `--listen`: an address and a port (`127.0.0.1:9750`, `localhost:9750`, `[::1]:9750`,
@@ -58,6 +70,12 @@ fn listen_failure(addr: &str, error: &std::io::Error) -> Failure {
 /// Runs `hub` until Ctrl-C, or until the link to the radio ends.
 pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
     args.link.check_wait(args.wait)?;
+    // Refused before the radio's link is opened; made once the hub serves.
+    let record = args
+        .record
+        .as_deref()
+        .map(|path| RecordingFile::check(path, args.force))
+        .transpose()?;
     let options = mcp_host::LinkOptions {
         wait_for_link: args.wait,
         ..args.link.options(true).await?
@@ -71,6 +89,17 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
             other => Failure::link(other.to_string()),
         })?;
     let ctrl_c = crate::interrupt::ctrl_c();
+    let mut frames = hub.tap_frames();
+    let mut recorder = match record.map(|file| file.create()).transpose() {
+        Ok(recording) => Recorder {
+            recording,
+            failure: None,
+        },
+        Err(failure) => {
+            hub.stop().await;
+            return Err(failure);
+        }
+    };
     crate::link_args::announce_radio_side(hub.radio_link());
     let addr = hub.local_addr();
     let mode = u8::from(hub.api_mode());
@@ -105,8 +134,10 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
             _ = &mut ctrl_c => break,
             () = hub.finished() => {
                 hub.stop().await;
+                recorder.drain(&mut frames).await;
                 return Err(Failure::link(format!("the link to {radio} closed")));
             }
+            Some(frame) = frames.next(), if recorder.recording.is_some() => recorder.take(&frame),
             _ = look.tick(), if fixed.is_some() => {
                 let now = hub.stats().radio;
                 if now.reconnects > last.reconnects {
@@ -133,6 +164,7 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
     }
     let stats = hub.stats();
     hub.stop().await;
+    recorder.drain(&mut frames).await;
     out!(
         "stopped: {} clients, {} frames from the radio, {} from clients, {} dropped for slow \
          clients, {} frames from clients refused",
@@ -151,5 +183,61 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
             radio.decode_errors()
         );
     }
-    Ok(())
+    if let Some(file) = &recorder.recording {
+        let missed = frames.missed();
+        let missed = if missed > 0 {
+            format!(
+                " ({} lost while writing the file fell behind)",
+                crate::counted(missed, "frame")
+            )
+        } else {
+            String::new()
+        };
+        out!(
+            "recorded {} to {}{missed}",
+            crate::counted(file.frames, "frame"),
+            file.path().display()
+        );
+    }
+    recorder.failure.map_or(Ok(()), Err)
+}
+
+/// `--record`: the recording, while it goes on.
+struct Recorder {
+    recording: Option<Recording>,
+    /// Why the recording stopped, if it did: the hub goes on serving (a full disk does
+    /// not cut the ground station off its MAV), and says it at the end.
+    failure: Option<Failure>,
+}
+
+impl Recorder {
+    /// Records `frame`, or stops recording if the file cannot take it.
+    fn take(&mut self, frame: &Record) {
+        let Some(file) = &mut self.recording else {
+            return;
+        };
+        if let Err(failure) = file.write(frame.time, frame.direction, &frame.frame) {
+            err!(
+                "mcp-gs: warning: {}: the recording stops here, the hub goes on serving",
+                failure.message
+            );
+            self.failure = Some(failure);
+            self.recording = None;
+        }
+    }
+
+    /// Records the frames still held for it, once the hub has stopped (which ends
+    /// `frames`).
+    async fn drain(&mut self, frames: &mut Subscription<Record>) {
+        if self.recording.is_none() {
+            return;
+        }
+        // Bounded all the same: the link ended with the hub.
+        let drained = tokio::time::timeout(Duration::from_secs(5), async {
+            while let Some(frame) = frames.next().await {
+                self.take(&frame);
+            }
+        });
+        let _ = drained.await;
+    }
 }

@@ -32,6 +32,7 @@ mod nodes;
 mod ports;
 mod probe;
 mod radio;
+mod recording;
 mod replay;
 mod send;
 mod setup;

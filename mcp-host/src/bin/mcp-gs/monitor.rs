@@ -1,17 +1,17 @@
 //! `mcp-gs monitor`: print live packets, optionally recording them.
 
-use std::fs::File;
-use std::io::{self, BufWriter, Write};
-use std::path::{Path, PathBuf};
+use std::io::{self, Write};
+use std::path::PathBuf;
 use std::time::SystemTime;
 
 use clap::Args;
 use futures::StreamExt;
-use mcp_host::record::{Direction, RecordWriter};
+use mcp_host::record::Direction;
 use mcp_host::render;
 use mcp_host::{Diagnoser, Event, LinkEvent};
 
 use crate::link_args::{ApiModeChoice, LinkArgs, check_mode, hint};
+use crate::recording::RecordingFile;
 use crate::{Failure, Format};
 
 /// Arguments of `monitor`.
@@ -56,23 +56,17 @@ fn parse_count(s: &str) -> Result<u64, String> {
 pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
     // A recording is never lost to a mistyped link: refuse to overwrite it before the
     // link is opened, and create the file only once the link is up.
-    if let Some(path) = &args.record {
-        if path.is_dir() {
-            return Err(Failure::input(format!(
-                "{} is a directory: give a file to record to",
-                path.display()
-            )));
-        }
-        if !args.force && path.exists() {
-            return Err(exists(path));
-        }
-    }
+    let record = args
+        .record
+        .as_deref()
+        .map(|path| RecordingFile::check(path, args.force))
+        .transpose()?;
     let (mut stream, sender) = args.link.open_with(true, args.wait).await?;
     let mut ctrl_c = std::pin::pin!(crate::interrupt::ctrl_c());
     // With --wait the link may not be there yet: the file is made once it is.
     let waiting = args.wait && sender.link_state() != mcp_host::LinkState::Connected;
-    let mut recorder = match &args.record {
-        Some(path) if !waiting => Some(create_recording(path, args.force)?),
+    let mut recorder = match &record {
+        Some(file) if !waiting => Some(file.create()?),
         _ => None,
     };
     crate::link_args::announce_radio_side(stream.info());
@@ -125,10 +119,10 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
             }
         };
         let Some(event) = event else { break Ok(()) };
-        if let (None, Some(path), Event::Link(LinkEvent::Connected { .. })) =
-            (&recorder, &args.record, &event)
+        if let (None, Some(file), Event::Link(LinkEvent::Connected { .. })) =
+            (&recorder, &record, &event)
         {
-            match create_recording(path, args.force) {
+            match file.create() {
                 Ok(created) => recorder = Some(created),
                 Err(failure) => break Err(failure),
             }
@@ -153,18 +147,9 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
             Event::InvalidPacket(rx) => rx.origin.received_at,
             _ => SystemTime::now(),
         };
-        if let (Some(recorder), Some(path), Some(frame)) =
-            (&mut recorder, &args.record, frame_data(&event))
-        {
-            let written = recorder
-                .write(time, Direction::Received, frame)
-                .and_then(|()| recorder.flush());
-            if let Err(e) = written {
-                let path = path.display();
-                break Err(Failure::new(
-                    Failure::OTHER,
-                    format!("cannot write to {path}: {e}"),
-                ));
+        if let (Some(recorder), Some(frame)) = (&mut recorder, frame_data(&event)) {
+            if let Err(failure) = recorder.write(time, Direction::Received, frame) {
+                break Err(failure);
             }
         }
         if let (Some(shown), Event::DecodeError(_)) = (&mut quiet, &event) {
@@ -322,29 +307,6 @@ impl Quiet {
 /// Connections a TCP peer ends before anything came from it after which `monitor` says
 /// what may be wrong.
 const TURNED_AWAY: u32 = 3;
-
-/// The recording at `path`, created (truncated with `force`, else it must not exist).
-fn create_recording(path: &Path, force: bool) -> Result<RecordWriter<BufWriter<File>>, Failure> {
-    let file = if force {
-        File::create(path)
-    } else {
-        File::create_new(path)
-    };
-    let file = file.map_err(|e| match e.kind() {
-        io::ErrorKind::AlreadyExists => exists(path),
-        _ => Failure::input(format!("cannot create {}: {e}", path.display())),
-    })?;
-    RecordWriter::new(BufWriter::new(file))
-        .map_err(|e| Failure::input(format!("cannot write {}: {e}", path.display())))
-}
-
-/// The failure of a `--record` file that exists.
-fn exists(path: &Path) -> Failure {
-    Failure::input(format!(
-        "{} exists: choose another file, or add --force to overwrite it",
-        path.display()
-    ))
-}
 
 /// The frame data of an event, for the recording: received packets as the frame they
 /// came in (a Receive Packet or an Explicit Rx Indicator), other frames as they are.

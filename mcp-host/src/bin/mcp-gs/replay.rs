@@ -17,9 +17,8 @@ use crate::link_args::{LinkArgs, send_failure};
 pub(crate) enum Which {
     /// Frames received from the radio (what a ground station saw): the default.
     Rx,
-    /// Frames sent to the radio (`monitor --record` records received frames only; a
-    /// program's own recording, made with `mcp_host::record::RecordWriter`, may hold
-    /// both).
+    /// Frames sent to the radio (`hub --record` records them beside the received
+    /// ones, `monitor --record` received frames only).
     Tx,
     /// Both.
     Both,
@@ -33,7 +32,7 @@ pub(crate) enum Which {
      to a radio (--frames tx), serial:PATH[:BAUD] or tcp:HOST:PORT"
 )))]
 pub(crate) struct ReplayArgs {
-    /// A recording made by `monitor --record` (or by a program with
+    /// A recording made by `monitor --record` or `hub --record` (or by a program with
     /// `mcp_host::record::RecordWriter`).
     file: PathBuf,
     #[command(flatten)]
@@ -124,8 +123,8 @@ fn check_wanted(args: &ReplayArgs) -> Result<(), Failure> {
         _ if received + sent == 0 => format!("{file} holds no frames: nothing to replay"),
         Which::Tx => format!(
             "{file} holds no sent frames (--frames tx), only {received} received ones \
-             (`monitor --record` records received frames only): replay those with \
-             --frames rx, the default"
+             (`monitor --record` records received frames only, `hub --record` both): \
+             replay those with --frames rx, the default"
         ),
         _ => format!(
             "{file} holds no received frames (--frames rx), only {sent} sent ones: \

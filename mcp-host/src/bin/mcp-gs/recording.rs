@@ -1,0 +1,104 @@
+//! `--record FILE` of `monitor` and `hub`: the file checked before anything is opened,
+//! created once there is something to record, and written a frame at a time.
+
+use std::fs::File;
+use std::io::{self, BufWriter};
+use std::path::{Path, PathBuf};
+use std::time::SystemTime;
+
+use mcp_host::record::{Direction, RecordWriter};
+
+use crate::Failure;
+
+/// A recording's file, checked and not yet created: a recording is never lost to a
+/// mistyped link, as the file is refused before the link is opened and made only once
+/// the link is up.
+#[derive(Debug)]
+pub(crate) struct RecordingFile {
+    path: PathBuf,
+    force: bool,
+}
+
+impl RecordingFile {
+    /// `path`, checked: not a directory, and not there unless `force` (overwrite it).
+    pub(crate) fn check(path: &Path, force: bool) -> Result<Self, Failure> {
+        if path.is_dir() {
+            return Err(Failure::input(format!(
+                "{} is a directory: give a file to record to",
+                path.display()
+            )));
+        }
+        if !force && path.exists() {
+            return Err(exists(path));
+        }
+        Ok(RecordingFile {
+            path: path.to_owned(),
+            force,
+        })
+    }
+
+    /// The file, created (truncated with `force`, else it must not exist).
+    pub(crate) fn create(&self) -> Result<Recording, Failure> {
+        let path = &self.path;
+        let file = if self.force {
+            File::create(path)
+        } else {
+            File::create_new(path)
+        };
+        let file = file.map_err(|e| match e.kind() {
+            io::ErrorKind::AlreadyExists => exists(path),
+            _ => Failure::input(format!("cannot create {}: {e}", path.display())),
+        })?;
+        let writer = RecordWriter::new(BufWriter::new(file))
+            .map_err(|e| Failure::input(format!("cannot write {}: {e}", path.display())))?;
+        Ok(Recording {
+            writer,
+            path: path.clone(),
+            frames: 0,
+        })
+    }
+}
+
+/// A recording being made.
+pub(crate) struct Recording {
+    writer: RecordWriter<BufWriter<File>>,
+    path: PathBuf,
+    /// Frames written so far.
+    pub(crate) frames: u64,
+}
+
+impl Recording {
+    /// Writes a frame, and flushes it to the file: what was recorded survives the
+    /// program's end however it comes. The failure names the file.
+    pub(crate) fn write(
+        &mut self,
+        time: SystemTime,
+        direction: Direction,
+        frame: &[u8],
+    ) -> Result<(), Failure> {
+        self.writer
+            .write(time, direction, frame)
+            .and_then(|()| self.writer.flush())
+            .map_err(|e| {
+                Failure::new(
+                    Failure::OTHER,
+                    format!("cannot write to {}: {e}", self.path.display()),
+                )
+            })?;
+        self.frames += 1;
+        Ok(())
+    }
+
+    /// The file's path.
+    pub(crate) fn path(&self) -> &Path {
+        &self.path
+    }
+}
+
+/// The failure of a `--record` file that exists.
+fn exists(path: &Path) -> Failure {
+    Failure::input(format!(
+        "{} exists: choose another file, or add --force to overwrite it",
+        path.display()
+    ))
+}
