@@ -107,7 +107,7 @@ impl CommandSender {
     /// ```no_run
     /// # async fn run(sender: mcp_host::CommandSender) -> Result<(), Box<dyn std::error::Error>> {
     /// use std::time::Duration;
-    /// use mcp_core::Command;
+    /// use mcp_host::mcp_core::Command;
     /// use mcp_host::{DeliveryReport, FrameId, SendError, SendOptions};
     ///
     /// let mav = "0013A20040B599B9".parse()?;
@@ -159,7 +159,7 @@ impl CommandSender {
     ///
     /// ```no_run
     /// # async fn run(sender: mcp_host::CommandSender) -> Result<(), Box<dyn std::error::Error>> {
-    /// use mcp_core::Waypoint;
+    /// use mcp_host::mcp_core::Waypoint;
     /// let mav = "0013A20040B599B9".parse()?;
     /// let waypoint = Waypoint { time: 1_700_000_000, elevator: 0.5, aileron: 0.0, altitude: 1.2 };
     /// sender.send_trajectory(mav, &[waypoint]).await?;
@@ -326,7 +326,7 @@ impl CommandSender {
     ///
     /// ```no_run
     /// # async fn run(sender: mcp_host::CommandSender) -> Result<(), Box<dyn std::error::Error>> {
-    /// use xbee_api::Frame;
+    /// use mcp_host::xbee_api::Frame;
     /// let response = sender.at(*b"AP", &[], None).await?;
     /// if let Ok(Frame::AtCommandResponse(at)) = response.parse() {
     ///     if at.status.is_ok() {
@@ -444,7 +444,7 @@ impl CommandSender {
     /// ```no_run
     /// # async fn run(sender: mcp_host::CommandSender) -> Result<(), Box<dyn std::error::Error>> {
     /// use std::time::Duration;
-    /// use xbee_api::{Address64, Frame};
+    /// use mcp_host::xbee_api::{Address64, Frame};
     /// let to = Address64::BROADCAST;
     /// let mut answers = sender.remote_at_answers(to, *b"VR", &[], true, Duration::from_secs(3)).await?;
     /// while let Some(answer) = answers.next().await {
@@ -646,13 +646,14 @@ impl CommandSender {
     /// use futures::StreamExt;
     /// use tokio::io::{AsyncReadExt, AsyncWriteExt};
     /// use mcp_host::record::{Direction, RecordWriter};
-    /// use mcp_host::{Link, LinkOptions};
+    /// use mcp_host::{Link, LinkOptions, LinkState};
     ///
     /// let link: Link = "tcp-listen:127.0.0.1:0".parse()?;
     /// let (stream, sender) = mcp_host::connect(&link, LinkOptions::default()).await?;
     /// let mut frames = sender.tap_frames();
     /// // A radio connects, and says "coordinator started" once it has read a frame.
     /// let mut radio = tokio::net::TcpStream::connect(stream.info().local_addr.unwrap()).await?;
+    /// sender.watch_link_state().wait_for(|s| *s == LinkState::Connected).await?;
     /// sender.write_frame(&[0x08, 0x00, b'A', b'P']).await?;
     /// radio.read_exact(&mut [0u8; 8]).await?;
     /// radio.write_all(&[0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F]).await?;
