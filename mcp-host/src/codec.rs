@@ -38,7 +38,7 @@ pub enum CodecItem {
 /// use bytes::BytesMut;
 /// use mcp_host::codec::{CodecItem, XBeeCodec};
 /// use tokio_util::codec::Decoder;
-/// use xbee_api::ApiMode;
+/// use mcp_host::xbee_api::ApiMode;
 ///
 /// let mut codec = XBeeCodec::new(ApiMode::Unescaped);
 /// // Garbage, a frame with a bad checksum, then a Modem Status frame.
@@ -100,7 +100,7 @@ impl XBeeCodec {
     /// use bytes::BytesMut;
     /// use mcp_host::codec::{CodecItem, XBeeCodec};
     /// use tokio_util::codec::Decoder;
-    /// use xbee_api::ApiMode;
+    /// use mcp_host::xbee_api::ApiMode;
     ///
     /// let mut codec = XBeeCodec::new(ApiMode::Unescaped);
     /// // A stray 0x7E and length, then a whole Modem Status frame.
@@ -108,7 +108,7 @@ impl XBeeCodec {
     /// assert_eq!(codec.decode(&mut buf)?, None);
     /// assert!(codec.partial_since().is_some());
     /// let items = codec.drop_partial();
-    /// assert!(matches!(items[0], CodecItem::Error(xbee_api::DecodeError::Truncated { .. })));
+    /// assert!(matches!(items[0], CodecItem::Error(mcp_host::xbee_api::DecodeError::Truncated { .. })));
     /// assert!(matches!(&items[1], CodecItem::Frame(f) if f.data()[..] == [0x8A, 0x06]));
     /// assert_eq!(codec.partial_since(), None);
     /// # Ok::<(), std::io::Error>(())

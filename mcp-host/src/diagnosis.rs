@@ -70,7 +70,7 @@ impl Stats {
     ///
     /// ```
     /// use mcp_host::{Diagnosis, Stats};
-    /// use xbee_api::ApiMode;
+    /// use mcp_host::xbee_api::ApiMode;
     ///
     /// // What came while a request waited for its answer, which never came.
     /// let stats = Stats { frames: 3, bad_checksum: 1, ..Stats::default() };
@@ -90,7 +90,7 @@ impl Stats {
     ///
     /// ```
     /// use mcp_host::{Diagnosis, Stats};
-    /// use xbee_api::ApiMode;
+    /// use mcp_host::xbee_api::ApiMode;
     ///
     /// let stats = Stats { frames: 2, bad_checksum: 6, ..Stats::default() };
     /// assert!(matches!(
@@ -148,7 +148,7 @@ const WINDOW_FRAMES: u64 = 64;
 ///
 /// ```
 /// use mcp_host::{Diagnoser, Diagnosis, Stats};
-/// use xbee_api::ApiMode;
+/// use mcp_host::xbee_api::ApiMode;
 ///
 /// let start = Stats { frames: 10_000, ..Stats::default() };
 /// let mut diagnoser = Diagnoser::new(ApiMode::Unescaped, start);
@@ -197,7 +197,7 @@ pub(crate) fn counted(n: u64, noun: &str) -> String {
 ///
 /// ```
 /// use mcp_host::Stats;
-/// use xbee_api::ApiMode;
+/// use mcp_host::xbee_api::ApiMode;
 ///
 /// let stats = Stats { frames: 2, bad_checksum: 6, ..Stats::default() };
 /// let diagnosis = stats.diagnose(ApiMode::Unescaped).unwrap();

@@ -201,6 +201,25 @@ pub enum RequestError {
     },
 }
 
+impl RequestError {
+    /// Whether the request ran out of time: no report came
+    /// ([`Timeout`](Self::Timeout)), or sending it did ([`SendError::is_timeout`]). The
+    /// MAV may be fine: asking again, or with a longer timeout, may do.
+    ///
+    /// ```
+    /// use mcp_host::{RequestError, SendError};
+    ///
+    /// let closed = RequestError::from(SendError::Closed);
+    /// assert!(!closed.is_timeout());
+    /// ```
+    pub fn is_timeout(&self) -> bool {
+        match self {
+            RequestError::Send(error) => error.is_timeout(),
+            RequestError::Timeout { .. } => true,
+        }
+    }
+}
+
 /// Why a report did not come, as far as the link can tell.
 fn timeout_cause(delivered: bool, undecodable: u64) -> String {
     let lost = (undecodable > 0).then(|| {
@@ -227,7 +246,7 @@ mod tests {
 
     use xbee_api::{Address16, Address64, DeliveryStatus, DiscoveryStatus};
 
-    use super::SendError;
+    use super::{RequestError, SendError};
 
     #[test]
     fn the_timeouts_are_the_requests_that_ran_out_of_time() {
@@ -263,5 +282,21 @@ mod tests {
         assert_eq!(ids, [Some(7), None, None]);
         assert_eq!(delivery.frame_id(), Some(9));
         assert_eq!(SendError::Closed.frame_id(), None);
+    }
+
+    #[test]
+    fn a_request_timed_out_when_no_report_came_or_sending_timed_out() {
+        let timeout = Duration::from_secs(1);
+        let no_report = RequestError::Timeout {
+            from: Address64(1),
+            what: "landing".into(),
+            timeout,
+            delivered: true,
+            undecodable: 0,
+        };
+        assert!(no_report.is_timeout());
+        let unsent = RequestError::from(SendError::NotSent { timeout });
+        assert!(unsent.is_timeout());
+        assert!(!RequestError::from(SendError::Closed).is_timeout());
     }
 }

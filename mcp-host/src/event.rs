@@ -27,6 +27,22 @@ pub enum Event {
     DecodeError(xbee_api::DecodeError),
 }
 
+/// One line of text, as `mcp-gs monitor` prints it (without its time of day):
+/// [`render::text::event`](crate::render::text::event).
+///
+/// ```
+/// use mcp_host::xbee_api::DecodeError;
+/// use mcp_host::Event;
+///
+/// let event = Event::DecodeError(DecodeError::EmptyFrame);
+/// assert_eq!(event.to_string(), "error: frame length 0");
+/// ```
+impl fmt::Display for Event {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&crate::render::text::event(self))
+    }
+}
+
 /// Where and when a radio frame came from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Origin {

@@ -48,8 +48,7 @@
 //! Packets, commands and identifiers are [`mcp_core`]'s, addresses and frames
 //! [`xbee_api`]'s, payloads [`bytes::Bytes`]: all three are re-exported here, so that a
 //! program that depends on this crate alone names them at the versions it uses
-//! (`use mcp_host::mcp_core::Command;`), as here. The [example](#example) further down
-//! names them as a program that depends on them itself does.
+//! (`use mcp_host::mcp_core::Command;`), as every example of these docs does.
 //!
 //! ```
 //! use mcp_host::bytes::Bytes;
@@ -66,9 +65,9 @@
 //!
 //! ```no_run
 //! use futures::StreamExt;
-//! use mcp_core::{Command, StatusRequest, TelemetryId};
+//! use mcp_host::mcp_core::{Command, StatusRequest, TelemetryId};
 //! use mcp_host::{Event, Link, LinkOptions};
-//! use xbee_api::Address64;
+//! use mcp_host::xbee_api::Address64;
 //!
 //! # async fn run() -> Result<(), Box<dyn std::error::Error>> {
 //! let link: Link = "serial:/dev/ttyUSB0".parse()?;
@@ -85,8 +84,8 @@
 //!
 //! while let Some(event) = stream.next().await {
 //!     match event {
-//!         Event::Packet(rx) => println!("{} {}", rx.origin.src64, rx.packet.as_borrowed()),
-//!         other => println!("{other:?}"),
+//!         Event::Packet(rx) => println!("{} {}", rx.origin.src64, rx.packet),
+//!         other => println!("{other}"),
 //!     }
 //! }
 //! # Ok(())

@@ -59,7 +59,7 @@ use crate::{LinkState, SendError};
 /// ```no_run
 /// # async fn run(sender: mcp_host::CommandSender) -> Result<(), mcp_host::SendError> {
 /// use futures::{SinkExt, stream};
-/// use mcp_core::{Command, Packet};
+/// use mcp_host::mcp_core::{Command, Packet};
 ///
 /// let mav = "0013A20040B599B9".parse().unwrap();
 /// let mut sink = sender.packet_sink();

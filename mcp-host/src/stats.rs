@@ -51,8 +51,8 @@ impl Stats {
     ///
     /// ```
     /// use mcp_host::Stats;
-    /// let earlier = xbee_api::Stats { bytes_skipped: u32::MAX - 1, ..Default::default() };
-    /// let now = xbee_api::Stats { frames_ok: 3, bytes_skipped: 2, ..Default::default() };
+    /// let earlier = mcp_host::xbee_api::Stats { bytes_skipped: u32::MAX - 1, ..Default::default() };
+    /// let now = mcp_host::xbee_api::Stats { frames_ok: 3, bytes_skipped: 2, ..Default::default() };
     /// let mut total = Stats { bytes_skipped: u64::from(u32::MAX - 1), ..Stats::default() };
     /// // 3 frames, and 4 bytes skipped across the wrap of the decoder's counter.
     /// total += Stats::decoder_since(&now, &earlier);

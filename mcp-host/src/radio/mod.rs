@@ -95,7 +95,7 @@
 //! ```
 //! use mcp_host::radio::{Network, NetworkConfig, NodeOptions};
 //! use tokio::io::{AsyncReadExt, AsyncWriteExt};
-//! use xbee_api::{Address64, Address16, EncodeFrame, TransmitRequestRepr, ApiMode};
+//! use mcp_host::xbee_api::{Address64, Address16, EncodeFrame, TransmitRequestRepr, ApiMode};
 //!
 //! # #[tokio::main(flavor = "current_thread")]
 //! # async fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -667,14 +667,14 @@ impl Network {
     /// use mcp_host::radio::{Network, NetworkConfig, NodeOptions};
     /// let network = Network::new(NetworkConfig::default());
     /// let link = "tcp-listen:127.0.0.1:0".parse().unwrap();
-    /// let node = network.add_link(xbee_api::Address64::COORDINATOR, &link, NodeOptions::default())
+    /// let node = network.add_link(mcp_host::xbee_api::Address64::COORDINATOR, &link, NodeOptions::default())
     ///     .await
     ///     .unwrap();
     /// network.stop().await;
     /// // The same port again, straight away.
     /// let again = format!("tcp-listen:{}", node.local_addr.unwrap()).parse().unwrap();
     /// let network = Network::new(NetworkConfig::default());
-    /// network.add_link(xbee_api::Address64::COORDINATOR, &again, NodeOptions::default())
+    /// network.add_link(mcp_host::xbee_api::Address64::COORDINATOR, &again, NodeOptions::default())
     ///     .await
     ///     .unwrap();
     /// # }

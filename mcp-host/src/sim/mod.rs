@@ -13,7 +13,7 @@
 //!
 //! ```no_run
 //! use mcp_host::sim::{Simulator, fleet_addresses};
-//! use xbee_api::ApiMode;
+//! use mcp_host::xbee_api::ApiMode;
 //!
 //! # async fn run() -> Result<(), Box<dyn std::error::Error>> {
 //! let sim = Simulator::start(&"pty".parse()?, ApiMode::Unescaped, &fleet_addresses(2),

@@ -31,7 +31,7 @@ const GRAVITY: f32 = 9.81;
 /// - The MAV time advances with [`SimVehicle::step`].
 ///
 /// ```
-/// use mcp_core::{mav::Vehicle, LandingState, TelemetryId};
+/// use mcp_host::mcp_core::{mav::Vehicle, LandingState, TelemetryId};
 /// use mcp_host::sim::SimVehicle;
 ///
 /// let mut v = SimVehicle::new(1_700_000_000);
