@@ -35,6 +35,14 @@
 //! A radio in transparent mode (`AP=0`, as XBee modules leave the factory) speaks no API
 //! frames: [`command_mode`] puts it into API mode through its AT command mode (`+++`).
 //!
+//! # Logging
+//!
+//! The library says what goes wrong beside the errors it returns (a radio whose frames
+//! fail to decode, a link not there yet and waited for, answers dropped) through
+//! [`tracing`](https://docs.rs/tracing), at `warn` and below; a program sees it once it
+//! installs a subscriber, as `tracing_subscriber::fmt().init()` of the
+//! `tracing-subscriber` crate does. Without one it is lost.
+//!
 //! [`CommandSender::discover`] finds the radios the local one can reach (node
 //! discovery, `ND`, in [`discovery`]); [`CommandSender::at_answers`] gathers every
 //! answer to any AT command that many radios answer.
