@@ -2,6 +2,7 @@
 //! [`PacketStream`](crate::PacketStream).
 
 use std::fmt;
+use std::future::Future;
 use std::marker::PhantomData;
 use std::pin::Pin;
 use std::task::{Context, Poll};
@@ -25,8 +26,9 @@ use crate::{LinkState, SendError};
 ///
 /// Made by [`CommandSender::packet_sink`](crate::CommandSender::packet_sink). The sink
 /// waits for room in the link's queue (`poll_ready`), so a fast stream is held back,
-/// never buffered without bound. `poll_flush` is ready once the packets are in that
-/// queue; the link's task writes them in the background.
+/// never buffered without bound. `poll_flush` (and so `send`, `send_all`, `close`) is
+/// ready once the link's task has taken the packets from that queue and put them in
+/// line for the transport, which it writes in the background.
 ///
 /// While the link is not connected (before its first connection, or between a
 /// disconnection and the reconnection) the sink is not ready: a stream fed to it waits,
@@ -46,9 +48,10 @@ use crate::{LinkState, SendError};
 /// dropped.
 ///
 /// Packets go out in order among themselves and with other writes without a frame id
-/// (`send_with` and [`FrameId::None`](crate::FrameId::None), `write_frame`); requests
-/// that await an answer go through another queue, so no order holds between those and
-/// the sink's packets.
+/// (`send_with` and [`FrameId::None`](crate::FrameId::None), `write_frame`). Requests
+/// that await an answer go through another queue: a request sent once the sink is
+/// flushed (`sink.send(..).await`, then `sender.request(..)`) goes out after its
+/// packets, while one sent meanwhile from another task may go before them.
 ///
 /// The item's packet holds its bytes in `B` (`Bytes`, `&[u8]`, `Vec<u8>`...), which the
 /// items sent fix: a sink fed [`Received`](crate::Received) packets takes
@@ -71,6 +74,9 @@ use crate::{LinkState, SendError};
 /// ```
 pub struct PacketSink<B = Bytes> {
     writes: PollSender<Op>,
+    /// The answer of the last packet handed over and not yet flushed: the link's task
+    /// takes the queue's packets in order, so once it took this one it took them all.
+    last: Option<oneshot::Receiver<Result<(), SendError>>>,
     /// The link's state as last seen.
     state: LinkState,
     /// The link's state changes, each as it comes.
@@ -89,6 +95,7 @@ impl<B> PacketSink<B> {
         });
         Self {
             writes: PollSender::new(writes),
+            last: None,
             state: now,
             changes: Box::pin(changes),
             packets: PhantomData,
@@ -133,21 +140,35 @@ impl<B: AsRef<[u8]>> Sink<(Address64, mcp_core::Packet<B>)> for PacketSink<B> {
         (to, packet): (Address64, mcp_core::Packet<B>),
     ) -> Result<(), SendError> {
         let data = transmit_frame_data(to, &packet)?;
-        // Nobody waits for the answer: a write is written all the same.
-        let (reply, _) = oneshot::channel();
-        self.get_mut()
-            .writes
+        // Answered once the link's task has taken it (`poll_flush` waits for that).
+        let (reply, taken) = oneshot::channel();
+        let this = self.get_mut();
+        this.writes
             .send_item(Op::Write { data, reply })
-            .map_err(|_| SendError::Closed)
+            .map_err(|_| SendError::Closed)?;
+        this.last = Some(taken);
+        Ok(())
     }
 
-    fn poll_flush(self: Pin<&mut Self>, _: &mut Context<'_>) -> Poll<Result<(), SendError>> {
-        Poll::Ready(Ok(()))
+    fn poll_flush(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<Result<(), SendError>> {
+        let this = self.get_mut();
+        let Some(taken) = &mut this.last else {
+            return Poll::Ready(Ok(()));
+        };
+        let result = match Pin::new(taken).poll(cx) {
+            Poll::Pending => return Poll::Pending,
+            Poll::Ready(Ok(result)) => result,
+            // Dropped unanswered: the link ended first.
+            Poll::Ready(Err(_)) => Err(SendError::Closed),
+        };
+        this.last = None;
+        Poll::Ready(result)
     }
 
-    fn poll_close(self: Pin<&mut Self>, _: &mut Context<'_>) -> Poll<Result<(), SendError>> {
+    fn poll_close(mut self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<Result<(), SendError>> {
+        let flushed = std::task::ready!(self.as_mut().poll_flush(cx));
         self.get_mut().writes.close();
-        Poll::Ready(Ok(()))
+        Poll::Ready(flushed)
     }
 }
 
