@@ -160,6 +160,11 @@ fn parse_serial(rest: &str) -> Result<Link, LinkParseError> {
             (path, value)
         }
         Some((path, "")) => (path, DEFAULT_BAUD),
+        // A baud rate mistyped (`115k`, `9600 `) rather than part of the path: a device's
+        // name holds no such ending (`/dev/serial/by-path/...-usb-0:1:1.0-port0`).
+        Some((_, baud)) if mistyped_baud(baud) => {
+            return Err(LinkParseError::InvalidBaud(baud.to_owned()));
+        }
         _ => (rest, DEFAULT_BAUD),
     };
     if path.is_empty() {
@@ -169,6 +174,14 @@ fn parse_serial(rest: &str) -> Result<Link, LinkParseError> {
         path: path.to_owned(),
         baud,
     })
+}
+
+/// Whether the last `:` part of a serial link is a baud rate mistyped: digits with a
+/// `k` after them (`115k`), or with spaces around them.
+fn mistyped_baud(part: &str) -> bool {
+    let digits = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
+    let trimmed = part.trim();
+    digits(trimmed) || trimmed.strip_suffix(['k', 'K']).is_some_and(digits)
 }
 
 fn parse_host_port(rest: &str) -> Result<(String, u16), LinkParseError> {
@@ -284,6 +297,9 @@ mod tests {
             ("serial:", MissingPath),
             ("serial::9600", MissingPath),
             ("serial:/dev/ttyS0:0", InvalidBaud("0".into())),
+            ("serial:/dev/ttyUSB0:115k", InvalidBaud("115k".into())),
+            ("serial:/dev/ttyUSB0:9600 ", InvalidBaud("9600 ".into())),
+            ("serial:COM3: 57600", InvalidBaud(" 57600".into())),
             (
                 "serial:/dev/ttyS0:99999999999",
                 InvalidBaud("99999999999".into()),
@@ -333,6 +349,26 @@ mod tests {
             let message = text.parse::<Link>().unwrap_err().to_string();
             assert!(message.contains(hint), "{message}");
         }
+    }
+
+    #[test]
+    fn a_device_name_with_colons_is_a_path_and_a_mistyped_baud_is_not() {
+        let by_path = "/dev/serial/by-path/pci-0000:00:14.0-usb-0:1:1.0-port0";
+        assert_eq!(
+            format!("serial:{by_path}").parse::<Link>(),
+            Ok(Link::Serial {
+                path: by_path.to_owned(),
+                baud: DEFAULT_BAUD,
+            })
+        );
+        let message = "serial:/dev/ttyUSB0:115k"
+            .parse::<Link>()
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            message,
+            "invalid baud rate \"115k\" (expected a positive integer)"
+        );
     }
 
     #[test]
