@@ -921,6 +921,7 @@ impl Driver {
                         Err(SendError::Timeout {
                             frame_id: id,
                             timeout: pending.timeout,
+                            heard: true,
                         })
                     }
                 };
@@ -1086,6 +1087,7 @@ impl Driver {
                             let _ = reply.send(Err(SendError::Timeout {
                                 frame_id: 0,
                                 timeout,
+                                heard: self.healthy,
                             }));
                         }
                     }
@@ -1197,6 +1199,7 @@ impl Driver {
         }
         let counters = &self.counters;
         let written = self.written;
+        let heard = self.healthy;
         let mut cut = Vec::new();
         let mut unsent_waiters = Vec::new();
         self.ids.replace_where(
@@ -1210,6 +1213,7 @@ impl Driver {
                     SendError::Timeout {
                         frame_id: id,
                         timeout: p.timeout,
+                        heard,
                     }
                 };
                 let kept = if unsent { None } else { p.expired(now) };
@@ -1301,6 +1305,7 @@ impl Driver {
             Err(pending) => pending.kind.fail(SendError::Timeout {
                 frame_id: 0,
                 timeout,
+                heard: self.healthy,
             }),
         }
     }

@@ -72,13 +72,22 @@ pub enum SendError {
     /// radio may still carry it out. Its frame id is kept from new requests for a
     /// while, so that a late answer is passed on as an unclaimed frame, never taken
     /// for another request's.
-    #[error("no answer to frame id {frame_id} within {timeout:?}")]
+    #[error(
+        "no answer to frame id {frame_id} within {timeout:?}{}",
+        if *heard { "" } else { " (no frame has come from the radio since the link came up)" }
+    )]
     #[non_exhaustive]
     Timeout {
         /// The frame id used.
         frame_id: u8,
         /// The timeout that expired.
         timeout: Duration,
+        /// Whether a frame came from the radio on this connection before the timeout
+        /// (true where the link cannot tell). If none did, the radio may not speak the
+        /// link's API mode or baud rate, or be in transparent mode, or the peer may
+        /// serve another connection first (a simulator or `tcp-listen:` link lets the
+        /// next one wait): see [`Stats::diagnose`](crate::Stats::diagnose).
+        heard: bool,
     },
     /// The request waited for a frame id for all of its timeout and was never sent: all
     /// 255 were taken by requests whose answers had not come (a radio that does not
@@ -255,6 +264,7 @@ mod tests {
             SendError::Timeout {
                 frame_id: 7,
                 timeout,
+                heard: true,
             },
             SendError::NoFreeFrameId { timeout },
             SendError::NotSent { timeout },

@@ -718,6 +718,7 @@ impl CommandSender {
             Err(_) => Err(SendError::Timeout {
                 frame_id: 0,
                 timeout,
+                heard: true,
             }),
         }
     }

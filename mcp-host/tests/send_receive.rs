@@ -385,7 +385,11 @@ async fn frame_ids_are_reused_and_no_send_is_lost_when_statuses_never_come() {
             let value = batch * BATCH + k as u32;
             match task.await.unwrap() {
                 Ok(DeliveryReport::Delivered { .. }) => assert_ne!(value % 5, 0),
-                Err(SendError::Timeout { frame_id, .. }) => {
+                Err(SendError::Timeout {
+                    frame_id, heard, ..
+                }) => {
+                    // Other statuses came on this link.
+                    assert!(heard);
                     assert_eq!(value % 5, 0, "answered send {value} timed out");
                     assert!(unanswered.contains(&frame_id), "{frame_id}");
                     timed_out += 1;
@@ -985,4 +989,49 @@ async fn options_out_of_range_are_refused_before_the_link_opens() {
             other => panic!("event_capacity {capacity}: {:?}", other.map(|_| ())),
         }
     }
+}
+
+#[tokio::test]
+async fn a_timeout_says_when_nothing_at_all_came_from_the_radio() {
+    // A peer that reads and says nothing: the radio in another API mode or at another
+    // baud rate, in transparent mode, or serving another connection first.
+    let (_stream, sender, mut fake) = pty_link(ApiMode::Escaped).await;
+    let short = SendOptions {
+        timeout: Some(Duration::from_millis(200)),
+        ..SendOptions::default()
+    };
+    let sent = sender.send_with(MAV, &Command::landing(true), short).await;
+    let error = sent.expect_err("no status came");
+    assert!(
+        matches!(error, SendError::Timeout { heard: false, .. }),
+        "{error:?}"
+    );
+    assert!(
+        error
+            .to_string()
+            .ends_with(" (no frame has come from the radio since the link came up)"),
+        "{error}"
+    );
+    let _ = fake.next_tx().await;
+    // Once a frame came, a timeout does not say so.
+    fake.send(&xbee_api::ModemStatusRepr {
+        status: xbee_api::ModemStatus::CoordinatorStarted,
+    })
+    .await;
+    let frames = sender.stats().frames;
+    tokio::time::timeout(GUARD, async {
+        while sender.stats().frames == frames {
+            tokio::task::yield_now().await;
+        }
+    })
+    .await
+    .expect("the modem status read");
+    let error = sender
+        .send_with(MAV, &Command::landing(true), short)
+        .await
+        .expect_err("no status came");
+    assert!(
+        matches!(error, SendError::Timeout { heard: true, .. }),
+        "{error:?}"
+    );
 }

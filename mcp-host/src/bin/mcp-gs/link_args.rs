@@ -901,7 +901,7 @@ pub(crate) fn send_failure(error: SendError) -> Failure {
         // No answer is no proof that nothing happened.
         SendError::Timeout { .. } => Failure::new(
             code,
-            format!("{error} (the frame may still have gone out and been carried out)"),
+            format!("{error}; the frame may still have gone out and been carried out"),
         ),
         _ => Failure::new(code, error.to_string()),
     }
