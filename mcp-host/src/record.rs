@@ -80,6 +80,28 @@ pub struct Record {
     pub frame: Vec<u8>,
 }
 
+impl Record {
+    /// The frame, typed; an MCP packet is the data of a Receive Packet (or, from the
+    /// ground station, of a Transmit Request), which [`mcp_core::parse`] reads.
+    ///
+    /// ```
+    /// use std::time::SystemTime;
+    /// use mcp_host::mcp_core::{self, Command, Packet};
+    /// use mcp_host::record::{Direction, Record};
+    /// use mcp_host::xbee_api::Frame;
+    ///
+    /// // A landing command as a Receive Packet from 0013A20040B599B9.
+    /// let mut frame = vec![0x90, 0x00, 0x13, 0xA2, 0x00, 0x40, 0xB5, 0x99, 0xB9, 0xFF, 0xFE, 0x01];
+    /// frame.extend_from_slice(b"c\x02\x01");
+    /// let record = Record { time: SystemTime::now(), direction: Direction::Received, frame };
+    /// let Ok(Frame::ReceivePacket(rx)) = record.parse() else { panic!("a Receive Packet") };
+    /// assert_eq!(mcp_core::parse(rx.data), Ok(Packet::Command(Command::landing(true))));
+    /// ```
+    pub fn parse(&self) -> Result<xbee_api::Frame<'_>, xbee_api::FrameError> {
+        xbee_api::Frame::parse_bytes(&self.frame)
+    }
+}
+
 /// Writes a recording.
 #[derive(Debug)]
 pub struct RecordWriter<W: Write> {

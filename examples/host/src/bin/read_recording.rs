@@ -25,7 +25,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             Direction::Sent => "tx",
         };
         // A record holds the frame's data: frame type first, unescaped.
-        let (peer, payload) = match Frame::parse_bytes(&record.frame) {
+        let (peer, payload) = match record.parse() {
             Ok(Frame::ReceivePacket(rx)) => (rx.src64, rx.data),
             Ok(Frame::ExplicitRxIndicator(rx)) => (rx.src64, rx.data),
             Ok(Frame::TransmitRequest(tx)) => (tx.dst64, tx.data),
