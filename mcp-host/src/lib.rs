@@ -103,6 +103,7 @@
 #![deny(missing_docs)]
 
 mod answers;
+mod api_mode;
 pub mod codec;
 pub mod command_mode;
 mod diagnosis;
@@ -141,6 +142,7 @@ pub use mcp_core;
 pub use xbee_api;
 
 pub use answers::Answers;
+pub use api_mode::{DetectError, detect_api_mode};
 pub use diagnosis::{Diagnoser, Diagnosis};
 pub use error::{ConnectError, RequestError, SendError};
 pub use event::{

@@ -5,8 +5,8 @@ use std::time::Duration;
 use clap::Args;
 use futures::StreamExt;
 use mcp_host::{
-    CommandSender, ConnectError, Connector, Diagnosis, Link, LinkError, LinkOptions, PacketStream,
-    ReconnectPolicy, SendError, Stats,
+    CommandSender, ConnectError, Connector, DetectError, Diagnosis, Link, LinkError, LinkOptions,
+    PacketStream, ReconnectPolicy, SendError, Stats,
 };
 use xbee_api::{Address64, ApiMode, DeliveryStatus, Frame};
 
@@ -201,52 +201,47 @@ impl LinkArgs {
 
     /// Asks the radio for its API mode ([`ask_ap`]).
     async fn detect_mode(&self) -> Result<ApiMode, Failure> {
-        if !matches!(self.link, Link::Serial { .. } | Link::Tcp { .. }) {
-            return Err(Failure::input(
-                "--api-mode auto needs a link to a radio (serial: or tcp:); give 1 or 2",
-            ));
-        }
         let timeout = self.timeout().min(Duration::from_secs(3));
         let options = LinkOptions {
             send_timeout: timeout,
             ..self.options_in(ApiMode::Unescaped, false)
         };
-        let mode = ask_ap(&self.link, options).await?.map_err(|e| match e {
-            SendError::Timeout { .. } => {
-                let link = &self.link;
-                let fix = match link {
-                    Link::Serial { path, .. } => format!(
-                        "`mcp-gs probe --link serial:{path}` finds its rate and mode, and \
-                         `mcp-gs setup` puts it into API mode"
-                    ),
-                    // A hub or a bridge (for a command that is a hub itself too): setup
-                    // and probe need the radio's own port, or the bridge.
-                    _ => format!(
-                        "if {link} is a hub, stop it and run `mcp-gs probe` on the radio's \
-                         serial port; if a serial bridge, `mcp-gs setup --link {link}`"
-                    ),
-                };
-                Failure::new(
-                    Failure::TIMEOUT,
-                    format!(
-                        "the radio on {link} did not answer AT AP within {timeout:?}: it may \
-                         be in transparent mode (AP=0) or at another baud rate ({fix})"
-                    ),
-                )
-            }
-            other => send_failure(other),
-        })?;
-        match mode {
-            Some(1) => Ok(ApiMode::Unescaped),
-            Some(2) => Ok(ApiMode::Escaped),
-            Some(0) => Err(Failure::input(
-                "the radio is in transparent mode (AP=0): `mcp-gs setup` puts it into API mode",
-            )),
-            other => Err(Failure::new(
-                Failure::OTHER,
-                format!("the radio answered AT AP with {other:?}, not 1 or 2"),
-            )),
-        }
+        let link = &self.link;
+        mcp_host::detect_api_mode(link, options)
+            .await
+            .map_err(|e| match e {
+                DetectError::NoRadio(_) => Failure::input(
+                    "--api-mode auto needs a link to a radio (serial: or tcp:); give 1 or 2",
+                ),
+                DetectError::Connect(e) => connect_failure(link, e),
+                DetectError::NoAnswer(SendError::Timeout { .. }) => {
+                    let fix = match link {
+                        Link::Serial { path, .. } => format!(
+                            "`mcp-gs probe --link serial:{path}` finds its rate and mode, and \
+                             `mcp-gs setup` puts it into API mode"
+                        ),
+                        // A hub or a bridge (for a command that is a hub itself too):
+                        // setup and probe need the radio's own port, or the bridge.
+                        _ => format!(
+                            "if {link} is a hub, stop it and run `mcp-gs probe` on the radio's \
+                             serial port; if a serial bridge, `mcp-gs setup --link {link}`"
+                        ),
+                    };
+                    Failure::new(
+                        Failure::TIMEOUT,
+                        format!(
+                            "the radio on {link} did not answer AT AP within {timeout:?}: it \
+                             may be in transparent mode (AP=0) or at another baud rate ({fix})"
+                        ),
+                    )
+                }
+                DetectError::NoAnswer(other) => send_failure(other),
+                DetectError::Transparent => Failure::input(
+                    "the radio is in transparent mode (AP=0): `mcp-gs setup` puts it into API \
+                     mode",
+                ),
+                other => Failure::new(Failure::OTHER, other.to_string()),
+            })
     }
 
     /// After a report that did not come although the radio delivered the request:
