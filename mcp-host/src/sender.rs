@@ -411,7 +411,7 @@ impl CommandSender {
     /// ```no_run
     /// # async fn run(sender: mcp_host::CommandSender) -> Result<(), Box<dyn std::error::Error>> {
     /// use std::time::Duration;
-    /// use futures::StreamExt;
+    /// // `Answers` is a `Stream` too; its own `next` needs no `StreamExt`.
     /// let mut answers = sender.at_answers(*b"ND", &[], Duration::from_secs(7)).await?;
     /// while let Some(answer) = answers.next().await {
     ///     println!("{:02x?}", answer?.data());
