@@ -1,5 +1,6 @@
 //! Node discovery: which radios the local one can reach, from [`CommandSender::discover`].
 
+use std::collections::HashMap;
 use std::fmt;
 use std::time::Duration;
 
@@ -15,6 +16,15 @@ pub const DEFAULT_DISCOVERY_TIME: Duration = Duration::from_secs(6);
 /// Added to the radio's discovery time (`N?` or `NT`) for the last answer to reach the
 /// host.
 pub const DISCOVERY_MARGIN: Duration = Duration::from_secs(1);
+
+/// The longest discovery time [`window`] takes from a radio: a DigiMesh radio's longest
+/// `NT` (0x2EE0 tenths of a second, 20 minutes). A longer `N?` or `NT` (a peer that is
+/// no radio) is cut to it, with a warning.
+pub const MAX_DISCOVERY_TIME: Duration = Duration::from_secs(1200);
+
+/// The most radios one discovery keeps ([`Discovery::left_out`] counts those beyond):
+/// as many as a network's 16-bit addresses.
+pub const MAX_NODES: usize = 65_536;
 
 /// A radio found by node discovery.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -71,9 +81,27 @@ pub struct Discovery {
     /// last answered, for one heard twice).
     pub nodes: Vec<Node>,
     /// Answers left out because they are no Zigbee or DigiMesh node discovery answer
-    /// ([`NodeInfo`]; an 802.15.4 radio's have another layout), each with a warning in
-    /// the log.
+    /// ([`NodeInfo`]; an 802.15.4 radio's have another layout); the first is logged as
+    /// a warning.
     pub unreadable: usize,
+    /// Radios left out beyond [`MAX_NODES`] (a peer that is no radio, answering
+    /// without end).
+    pub left_out: usize,
+}
+
+impl Discovery {
+    /// Adds `node`, or puts it in the place of its radio's earlier answer (`index` says
+    /// where each radio is in `nodes`); beyond `max` radios, counts it left out.
+    fn add(&mut self, index: &mut HashMap<Address64, usize>, node: Node, max: usize) {
+        match index.get(&node.addr64) {
+            Some(&at) => self.nodes[at] = node,
+            None if self.nodes.len() < max => {
+                index.insert(node.addr64, self.nodes.len());
+                self.nodes.push(node);
+            }
+            None => self.left_out += 1,
+        }
+    }
 }
 
 /// Why node discovery failed.
@@ -103,12 +131,16 @@ pub(crate) async fn discover(
     };
     let mut answers = sender.at_answers(*b"ND", &[], window).await?;
     let mut found = Discovery::default();
+    // Where each radio is in `found.nodes`: a radio heard again is found at once.
+    let mut index = HashMap::new();
     while let Some(answer) = answers.next().await {
         let answer = answer?;
         let response = match answer.parse() {
             Ok(Frame::AtCommandResponse(response)) if response.command == *b"ND" => response,
             _ => {
-                tracing::warn!(data = %crate::render::json::hex(answer.data()), "node discovery: not an answer to ND");
+                if found.unreadable == 0 {
+                    tracing::warn!(data = %crate::render::json::hex(answer.data()), "node discovery: not an answer to ND (more are counted, not logged)");
+                }
                 found.unreadable += 1;
                 continue;
             }
@@ -123,15 +155,11 @@ pub(crate) async fn discover(
             break;
         }
         match NodeInfo::parse(response.data) {
-            Ok(info) => {
-                let node = Node::from(&info);
-                match found.nodes.iter_mut().find(|n| n.addr64 == node.addr64) {
-                    Some(known) => *known = node,
-                    None => found.nodes.push(node),
-                }
-            }
+            Ok(info) => found.add(&mut index, Node::from(&info), MAX_NODES),
             Err(error) => {
-                tracing::warn!(%error, data = %crate::render::json::hex(response.data), "node discovery: an answer cannot be read");
+                if found.unreadable == 0 {
+                    tracing::warn!(%error, data = %crate::render::json::hex(response.data), "node discovery: an answer cannot be read (more are counted, not logged)");
+                }
                 found.unreadable += 1;
             }
         }
@@ -142,8 +170,8 @@ pub(crate) async fn discover(
 /// How long [`CommandSender::discover`] listens when given no window: the radio's
 /// longest discovery time, `N?` (in milliseconds, on DigiMesh and 802.15.4 radios, which
 /// add the network's delays to `NT`), else its discovery time `NT` (tenths of a second,
-/// on Zigbee radios, which have no `N?`), else [`DEFAULT_DISCOVERY_TIME`]; and
-/// [`DISCOVERY_MARGIN`] more.
+/// on Zigbee radios, which have no `N?`), else [`DEFAULT_DISCOVERY_TIME`]; at most
+/// [`MAX_DISCOVERY_TIME`]; and [`DISCOVERY_MARGIN`] more.
 pub async fn window(sender: &CommandSender) -> Result<Duration, SendError> {
     let time = match read_number(sender, *b"N?").await? {
         Some(ms) => Duration::from_millis(ms),
@@ -152,7 +180,13 @@ pub async fn window(sender: &CommandSender) -> Result<Duration, SendError> {
             None => DEFAULT_DISCOVERY_TIME,
         },
     };
-    Ok(time + DISCOVERY_MARGIN)
+    if time > MAX_DISCOVERY_TIME {
+        tracing::warn!(
+            "node discovery: the radio's discovery time, {time:?}, is longer than any radio's: \
+             {MAX_DISCOVERY_TIME:?} taken"
+        );
+    }
+    Ok(time.min(MAX_DISCOVERY_TIME) + DISCOVERY_MARGIN)
 }
 
 /// A number the local radio answers `command` with (1 to 4 bytes, big-endian); `None` if
@@ -165,4 +199,34 @@ async fn read_number(sender: &CommandSender, command: [u8; 2]) -> Result<Option<
         }
         _ => None,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn node(addr: u64, name: &str) -> Node {
+        Node {
+            addr64: Address64(addr),
+            addr16: Address16(0x1234),
+            identifier: name.to_owned(),
+            device_type: DeviceType::Router,
+            parent: Address16(0xFFFE),
+            rssi: None,
+        }
+    }
+
+    #[test]
+    fn a_radio_heard_again_keeps_its_place_and_radios_beyond_the_most_are_counted() {
+        let mut found = Discovery::default();
+        let mut index = HashMap::new();
+        found.add(&mut index, node(1, "a"), 2);
+        found.add(&mut index, node(2, "b"), 2);
+        found.add(&mut index, node(1, "a again"), 2);
+        found.add(&mut index, node(3, "c"), 2);
+        found.add(&mut index, node(4, "d"), 2);
+        let names: Vec<&str> = found.nodes.iter().map(|n| n.identifier.as_str()).collect();
+        assert_eq!(names, ["a again", "b"]);
+        assert_eq!(found.left_out, 2);
+    }
 }

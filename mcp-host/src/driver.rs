@@ -282,6 +282,9 @@ enum PendingKind {
         answers: AnswerSender,
         /// The frame type of its answers (0x88 for AT commands, 0x97 for remote ones).
         answer_type: u8,
+        /// Answers dropped while [`ANSWERS_HELD`] waited for the caller: the first is
+        /// logged, the count when the window ends.
+        dropped: u64,
     },
     /// A request whose caller has its timeout (or is gone), its frame sent: its late
     /// answer comes as an unclaimed frame ([`Pending::expired`]).
@@ -862,6 +865,7 @@ impl Driver {
             Some(PendingKind::Answers {
                 answers,
                 answer_type,
+                ..
             }) if *answer_type == frame_type => {
                 if answers.is_closed() {
                     // Its caller stopped listening: the id waits for the last answers.
@@ -874,11 +878,19 @@ impl Driver {
                 }
                 if answers.capacity() > 1 {
                     let _ = answers.try_send(Ok(frame));
-                } else {
-                    tracing::warn!(
-                        frame_id = id,
-                        "an answer was dropped: {ANSWERS_HELD} answers wait for their caller"
-                    );
+                } else if let Some(PendingKind::Answers { dropped, .. }) =
+                    self.ids.get_mut(id).map(|p| &mut p.kind)
+                {
+                    // Said once a request, and counted: answers that come faster than
+                    // their caller takes them would make a line each.
+                    *dropped += 1;
+                    if *dropped == 1 {
+                        tracing::warn!(
+                            frame_id = id,
+                            "an answer was dropped: {ANSWERS_HELD} answers wait for their \
+                             caller (more are counted, and said when its window ends)"
+                        );
+                    }
                 }
                 return;
             }
@@ -1156,6 +1168,7 @@ impl Driver {
                 let kind = PendingKind::Answers {
                     answers,
                     answer_type,
+                    dropped: 0,
                 };
                 self.write_under_id(out, &data, deadline, timeout, kind);
             }
@@ -1228,9 +1241,18 @@ impl Driver {
                     }
                     // Its window is over: dropping the sender ends the answers; a
                     // request that never went out says so.
-                    PendingKind::Answers { answers, .. } => {
+                    PendingKind::Answers {
+                        answers, dropped, ..
+                    } => {
                         if unsent {
                             fail_answers(&answers, error);
+                        }
+                        if dropped > 1 {
+                            tracing::warn!(
+                                frame_id = id,
+                                "{dropped} answers were dropped in all: {ANSWERS_HELD} \
+                                 answers waited for their caller"
+                            );
                         }
                     }
                     // The report waiter has the same deadline and answers below (at
@@ -1525,6 +1547,7 @@ mod tests {
                 PendingKind::Answers {
                     answers,
                     answer_type: 0x88,
+                    dropped: 0,
                 },
                 at,
                 now,

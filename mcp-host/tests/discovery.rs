@@ -220,6 +220,33 @@ async fn the_window_is_the_radios_longest_discovery_time_where_it_gives_one() {
 }
 
 #[tokio::test]
+async fn a_discovery_time_longer_than_any_radios_is_cut() {
+    let (_stream, sender, mut fake) = common::pty_link(ApiMode::Unescaped).await;
+    let window = tokio::spawn({
+        let sender = sender.clone();
+        async move { mcp_host::discovery::window(&sender).await }
+    });
+    // 49.7 days, from a peer that is no radio.
+    let id = at_command(&mut fake, *b"N?").await;
+    fake.send(&AtCommandResponseRepr {
+        frame_id: id,
+        command: *b"N?",
+        status: AtStatus::Ok,
+        data: &[0xFF; 4],
+    })
+    .await;
+    let window = tokio::time::timeout(GUARD, window)
+        .await
+        .unwrap()
+        .unwrap()
+        .unwrap();
+    assert_eq!(
+        window,
+        mcp_host::discovery::MAX_DISCOVERY_TIME + DISCOVERY_MARGIN
+    );
+}
+
+#[tokio::test]
 async fn the_emulated_network_answers_with_every_radio_it_can_reach() {
     let network = Network::new(NetworkConfig::default());
     let coord = common::tcp_coordinator(&network).await;

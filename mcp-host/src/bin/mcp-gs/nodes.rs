@@ -59,6 +59,13 @@ pub(crate) async fn run(args: NodesArgs) -> Result<(), Failure> {
         // Answers that failed their checksum: the local radio may be in the other mode.
         return Err(with_mode_hint(failure, &args.link, &sender.stats()));
     }
+    if found.left_out > 0 {
+        err!(
+            "mcp-gs: warning: {} left out: no more than {} are listed (is this a radio?)",
+            crate::counted(found.left_out as u64, "more radio"),
+            mcp_host::discovery::MAX_NODES
+        );
+    }
     for node in &found.nodes {
         match args.format {
             Format::Text => out!("{node}"),
