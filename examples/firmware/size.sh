@@ -8,7 +8,8 @@
 # override the tools.
 #
 # Fails when the receive path takes more flash than its budget, RX_FLASH_BUDGET bytes
-# (default 4096: the 4 KiB the receive path is held to).
+# (default 4096: the 4 KiB the receive path is held to), and when a binary keeps a panic
+# path (its panic handler, panic-halt's, is then reached through core::panicking).
 set -euo pipefail
 cd "$(dirname "$0")"
 unset CARGO_TARGET_DIR
@@ -75,3 +76,14 @@ if ((rx_flash > budget)); then
     exit 1
 fi
 echo "  within the flash budget of $budget bytes ($((budget - rx_flash)) to spare)"
+
+# No panic path: a reachable panic links core::panicking (a `RefCell::borrow_mut` or a
+# `&buf[..len]` the compiler cannot prove in bounds is enough).
+for bin in mav-firmware rx_path rx_slice baseline; do
+    if "$NM" -C "$dir/$bin" | grep -q ' core::panicking::'; then
+        echo "size.sh: $bin keeps a panic path: $("$NM" -C "$dir/$bin" | grep -E ' core::(panicking|cell|slice|option|result)::' | awk '{ $1 = $2 = ""; print }' | tr '\n' ';')" >&2
+        exit 1
+    fi
+done
+echo
+echo "no panic path in mav-firmware, rx_path, rx_slice or baseline"

@@ -4,31 +4,60 @@ use core::{fmt, str::FromStr};
 
 /// An 8-byte (64-bit) MAV address, as carried by position slave set packets.
 ///
-/// The bytes are kept in wire order. The `u64` conversions read them big-endian, the
-/// order in which XBee addresses are written (`0013A20040B599B9`), and `Display`
-/// writes 16 lower-case hex digits in that order, as `xbee_api::Address64` does. To
-/// address a slave MAV over the radio: `Address64(u64::from(address))`; back:
-/// `Address::from(address64.0)`.
+/// The bytes are kept in wire order. The `u64` conversions ([`from_u64`](Self::from_u64),
+/// [`to_u64`](Self::to_u64) and the `From` impls) read them big-endian, the order in
+/// which XBee addresses are written (`0013A20040B599B9`), and `Display` writes 16
+/// lower-case hex digits in that order, as `xbee_api::Address64` does. To address a
+/// slave MAV over the radio: `Address64(address.to_u64())`; back:
+/// `Address::from_u64(address64.0)`.
 ///
 /// ```
 /// use mcp_core::Address;
 /// let a: Address = "0013A20040B599B9".parse().unwrap();
 /// assert_eq!(a.0, [0x00, 0x13, 0xA2, 0x00, 0x40, 0xB5, 0x99, 0xB9]);
-/// assert_eq!(u64::from(a), 0x0013_A200_40B5_99B9);
+/// assert_eq!(a.to_u64(), 0x0013_A200_40B5_99B9);
 /// assert_eq!(a.to_string(), "0013a20040b599b9");
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
 pub struct Address(pub [u8; 8]);
 
-impl From<u64> for Address {
-    fn from(value: u64) -> Self {
+impl Address {
+    /// The address whose big-endian bytes are `value`: the most significant byte comes
+    /// first on the wire. `const`, for addresses fixed at compile time.
+    ///
+    /// ```
+    /// use mcp_core::Address;
+    /// const SLAVE: Address = Address::from_u64(0x0013_A200_40B5_99B9);
+    /// assert_eq!(SLAVE.0, [0x00, 0x13, 0xA2, 0x00, 0x40, 0xB5, 0x99, 0xB9]);
+    /// ```
+    pub const fn from_u64(value: u64) -> Self {
         Address(value.to_be_bytes())
+    }
+
+    /// The address as a number, its bytes read big-endian: what `xbee_api::Address64`
+    /// holds for the same radio.
+    ///
+    /// ```
+    /// use mcp_core::Address;
+    /// let a = Address([0x00, 0x13, 0xA2, 0x00, 0x40, 0xB5, 0x99, 0xB9]);
+    /// assert_eq!(a.to_u64(), 0x0013_A200_40B5_99B9);
+    /// ```
+    pub const fn to_u64(self) -> u64 {
+        u64::from_be_bytes(self.0)
+    }
+}
+
+impl From<u64> for Address {
+    /// As [`Address::from_u64`].
+    fn from(value: u64) -> Self {
+        Address::from_u64(value)
     }
 }
 
 impl From<Address> for u64 {
+    /// As [`Address::to_u64`].
     fn from(value: Address) -> Self {
-        u64::from_be_bytes(value.0)
+        value.to_u64()
     }
 }
 
@@ -42,7 +71,7 @@ impl fmt::Display for Address {
 #[cfg(feature = "defmt")]
 impl defmt::Format for Address {
     fn format(&self, f: defmt::Formatter<'_>) {
-        defmt::write!(f, "{=u64:016x}", u64::from_be_bytes(self.0));
+        defmt::write!(f, "{=u64:016x}", self.to_u64());
     }
 }
 
@@ -120,5 +149,27 @@ impl From<Slot> for u8 {
 impl fmt::Display for Slot {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "{}", self.0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The `u64` forms read the wire bytes big-endian, in a `const` as at run time, and
+    /// agree with the `From` impls.
+    #[test]
+    fn u64_forms_are_big_endian_and_const() {
+        const SLAVE: Address = Address::from_u64(0x0013_A200_40B5_99B9);
+        const BACK: u64 = SLAVE.to_u64();
+        assert_eq!(SLAVE.0, [0x00, 0x13, 0xA2, 0x00, 0x40, 0xB5, 0x99, 0xB9]);
+        assert_eq!(BACK, 0x0013_A200_40B5_99B9);
+        for value in [0, 1, 0xFF, 0x0100, u64::MAX, 0x0102_0304_0506_0708] {
+            let address = Address::from_u64(value);
+            assert_eq!(address, Address::from(value));
+            assert_eq!(address.to_u64(), value);
+            assert_eq!(u64::from(address), value);
+            assert_eq!(address.0, value.to_be_bytes());
+        }
     }
 }

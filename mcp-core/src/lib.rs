@@ -8,7 +8,7 @@
 //!
 //! - Identifiers ([`Category`], [`CommandType`], [`TelemetryId`], [`Controller`],
 //!   [`LandingState`]): one-byte enums with an `Unknown(u8)` arm, names, `Display`
-//!   and `FromStr`.
+//!   and `FromStr`. [`TelemetrySet`] holds a set of telemetry ids in 32 bytes.
 //! - [`parse`] turns bytes into a [`Packet`]: a [`Command`], [`Telemetry`], a
 //!   [`Report`], or message/warning [`Text`]. Variable-length parts are views over the
 //!   input (no copy): [`Telemetry`] iterates [`TelemetryRecord`]s, [`Waypoints`]
@@ -126,6 +126,7 @@ pub use address::{Address, ParseAddressError, Slot};
 pub use command::{Command, StatusRequest};
 pub use error::{BufferTooSmall, Error, ErrorKind, Expected, Full};
 pub use id::{Category, CommandType, Controller, LandingState, ParseIdError, TelemetryId};
+pub use mav::{TelemetrySet, TelemetrySetIter};
 pub use packet::{Packet, parse};
 pub use report::{Report, SlaveAddresses};
 pub use telemetry::{Telemetry, TelemetryBuilder, TelemetryIter, TelemetryRecord};

@@ -58,9 +58,11 @@ impl<B> Packet<B> {
 /// Any non-zero on/off byte decodes as on.
 ///
 /// It is always inlined, for the speed of a decode loop: each place that calls it
-/// holds its own copy (about 1.1 KB on a Cortex-M3). A firmware that parses in several
-/// places can call it from one function of its own, marked `#[inline(never)]`, to keep
-/// a single copy.
+/// holds its own copy. On a Cortex-M3 (`opt-level = "s"`, LTO) a copy takes about
+/// 1.3 KB of flash where only `is_ok()` of the result is used, and 2.3 to 2.9 KB where
+/// the packet is, as in a firmware that acts on commands: the optimiser drops the
+/// decoding of fields nothing reads. A firmware that parses in several places can call
+/// it from one function of its own, marked `#[inline(never)]`, to keep a single copy.
 ///
 /// ```
 /// use mcp_core::{parse, Packet, Command, Controller};
@@ -148,7 +150,9 @@ impl<B: AsRef<[u8]>> Packet<B> {
         }
     }
 
-    /// Writes the packet into `buf`, returning its length (`encoded_len()`).
+    /// Writes the packet into `buf`, returning its length (`encoded_len()`). In
+    /// firmware, take the packet as `buf.get(..len)`: `&buf[..len]` keeps a bounds check
+    /// that the compiler cannot always drop, and so a panic path.
     pub fn encode(&self, buf: &mut [u8]) -> Result<usize, BufferTooSmall> {
         match self {
             Packet::Command(c) => c.encode(buf),

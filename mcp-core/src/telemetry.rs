@@ -209,7 +209,7 @@ impl FusedIterator for TelemetryIter<'_> {}
 /// b.push(TelemetryId::PitchAngle, -0.25).unwrap();
 /// let len = b.finish();
 /// assert_eq!(len, 11);
-/// let Ok(Packet::Telemetry(t)) = parse(&buf[..len]) else { panic!() };
+/// let Ok(Packet::Telemetry(t)) = parse(buf.get(..len).unwrap_or_default()) else { panic!() };
 /// assert_eq!(t.value(TelemetryId::PitchAngle), Some(-0.25));
 /// ```
 #[derive(Debug)]
@@ -255,7 +255,10 @@ impl<'a> TelemetryBuilder<'a> {
         self.buf.get(..self.len).unwrap_or_default()
     }
 
-    /// Ends the packet, returning its length: `buf[..len]` is the packet.
+    /// Ends the packet, returning its length: the packet is `buf.get(..len)`, the
+    /// bytes [`as_bytes`](Self::as_bytes) gives before `finish`. In firmware, take it
+    /// that way rather than as `&buf[..len]`, whose bounds check the compiler cannot
+    /// always drop, and so a panic path.
     pub fn finish(self) -> usize {
         self.len
     }

@@ -374,7 +374,10 @@ impl<'a> TrajectoryBuilder<'a> {
         self.buf.get(..self.len).unwrap_or_default()
     }
 
-    /// Ends the packet, returning its length: `buf[..len]` is the packet.
+    /// Ends the packet, returning its length: the packet is `buf.get(..len)`, the
+    /// bytes [`as_bytes`](Self::as_bytes) gives before `finish`. In firmware, take it
+    /// that way rather than as `&buf[..len]`, whose bounds check the compiler cannot
+    /// always drop, and so a panic path.
     pub fn finish(self) -> usize {
         self.len
     }

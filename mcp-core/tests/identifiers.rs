@@ -153,3 +153,15 @@ fn from_str_accepts_numbers_and_rejects_junk() {
     assert!("".parse::<LandingState>().is_err());
     assert!("Manual".parse::<Controller>().is_err());
 }
+
+/// A set of telemetry ids is at the crate root, beside `TelemetryId`, and builds in a
+/// `const`.
+#[test]
+fn telemetry_set_at_the_crate_root() {
+    const ENABLED: mcp_core::TelemetrySet = mcp_core::TelemetrySet::new()
+        .with(TelemetryId::Altitude)
+        .with(TelemetryId::PitchAngle);
+    let ids: Vec<TelemetryId> = ENABLED.iter().collect();
+    assert_eq!(ids, [TelemetryId::Altitude, TelemetryId::PitchAngle]);
+    assert_eq!(ENABLED, mcp_core::mav::TelemetrySet::from_iter(ids));
+}

@@ -20,8 +20,10 @@ use core::marker::PhantomData;
 /// Default buffer capacity of [`Decoder`]: 512 bytes.
 ///
 /// XBee frame data tops out near 273 bytes (a 255-byte fragmented payload plus the
-/// Explicit Rx Indicator's 18-byte header), so 512 leaves room for every frame a radio
-/// sends, with margin, in both modes (mode 1 also buffers the 4 framing bytes).
+/// Explicit Rx Indicator's 18-byte header,
+/// [`ExplicitRxIndicatorRepr::MAX_LEN`](crate::ExplicitRxIndicatorRepr::MAX_LEN)), so
+/// 512 leaves room for every frame a radio sends, with margin, in both modes (mode 1
+/// also buffers the 4 framing bytes).
 pub const DEFAULT_CAPACITY: usize = 512;
 
 /// The buffer size `N` a [`Decoder<N>`](Decoder) needs to take frame data of up to
@@ -133,8 +135,9 @@ enum State {
 /// that bound and nothing is lost, but a mode 1 link open to untrusted bytes should not
 /// accept longer frames than it carries: build the decoder with
 /// [`with_max_len`](Self::with_max_len) set to the largest frame data its radios send
-/// (a payload of at most 255 bytes arrives in frame data of at most 273 bytes, so 273
-/// rather than the 508 of `Decoder<512>`), which turns longer length fields into
+/// (a payload of at most 255 bytes arrives in frame data of at most 273 bytes,
+/// [`ExplicitRxIndicatorRepr::MAX_LEN`](crate::ExplicitRxIndicatorRepr::MAX_LEN), so
+/// 273 rather than the 508 of `Decoder<512>`), which turns longer length fields into
 /// [`DecodeError::Oversize`] as soon as they are read and bounds the rescan by that
 /// length instead.
 ///
@@ -600,8 +603,8 @@ impl<const N: usize, M: DecoderMode> Decoder<N, M> {
     /// It costs flash for that: it is put in line in its caller, with the frame loop of
     /// each mode the decoder may read, so fix the mode in the type
     /// ([`fixed`](Decoder::fixed)) to link one. On a Cortex-M3 (`opt-level = "s"`,
-    /// LTO) the firmware example's receive path, in a fixed mode 1, takes 4 588 bytes
-    /// of flash with `decode_each` against 3 576 with `push` (`examples/firmware`,
+    /// LTO) the firmware example's receive path, in a fixed mode 1, takes 4 656 bytes
+    /// of flash with `decode_each` against 3 568 with `push` (`examples/firmware`,
     /// `size.sh`, without the firmware's tick that gives up a stale frame); with the
     /// mode a value, 11 148 against 4 084. In a fixed mode 2 the difference is larger:
     /// about 3 300 bytes in a firmware like the README's. Each call site is a copy.

@@ -4,8 +4,10 @@ use crate::wire::{ESCAPE, ESCAPE_XOR, START_DELIMITER, checksum_of_sum, needs_es
 use crate::{ApiMode, EncodeError};
 
 /// Largest frame data length the 16-bit length field can carry, and so the largest the
-/// encoder accepts. Radios take far less (frame data tops out near 273 bytes), but the
-/// encoder only enforces what the wire format can express.
+/// encoder accepts. Radios take far less (frame data tops out near 273 bytes,
+/// [`ExplicitRxIndicatorRepr::MAX_LEN`](crate::ExplicitRxIndicatorRepr::MAX_LEN)), but
+/// the encoder only enforces what the wire format can express: size buffers for
+/// received frames by that, not by this.
 pub const MAX_FRAME_DATA_LEN: usize = 0xFFFF;
 
 /// The most bytes a frame with `frame_data_len` bytes of frame data takes on the wire
@@ -74,6 +76,8 @@ pub trait EncodeFrame {
 
     /// Encodes the whole frame (delimiter, length, frame data, checksum) into the start
     /// of `buf`, escaped in [`ApiMode::Escaped`]; returns the number of bytes written.
+    /// In firmware, take the frame as `buf.get(..n)`: `&buf[..n]` keeps a bounds check
+    /// that the compiler cannot always drop, and so a panic path.
     ///
     /// Fails with [`EncodeError::BufferTooSmall`] when `buf` is shorter than
     /// [`encoded_len`](Self::encoded_len) (nothing useful is written then), with

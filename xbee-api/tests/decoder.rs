@@ -5,8 +5,8 @@ mod common;
 
 use common::{Owned, decode_bytes, decode_slices, frames, hex};
 use xbee_api::{
-    Address16, Address64, ApiMode, DecodeError, Decoder, EncodeFrame, Frame, RawFrame,
-    TransmitRequestRepr,
+    Address16, Address64, ApiMode, DecodeError, Decoder, EncodeFrame, ExplicitRxIndicatorRepr,
+    Frame, RawFrame, ReceivePacketRepr, TransmitRequestRepr, decoder_buffer_len,
 };
 
 const MODEM: &str = "7E 00 02 8A 06 6F";
@@ -76,6 +76,75 @@ fn frame_as_long_as_capacity_fits() {
         let (events, stats) = both::<32>(mode, &stream);
         assert_eq!(events, [Owned::Frame(data)]);
         assert_eq!(stats.errors(), 0);
+    }
+}
+
+/// The largest received frame data: the header and a 255-byte payload put back together
+/// from fragments, 267 bytes in a Receive Packet and 273 in an Explicit Rx Indicator
+/// (`AO=1`). A decoder sized by it takes that frame and drops one a byte longer.
+#[test]
+fn largest_received_frames_fit_a_decoder_sized_by_them() {
+    assert_eq!(ReceivePacketRepr::MAX_LEN, 12 + 255);
+    assert_eq!(ExplicitRxIndicatorRepr::HEADER_LEN, 18);
+    assert_eq!(ExplicitRxIndicatorRepr::MAX_LEN, 18 + 255);
+    assert_eq!(
+        ReceivePacketRepr::MAX_LEN,
+        ReceivePacketRepr::HEADER_LEN + TransmitRequestRepr::MAX_UNICAST_DATA_FRAGMENTED
+    );
+    let payload: Vec<u8> = (0..=254u8).collect();
+    let rx = ReceivePacketRepr {
+        src64: Address64(0x0013_A200_40B5_99B9),
+        src16: Address16(0x1234),
+        options: 0x01,
+        data: &payload,
+    };
+    let explicit = ExplicitRxIndicatorRepr {
+        src64: rx.src64,
+        src16: rx.src16,
+        src_endpoint: 0xE8,
+        dst_endpoint: 0xE8,
+        cluster_id: 0x0011,
+        profile_id: 0xC105,
+        options: 0x01,
+        data: &payload,
+    };
+    assert_eq!(rx.frame_data_len(), ReceivePacketRepr::MAX_LEN);
+    assert_eq!(explicit.frame_data_len(), ExplicitRxIndicatorRepr::MAX_LEN);
+    const RX1: usize = decoder_buffer_len(ReceivePacketRepr::MAX_LEN, ApiMode::Unescaped);
+    const RX2: usize = decoder_buffer_len(ReceivePacketRepr::MAX_LEN, ApiMode::Escaped);
+    const AO1: usize = decoder_buffer_len(ExplicitRxIndicatorRepr::MAX_LEN, ApiMode::Unescaped);
+    const AO2: usize = decoder_buffer_len(ExplicitRxIndicatorRepr::MAX_LEN, ApiMode::Escaped);
+    for (mode, stream) in [
+        (ApiMode::Unescaped, encode(&rx, ApiMode::Unescaped)),
+        (ApiMode::Escaped, encode(&rx, ApiMode::Escaped)),
+    ] {
+        let (events, stats) = match mode {
+            ApiMode::Unescaped => both::<RX1>(mode, &stream),
+            ApiMode::Escaped => both::<RX2>(mode, &stream),
+        };
+        assert_eq!(stats.errors(), 0, "{mode:?}");
+        let [Owned::Frame(data)] = &events[..] else {
+            panic!("{mode:?}: {events:?}")
+        };
+        assert_eq!(ReceivePacketRepr::parse_bytes(data).unwrap(), rx);
+    }
+    // The Explicit Rx Indicator is too long for a decoder sized by the Receive Packet.
+    let (events, stats) = both::<RX2>(ApiMode::Escaped, &encode(&explicit, ApiMode::Escaped));
+    assert_eq!(stats.oversize, 1, "{events:?}");
+    for mode in [ApiMode::Unescaped, ApiMode::Escaped] {
+        let stream = encode(&explicit, mode);
+        let (events, stats) = match mode {
+            ApiMode::Unescaped => both::<AO1>(mode, &stream),
+            ApiMode::Escaped => both::<AO2>(mode, &stream),
+        };
+        assert_eq!(stats.errors(), 0, "{mode:?}");
+        let [Owned::Frame(data)] = &events[..] else {
+            panic!("{mode:?}: {events:?}")
+        };
+        assert_eq!(
+            ExplicitRxIndicatorRepr::parse_bytes(data).unwrap(),
+            explicit
+        );
     }
 }
 

@@ -5,6 +5,11 @@
 //! [`Inbox`] keeps the MCP payload (RF data) of every Receive Packet (0x90) in a small
 //! queue. The main loop takes the payloads with [`take`] and parses
 //! them in place.
+//!
+//! The shared state is borrowed with `try_borrow_mut`/`try_borrow`, never
+//! `borrow_mut`: no borrow outlives its critical section, so they never fail, but only
+//! the `try_` forms leave no panic path in the built firmware (`RefCell::borrow_mut`
+//! keeps one, `core::cell::panic_already_borrowed`).
 
 use core::cell::RefCell;
 
@@ -197,8 +202,12 @@ static INBOX: Mutex<RefCell<Inbox>> = Mutex::new(RefCell::new(Inbox::new()));
 /// the board, the main loop empties a slot long before the FIFO overruns).
 pub fn on_uart0_interrupt() {
     critical_section::with(|cs| {
-        let mut decoder = DECODER.borrow_ref_mut(cs);
-        let mut inbox = INBOX.borrow_ref_mut(cs);
+        let Ok(mut decoder) = DECODER.borrow(cs).try_borrow_mut() else {
+            return;
+        };
+        let Ok(mut inbox) = INBOX.borrow(cs).try_borrow_mut() else {
+            return;
+        };
         // Bytes came (the receive interrupts), or a slot was freed for those held back
         // (`take` raises it, and it runs before the main loop's next tick): the line is
         // not quiet. Once an interrupt, not once a byte.
@@ -223,7 +232,7 @@ pub fn on_uart0_interrupt() {
 /// may come to raise it.
 pub fn take() -> Option<Payload> {
     critical_section::with(|cs| {
-        let payload = INBOX.borrow_ref_mut(cs).pop();
+        let payload = INBOX.borrow(cs).try_borrow_mut().ok()?.pop();
         if payload.is_some() {
             hw::uart0_rx_interrupts(true);
             hw::uart0_pend();
@@ -238,24 +247,32 @@ pub fn take() -> Option<Payload> {
 /// its ticks would otherwise see a byte from the future as one long ago).
 pub fn on_tick() {
     critical_section::with(|cs| {
-        let mut decoder = DECODER.borrow_ref_mut(cs);
-        INBOX
-            .borrow_ref_mut(cs)
-            .give_up_stale(&mut decoder, crate::clock::ticks());
+        let Ok(mut decoder) = DECODER.borrow(cs).try_borrow_mut() else {
+            return;
+        };
+        let Ok(mut inbox) = INBOX.borrow(cs).try_borrow_mut() else {
+            return;
+        };
+        inbox.give_up_stale(&mut decoder, crate::clock::ticks());
     });
 }
 
 /// `true` if a payload is waiting (for the idle check, inside a critical section).
 pub fn is_pending(cs: CriticalSection<'_>) -> bool {
-    INBOX.borrow_ref(cs).is_pending()
+    INBOX
+        .borrow(cs)
+        .try_borrow()
+        .is_ok_and(|inbox| inbox.is_pending())
 }
 
 /// The receive counters and the decoder's.
 pub fn stats() -> (RxStats, xbee_api::Stats) {
     critical_section::with(|cs| {
-        (
-            INBOX.borrow_ref(cs).stats(),
-            *DECODER.borrow_ref(cs).stats(),
-        )
+        let inbox = INBOX.borrow(cs).try_borrow().map(|inbox| inbox.stats());
+        let decoder = DECODER
+            .borrow(cs)
+            .try_borrow()
+            .map(|decoder| *decoder.stats());
+        (inbox.unwrap_or_default(), decoder.unwrap_or_default())
     })
 }

@@ -2,7 +2,8 @@ use super::id_enum;
 
 id_enum! {
     /// Telemetry identifier (table 29). The protocol allows 256 ids; 0x21-0xFF are
-    /// valid on the wire and decode as `Unknown`.
+    /// valid on the wire and decode as `Unknown`. A set of them (the ids enabled for
+    /// telemetry, say) is a [`TelemetrySet`](crate::TelemetrySet).
     ///
     /// ```
     /// use mcp_core::TelemetryId;

@@ -4,10 +4,12 @@ use core::iter::FusedIterator;
 
 use crate::id::TelemetryId;
 
-/// A set of telemetry ids, all 256 of them possible (a 32-byte bitmap).
+/// A set of telemetry ids, all 256 of them possible (a 32-byte bitmap). [`Mav`](super::Mav)
+/// keeps the enabled ids in one; a firmware without `Mav` can too (it is also at the
+/// crate root, `mcp_core::TelemetrySet`).
 ///
 /// ```
-/// use mcp_core::{mav::TelemetrySet, TelemetryId};
+/// use mcp_core::{TelemetryId, TelemetrySet};
 /// let mut set = TelemetrySet::new();
 /// set.insert(TelemetryId::PitchAngle);
 /// set.insert(TelemetryId::from(0xF0));

@@ -144,6 +144,25 @@ pub struct ExplicitRxIndicatorRepr<'a> {
 impl<'a> ExplicitRxIndicatorRepr<'a> {
     /// The frame type, 0x91.
     pub const FRAME_TYPE: u8 = frame_type::EXPLICIT_RX_INDICATOR;
+    /// Frame data before the RF data: type, addresses, endpoints, cluster and profile
+    /// ids, options.
+    pub const HEADER_LEN: usize = field::HEADER_LEN;
+    /// The most frame data a radio hands over in an Explicit Rx Indicator (what it
+    /// sends for received RF data with `AO=1`): the header and the largest RF data, 255
+    /// bytes
+    /// ([`MAX_UNICAST_DATA_FRAGMENTED`](crate::TransmitRequestRepr::MAX_UNICAST_DATA_FRAGMENTED),
+    /// sent in fragments and put back together by the receiving radio), 273 bytes in
+    /// all: the longest frame data that received RF data comes in. Size a decoder by it
+    /// to take every payload a sender may send, whatever the radio's `AO` setting.
+    ///
+    /// ```
+    /// use xbee_api::{ApiMode, Decoder, ExplicitRxIndicatorRepr, Mode1, decoder_buffer_len};
+    /// const N: usize = decoder_buffer_len(ExplicitRxIndicatorRepr::MAX_LEN, ApiMode::Unescaped);
+    /// assert_eq!(N, 277);
+    /// assert_eq!(Decoder::<N, Mode1>::fixed().capacity(), 273);
+    /// ```
+    pub const MAX_LEN: usize =
+        field::HEADER_LEN + crate::TransmitRequestRepr::MAX_UNICAST_DATA_FRAGMENTED;
 
     /// Reads the fields of `frame`, checking it first.
     pub fn parse(frame: &ExplicitRxIndicator<&'a [u8]>) -> Result<Self, FrameError> {

@@ -119,6 +119,25 @@ impl<'a> ReceivePacketRepr<'a> {
     pub const FRAME_TYPE: u8 = frame_type::RECEIVE_PACKET;
     /// Frame data before the RF data: type, addresses, options.
     pub const HEADER_LEN: usize = field::HEADER_LEN;
+    /// The most frame data a radio hands over in a Receive Packet: the header and the
+    /// largest RF data, 255 bytes
+    /// ([`MAX_UNICAST_DATA_FRAGMENTED`](crate::TransmitRequestRepr::MAX_UNICAST_DATA_FRAGMENTED),
+    /// sent in fragments and put back together by the receiving radio), 267 bytes in
+    /// all. Size a decoder by it to take every payload a sender may send; a decoder
+    /// sized for unfragmented payloads
+    /// (`HEADER_LEN + TransmitRequestRepr::MAX_UNICAST_DATA`, 96 bytes) drops longer
+    /// frames as [`DecodeError::Oversize`](crate::DecodeError::Oversize). With `AO=1`
+    /// the radio hands over Explicit Rx Indicators instead, 6 bytes longer
+    /// ([`ExplicitRxIndicatorRepr::MAX_LEN`](crate::ExplicitRxIndicatorRepr::MAX_LEN)).
+    ///
+    /// ```
+    /// use xbee_api::{ApiMode, Decoder, Mode2, ReceivePacketRepr, decoder_buffer_len};
+    /// type FirmwareDecoder =
+    ///     Decoder<{ decoder_buffer_len(ReceivePacketRepr::MAX_LEN, ApiMode::Escaped) }, Mode2>;
+    /// assert_eq!(FirmwareDecoder::fixed().capacity(), 267);
+    /// ```
+    pub const MAX_LEN: usize =
+        field::HEADER_LEN + crate::TransmitRequestRepr::MAX_UNICAST_DATA_FRAGMENTED;
 
     /// Reads the fields of `frame`, checking it first.
     pub fn parse(frame: &ReceivePacket<&'a [u8]>) -> Result<Self, FrameError> {

@@ -48,17 +48,24 @@ fn UART0() {
                 None => break,
             }
         }
-        let mut counts = COUNTS.borrow_ref_mut(cs);
-        DECODER
-            .borrow_ref_mut(cs)
-            .decode_each(&chunk[..len], |event| {
-                if let Ok(frame) = event {
-                    if let Ok(packet) = ReceivePacket::new_checked(frame.data()) {
-                        let valid = mcp_core::parse(packet.data()).is_ok();
-                        counts[usize::from(valid)] += 1;
-                    }
+        // `try_borrow_mut` and `get`: `borrow_mut` and `&chunk[..len]` would keep a panic
+        // path.
+        let Ok(mut counts) = COUNTS.borrow(cs).try_borrow_mut() else {
+            return;
+        };
+        let (Ok(mut decoder), Some(input)) =
+            (DECODER.borrow(cs).try_borrow_mut(), chunk.get(..len))
+        else {
+            return;
+        };
+        decoder.decode_each(input, |event| {
+            if let Ok(frame) = event {
+                if let Ok(packet) = ReceivePacket::new_checked(frame.data()) {
+                    let valid = mcp_core::parse(packet.data()).is_ok();
+                    counts[usize::from(valid)] += 1;
                 }
-            });
+            }
+        });
         black_box(&*counts);
     });
 }
