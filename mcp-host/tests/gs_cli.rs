@@ -1007,6 +1007,27 @@ fn a_cut_off_recording_is_summed_up_to_the_cut_then_an_error() {
     assert_eq!(reader.join().unwrap(), modem_status.repeat(2));
 }
 
+#[cfg(unix)]
+#[test]
+fn a_recording_piped_in_is_replayed_whole() {
+    // Read once, as a pipe (or a FIFO) can be: from its first record on.
+    let bytes = common::modem_status_recording(3);
+    let (link, reader) = common::recording_peer();
+    let mut child = gs()
+        .args(["replay", "/dev/stdin", "--link", &link, "--speed", "0"])
+        .stdin(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::io::Write::write_all(&mut child.stdin.take().unwrap(), &bytes).unwrap();
+    let output = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(0), "{stderr}");
+    assert!(stderr.contains("replayed 3 frames"), "{stderr}");
+    let modem_status = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F];
+    assert_eq!(reader.join().unwrap(), modem_status.repeat(3));
+}
+
 #[test]
 fn monitor_keeps_an_existing_recording() {
     let dir = tempfile::tempdir().unwrap();

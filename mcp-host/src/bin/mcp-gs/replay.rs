@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use clap::{Args, ValueEnum};
-use mcp_host::record::{Direction, RecordReader};
+use mcp_host::record::{Direction, Record, RecordReader};
 use mcp_host::{CommandSender, SendError};
 
 use crate::Failure;
@@ -61,16 +61,17 @@ fn parse_speed(s: &str) -> Result<f64, String> {
 pub(crate) async fn run(args: ReplayArgs) -> Result<(), Failure> {
     let file = File::open(&args.file)
         .map_err(|e| Failure::input(format!("cannot open {}: {e}", args.file.display())))?;
-    let reader = RecordReader::new(BufReader::new(file))
+    let mut reader = RecordReader::new(BufReader::new(file))
         .map_err(|e| Failure::input(format!("{}: {e}", args.file.display())))?;
-    check_wanted(&args)?;
+    let first = first_wanted(&args, &mut reader)?;
     let (stream, sender) = args.link.open(false).await?;
     if let Some(path) = &stream.info().pty_path {
         err!("mcp-gs: pseudo-terminal: {}", path.display());
     }
     let start = tokio::time::Instant::now();
     let mut played = 0u64;
-    let result = play(&args, reader, &sender, start, &mut played).await;
+    let records = std::iter::once(Ok(first)).chain(reader);
+    let result = play(&args, records, &sender, start, &mut played).await;
     // What was written goes out before the process ends, also after an error. (The
     // stream is dropped first: its queue, full of what nobody read, would hold up the
     // last event of the link.)
@@ -94,14 +95,15 @@ fn wanted(which: Which, direction: Direction) -> bool {
     )
 }
 
-/// Reads the recording through before the link is opened: one that holds no frame
-/// `--frames` plays is an input error (a recording made by `monitor` holds received
-/// frames only), and so is one damaged before the first such frame.
-fn check_wanted(args: &ReplayArgs) -> Result<(), Failure> {
-    let file = File::open(&args.file)
-        .map_err(|e| Failure::input(format!("cannot open {}: {e}", args.file.display())))?;
-    let reader = RecordReader::new(BufReader::new(file))
-        .map_err(|e| Failure::input(format!("{}: {e}", args.file.display())))?;
+/// Reads the recording up to its first frame `--frames` plays, before the link is
+/// opened, and returns it (the records before it are not played): one that holds no
+/// such frame is an input error (a recording made by `monitor` holds received frames
+/// only), and so is one damaged before it. The recording is read once, so that a pipe
+/// or a FIFO plays as a file does.
+fn first_wanted(
+    args: &ReplayArgs,
+    reader: &mut RecordReader<BufReader<File>>,
+) -> Result<Record, Failure> {
     let (mut received, mut sent) = (0u64, 0u64);
     for record in reader {
         let record = record.map_err(|e| {
@@ -115,7 +117,7 @@ fn check_wanted(args: &ReplayArgs) -> Result<(), Failure> {
             Direction::Sent => sent += 1,
         }
         if wanted(args.frames, record.direction) {
-            return Ok(());
+            return Ok(record);
         }
     }
     let file = args.file.display();
@@ -140,16 +142,16 @@ fn lost(error: SendError, played: u64) -> Failure {
     Failure::new(failure.code(), message)
 }
 
-/// Writes the wanted records of `reader` at their pace; counts them in `played`.
+/// Writes the wanted records of `records` at their pace; counts them in `played`.
 async fn play(
     args: &ReplayArgs,
-    reader: RecordReader<BufReader<File>>,
+    records: impl Iterator<Item = std::io::Result<Record>>,
     sender: &CommandSender,
     start: tokio::time::Instant,
     played: &mut u64,
 ) -> Result<(), Failure> {
     let mut first = None;
-    for record in reader {
+    for record in records {
         let record = record.map_err(|e| {
             Failure::input(format!(
                 "{}: {e} (replayed {played} frames before it)",
