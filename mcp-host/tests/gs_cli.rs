@@ -1029,6 +1029,45 @@ fn a_recording_piped_in_is_replayed_whole() {
 }
 
 #[test]
+fn monitor_says_what_it_lost_for_falling_behind() {
+    // A radio (a bridge that buffered during a stall) sends a burst while monitor's
+    // output is not read: the link drops what monitor cannot take, and monitor says so.
+    let radio = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let link = format!("tcp:{}", radio.local_addr().unwrap());
+    let dir = tempfile::tempdir().unwrap();
+    let record = dir.path().join("burst.mcprec");
+    let monitor = gs()
+        .args(["monitor", "--link", &link, "--record"])
+        .arg(&record)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut child = common::Running(monitor);
+    let errors = common::stderr_lines(&mut child.0);
+    let (mut socket, _) = radio.accept().unwrap();
+    let modem_status = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F];
+    socket.write_all(&modem_status.repeat(50_000)).unwrap();
+    // Its output read from now on: it goes on, and says what it lost.
+    let stdout = child.0.stdout.take().unwrap();
+    std::thread::spawn(move || std::io::copy(&mut { stdout }, &mut std::io::sink()));
+    let said = loop {
+        let line = errors
+            .recv_timeout(std::time::Duration::from_secs(30))
+            .expect("monitor says what it lost");
+        if line.contains(" lost: ") {
+            break line;
+        }
+    };
+    assert!(
+        said.starts_with("mcp-gs: warning: ")
+            && said.contains(" received frames lost: monitor fell behind the link")
+            && said.ends_with(", and are missing from the recording"),
+        "{said}"
+    );
+}
+
+#[test]
 fn monitor_keeps_an_existing_recording() {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("flight.mcprec");

@@ -92,14 +92,16 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
     // Connections a TCP peer ended before anything came: it may be turning us away.
     let mut ended_silent = 0u32;
     let mut dates = render::text::DateLines::new();
+    let mut lost = Lost::default();
     // Bytes that are no frames at all come as no event: the counters are looked at now
-    // and then for them.
+    // and then for them (and for events lost).
     let mut look = tokio::time::interval(std::time::Duration::from_secs(1));
     let ended = loop {
         let event = tokio::select! {
             event = stream.next() => event,
             _ = &mut ctrl_c => None,
             _ = look.tick() => {
+                lost.tell(&stream.stats(), recorder.is_some(), false);
                 let found = diagnoser.as_mut().and_then(|d| d.look(stream.stats()));
                 match (&mut quiet, found) {
                     // Still wrong: said with the counts as they are now.
@@ -229,7 +231,44 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
     if let Some(shown) = &mut quiet {
         shown.tell_if_due(true);
     }
+    lost.tell(&stream.stats(), recorder.is_some(), true);
     ended
+}
+
+/// Events the link dropped because monitor fell behind it (its output slower than the
+/// frames came, in a burst from a TCP peer or a bridge): said as they happen, at most
+/// once a look, and in all at the end, not lost in silence.
+#[derive(Debug, Default)]
+struct Lost {
+    /// The count last said.
+    told: u64,
+}
+
+impl Lost {
+    /// Says the events lost since it last said any (`end`: in all, if any were).
+    fn tell(&mut self, stats: &mcp_host::Stats, recording: bool, end: bool) {
+        let lost = stats.events_dropped;
+        let also = if recording {
+            ", and are missing from the recording"
+        } else {
+            ""
+        };
+        if lost > self.told {
+            err!(
+                "mcp-gs: warning: {} lost: monitor fell behind the link (writing its output \
+                 took too long) and they were not shown{also}",
+                crate::counted(lost - self.told, "received frame")
+            );
+            self.told = lost;
+        }
+        if end && lost > 0 && recording {
+            err!(
+                "mcp-gs: warning: {} in all are missing from the recording: monitor fell \
+                 behind the link",
+                crate::counted(lost, "received frame")
+            );
+        }
+    }
 }
 
 /// How often [`Quiet`] says how many frames it did not show.
