@@ -574,8 +574,9 @@ impl Driver {
                 written = wr.write(&out), if !out.is_empty() => match written {
                     Ok(0) => return Served::Failed("the transport accepts no more data".into()),
                     Ok(n) => {
-                        let (done, rest) = out.split_at(n);
-                        sent.written(done, rest, &self.subscribers.0);
+                        // An `AsyncWrite` writes no more than it was given.
+                        let n = n.min(out.len());
+                        sent.written(&out[..n], &self.subscribers.0);
                         out.advance(n);
                         self.written += n as u64;
                     }
@@ -652,7 +653,7 @@ impl Driver {
         while let Ok(op) = self.writes.try_recv() {
             self.start(op, out);
         }
-        sent.written(out, &[], &self.subscribers.0);
+        sent.written(out, &self.subscribers.0);
         let flush = async {
             wr.write_all_buf(out).await?;
             wr.flush().await

@@ -638,7 +638,9 @@ impl CommandSender {
     /// [`missed`](crate::Subscription::missed); it ends with the link).
     ///
     /// A frame being written when it is taken is not in it (its first bytes went out
-    /// before): it starts with the next frame the link begins to write.
+    /// before): it starts with the next frame the link begins to write. The frames the
+    /// link writes out as it closes are in it as they are handed to the transport (a
+    /// write that then fails, within the second it is given, did not deliver them).
     ///
     /// ```
     /// # #[tokio::main(flavor = "current_thread")]
