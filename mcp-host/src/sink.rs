@@ -43,9 +43,10 @@ use crate::{LinkState, SendError};
 /// `forward` stop at the first error), and [`SendError::Closed`] once the link has
 /// ended.
 ///
-/// Closing the sink closes it alone: the link and its other senders go on. A sink keeps
-/// the link open, as a [`CommandSender`](crate::CommandSender) does, until it is
-/// dropped.
+/// Closing the sink closes it alone: the link and its other senders go on. It flushes
+/// first, so it waits as `poll_flush` does, for as long as the link's queue is full (a
+/// radio that takes no bytes); dropping the sink waits for nothing. A sink keeps the link
+/// open, as a [`CommandSender`](crate::CommandSender) does, until it is dropped.
 ///
 /// Packets go out in order among themselves and with other writes without a frame id
 /// (`send_with` and [`FrameId::None`](crate::FrameId::None), `write_frame`). Requests
@@ -157,7 +158,10 @@ impl<B: AsRef<[u8]>> Sink<(Address64, mcp_core::Packet<B>)> for PacketSink<B> {
         };
         let result = match Pin::new(taken).poll(cx) {
             Poll::Pending => return Poll::Pending,
-            Poll::Ready(Ok(result)) => result,
+            // Taken, or lost with a transport that failed first, as a radio loses a
+            // frame it sent without a status: the sink goes on once the link is up.
+            Poll::Ready(Ok(Ok(()) | Err(SendError::Disconnected { .. }))) => Ok(()),
+            Poll::Ready(Ok(Err(error))) => Err(error),
             // Dropped unanswered: the link ended first.
             Poll::Ready(Err(_)) => Err(SendError::Closed),
         };

@@ -178,19 +178,22 @@ async fn a_sink_waits_while_the_link_is_down_and_goes_on_once_it_is_back() {
     assert_eq!(radio.next_tx().await, without_status(MAV, &second));
 }
 
-#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+#[tokio::test]
 async fn a_request_sent_after_a_flushed_packet_goes_out_after_it() {
     // `send` flushes: once it returns, the link's task has taken the packet, and a
     // request sent after it (through another queue, as it awaits a status) cannot
     // overtake it.
     let (_stream, sender, mut radio) = pty_link(ApiMode::Unescaped).await;
     let mut sink = sender.packet_sink();
-    for round in 0..20u8 {
+    for round in 0..64u8 {
         let packet = Packet::Command(Command::landing(round % 2 == 0));
         sink.send((MAV, packet)).await.unwrap();
-        let asking = sender.clone();
-        let request =
-            tokio::spawn(async move { asking.send(MAV, &Command::landing(round % 2 == 1)).await });
+        // The request queued at once, before the link's task runs again: were the
+        // packet still in its queue, the task would find both waiting, and could take
+        // either first.
+        let command = Command::landing(round % 2 == 1);
+        let mut request = Box::pin(sender.send(MAV, &command));
+        assert!(futures::poll!(&mut request).is_pending());
         let first = radio.next_tx().await;
         assert_eq!(first, without_status(MAV, &packet), "round {round}");
         let second = radio.next_tx().await;
@@ -198,6 +201,6 @@ async fn a_request_sent_after_a_flushed_packet_goes_out_after_it() {
         radio
             .status(second.frame_id, xbee_api::DeliveryStatus::Success)
             .await;
-        request.await.unwrap().unwrap();
+        request.await.unwrap();
     }
 }
