@@ -360,9 +360,11 @@ impl Hub {
 
     /// Every frame between the hub and the radio from now on, both ways: the radio's
     /// frames, and the clients' frames as the hub wrote them (under the frame ids it
-    /// gave them), with the hub's own requests; see [`CommandSender::tap_frames`]. A
-    /// recording of them (`mcp-gs hub --record`) is what the radio heard and said,
-    /// whichever client it was for. It ends when the hub does.
+    /// gave them), with the hub's own `AT AP` each time the radio comes back (not the
+    /// one [`start`](Self::start) asks before it returns); see
+    /// [`CommandSender::tap_frames`]. A recording of them (`mcp-gs hub --record`) is
+    /// what the radio heard and said, whichever client it was for. It ends when the hub
+    /// does.
     pub fn tap_frames(&self) -> crate::Subscription<crate::record::Record> {
         self.radio_subscribers.tap_frames()
     }

@@ -7,7 +7,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, PoisonError};
 use std::task::{Context, Poll};
 
-use futures::stream::{BoxStream, StreamExt};
+use futures::stream::{BoxStream, Fuse, FusedStream, StreamExt};
 use tokio::sync::broadcast;
 
 use crate::Event;
@@ -61,7 +61,8 @@ use crate::record::Record;
 pub struct Subscription<T = Event> {
     /// In a mutex only to be `Sync`, as the link's other handles are: polling takes
     /// `&mut self`, which reaches the stream without locking.
-    events: Mutex<BoxStream<'static, T>>,
+    /// Fused: read again after its end, it gives `None` again.
+    events: Mutex<Fuse<BoxStream<'static, T>>>,
     missed: Arc<AtomicU64>,
 }
 
@@ -184,7 +185,8 @@ impl<T: Clone + Send + 'static> Subscription<T> {
                 }
             }
         })
-        .boxed();
+        .boxed()
+        .fuse();
         Subscription {
             events: Mutex::new(events),
             missed,
@@ -204,6 +206,16 @@ impl<T> std::fmt::Debug for Subscription<T> {
         f.debug_struct("Subscription")
             .field("missed", &self.missed())
             .finish_non_exhaustive()
+    }
+}
+
+/// Read again after its end (in a `select!` loop, say), it ends again.
+impl<T> FusedStream for Subscription<T> {
+    fn is_terminated(&self) -> bool {
+        self.events
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .is_terminated()
     }
 }
 

@@ -60,7 +60,10 @@ async fn a_radio_that_does_not_answer_and_a_link_with_no_radio_say_so() {
     );
     assert!(error.to_string().contains("transparent mode"), "{error}");
     // The link was closed: the peer saw its end.
-    peer.await.unwrap();
+    tokio::time::timeout(Duration::from_secs(20), peer)
+        .await
+        .expect("the link closed")
+        .unwrap();
 
     for link in ["pty", "tcp-listen:127.0.0.1:0"] {
         let link: Link = link.parse().unwrap();

@@ -285,12 +285,18 @@ fn a_hub_with_wait_waits_for_its_radio_refusing_clients_meanwhile() {
     // Nothing listens on the radio's port yet (a bridge not started).
     let reserved = common::ReservedPort::new();
     let radio = format!("tcp:127.0.0.1:{}", reserved.port);
-    let (_hub, out, err) = start_hub_with(&radio, &["--wait"]);
+    // A recording of yesterday's flight, to be overwritten: kept until a radio is there.
+    let dir = tempfile::tempdir().unwrap();
+    let record = dir.path().join("flight.mcprec");
+    std::fs::write(&record, b"yesterday's flight").unwrap();
+    let path = record.to_str().unwrap();
+    let (_hub, out, err) = start_hub_with(&radio, &["--wait", "--record", path, "--force"]);
     let (announced, addr) = serving(&out);
     assert!(announced.starts_with("will serve"), "{announced}");
     line_with(&err, "link not there yet: waiting for it");
     let refused = std::net::TcpStream::connect(&addr).unwrap_err();
     assert_eq!(refused.kind(), std::io::ErrorKind::ConnectionRefused);
+    assert_eq!(std::fs::read(&record).unwrap(), b"yesterday's flight");
     // The radio comes: the hub listens.
     let listener = reserved.listen();
     let (_radio, _) = listener.accept().unwrap();

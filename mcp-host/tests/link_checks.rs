@@ -249,3 +249,48 @@ fn a_device_this_user_may_not_open_says_what_to_do_also_while_waiting() {
         format!("mcp-gs: cannot open {link}:115200: permission denied ({hint})\n")
     );
 }
+
+#[cfg(target_os = "linux")]
+#[test]
+fn a_hub_recording_whose_radio_ends_for_good_says_what_it_recorded() {
+    let dir = tempfile::tempdir().unwrap();
+    let (mut master, far, terminal) = pseudo_terminal();
+    let port = dir.path().join("ttyUSB0");
+    std::os::unix::fs::symlink(&terminal, &port).unwrap();
+    let link = format!("serial:{}", port.display());
+    let record = dir.path().join("flight.mcprec");
+    let args = [
+        "hub",
+        "--link",
+        &link,
+        "--listen",
+        "127.0.0.1:0",
+        "--record",
+        record.to_str().unwrap(),
+    ];
+    let (running, stdout, stderr) = start(&args);
+    // The hub asks its AT AP, unanswered here: it warns, and serves.
+    line(&stdout, |l| l.starts_with("serving "));
+    // A frame from the radio, recorded: a modem status.
+    std::io::Write::write_all(&mut master, &[0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F]).unwrap();
+    // The adapter pulled out, a regular file left where it was: the link ends for good.
+    // Until the frame is in the file, the hub is given time (its reads are not seen).
+    let wait = std::time::Instant::now();
+    while std::fs::metadata(&record).map_or(0, |m| m.len()) < 8 + 11 + 2 {
+        assert!(wait.elapsed() < GUARD, "the frame is not recorded");
+        std::thread::yield_now();
+    }
+    drop(far);
+    let stray = dir.path().join("stray");
+    std::fs::write(&stray, b"\n").unwrap();
+    repoint(&port, &stray);
+    drop(master);
+    let (code, said) = finish(running, &stderr, &args);
+    assert_eq!(code, Some(3), "{said}");
+    assert!(!said.contains("panicked"), "{said}");
+    let out: Vec<String> = stdout.try_iter().collect();
+    assert!(
+        out.contains(&format!("recorded 1 frame to {}", record.display())),
+        "{out:?}"
+    );
+}

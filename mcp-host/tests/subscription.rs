@@ -174,4 +174,7 @@ async fn a_tap_gets_every_frame_both_ways_as_it_is_on_the_link() {
         .await
         .expect("the end in time");
     assert!(end.is_none(), "{end:?}");
+    // Read again after its end (in a `select!` loop), it ends again.
+    assert!(futures::stream::FusedStream::is_terminated(&tap));
+    assert!(tap.next().await.is_none());
 }

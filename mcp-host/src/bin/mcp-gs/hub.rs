@@ -7,6 +7,7 @@ use std::time::Duration;
 use clap::Args;
 use futures::StreamExt;
 
+use futures::stream::FusedStream;
 use mcp_host::hub::{Hub, HubError};
 use mcp_host::record::Record;
 use mcp_host::{Diagnoser, Subscription};
@@ -70,7 +71,7 @@ fn listen_failure(addr: &str, error: &std::io::Error) -> Failure {
 /// Runs `hub` until Ctrl-C, or until the link to the radio ends.
 pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
     args.link.check_wait(args.wait)?;
-    // Refused before the radio's link is opened; made once the hub serves.
+    // Refused before the radio's link is opened; made once a frame is there to record.
     let record = args
         .record
         .as_deref()
@@ -89,17 +90,7 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
             other => Failure::link(other.to_string()),
         })?;
     let ctrl_c = crate::interrupt::ctrl_c();
-    let mut frames = hub.tap_frames();
-    let mut recorder = match record.map(|file| file.create()).transpose() {
-        Ok(recording) => Recorder {
-            recording,
-            failure: None,
-        },
-        Err(failure) => {
-            hub.stop().await;
-            return Err(failure);
-        }
-    };
+    let mut recorder = record.map(|file| Recorder::new(file, hub.tap_frames()));
     crate::link_args::announce_radio_side(hub.radio_link());
     let addr = hub.local_addr();
     let mode = u8::from(hub.api_mode());
@@ -134,10 +125,17 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
             _ = &mut ctrl_c => break,
             () = hub.finished() => {
                 hub.stop().await;
-                recorder.drain(&mut frames).await;
-                return Err(Failure::link(format!("the link to {radio} closed")));
+                let closed = Failure::link(format!("the link to {radio} closed"));
+                // The link's end is what the exit status says; the recording's failure
+                // was said when it came.
+                let _ = Recorder::end(recorder).await;
+                return Err(closed);
             }
-            Some(frame) = frames.next(), if recorder.recording.is_some() => recorder.take(&frame),
+            Some(frame) = next_frame(&mut recorder) => {
+                if let Some(recorder) = &mut recorder {
+                    recorder.take(&frame);
+                }
+            }
             _ = look.tick(), if fixed.is_some() => {
                 let now = hub.stats().radio;
                 if now.reconnects > last.reconnects {
@@ -164,7 +162,6 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
     }
     let stats = hub.stats();
     hub.stop().await;
-    recorder.drain(&mut frames).await;
     out!(
         "stopped: {} clients, {} frames from the radio, {} from clients, {} dropped for slow \
          clients, {} frames from clients refused",
@@ -183,27 +180,24 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
             radio.decode_errors()
         );
     }
-    if let Some(file) = &recorder.recording {
-        let missed = frames.missed();
-        let missed = if missed > 0 {
-            format!(
-                " ({} lost while writing the file fell behind)",
-                crate::counted(missed, "frame")
-            )
-        } else {
-            String::new()
-        };
-        out!(
-            "recorded {} to {}{missed}",
-            crate::counted(file.frames, "frame"),
-            file.path().display()
-        );
-    }
-    recorder.failure.map_or(Ok(()), Err)
+    Recorder::end(recorder).await
 }
 
-/// `--record`: the recording, while it goes on.
+/// The next frame for the recording, while it goes on; never, without one.
+async fn next_frame(recorder: &mut Option<Recorder>) -> Option<Record> {
+    match recorder {
+        Some(recorder) if recorder.going() => recorder.frames.next().await,
+        _ => std::future::pending().await,
+    }
+}
+
+/// `--record`: the frames between the hub and its radio, to a file made at the first of
+/// them (not before a radio is there: a hub started with `--wait` and `--force` keeps the
+/// file it would overwrite until then).
 struct Recorder {
+    frames: Subscription<Record>,
+    /// The file, until it is made.
+    file: Option<RecordingFile>,
     recording: Option<Recording>,
     /// Why the recording stopped, if it did: the hub goes on serving (a full disk does
     /// not cut the ground station off its MAV), and says it at the end.
@@ -211,33 +205,80 @@ struct Recorder {
 }
 
 impl Recorder {
-    /// Records `frame`, or stops recording if the file cannot take it.
+    fn new(file: RecordingFile, frames: Subscription<Record>) -> Self {
+        Recorder {
+            frames,
+            file: Some(file),
+            recording: None,
+            failure: None,
+        }
+    }
+
+    /// Whether frames are still to be recorded (the tap has not ended, nor the file
+    /// failed).
+    fn going(&self) -> bool {
+        self.failure.is_none() && !self.frames.is_terminated()
+    }
+
+    /// Records `frame` (making the file for the first), or stops recording if the file
+    /// cannot take it.
     fn take(&mut self, frame: &Record) {
+        if let Some(file) = self.file.take() {
+            match file.create() {
+                Ok(recording) => self.recording = Some(recording),
+                Err(failure) => return self.stop(failure),
+            }
+        }
         let Some(file) = &mut self.recording else {
             return;
         };
         if let Err(failure) = file.write(frame.time, frame.direction, &frame.frame) {
-            err!(
-                "mcp-gs: warning: {}: the recording stops here, the hub goes on serving",
-                failure.message
-            );
-            self.failure = Some(failure);
-            self.recording = None;
+            self.stop(failure);
         }
     }
 
-    /// Records the frames still held for it, once the hub has stopped (which ends
-    /// `frames`).
-    async fn drain(&mut self, frames: &mut Subscription<Record>) {
-        if self.recording.is_none() {
-            return;
-        }
+    fn stop(&mut self, failure: Failure) {
+        err!(
+            "mcp-gs: warning: {}: the recording stops here, the hub goes on serving",
+            failure.message
+        );
+        self.failure = Some(failure);
+    }
+
+    /// Once the hub has stopped (which ends the tap): records the frames still held
+    /// for it, says what was recorded, and fails if the recording did.
+    async fn end(recorder: Option<Self>) -> Result<(), Failure> {
+        let Some(mut recorder) = recorder else {
+            return Ok(());
+        };
         // Bounded all the same: the link ended with the hub.
         let drained = tokio::time::timeout(Duration::from_secs(5), async {
-            while let Some(frame) = frames.next().await {
-                self.take(&frame);
+            while recorder.going() {
+                match recorder.frames.next().await {
+                    Some(frame) => recorder.take(&frame),
+                    None => break,
+                }
             }
         });
         let _ = drained.await;
+        if let Some(file) = &recorder.recording {
+            let missed = recorder.frames.missed();
+            let missed = if missed > 0 {
+                format!(
+                    " ({} lost while writing the file fell behind)",
+                    crate::counted(missed, "frame")
+                )
+            } else {
+                String::new()
+            };
+            out!(
+                "recorded {} to {}{missed}",
+                crate::counted(file.frames, "frame"),
+                file.path().display()
+            );
+        } else if recorder.failure.is_none() {
+            out!("recorded nothing: no frame came (the file was not made)");
+        }
+        recorder.failure.map_or(Ok(()), Err)
     }
 }
