@@ -22,9 +22,7 @@ pub enum DetectError {
     /// transparent mode (`AP=0`, as XBee modules leave the factory, which
     /// [`command_mode`](crate::command_mode) changes) or at another baud rate. Or the
     /// request failed otherwise (the link went down).
-    #[error(
-        "the radio did not answer AT AP: {0} (a radio in transparent mode, AP=0, or at another baud rate does not)"
-    )]
+    #[error("the radio did not answer AT AP: {0}")]
     NoAnswer(SendError),
     /// The radio answered that it is in transparent mode (`AP=0`): it speaks no API
     /// frames until [`command_mode`](crate::command_mode) changes that (it answered in

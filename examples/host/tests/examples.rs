@@ -54,7 +54,7 @@ const MAV: &str = "0013A20040B599B9";
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn telemetry_prints_the_altitude_the_mav_sends() {
     let (_sim, link) = simulator().await;
-    let out = stdout(&run("telemetry", &[&link, MAV, "1"]).await);
+    let out = stdout(&run("telemetry", &[&link, MAV, "2"]).await);
     let altitudes = out.lines().filter(|l| l.starts_with("altitude = ")).count();
     // 20 a second.
     assert!(altitudes >= 5, "{out}");

@@ -30,7 +30,7 @@ pub(crate) struct HubArgs {
     #[arg(long)]
     wait: bool,
     /// Record every frame between the hub and the radio to FILE, both ways: what the
-    /// radio received and what every client sent through it (see `decode` and
+    /// radio said, and what every client said to it through the hub (see `decode` and
     /// `replay`). An existing FILE is kept unless `--force` is given.
     #[arg(long, value_name = "FILE")]
     record: Option<PathBuf>,
