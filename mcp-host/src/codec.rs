@@ -6,6 +6,7 @@
 //! resumes at the next start delimiter.
 
 use std::sync::Arc;
+use std::time::Duration;
 
 use tokio::time::Instant;
 
@@ -19,6 +20,22 @@ use crate::stats::Counters;
 /// Largest frame data length the codec can accept (mode 2; 4 less in mode 1): the
 /// capacity of the underlying decoder, well above the ~273 bytes a radio sends.
 pub const MAX_FRAME_DATA: usize = xbee_api::DEFAULT_CAPACITY;
+
+/// Largest frame data (frame type byte included) of a request a ground station or a
+/// device writes to its radio, 275 bytes: an Explicit Addressing Command (0x11), 20
+/// bytes of fixed fields, with the longest payload a radio carries (255 bytes,
+/// fragmented: [`mcp_core::MAX_PAYLOAD`]). The other requests are shorter: a Transmit
+/// Request (0x10) with that payload takes 269 bytes, an AT Command (0x08, 0x09) 4 bytes
+/// and its parameter, a Remote AT Command (0x17) 15 (a radio's parameters run to a
+/// 20-character node identifier or a 32-byte key), and so is every frame a radio sends
+/// (at most 273 bytes: an Explicit Rx Indicator with that payload). The devices of a
+/// virtual [`Network`](crate::radio::Network) are read with this limit, and a
+/// [`Hub`](crate::hub::Hub) open to untrusted clients should be given it as its
+/// [`LinkOptions::max_frame_len`](crate::LinkOptions::max_frame_len): in API mode 1 a
+/// longer length field is then dropped as oversize at once, rather than costing a
+/// rescan of as many bytes (see the `Worst case` of [`xbee_api::Decoder`]).
+pub const MAX_REQUEST_DATA: usize =
+    xbee_api::frame::explicit_addressing_command::field::HEADER_LEN + mcp_core::MAX_PAYLOAD;
 
 /// What the codec yields.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -123,6 +140,27 @@ impl XBeeCodec {
             next = convert(self.decoder.poll());
         }
         items
+    }
+
+    /// When a reader that gives up a partial frame after `timeout` without a new byte
+    /// (API mode 1 only, as [`drop_partial`](Self::drop_partial) explains) is to look at
+    /// it next: when it goes stale or, with none pending, `timeout` from now (the bytes
+    /// of a partial frame come in without an item to wake the reader). `None` in mode 2
+    /// or without a timeout.
+    pub(crate) fn stale_check_at(&self, timeout: Option<Duration>) -> Option<Instant> {
+        let timeout = timeout.filter(|_| self.mode == ApiMode::Unescaped)?;
+        let since = self.partial_since().unwrap_or_else(Instant::now);
+        Some(crate::options::later(since, timeout))
+    }
+
+    /// Whether a partial frame is pending that has had no new byte for `timeout` at
+    /// `now` (API mode 1 only).
+    pub(crate) fn is_stale(&self, timeout: Option<Duration>, now: Instant) -> bool {
+        let Some(timeout) = timeout.filter(|_| self.mode == ApiMode::Unescaped) else {
+            return false;
+        };
+        self.partial_since()
+            .is_some_and(|since| crate::options::later(since, timeout) <= now)
     }
 
     /// The API mode.

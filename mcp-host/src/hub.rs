@@ -42,19 +42,36 @@
 //! - **Frame ids:** the radio's link has 255. A client has at most
 //!   [`ROUTES_PER_CLIENT`] requests waiting for answers at once; its next request
 //!   waits (and the hub reads no more of its frames meanwhile) until one is answered,
-//!   so a client that floods the hub with requests slows itself alone, and the others
-//!   find ids free. When a client leaves (its connection fails, or the hub ends it),
-//!   its requests' ids are free again (their late answers are dropped); a client that
-//!   closed its connection keeps them until it is let go (see below). Requests that waited are counted in
-//!   [`HubStats::requests_held`]. Frames with frame id 0 (no
-//!   answer wanted) are written as they are, whatever their type. A frame of a type not
-//!   in the table with a frame id (its second byte, in every XBee request) is refused
-//!   and counted in [`HubStats::frames_refused`]: the hub cannot tell its answers from
-//!   those to other clients' requests.
+//!   so a client that floods the hub with requests slows itself first. Several such
+//!   clients together could still take every id ([`MAX_CLIENTS`] times
+//!   [`ROUTES_PER_CLIENT`] is more than 255), with requests the radio answers late or
+//!   never, so [`RESERVED_IDS`] ids are kept for each client that can still send:
+//!   beyond that many requests waiting for answers, a client takes an id only while
+//!   more are free than are kept for the others. A client with fewer requests than
+//!   that waiting thus finds an id at once, whatever the others send; one that
+//!   connects while the others hold every id (they took them before it came) gets the
+//!   first to come free, before any other client's request beyond its own reserve: as
+//!   the radio answers (a local AT command in milliseconds, a transmission or a remote
+//!   AT command within seconds, with a status saying whether it got through), and
+//!   [`ANSWER_WINDOW`] after they were written at most (node discovery, active scan
+//!   and broadcast remote AT commands keep theirs that long). When a client leaves
+//!   (its connection fails, or the hub ends it), its requests' ids are free again
+//!   (their late answers are dropped); a client that closed its connection keeps them
+//!   until it is let go (see below), but no ids are kept for it any more. Requests
+//!   that waited are counted in [`HubStats::requests_held`]. Frames with frame id 0
+//!   (no answer wanted) are written as they are, whatever their type. A frame with a
+//!   frame id (its second byte, in every XBee request) is refused and counted in
+//!   [`HubStats::frames_refused`] if its type is not in the table (the hub cannot tell
+//!   its answers from those to other clients' requests), or if it is cut short of
+//!   the fixed fields of its type (`10 01`, a Transmit Request that ends after its
+//!   frame id): a radio drops such a frame without an answer, and its id would be
+//!   taken for nothing.
 //! - **Clients:** [`MAX_CLIENTS`] at once. A client that comes while as many are
 //!   connected takes the place of the one that closed its connection first (the hub
 //!   read its end: it sends nothing more), else of the one that has fallen behind the
-//!   radio's frames the longest, or is turned away if none has. A client that closed
+//!   radio's frames the longest, or is turned away if none has (counted in
+//!   [`HubStats::clients_turned_away`]; the first is logged as a warning, the next ones
+//!   together at most once a second). A client that closed
 //!   its connection is still served until its place is taken: the hub cannot tell a
 //!   connection closed from one whose sending side alone is shut (a monitor, or
 //!   `nc -N`, that still reads), so the frames it sent still go to the radio, and the
@@ -67,6 +84,16 @@
 //!   even one that sends nothing for hours, never loses its place; no client is
 //!   dropped for being quiet, as quiet is what a monitor is on a quiet network. A
 //!   client is not dropped either for falling behind while the hub has room.
+//! - **Reading clients:** a client's frames are read as the radio's, with the hub's
+//!   [`LinkOptions`]: a frame longer than [`LinkOptions::max_frame_len`] is refused
+//!   (counted in [`HubStats::frames_refused`]) as soon as its length is read, and in
+//!   API mode 1 a partial frame that gets no new byte for
+//!   [`LinkOptions::partial_frame_timeout`] is given up and the bytes after its start
+//!   delimiter scanned again, so that a stray 0x7E does not hold the requests behind
+//!   it back. A hub open to untrusted clients in API mode 1 should take no longer
+//!   frames than requests are ([`MAX_REQUEST_DATA`](crate::codec::MAX_REQUEST_DATA),
+//!   which every radio's frame fits too): a longer length field costs a rescan of as
+//!   many bytes (see the `Worst case` of [`xbee_api::Decoder`]).
 //! - **Clients ended:** when the hub ends a client (its place taken, the radio's link
 //!   lost, the hub stopped) or its connection fails, its frames not yet written are
 //!   dropped (counted in [`HubStats::frames_refused`]): its commands are not carried out
@@ -108,12 +135,14 @@
 mod port;
 
 use std::cell::Cell;
+use std::collections::HashMap;
 use std::net::SocketAddr;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, PoisonError};
 use std::time::Duration;
 
 use bytes::{Bytes, BytesMut};
+use futures::FutureExt;
 use futures::StreamExt;
 use tokio::io::AsyncWriteExt;
 use tokio::net::tcp::{OwnedReadHalf, OwnedWriteHalf};
@@ -146,8 +175,17 @@ pub const MAX_CLIENTS: usize = 64;
 /// 255 frame ids of the radio's link). The client's next request waits, and the hub
 /// reads no more of its frames meanwhile, until an answer (or [`ANSWER_WINDOW`]) frees
 /// one: a client that floods the hub with requests, answered or not, slows itself
-/// alone, and the other clients always find frame ids free.
+/// first. Beyond [`RESERVED_IDS`] of them, it takes ids only while more are free than
+/// are kept for the other clients.
 pub const ROUTES_PER_CLIENT: usize = 16;
+
+/// Frame ids kept for each client that can still send (connected, its sending side
+/// open): while it has fewer requests than this waiting for answers, the other clients
+/// cannot take the rest of them, so its next request finds an id at once (see the
+/// [module](self) docs). Three: 255 / [`MAX_CLIENTS`], so that all clients together
+/// keep no more ids than there are; a ground station mostly waits for the answer to one
+/// request at a time (a command's delivery, then its report).
+pub const RESERVED_IDS: usize = u8::MAX as usize / MAX_CLIENTS;
 
 /// Frames of one client read by the hub and waiting for their turn to the radio, at
 /// most; the hub reads no more of the client's frames meanwhile.
@@ -206,13 +244,20 @@ pub struct HubStats {
     /// Frames from the radio not given to a client that had fallen behind.
     pub frames_dropped: u64,
     /// Frames of clients not written: all 255 frame ids were waiting for answers, a
-    /// frame id on a frame type the hub does not know (see the [module](self) docs), the
-    /// link to the radio was down, or the client was ended before their turn.
+    /// frame id on a frame type the hub does not know or on a request cut short of its
+    /// fixed fields (see the [module](self) docs), frames longer than the hub takes
+    /// ([`LinkOptions::max_frame_len`]), the link to the radio was down, or the client
+    /// was ended before their turn.
     pub frames_refused: u64,
     /// Requests of clients that had to wait for a frame id before they went to the
     /// radio: their client had [`ROUTES_PER_CLIENT`] requests waiting for answers, or
-    /// all 255 ids were taken.
+    /// no id was free for it (every id taken, or the free ones kept for other clients:
+    /// see [`RESERVED_IDS`]).
     pub requests_held: u64,
+    /// Clients turned away: [`MAX_CLIENTS`] were connected and none could give its
+    /// place. The first is logged as a warning, the next ones counted in a warning at
+    /// most once a second.
+    pub clients_turned_away: u64,
     /// The counters of the hub's own link to the radio: frames and framing errors,
     /// disconnects and reconnects, and in [`Stats::events_dropped`] the frames lost
     /// because the hub itself fell behind the radio (before any client saw them). The
@@ -230,6 +275,7 @@ struct Counters {
     frames_dropped: AtomicU64,
     frames_refused: AtomicU64,
     requests_held: AtomicU64,
+    clients_turned_away: AtomicU64,
 }
 
 fn bump(counter: &AtomicU64) {
@@ -263,6 +309,12 @@ impl Hub {
     /// returns, the port held on Linux, until the radio is there.
     pub async fn start(link: &Link, options: LinkOptions, listen: &str) -> Result<Hub, HubError> {
         let mode = options.api_mode;
+        // The clients' frames are read as the radio's: as long, and their partial
+        // frames waiting as long.
+        let client_input = ClientInput {
+            max_frame_len: options.max_frame_len,
+            partial_frame_timeout: options.partial_frame_timeout,
+        };
         let (mut port, listener) = Port::bind(listen)
             .await
             .map_err(|source| HubError::Listen {
@@ -289,7 +341,7 @@ impl Hub {
         // the moment this returns, the port held.
         let radio_up = sender.link_state() == crate::LinkState::Connected;
         let routes = Arc::new(Mutex::new(Routes::new()));
-        let ids = Arc::new(Semaphore::new(usize::from(u8::MAX)));
+        let ids = Ids::new();
         let listener = if radio_up {
             check_radio_mode(&sender, mode, &routes, &ids).await;
             Some(listener)
@@ -317,6 +369,8 @@ impl Hub {
             counters: hub.counters.clone(),
             routes,
             ids,
+            client_input,
+            turned_away: Repeats::default(),
             clients: Vec::new(),
             next_client: 0,
             radio_up,
@@ -354,6 +408,7 @@ impl Hub {
             frames_dropped: c.frames_dropped.load(Ordering::Relaxed),
             frames_refused: c.frames_refused.load(Ordering::Relaxed),
             requests_held: c.requests_held.load(Ordering::Relaxed),
+            clients_turned_away: c.clients_turned_away.load(Ordering::Relaxed),
             radio: self.radio_counters.snapshot(),
         }
     }
@@ -400,10 +455,10 @@ impl Drop for Hub {
 struct Routes(IdTable<Route>, Held);
 
 /// The frame ids the hub's own requests went out under (its `AT AP`), until when they
-/// are kept from clients (a late answer under one is no client's), and the permits of
+/// are kept from clients (a late answer under one is no client's), and the shares of
 /// the 255 ids they hold meanwhile.
 #[derive(Default)]
-struct Held(Vec<(u8, Instant, Option<OwnedSemaphorePermit>)>);
+struct Held(Vec<(u8, Instant, Option<IdPermit>)>);
 
 impl Held {
     fn expire(&mut self, now: Instant) {
@@ -433,9 +488,8 @@ struct Route {
     many: bool,
     /// One of the client's [`ROUTES_PER_CLIENT`] permits, given back with the route.
     _permit: OwnedSemaphorePermit,
-    /// One of the 255 frame ids' permits: requests of all clients wait for a free id in
-    /// the order they came.
-    _id: OwnedSemaphorePermit,
+    /// One of the 255 frame ids, from the client's share (see [`Ids`]).
+    _id: IdPermit,
 }
 
 impl Routes {
@@ -454,13 +508,13 @@ impl Routes {
 
     /// Keeps `ids`, which the hub's own requests went out under, from clients for
     /// [`ANSWER_WINDOW`]: their late answers then reach no client. Each holds one of
-    /// the 255 ids' permits of `permits`, so that clients wait for an id rather than
-    /// find none free.
-    fn hold(&mut self, ids: &[u8], permits: &Arc<Semaphore>, now: Instant) {
+    /// the 255 ids of `permits`, so that clients wait for an id rather than find none
+    /// free.
+    fn hold(&mut self, ids: &[u8], permits: &Arc<Ids>, now: Instant) {
         self.1.expire(now);
         let until = now + ANSWER_WINDOW;
         for &id in ids {
-            let permit = permits.clone().try_acquire_owned().ok();
+            let permit = permits.try_take(None);
             self.1.0.push((id, until, permit));
         }
     }
@@ -520,6 +574,211 @@ fn answered_many_times(data: &[u8]) -> bool {
             | [0x08 | 0x09, _, b'A', b'S', ..]
             | [0x17, _, 0, 0, 0, 0, 0, 0, 0xFF, 0xFF, ..]
     )
+}
+
+/// How the hub reads its clients' frames: as it reads the radio's, with its
+/// [`LinkOptions`].
+#[derive(Debug, Clone, Copy)]
+struct ClientInput {
+    /// Frames longer than this ([`LinkOptions::max_frame_len`]) are refused as soon as
+    /// their length is read.
+    max_frame_len: usize,
+    /// API mode 1: a partial frame that gets no new byte for this long is given up,
+    /// and the bytes after its start delimiter scanned again
+    /// ([`LinkOptions::partial_frame_timeout`]).
+    partial_frame_timeout: Option<Duration>,
+}
+
+/// Whether `data`, a request of a type the hub routes (see [`answer_type`]), holds the
+/// fixed fields of its type: a radio drops a request cut short without an answer.
+fn is_whole_request(data: &[u8]) -> bool {
+    match data.first() {
+        // 802.15.4 Transmit Request, 64-bit address: type, id, address, options.
+        Some(0x00) => data.len() >= 11,
+        // 16-bit address: type, id, address, options.
+        Some(0x01) => data.len() >= 5,
+        // Transmit Request IPv4: type, id, address, two ports, protocol, options.
+        Some(0x20) => data.len() >= 12,
+        // Register Joining Device: type, id, 64-bit address, 0xFFFE, options (and the
+        // key, none to take the device out of the table).
+        Some(0x24) => data.len() >= 13,
+        // The others `xbee-api` types (0x08, 0x09, 0x10, 0x11, 0x17).
+        _ => xbee_api::Frame::parse_bytes(data).is_ok(),
+    }
+}
+
+/// The 255 frame ids of the radio's link, shared out among the clients: each that can
+/// still send has [`RESERVED_IDS`] kept for it, and takes more only while more are free
+/// than are kept for the others (see the [module](self) docs).
+struct Ids {
+    state: Mutex<IdsState>,
+    /// An id came free, or the ids kept for a client were let go.
+    freed: Notify,
+}
+
+struct IdsState {
+    /// Ids not taken.
+    free: usize,
+    /// Ids kept for the clients: for each that can still send, [`RESERVED_IDS`] less
+    /// those it holds.
+    kept: usize,
+    /// The ids each client holds, and whether it can still send; a client is here from
+    /// when it connects until it sends no more and holds no id.
+    clients: HashMap<u64, Share>,
+}
+
+/// A client's share of the ids.
+#[derive(Default)]
+struct Share {
+    held: usize,
+    sending: bool,
+}
+
+impl Share {
+    /// The ids kept for it.
+    fn kept(&self) -> usize {
+        if self.sending {
+            RESERVED_IDS.saturating_sub(self.held)
+        } else {
+            0
+        }
+    }
+}
+
+impl IdsState {
+    /// Changes the share of `client`, and what is kept for it with it.
+    fn update(&mut self, client: u64, change: impl FnOnce(&mut Share)) {
+        let share = self.clients.entry(client).or_default();
+        let before = share.kept();
+        change(share);
+        let after = share.kept();
+        if !share.sending && share.held == 0 {
+            self.clients.remove(&client);
+        }
+        self.kept = self.kept - before + after;
+    }
+}
+
+/// One of the 255 ids, taken from [`Ids`] (by a client, or by the hub itself), given
+/// back when dropped.
+struct IdPermit {
+    ids: Arc<Ids>,
+    client: Option<u64>,
+}
+
+impl Drop for IdPermit {
+    fn drop(&mut self) {
+        let mut state = lock(&self.ids.state);
+        state.free += 1;
+        if let Some(client) = self.client {
+            state.update(client, |share| share.held -= 1);
+        }
+        drop(state);
+        self.ids.freed.notify_waiters();
+    }
+}
+
+impl Ids {
+    fn new() -> Arc<Ids> {
+        Arc::new(Ids {
+            state: Mutex::new(IdsState {
+                free: usize::from(u8::MAX),
+                kept: 0,
+                clients: HashMap::new(),
+            }),
+            freed: Notify::new(),
+        })
+    }
+
+    /// A new client: ids are kept for it from now on.
+    fn join(&self, client: u64) {
+        lock(&self.state).update(client, |share| share.sending = true);
+    }
+
+    /// `client` sends no more: nothing is kept for it now.
+    fn stop_sending(&self, client: u64) {
+        lock(&self.state).update(client, |share| share.sending = false);
+        self.freed.notify_waiters();
+    }
+
+    /// An id for `client` (for the hub itself with `None`: any free one), if it may
+    /// take one now.
+    fn try_take(self: &Arc<Self>, client: Option<u64>) -> Option<IdPermit> {
+        let mut state = lock(&self.state);
+        let may = match client {
+            Some(client) => {
+                let kept = state.clients.get(&client).map_or(0, Share::kept);
+                state.free > 0 && (kept > 0 || state.free > state.kept)
+            }
+            None => state.free > 0,
+        };
+        if !may {
+            return None;
+        }
+        state.free -= 1;
+        if let Some(client) = client {
+            state.update(client, |share| share.held += 1);
+        }
+        Some(IdPermit {
+            ids: self.clone(),
+            client,
+        })
+    }
+
+    /// An id for `client`, once it may take one.
+    async fn take(self: &Arc<Self>, client: u64) -> IdPermit {
+        loop {
+            let freed = self.freed.notified();
+            let mut freed = std::pin::pin!(freed);
+            // Any id freed from here on wakes it.
+            freed.as_mut().enable();
+            if let Some(permit) = self.try_take(Some(client)) {
+                return permit;
+            }
+            freed.await;
+        }
+    }
+}
+
+/// How often a warning repeated by a peer (a client turned away) is said at most: the
+/// first is said at once, the next ones counted and said together.
+const REPEAT_QUIET: Duration = Duration::from_secs(1);
+
+/// A warning said at most every [`REPEAT_QUIET`], with a count of those not said.
+#[derive(Default)]
+struct Repeats {
+    /// When it was last said.
+    said: Option<Instant>,
+    /// Times it was not said since.
+    unsaid: u64,
+}
+
+impl Repeats {
+    /// Counts one at `now`: `Some(n)` to say it, with the `n` not said before it, or
+    /// `None` to stay quiet.
+    fn count(&mut self, now: Instant) -> Option<u64> {
+        match self.said {
+            Some(said) if now.duration_since(said) < REPEAT_QUIET => {
+                self.unsaid += 1;
+                None
+            }
+            _ => {
+                self.said = Some(now);
+                Some(std::mem::take(&mut self.unsaid))
+            }
+        }
+    }
+
+    /// The number not said yet, once [`REPEAT_QUIET`] has passed since the last one was
+    /// said (when they stopped coming); `None` without any.
+    fn due(&mut self, now: Instant) -> Option<u64> {
+        let said = self.said?;
+        if self.unsaid == 0 || now.duration_since(said) < REPEAT_QUIET {
+            return None;
+        }
+        self.said = Some(now);
+        Some(std::mem::take(&mut self.unsaid))
+    }
 }
 
 /// A client's queue of frames to the radio, and the client (kept until the queue is
@@ -654,8 +913,12 @@ struct Serve {
     tasks: TaskTracker,
     counters: Arc<Counters>,
     routes: Arc<Mutex<Routes>>,
-    /// The permits of the 255 frame ids, one held by each route.
-    ids: Arc<Semaphore>,
+    /// The 255 frame ids, one held by each route.
+    ids: Arc<Ids>,
+    /// How the clients' frames are read.
+    client_input: ClientInput,
+    /// Clients turned away, for the warning.
+    turned_away: Repeats,
     /// Each client's queue of encoded frames, and what ends it.
     clients: Vec<Connected>,
     /// The number of the next client.
@@ -714,7 +977,15 @@ impl Serve {
                 () = self.stop.cancelled() => break,
                 // Requests no longer answered give their ids, and their clients'
                 // permits, back.
-                _ = expire.tick() => lock(&self.routes).expire(Instant::now()),
+                _ = expire.tick() => {
+                    lock(&self.routes).expire(Instant::now());
+                    // The clients turned away since the last warning, once they stop.
+                    if let Some(more) = self.turned_away.due(Instant::now()) {
+                        tracing::warn!(
+                            "hub: {more} more clients turned away ({MAX_CLIENTS} connected)"
+                        );
+                    }
+                }
                 accepted = accept(listener.as_ref()) => match accepted {
                     Ok((socket, peer)) => self.accept(socket, peer),
                     Err(error) => {
@@ -768,7 +1039,18 @@ impl Serve {
         // Only while the radio's link is up: the hub does not listen otherwise.
         self.clients.retain(|client| !client.queue.is_closed());
         if self.clients.len() >= MAX_CLIENTS && !self.make_room(peer) {
-            tracing::warn!(%peer, "hub: client turned away ({MAX_CLIENTS} connected)");
+            bump(&self.counters.clients_turned_away);
+            match self.turned_away.count(Instant::now()) {
+                Some(0) => {
+                    tracing::warn!(%peer, "hub: client turned away ({MAX_CLIENTS} connected)");
+                }
+                Some(more) => tracing::warn!(
+                    %peer,
+                    "hub: client turned away ({MAX_CLIENTS} connected), and {more} more \
+                     since the last such warning"
+                ),
+                None => tracing::debug!(%peer, "hub: client turned away"),
+            }
             return;
         }
         tracing::info!(%peer, "hub: client connected");
@@ -788,6 +1070,7 @@ impl Serve {
         });
         let number = self.next_client;
         self.next_client += 1;
+        self.ids.join(number);
         let client = Arc::new(Client {
             number,
             peer,
@@ -797,6 +1080,7 @@ impl Serve {
             routes: self.routes.clone(),
             ids: self.ids.clone(),
             permits: Arc::new(Semaphore::new(ROUTES_PER_CLIENT)),
+            input: self.client_input,
             counters: self.counters.clone(),
             end,
             behind,
@@ -953,7 +1237,7 @@ async fn check_radio_mode(
     sender: &CommandSender,
     mode: ApiMode,
     routes: &Mutex<Routes>,
-    permits: &Arc<Semaphore>,
+    permits: &Arc<Ids>,
 ) {
     let mut asked = Vec::new();
     let mut ask = async || {
@@ -1032,10 +1316,12 @@ struct Client {
     /// Its own queue, for the answers to its requests.
     queue: mpsc::Sender<Bytes>,
     routes: Arc<Mutex<Routes>>,
-    /// The permits of the 255 frame ids, shared by all clients.
-    ids: Arc<Semaphore>,
+    /// The 255 frame ids, shared by all clients.
+    ids: Arc<Ids>,
     /// Its [`ROUTES_PER_CLIENT`] permits to have a request waiting for answers.
     permits: Arc<Semaphore>,
+    /// How its frames are read.
+    input: ClientInput,
     counters: Arc<Counters>,
     /// Ends both its tasks: the hub stopped, the radio's link went down, its
     /// connection failed, or another client took its place.
@@ -1061,23 +1347,39 @@ impl Client {
     /// closed, or only its write side shut) is the first to give its place to a new
     /// client when the hub is full; until then it still gets its answers and the radio's
     /// frames, and its frames already read still go to the radio. A connection that
-    /// fails ends the client.
+    /// fails ends the client. Its frames are read as the radio's (see [`ClientInput`]).
     async fn read(self: Arc<Self>, rd: OwnedReadHalf, to_radio: mpsc::Sender<Vec<u8>>) {
-        let mut reader = FramedRead::new(rd, XBeeCodec::new(self.mode));
+        let max_frame_len = self.input.max_frame_len;
+        let codec = XBeeCodec::with_counters(self.mode, max_frame_len, Arc::default());
+        let mut reader = FramedRead::new(rd, codec);
+        let timeout = self.input.partial_frame_timeout;
         let read = async {
             loop {
-                match reader.next().await {
-                    Some(Ok(CodecItem::Frame(frame))) => {
-                        if let Some(data) = self.admit(frame.data()).await {
-                            // Waits while CLIENT_FRAMES_TO_RADIO frames wait their turn.
-                            if to_radio.send(data).await.is_err() {
-                                return; // The hub stops.
+                let check_stale_at = reader.decoder().stale_check_at(timeout);
+                let item = tokio::select! {
+                    item = reader.next() => item,
+                    () = tokio::time::sleep_until(check_stale_at.unwrap_or_else(Instant::now)), if check_stale_at.is_some() => {
+                        // Bytes may be waiting unread (this task ran late): they come
+                        // first, and the next turn looks again.
+                        if let Some(item) = reader.next().now_or_never() {
+                            item
+                        } else {
+                            if reader.decoder().is_stale(timeout, Instant::now()) {
+                                for item in reader.decoder_mut().drop_partial() {
+                                    if !self.pass(item, &to_radio).await {
+                                        return;
+                                    }
+                                }
                             }
-                            self.to_radio.ready.notify_one();
+                            continue;
                         }
                     }
-                    Some(Ok(CodecItem::Error(error))) => {
-                        tracing::debug!(%error, "hub: a client's frame dropped");
+                };
+                match item {
+                    Some(Ok(item)) => {
+                        if !self.pass(item, &to_radio).await {
+                            return; // The hub stops.
+                        }
                     }
                     Some(Err(error)) => {
                         tracing::debug!(peer = %self.peer, %error, "hub: reading from a client failed");
@@ -1096,10 +1398,36 @@ impl Client {
             () = read => {}
         }
         lock(&self.closed).get_or_insert_with(Instant::now);
+        // It sends no more requests: no ids are kept for it.
+        self.ids.stop_sending(self.number);
         // The writer sees the queue closed (or the client ended) and lets the client go
         // once it may.
         drop(to_radio);
         self.to_radio.ready.notify_one();
+    }
+
+    /// Passes an item of the client's reader on: a frame admitted to the radio's queue
+    /// (waiting while [`CLIENT_FRAMES_TO_RADIO`] frames wait their turn); `false` once
+    /// the hub stops.
+    async fn pass(&self, item: CodecItem, to_radio: &mpsc::Sender<Vec<u8>>) -> bool {
+        match item {
+            CodecItem::Frame(frame) => {
+                if let Some(data) = self.admit(frame.data()).await {
+                    if to_radio.send(data).await.is_err() {
+                        return false;
+                    }
+                    self.to_radio.ready.notify_one();
+                }
+            }
+            CodecItem::Error(error) => {
+                if let xbee_api::DecodeError::Oversize { .. } = error {
+                    // Longer than the hub takes: refused.
+                    bump(&self.counters.frames_refused);
+                }
+                tracing::debug!(%error, "hub: a client's frame dropped");
+            }
+        }
+        true
     }
 
     /// Writes the radio's frames to the client, until its connection fails or it is
@@ -1133,7 +1461,8 @@ impl Client {
     /// a frame id, its answers then routed back to this client; `None` if refused. A
     /// frame of a type the hub does not know as a request is refused if it carries a
     /// frame id (byte 1): its answers could not be told from those to other clients'
-    /// requests.
+    /// requests. So is a request with a frame id cut short of its fixed fields: no
+    /// radio answers it.
     async fn admit(&self, data: &Bytes) -> Option<Vec<u8>> {
         let mut data = data.to_vec();
         if let [frame_type, own_id, ..] = data[..] {
@@ -1146,13 +1475,38 @@ impl Client {
                     bump(&self.counters.frames_refused);
                     return None;
                 };
-                // Waits while the client has ROUTES_PER_CLIENT requests waiting for
-                // answers, then for a free frame id (the semaphores are never closed).
-                if self.permits.available_permits() == 0 || self.ids.available_permits() == 0 {
-                    bump(&self.counters.requests_held);
+                if !is_whole_request(&data) {
+                    tracing::debug!(
+                        frame_type,
+                        len = data.len(),
+                        "hub: a request cut short of its fixed fields; frame refused"
+                    );
+                    bump(&self.counters.frames_refused);
+                    return None;
                 }
-                let permit = self.permits.clone().acquire_owned().await.ok()?;
-                let id = self.ids.clone().acquire_owned().await.ok()?;
+                // Waits while the client has ROUTES_PER_CLIENT requests waiting for
+                // answers, then for a frame id it may take (the semaphore is never
+                // closed).
+                let mut held = false;
+                let mut bump_held = || {
+                    if !std::mem::replace(&mut held, true) {
+                        bump(&self.counters.requests_held);
+                    }
+                };
+                let permit = match self.permits.clone().try_acquire_owned() {
+                    Ok(permit) => permit,
+                    Err(_) => {
+                        bump_held();
+                        self.permits.clone().acquire_owned().await.ok()?
+                    }
+                };
+                let id = match self.ids.try_take(Some(self.number)) {
+                    Some(id) => id,
+                    None => {
+                        bump_held();
+                        self.ids.take(self.number).await
+                    }
+                };
                 let route = Route {
                     client: self.number,
                     queue: self.queue.clone(),

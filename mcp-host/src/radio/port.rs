@@ -5,9 +5,10 @@ use std::collections::VecDeque;
 use std::pin::Pin;
 use std::sync::{Arc, Mutex};
 use std::task::{Context, Poll};
+use std::time::Duration;
 
 use bytes::BytesMut;
-use futures::StreamExt;
+use futures::{FutureExt, StreamExt};
 use tokio::io::{AsyncRead, AsyncWrite, AsyncWriteExt, ReadBuf};
 use tokio::sync::mpsc;
 use tokio::time::{Instant, sleep_until};
@@ -17,7 +18,7 @@ use xbee_api::Address64;
 use super::command_mode::{CommandMode, Step};
 use super::router::{LinkMode, OUT_CAPACITY, Out, State};
 use super::uart::Uart;
-use crate::codec::{CodecItem, XBeeCodec};
+use crate::codec::{CodecItem, MAX_REQUEST_DATA, XBeeCodec};
 use crate::options::ReconnectPolicy;
 use crate::pty::{PtyPort, PtyStream};
 use crate::transport::Connector;
@@ -232,8 +233,62 @@ async fn serve(
     out: &mut mpsc::Receiver<Out>,
 ) -> (End, bool) {
     let mut healthy = false;
-    let end = serve_until_end(state, addr, io, out, &mut healthy).await;
+    let mut overflow = Overflow::default();
+    let end = serve_until_end(state, addr, io, out, &mut healthy, &mut overflow).await;
+    overflow.say_rest(addr);
     (end, healthy)
+}
+
+/// How long a partial frame from a device in API mode 1 waits for its next byte before
+/// it is given up and the bytes after its start delimiter scanned again, as a link
+/// does by default ([`crate::LinkOptions::partial_frame_timeout`]): a stray 0x7E on a
+/// noisy line would otherwise hold the frames behind it back until its length is
+/// reached, on a quiet line for ever.
+const PARTIAL_FRAME_TIMEOUT: Option<Duration> = Some(crate::options::DEFAULT_PARTIAL_FRAME_TIMEOUT);
+
+/// How often "write queue full" is said at most for a node: a device that sends
+/// requests and reads none of the answers fills its queue at the pace it writes.
+const OVERFLOW_QUIET: Duration = Duration::from_secs(1);
+
+/// Frames for a device dropped because its write queue was full (each counted in
+/// [`super::NodeStats::overflow`]): the first said at once, the next ones together, at
+/// most every [`OVERFLOW_QUIET`] and when the stream ends.
+#[derive(Default)]
+struct Overflow {
+    /// When it was last said.
+    said: Option<Instant>,
+    /// Dropped since, not said.
+    unsaid: u64,
+}
+
+impl Overflow {
+    /// A frame dropped at `now`.
+    fn dropped(&mut self, addr: Address64, now: Instant) {
+        match self.said {
+            Some(said) if now.duration_since(said) < OVERFLOW_QUIET => self.unsaid += 1,
+            _ => {
+                self.said = Some(now);
+                tracing::warn!(node = %addr, "write queue full: frame dropped");
+            }
+        }
+    }
+
+    /// When the frames dropped and not said yet are to be said.
+    fn due(&self) -> Option<Instant> {
+        if self.unsaid == 0 {
+            return None;
+        }
+        self.said.map(|said| said + OVERFLOW_QUIET)
+    }
+
+    /// Says the frames dropped and not said yet.
+    fn say_rest(&mut self, addr: Address64) {
+        if self.unsaid > 0 {
+            let more = std::mem::take(&mut self.unsaid);
+            self.said = Some(Instant::now());
+            tracing::warn!(node = %addr, "write queue full: {more} more frames dropped");
+        }
+    }
 }
 
 async fn serve_until_end(
@@ -242,6 +297,7 @@ async fn serve_until_end(
     io: &mut Stream,
     out: &mut mpsc::Receiver<Out>,
     healthy: &mut bool,
+    overflow: &mut Overflow,
 ) -> End {
     // A device on a pseudo-terminal set to another rate than its radio's UART's.
     let rate_probe = match &*io {
@@ -273,12 +329,20 @@ async fn serve_until_end(
     let mut frames = FramedRead::new(reader, NodeCodec::new(link_mode));
     let mut pending: VecDeque<Out> = VecDeque::new();
     let mut held: Option<(Out, Instant)> = None;
+    // What the reader gave outside its branch below (a partial frame given up), to be
+    // handled there first.
+    let mut early: VecDeque<Option<std::io::Result<Input>>> = VecDeque::new();
     loop {
         let next_at = pending.front().map(|o| o.at);
         let held_until = held.as_ref().map(|(_, until)| *until);
         let command_due = command_mode.as_ref().and_then(CommandMode::deadline);
+        let check_stale_at = frames
+            .decoder()
+            .api()
+            .and_then(|codec| codec.stale_check_at(PARTIAL_FRAME_TIMEOUT));
+        let overflow_due = overflow.due();
         let steps = tokio::select! {
-            item = frames.next() => match item {
+            item = next_input(&mut early, &mut frames) => match item {
                 Some(Ok(Input::Frame(CodecItem::Frame(frame)))) => {
                     *healthy = true;
                     let now = {
@@ -324,10 +388,30 @@ async fn serve_until_end(
                     continue;
                 }
                 Some(_) => {
-                    tracing::warn!(node = %addr, "write queue full: frame dropped");
+                    if let Some(node) = lock(state).nodes.get_mut(&addr) {
+                        node.stats.overflow += 1;
+                    }
+                    overflow.dropped(addr, Instant::now());
                     continue;
                 }
                 None => return End::NetworkGone,
+            },
+            () = sleep_until(overflow_due.unwrap_or_else(Instant::now)), if overflow_due.is_some() => {
+                overflow.say_rest(addr);
+                continue;
+            },
+            () = sleep_until(check_stale_at.unwrap_or_else(Instant::now)), if check_stale_at.is_some() => {
+                // Bytes may be waiting unread (this task ran late): they come first, and
+                // the next turn looks again.
+                if let Some(item) = frames.next().now_or_never() {
+                    early.push_back(item);
+                } else if let Some(codec) = frames.decoder_mut().api_mut() {
+                    if codec.is_stale(PARTIAL_FRAME_TIMEOUT, Instant::now()) {
+                        let items = codec.drop_partial();
+                        early.extend(items.into_iter().map(|item| Some(Ok(Input::Frame(item)))));
+                    }
+                }
+                continue;
             },
             () = sleep_until(next_at.unwrap_or_else(Instant::now)), if next_at.is_some() => {
                 let Some(item) = pending.pop_front() else { continue };
@@ -390,6 +474,18 @@ async fn serve_until_end(
     }
 }
 
+/// The next of what the device wrote: what waits in `early` first, then what `frames`
+/// reads.
+async fn next_input<R: AsyncRead + Unpin>(
+    early: &mut VecDeque<Option<std::io::Result<Input>>>,
+    frames: &mut FramedRead<R, NodeCodec>,
+) -> Option<std::io::Result<Input>> {
+    match early.pop_front() {
+        Some(item) => item,
+        None => frames.next().await,
+    }
+}
+
 /// Reads what the device writes the way its radio speaks `now`, if that is no longer
 /// `link_mode`: with a new decoder, and AT command mode in transparent mode.
 fn relink_to<R>(
@@ -418,10 +514,30 @@ enum NodeCodec {
 }
 
 impl NodeCodec {
+    /// In API mode, frames up to [`MAX_REQUEST_DATA`]: a device writes no longer ones.
     fn new(mode: LinkMode) -> Self {
         match mode {
-            LinkMode::Api(mode) => NodeCodec::Api(XBeeCodec::new(mode)),
+            LinkMode::Api(mode) => NodeCodec::Api(XBeeCodec::with_counters(
+                mode,
+                MAX_REQUEST_DATA,
+                Arc::default(),
+            )),
             LinkMode::Transparent => NodeCodec::Transparent(BytesCodec::new()),
+        }
+    }
+
+    /// The frame decoder, in API mode.
+    fn api(&self) -> Option<&XBeeCodec> {
+        match self {
+            NodeCodec::Api(codec) => Some(codec),
+            NodeCodec::Transparent(_) => None,
+        }
+    }
+
+    fn api_mut(&mut self) -> Option<&mut XBeeCodec> {
+        match self {
+            NodeCodec::Api(codec) => Some(codec),
+            NodeCodec::Transparent(_) => None,
         }
     }
 }

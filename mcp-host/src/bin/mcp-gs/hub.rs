@@ -79,6 +79,9 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
         .transpose()?;
     let options = mcp_host::LinkOptions {
         wait_for_link: args.wait,
+        // Its clients may be anyone who reaches its port: no frame longer than a request
+        // is (every frame of the radio's fits too).
+        max_frame_len: mcp_host::codec::MAX_REQUEST_DATA,
         ..args.link.options(true).await?
     };
     let radio = &args.link.link;

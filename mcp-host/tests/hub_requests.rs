@@ -1,0 +1,233 @@
+//! What a hub takes from its clients: requests cut short take no frame id, ids are kept
+//! for every client whatever the others send, frames longer than any request are
+//! refused, and a stray start delimiter (API mode 1) holds nothing back for long. Over
+//! real TCP sockets, with the radio played by the test.
+
+mod common;
+
+use std::time::Duration;
+
+use common::hub_wire::*;
+use futures::SinkExt;
+use mcp_host::codec::{MAX_REQUEST_DATA, XBeeCodec};
+use mcp_host::hub::{Hub, HubStats, RESERVED_IDS, ROUTES_PER_CLIENT};
+use mcp_host::options::DEFAULT_PARTIAL_FRAME_TIMEOUT;
+use mcp_host::{Link, LinkOptions};
+use tokio::io::AsyncWriteExt;
+use tokio::net::TcpListener;
+use tokio_util::codec::Framed;
+use xbee_api::{ApiMode, RawFrame};
+
+/// Failure guard only: every wait ends on a frame long before this.
+const GUARD: Duration = Duration::from_secs(20);
+
+/// Waits until the hub's counters satisfy `done`, looking every 5 ms (they change in
+/// its tasks, which signal nothing); fails after [`GUARD`].
+async fn until(hub: &Hub, done: impl Fn(&HubStats) -> bool) {
+    let deadline = tokio::time::Instant::now() + GUARD;
+    while !done(&hub.stats()) {
+        assert!(tokio::time::Instant::now() < deadline, "{:?}", hub.stats());
+        tokio::time::sleep(Duration::from_millis(5)).await;
+    }
+}
+
+/// The radio's next frame, which must come within `within`.
+async fn next_within(radio: &mut Wire, within: Duration, hub: &Hub) -> Vec<u8> {
+    tokio::time::timeout(within, next(radio))
+        .await
+        .unwrap_or_else(|_| panic!("nothing reached the radio: {:?}", hub.stats()))
+}
+
+/// A client whose frame (frame id 0) has reached the radio: the hub serves it.
+async fn served_client(hub: &Hub, radio: &mut Wire) -> Wire {
+    let mut client = raw_client(hub).await;
+    send(&mut client, &[0x08, 0x00, b'S', b'H']).await;
+    assert_eq!(next(radio).await, [0x08, 0x00, b'S', b'H']);
+    client
+}
+
+/// Requests of a type the hub routes, with a frame id, but cut short of the fixed fields
+/// of their type (a Transmit Request ending after its frame id, `10 01`): no radio
+/// answers them, so they are refused rather than given an id each for the answer
+/// window. More of them than a client may have waiting leave its next request free to
+/// go at once.
+#[tokio::test]
+async fn requests_cut_short_take_no_frame_id() {
+    let (hub, mut radio) = hub_and_radio().await;
+    let mut client = raw_client(&hub).await;
+    let cut_short: [&[u8]; 8] = [
+        &[0x10, 0x01],
+        &[0x11, 0x01, 0, 0, 0, 0, 0, 0, 0xFF, 0xFF],
+        &[0x08, 0x01, b'N'],
+        &[0x17, 0x01, 0, 0x13, 0xA2, 0],
+        &[0x00, 0x01, 0, 0x13, 0xA2, 0, 0x40, 0xB5, 0x99, 0xB9],
+        &[0x01, 0x01, 0x12, 0x34],
+        &[0x20, 0x01, 10, 0, 0, 1],
+        &[
+            0x24, 0x01, 0, 0x13, 0xA2, 0, 0x40, 0xB5, 0x99, 0xB9, 0xFF, 0xFE,
+        ],
+    ];
+    let mut refused = 0;
+    for _ in 0..ROUTES_PER_CLIENT {
+        for data in cut_short {
+            client.feed(&RawFrame::new(data).unwrap()).await.unwrap();
+            refused += 1;
+        }
+    }
+    client
+        .feed(&RawFrame::new(&[0x08, 0x07, b'S', b'H']).unwrap())
+        .await
+        .unwrap();
+    SinkExt::<&RawFrame<'_>>::flush(&mut client).await.unwrap();
+
+    // The first frame the radio gets is the whole request, at once.
+    let at = next_within(&mut radio, Duration::from_secs(5), &hub).await;
+    assert_eq!((at[0], &at[2..]), (0x08, &b"SH"[..]), "{at:02X?}");
+    send(&mut radio, &[0x88, at[1], b'S', b'H', 0x00, 0x00, 0x13]).await;
+    assert_eq!(
+        next(&mut client).await,
+        [0x88, 0x07, b'S', b'H', 0x00, 0x00, 0x13]
+    );
+    let stats = hub.stats();
+    assert_eq!(stats.frames_refused, refused, "{stats:?}");
+    assert_eq!(stats.requests_held, 0, "{stats:?}");
+    hub.stop().await;
+}
+
+/// 16 connections each send 16 well-formed requests the radio does not answer (as many
+/// as a client may have waiting, 256 together: more than the 255 frame ids). A client
+/// connected before them still has `RESERVED_IDS` ids kept: its requests reach the
+/// radio at once.
+#[tokio::test(flavor = "multi_thread")]
+async fn a_client_keeps_its_ids_while_others_take_all_they_can() {
+    let (hub, mut radio) = hub_and_radio().await;
+    let mut victim = served_client(&hub, &mut radio).await;
+
+    let mut flood = Vec::new();
+    for _ in 0..16 {
+        let mut client = raw_client(&hub).await;
+        for id in 1..=16u8 {
+            client
+                .feed(&RawFrame::new(&[0x08, id, b'S', b'L']).unwrap())
+                .await
+                .unwrap();
+        }
+        SinkExt::<&RawFrame<'_>>::flush(&mut client).await.unwrap();
+        flood.push(client);
+    }
+    // All the flood gets: every id but those kept for the victim.
+    for _ in 0..usize::from(u8::MAX) - RESERVED_IDS {
+        let frame = next(&mut radio).await;
+        assert_eq!(&frame[2..], b"SL");
+    }
+
+    for id in 1..=RESERVED_IDS as u8 {
+        send(&mut victim, &[0x08, id, b'S', b'H']).await;
+        let at = next_within(&mut radio, Duration::from_secs(5), &hub).await;
+        assert_eq!(&at[2..], b"SH", "{at:02X?}; {:?}", hub.stats());
+        send(&mut radio, &[0x88, at[1], b'S', b'H', 0x00, 0x00]).await;
+        assert_eq!(next(&mut victim).await, [0x88, id, b'S', b'H', 0x00, 0x00]);
+    }
+    hub.stop().await;
+}
+
+/// With every frame id taken by clients whose requests the radio has not answered yet,
+/// a client that connects gets the first id to come free, before the requests of the
+/// others that wait for more than their own share.
+#[tokio::test(flavor = "multi_thread")]
+async fn a_client_that_comes_when_every_id_is_taken_gets_the_first_free_one() {
+    let (hub, mut radio) = hub_and_radio().await;
+    let mut flood = Vec::new();
+    for _ in 0..16 {
+        let mut client = raw_client(&hub).await;
+        for id in 1..=16u8 {
+            client
+                .feed(&RawFrame::new(&[0x08, id, b'S', b'L']).unwrap())
+                .await
+                .unwrap();
+        }
+        SinkExt::<&RawFrame<'_>>::flush(&mut client).await.unwrap();
+        flood.push(client);
+    }
+    let mut taken = Vec::new();
+    for _ in 0..u8::MAX {
+        let frame = next(&mut radio).await;
+        assert_eq!(&frame[2..], b"SL");
+        taken.push(frame[1]);
+    }
+    // 256 requests: one of the flood's waits for an id.
+    until(&hub, |stats| stats.requests_held >= 1).await;
+
+    let held = hub.stats().requests_held;
+    let mut late = raw_client(&hub).await;
+    send(&mut late, &[0x08, 0x01, b'S', b'H']).await;
+    until(&hub, |stats| stats.requests_held > held).await;
+    // The radio answers one of the flood's requests: its id goes to the newcomer.
+    send(&mut radio, &[0x88, taken[0], b'S', b'L', 0x00, 0x00]).await;
+    let at = next_within(&mut radio, Duration::from_secs(5), &hub).await;
+    assert_eq!(&at[2..], b"SH", "{at:02X?}; {:?}", hub.stats());
+    hub.stop().await;
+}
+
+/// A hub that takes frames up to `MAX_REQUEST_DATA` (`LinkOptions::max_frame_len`)
+/// from its clients, as from its radio: the longest request a client sends (an Explicit
+/// Addressing Command with a 255-byte payload) goes to the radio; a frame one byte
+/// longer is refused as oversize, and the frame after it goes.
+#[tokio::test]
+async fn a_frame_longer_than_the_hub_takes_is_refused() {
+    let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let link: Link = format!("tcp:{}", listener.local_addr().unwrap())
+        .parse()
+        .unwrap();
+    let options = LinkOptions {
+        max_frame_len: MAX_REQUEST_DATA,
+        ..LinkOptions::default()
+    };
+    let (hub, socket) = tokio::join!(
+        Hub::start(&link, options, "127.0.0.1:0"),
+        radio_accepted(&listener)
+    );
+    let hub = hub.unwrap();
+    let mut radio = Framed::new(socket, XBeeCodec::new(ApiMode::Unescaped));
+    let mut client = raw_client(&hub).await;
+    let mut longest = vec![
+        0x11, 0x00, 0, 0x13, 0xA2, 0, 0x40, 0xB5, 0x99, 0xB9, 0xFF, 0xFE, 0xE8, 0xE8, 0, 0x11,
+        0xC1, 0x05, 0, 0,
+    ];
+    longest.resize(MAX_REQUEST_DATA, 0x55);
+    assert_eq!(longest.len(), 20 + 255);
+    send(&mut client, &longest).await;
+    assert_eq!(next(&mut radio).await, longest);
+
+    let mut too_long = longest.clone();
+    too_long.push(0x55);
+    send(&mut client, &too_long).await;
+    send(&mut client, &[0x08, 0x00, b'A', b'C']).await;
+    assert_eq!(next(&mut radio).await, [0x08, 0x00, b'A', b'C']);
+    assert_eq!(hub.stats().frames_refused, 1, "{:?}", hub.stats());
+    hub.stop().await;
+}
+
+/// API mode 1: a stray start delimiter with a length (`7E 00 F0`, noise) before a
+/// client's request is given up once the client's bytes stop for the partial frame
+/// timeout, and the request behind it goes to the radio then, not after 240 more bytes.
+#[tokio::test]
+async fn a_stray_start_delimiter_holds_a_request_back_for_the_partial_frame_timeout_at_most() {
+    let (hub, mut radio) = hub_and_radio().await;
+    let mut client = raw_client(&hub).await;
+    client
+        .get_mut()
+        .write_all(&[0x7E, 0x00, 0xF0])
+        .await
+        .unwrap();
+    let sent = tokio::time::Instant::now();
+    send(&mut client, &[0x08, 0x05, b'S', b'H']).await;
+    let within = DEFAULT_PARTIAL_FRAME_TIMEOUT + Duration::from_secs(4);
+    let at = next_within(&mut radio, within, &hub).await;
+    assert_eq!((at[0], &at[2..]), (0x08, &b"SH"[..]), "{at:02X?}");
+    // Not before the timeout: the stray candidate could still have been a frame.
+    assert!(sent.elapsed() >= DEFAULT_PARTIAL_FRAME_TIMEOUT - Duration::from_millis(50));
+    send(&mut radio, &[0x88, at[1], b'S', b'H', 0x00]).await;
+    assert_eq!(next(&mut client).await, [0x88, 0x05, b'S', b'H', 0x00]);
+    hub.stop().await;
+}
