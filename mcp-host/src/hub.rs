@@ -54,7 +54,10 @@
 //!   the radio answers (a local AT command in milliseconds, a transmission or a remote
 //!   AT command within seconds, with a status saying whether it got through), and
 //!   [`ANSWER_WINDOW`] after they were written at most (node discovery, active scan
-//!   and broadcast remote AT commands keep theirs that long). When a client leaves
+//!   and broadcast remote AT commands keep theirs that long; such requests of all
+//!   clients together hold [`MANY_ANSWER_IDS`] at most, the next waiting for one of
+//!   them to end, so that a flood of them leaves ids for the requests answered once,
+//!   a newcomer's among them). When a client leaves
 //!   (its connection fails, or the hub ends it), its requests' ids are free again
 //!   (their late answers are dropped); a client that closed its connection keeps them
 //!   until it is let go (see below), but no ids are kept for it any more. Requests
@@ -186,6 +189,14 @@ pub const ROUTES_PER_CLIENT: usize = 16;
 /// keep no more ids than there are; a ground station mostly waits for the answer to one
 /// request at a time (a command's delivery, then its report).
 pub const RESERVED_IDS: usize = u8::MAX as usize / MAX_CLIENTS;
+
+/// Frame ids that requests answered many times (node discovery, active scan, a
+/// broadcast remote AT command: each keeps its id for [`ANSWER_WINDOW`]) hold at most,
+/// all clients together; more such requests wait for one of them to end. Half the 255:
+/// the others stay for requests the radio answers once, within seconds, so that a
+/// client that connects while others flood the hub with such requests finds an id
+/// soon, not after the answer window.
+pub const MANY_ANSWER_IDS: usize = 128;
 
 /// Frames of one client read by the hub and waiting for their turn to the radio, at
 /// most; the hub reads no more of the client's frames meanwhile.
@@ -514,7 +525,7 @@ impl Routes {
         self.1.expire(now);
         let until = now + ANSWER_WINDOW;
         for &id in ids {
-            let permit = permits.try_take(None);
+            let permit = permits.try_take(None, false);
             self.1.0.push((id, until, permit));
         }
     }
@@ -619,6 +630,8 @@ struct Ids {
 struct IdsState {
     /// Ids not taken.
     free: usize,
+    /// Ids taken by requests answered many times (at most [`MANY_ANSWER_IDS`]).
+    many: usize,
     /// Ids kept for the clients: for each that can still send, [`RESERVED_IDS`] less
     /// those it holds.
     kept: usize,
@@ -664,12 +677,17 @@ impl IdsState {
 struct IdPermit {
     ids: Arc<Ids>,
     client: Option<u64>,
+    /// Taken by a request answered many times.
+    many: bool,
 }
 
 impl Drop for IdPermit {
     fn drop(&mut self) {
         let mut state = lock(&self.ids.state);
         state.free += 1;
+        if self.many {
+            state.many -= 1;
+        }
         if let Some(client) = self.client {
             state.update(client, |share| share.held -= 1);
         }
@@ -683,6 +701,7 @@ impl Ids {
         Arc::new(Ids {
             state: Mutex::new(IdsState {
                 free: usize::from(u8::MAX),
+                many: 0,
                 kept: 0,
                 clients: HashMap::new(),
             }),
@@ -701,9 +720,9 @@ impl Ids {
         self.freed.notify_waiters();
     }
 
-    /// An id for `client` (for the hub itself with `None`: any free one), if it may
-    /// take one now.
-    fn try_take(self: &Arc<Self>, client: Option<u64>) -> Option<IdPermit> {
+    /// An id for `client` (for the hub itself with `None`: any free one), for a request
+    /// answered `many` times or once, if it may take one now.
+    fn try_take(self: &Arc<Self>, client: Option<u64>, many: bool) -> Option<IdPermit> {
         let mut state = lock(&self.state);
         let may = match client {
             Some(client) => {
@@ -712,27 +731,31 @@ impl Ids {
             }
             None => state.free > 0,
         };
-        if !may {
+        if !may || (many && state.many >= MANY_ANSWER_IDS) {
             return None;
         }
         state.free -= 1;
+        if many {
+            state.many += 1;
+        }
         if let Some(client) = client {
             state.update(client, |share| share.held += 1);
         }
         Some(IdPermit {
             ids: self.clone(),
             client,
+            many,
         })
     }
 
     /// An id for `client`, once it may take one.
-    async fn take(self: &Arc<Self>, client: u64) -> IdPermit {
+    async fn take(self: &Arc<Self>, client: u64, many: bool) -> IdPermit {
         loop {
             let freed = self.freed.notified();
             let mut freed = std::pin::pin!(freed);
             // Any id freed from here on wakes it.
             freed.as_mut().enable();
-            if let Some(permit) = self.try_take(Some(client)) {
+            if let Some(permit) = self.try_take(Some(client), many) {
                 return permit;
             }
             freed.await;
@@ -1500,11 +1523,12 @@ impl Client {
                         self.permits.clone().acquire_owned().await.ok()?
                     }
                 };
-                let id = match self.ids.try_take(Some(self.number)) {
+                let many = answered_many_times(&data);
+                let id = match self.ids.try_take(Some(self.number), many) {
                     Some(id) => id,
                     None => {
                         bump_held();
-                        self.ids.take(self.number).await
+                        self.ids.take(self.number, many).await
                     }
                 };
                 let route = Route {
@@ -1513,7 +1537,7 @@ impl Client {
                     own_id,
                     answer_type,
                     until: Cell::new(None),
-                    many: answered_many_times(&data),
+                    many,
                     _permit: permit,
                     _id: id,
                 };

@@ -10,7 +10,7 @@ use std::time::Duration;
 use common::hub_wire::*;
 use futures::SinkExt;
 use mcp_host::codec::{MAX_REQUEST_DATA, XBeeCodec};
-use mcp_host::hub::{Hub, HubStats, RESERVED_IDS, ROUTES_PER_CLIENT};
+use mcp_host::hub::{Hub, HubStats, MANY_ANSWER_IDS, RESERVED_IDS, ROUTES_PER_CLIENT};
 use mcp_host::options::DEFAULT_PARTIAL_FRAME_TIMEOUT;
 use mcp_host::{Link, LinkOptions};
 use tokio::io::AsyncWriteExt;
@@ -164,6 +164,38 @@ async fn a_client_that_comes_when_every_id_is_taken_gets_the_first_free_one() {
     until(&hub, |stats| stats.requests_held > held).await;
     // The radio answers one of the flood's requests: its id goes to the newcomer.
     send(&mut radio, &[0x88, taken[0], b'S', b'L', 0x00, 0x00]).await;
+    let at = next_within(&mut radio, Duration::from_secs(5), &hub).await;
+    assert_eq!(&at[2..], b"SH", "{at:02X?}; {:?}", hub.stats());
+    hub.stop().await;
+}
+
+/// Requests answered many times (node discovery here) keep their ids for the answer
+/// window: clients flooding the hub with them hold `MANY_ANSWER_IDS` at most, and a
+/// client that connects after them finds an id at once.
+#[tokio::test(flavor = "multi_thread")]
+async fn requests_answered_many_times_leave_ids_for_a_client_that_comes_later() {
+    let (hub, mut radio) = hub_and_radio().await;
+    let mut flood = Vec::new();
+    for _ in 0..16 {
+        let mut client = raw_client(&hub).await;
+        for id in 1..=16u8 {
+            client
+                .feed(&RawFrame::new(&[0x08, id, b'N', b'D']).unwrap())
+                .await
+                .unwrap();
+        }
+        SinkExt::<&RawFrame<'_>>::flush(&mut client).await.unwrap();
+        flood.push(client);
+    }
+    for _ in 0..MANY_ANSWER_IDS {
+        let frame = next(&mut radio).await;
+        assert_eq!(&frame[2..], b"ND");
+    }
+    // The rest wait: none is written while the window of those written lasts.
+    until(&hub, |stats| stats.requests_held >= 1).await;
+
+    let mut late = raw_client(&hub).await;
+    send(&mut late, &[0x08, 0x01, b'S', b'H']).await;
     let at = next_within(&mut radio, Duration::from_secs(5), &hub).await;
     assert_eq!(&at[2..], b"SH", "{at:02X?}; {:?}", hub.stats());
     hub.stop().await;
