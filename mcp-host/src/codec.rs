@@ -27,8 +27,10 @@ pub const MAX_FRAME_DATA: usize = xbee_api::DEFAULT_CAPACITY;
 /// fragmented: [`mcp_core::MAX_PAYLOAD`]). The other requests are shorter: a Transmit
 /// Request (0x10) with that payload takes 269 bytes, an AT Command (0x08, 0x09) 4 bytes
 /// and its parameter, a Remote AT Command (0x17) 15 (a radio's parameters run to a
-/// 20-character node identifier or a 32-byte key), and so is every frame a radio sends
-/// (at most 273 bytes: an Explicit Rx Indicator with that payload). The devices of a
+/// 20-character node identifier or a 32-byte key), and so is every frame a Zigbee or
+/// DigiMesh radio sends (at most 273 bytes: an Explicit Rx Indicator with that payload;
+/// the IPv4 frames of Wi-Fi and Cellular modules, 0x20 and 0xB0, run longer, and need a
+/// larger limit). The devices of a
 /// virtual [`Network`](crate::radio::Network) are read with this limit, and a
 /// [`Hub`](crate::hub::Hub) open to untrusted clients should be given it as its
 /// [`LinkOptions::max_frame_len`](crate::LinkOptions::max_frame_len): in API mode 1 a

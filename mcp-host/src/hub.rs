@@ -42,33 +42,25 @@
 //! - **Frame ids:** the radio's link has 255. A client has at most
 //!   [`ROUTES_PER_CLIENT`] requests waiting for answers at once; its next request
 //!   waits (and the hub reads no more of its frames meanwhile) until one is answered,
-//!   so a client that floods the hub with requests slows itself first. Several such
-//!   clients together could still take every id ([`MAX_CLIENTS`] times
-//!   [`ROUTES_PER_CLIENT`] is more than 255), with requests the radio answers late or
-//!   never, so [`RESERVED_IDS`] ids are kept for each client that can still send:
-//!   beyond that many requests waiting for answers, a client takes an id only while
-//!   more are free than are kept for the others. A client with fewer requests than
-//!   that waiting thus finds an id at once, whatever the others send; one that
-//!   connects while the others hold every id (they took them before it came) gets the
-//!   first to come free, before any other client's request beyond its own reserve: as
-//!   the radio answers (a local AT command in milliseconds, a transmission or a remote
-//!   AT command within seconds, with a status saying whether it got through), and
-//!   [`ANSWER_WINDOW`] after they were written at most (node discovery, active scan
-//!   and broadcast remote AT commands keep theirs that long; such requests of all
-//!   clients together hold [`MANY_ANSWER_IDS`] at most, the next waiting for one of
-//!   them to end, so that a flood of them leaves ids for the requests answered once,
-//!   a newcomer's among them). When a client leaves
-//!   (its connection fails, or the hub ends it), its requests' ids are free again
-//!   (their late answers are dropped); a client that closed its connection keeps them
-//!   until it is let go (see below), but no ids are kept for it any more. Requests
-//!   that waited are counted in [`HubStats::requests_held`]. Frames with frame id 0
-//!   (no answer wanted) are written as they are, whatever their type. A frame with a
-//!   frame id (its second byte, in every XBee request) is refused and counted in
+//!   so a client that floods the hub with requests slows itself first. A request
+//!   holds its id until the radio answers it (a local AT command in milliseconds, a
+//!   transmission or a remote AT command within seconds, with a status saying whether
+//!   it got through); requests answered many times (node discovery, active scan,
+//!   broadcast remote AT commands) hold theirs for [`ANSWER_WINDOW`], and a client has
+//!   [`MANY_ANSWER_PER_CLIENT`] of those at most (all clients together, 128 of the
+//!   255), so that no flood of them leaves the others without ids for half a minute.
+//!   When every id is taken, requests of all clients wait for one in the order they
+//!   came. When a client leaves (its connection fails, or the hub ends it), its
+//!   requests' ids are free again (their late answers are dropped); a client that
+//!   closed its connection keeps them until it is let go (see below). Requests that
+//!   waited are counted in [`HubStats::requests_held`]. Frames with frame id 0 (no
+//!   answer wanted) are written as they are, whatever their type. A frame with a frame
+//!   id (its second byte, in every XBee request) is refused and counted in
 //!   [`HubStats::frames_refused`] if its type is not in the table (the hub cannot tell
-//!   its answers from those to other clients' requests), or if it is cut short of
-//!   the fixed fields of its type (`10 01`, a Transmit Request that ends after its
-//!   frame id): a radio drops such a frame without an answer, and its id would be
-//!   taken for nothing.
+//!   its answers from those to other clients' requests), or if it is cut short of the
+//!   fixed fields of its type (`10 01`, a Transmit Request that ends after its frame
+//!   id): a radio drops such a frame without an answer, and its id would be taken for
+//!   nothing.
 //! - **Clients:** [`MAX_CLIENTS`] at once. A client that comes while as many are
 //!   connected takes the place of the one that closed its connection first (the hub
 //!   read its end: it sends nothing more), else of the one that has fallen behind the
@@ -138,7 +130,6 @@
 mod port;
 
 use std::cell::Cell;
-use std::collections::HashMap;
 use std::net::SocketAddr;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, PoisonError};
@@ -178,25 +169,16 @@ pub const MAX_CLIENTS: usize = 64;
 /// 255 frame ids of the radio's link). The client's next request waits, and the hub
 /// reads no more of its frames meanwhile, until an answer (or [`ANSWER_WINDOW`]) frees
 /// one: a client that floods the hub with requests, answered or not, slows itself
-/// first. Beyond [`RESERVED_IDS`] of them, it takes ids only while more are free than
-/// are kept for the other clients.
+/// first.
 pub const ROUTES_PER_CLIENT: usize = 16;
 
-/// Frame ids kept for each client that can still send (connected, its sending side
-/// open): while it has fewer requests than this waiting for answers, the other clients
-/// cannot take the rest of them, so its next request finds an id at once (see the
-/// [module](self) docs). Three: 255 / [`MAX_CLIENTS`], so that all clients together
-/// keep no more ids than there are; a ground station mostly waits for the answer to one
-/// request at a time (a command's delivery, then its report).
-pub const RESERVED_IDS: usize = u8::MAX as usize / MAX_CLIENTS;
-
-/// Frame ids that requests answered many times (node discovery, active scan, a
-/// broadcast remote AT command: each keeps its id for [`ANSWER_WINDOW`]) hold at most,
-/// all clients together; more such requests wait for one of them to end. Half the 255:
-/// the others stay for requests the radio answers once, within seconds, so that a
-/// client that connects while others flood the hub with such requests finds an id
-/// soon, not after the answer window.
-pub const MANY_ANSWER_IDS: usize = 128;
+/// Requests answered many times (node discovery, active scan, a broadcast remote AT
+/// command: each keeps its frame id for [`ANSWER_WINDOW`]) of one client waiting for
+/// answers at once, at most; its next such request waits (and the hub reads no more of
+/// its frames meanwhile) until one ends. Two: all [`MAX_CLIENTS`] clients together hold
+/// 128 such ids at most, and the other 127 stay for requests the radio answers once,
+/// within seconds, however many of them the clients send.
+pub const MANY_ANSWER_PER_CLIENT: usize = 2;
 
 /// Frames of one client read by the hub and waiting for their turn to the radio, at
 /// most; the hub reads no more of the client's frames meanwhile.
@@ -261,9 +243,8 @@ pub struct HubStats {
     /// was ended before their turn.
     pub frames_refused: u64,
     /// Requests of clients that had to wait for a frame id before they went to the
-    /// radio: their client had [`ROUTES_PER_CLIENT`] requests waiting for answers, or
-    /// no id was free for it (every id taken, or the free ones kept for other clients:
-    /// see [`RESERVED_IDS`]).
+    /// radio: their client had [`ROUTES_PER_CLIENT`] requests waiting for answers (or
+    /// [`MANY_ANSWER_PER_CLIENT`] answered many times), or all 255 ids were taken.
     pub requests_held: u64,
     /// Clients turned away: [`MAX_CLIENTS`] were connected and none could give its
     /// place. The first is logged as a warning, the next ones counted in a warning at
@@ -352,7 +333,7 @@ impl Hub {
         // the moment this returns, the port held.
         let radio_up = sender.link_state() == crate::LinkState::Connected;
         let routes = Arc::new(Mutex::new(Routes::new()));
-        let ids = Ids::new();
+        let ids = Arc::new(Semaphore::new(usize::from(u8::MAX)));
         let listener = if radio_up {
             check_radio_mode(&sender, mode, &routes, &ids).await;
             Some(listener)
@@ -466,10 +447,10 @@ impl Drop for Hub {
 struct Routes(IdTable<Route>, Held);
 
 /// The frame ids the hub's own requests went out under (its `AT AP`), until when they
-/// are kept from clients (a late answer under one is no client's), and the shares of
+/// are kept from clients (a late answer under one is no client's), and the permits of
 /// the 255 ids they hold meanwhile.
 #[derive(Default)]
-struct Held(Vec<(u8, Instant, Option<IdPermit>)>);
+struct Held(Vec<(u8, Instant, Option<OwnedSemaphorePermit>)>);
 
 impl Held {
     fn expire(&mut self, now: Instant) {
@@ -499,8 +480,12 @@ struct Route {
     many: bool,
     /// One of the client's [`ROUTES_PER_CLIENT`] permits, given back with the route.
     _permit: OwnedSemaphorePermit,
-    /// One of the 255 frame ids, from the client's share (see [`Ids`]).
-    _id: IdPermit,
+    /// For a request answered many times, one of the client's
+    /// [`MANY_ANSWER_PER_CLIENT`] permits.
+    _many: Option<OwnedSemaphorePermit>,
+    /// One of the 255 frame ids' permits: requests of all clients wait for a free id in
+    /// the order they came.
+    _id: OwnedSemaphorePermit,
 }
 
 impl Routes {
@@ -521,11 +506,11 @@ impl Routes {
     /// [`ANSWER_WINDOW`]: their late answers then reach no client. Each holds one of
     /// the 255 ids of `permits`, so that clients wait for an id rather than find none
     /// free.
-    fn hold(&mut self, ids: &[u8], permits: &Arc<Ids>, now: Instant) {
+    fn hold(&mut self, ids: &[u8], permits: &Arc<Semaphore>, now: Instant) {
         self.1.expire(now);
         let until = now + ANSWER_WINDOW;
         for &id in ids {
-            let permit = permits.try_take(None, false);
+            let permit = permits.clone().try_acquire_owned().ok();
             self.1.0.push((id, until, permit));
         }
     }
@@ -615,151 +600,6 @@ fn is_whole_request(data: &[u8]) -> bool {
         Some(0x24) => data.len() >= 13,
         // The others `xbee-api` types (0x08, 0x09, 0x10, 0x11, 0x17).
         _ => xbee_api::Frame::parse_bytes(data).is_ok(),
-    }
-}
-
-/// The 255 frame ids of the radio's link, shared out among the clients: each that can
-/// still send has [`RESERVED_IDS`] kept for it, and takes more only while more are free
-/// than are kept for the others (see the [module](self) docs).
-struct Ids {
-    state: Mutex<IdsState>,
-    /// An id came free, or the ids kept for a client were let go.
-    freed: Notify,
-}
-
-struct IdsState {
-    /// Ids not taken.
-    free: usize,
-    /// Ids taken by requests answered many times (at most [`MANY_ANSWER_IDS`]).
-    many: usize,
-    /// Ids kept for the clients: for each that can still send, [`RESERVED_IDS`] less
-    /// those it holds.
-    kept: usize,
-    /// The ids each client holds, and whether it can still send; a client is here from
-    /// when it connects until it sends no more and holds no id.
-    clients: HashMap<u64, Share>,
-}
-
-/// A client's share of the ids.
-#[derive(Default)]
-struct Share {
-    held: usize,
-    sending: bool,
-}
-
-impl Share {
-    /// The ids kept for it.
-    fn kept(&self) -> usize {
-        if self.sending {
-            RESERVED_IDS.saturating_sub(self.held)
-        } else {
-            0
-        }
-    }
-}
-
-impl IdsState {
-    /// Changes the share of `client`, and what is kept for it with it.
-    fn update(&mut self, client: u64, change: impl FnOnce(&mut Share)) {
-        let share = self.clients.entry(client).or_default();
-        let before = share.kept();
-        change(share);
-        let after = share.kept();
-        if !share.sending && share.held == 0 {
-            self.clients.remove(&client);
-        }
-        self.kept = self.kept - before + after;
-    }
-}
-
-/// One of the 255 ids, taken from [`Ids`] (by a client, or by the hub itself), given
-/// back when dropped.
-struct IdPermit {
-    ids: Arc<Ids>,
-    client: Option<u64>,
-    /// Taken by a request answered many times.
-    many: bool,
-}
-
-impl Drop for IdPermit {
-    fn drop(&mut self) {
-        let mut state = lock(&self.ids.state);
-        state.free += 1;
-        if self.many {
-            state.many -= 1;
-        }
-        if let Some(client) = self.client {
-            state.update(client, |share| share.held -= 1);
-        }
-        drop(state);
-        self.ids.freed.notify_waiters();
-    }
-}
-
-impl Ids {
-    fn new() -> Arc<Ids> {
-        Arc::new(Ids {
-            state: Mutex::new(IdsState {
-                free: usize::from(u8::MAX),
-                many: 0,
-                kept: 0,
-                clients: HashMap::new(),
-            }),
-            freed: Notify::new(),
-        })
-    }
-
-    /// A new client: ids are kept for it from now on.
-    fn join(&self, client: u64) {
-        lock(&self.state).update(client, |share| share.sending = true);
-    }
-
-    /// `client` sends no more: nothing is kept for it now.
-    fn stop_sending(&self, client: u64) {
-        lock(&self.state).update(client, |share| share.sending = false);
-        self.freed.notify_waiters();
-    }
-
-    /// An id for `client` (for the hub itself with `None`: any free one), for a request
-    /// answered `many` times or once, if it may take one now.
-    fn try_take(self: &Arc<Self>, client: Option<u64>, many: bool) -> Option<IdPermit> {
-        let mut state = lock(&self.state);
-        let may = match client {
-            Some(client) => {
-                let kept = state.clients.get(&client).map_or(0, Share::kept);
-                state.free > 0 && (kept > 0 || state.free > state.kept)
-            }
-            None => state.free > 0,
-        };
-        if !may || (many && state.many >= MANY_ANSWER_IDS) {
-            return None;
-        }
-        state.free -= 1;
-        if many {
-            state.many += 1;
-        }
-        if let Some(client) = client {
-            state.update(client, |share| share.held += 1);
-        }
-        Some(IdPermit {
-            ids: self.clone(),
-            client,
-            many,
-        })
-    }
-
-    /// An id for `client`, once it may take one.
-    async fn take(self: &Arc<Self>, client: u64, many: bool) -> IdPermit {
-        loop {
-            let freed = self.freed.notified();
-            let mut freed = std::pin::pin!(freed);
-            // Any id freed from here on wakes it.
-            freed.as_mut().enable();
-            if let Some(permit) = self.try_take(Some(client), many) {
-                return permit;
-            }
-            freed.await;
-        }
     }
 }
 
@@ -936,8 +776,8 @@ struct Serve {
     tasks: TaskTracker,
     counters: Arc<Counters>,
     routes: Arc<Mutex<Routes>>,
-    /// The 255 frame ids, one held by each route.
-    ids: Arc<Ids>,
+    /// The permits of the 255 frame ids, one held by each route.
+    ids: Arc<Semaphore>,
     /// How the clients' frames are read.
     client_input: ClientInput,
     /// Clients turned away, for the warning.
@@ -1093,7 +933,6 @@ impl Serve {
         });
         let number = self.next_client;
         self.next_client += 1;
-        self.ids.join(number);
         let client = Arc::new(Client {
             number,
             peer,
@@ -1103,6 +942,7 @@ impl Serve {
             routes: self.routes.clone(),
             ids: self.ids.clone(),
             permits: Arc::new(Semaphore::new(ROUTES_PER_CLIENT)),
+            many: Arc::new(Semaphore::new(MANY_ANSWER_PER_CLIENT)),
             input: self.client_input,
             counters: self.counters.clone(),
             end,
@@ -1260,7 +1100,7 @@ async fn check_radio_mode(
     sender: &CommandSender,
     mode: ApiMode,
     routes: &Mutex<Routes>,
-    permits: &Arc<Ids>,
+    permits: &Arc<Semaphore>,
 ) {
     let mut asked = Vec::new();
     let mut ask = async || {
@@ -1339,10 +1179,13 @@ struct Client {
     /// Its own queue, for the answers to its requests.
     queue: mpsc::Sender<Bytes>,
     routes: Arc<Mutex<Routes>>,
-    /// The 255 frame ids, shared by all clients.
-    ids: Arc<Ids>,
+    /// The permits of the 255 frame ids, shared by all clients.
+    ids: Arc<Semaphore>,
     /// Its [`ROUTES_PER_CLIENT`] permits to have a request waiting for answers.
     permits: Arc<Semaphore>,
+    /// Its [`MANY_ANSWER_PER_CLIENT`] permits to have a request answered many times
+    /// waiting.
+    many: Arc<Semaphore>,
     /// How its frames are read.
     input: ClientInput,
     counters: Arc<Counters>,
@@ -1421,8 +1264,6 @@ impl Client {
             () = read => {}
         }
         lock(&self.closed).get_or_insert_with(Instant::now);
-        // It sends no more requests: no ids are kept for it.
-        self.ids.stop_sending(self.number);
         // The writer sees the queue closed (or the client ended) and lets the client go
         // once it may.
         drop(to_radio);
@@ -1508,29 +1349,26 @@ impl Client {
                     return None;
                 }
                 // Waits while the client has ROUTES_PER_CLIENT requests waiting for
-                // answers, then for a frame id it may take (the semaphore is never
-                // closed).
+                // answers (MANY_ANSWER_PER_CLIENT answered many times), then for a
+                // free frame id (the semaphores are never closed).
+                let many = answered_many_times(&data);
                 let mut held = false;
-                let mut bump_held = || {
+                let mut take = async |permits: &Arc<Semaphore>| {
+                    if let Ok(permit) = permits.clone().try_acquire_owned() {
+                        return Some(permit);
+                    }
                     if !std::mem::replace(&mut held, true) {
                         bump(&self.counters.requests_held);
                     }
+                    permits.clone().acquire_owned().await.ok()
                 };
-                let permit = match self.permits.clone().try_acquire_owned() {
-                    Ok(permit) => permit,
-                    Err(_) => {
-                        bump_held();
-                        self.permits.clone().acquire_owned().await.ok()?
-                    }
+                let permit = take(&self.permits).await?;
+                let many_permit = if many {
+                    Some(take(&self.many).await?)
+                } else {
+                    None
                 };
-                let many = answered_many_times(&data);
-                let id = match self.ids.try_take(Some(self.number), many) {
-                    Some(id) => id,
-                    None => {
-                        bump_held();
-                        self.ids.take(self.number, many).await
-                    }
-                };
+                let id = take(&self.ids).await?;
                 let route = Route {
                     client: self.number,
                     queue: self.queue.clone(),
@@ -1539,6 +1377,7 @@ impl Client {
                     until: Cell::new(None),
                     many,
                     _permit: permit,
+                    _many: many_permit,
                     _id: id,
                 };
                 // An id is free: the route holds one of the 255 permits.

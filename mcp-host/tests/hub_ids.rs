@@ -1,6 +1,7 @@
 //! No client can take the hub's frame ids from the others: each has at most
-//! `ROUTES_PER_CLIENT` requests waiting for answers, and a client's requests give their
-//! ids back when it leaves. Over real TCP sockets.
+//! `ROUTES_PER_CLIENT` requests waiting for answers (`MANY_ANSWER_PER_CLIENT` answered
+//! many times), and a client's requests give their ids back when it leaves. Over real
+//! TCP sockets.
 
 mod common;
 
@@ -9,7 +10,7 @@ use std::time::Duration;
 use common::hub_wire::*;
 use futures::{SinkExt, StreamExt};
 use mcp_host::codec::CodecItem;
-use mcp_host::hub::{ANSWER_WINDOW, ROUTES_PER_CLIENT};
+use mcp_host::hub::{ANSWER_WINDOW, MANY_ANSWER_PER_CLIENT, ROUTES_PER_CLIENT};
 use mcp_host::{Link, LinkOptions, SendOptions};
 use xbee_api::{Address64, ApiMode, RawFrame};
 
@@ -19,7 +20,7 @@ const MAV: Address64 = Address64(0x0013_A200_40B5_99B9);
 
 /// One client sends 255 node discoveries (`AT ND`), each answered at once by the radio.
 /// Their answers could keep coming for the hub's answer window, so each keeps its frame
-/// id meanwhile: the client gets `ROUTES_PER_CLIENT` of them through, the rest wait, and
+/// id meanwhile: the client gets `MANY_ANSWER_PER_CLIENT` of them through, the rest wait, and
 /// a ground station on the same hub still gets its AT commands and transmissions
 /// through at once.
 #[tokio::test(flavor = "multi_thread")]
@@ -41,12 +42,12 @@ async fn a_client_flooding_the_hub_with_discoveries_leaves_frame_ids_for_the_oth
     // Until the flood has taken all it can: every discovery answered, or the hub holds
     // the client's next ones back.
     let mut answers = 0;
-    while answers < 255 && (answers < ROUTES_PER_CLIENT || hub.stats().requests_held == 0) {
+    while answers < 255 && (answers < MANY_ANSWER_PER_CLIENT || hub.stats().requests_held == 0) {
         tokio::select! {
             frame = next(&mut flood) => if frame[0] == 0x88 {
                 answers += 1;
             },
-            () = tokio::task::yield_now(), if answers >= ROUTES_PER_CLIENT => {}
+            () = tokio::task::yield_now(), if answers >= MANY_ANSWER_PER_CLIENT => {}
         }
     }
 
@@ -63,7 +64,7 @@ async fn a_client_flooding_the_hub_with_discoveries_leaves_frame_ids_for_the_oth
     assert!(sent.is_ok(), "{sent:?}; {:?}", hub.stats());
     assert_eq!(hub.stats().frames_refused, 0);
     // The flooding client got through what the hub lets one client have at once.
-    assert_eq!(answers, ROUTES_PER_CLIENT);
+    assert_eq!(answers, MANY_ANSWER_PER_CLIENT);
     hub.stop().await;
     sim.stop().await;
 }

@@ -1,7 +1,7 @@
-//! What a hub takes from its clients: requests cut short take no frame id, ids are kept
-//! for every client whatever the others send, frames longer than any request are
-//! refused, and a stray start delimiter (API mode 1) holds nothing back for long. Over
-//! real TCP sockets, with the radio played by the test.
+//! What a hub takes from its clients: requests cut short take no frame id, ids come free
+//! in order, requests answered many times leave ids for the others, frames longer than
+//! any request are refused, and a stray start delimiter (API mode 1) holds nothing back
+//! for long. Over real TCP sockets, with the radio played by the test.
 
 mod common;
 
@@ -10,7 +10,7 @@ use std::time::Duration;
 use common::hub_wire::*;
 use futures::SinkExt;
 use mcp_host::codec::{MAX_REQUEST_DATA, XBeeCodec};
-use mcp_host::hub::{Hub, HubStats, MANY_ANSWER_IDS, RESERVED_IDS, ROUTES_PER_CLIENT};
+use mcp_host::hub::{Hub, HubStats, MANY_ANSWER_PER_CLIENT, ROUTES_PER_CLIENT};
 use mcp_host::options::DEFAULT_PARTIAL_FRAME_TIMEOUT;
 use mcp_host::{Link, LinkOptions};
 use tokio::io::AsyncWriteExt;
@@ -36,14 +36,6 @@ async fn next_within(radio: &mut Wire, within: Duration, hub: &Hub) -> Vec<u8> {
     tokio::time::timeout(within, next(radio))
         .await
         .unwrap_or_else(|_| panic!("nothing reached the radio: {:?}", hub.stats()))
-}
-
-/// A client whose frame (frame id 0) has reached the radio: the hub serves it.
-async fn served_client(hub: &Hub, radio: &mut Wire) -> Wire {
-    let mut client = raw_client(hub).await;
-    send(&mut client, &[0x08, 0x00, b'S', b'H']).await;
-    assert_eq!(next(radio).await, [0x08, 0x00, b'S', b'H']);
-    client
 }
 
 /// Requests of a type the hub routes, with a frame id, but cut short of the fixed fields
@@ -94,48 +86,11 @@ async fn requests_cut_short_take_no_frame_id() {
     hub.stop().await;
 }
 
-/// 16 connections each send 16 well-formed requests the radio does not answer (as many
-/// as a client may have waiting, 256 together: more than the 255 frame ids). A client
-/// connected before them still has `RESERVED_IDS` ids kept: its requests reach the
-/// radio at once.
+/// With every frame id taken by requests the radio has not answered yet, requests of
+/// all clients wait for one in the order they came: the flood's that came first, then
+/// a newcomer's.
 #[tokio::test(flavor = "multi_thread")]
-async fn a_client_keeps_its_ids_while_others_take_all_they_can() {
-    let (hub, mut radio) = hub_and_radio().await;
-    let mut victim = served_client(&hub, &mut radio).await;
-
-    let mut flood = Vec::new();
-    for _ in 0..16 {
-        let mut client = raw_client(&hub).await;
-        for id in 1..=16u8 {
-            client
-                .feed(&RawFrame::new(&[0x08, id, b'S', b'L']).unwrap())
-                .await
-                .unwrap();
-        }
-        SinkExt::<&RawFrame<'_>>::flush(&mut client).await.unwrap();
-        flood.push(client);
-    }
-    // All the flood gets: every id but those kept for the victim.
-    for _ in 0..usize::from(u8::MAX) - RESERVED_IDS {
-        let frame = next(&mut radio).await;
-        assert_eq!(&frame[2..], b"SL");
-    }
-
-    for id in 1..=RESERVED_IDS as u8 {
-        send(&mut victim, &[0x08, id, b'S', b'H']).await;
-        let at = next_within(&mut radio, Duration::from_secs(5), &hub).await;
-        assert_eq!(&at[2..], b"SH", "{at:02X?}; {:?}", hub.stats());
-        send(&mut radio, &[0x88, at[1], b'S', b'H', 0x00, 0x00]).await;
-        assert_eq!(next(&mut victim).await, [0x88, id, b'S', b'H', 0x00, 0x00]);
-    }
-    hub.stop().await;
-}
-
-/// With every frame id taken by clients whose requests the radio has not answered yet,
-/// a client that connects gets the first id to come free, before the requests of the
-/// others that wait for more than their own share.
-#[tokio::test(flavor = "multi_thread")]
-async fn a_client_that_comes_when_every_id_is_taken_gets_the_first_free_one() {
+async fn when_every_id_is_taken_requests_get_the_ids_that_come_free_in_order() {
     let (hub, mut radio) = hub_and_radio().await;
     let mut flood = Vec::new();
     for _ in 0..16 {
@@ -162,16 +117,19 @@ async fn a_client_that_comes_when_every_id_is_taken_gets_the_first_free_one() {
     let mut late = raw_client(&hub).await;
     send(&mut late, &[0x08, 0x01, b'S', b'H']).await;
     until(&hub, |stats| stats.requests_held > held).await;
-    // The radio answers one of the flood's requests: its id goes to the newcomer.
-    send(&mut radio, &[0x88, taken[0], b'S', b'L', 0x00, 0x00]).await;
-    let at = next_within(&mut radio, Duration::from_secs(5), &hub).await;
-    assert_eq!(&at[2..], b"SH", "{at:02X?}; {:?}", hub.stats());
+    // The radio answers two of the flood's requests: their ids go to the waiting
+    // request of the flood, then to the newcomer's.
+    for (answered, waiting) in [(taken[0], b"SL"), (taken[1], b"SH")] {
+        send(&mut radio, &[0x88, answered, b'S', b'L', 0x00, 0x00]).await;
+        let at = next_within(&mut radio, Duration::from_secs(5), &hub).await;
+        assert_eq!(&at[2..], waiting, "{at:02X?}; {:?}", hub.stats());
+    }
     hub.stop().await;
 }
 
 /// Requests answered many times (node discovery here) keep their ids for the answer
-/// window: clients flooding the hub with them hold `MANY_ANSWER_IDS` at most, and a
-/// client that connects after them finds an id at once.
+/// window: a client has `MANY_ANSWER_PER_CLIENT` of them at most, so that clients
+/// flooding the hub with them leave ids for a client that connects after them.
 #[tokio::test(flavor = "multi_thread")]
 async fn requests_answered_many_times_leave_ids_for_a_client_that_comes_later() {
     let (hub, mut radio) = hub_and_radio().await;
@@ -187,12 +145,12 @@ async fn requests_answered_many_times_leave_ids_for_a_client_that_comes_later() 
         SinkExt::<&RawFrame<'_>>::flush(&mut client).await.unwrap();
         flood.push(client);
     }
-    for _ in 0..MANY_ANSWER_IDS {
+    for _ in 0..16 * MANY_ANSWER_PER_CLIENT {
         let frame = next(&mut radio).await;
         assert_eq!(&frame[2..], b"ND");
     }
     // The rest wait: none is written while the window of those written lasts.
-    until(&hub, |stats| stats.requests_held >= 1).await;
+    until(&hub, |stats| stats.requests_held >= 16).await;
 
     let mut late = raw_client(&hub).await;
     send(&mut late, &[0x08, 0x01, b'S', b'H']).await;
