@@ -195,51 +195,39 @@ async fn a_link_lost_during_discovery_ends_the_answers_with_why() {
     }
 }
 
-#[tokio::test]
-async fn the_window_is_the_radios_longest_discovery_time_where_it_gives_one() {
+/// The discovery window of a radio that answers `N?` with `data`.
+async fn window_of_a_radio_answering(data: &[u8]) -> Duration {
     let (_stream, sender, mut fake) = common::pty_link(ApiMode::Unescaped).await;
     let window = tokio::spawn({
         let sender = sender.clone();
         async move { mcp_host::discovery::window(&sender).await }
     });
-    // A DigiMesh radio: N? is NT and the network's delays, in milliseconds.
     let id = at_command(&mut fake, *b"N?").await;
     fake.send(&AtCommandResponseRepr {
         frame_id: id,
         command: *b"N?",
         status: AtStatus::Ok,
-        data: &[0x00, 0x00, 0x1F, 0x40],
+        data,
     })
     .await;
-    let window = tokio::time::timeout(GUARD, window)
+    tokio::time::timeout(GUARD, window)
         .await
         .unwrap()
         .unwrap()
-        .unwrap();
+        .unwrap()
+}
+
+#[tokio::test]
+async fn the_window_is_the_radios_longest_discovery_time_where_it_gives_one() {
+    // A DigiMesh radio: N? is NT and the network's delays, in milliseconds.
+    let window = window_of_a_radio_answering(&[0x00, 0x00, 0x1F, 0x40]).await;
     assert_eq!(window, Duration::from_secs(8) + DISCOVERY_MARGIN);
 }
 
 #[tokio::test]
 async fn a_discovery_time_longer_than_any_radios_is_cut() {
-    let (_stream, sender, mut fake) = common::pty_link(ApiMode::Unescaped).await;
-    let window = tokio::spawn({
-        let sender = sender.clone();
-        async move { mcp_host::discovery::window(&sender).await }
-    });
     // 49.7 days, from a peer that is no radio.
-    let id = at_command(&mut fake, *b"N?").await;
-    fake.send(&AtCommandResponseRepr {
-        frame_id: id,
-        command: *b"N?",
-        status: AtStatus::Ok,
-        data: &[0xFF; 4],
-    })
-    .await;
-    let window = tokio::time::timeout(GUARD, window)
-        .await
-        .unwrap()
-        .unwrap()
-        .unwrap();
+    let window = window_of_a_radio_answering(&[0xFF; 4]).await;
     assert_eq!(
         window,
         mcp_host::discovery::MAX_DISCOVERY_TIME + DISCOVERY_MARGIN

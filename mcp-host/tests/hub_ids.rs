@@ -31,14 +31,7 @@ async fn a_client_flooding_the_hub_with_discoveries_leaves_frame_ids_for_the_oth
         .await
         .unwrap();
 
-    let mut flood = raw_client(&hub).await;
-    for id in 1..=255u8 {
-        flood
-            .feed(&RawFrame::new(&[0x08, id, b'N', b'D']).unwrap())
-            .await
-            .unwrap();
-    }
-    SinkExt::<&RawFrame<'_>>::flush(&mut flood).await.unwrap();
+    let mut flood = flood(&hub, 1, 255, *b"ND").await.remove(0);
     // Until the flood has taken all it can: every discovery answered, or the hub holds
     // the client's next ones back.
     let mut answers = 0;

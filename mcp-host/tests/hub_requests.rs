@@ -92,18 +92,7 @@ async fn requests_cut_short_take_no_frame_id() {
 #[tokio::test(flavor = "multi_thread")]
 async fn when_every_id_is_taken_requests_get_the_ids_that_come_free_in_order() {
     let (hub, mut radio) = hub_and_radio().await;
-    let mut flood = Vec::new();
-    for _ in 0..16 {
-        let mut client = raw_client(&hub).await;
-        for id in 1..=16u8 {
-            client
-                .feed(&RawFrame::new(&[0x08, id, b'S', b'L']).unwrap())
-                .await
-                .unwrap();
-        }
-        SinkExt::<&RawFrame<'_>>::flush(&mut client).await.unwrap();
-        flood.push(client);
-    }
+    let _flood = flood(&hub, 16, 16, *b"SL").await;
     let mut taken = Vec::new();
     for _ in 0..u8::MAX {
         let frame = next(&mut radio).await;
@@ -133,18 +122,7 @@ async fn when_every_id_is_taken_requests_get_the_ids_that_come_free_in_order() {
 #[tokio::test(flavor = "multi_thread")]
 async fn requests_answered_many_times_leave_ids_for_a_client_that_comes_later() {
     let (hub, mut radio) = hub_and_radio().await;
-    let mut flood = Vec::new();
-    for _ in 0..16 {
-        let mut client = raw_client(&hub).await;
-        for id in 1..=16u8 {
-            client
-                .feed(&RawFrame::new(&[0x08, id, b'N', b'D']).unwrap())
-                .await
-                .unwrap();
-        }
-        SinkExt::<&RawFrame<'_>>::flush(&mut client).await.unwrap();
-        flood.push(client);
-    }
+    let _flood = flood(&hub, 16, 16, *b"ND").await;
     for _ in 0..16 * MANY_ANSWER_PER_CLIENT {
         let frame = next(&mut radio).await;
         assert_eq!(&frame[2..], b"ND");

@@ -39,6 +39,22 @@ pub async fn next(wire: &mut Wire) -> Vec<u8> {
     }
 }
 
+/// `clients` new clients of `hub`, each sending the AT command `command` under frame
+/// ids 1 to `requests` (flushed): a flood of requests.
+pub async fn flood(hub: &Hub, clients: usize, requests: u8, command: [u8; 2]) -> Vec<Wire> {
+    let mut flood = Vec::new();
+    for _ in 0..clients {
+        let mut client = raw_client(hub).await;
+        for id in 1..=requests {
+            let frame = [0x08, id, command[0], command[1]];
+            client.feed(&RawFrame::new(&frame).unwrap()).await.unwrap();
+        }
+        SinkExt::<&RawFrame<'_>>::flush(&mut client).await.unwrap();
+        flood.push(client);
+    }
+    flood
+}
+
 /// A hub whose radio is played by the test: the radio's side of the link.
 pub async fn hub_and_radio() -> (Hub, Wire) {
     let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
