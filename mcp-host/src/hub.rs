@@ -152,6 +152,7 @@ use self::port::Port;
 use crate::codec::{CodecItem, XBeeCodec, encode_frame};
 use crate::event::{answer_type, is_response};
 use crate::ids::IdTable;
+use crate::repeats::Repeats;
 use crate::{
     CommandSender, ConnectError, Event, Link, LinkEvent, LinkInfo, LinkOptions, PacketStream, Stats,
 };
@@ -603,47 +604,6 @@ fn is_whole_request(data: &[u8]) -> bool {
     }
 }
 
-/// How often a warning repeated by a peer (a client turned away) is said at most: the
-/// first is said at once, the next ones counted and said together.
-const REPEAT_QUIET: Duration = Duration::from_secs(1);
-
-/// A warning said at most every [`REPEAT_QUIET`], with a count of those not said.
-#[derive(Default)]
-struct Repeats {
-    /// When it was last said.
-    said: Option<Instant>,
-    /// Times it was not said since.
-    unsaid: u64,
-}
-
-impl Repeats {
-    /// Counts one at `now`: `Some(n)` to say it, with the `n` not said before it, or
-    /// `None` to stay quiet.
-    fn count(&mut self, now: Instant) -> Option<u64> {
-        match self.said {
-            Some(said) if now.duration_since(said) < REPEAT_QUIET => {
-                self.unsaid += 1;
-                None
-            }
-            _ => {
-                self.said = Some(now);
-                Some(std::mem::take(&mut self.unsaid))
-            }
-        }
-    }
-
-    /// The number not said yet, once [`REPEAT_QUIET`] has passed since the last one was
-    /// said (when they stopped coming); `None` without any.
-    fn due(&mut self, now: Instant) -> Option<u64> {
-        let said = self.said?;
-        if self.unsaid == 0 || now.duration_since(said) < REPEAT_QUIET {
-            return None;
-        }
-        self.said = Some(now);
-        Some(std::mem::take(&mut self.unsaid))
-    }
-}
-
 /// A client's queue of frames to the radio, and the client (kept until the queue is
 /// drained, so that the routes of its last frames stay until these are written).
 type ClientFrames = (mpsc::Receiver<Vec<u8>>, Arc<Client>);
@@ -843,7 +803,7 @@ impl Serve {
                 _ = expire.tick() => {
                     lock(&self.routes).expire(Instant::now());
                     // The clients turned away since the last warning, once they stop.
-                    if let Some(more) = self.turned_away.due(Instant::now()) {
+                    if let Some(more) = self.turned_away.take_due(Instant::now()) {
                         tracing::warn!(
                             "hub: {more} more clients turned away ({MAX_CLIENTS} connected)"
                         );

@@ -121,6 +121,7 @@ mod pty;
 pub mod radio;
 pub mod record;
 pub mod render;
+mod repeats;
 mod sender;
 pub mod sim;
 mod sink;

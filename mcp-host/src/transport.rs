@@ -18,6 +18,7 @@ use tokio_util::task::AbortOnDropHandle;
 use crate::link::Link;
 use crate::options::{LinkOptions, ReconnectPolicy};
 use crate::pty::{PtyPort, PtyStream};
+use crate::repeats::Repeats;
 
 /// Why a link could not be opened.
 #[derive(Debug, thiserror::Error)]
@@ -562,42 +563,17 @@ fn second_handle(stream: &TcpStream) -> Option<std::net::TcpStream> {
     Some(served)
 }
 
-/// Peers a `tcp-listen` link turned away: said to the operator of a simulator or an
-/// emulated radio (the peer sees only its connection closed), the first at once and
-/// then a count at most once a second, as a peer that connects again and again would
+/// Says that `peer` was turned away: to the operator of a simulator or an emulated
+/// radio (the peer sees only its connection closed), the first at once and then a count
+/// at most once a second ([`Repeats`]), as a peer that connects again and again would
 /// make a line each.
-#[derive(Default)]
-struct TurnedAway {
-    /// Turned away and not yet said.
-    unsaid: u64,
-    /// When a line was last said.
-    said_at: Option<tokio::time::Instant>,
-}
-
-impl TurnedAway {
-    /// Counts `peer` turned away, and says so if a second has passed since the last line.
-    fn one(&mut self, peer: SocketAddr) {
-        if let Some(count) = self.count() {
-            let more = match count {
-                1 => String::new(),
-                n => format!(" ({n} turned away since the last line)"),
-            };
-            tracing::warn!(%peer, "turned a peer away: the link serves another one, and one more waits its turn (to share the link, use a hub){more}");
-        }
-    }
-
-    /// Counts one, and gives the count to say now, if it is time to say one.
-    fn count(&mut self) -> Option<u64> {
-        self.unsaid += 1;
-        let now = tokio::time::Instant::now();
-        if self
-            .said_at
-            .is_some_and(|at| now.duration_since(at) < Duration::from_secs(1))
-        {
-            return None;
-        }
-        self.said_at = Some(now);
-        Some(std::mem::take(&mut self.unsaid))
+fn turned_away(peer: SocketAddr, repeats: &mut Repeats) {
+    if let Some(more) = repeats.count(tokio::time::Instant::now()) {
+        let more = match more {
+            0 => String::new(),
+            n => format!(" ({} turned away since the last line)", n + 1),
+        };
+        tracing::warn!(%peer, "turned a peer away: the link serves another one, and one more waits its turn (to share the link, use a hub){more}");
     }
 }
 
@@ -624,7 +600,7 @@ const WAITED_MAX: usize = 64 * 1024;
 /// others are closed at once.
 async fn accept_peers(listener: TcpListener, name: String, slot: Arc<Slot>) {
     let mut failures = 0u64;
-    let mut turned_away = TurnedAway::default();
+    let mut turned_away_repeats = Repeats::default();
     loop {
         match listener.accept().await {
             Ok((stream, peer)) => {
@@ -660,7 +636,7 @@ async fn accept_peers(listener: TcpListener, name: String, slot: Arc<Slot>) {
                     slot.filled.notify_one();
                 } else {
                     drop(state);
-                    turned_away.one(peer);
+                    turned_away(peer, &mut turned_away_repeats);
                 }
             }
             Err(error) => {
@@ -1024,17 +1000,5 @@ mod tests {
                 .is_ready()
         );
         assert_eq!(buf.filled(), b"cmd");
-    }
-
-    #[tokio::test(start_paused = true)]
-    async fn peers_turned_away_are_said_the_first_at_once_then_a_count_a_second() {
-        let mut turned_away = TurnedAway::default();
-        assert_eq!(turned_away.count(), Some(1));
-        for _ in 0..1000 {
-            assert_eq!(turned_away.count(), None);
-        }
-        tokio::time::advance(Duration::from_secs(1)).await;
-        assert_eq!(turned_away.count(), Some(1001));
-        assert_eq!(turned_away.count(), None);
     }
 }

@@ -21,6 +21,7 @@ use super::uart::Uart;
 use crate::codec::{CodecItem, MAX_REQUEST_DATA, XBeeCodec};
 use crate::options::ReconnectPolicy;
 use crate::pty::{PtyPort, PtyStream};
+use crate::repeats::Repeats;
 use crate::transport::Connector;
 
 /// The peer of a node added as a byte stream.
@@ -233,9 +234,12 @@ async fn serve(
     out: &mut mpsc::Receiver<Out>,
 ) -> (End, bool) {
     let mut healthy = false;
-    let mut overflow = Overflow::default();
+    // Frames for the device dropped because its write queue was full (each counted in
+    // `NodeStats::overflow`): a device that sends requests and reads none of the
+    // answers fills its queue at the pace it writes.
+    let mut overflow = Repeats::default();
     let end = serve_until_end(state, addr, io, out, &mut healthy, &mut overflow).await;
-    overflow.say_rest(addr);
+    say_overflow_rest(addr, &mut overflow);
     (end, healthy)
 }
 
@@ -246,48 +250,10 @@ async fn serve(
 /// reached, on a quiet line for ever.
 const PARTIAL_FRAME_TIMEOUT: Option<Duration> = Some(crate::options::DEFAULT_PARTIAL_FRAME_TIMEOUT);
 
-/// How often "write queue full" is said at most for a node: a device that sends
-/// requests and reads none of the answers fills its queue at the pace it writes.
-const OVERFLOW_QUIET: Duration = Duration::from_secs(1);
-
-/// Frames for a device dropped because its write queue was full (each counted in
-/// [`super::NodeStats::overflow`]): the first said at once, the next ones together, at
-/// most every [`OVERFLOW_QUIET`] and when the stream ends.
-#[derive(Default)]
-struct Overflow {
-    /// When it was last said.
-    said: Option<Instant>,
-    /// Dropped since, not said.
-    unsaid: u64,
-}
-
-impl Overflow {
-    /// A frame dropped at `now`.
-    fn dropped(&mut self, addr: Address64, now: Instant) {
-        match self.said {
-            Some(said) if now.duration_since(said) < OVERFLOW_QUIET => self.unsaid += 1,
-            _ => {
-                self.said = Some(now);
-                tracing::warn!(node = %addr, "write queue full: frame dropped");
-            }
-        }
-    }
-
-    /// When the frames dropped and not said yet are to be said.
-    fn due(&self) -> Option<Instant> {
-        if self.unsaid == 0 {
-            return None;
-        }
-        self.said.map(|said| said + OVERFLOW_QUIET)
-    }
-
-    /// Says the frames dropped and not said yet.
-    fn say_rest(&mut self, addr: Address64) {
-        if self.unsaid > 0 {
-            let more = std::mem::take(&mut self.unsaid);
-            self.said = Some(Instant::now());
-            tracing::warn!(node = %addr, "write queue full: {more} more frames dropped");
-        }
+/// Says the frames dropped for a full write queue and not said yet.
+fn say_overflow_rest(addr: Address64, overflow: &mut Repeats) {
+    if let Some(more) = overflow.take_rest() {
+        tracing::warn!(node = %addr, "write queue full: {more} more frames dropped");
     }
 }
 
@@ -297,7 +263,7 @@ async fn serve_until_end(
     io: &mut Stream,
     out: &mut mpsc::Receiver<Out>,
     healthy: &mut bool,
-    overflow: &mut Overflow,
+    overflow: &mut Repeats,
 ) -> End {
     // A device on a pseudo-terminal set to another rate than its radio's UART's.
     let rate_probe = match &*io {
@@ -340,7 +306,7 @@ async fn serve_until_end(
             .decoder()
             .api()
             .and_then(|codec| codec.stale_check_at(PARTIAL_FRAME_TIMEOUT));
-        let overflow_due = overflow.due();
+        let overflow_due = overflow.due_at();
         let steps = tokio::select! {
             item = next_input(&mut early, &mut frames) => match item {
                 Some(Ok(Input::Frame(CodecItem::Frame(frame)))) => {
@@ -391,13 +357,20 @@ async fn serve_until_end(
                     if let Some(node) = lock(state).nodes.get_mut(&addr) {
                         node.stats.overflow += 1;
                     }
-                    overflow.dropped(addr, Instant::now());
+                    match overflow.count(Instant::now()) {
+                        Some(0) => tracing::warn!(node = %addr, "write queue full: frame dropped"),
+                        Some(more) => tracing::warn!(
+                            node = %addr,
+                            "write queue full: frame dropped ({more} more since the last line)"
+                        ),
+                        None => {}
+                    }
                     continue;
                 }
                 None => return End::NetworkGone,
             },
             () = sleep_until(overflow_due.unwrap_or_else(Instant::now)), if overflow_due.is_some() => {
-                overflow.say_rest(addr);
+                say_overflow_rest(addr, overflow);
                 continue;
             },
             () = sleep_until(check_stale_at.unwrap_or_else(Instant::now)), if check_stale_at.is_some() => {
