@@ -741,13 +741,11 @@ impl Driver {
                     self.healthy = true;
                     self.connector.mark_healthy();
                 }
-                if self.subscribers.0.frames_wanted() {
-                    self.subscribers.0.publish_frame(Record {
-                        time: SystemTime::now(),
-                        direction: Direction::Received,
-                        frame: frame.data().to_vec(),
-                    });
-                }
+                self.subscribers.0.publish_frame(|| Record {
+                    time: SystemTime::now(),
+                    direction: Direction::Received,
+                    frame: frame.data().to_vec(),
+                });
                 self.dispatch(frame);
             }
         }

@@ -104,10 +104,11 @@ impl<T: Clone + Send + 'static> State<T> {
         matches!(self, State::Open(tx) if tx.receiver_count() > 0)
     }
 
-    /// Hands `item` to the subscriptions, if there are any.
-    fn publish(&self, item: T) {
+    /// Hands what `make` makes to the subscriptions, if there are any (it is not made
+    /// otherwise).
+    fn publish(&self, make: impl FnOnce() -> T) {
         if let (true, State::Open(tx)) = (self.wanted(), self) {
-            let _ = tx.send(item);
+            let _ = tx.send(make());
         }
     }
 }
@@ -139,10 +140,7 @@ impl Subscribers {
 
     /// Hands `event` to the subscriptions, if there are any.
     pub(crate) fn publish(&self, event: &Event) {
-        let state = lock(&self.events);
-        if state.wanted() {
-            state.publish(event.clone());
-        }
+        lock(&self.events).publish(|| event.clone());
     }
 
     /// Whether a subscription to the frames is there to take them.
@@ -150,9 +148,10 @@ impl Subscribers {
         lock(&self.frames).wanted()
     }
 
-    /// Hands `record` to the subscriptions to the frames, if there are any.
-    pub(crate) fn publish_frame(&self, record: Record) {
-        lock(&self.frames).publish(record);
+    /// Hands the record `make` makes to the subscriptions to the frames, if there are
+    /// any (it is not made otherwise).
+    pub(crate) fn publish_frame(&self, make: impl FnOnce() -> Record) {
+        lock(&self.frames).publish(make);
     }
 
     /// The link has ended, with `last` its last event: the subscriptions end after it.

@@ -64,7 +64,7 @@ impl SentFrames {
                 // The link wrote frames it encoded itself: an error is not expected,
                 // and has no frame to record.
                 if let Ok(frame) = event {
-                    subscribers.publish_frame(Record {
+                    subscribers.publish_frame(|| Record {
                         time: SystemTime::now(),
                         direction: Direction::Sent,
                         frame: frame.data().to_vec(),
