@@ -566,7 +566,10 @@ impl Driver {
             let accept_ops =
                 self.ops_open && self.parked.len() < PARKED_MAX && out.len() < HIGH_WATER;
             let accept_writes = self.writes_open && out.len() < HIGH_WATER;
-            let check_stale_at = self.stale_check_at(reader.decoder());
+            // API mode 1: a partial frame is given up after a quiet spell (see
+            // `LinkOptions::partial_frame_timeout`).
+            let stale_after = self.options.partial_frame_timeout;
+            let check_stale_at = reader.decoder().stale_check_at(stale_after);
             tokio::select! {
                 item = reader.next() => if let Some(failed) = self.on_read(item) {
                     return failed;
@@ -601,7 +604,7 @@ impl Driver {
                             return failed;
                         },
                         // Unless bytes came in meanwhile (the next turn waits again).
-                        None => if self.stale_at(reader.decoder()).is_some_and(|at| at <= Instant::now()) {
+                        None => if reader.decoder().is_stale(stale_after, Instant::now()) {
                             for item in reader.decoder_mut().drop_partial() {
                                 self.handle_item(item);
                             }
@@ -664,30 +667,6 @@ impl Driver {
         {
             tracing::warn!(%error, "closing: queued frames not all written");
         }
-    }
-
-    /// How long a partial frame may wait for its next byte: API mode 1 only, see
-    /// [`LinkOptions::partial_frame_timeout`].
-    fn partial_frame_timeout(&self) -> Option<Duration> {
-        match self.options.api_mode {
-            xbee_api::ApiMode::Unescaped => self.options.partial_frame_timeout,
-            xbee_api::ApiMode::Escaped => None,
-        }
-    }
-
-    /// When the partial frame the codec holds is to be given up.
-    fn stale_at(&self, codec: &XBeeCodec) -> Option<Instant> {
-        Some(crate::options::later(
-            codec.partial_since()?,
-            self.partial_frame_timeout()?,
-        ))
-    }
-
-    /// When to look at the partial frame next: when it goes stale or, with none there, a
-    /// timeout from now (the bytes of one come in without waking the loop: no item).
-    fn stale_check_at(&self, codec: &XBeeCodec) -> Option<Instant> {
-        let since = codec.partial_since().unwrap_or_else(Instant::now);
-        Some(crate::options::later(since, self.partial_frame_timeout()?))
     }
 
     /// Queues `event` for the stream. When the queue is full, a link event is held back
