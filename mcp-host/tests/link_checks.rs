@@ -126,6 +126,35 @@ fn repoint(at: &std::path::Path, target: &std::path::Path) {
     std::fs::rename(&next, at).unwrap();
 }
 
+/// A USB serial adapter's path in `dir`, `ttyUSB0`, a terminal at first: a symbolic
+/// link to a pseudo-terminal's far end. The master side and the far end (held open) come
+/// with it.
+#[cfg(target_os = "linux")]
+fn adapter(
+    dir: &std::path::Path,
+) -> (serialport::TTYPort, serialport::TTYPort, std::path::PathBuf) {
+    let (master, far, terminal) = pseudo_terminal();
+    let port = dir.join("ttyUSB0");
+    std::os::unix::fs::symlink(&terminal, &port).unwrap();
+    (master, far, port)
+}
+
+/// The adapter at `port` pulled out, and a regular file left where it was: the link
+/// goes down, and cannot be opened again.
+#[cfg(target_os = "linux")]
+fn pull_out(
+    dir: &std::path::Path,
+    port: &std::path::Path,
+    master: serialport::TTYPort,
+    far: serialport::TTYPort,
+) {
+    drop(far);
+    let stray = dir.join("stray");
+    std::fs::write(&stray, b"\n").unwrap();
+    repoint(port, &stray);
+    drop(master);
+}
+
 #[cfg(target_os = "linux")]
 #[test]
 fn a_link_that_ends_for_good_stops_sim_and_radio_naming_it() {
@@ -139,10 +168,7 @@ fn a_link_that_ends_for_good_stops_sim_and_radio_naming_it() {
     ];
     for (command, name) in cases {
         let dir = tempfile::tempdir().unwrap();
-        // The adapter's path, a terminal at first: its master side held here.
-        let (mut master, far, terminal) = pseudo_terminal();
-        let port = dir.path().join("ttyUSB0");
-        std::os::unix::fs::symlink(&terminal, &port).unwrap();
+        let (mut master, far, port) = adapter(dir.path());
         let link = format!("serial:{}", port.display());
         let given = match command[0] {
             "sim" => link.clone(),
@@ -156,13 +182,7 @@ fn a_link_that_ends_for_good_stops_sim_and_radio_naming_it() {
         let mut start = [0u8; 1];
         std::io::Read::read_exact(&mut master, &mut start).expect("a modem status");
         assert_eq!(start, [0x7E]);
-        drop(far);
-        // The adapter pulled out, and a regular file left where it was: the link goes
-        // down, and cannot be opened again.
-        let stray = dir.path().join("stray");
-        std::fs::write(&stray, b"\n").unwrap();
-        repoint(&port, &stray);
-        drop(master);
+        pull_out(dir.path(), &port, master, far);
         let (code, said) = finish(running, &stderr, &args);
         assert_eq!(code, Some(3), "{args:?}: {said}");
         let path = port.display();
@@ -254,9 +274,7 @@ fn a_device_this_user_may_not_open_says_what_to_do_also_while_waiting() {
 #[test]
 fn a_hub_recording_whose_radio_ends_for_good_says_what_it_recorded() {
     let dir = tempfile::tempdir().unwrap();
-    let (mut master, far, terminal) = pseudo_terminal();
-    let port = dir.path().join("ttyUSB0");
-    std::os::unix::fs::symlink(&terminal, &port).unwrap();
+    let (mut master, far, port) = adapter(dir.path());
     let link = format!("serial:{}", port.display());
     let record = dir.path().join("flight.mcprec");
     let args = [
@@ -273,19 +291,15 @@ fn a_hub_recording_whose_radio_ends_for_good_says_what_it_recorded() {
     line(&stdout, |l| l.starts_with("serving "));
     // A frame from the radio, recorded: a modem status.
     std::io::Write::write_all(&mut master, &[0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F]).unwrap();
-    // The adapter pulled out, a regular file left where it was: the link ends for good.
-    // Until the frame is in the file, the hub is given time (its reads are not seen).
+    // The adapter pulled out once the frame is in the file (until then the hub is given
+    // time: its reads are not seen): the link ends for good.
     let wait = std::time::Instant::now();
     while std::fs::metadata(&record).map_or(0, |m| m.len()) < 8 + 11 + 2 {
         assert!(wait.elapsed() < GUARD, "the frame is not recorded");
         // Looked at again shortly: the file says nothing when it grows.
         std::thread::sleep(std::time::Duration::from_millis(10));
     }
-    drop(far);
-    let stray = dir.path().join("stray");
-    std::fs::write(&stray, b"\n").unwrap();
-    repoint(&port, &stray);
-    drop(master);
+    pull_out(dir.path(), &port, master, far);
     let (code, said) = finish(running, &stderr, &args);
     assert_eq!(code, Some(3), "{said}");
     assert!(!said.contains("panicked"), "{said}");
