@@ -8,34 +8,65 @@ use std::str::FromStr;
 /// at 115200 baud, 8N1).
 pub const DEFAULT_BAUD: u32 = 115_200;
 
+/// Flow control of a `serial:` link.
+///
+/// XBee modules offer hardware flow control alone: the radio drops CTS while its serial
+/// receive buffer is nearly full (`D7` = 1, as it leaves the factory), and with `D6` = 1
+/// it holds back what it sends while the host drops RTS. Without flow control (the
+/// default, as most USB adapters are used) a host that writes faster than the radio
+/// sends over the air, many commands at once through a hub say, can overrun that buffer,
+/// and the radio drops the bytes: the frames cut short are never sent, their requests
+/// time out. Software flow control (XON/XOFF) is not offered: XBee modules do not speak
+/// it, and in API mode 1 the bytes 0x11 and 0x13 occur in frames unescaped.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum FlowControl {
+    /// None: the CTS line is ignored and RTS left asserted.
+    #[default]
+    None,
+    /// Hardware flow control on RTS/CTS (`serial:PATH:BAUD:rtscts`): nothing is written
+    /// while the radio drops CTS.
+    RtsCts,
+}
+
 /// Where the XBee API byte stream comes from.
 ///
 /// Parsed from and displayed as a string; `Display` always writes the baud rate of a
 /// serial link, so `link.to_string().parse()` gives the same link back.
 ///
 /// ```
+/// use mcp_host::link::FlowControl;
 /// use mcp_host::Link;
 ///
 /// let link: Link = "serial:/dev/ttyUSB0".parse()?;
-/// assert_eq!(link, Link::Serial { path: "/dev/ttyUSB0".into(), baud: 115_200 });
+/// assert_eq!(link, Link::serial("/dev/ttyUSB0", 115_200));
 /// assert_eq!(link.to_string(), "serial:/dev/ttyUSB0:115200");
 ///
+/// // A radio whose CTS line the host must honour (hardware flow control).
+/// let link: Link = "serial:/dev/ttyUSB0:230400:rtscts".parse()?;
+/// assert_eq!(link, Link::serial_with("/dev/ttyUSB0", 230_400, FlowControl::RtsCts));
+///
 /// let link: Link = "tcp:[::1]:9750".parse()?;
-/// assert_eq!(link, Link::Tcp { host: "::1".into(), port: 9750 });
+/// assert_eq!(link, Link::tcp("::1", 9750));
+/// assert_eq!(Link::from("[::1]:9750".parse::<std::net::SocketAddr>()?), link);
 /// assert_eq!(link.to_string(), "tcp:[::1]:9750");
-/// # Ok::<(), mcp_host::LinkParseError>(())
+/// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
 #[non_exhaustive]
 pub enum Link {
-    /// A serial port (`serial:PATH[:BAUD]`), 8 data bits, no parity, 1 stop bit.
+    /// A serial port (`serial:PATH[:BAUD][:rtscts]`), 8 data bits, no parity, 1 stop bit.
+    #[non_exhaustive]
     Serial {
         /// Device path, e.g. `/dev/ttyUSB0`.
         path: String,
         /// Baud rate.
         baud: u32,
+        /// Flow control: none (the default), or RTS/CTS (`:rtscts`).
+        flow_control: FlowControl,
     },
     /// A TCP connection to `HOST:PORT` (`tcp:HOST:PORT`).
+    #[non_exhaustive]
     Tcp {
         /// Host name or IP address (IPv6 without brackets).
         host: String,
@@ -43,6 +74,7 @@ pub enum Link {
         port: u16,
     },
     /// A TCP listener on `ADDR:PORT` serving one peer at a time (`tcp-listen:ADDR:PORT`).
+    #[non_exhaustive]
     TcpListen {
         /// Local address to bind (IPv6 without brackets).
         addr: String,
@@ -61,15 +93,20 @@ pub enum Link {
 pub enum LinkParseError {
     /// The string was empty.
     #[error(
-        "empty link string (expected serial:PATH[:BAUD], tcp:HOST:PORT, tcp-listen:ADDR:PORT or pty)"
+        "empty link string (expected serial:PATH[:BAUD][:rtscts], tcp:HOST:PORT, tcp-listen:ADDR:PORT or pty)"
     )]
     Empty,
     /// The part before the first `:` is not a known link kind.
     #[error("unknown link kind {0:?} (expected serial, tcp, tcp-listen or pty){hint}", hint = bare_path_hint(.0))]
     UnknownKind(String),
     /// `serial:` without a device path.
-    #[error("serial link without a device path (expected serial:PATH[:BAUD])")]
+    #[error("serial link without a device path (expected serial:PATH[:BAUD][:rtscts])")]
     MissingPath,
+    /// A serial link ending in a word that is neither a baud rate nor `rtscts`
+    /// (`serial:/dev/ttyUSB0:115200:rts`): no device's name ends so, and taken as part of
+    /// the path it would be waited for in vain.
+    #[error("{}", option_message(.0))]
+    UnknownSerialOption(String),
     /// The baud rate is not a positive integer.
     #[error("invalid baud rate {0:?} (expected a positive integer)")]
     InvalidBaud(String),
@@ -148,7 +185,86 @@ impl FromStr for Link {
     }
 }
 
+/// The message of [`LinkParseError::UnknownSerialOption`].
+fn option_message(word: &str) -> String {
+    let lower = word.to_ascii_lowercase();
+    if matches!(
+        lower.as_str(),
+        "xonxoff" | "xon/xoff" | "xon-xoff" | "software"
+    ) {
+        format!(
+            "software flow control ({word:?}) is not offered: XBee radios have hardware flow control alone (write :rtscts)"
+        )
+    } else {
+        format!(
+            "unknown option {word:?} after the serial port's path (expected :BAUD, :rtscts or both, as in serial:/dev/ttyUSB0:115200:rtscts)"
+        )
+    }
+}
+
+/// Whether the last `:` part of a serial link is meant as an option: a word of letters
+/// (`rts`, `fast`, `rts/cts`). No device's name ends so; the colons in names such as
+/// `/dev/serial/by-path/pci-0000:00:14.0-usb-0:1:1.0-port0` come before digits.
+fn is_option_word(word: &str) -> bool {
+    word.bytes().any(|b| b.is_ascii_alphabetic())
+        && word
+            .bytes()
+            .all(|b| b.is_ascii_alphabetic() || b == b'/' || b == b'-' || b == b'_')
+}
+
+impl Link {
+    /// A `serial:` link without flow control, as `serial:PATH:BAUD` parses to.
+    pub fn serial(path: impl Into<String>, baud: u32) -> Link {
+        Link::serial_with(path, baud, FlowControl::None)
+    }
+
+    /// A `serial:` link with the given flow control (`serial:PATH:BAUD:rtscts` for
+    /// [`FlowControl::RtsCts`]).
+    pub fn serial_with(path: impl Into<String>, baud: u32, flow_control: FlowControl) -> Link {
+        Link::Serial {
+            path: path.into(),
+            baud,
+            flow_control,
+        }
+    }
+
+    /// A `tcp:` link to `host` (a name or an IP address, IPv6 without brackets) and
+    /// `port`.
+    pub fn tcp(host: impl Into<String>, port: u16) -> Link {
+        Link::Tcp {
+            host: host.into(),
+            port,
+        }
+    }
+
+    /// A `tcp-listen:` link on the local address `addr` (IPv6 without brackets) and
+    /// `port` (0 for one the system chooses).
+    pub fn tcp_listen(addr: impl Into<String>, port: u16) -> Link {
+        Link::TcpListen {
+            addr: addr.into(),
+            port,
+        }
+    }
+}
+
+/// A `tcp:` link to the address, as a program that started a `tcp-listen:` link on port 0
+/// (a [`crate::sim::Simulator`], a [`crate::hub::Hub`]) connects to it.
+impl From<std::net::SocketAddr> for Link {
+    fn from(addr: std::net::SocketAddr) -> Link {
+        Link::tcp(addr.ip().to_string(), addr.port())
+    }
+}
+
 fn parse_serial(rest: &str) -> Result<Link, LinkParseError> {
+    // A trailing `:rtscts` is the flow control.
+    let (rest, flow_control) = match rest.rsplit_once(':') {
+        Some((rest, "rtscts")) => (rest, FlowControl::RtsCts),
+        Some((rest, "none")) => (rest, FlowControl::None),
+        Some((_, word)) if is_option_word(word) => {
+            return Err(LinkParseError::UnknownSerialOption(word.to_owned()));
+        }
+        _ => (rest, FlowControl::None),
+    };
     // A trailing `:DIGITS` is the baud rate; anything else belongs to the path.
     let (path, baud) = match rest.rsplit_once(':') {
         Some((path, baud)) if !baud.is_empty() && baud.bytes().all(|b| b.is_ascii_digit()) => {
@@ -173,6 +289,7 @@ fn parse_serial(rest: &str) -> Result<Link, LinkParseError> {
     Ok(Link::Serial {
         path: path.to_owned(),
         baud,
+        flow_control,
     })
 }
 
@@ -226,7 +343,17 @@ impl fmt::Display for HostPort<'_> {
 impl fmt::Display for Link {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Link::Serial { path, baud } => write!(f, "serial:{path}:{baud}"),
+            Link::Serial {
+                path,
+                baud,
+                flow_control,
+            } => {
+                write!(f, "serial:{path}:{baud}")?;
+                match flow_control {
+                    FlowControl::None => Ok(()),
+                    FlowControl::RtsCts => f.write_str(":rtscts"),
+                }
+            }
             Link::Tcp { host, port } => write!(f, "tcp:{}", HostPort(host, *port)),
             Link::TcpListen { addr, port } => write!(f, "tcp-listen:{}", HostPort(addr, *port)),
             Link::Pty => f.write_str("pty"),
@@ -242,25 +369,13 @@ mod tests {
     fn parses_each_kind() {
         assert_eq!(
             "serial:/dev/ttyUSB0".parse(),
-            Ok(Link::Serial {
-                path: "/dev/ttyUSB0".into(),
-                baud: 115_200
-            })
+            Ok(Link::serial("/dev/ttyUSB0", 115_200))
         );
         assert_eq!(
             "serial:/dev/ttyS1:9600".parse(),
-            Ok(Link::Serial {
-                path: "/dev/ttyS1".into(),
-                baud: 9600
-            })
+            Ok(Link::serial("/dev/ttyS1", 9600))
         );
-        assert_eq!(
-            "serial:COM3".parse(),
-            Ok(Link::Serial {
-                path: "COM3".into(),
-                baud: 115_200
-            })
-        );
+        assert_eq!("serial:COM3".parse(), Ok(Link::serial("COM3", 115_200)));
         assert_eq!(
             "tcp:localhost:9750".parse(),
             Ok(Link::Tcp {
@@ -356,10 +471,7 @@ mod tests {
         let by_path = "/dev/serial/by-path/pci-0000:00:14.0-usb-0:1:1.0-port0";
         assert_eq!(
             format!("serial:{by_path}").parse::<Link>(),
-            Ok(Link::Serial {
-                path: by_path.to_owned(),
-                baud: DEFAULT_BAUD,
-            })
+            Ok(Link::serial(by_path, DEFAULT_BAUD))
         );
         let message = "serial:/dev/ttyUSB0:115k"
             .parse::<Link>()
@@ -372,10 +484,72 @@ mod tests {
     }
 
     #[test]
+    fn flow_control_is_the_last_part_of_a_serial_link() {
+        let rts_cts = |path: &str, baud| Link::Serial {
+            path: path.to_owned(),
+            baud,
+            flow_control: FlowControl::RtsCts,
+        };
+        assert_eq!(
+            "serial:/dev/ttyUSB0:230400:rtscts".parse(),
+            Ok(rts_cts("/dev/ttyUSB0", 230_400))
+        );
+        assert_eq!(
+            "serial:COM3:rtscts".parse(),
+            Ok(rts_cts("COM3", DEFAULT_BAUD))
+        );
+        assert_eq!(
+            "serial:/dev/ttyUSB0:9600:none".parse(),
+            Ok(Link::serial("/dev/ttyUSB0", 9600))
+        );
+        let by_path = "/dev/serial/by-path/pci-0000:00:14.0-usb-0:1:1.0-port0";
+        assert_eq!(
+            format!("serial:{by_path}:rtscts").parse(),
+            Ok(rts_cts(by_path, DEFAULT_BAUD))
+        );
+        assert_eq!(
+            rts_cts("/dev/ttyUSB0", 57_600).to_string(),
+            "serial:/dev/ttyUSB0:57600:rtscts"
+        );
+        for (text, word) in [
+            ("serial:/dev/ttyUSB0:115200:RTSCTS", "RTSCTS"),
+            ("serial:/dev/ttyUSB0:115200:rts/cts", "rts/cts"),
+            ("serial:/dev/ttyUSB0:hardware", "hardware"),
+            ("serial:/dev/ttyUSB0:115200:xonxoff", "xonxoff"),
+            ("serial:/dev/ttyUSB0:115200:rts", "rts"),
+            ("serial:/dev/ttyUSB0:fast", "fast"),
+            ("serial:COM3:rts_cts", "rts_cts"),
+        ] {
+            assert_eq!(
+                text.parse::<Link>(),
+                Err(LinkParseError::UnknownSerialOption(word.into())),
+                "{text}"
+            );
+        }
+        let message = "serial:/dev/ttyUSB0:115200:rts/cts"
+            .parse::<Link>()
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            message,
+            "unknown option \"rts/cts\" after the serial port's path (expected :BAUD, :rtscts or both, as in serial:/dev/ttyUSB0:115200:rtscts)"
+        );
+        let message = "serial:/dev/ttyUSB0:115200:xonxoff"
+            .parse::<Link>()
+            .unwrap_err()
+            .to_string();
+        assert!(
+            message.contains("XBee radios have hardware flow control alone"),
+            "{message}"
+        );
+    }
+
+    #[test]
     fn display_round_trips() {
         for text in [
             "serial:/dev/ttyUSB0:115200",
             "serial:/dev/serial/by-id/usb-FTDI_FT232R-if00:57600",
+            "serial:/dev/ttyUSB0:115200:rtscts",
             "tcp:127.0.0.1:9750",
             "tcp:[fe80::1]:1",
             "tcp-listen:0.0.0.0:65535",

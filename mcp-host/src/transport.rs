@@ -295,8 +295,15 @@ impl Drop for Lent {
 }
 
 enum Kind {
-    Serial { path: String, baud: u32 },
-    Tcp { host: String, port: u16 },
+    Serial {
+        path: String,
+        baud: u32,
+        flow_control: crate::link::FlowControl,
+    },
+    Tcp {
+        host: String,
+        port: u16,
+    },
     Listen(Listen),
     Pty(PtyLink),
 }
@@ -699,9 +706,14 @@ impl Connector {
     /// Prepares `link`: binds a listener or creates a pseudo-terminal pair where needed.
     pub async fn new(link: &Link, options: &LinkOptions) -> Result<Self, LinkError> {
         let kind = match link {
-            Link::Serial { path, baud } => Kind::Serial {
+            Link::Serial {
+                path,
+                baud,
+                flow_control,
+            } => Kind::Serial {
                 path: path.clone(),
                 baud: *baud,
+                flow_control: *flow_control,
             },
             Link::Tcp { host, port } => Kind::Tcp {
                 host: host.clone(),
@@ -776,7 +788,11 @@ impl Connector {
 
     async fn open_kind(&mut self) -> Result<Transport, LinkError> {
         match &mut self.kind {
-            Kind::Serial { path, baud } => {
+            Kind::Serial {
+                path,
+                baud,
+                flow_control,
+            } => {
                 let serial_error = |source| LinkError::Serial {
                     path: path.clone(),
                     baud: *baud,
@@ -787,7 +803,10 @@ impl Connector {
                     .data_bits(tokio_serial::DataBits::Eight)
                     .parity(tokio_serial::Parity::None)
                     .stop_bits(tokio_serial::StopBits::One)
-                    .flow_control(tokio_serial::FlowControl::None)
+                    .flow_control(match flow_control {
+                        crate::link::FlowControl::RtsCts => tokio_serial::FlowControl::Hardware,
+                        _ => tokio_serial::FlowControl::None,
+                    })
                     .open_native_async()
                     .map_err(serial_error)?;
                 // The far end of a pseudo-terminal (a virtual radio's, a simulator's) keeps

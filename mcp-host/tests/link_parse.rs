@@ -1,6 +1,7 @@
 //! Link strings: every link displays to a string that parses back to it.
 
 use mcp_host::Link;
+use mcp_host::link::FlowControl;
 use proptest::prelude::*;
 
 fn link() -> impl Strategy<Value = Link> {
@@ -10,9 +11,16 @@ fn link() -> impl Strategy<Value = Link> {
         any::<std::net::Ipv6Addr>().prop_map(|a| a.to_string()),
     ];
     prop_oneof![
-        ("[^\\x00]{1,40}", 1u32..).prop_map(|(path, baud)| Link::Serial { path, baud }),
-        (host.clone(), any::<u16>()).prop_map(|(host, port)| Link::Tcp { host, port }),
-        (host, any::<u16>()).prop_map(|(addr, port)| Link::TcpListen { addr, port }),
+        ("[^\\x00]{1,40}", 1u32.., any::<bool>()).prop_map(|(path, baud, rts_cts)| {
+            let flow_control = if rts_cts {
+                FlowControl::RtsCts
+            } else {
+                FlowControl::None
+            };
+            Link::serial_with(path, baud, flow_control)
+        }),
+        (host.clone(), any::<u16>()).prop_map(|(host, port)| Link::tcp(host, port)),
+        (host, any::<u16>()).prop_map(|(addr, port)| Link::tcp_listen(addr, port)),
         Just(Link::Pty),
     ]
 }

@@ -538,10 +538,7 @@ async fn open_errors_are_clear() {
     assert!(!err.is_retryable());
 
     // Port 0 can only be a mistake (`tcp:HOST:0` does not parse): not waited on.
-    let link = Link::Tcp {
-        host: "127.0.0.1".into(),
-        port: 0,
-    };
+    let link = Link::tcp("127.0.0.1", 0);
     let err = refused_at_once(&link).await;
     assert!(err.to_string().contains("port 0"), "{err}");
 
@@ -551,15 +548,36 @@ async fn open_errors_are_clear() {
     let file = dir.path().join("not-a-device");
     std::fs::write(&file, b"").unwrap();
     for path in [dir.path().to_path_buf(), file] {
-        let link = Link::Serial {
-            path: path.display().to_string(),
-            baud: 9600,
-        };
+        let link = Link::serial(path.display().to_string(), 9600);
         let err = refused_at_once(&link).await;
         assert!(
             err.to_string().contains(&path.display().to_string()),
             "{err}"
         );
+    }
+}
+
+// A pseudo-terminal's master side reads the far end's settings (Linux).
+#[cfg(target_os = "linux")]
+#[tokio::test]
+async fn a_serial_link_opens_its_port_with_the_flow_control_it_names() {
+    use tokio_serial::{FlowControl, SerialPort};
+    let (master, slave) = tokio_serial::SerialStream::pair().unwrap();
+    let path = slave.name().unwrap();
+    drop(slave);
+    for (suffix, expected) in [
+        (":rtscts", FlowControl::Hardware),
+        ("", FlowControl::None),
+        (":rtscts", FlowControl::Hardware),
+    ] {
+        let link: Link = format!("serial:{path}:57600{suffix}").parse().unwrap();
+        let mut connector = Connector::new(&link, &LinkOptions::default())
+            .await
+            .unwrap();
+        let transport = connector.open().await.unwrap();
+        assert_eq!(master.flow_control().unwrap(), expected, "{link}");
+        assert_eq!(master.baud_rate().unwrap(), 57_600, "{link}");
+        drop(transport);
     }
 }
 

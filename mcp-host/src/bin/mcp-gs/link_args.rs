@@ -39,7 +39,7 @@ pub(crate) struct LinkArgs {
     #[arg(
         long,
         value_name = "LINK",
-        help = "The local radio: serial:PATH[:BAUD] (default 115200 8N1), tcp:HOST:PORT, \
+        help = "The local radio: serial:PATH[:BAUD][:rtscts] (default 115200 8N1), tcp:HOST:PORT, \
                 tcp-listen:ADDR:PORT or pty"
     )]
     pub(crate) link: Link,
@@ -452,7 +452,7 @@ pub(crate) fn hint(found: Diagnosis, link: &Link) -> String {
 /// What to do about a baud rate that may differ from the radio's, on `link`.
 fn baud_advice(link: &Link) -> String {
     match link {
-        Link::Serial { path, baud } => format!(
+        Link::Serial { path, baud, .. } => format!(
             "the link runs at {baud} baud: give the radio's rate as serial:{path}:BAUD (XBee \
              modules ship at 9600), or let `mcp-gs probe --link serial:{path}` find it"
         ),
@@ -915,10 +915,7 @@ mod tests {
             ..Stats::default()
         };
         let found = stats.diagnose(ApiMode::Unescaped).expect("a diagnosis");
-        let serial = Link::Serial {
-            path: "/dev/ttyUSB0".into(),
-            baud: 9600,
-        };
+        let serial = Link::serial("/dev/ttyUSB0", 9600);
         let text = hint(found, &serial);
         assert!(
             text.contains(
@@ -931,10 +928,7 @@ mod tests {
             "{text}"
         );
         // Over TCP the rate is not the link's to give.
-        let tcp = Link::Tcp {
-            host: "127.0.0.1".into(),
-            port: 9750,
-        };
+        let tcp = Link::tcp("127.0.0.1", 9750);
         let text = hint(found, &tcp);
         assert!(
             text.contains("the radio's baud rate is set where it is attached"),

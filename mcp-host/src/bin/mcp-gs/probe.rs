@@ -44,9 +44,14 @@ fn parse_probe_link(s: &str) -> Result<ProbeLink, String> {
     // Where the link parser took the path to end: a rate was written if more than a
     // bare `:` follows it (`serial:115200` is a path).
     let given = match &link {
-        Link::Serial { path, baud } => s
+        Link::Serial { path, baud, .. } => s
             .strip_prefix("serial:")
             .and_then(|rest| rest.strip_prefix(path.as_str()))
+            .map(|rest| {
+                // The flow control, after the rate if there is one.
+                let flow = [":rtscts", ":none"].into_iter();
+                flow.fold(rest, |rest, word| rest.strip_suffix(word).unwrap_or(rest))
+            })
             .is_some_and(|rest| rest.len() > 1)
             .then_some(*baud),
         _ => None,
@@ -72,7 +77,10 @@ enum Found {
 
 /// Runs `probe`.
 pub(crate) async fn run(args: ProbeArgs) -> Result<(), Failure> {
-    let Link::Serial { path, .. } = &args.link.link else {
+    let Link::Serial {
+        path, flow_control, ..
+    } = &args.link.link
+    else {
         return Err(Failure::input(
             "probe tries the baud rates of a serial port: give serial:PATH",
         ));
@@ -81,10 +89,7 @@ pub(crate) async fn run(args: ProbeArgs) -> Result<(), Failure> {
     let timeout = Duration::from_secs_f64(args.timeout);
     let guard = args.guard.duration();
     for baud in rates(args.link.given) {
-        let link = Link::Serial {
-            path: path.clone(),
-            baud,
-        };
+        let link = Link::serial_with(path.clone(), baud, *flow_control);
         err!("mcp-gs: {baud} baud...");
         let found = match ask_api(&link, timeout).await? {
             Some(mode) => Found::Api(mode),
@@ -189,6 +194,9 @@ mod tests {
         assert_eq!(given("serial:COM3"), None);
         assert_eq!(given("serial:115200"), None);
         assert_eq!(given("serial:/dev/ttyUSB0:"), None);
+        assert_eq!(given("serial:/dev/ttyUSB0:rtscts"), None);
+        assert_eq!(given("serial:/dev/ttyUSB0::rtscts"), None);
+        assert_eq!(given("serial:/dev/ttyUSB0:57600:rtscts"), Some(57_600));
         assert_eq!(given("tcp:127.0.0.1:9750"), None);
         assert!(parse_probe_link("serial:/dev/ttyUSB0:0").is_err());
     }

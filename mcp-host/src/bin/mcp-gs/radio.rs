@@ -43,7 +43,7 @@ pub(crate) struct RadioArgs {
 }
 
 const RADIO_HELP: &str = "\
-Links: serial:PATH[:BAUD], tcp:HOST:PORT, tcp-listen:ADDR:PORT (each new peer is the device \
+Links: serial:PATH[:BAUD][:rtscts], tcp:HOST:PORT, tcp-listen:ADDR:PORT (each new peer is the device \
 back), pty (the path to open is printed). A link's API mode is given after an @ \
 (LINK@1, LINK@2, or LINK@0: transparent mode), else --api-mode.
 

@@ -29,7 +29,7 @@ pub(crate) enum Which {
 #[command(mut_arg("link", |arg| arg.help(
     "Where to play the frames: to a ground station (received frames, the default), \
      tcp-listen:ADDR:PORT for it to connect to, or serial:PATH on a serial cable to it; \
-     to a radio (--frames tx), serial:PATH[:BAUD] or tcp:HOST:PORT"
+     to a radio (--frames tx), serial:PATH[:BAUD][:rtscts] or tcp:HOST:PORT"
 )))]
 pub(crate) struct ReplayArgs {
     /// A recording made by `monitor --record` or `hub --record` (or by a program with

@@ -24,7 +24,7 @@ pub(crate) struct SetupArgs {
     #[arg(
         long,
         value_name = "LINK",
-        help = "The local radio: serial:PATH[:BAUD] (XBee modules leave the factory at 9600 \
+        help = "The local radio: serial:PATH[:BAUD][:rtscts] (XBee modules leave the factory at 9600 \
                 baud: serial:/dev/ttyUSB0:9600) or tcp:HOST:PORT (a serial-to-TCP bridge, not \
                 a hub: a radio set to another mode would be cut off from it)"
     )]
@@ -209,10 +209,12 @@ pub(crate) async fn run(args: SetupArgs) -> Result<(), Failure> {
     // Leaving command mode applies the changes; the port is closed for the check.
     drop(radio.exit().await.map_err(failed)?);
     let link = match (&args.link, args.baud) {
-        (Link::Serial { path, .. }, Some(baud)) => Link::Serial {
-            path: path.clone(),
-            baud,
-        },
+        (
+            Link::Serial {
+                path, flow_control, ..
+            },
+            Some(baud),
+        ) => Link::serial_with(path.clone(), baud, *flow_control),
         (Link::Tcp { .. }, Some(baud)) => {
             err!(
                 "mcp-gs: the radio's UART now runs at {baud} baud: set the bridge's serial \
@@ -320,14 +322,17 @@ async fn set_up_in_api_frames(
         let was = bd.map(|bd| format!("{bd:X}"));
         let (line, change) = bd_line(was.as_deref(), baud);
         // Through a bridge, a change was refused above.
-        if let (true, Link::Serial { path, .. }) = (change, &args.link) {
+        if let (
+            true,
+            Link::Serial {
+                path, flow_control, ..
+            },
+        ) = (change, &args.link)
+        {
             set(&now, &asked, *b"BD", &[bd_value(baud)])
                 .await
                 .map_err(unsaved(&lines))?;
-            now.0 = Link::Serial {
-                path: path.clone(),
-                baud,
-            };
+            now.0 = Link::serial_with(path.clone(), baud, *flow_control);
         }
         lines.push((line, change));
     }
@@ -439,7 +444,9 @@ fn command_failure(error: CommandModeError, link: &Link) -> Failure {
         CommandModeError::NoAnswer { ref sent, .. } if sent == "+++" => {
             let rates = match link {
                 // The factory's rate, unless it was the one tried.
-                Link::Serial { path, baud: 9600 } => {
+                Link::Serial {
+                    path, baud: 9600, ..
+                } => {
                     format!("`mcp-gs probe --link serial:{path}` tries every rate")
                 }
                 Link::Serial { path, .. } => format!(
