@@ -13,13 +13,12 @@ use xbee_api::ApiMode;
 
 use crate::stats::Stats;
 
-/// The failed frames it takes for [`Stats::diagnose_running`] (and skipped bytes
-/// [`BYTES_PER_FAILURE`] times as many).
+/// The failed frames it takes for [`Stats::diagnose_running`].
 const RUNNING_FAILURES: u64 = 5;
 
-/// Bytes skipped, for each failed frame asked for, before bytes that begin no frame
-/// count as a sign.
-const BYTES_PER_FAILURE: u64 = 16;
+/// The bytes that begin no frame it takes for [`Stats::diagnose_running`], when no
+/// frame came: a few are noise on a line, a port opened in the middle of a frame.
+const RUNNING_BYTES: u64 = 80;
 
 /// What a link's counters say may be wrong with the radio's settings.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -80,7 +79,10 @@ impl Stats {
     /// ));
     /// ```
     pub fn diagnose(&self, mode: ApiMode) -> Option<Diagnosis> {
-        self.diagnose_with(mode, 1, false)
+        // In a short exchange a radio at another baud rate sends few bytes (an AT
+        // answer at 9600 read at 115200: six), and a request went unanswered where the
+        // local radio always answers: any byte and no frame is a sign.
+        self.diagnose_with(mode, 1, 1, false)
     }
 
     /// What these counters say may be wrong, for the counters of a link over a long
@@ -102,12 +104,19 @@ impl Stats {
     /// assert_eq!(stats.diagnose_running(ApiMode::Unescaped), None);
     /// ```
     pub fn diagnose_running(&self, mode: ApiMode) -> Option<Diagnosis> {
-        self.diagnose_with(mode, RUNNING_FAILURES, true)
+        self.diagnose_with(mode, RUNNING_FAILURES, RUNNING_BYTES, true)
     }
 
-    /// [`diagnose`](Self::diagnose) with `min_failed` failed frames (and 16 skipped
-    /// bytes for each), and with `majority` more failed frames than good ones.
-    fn diagnose_with(&self, mode: ApiMode, min_failed: u64, majority: bool) -> Option<Diagnosis> {
+    /// [`diagnose`](Self::diagnose) with `min_failed` failed frames (or `min_bytes`
+    /// skipped bytes and no frame), and with `majority` more failed frames than good
+    /// ones.
+    fn diagnose_with(
+        &self,
+        mode: ApiMode,
+        min_failed: u64,
+        min_bytes: u64,
+        majority: bool,
+    ) -> Option<Diagnosis> {
         let failed = self.bad_checksum + self.bad_escape;
         if failed >= min_failed && (!majority || failed > self.frames) {
             return Some(Diagnosis::OtherApiMode {
@@ -120,7 +129,7 @@ impl Stats {
         if self.frames == 0
             && impossible == 0
             && failed == 0
-            && self.bytes_skipped >= BYTES_PER_FAILURE.saturating_mul(min_failed)
+            && self.bytes_skipped >= min_bytes.max(1)
         {
             return Some(Diagnosis::NoFrames {
                 bytes: self.bytes_skipped,
@@ -289,6 +298,13 @@ mod tests {
         };
         assert_eq!(fewer.diagnose_running(mode), None);
         assert!(fewer.diagnose(mode).is_some());
+        // In a short exchange any byte and no frame is a sign.
+        let one = Stats {
+            bytes_skipped: 1,
+            ..Stats::default()
+        };
+        assert_eq!(one.diagnose(mode), Some(Diagnosis::NoFrames { bytes: 1 }));
+        assert_eq!(one.diagnose_running(mode), None);
         let lengths = Stats {
             oversize: 3,
             truncated: 2,
