@@ -47,7 +47,7 @@ const LINE_MAX: usize = 64;
 pub enum CommandModeError {
     /// Reading from or writing to the link failed.
     #[error("command mode: {0}")]
-    Io(#[from] io::Error),
+    Io(io::Error),
     /// The link closed.
     #[error("command mode: the link closed")]
     Closed,
@@ -79,6 +79,14 @@ pub enum CommandModeError {
         /// What would have been sent, as text.
         sent: String,
     },
+}
+
+/// The message says what the system said: no [`source`](std::error::Error::source), so
+/// that a chain of errors says it once.
+impl From<io::Error> for CommandModeError {
+    fn from(error: io::Error) -> Self {
+        CommandModeError::Io(error)
+    }
 }
 
 /// A radio in AT command mode, over `io` (a [`Transport`](crate::Transport), or any

@@ -110,7 +110,7 @@ impl Discovery {
 pub enum DiscoverError {
     /// The `ND` command could not be sent, or the link went down meanwhile.
     #[error("node discovery: {0}")]
-    Send(#[from] SendError),
+    Send(SendError),
     /// The radio answered `ND` with a status other than ok.
     #[error("node discovery: the radio answered {status} (0x{code:02x})", code = u8::from(*.status))]
     #[non_exhaustive]
@@ -118,6 +118,14 @@ pub enum DiscoverError {
         /// The status it answered.
         status: AtStatus,
     },
+}
+
+/// The message says why it could not be sent: no [`source`](std::error::Error::source),
+/// so that a chain of errors says it once.
+impl From<SendError> for DiscoverError {
+    fn from(error: SendError) -> Self {
+        DiscoverError::Send(error)
+    }
 }
 
 /// What [`CommandSender::discover`] does.

@@ -182,7 +182,7 @@ pub enum RequestError {
     /// Sending the request failed (delivery failure, disconnection, ...). A link that
     /// went down while the request was in flight may have delivered it first.
     #[error("status request failed: {0}")]
-    Send(#[from] SendError),
+    Send(SendError),
     /// The request was delivered (or no status came) but no matching report arrived in
     /// time.
     #[error(
@@ -208,6 +208,14 @@ pub enum RequestError {
         /// [`Stats::diagnose`]: crate::Stats::diagnose
         undecodable: u64,
     },
+}
+
+/// The message says why the request could not be sent: no
+/// [`source`](std::error::Error::source), so that a chain of errors says it once.
+impl From<SendError> for RequestError {
+    fn from(error: SendError) -> Self {
+        RequestError::Send(error)
+    }
 }
 
 impl RequestError {
@@ -256,6 +264,36 @@ mod tests {
     use xbee_api::{Address16, Address64, DeliveryStatus, DiscoveryStatus};
 
     use super::{RequestError, SendError};
+
+    /// The messages of `error` and of each of its sources.
+    fn chain(error: &dyn std::error::Error) -> Vec<String> {
+        std::iter::successors(Some(error), |e| e.source())
+            .map(ToString::to_string)
+            .collect()
+    }
+
+    #[test]
+    fn a_chain_of_errors_says_each_cause_once() {
+        let request = RequestError::from(SendError::Closed);
+        assert_eq!(chain(&request), ["status request failed: link closed"]);
+        let discovery = crate::discovery::DiscoverError::from(SendError::Closed);
+        assert_eq!(chain(&discovery), ["node discovery: link closed"]);
+        let io = std::io::Error::other("broken pipe");
+        let command_mode = crate::command_mode::CommandModeError::from(io);
+        assert_eq!(chain(&command_mode), ["command mode: broken pipe"]);
+        let link = crate::LinkError::Connect {
+            addr: "127.0.0.1:9".into(),
+            error: std::io::Error::other("refused"),
+        };
+        let node = crate::radio::NetworkError::Link {
+            node: Address64::COORDINATOR,
+            error: link,
+        };
+        assert_eq!(
+            chain(&node),
+            ["node 0000000000000000: cannot connect to 127.0.0.1:9: refused"]
+        );
+    }
 
     #[test]
     fn the_timeouts_are_the_requests_that_ran_out_of_time() {

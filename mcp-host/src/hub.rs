@@ -211,14 +211,14 @@ pub enum HubError {
     #[error(transparent)]
     Connect(#[from] ConnectError),
     /// The TCP port could not be listened on.
-    #[error("cannot listen on {addr}: {source}")]
+    #[error("cannot listen on {addr}: {error}")]
     #[non_exhaustive]
     Listen {
         /// The address as given.
         addr: String,
-        /// What the system said.
-        #[source]
-        source: std::io::Error,
+        /// What the system said (in the message too, so no
+        /// [`source`](std::error::Error::source)).
+        error: std::io::Error,
     },
 }
 
@@ -308,12 +308,10 @@ impl Hub {
             max_frame_len: options.max_frame_len,
             partial_frame_timeout: options.partial_frame_timeout,
         };
-        let (mut port, listener) = Port::bind(listen)
-            .await
-            .map_err(|source| HubError::Listen {
-                addr: listen.to_owned(),
-                source,
-            })?;
+        let (mut port, listener) = Port::bind(listen).await.map_err(|error| HubError::Listen {
+            addr: listen.to_owned(),
+            error,
+        })?;
         let local_addr = port.addr();
         let bytes_per_second = match link {
             Link::Serial { baud, .. } => *baud,

@@ -21,11 +21,15 @@ use crate::pty::{PtyPort, PtyStream};
 use crate::repeats::Repeats;
 
 /// Why a link could not be opened.
+///
+/// What the system said is in the message, and in a field to match on; it is no
+/// [`source`](std::error::Error::source), so that a report that follows the chain of
+/// sources (`anyhow`'s `{:#}`) says it once.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum LinkError {
     /// The serial port could not be opened or configured.
-    #[error("cannot open serial port {path} at {baud} baud: {source}")]
+    #[error("cannot open serial port {path} at {baud} baud: {error}")]
     #[non_exhaustive]
     Serial {
         /// Device path.
@@ -33,18 +37,16 @@ pub enum LinkError {
         /// Requested baud rate.
         baud: u32,
         /// What the system said.
-        #[source]
-        source: tokio_serial::Error,
+        error: tokio_serial::Error,
     },
     /// The TCP connection failed.
-    #[error("cannot connect to {addr}: {source}")]
+    #[error("cannot connect to {addr}: {error}")]
     #[non_exhaustive]
     Connect {
         /// `HOST:PORT` as given.
         addr: String,
         /// What the system said.
-        #[source]
-        source: io::Error,
+        error: io::Error,
     },
     /// The TCP connection did not complete within the connect timeout.
     #[error("timed out after {timeout:?} connecting to {addr}")]
@@ -56,28 +58,26 @@ pub enum LinkError {
         timeout: Duration,
     },
     /// The TCP listener could not be bound.
-    #[error("cannot listen on {addr}: {source}")]
+    #[error("cannot listen on {addr}: {error}")]
     #[non_exhaustive]
     Listen {
         /// `ADDR:PORT` as given.
         addr: String,
         /// What the system said.
-        #[source]
-        source: io::Error,
+        error: io::Error,
     },
     /// Accepting a peer failed.
-    #[error("cannot accept a peer on {addr}: {source}")]
+    #[error("cannot accept a peer on {addr}: {error}")]
     #[non_exhaustive]
     Accept {
         /// `ADDR:PORT` as given.
         addr: String,
         /// What the system said.
-        #[source]
-        source: io::Error,
+        error: io::Error,
     },
     /// The pseudo-terminal pair could not be created.
     #[error("cannot create a pseudo-terminal pair: {0}")]
-    Pty(#[source] tokio_serial::Error),
+    Pty(tokio_serial::Error),
     /// The local side of a `pty` link is gone (still held by a transport that was not
     /// closed), so the link cannot wait for another device.
     #[error("the pseudo-terminal's local side is gone: the link cannot be reopened")]
@@ -102,11 +102,11 @@ impl LinkError {
     pub fn is_retryable(&self) -> bool {
         use std::io::ErrorKind as Io;
         match self {
-            LinkError::Serial { path, source, .. } => {
-                source.kind() != tokio_serial::ErrorKind::InvalidInput && !is_no_device(path)
+            LinkError::Serial { path, error, .. } => {
+                error.kind() != tokio_serial::ErrorKind::InvalidInput && !is_no_device(path)
             }
-            LinkError::Connect { source, .. } => {
-                !matches!(source.kind(), Io::InvalidInput | Io::AddrNotAvailable)
+            LinkError::Connect { error, .. } => {
+                !matches!(error.kind(), Io::InvalidInput | Io::AddrNotAvailable)
             }
             LinkError::Listen { .. }
             | LinkError::Pty(_)
@@ -724,9 +724,9 @@ impl Connector {
                 let listener =
                     TcpListener::bind((addr.as_str(), *port))
                         .await
-                        .map_err(|source| LinkError::Listen {
+                        .map_err(|error| LinkError::Listen {
                             addr: name.clone(),
-                            source,
+                            error,
                         })?;
                 Kind::Listen(Listen::new(listener, name))
             }
@@ -793,10 +793,10 @@ impl Connector {
                 baud,
                 flow_control,
             } => {
-                let serial_error = |source| LinkError::Serial {
+                let serial_error = |error| LinkError::Serial {
                     path: path.clone(),
                     baud: *baud,
-                    source,
+                    error,
                 };
                 #[cfg_attr(not(target_os = "linux"), allow(unused_mut))]
                 let mut stream = tokio_serial::new(path.as_str(), *baud)
@@ -831,7 +831,7 @@ impl Connector {
                     // Linux): retried, it would be waited on for ever.
                     return Err(LinkError::Connect {
                         addr,
-                        source: std::io::Error::new(
+                        error: std::io::Error::new(
                             std::io::ErrorKind::InvalidInput,
                             "port 0 cannot be connected to",
                         ),
@@ -846,9 +846,9 @@ impl Connector {
                     addr: addr.clone(),
                     timeout: self.connect_timeout,
                 })?
-                .map_err(|source| LinkError::Connect {
+                .map_err(|error| LinkError::Connect {
                     addr: addr.clone(),
-                    source,
+                    error,
                 })?;
                 let _ = stream.set_nodelay(true);
                 let peer = stream.peer_addr().map(|a| a.to_string()).unwrap_or(addr);
@@ -861,7 +861,7 @@ impl Connector {
                 if listen.accepting.is_none() {
                     return Err(LinkError::Listen {
                         addr: self.link.to_string(),
-                        source: io::Error::other("the link was shut down"),
+                        error: io::Error::other("the link was shut down"),
                     });
                 }
                 let (stream, peer, early, turn) = listen.next_peer().await;

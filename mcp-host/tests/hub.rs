@@ -439,11 +439,14 @@ async fn no_second_hub_on(hub: &Hub) {
     let addr = hub.local_addr().to_string();
     let second = Hub::start(&radio, LinkOptions::default(), &addr).await;
     assert!(
-        matches!(&second, Err(mcp_host::hub::HubError::Listen { source, .. })
-            if source.kind() == std::io::ErrorKind::AddrInUse),
+        matches!(&second, Err(mcp_host::hub::HubError::Listen { error, .. })
+            if error.kind() == std::io::ErrorKind::AddrInUse),
         "{:?}",
-        second.map(|hub| hub.local_addr())
+        second.as_ref().map(|hub| hub.local_addr())
     );
+    // A report that follows the chain of sources says what the system said once.
+    let error = second.err().unwrap();
+    assert_eq!(common::error_chain(&error), [error.to_string()]);
 }
 
 #[tokio::test]

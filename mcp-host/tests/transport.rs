@@ -223,6 +223,12 @@ async fn tcp_reconnect_retries_until_the_port_listens_again() {
         err.to_string().contains(&format!("127.0.0.1:{port}")),
         "{err}"
     );
+    // The system's reason is in the message, once in a report of the whole chain.
+    let LinkError::Connect { error, .. } = &err else {
+        unreachable!()
+    };
+    assert!(err.to_string().ends_with(&error.to_string()), "{err}");
+    assert_eq!(common::error_chain(&err), [err.to_string()]);
 
     let reopen = tokio::spawn(async move {
         let transport = connector.reopen(&fast_reconnect().reconnect).await;
@@ -489,8 +495,8 @@ async fn a_serial_link_holds_a_pseudo_terminal_by_its_lock_alone() {
         .unwrap();
     let err = second.open().await.unwrap_err();
     assert!(
-        matches!(&err, LinkError::Serial { source, .. }
-            if source.kind == tokio_serial::ErrorKind::NoDevice),
+        matches!(&err, LinkError::Serial { error, .. }
+            if error.kind == tokio_serial::ErrorKind::NoDevice),
         "{err}"
     );
     drop(held);

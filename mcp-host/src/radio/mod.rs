@@ -361,13 +361,12 @@ pub enum NetworkError {
     #[error("{0} is the broadcast address")]
     Broadcast(Address64),
     /// The link could not be prepared.
-    #[error("node {node}: {source}")]
+    #[error("node {node}: {error}")]
     Link {
         /// The node.
         node: Address64,
-        /// Why.
-        #[source]
-        source: LinkError,
+        /// Why (in the message too, so no [`source`](std::error::Error::source)).
+        error: LinkError,
     },
 }
 
@@ -420,9 +419,9 @@ impl Network {
     ) -> Result<NodeInfo, NetworkError> {
         self.check_new(address)?;
         if matches!(link, Link::Pty) {
-            let port = crate::pty::PtyPort::new().map_err(|source| NetworkError::Link {
+            let port = crate::pty::PtyPort::new().map_err(|error| NetworkError::Link {
                 node: address,
-                source,
+                error,
             })?;
             let pty_path = port.path().to_owned();
             let mut info = self.insert(address, options, Source::Pty(port))?;
@@ -434,12 +433,13 @@ impl Network {
             connect_timeout: options.connect_timeout,
             ..LinkOptions::default()
         };
-        let connector = Connector::new(link, &link_options)
-            .await
-            .map_err(|source| NetworkError::Link {
-                node: address,
-                source,
-            })?;
+        let connector =
+            Connector::new(link, &link_options)
+                .await
+                .map_err(|error| NetworkError::Link {
+                    node: address,
+                    error,
+                })?;
         let pty_path = connector.pty_path().map(PathBuf::from);
         let local_addr = connector.local_addr();
         let source = Source::Link {

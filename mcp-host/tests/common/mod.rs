@@ -433,3 +433,11 @@ pub fn modem_status_recording(n: usize) -> Vec<u8> {
     }
     writer.into_inner()
 }
+
+/// The messages of `error` and of each of its sources, as a report that follows the
+/// chain (`anyhow`'s `{:#}`) prints them.
+pub fn error_chain(error: &dyn std::error::Error) -> Vec<String> {
+    std::iter::successors(Some(error), |e| e.source())
+        .map(ToString::to_string)
+        .collect()
+}

@@ -89,7 +89,7 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
         .await
         .map_err(|e| match e {
             HubError::Connect(e) => connect_failure(radio, e),
-            HubError::Listen { addr, source, .. } => listen_failure(&addr, &source),
+            HubError::Listen { addr, error, .. } => listen_failure(&addr, &error),
             other => Failure::link(other.to_string()),
         })?;
     let ctrl_c = crate::interrupt::ctrl_c();

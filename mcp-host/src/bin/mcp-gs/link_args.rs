@@ -718,7 +718,7 @@ fn link_hint(error: &LinkError, link: &Link) -> Option<String> {
     use std::io::ErrorKind as Io;
     use tokio_serial::ErrorKind as Serial;
     match error {
-        LinkError::Serial { source, .. } => match source.kind {
+        LinkError::Serial { error, .. } => match error.kind {
             Serial::Io(Io::NotFound) => Some(match misread_baud(link) {
                 Some((path, baud)) => format!(
                     "no such device; `{baud}` was read as part of the path: a baud rate is \
@@ -742,20 +742,20 @@ fn link_hint(error: &LinkError, link: &Link) -> Option<String> {
                     "another program has the port open, perhaps another mcp-gs"
                 }
             )),
-            _ => not_a_serial_port(&source.description, link),
+            _ => not_a_serial_port(&error.description, link),
         },
-        LinkError::Connect { source, .. } if source.kind() == Io::ConnectionRefused => Some(
+        LinkError::Connect { error, .. } if error.kind() == Io::ConnectionRefused => Some(
             "nothing listens there: is the radio bridge, `mcp-gs hub` or `mcp-gs sim` \
              running? A hub whose radio is disconnected refuses connections"
                 .into(),
         ),
-        LinkError::Listen { source, .. } => match source.kind() {
+        LinkError::Listen { error, .. } => match error.kind() {
             Io::AddrInUse => Some(
                 "another program, perhaps another mcp-gs, listens there: give another port, \
                  or port 0 for any free one"
                     .into(),
             ),
-            _ => listen_hint(source).map(str::to_owned),
+            _ => listen_hint(error).map(str::to_owned),
         },
         _ => None,
     }
@@ -780,8 +780,8 @@ pub(crate) fn listen_hint(error: &std::io::Error) -> Option<&'static str> {
 /// anything else, bad input.
 pub(crate) fn network_failure(error: mcp_host::radio::NetworkError, link: &Link) -> Failure {
     match &error {
-        mcp_host::radio::NetworkError::Link { source, .. } => {
-            let hint = link_hint(source, link)
+        mcp_host::radio::NetworkError::Link { error: cause, .. } => {
+            let hint = link_hint(cause, link)
                 .map(|h| format!(" ({h})"))
                 .unwrap_or_default();
             Failure::link(format!("{error}{hint}"))
