@@ -458,15 +458,10 @@ impl<E: fmt::Display> fmt::Display for WriteError<E> {
     }
 }
 
-impl<E: core::error::Error + 'static> core::error::Error for WriteError<E> {
-    fn source(&self) -> Option<&(dyn core::error::Error + 'static)> {
-        match self {
-            Self::Encode(e) => Some(e),
-            Self::Io(e) => Some(e),
-            Self::WriteZero { .. } => None,
-        }
-    }
-}
+/// The encoder's or writer's error is in the message, so it is no
+/// [`source`](core::error::Error::source): a report that follows the chain of sources
+/// says it once.
+impl<E: fmt::Debug + fmt::Display> core::error::Error for WriteError<E> {}
 
 impl<E: embedded_io::Error + 'static> embedded_io::Error for WriteError<E> {
     fn kind(&self) -> embedded_io::ErrorKind {

@@ -414,6 +414,9 @@ fn a_write_error_is_the_writers_and_ends_the_frame() {
     assert_eq!(error, WriteError::Io(ErrorKind::WriteZero));
     assert_eq!(embedded_io::Error::kind(&error), ErrorKind::WriteZero);
     assert_eq!(error.to_string(), "cannot write the frame: WriteZero");
+    // The writer's error is in the message, so no source: a report that follows the
+    // chain says it once.
+    assert!(std::error::Error::source(&error).is_none());
     // The 32-byte chunk that fitted went out, the rest of the frame did not.
     assert_eq!(out.sent.len(), 40);
     assert!(!out.flushed);
@@ -432,6 +435,7 @@ fn a_frame_that_cannot_be_encoded_writes_nothing() {
     let mut out = tx(usize::MAX, 64);
     let error = write_frame(&mut out, ApiMode::Escaped, &Empty).unwrap_err();
     assert_eq!(error, WriteError::Encode(EncodeError::EmptyFrame));
+    assert!(std::error::Error::source(&error).is_none());
     assert_eq!(embedded_io::Error::kind(&error), ErrorKind::InvalidInput);
     assert!(out.sent.is_empty() && !out.flushed);
 }
