@@ -27,6 +27,45 @@ pub enum Event {
     DecodeError(xbee_api::DecodeError),
 }
 
+impl Event {
+    /// The MCP packet, if this is one.
+    pub fn packet(&self) -> Option<&Received> {
+        match self {
+            Event::Packet(rx) => Some(rx),
+            _ => None,
+        }
+    }
+
+    /// The MCP packet, if this is one, owned: for `filter_map` over a stream of events.
+    ///
+    /// ```
+    /// # async fn run(stream: mcp_host::PacketStream) {
+    /// use futures::{StreamExt, future::ready};
+    /// use mcp_host::Event;
+    ///
+    /// let mut packets = stream.filter_map(|event| ready(event.into_packet()));
+    /// while let Some(rx) = packets.next().await {
+    ///     println!("{} {}", rx.origin.src64, rx.packet);
+    /// }
+    /// # }
+    /// ```
+    pub fn into_packet(self) -> Option<Received> {
+        match self {
+            Event::Packet(rx) => Some(rx),
+            _ => None,
+        }
+    }
+
+    /// Where and when the radio frame came from, for an MCP packet, valid or not.
+    pub fn origin(&self) -> Option<&Origin> {
+        match self {
+            Event::Packet(rx) => Some(&rx.origin),
+            Event::InvalidPacket(invalid) => Some(&invalid.origin),
+            _ => None,
+        }
+    }
+}
+
 /// One line of text, as `mcp-gs monitor` prints it (without its time of day):
 /// [`render::text::event`](crate::render::text::event).
 ///

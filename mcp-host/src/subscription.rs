@@ -10,8 +10,8 @@ use std::task::{Context, Poll};
 use futures::stream::{BoxStream, Fuse, FusedStream, StreamExt};
 use tokio::sync::broadcast;
 
-use crate::Event;
 use crate::record::Record;
+use crate::{Event, Received};
 
 /// Every [`Event`] of a link from the moment it was taken, for a task other than the
 /// one that reads the [`PacketStream`](crate::PacketStream): a user interface, a logger
@@ -190,6 +190,56 @@ impl<T: Clone + Send + 'static> Subscription<T> {
             events: Mutex::new(events),
             missed,
         }
+    }
+}
+
+impl<T: Send + 'static> Subscription<T> {
+    /// What `f` makes of each item, where it makes something; what was missed before
+    /// and after counts on.
+    fn filter_map<U: Send + 'static>(
+        self,
+        mut f: impl FnMut(T) -> Option<U> + Send + 'static,
+    ) -> Subscription<U> {
+        let events = self
+            .events
+            .into_inner()
+            .unwrap_or_else(PoisonError::into_inner)
+            .filter_map(move |item| futures::future::ready(f(item)))
+            .boxed()
+            .fuse();
+        Subscription {
+            events: Mutex::new(events),
+            missed: self.missed,
+        }
+    }
+}
+
+impl Subscription<Event> {
+    /// The MCP packets alone ([`Event::Packet`]), from every radio. It ends with the
+    /// link; [`missed`](Self::missed) counts every event missed, packets or not.
+    pub fn packets(self) -> Subscription<Received> {
+        self.filter_map(Event::into_packet)
+    }
+
+    /// The MCP packets from the radio `src64` alone: one MAV's telemetry and reports
+    /// among many. It ends with the link; [`missed`](Self::missed) counts every event
+    /// missed, whoever it came from.
+    ///
+    /// ```
+    /// # async fn run(sender: mcp_host::CommandSender) {
+    /// use futures::StreamExt;
+    /// use mcp_host::xbee_api::Address64;
+    ///
+    /// let mav = Address64(0x0013_A200_40B5_99B9);
+    /// let mut from_mav = sender.subscribe().packets_from(mav);
+    /// while let Some(rx) = from_mav.next().await {
+    ///     assert_eq!(rx.origin.src64, mav);
+    ///     println!("{}", rx.packet);
+    /// }
+    /// # }
+    /// ```
+    pub fn packets_from(self, src64: xbee_api::Address64) -> Subscription<Received> {
+        self.filter_map(move |event| event.into_packet().filter(|rx| rx.origin.src64 == src64))
     }
 }
 

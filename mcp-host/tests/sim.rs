@@ -34,7 +34,8 @@ async fn over_tcp(addresses: &[Address64]) -> Ground {
     .await
     .unwrap();
     let addr = sim.coordinator().local_addr.unwrap();
-    let link: Link = format!("tcp:{addr}").parse().unwrap();
+    let link = sim.ground_station_link().unwrap();
+    assert_eq!(link.to_string(), format!("tcp:{addr}"));
     let (stream, sender) = mcp_host::connect(&link, LinkOptions::default())
         .await
         .unwrap();
@@ -50,7 +51,8 @@ async fn over_pty(addresses: &[Address64], mode: ApiMode) -> Ground {
         .await
         .unwrap();
     let path = sim.coordinator().pty_path.clone().unwrap();
-    let link: Link = format!("serial:{}", path.display()).parse().unwrap();
+    let link = sim.ground_station_link().unwrap();
+    assert_eq!(link, Link::serial(path.display().to_string(), 115_200));
     let options = LinkOptions {
         api_mode: mode,
         ..LinkOptions::default()
@@ -441,7 +443,8 @@ async fn a_receive_buffer_limit_drops_long_commands() {
     .await
     .unwrap();
     let addr = sim.coordinator().local_addr.unwrap();
-    let link: Link = format!("tcp:{addr}").parse().unwrap();
+    let link = sim.ground_station_link().unwrap();
+    assert_eq!(link.to_string(), format!("tcp:{addr}"));
     let (stream, sender) = mcp_host::connect(&link, LinkOptions::default())
         .await
         .unwrap();
@@ -474,4 +477,44 @@ async fn a_receive_buffer_limit_drops_long_commands() {
         };
         assert_eq!(w.len(), kept);
     }
+}
+
+#[tokio::test]
+async fn the_ground_station_link_of_a_coordinator_on_every_interface_is_loopback() {
+    let link = Link::tcp_listen("0.0.0.0", 0);
+    let sim = Simulator::start(
+        &link,
+        ApiMode::Unescaped,
+        &[MAV],
+        Simulator::network_config(),
+    )
+    .await
+    .unwrap();
+    let port = sim.coordinator().local_addr.unwrap().port();
+    let link = sim.ground_station_link().unwrap();
+    assert_eq!(link, Link::tcp("127.0.0.1", port));
+    let (_stream, sender) = mcp_host::connect(&link, LinkOptions::default())
+        .await
+        .unwrap();
+    let report = tokio::time::timeout(GUARD, sender.request(MAV, StatusRequest::Landing))
+        .await
+        .unwrap();
+    assert!(matches!(report, Ok(Report::Landing(_))), "{report:?}");
+    sim.stop().await;
+
+    // A coordinator that connects out has its ground station elsewhere.
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let out = Link::from(listener.local_addr().unwrap());
+    let accepting = tokio::spawn(async move { listener.accept().await.map(|(peer, _)| peer) });
+    let sim = Simulator::start(
+        &out,
+        ApiMode::Unescaped,
+        &[MAV],
+        Simulator::network_config(),
+    )
+    .await
+    .unwrap();
+    assert_eq!(sim.ground_station_link(), None);
+    sim.stop().await;
+    drop(accepting.await);
 }

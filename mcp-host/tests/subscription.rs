@@ -178,3 +178,56 @@ async fn a_tap_gets_every_frame_both_ways_as_it_is_on_the_link() {
     assert!(futures::stream::FusedStream::is_terminated(&tap));
     assert!(tap.next().await.is_none());
 }
+
+#[tokio::test]
+async fn packets_from_one_mav_leave_out_the_others_and_every_other_event() {
+    let (mut stream, sender, mut fake) = pty_link(ApiMode::Escaped).await;
+    let mut every = sender.subscribe();
+    let mut packets = sender.subscribe().packets();
+    let mut from_mav = sender.subscribe().packets_from(MAV);
+    let ours: Vec<Vec<u8>> = (1..=3).map(time_report).collect();
+    let theirs = time_report(99);
+    for payload in &ours {
+        fake.receive(OTHER_MAV, &theirs).await;
+        // Not an MCP packet: an event with an origin, but no packet.
+        fake.receive(MAV, b"\xFF").await;
+        fake.receive(MAV, payload).await;
+    }
+    let mut events = Vec::new();
+    while events.len() < 3 * ours.len() {
+        events.push(next(&mut every).await.expect("an event"));
+    }
+    let origins: Vec<_> = events.iter().map(|e| e.origin().map(|o| o.src64)).collect();
+    assert_eq!(origins, [Some(OTHER_MAV), Some(MAV), Some(MAV)].repeat(3));
+    assert_eq!(
+        events.iter().filter(|e| e.packet().is_some()).count(),
+        2 * ours.len()
+    );
+    assert!(matches!(events[1], Event::InvalidPacket(_)));
+
+    let mut got = Vec::new();
+    while got.len() < ours.len() {
+        let rx = tokio::time::timeout(GUARD, from_mav.next()).await.unwrap();
+        let rx = rx.expect("a packet");
+        assert_eq!(rx.origin.src64, MAV);
+        got.push(rx.payload.to_vec());
+    }
+    assert_eq!(got, ours);
+    let mut all = Vec::new();
+    while all.len() < 2 * ours.len() {
+        let rx = tokio::time::timeout(GUARD, packets.next()).await.unwrap();
+        all.push(rx.expect("a packet").origin.src64);
+    }
+    assert_eq!(all, [OTHER_MAV, MAV].repeat(3));
+
+    // They end with the link, what they left out included.
+    sender.close();
+    for subscription in [&mut from_mav, &mut packets] {
+        let end = tokio::time::timeout(GUARD, subscription.next())
+            .await
+            .unwrap();
+        assert!(end.is_none());
+        assert_eq!(subscription.missed(), 0);
+    }
+    drop(stream.next().await);
+}

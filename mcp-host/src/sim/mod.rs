@@ -239,7 +239,38 @@ where
 }
 
 /// Simulated MAVs behind a virtual XBee network whose coordinator is a link.
+///
+/// It runs until [`stop`](Self::stop)ped, [`shutdown`](Self::shutdown) or dropped:
+/// dropping it stops the network and its MAVs at once, so hold it for as long as a
+/// ground station talks to it.
+///
+/// ```
+/// # #[tokio::main(flavor = "current_thread")]
+/// # async fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// use mcp_host::mcp_core::{Report, StatusRequest};
+/// use mcp_host::sim::{Simulator, fleet_addresses};
+/// use mcp_host::xbee_api::ApiMode;
+/// use mcp_host::{Link, LinkOptions};
+///
+/// // One MAV; its ground station's radio on a free TCP port of this machine.
+/// let mavs = fleet_addresses(1);
+/// let sim = Simulator::start(
+///     &Link::tcp_listen("127.0.0.1", 0),
+///     ApiMode::Unescaped,
+///     &mavs,
+///     Simulator::network_config(),
+/// )
+/// .await?;
+/// let link = sim.ground_station_link().expect("a tcp-listen link has one");
+/// let (_stream, sender) = mcp_host::connect(&link, LinkOptions::default()).await?;
+/// let report = sender.request(mavs[0], StatusRequest::Landing).await?;
+/// assert!(matches!(report, Report::Landing(_)));
+/// sim.stop().await;
+/// # Ok(())
+/// # }
+/// ```
 #[derive(Debug)]
+#[must_use = "dropping a Simulator stops it at once"]
 pub struct Simulator {
     network: Network,
     coordinator: NodeInfo,
@@ -318,6 +349,28 @@ impl Simulator {
     /// The simulated MAVs.
     pub fn mavs(&self) -> &[NodeInfo] {
         &self.mavs
+    }
+
+    /// The link a ground station in this process takes to the coordinator: `tcp:` to
+    /// where a `tcp-listen:` link listens (this machine's loopback address for one bound
+    /// to every interface), or `serial:` to the far end of a `pty` link. `None` for a
+    /// coordinator on a link that connects out (`tcp:`, `serial:`), whose ground station
+    /// is elsewhere.
+    pub fn ground_station_link(&self) -> Option<Link> {
+        if let Some(mut addr) = self.coordinator.local_addr {
+            if addr.ip().is_unspecified() {
+                addr.set_ip(match addr.ip() {
+                    std::net::IpAddr::V4(_) => std::net::Ipv4Addr::LOCALHOST.into(),
+                    std::net::IpAddr::V6(_) => std::net::Ipv6Addr::LOCALHOST.into(),
+                });
+            }
+            return Some(Link::from(addr));
+        }
+        let path = self.coordinator.pty_path.as_ref()?;
+        Some(Link::serial(
+            path.display().to_string(),
+            crate::link::DEFAULT_BAUD,
+        ))
     }
 
     /// Tells the MAVs and the network to stop, and returns at once; the links close
