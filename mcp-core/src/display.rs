@@ -140,9 +140,12 @@ impl<B: AsRef<[u8]>> fmt::Display for Report<B> {
             Report::Controllers(c) => write!(f, " {c}"),
             Report::TrajectorySet(w) => write!(f, " {w}"),
             Report::PositionSlaveSet(SlaveAddresses::Single(a)) => write!(f, " {a}"),
-            Report::PositionSlaveSet(SlaveAddresses::Slots(all)) => {
-                all.iter().try_for_each(|a| write!(f, " {a}"))
-            }
+            // Labelled as the slot form's command is (`slot 2 ADDR`): four bare
+            // addresses do not say which slot is which, nor that empty ones are zeros.
+            Report::PositionSlaveSet(SlaveAddresses::Slots(all)) => all
+                .iter()
+                .enumerate()
+                .try_for_each(|(slot, a)| write!(f, " slot {slot} {a}")),
             Report::Time(t) => write!(f, " {t}"),
         }
     }
@@ -201,6 +204,13 @@ mod tests {
         assert_eq!(
             show(b"c\x05\x01\x00\x13\xa2\x00\x40\xb5\x99\xb9"),
             "command position_slave_set slot 1 0013a20040b599b9"
+        );
+        // The firmware's four slots, each labelled.
+        let slots = [&b"r\x05\x00\x13\xa2\x00\x40\xb5\x99\xbf"[..], &[0; 24]].concat();
+        assert_eq!(
+            show(&slots),
+            "report position_slave_set slot 0 0013a20040b599bf slot 1 0000000000000000 \
+             slot 2 0000000000000000 slot 3 0000000000000000"
         );
         assert_eq!(
             show(b"c\x04\x01\x01\x00\x00\x00\x00\x00\x80\x3f\x00\x00\x00\x40\x00\x00\x40\x40"),

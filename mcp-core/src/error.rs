@@ -167,7 +167,12 @@ impl fmt::Display for ErrorKind {
             }
             ErrorKind::SizeMismatch { size, waypoints } => write!(
                 f,
-                "trajectory size byte {size} does not match the {waypoints} waypoints in the packet length"
+                "trajectory size byte {size} does not match the {waypoints} {} in the packet length",
+                if *waypoints == 1 {
+                    "waypoint"
+                } else {
+                    "waypoints"
+                }
             ),
             ErrorKind::TooManyWaypoints(n) => {
                 write!(f, "{n} trajectory waypoints, at most 254 allowed")

@@ -548,6 +548,11 @@ fn error_display_says_what_and_where() {
         err(b"c\x04\x02").to_string(),
         "trajectory size byte 2 does not match the 0 waypoints in the packet length (at offset 2)"
     );
+    let one = [&b"c\x04\x02"[..], &[0; 16]].concat();
+    assert_eq!(
+        err(&one).to_string(),
+        "trajectory size byte 2 does not match the 1 waypoint in the packet length (at offset 2)"
+    );
     assert_eq!(
         err(b"c\x05\x07\x00\x00\x00\x00\x00\x00\x00\x00").to_string(),
         "position slave slot 7 is not 0-3 (at offset 2)"

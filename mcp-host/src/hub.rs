@@ -53,8 +53,13 @@
 //!   came. When a client leaves (its connection fails, or the hub ends it), its
 //!   requests' ids are free again (their late answers are dropped); a client that
 //!   closed its connection keeps them until it is let go (see below). Requests that
-//!   waited are counted in [`HubStats::requests_held`]. Frames with frame id 0 (no
-//!   answer wanted) are written as they are, whatever their type. A frame with a frame
+//!   waited are counted in [`HubStats::requests_held`]. A frame of a type a radio sends
+//!   rather than takes (its high bit set: 0x88 AT Command Response, 0x90 Receive
+//!   Packet, ...) is refused, whatever its second byte, and counted in
+//!   [`HubStats::frames_refused`]: a radio would drop it unanswered. Other frames with
+//!   frame id 0 (no answer wanted) are written as they are, whatever their type. Every
+//!   refused frame is said as a warning (the first at once, then at most one a second
+//!   with the number not said). A frame with a frame
 //!   id (its second byte, in every XBee request) is refused and counted in
 //!   [`HubStats::frames_refused`] if its type is not in the table (the hub cannot tell
 //!   its answers from those to other clients' requests), or if it is cut short of the
@@ -237,8 +242,9 @@ pub struct HubStats {
     pub frames_from_clients: u64,
     /// Frames from the radio not given to a client that had fallen behind.
     pub frames_dropped: u64,
-    /// Frames of clients not written: all 255 frame ids were waiting for answers, a
-    /// frame id on a frame type the hub does not know or on a request cut short of its
+    /// Frames of clients not written: a frame of a type a radio sends (0x80 and up),
+    /// all 255 frame ids were waiting for answers, a frame id on a frame type the hub
+    /// does not know or on a request cut short of its
     /// fixed fields (see the [module](self) docs), frames longer than the hub takes
     /// ([`LinkOptions::max_frame_len`]), the link to the radio was down, or the client
     /// was ended before their turn.
@@ -269,6 +275,10 @@ struct Counters {
     frames_refused: AtomicU64,
     requests_held: AtomicU64,
     clients_turned_away: AtomicU64,
+    /// Clients' frames refused, for the warning: said as they come, a second apart at
+    /// most, since a client that keeps sending what the hub refuses (a recording of
+    /// what a radio said, played onto the hub) hears nothing back.
+    refusals: Mutex<Repeats>,
 }
 
 fn bump(counter: &AtomicU64) {
@@ -806,6 +816,15 @@ impl Serve {
                             "hub: {more} more clients turned away ({MAX_CLIENTS} connected)"
                         );
                     }
+                    // Likewise the clients' frames refused since the last warning.
+                    let refused = lock(&self.counters.refusals).take_due(Instant::now());
+                    if let Some(more) = refused {
+                        let frames = if more == 1 { "frame" } else { "frames" };
+                        tracing::warn!(
+                            "hub: {more} more {frames} of clients refused since the last such \
+                             warning"
+                        );
+                    }
                 }
                 accepted = accept(listener.as_ref()) => match accepted {
                     Ok((socket, peer)) => self.accept(socket, peer),
@@ -1228,6 +1247,22 @@ impl Client {
         self.to_radio.ready.notify_one();
     }
 
+    /// Counts a frame of this client's refused, and says why as a warning: the first at
+    /// once, then at most one a second with the number of those not said.
+    fn refuse(&self, why: std::fmt::Arguments<'_>) {
+        bump(&self.counters.frames_refused);
+        let peer = self.peer;
+        match lock(&self.counters.refusals).count(Instant::now()) {
+            Some(0) => tracing::warn!(%peer, "hub: a client's frame refused: {why}"),
+            Some(more) => tracing::warn!(
+                %peer,
+                "hub: a client's frame refused: {why}; and {more} more since the last such \
+                 warning"
+            ),
+            None => tracing::debug!(%peer, "hub: a client's frame refused: {why}"),
+        }
+    }
+
     /// Passes an item of the client's reader on: a frame admitted to the radio's queue
     /// (waiting while [`CLIENT_FRAMES_TO_RADIO`] frames wait their turn); `false` once
     /// the hub stops.
@@ -1244,9 +1279,10 @@ impl Client {
             CodecItem::Error(error) => {
                 if let xbee_api::DecodeError::Oversize { .. } = error {
                     // Longer than the hub takes: refused.
-                    bump(&self.counters.frames_refused);
+                    self.refuse(format_args!("{error}"));
+                } else {
+                    tracing::debug!(%error, "hub: a client's frame dropped");
                 }
-                tracing::debug!(%error, "hub: a client's frame dropped");
             }
         }
         true
@@ -1287,23 +1323,33 @@ impl Client {
     /// radio answers it.
     async fn admit(&self, data: &Bytes) -> Option<Vec<u8>> {
         let mut data = data.to_vec();
+        if let Some(&frame_type) = data.first() {
+            if is_from_radio(frame_type) {
+                self.refuse(format_args!(
+                    "type 0x{frame_type:02x}{} is a frame a radio sends, not one it takes \
+                     (a recording of what a radio said, played onto the hub?)",
+                    crate::render::json::frame_type_name(frame_type)
+                        .map(|name| format!(" ({name})"))
+                        .unwrap_or_default()
+                ));
+                return None;
+            }
+        }
         if let [frame_type, own_id, ..] = data[..] {
             if own_id != 0 {
                 let Some(answer_type) = answer_type(frame_type) else {
-                    tracing::debug!(
-                        frame_type,
-                        "hub: a frame id on a frame type the hub does not know; frame refused"
-                    );
-                    bump(&self.counters.frames_refused);
+                    self.refuse(format_args!(
+                        "a frame id on type 0x{frame_type:02x}, which the hub does not know \
+                         (its answers could not be told from other clients')"
+                    ));
                     return None;
                 };
                 if !is_whole_request(&data) {
-                    tracing::debug!(
-                        frame_type,
-                        len = data.len(),
-                        "hub: a request cut short of its fixed fields; frame refused"
-                    );
-                    bump(&self.counters.frames_refused);
+                    self.refuse(format_args!(
+                        "a request of type 0x{frame_type:02x} cut short of its fixed fields \
+                         ({} bytes): no radio answers it",
+                        data.len()
+                    ));
                     return None;
                 }
                 // Waits while the client has ROUTES_PER_CLIENT requests waiting for
@@ -1340,8 +1386,7 @@ impl Client {
                 };
                 // An id is free: the route holds one of the 255 permits.
                 let Some(id) = lock(&self.routes).insert(route, Instant::now()) else {
-                    tracing::debug!("hub: every frame id waits for an answer; frame refused");
-                    bump(&self.counters.frames_refused);
+                    self.refuse(format_args!("every frame id waits for an answer"));
                     return None;
                 };
                 if let Some(slot) = data.get_mut(1) {
@@ -1351,6 +1396,15 @@ impl Client {
         }
         Some(data)
     }
+}
+
+/// Whether a frame of `frame_type` is one a radio sends, never one it takes: Digi's
+/// API identifiers of responses and indications have the high bit set (0x88 AT Command
+/// Response, 0x90 Receive Packet, ...), those of requests not. A radio drops such a
+/// frame unanswered; the hub refuses it, so that the client's mistake is counted and
+/// said rather than lost at the radio.
+fn is_from_radio(frame_type: u8) -> bool {
+    frame_type & 0x80 != 0
 }
 
 /// Frame data encoded whole for the wire; `None` for data no frame can hold.

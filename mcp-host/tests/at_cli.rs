@@ -496,3 +496,32 @@ fn a_broadcast_nobody_answers_exits_4() {
         "{out:?}"
     );
 }
+
+#[test]
+fn a_local_mode_or_rate_changed_says_what_later_commands_need() {
+    let sim = Sim::start();
+    // BD reads as its baud rate, as `setup` prints it.
+    assert_eq!(sim.ok(&["BD"]), "BD = 07 (115200 baud)\n");
+    let out = sim.at(&["BD", "3"]);
+    assert!(out.status.success(), "{out:?}");
+    assert_eq!(stdout(&out), "BD: ok\n");
+    assert!(
+        stderr(&out).contains("note: the radio's UART now runs at 9600 baud"),
+        "{}",
+        stderr(&out)
+    );
+    // The same mode as --api-mode needs nothing; another does.
+    let out = sim.at(&["AP", "1"]);
+    assert_eq!(stderr(&out), "", "{out:?}");
+    let out = sim.at(&["AP", "2"]);
+    assert!(out.status.success(), "{out:?}");
+    assert!(
+        stderr(&out).contains("note: the radio now speaks API mode 2: give --api-mode 2"),
+        "{}",
+        stderr(&out)
+    );
+    // A remote radio's settings are not the link's.
+    let out = sim.at(&["--api-mode", "2", "--to", MAV, "AP", "1"]);
+    assert!(out.status.success(), "{out:?}");
+    assert!(!stderr(&out).contains("note:"), "{}", stderr(&out));
+}

@@ -163,7 +163,7 @@ fn ctrl_c_stops_monitor_hub_and_a_timed_sim_cleanly() {
     ]);
     let mut sim = Running(child);
     let link = tcp_link(&line_with(&sim_lines, "listening on"));
-    line_with(&sim_lines, "running; Ctrl-C stops");
+    line_with(&sim_lines, "running for 600 s; Ctrl-C stops it sooner");
     let (child, lines) = spawn_lines(&["monitor", "--link", &link]);
     let mut monitor = Running(child);
     line_with(&lines, "link connected");
@@ -201,6 +201,31 @@ fn a_status_kind_with_no_status_request_says_why() {
     let output = run(&["encode", "--to", M, "status", "7"]);
     assert_eq!(output.status.code(), Some(2));
     assert!(stderr(&output).contains("the position is in the telemetry"));
+}
+
+#[test]
+fn a_kind_that_takes_no_telemetry_id_says_so_whatever_the_id() {
+    // A junk id is no reason to list the telemetry names: the kind takes none.
+    for id in ["5", "foo"] {
+        for kind in ["controllers", "landing"] {
+            for args in [
+                &["status", "--link", "tcp:127.0.0.1:9", "--to", M, kind, id][..],
+                &["encode", "--to", M, "status", kind, id],
+            ] {
+                let output = run(args);
+                let stderr = stderr(&output);
+                assert_eq!(output.status.code(), Some(2), "{args:?}: {stderr}");
+                assert!(
+                    stderr.contains(&format!("a {kind} status request takes no telemetry id")),
+                    "{args:?}: {stderr}"
+                );
+            }
+        }
+    }
+    // The one kind that takes an id still names them.
+    let output = run(&["encode", "--to", M, "status", "telemetry", "foo"]);
+    assert_eq!(output.status.code(), Some(2));
+    assert!(stderr(&output).contains("`foo` is not a telemetry id: give a name"));
 }
 
 #[test]
@@ -831,7 +856,7 @@ fn replay_of_a_hostile_recording_is_an_input_error_at_a_slow_speed() {
         assert!(!stderr.contains("panicked"), "{stderr}");
         assert_eq!(output.status.code(), Some(2), "{speed}: {stderr}");
         assert!(stderr.contains("too far ahead"), "{stderr}");
-        assert!(stderr.contains("replayed 1 frames before it"), "{stderr}");
+        assert!(stderr.contains("replayed 1 frame before it"), "{stderr}");
         // The first frame went out.
         assert_eq!(reader.join().unwrap(), [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F]);
     }
@@ -856,9 +881,11 @@ fn replay_says_how_far_it_got_when_its_peer_leaves() {
     let stderr = stderr(&output);
     assert_eq!(peer.join().unwrap(), [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F]);
     assert_eq!(output.status.code(), Some(3), "{stderr}");
+    // After the warning that a `tcp:` link is most often a radio's side.
     assert_eq!(
-        stderr.trim_end(),
-        "mcp-gs: link closed (replayed 1 frames before it)"
+        stderr.trim_end().lines().last(),
+        Some("mcp-gs: link closed (replayed 1 frame before it)"),
+        "{stderr}"
     );
 }
 

@@ -132,6 +132,8 @@ fn the_summary_counts_bad_lines_among_errors() {
     let out = text(&output.stdout);
     assert!(out.contains("\nerrors:\n"), "{out}");
     assert!(out.contains("\n  bad_hex_line: 2\n"), "{out}");
+    // A frame type xbee-api reads is named as JSON names its frames.
+    assert!(out.contains("\n  type 0x8a (modem_status): 2\n"), "{out}");
     // Good hex counts none, and exits 0.
     let output = decode_stdin(&["--hex", "--summary"], &format!("{FRAME}\n"));
     assert_eq!(output.status.code(), Some(0));

@@ -124,6 +124,21 @@ fn serving(out: &mpsc::Receiver<String>) -> (String, String) {
     (serving, addr)
 }
 
+/// Asserts that `line` is `mcp-gs: HH:MM:SS.mmm` followed by `then`, as every hub line
+/// is: a line read back after an outage needs its time.
+fn assert_timed(line: &str, then: &str) {
+    let time = line
+        .strip_prefix("mcp-gs: ")
+        .and_then(|rest| rest.split_once(then))
+        .map(|(time, _)| time)
+        .unwrap_or_else(|| panic!("{line}"));
+    let shape: String = time
+        .chars()
+        .map(|c| if c.is_ascii_digit() { '9' } else { c })
+        .collect();
+    assert_eq!(shape, "99:99:99.999", "{line}");
+}
+
 #[test]
 fn the_hub_says_when_the_radio_is_lost_and_when_it_is_back() {
     let radio = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
@@ -140,16 +155,7 @@ fn the_hub_says_when_the_radio_is_lost_and_when_it_is_back() {
     );
     // A warning like the command's own, not a log record, with the time of day (UTC) for
     // an outage read back later: `mcp-gs: HH:MM:SS.mmm warning: hub: radio lost`.
-    let time = lost
-        .strip_prefix("mcp-gs: ")
-        .and_then(|rest| rest.split_once(" warning: hub: radio lost"))
-        .map(|(time, _)| time)
-        .unwrap_or_else(|| panic!("{lost}"));
-    let shape: String = time
-        .chars()
-        .map(|c| if c.is_ascii_digit() { '9' } else { c })
-        .collect();
-    assert_eq!(shape, "99:99:99.999", "{lost}");
+    assert_timed(&lost, " warning: hub: radio lost");
     let (_socket, _) = radio.accept().unwrap();
     let back = line_with(&err, "radio back");
     // A status line, not a warning.
@@ -179,6 +185,8 @@ fn a_hub_on_a_pty_listens_once_a_radio_is_there() {
     );
     let waiting = line_with(&err, "no radio on pty yet");
     assert!(waiting.contains("clients are refused"), "{waiting}");
+    // A status line like the "radio there" that follows it.
+    assert_timed(&waiting, " hub: no radio on pty yet");
     // Nothing to serve yet: a client is refused, not accepted and left without answers.
     let refused = std::net::TcpStream::connect(&addr).unwrap_err();
     assert_eq!(refused.kind(), std::io::ErrorKind::ConnectionRefused);
@@ -246,7 +254,11 @@ fn a_hub_in_another_api_mode_than_its_radio_says_so_at_once() {
         .env_remove("MCP_LOG")
         .output()
         .expect("run mcp-gs send");
-    let dropping = line_with(&err, "the hub drops the radio's frames it cannot read");
+    let dropping = line_with(&err, "frames cannot be read and are dropped");
+    assert_timed(
+        &dropping,
+        " warning: hub: the radio's frames cannot be read",
+    );
     assert!(
         dropping.contains("failed the checksum") && dropping.contains("try --api-mode 2"),
         "{dropping} ({send:?})"
@@ -469,4 +481,54 @@ fn a_recording_that_cannot_be_written_stops_and_the_hub_goes_on_serving() {
         "{said}"
     );
     assert_eq!(hub.0.wait().unwrap().code(), Some(1));
+}
+
+#[test]
+fn frames_a_radio_sends_replayed_onto_the_hub_are_refused_and_said() {
+    let (_sim, radio, _sim_out) = sim_on_tcp("1");
+    let (mut hub, out, err) = start_hub(&radio);
+    let (_, addr) = serving(&out);
+    // A recording of what a radio said: three modem statuses, received.
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("heard.mcprec");
+    let mut bytes = b"MCPREC\x01\x00".to_vec();
+    for micros in 0..3u64 {
+        bytes.extend_from_slice(&micros.to_le_bytes());
+        bytes.push(0);
+        bytes.extend_from_slice(&2u16.to_le_bytes());
+        bytes.extend_from_slice(&[0x8A, 0x06]);
+    }
+    std::fs::write(&file, bytes).unwrap();
+    let replay = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args(["replay", file.to_str().unwrap(), "--speed", "0"])
+        .args(["--link", &format!("tcp:{addr}")])
+        .output()
+        .unwrap();
+    // The replay is warned of where its frames go.
+    let replayed = String::from_utf8_lossy(&replay.stderr);
+    assert!(
+        replayed.contains("warning: --frames rx, the default, plays what a radio said"),
+        "{replayed}"
+    );
+    // The hub says the first refusal at once, with its time, as its other lines.
+    let refused = line_with(&err, "a client's frame refused");
+    assert_timed(&refused, " warning: hub: a client's frame refused");
+    assert!(
+        refused.contains("type 0x8a (modem_status) is a frame a radio sends"),
+        "{refused}"
+    );
+    // The next ones together once they stop coming, and every one counted.
+    line_with(
+        &err,
+        "hub: 2 more frames of clients refused since the last such warning",
+    );
+    let pid = i32::try_from(hub.0.id()).expect("pid");
+    // SAFETY: kill(2) with the pid of a child of this process and a valid signal.
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
+    assert_eq!(hub.0.wait().unwrap().code(), Some(0));
+    let stopped = line_with(&out, "stopped:");
+    assert!(
+        stopped.ends_with(" 3 frames from clients refused"),
+        "{stopped}"
+    );
 }

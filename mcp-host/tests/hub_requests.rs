@@ -86,6 +86,34 @@ async fn requests_cut_short_take_no_frame_id() {
     hub.stop().await;
 }
 
+/// Frames a radio sends (a recording of what one said, played onto the hub) are refused
+/// whatever their second byte, and counted: a Receive Packet from 0013A2... has a 0 there,
+/// which read as "frame id 0" let it through to a radio that drops it, uncounted.
+#[tokio::test]
+async fn frames_a_radio_sends_are_refused_and_counted() {
+    let (hub, mut radio) = hub_and_radio().await;
+    let mut client = raw_client(&hub).await;
+    let from_radio: [&[u8]; 4] = [
+        &[
+            0x90, 0x00, 0x13, 0xA2, 0x00, 0x40, 0xB5, 0x99, 0xB9, 0x7B, 0x1F, 0x01, b'r', 0x02,
+            0x04,
+        ],
+        &[0x8A, 0x06],
+        &[0x8B, 0x01, 0xFF, 0xFE, 0, 0, 0],
+        &[0x88, 0x00, b'A', b'P', 0x00, 0x01],
+    ];
+    for data in from_radio {
+        send(&mut client, data).await;
+    }
+    send(&mut client, &[0x08, 0x00, b'A', b'C']).await;
+    // The first frame the radio gets is the request after them.
+    assert_eq!(next(&mut radio).await, [0x08, 0x00, b'A', b'C']);
+    let stats = hub.stats();
+    // Counted as they were read, before the request after them.
+    assert_eq!(stats.frames_refused, 4, "{stats:?}");
+    hub.stop().await;
+}
+
 /// With every frame id taken by requests the radio has not answered yet, requests of
 /// all clients wait for one in the order they came: the flood's that came first, then
 /// a newcomer's.

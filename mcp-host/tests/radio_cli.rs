@@ -238,6 +238,18 @@ fn nonsense_numbers_are_refused_with_a_reason() {
             "milliseconds",
         ),
         (
+            &["sim", "--link", "pty", "--mavs", "0"],
+            "expected a whole number from 1 to 4096, got `0`",
+        ),
+        (
+            &["sim", "--link", "pty", "--max-unicast", "300"],
+            "expected a whole number from 1 to 255, got `300`",
+        ),
+        (
+            &["setup", "--link", "pty", "--guard-time", "0"],
+            "expected a whole number from 1 to 10000, got `0`",
+        ),
+        (
             &["sim", "--link", "pty", "--loss", "2"],
             "a probability from 0 to 1",
         ),
@@ -491,5 +503,49 @@ fn the_seed_is_printed_when_there_are_faults_to_replay() {
             seeded,
             "{faults:?}: {stdout}"
         );
+    }
+}
+
+#[test]
+fn a_run_with_a_duration_says_how_long_and_when_it_stopped() {
+    for run in [
+        &["radio", "--coordinator", "tcp-listen:127.0.0.1:0"][..],
+        &["sim", "--link", "tcp-listen:127.0.0.1:0"],
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+            .args(run)
+            .args(["--duration", "0.5"])
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{out:?}");
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            stdout.contains("\nrunning for 0.5 s; Ctrl-C stops it sooner\n"),
+            "{run:?}: {stdout}"
+        );
+        let last = stdout.lines().last().unwrap_or_default();
+        assert!(
+            last.ends_with(" stopped after 0.5 s (--duration)"),
+            "{run:?}: {stdout}"
+        );
+    }
+}
+
+#[test]
+fn a_cut_is_said_in_seconds() {
+    let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args(["sim", "--link", "tcp-listen:127.0.0.1:0", "--mavs", "2"])
+        .args(["--cut", "0013A20040B599B9@0+100"])
+        .args(["--cut", "0013A20040B599BF@0.1+1e-4"])
+        .args(["--duration", "0.001"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{out:?}");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    for line in [
+        "0013a20040b599b9 out of range from 0 s to 100 s after start",
+        "0013a20040b599bf out of range from 0.1 s to 0.1001 s after start",
+    ] {
+        assert!(stdout.to_lowercase().contains(line), "{line}: {stdout}");
     }
 }

@@ -199,6 +199,27 @@ pub fn frame(frame: &Frame<'_>) -> Value {
     Value::Object(m)
 }
 
+/// The name [`frame`] gives a frame of type `frame_type` as its `"frame"`, for a type
+/// xbee-api reads (`transmit_status` for 0x8B); `None` for another. A queued AT command
+/// (0x09) is an `at` frame too, with `"queued":true`.
+pub fn frame_type_name(frame_type: u8) -> Option<&'static str> {
+    use xbee_api::frame::frame_type::*;
+    Some(match frame_type {
+        AT_COMMAND | AT_COMMAND_QUEUE => "at",
+        TRANSMIT_REQUEST => "transmit",
+        EXPLICIT_ADDRESSING_COMMAND => "explicit_transmit",
+        REMOTE_AT_COMMAND => "remote_at",
+        AT_COMMAND_RESPONSE => "at_response",
+        MODEM_STATUS => "modem_status",
+        TRANSMIT_STATUS => "transmit_status",
+        RECEIVE_PACKET => "receive",
+        EXPLICIT_RX_INDICATOR => "explicit_receive",
+        NODE_IDENTIFICATION_INDICATOR => "node_identification",
+        REMOTE_AT_RESPONSE => "remote_at_response",
+        _ => return None,
+    })
+}
+
 /// An AT command name: its two characters, or hex when they are not printable.
 pub(crate) fn at_name(command: [u8; 2]) -> String {
     if command.iter().all(|b| b.is_ascii_graphic()) {
@@ -516,6 +537,28 @@ fn link_event(link: &LinkEvent) -> Value {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_frame_types_name_is_its_frames_name() {
+        for data in [
+            &[0x8A, 0x06][..],
+            &[0x8B, 1, 0xFF, 0xFE, 0, 0, 0],
+            &[0x88, 1, b'A', b'P', 0],
+            &[0x08, 1, b'A', b'P'],
+            &[0x09, 1, b'A', b'P'],
+            &[
+                0x90, 0, 0x13, 0xA2, 0, 0x40, 0xB5, 0x99, 0xB9, 0xFF, 0xFE, 0x01,
+            ],
+        ] {
+            let parsed = Frame::parse_bytes(data).unwrap();
+            assert_eq!(
+                frame_type_name(data[0]),
+                frame(&parsed)["frame"].as_str(),
+                "{data:02x?}"
+            );
+        }
+        assert_eq!(frame_type_name(0x23), None);
+    }
 
     #[test]
     fn floats_keep_the_shortest_digits_of_their_f32() {

@@ -11,7 +11,16 @@ use super::json::hex;
 pub fn mcp(payload: &[u8]) -> String {
     match mcp_core::parse(payload) {
         Ok(packet) => packet.to_string(),
-        Err(error) => format!("invalid MCP packet ({error}): {}", hex(payload)),
+        Err(error) => invalid_mcp(&error, payload),
+    }
+}
+
+/// An invalid MCP payload: why, and its bytes (none to show for an empty one).
+fn invalid_mcp(error: &impl std::fmt::Display, payload: &[u8]) -> String {
+    if payload.is_empty() {
+        format!("invalid MCP packet ({error})")
+    } else {
+        format!("invalid MCP packet ({error}): {}", hex(payload))
     }
 }
 
@@ -171,12 +180,11 @@ pub fn event(event: &crate::Event) -> String {
             rx.packet.as_borrowed()
         ),
         Event::InvalidPacket(rx) => format!(
-            "rx  {}/{} opt {:02x}: invalid MCP packet ({}): {}",
+            "rx  {}/{} opt {:02x}: {}",
             rx.origin.src64,
             rx.origin.src16,
             rx.origin.options,
-            rx.error,
-            hex(&rx.payload)
+            invalid_mcp(&rx.error, &rx.payload)
         ),
         Event::Frame(owned) => match owned.parse() {
             Ok(parsed) => frame(&parsed),
@@ -291,6 +299,15 @@ impl DateLines {
 mod tests {
     use super::*;
     use std::time::Duration;
+
+    #[test]
+    fn an_empty_invalid_packet_shows_no_bytes() {
+        assert_eq!(mcp(b""), "invalid MCP packet (empty packet (at offset 0))");
+        assert_eq!(
+            mcp(b"c\x09"),
+            "invalid MCP packet (unknown command type 0x09 (at offset 1)): 6309"
+        );
+    }
 
     #[test]
     fn dates_around_1970_midnights_and_out_of_range() {

@@ -3,7 +3,8 @@
 use std::time::Duration;
 
 use clap::Args;
-use mcp_host::SendError;
+use mcp_host::command_mode::BAUD_RATES;
+use mcp_host::{Link, SendError};
 use xbee_api::{Address64, AtStatus, Frame};
 
 use crate::link_args::{
@@ -14,6 +15,11 @@ use mcp_host::render::json::hex;
 
 /// Arguments of `at`.
 #[derive(Debug, Args)]
+#[command(mut_arg("timeout", |arg| arg.help(
+    "Seconds to wait to connect, and for the radio's answer [default: 3 to read a \
+parameter of the local radio, which answers at once; 12 for a change, an \
+action, ND, DN, AS, ED, FN or a remote radio]"
+)))]
 pub(crate) struct AtArgs {
     #[command(flatten)]
     link: LinkArgs,
@@ -137,6 +143,10 @@ fn value_line(name: &str, command: &[u8; 2], data: &[u8]) -> String {
     if is_text(command) {
         return format!("{name} = {:?}", String::from_utf8_lossy(data));
     }
+    if let (b"BD", Some(rate)) = (command, baud_rate(data)) {
+        // As `setup` prints it: the rate is what the operator gives a serial link.
+        return format!("{name} = {} ({rate} baud)", hex(data).to_uppercase());
+    }
     if data.len() <= 16 {
         let number = data.iter().fold(0u128, |n, &b| (n << 8) | u128::from(b));
         format!(
@@ -146,6 +156,75 @@ fn value_line(name: &str, command: &[u8; 2], data: &[u8]) -> String {
         )
     } else {
         format!("{name} = {}", hex(data).to_uppercase())
+    }
+}
+
+/// The baud rate a `BD` value stands for, if it is one of the standard ones.
+fn baud_rate(bd: &[u8]) -> Option<u32> {
+    let index = usize::try_from(crate::link_args::at_number(bd)).ok()?;
+    BAUD_RATES.get(index).copied()
+}
+
+/// What the operator must change after the local radio took `value` for `command` and
+/// applied it: a new API mode or UART rate leaves every later command on the old
+/// settings talking to a radio that no longer understands them.
+fn change_note(command: &[u8; 2], value: &[u8], link: &LinkArgs) -> Option<String> {
+    let through = match &link.link {
+        Link::Tcp { .. } => " (through a hub, restart the hub with it)",
+        _ => "",
+    };
+    match command {
+        b"AP" => match crate::link_args::at_number(value) {
+            0 => Some(format!(
+                "the radio is now in transparent mode (AP=0) and answers no API frame: \
+                 `mcp-gs setup --link {}` puts it back into API mode",
+                link.link
+            )),
+            mode @ (1 | 2) => {
+                let spoken = match link.api_mode {
+                    ApiModeChoice::Fixed(m) => u64::from(u8::from(m)) == mode,
+                    ApiModeChoice::Auto => false,
+                };
+                // Later commands given the same --api-mode already speak it.
+                (!spoken).then(|| {
+                    format!(
+                        "the radio now speaks API mode {mode}: give --api-mode {mode} to \
+                         later commands{through}"
+                    )
+                })
+            }
+            mode => Some(format!(
+                "the radio now reads AP={mode}, a mode this ground station does not speak: \
+                 `mcp-gs setup --link {}` sets 1",
+                link.link
+            )),
+        },
+        b"BD" => {
+            let Some(baud) = baud_rate(value) else {
+                return Some(format!(
+                    "the radio's UART rate changed (BD={}): later commands need the link's \
+                     baud rate to match",
+                    hex(value).to_uppercase()
+                ));
+            };
+            let advice = match &link.link {
+                Link::Serial {
+                    path, flow_control, ..
+                } => format!(
+                    "use {}",
+                    Link::serial_with(path.clone(), baud, *flow_control)
+                ),
+                Link::Tcp { .. } => format!(
+                    "set the serial side of the bridge or hub to {baud} baud (a hub restarted \
+                     with serial:PATH:{baud})"
+                ),
+                _ => format!("use serial:PATH:{baud}"),
+            };
+            Some(format!(
+                "the radio's UART now runs at {baud} baud: {advice}"
+            ))
+        }
+        _ => None,
     }
 }
 
@@ -408,6 +487,11 @@ pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
              `mcp-gs nodes` lists them all"
         );
     }
+    if let (None, false, Some(_)) = (args.to, args.no_apply, &args.value) {
+        if let Some(note) = change_note(&command, &parameter, &args.link) {
+            err!("mcp-gs: note: {note}");
+        }
+    }
     // The local radio's API mode, read in another than --api-mode (the AP answer reads
     // the same in both modes): the other frames will not.
     if let (None, b"AP", ApiModeChoice::Fixed(mode), &[ap]) =
@@ -464,6 +548,44 @@ mod tests {
         );
         assert_eq!(value_line("NI", b"NI", b"MAV \"1\""), r#"NI = "MAV \"1\"""#);
         assert_eq!(value_line("NI", b"NI", b""), r#"NI = """#);
+    }
+
+    #[test]
+    fn bd_reads_as_its_baud_rate() {
+        assert_eq!(value_line("BD", b"BD", &[3]), "BD = 03 (9600 baud)");
+        assert_eq!(value_line("BD", b"BD", &[0x20]), "BD = 20 (0x20, 32)");
+        assert_eq!(value_line("ID", b"ID", &[3]), "ID = 03 (0x03, 3)");
+    }
+
+    #[test]
+    fn a_new_rate_on_a_serial_link_names_the_link_to_use() {
+        #[derive(clap::Parser)]
+        struct Cli {
+            #[command(flatten)]
+            link: LinkArgs,
+        }
+        let link = |argv: &[&str]| {
+            let mut all = vec!["at"];
+            all.extend(argv);
+            <Cli as clap::Parser>::try_parse_from(&all).unwrap().link
+        };
+        let serial = link(&["--link", "serial:/dev/ttyUSB0:115200:rtscts"]);
+        let note = change_note(b"BD", &[3], &serial).unwrap();
+        assert!(
+            note.ends_with("use serial:/dev/ttyUSB0:9600:rtscts"),
+            "{note}"
+        );
+        let note = change_note(b"AP", &[2], &serial).unwrap();
+        assert!(!note.contains("hub"), "{note}");
+        let hub = link(&["--link", "tcp:127.0.0.1:9750", "--api-mode", "2"]);
+        assert_eq!(change_note(b"AP", &[2], &hub), None);
+        let note = change_note(b"AP", &[1], &hub).unwrap();
+        assert!(
+            note.contains("--api-mode 1") && note.contains("hub"),
+            "{note}"
+        );
+        assert!(change_note(b"AP", &[0], &hub).unwrap().contains("setup"));
+        assert_eq!(change_note(b"NI", b"MAV", &hub), None);
     }
 
     #[test]

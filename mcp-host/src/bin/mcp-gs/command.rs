@@ -287,9 +287,10 @@ pub(crate) enum CommandArgs {
         /// `position_slave_set` (`slave-set`), `time`, or a number.
         #[arg(value_parser = parse_status_kind)]
         kind: CommandType,
-        /// For `telemetry_to_coordinator`: the telemetry id.
-        #[arg(value_parser = parse_telemetry_id)]
-        id: Option<TelemetryId>,
+        /// For `telemetry_to_coordinator`: the telemetry id (a name or a number).
+        // Parsed once the kind is known: another kind takes no id at all, which is what a
+        // wrong one should hear.
+        id: Option<String>,
     },
     /// A text message (category `m`).
     Message {
@@ -336,18 +337,15 @@ fn parse_hex_payload(s: &str) -> Result<HexPayload, String> {
 }
 
 /// Builds the status request for `kind` (and `id` for telemetry-to-coordinator).
-pub(crate) fn status_request(
-    kind: CommandType,
-    id: Option<TelemetryId>,
-) -> Result<StatusRequest, String> {
+pub(crate) fn status_request(kind: CommandType, id: Option<&str>) -> Result<StatusRequest, String> {
     match (kind, id) {
         (CommandType::TelemetryToCoordinator, None) => Err(
             "a telemetry_to_coordinator status request needs a telemetry id (e.g. `altitude`)"
                 .into(),
         ),
-        (CommandType::TelemetryToCoordinator, Some(id)) => {
-            Ok(StatusRequest::TelemetryToCoordinator(id))
-        }
+        (CommandType::TelemetryToCoordinator, Some(id)) => parse_telemetry_id(id)
+            .map(StatusRequest::TelemetryToCoordinator)
+            .map_err(|e| format!("`{id}` is {e}")),
         (_, Some(_)) => Err(format!("a {kind} status request takes no telemetry id")),
         (kind, None) => StatusRequest::for_type(kind, TelemetryId::from(0))
             .ok_or_else(|| no_status_request(kind).unwrap_or_default()),
@@ -403,7 +401,7 @@ impl CommandArgs {
                     }
                     .into(),
                     Self::Status { kind, id } => {
-                        Command::StatusRequest(status_request(*kind, *id)?).into()
+                        Command::StatusRequest(status_request(*kind, id.as_deref())?).into()
                     }
                     Self::Message { text: t } => {
                         text = t.as_bytes();

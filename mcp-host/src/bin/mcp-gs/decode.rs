@@ -724,7 +724,11 @@ fn print_summary(
             writeln!(out, "bytes: {bytes}")?;
             writeln!(out, "frames: {}", summary.frames)?;
             for (t, n) in summary.frame_types() {
-                writeln!(out, "  type 0x{t:02x}: {n}")?;
+                // The hex as the JSON summary keys it, the name as frames print in JSON.
+                match mcp_host::render::json::frame_type_name(t) {
+                    Some(name) => writeln!(out, "  type 0x{t:02x} ({name}): {n}")?,
+                    None => writeln!(out, "  type 0x{t:02x}: {n}")?,
+                }
             }
             writeln!(out, "mcp packets:")?;
             for (c, n) in summary.categories() {
@@ -836,16 +840,25 @@ mod tests {
             .unwrap();
         let recording = recording.into_inner();
         let out = summary(&recording, &args(false)).unwrap();
-        assert!(out.contains("frames: 1\n  type 0x8a: 1\n"), "{out}");
+        assert!(
+            out.contains("frames: 1\n  type 0x8a (modem_status): 1\n"),
+            "{out}"
+        );
         // As hex text too, and raw bytes given as hex are refused.
         let hex: String = recording.iter().map(|b| format!("{b:02x} ")).collect();
         let out = summary(hex.as_bytes(), &args(true)).unwrap();
-        assert!(out.contains("frames: 1\n  type 0x8a: 1\n"), "{out}");
+        assert!(
+            out.contains("frames: 1\n  type 0x8a (modem_status): 1\n"),
+            "{out}"
+        );
         let e = summary(&recording, &args(true)).unwrap_err();
         assert!(e.to_string().contains("is a recording"), "{e}");
         // A raw capture is read as one.
         let out = summary(&[0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F], &args(false)).unwrap();
-        assert!(out.contains("frames: 1\n  type 0x8a: 1\n"), "{out}");
+        assert!(
+            out.contains("frames: 1\n  type 0x8a (modem_status): 1\n"),
+            "{out}"
+        );
     }
 
     #[test]

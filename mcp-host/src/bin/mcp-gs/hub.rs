@@ -18,6 +18,11 @@ use crate::recording::{Recording, RecordingFile};
 
 /// Arguments of `hub`.
 #[derive(Debug, Args)]
+#[command(mut_arg("timeout", |arg| arg.help(
+    "Seconds to wait for the radio's link to connect (tcp:) [default: 12]; with \
+--wait, or on pty or tcp-listen:, the hub waits for its radio as long as it \
+runs"
+)))]
 pub(crate) struct HubArgs {
     #[command(flatten)]
     link: LinkArgs,
@@ -107,7 +112,11 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
             "will serve {radio} on {addr} once a radio is there: then give other commands \
              --link tcp:{addr} --api-mode {mode} (Ctrl-C stops)"
         );
-        err!("mcp-gs: no radio on {radio} yet: clients are refused until one is there");
+        // A status line like the hub's own "radio there" that follows it, with the time.
+        tracing::info!(
+            target: mcp_host::hub::STATUS_TARGET,
+            "hub: no radio on {radio} yet: clients are refused until one is there"
+        );
     }
     // What is wrong with the radio's settings, said from its link's counters (a radio
     // in another API mode, at another baud rate, in transparent mode): the hub drops
@@ -154,8 +163,9 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
                 if let (Some(hint), false) = (hint, hinted) {
                     hinted = true;
                     let reason = hint.strip_prefix("hint: ").unwrap_or(&hint);
-                    err!(
-                        "mcp-gs: the hub drops the radio's frames it cannot read, and its \
+                    // A warning like the hub's own, with the time of day.
+                    tracing::warn!(
+                        "hub: the radio's frames cannot be read and are dropped: its \
                          clients get none of them: {reason} (stop the hub, and start it \
                          again with that fixed)"
                     );
@@ -166,21 +176,21 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
     let stats = hub.stats();
     hub.stop().await;
     out!(
-        "stopped: {} clients, {} frames from the radio, {} from clients, {} dropped for slow \
-         clients, {} frames from clients refused",
-        stats.clients,
-        stats.frames_from_radio,
+        "stopped: {}, {} from the radio, {} from clients, {} dropped for slow clients, {} \
+         from clients refused",
+        crate::counted(stats.clients, "client"),
+        crate::counted(stats.frames_from_radio, "frame"),
         stats.frames_from_clients,
         stats.frames_dropped,
-        stats.frames_refused
+        crate::counted(stats.frames_refused, "frame")
     );
     let radio = stats.radio;
     if radio.events_dropped > 0 || radio.decode_errors() > 0 {
         out!(
-            "from the radio: {} events lost while the hub fell behind, {} frames dropped \
+            "from the radio: {} lost while the hub fell behind, {} dropped \
              (bad checksum, cut off, ...)",
-            radio.events_dropped,
-            radio.decode_errors()
+            crate::counted(radio.events_dropped, "event"),
+            crate::counted(radio.decode_errors(), "frame")
         );
     }
     Recorder::end(recorder).await

@@ -46,10 +46,8 @@ pub(crate) struct LinkArgs {
     /// XBee API mode of the local radio (its AP setting): 1, 2, or auto to ask the radio.
     #[arg(long, value_name = "1|2|auto", default_value = "1")]
     pub(crate) api_mode: ApiModeChoice,
-    /// Seconds to wait to connect (`monitor` on `tcp-listen:` or with `--wait` waits for
-    /// its link, and once connected reconnects, as long as it runs), and for each
-    /// transmit status, response or report a subcommand waits for [default: 12; 3 for
-    /// `at` reading a local parameter].
+    /// Seconds to wait to connect, and for what the subcommand waits for [default: 12].
+    // Each subcommand says in its help what it waits for (`mut_arg("timeout", ...)`).
     #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
     pub(crate) timeout: Option<f64>,
 }

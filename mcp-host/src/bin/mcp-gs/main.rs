@@ -305,6 +305,31 @@ pub(crate) fn counted(n: impl Into<u64>, noun: &str) -> String {
     }
 }
 
+/// A value parser for a whole number from `min` to `max`, whose error says so (`expected
+/// a whole number from 1 to 4096, got `0``) where clap's range says `0 is not in 1..=4096`,
+/// Rust's syntax.
+pub(crate) fn whole_number<T>(
+    min: T,
+    max: T,
+) -> impl Fn(&str) -> Result<T, String> + Clone + Send + Sync + 'static
+where
+    T: std::str::FromStr + PartialOrd + std::fmt::Display + Copy + Send + Sync + 'static,
+{
+    move |s: &str| {
+        s.trim()
+            .parse::<T>()
+            .ok()
+            .filter(|n| (min..=max).contains(n))
+            .ok_or_else(|| format!("expected a whole number from {min} to {max}, got `{s}`"))
+    }
+}
+
+/// A duration as seconds, `0.1001 s`, `100 s`: as an operator gives them (`--duration`,
+/// `--cut`), not as Rust's `100.1ms`.
+pub(crate) fn seconds(duration: std::time::Duration) -> String {
+    format!("{} s", duration.as_secs_f64())
+}
+
 #[tokio::main]
 async fn main() -> ExitCode {
     let cli = parse(hoist_options(std::env::args_os().collect()));
@@ -338,5 +363,55 @@ async fn main() -> ExitCode {
             err!("mcp-gs: {}", failure.message);
             ExitCode::from(failure.code)
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_subcommand_says_what_its_timeout_waits_for() {
+        let cli = Cli::command();
+        let helps: Vec<(String, String)> = cli
+            .get_subcommands()
+            .filter_map(|sub| {
+                let timeout = sub.get_arguments().find(|a| a.get_id() == "timeout")?;
+                let help = timeout.get_help().map(ToString::to_string)?;
+                Some((sub.get_name().to_owned(), help))
+            })
+            .collect();
+        assert!(helps.len() >= 7, "{helps:?}");
+        for (i, (name, help)) in helps.iter().enumerate() {
+            for (other, its) in &helps[i + 1..] {
+                assert_ne!(help, its, "{name} and {other}");
+            }
+            // Not another subcommand's case.
+            if name != "monitor" {
+                assert!(!help.contains("monitor"), "{name}: {help}");
+            }
+            if name != "at" {
+                assert!(!help.contains("local parameter"), "{name}: {help}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_number_out_of_range_is_said_in_words() {
+        let parse = whole_number(1u16, 4096);
+        assert_eq!(parse("4096"), Ok(4096));
+        assert_eq!(
+            parse("0"),
+            Err("expected a whole number from 1 to 4096, got `0`".to_owned())
+        );
+        assert!(parse("-1").is_err() && parse("x").is_err());
+    }
+
+    #[test]
+    fn durations_print_as_seconds() {
+        use std::time::Duration;
+        assert_eq!(seconds(Duration::ZERO), "0 s");
+        assert_eq!(seconds(Duration::from_secs(100)), "100 s");
+        assert_eq!(seconds(Duration::from_micros(100_100)), "0.1001 s");
     }
 }

@@ -16,6 +16,11 @@ use crate::{Failure, Format};
 
 /// Arguments of `monitor`.
 #[derive(Debug, Args)]
+#[command(mut_arg("timeout", |arg| arg.help(
+    "Seconds to wait for the link to connect (tcp:) [default: 12]; on tcp-listen: \
+or with --wait, monitor waits for its link, and once connected reconnects, as \
+long as it runs"
+)))]
 pub(crate) struct MonitorArgs {
     #[command(flatten)]
     link: LinkArgs,

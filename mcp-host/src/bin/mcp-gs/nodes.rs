@@ -10,6 +10,10 @@ use crate::{Failure, Format};
 
 /// Arguments of `nodes`.
 #[derive(Debug, Args)]
+#[command(mut_arg("timeout", |arg| arg.help(
+    "Seconds to wait to connect, and for the radio's discovery time (N? or NT) \
+asked first [default: 12]; the answers are gathered for --window"
+)))]
 pub(crate) struct NodesArgs {
     #[command(flatten)]
     link: LinkArgs,

@@ -98,7 +98,7 @@ pub(crate) struct NetArgs {
     seed: Option<u64>,
     /// Largest unicast payload (84 without fragmentation, at most 255). Default: 84 for
     /// `radio`, 255 for `sim` (MCP packets go up to 255 bytes).
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..=255))]
+    #[arg(long, value_name = "N", value_parser = crate::whole_number(1u16, 255))]
     max_unicast: Option<u16>,
     /// Assume fragmentation: unicast payloads up to 255 bytes.
     #[arg(long, conflicts_with = "max_unicast")]
@@ -108,11 +108,11 @@ pub(crate) struct NetArgs {
     loss: f64,
     /// Delay before a frame is written to a link, milliseconds (at most an hour).
     #[arg(long, value_name = "MS", default_value_t = 0,
-          value_parser = clap::value_parser!(u64).range(0..=MAX_DELAY_MS))]
+          value_parser = crate::whole_number(0, MAX_DELAY_MS))]
     latency: u64,
     /// Random extra delay, up to this many milliseconds (at most an hour).
     #[arg(long, value_name = "MS", default_value_t = 0,
-          value_parser = clap::value_parser!(u64).range(0..=MAX_DELAY_MS))]
+          value_parser = crate::whole_number(0, MAX_DELAY_MS))]
     jitter: u64,
     /// Probability that a frame is written twice.
     #[arg(long, value_name = "P", default_value_t = 0.0, value_parser = parse_probability)]
@@ -222,10 +222,10 @@ impl NetArgs {
         }
         for c in &self.cuts {
             out!(
-                "{} out of range from {:?} to {:?} after start",
+                "{} out of range from {} to {} after start",
                 c.address,
-                c.start,
-                c.start + c.length
+                crate::seconds(c.start),
+                crate::seconds(c.start + c.length)
             );
         }
     }
@@ -567,6 +567,14 @@ fn ended_failure(named: &NamedLink, error: &str) -> Failure {
     crate::link_args::link_ended_failure(&named.name, &named.link, error)
 }
 
+/// The line saying the network runs: until Ctrl-C, or for `duration` (0: no limit).
+fn running_line(duration: Option<Duration>) -> String {
+    match duration.filter(|d| !d.is_zero()) {
+        Some(d) => format!("running for {}; Ctrl-C stops it sooner", crate::seconds(d)),
+        None => "running; Ctrl-C stops".to_owned(),
+    }
+}
+
 /// Says it runs, then prints network events and carries out the cuts until Ctrl-C or
 /// `duration` (0: no limit), whichever comes first. A failed delivery like one printed
 /// less than five seconds before is counted, not printed. One of `links` that ends
@@ -587,7 +595,9 @@ pub(crate) async fn watch(
         .filter(|d| !d.is_zero())
         .map(|d| Instant::now() + d);
     let ctrl_c = crate::interrupt::ctrl_c();
-    out!("running; Ctrl-C stops");
+    out!("{}", running_line(duration));
+    // Whether the time ran out (said, as a run that stops by itself would otherwise
+    // end without a word), or Ctrl-C came.
     let stop = async {
         let time_up = async {
             match deadline {
@@ -596,8 +606,8 @@ pub(crate) async fn watch(
             }
         };
         tokio::select! {
-            () = time_up => {}
-            _ = ctrl_c => {}
+            () = time_up => true,
+            _ = ctrl_c => false,
         }
     };
     tokio::pin!(stop);
@@ -615,7 +625,15 @@ pub(crate) async fn watch(
     loop {
         let next = timeline.peek().map(|step| step.0);
         tokio::select! {
-            () = &mut stop => return Ok(()),
+            time_up = &mut stop => {
+                if let (true, Some(duration)) = (time_up, duration) {
+                    let now = SystemTime::now();
+                    date_line(now);
+                    let time = mcp_host::render::text::time(now);
+                    out!("{time} stopped after {} (--duration)", crate::seconds(duration));
+                }
+                return Ok(());
+            }
             () = tokio::time::sleep_until(next.unwrap_or_else(Instant::now)), if next.is_some() => {
                 if let Some((_, node, cut)) = timeline.next() {
                     let known = if cut { network.cut(node) } else { network.restore(node) };

@@ -7,7 +7,7 @@ use std::time::Duration;
 
 use clap::{Args, ValueEnum};
 use mcp_host::record::{Direction, Record, RecordReader};
-use mcp_host::{CommandSender, SendError};
+use mcp_host::{CommandSender, Link, SendError};
 
 use crate::Failure;
 use crate::link_args::{LinkArgs, send_failure};
@@ -26,6 +26,10 @@ pub(crate) enum Which {
 
 /// Arguments of `replay`.
 #[derive(Debug, Args)]
+#[command(mut_arg("timeout", |arg| arg.help(
+    "Seconds to wait to connect (on tcp-listen:, for the ground station to connect) \
+and for the link to take each frame [default: 12]"
+)))]
 #[command(mut_arg("link", |arg| arg.help(
     "Where to play the frames: to a ground station (received frames, the default), \
      tcp-listen:ADDR:PORT for it to connect to, or serial:PATH on a serial cable to it; \
@@ -64,6 +68,9 @@ pub(crate) async fn run(args: ReplayArgs) -> Result<(), Failure> {
     let mut reader = RecordReader::new(BufReader::new(file))
         .map_err(|e| Failure::input(format!("{}: {e}", args.file.display())))?;
     let first = first_wanted(&args, &mut reader)?;
+    if let Some(warning) = radio_side_warning(&args.link.link, args.frames) {
+        err!("mcp-gs: warning: {warning}");
+    }
     let (stream, sender) = args.link.open(false).await?;
     if let Some(path) = &stream.info().pty_path {
         err!("mcp-gs: pseudo-terminal: {}", path.display());
@@ -79,8 +86,28 @@ pub(crate) async fn run(args: ReplayArgs) -> Result<(), Failure> {
     sender.close();
     sender.closed().await;
     result?;
-    err!("mcp-gs: replayed {played} frames");
+    err!("mcp-gs: replayed {}", crate::counted(played, "frame"));
     Ok(())
+}
+
+/// What to say when the received frames (what a radio said, for a ground station) go
+/// onto a `tcp:` link: most often a radio's side (a hub, a serial bridge, `mcp-gs sim`),
+/// which takes requests only, so that the replay would seem to succeed while every frame
+/// is dropped. Only a warning: a ground station listening on `tcp-listen:` takes them.
+fn radio_side_warning(link: &Link, frames: Which) -> Option<String> {
+    let (Link::Tcp { .. }, Which::Rx | Which::Both) = (link, frames) else {
+        return None;
+    };
+    let which = match frames {
+        Which::Both => "--frames both",
+        _ => "--frames rx, the default,",
+    };
+    Some(format!(
+        "{which} plays what a radio said, for a ground station; {link} is most often a \
+         radio's side (a hub, a serial bridge, `mcp-gs sim`), which drops such frames (a \
+         hub refuses them): --frames tx plays what was said to the radio (ignore this if a \
+         ground station listens there)"
+    ))
 }
 
 /// The longest a replay waits for a record, from the start (about 31 years, as the
@@ -138,7 +165,11 @@ fn first_wanted(
 /// The failure of a frame that could not be written, after `played` were.
 fn lost(error: SendError, played: u64) -> Failure {
     let failure = send_failure(error);
-    let message = format!("{} (replayed {played} frames before it)", failure.message);
+    let message = format!(
+        "{} (replayed {} before it)",
+        failure.message,
+        crate::counted(played, "frame")
+    );
     Failure::new(failure.code(), message)
 }
 
@@ -154,8 +185,9 @@ async fn play(
     for record in records {
         let record = record.map_err(|e| {
             Failure::input(format!(
-                "{}: {e} (replayed {played} frames before it)",
-                args.file.display()
+                "{}: {e} (replayed {} before it)",
+                args.file.display(),
+                crate::counted(*played, "frame")
             ))
         })?;
         if !wanted(args.frames, record.direction) {
@@ -173,11 +205,12 @@ async fn play(
                 .ok_or_else(|| {
                     Failure::input(format!(
                         "{}: a record stamped {} s after the first is too far ahead to wait \
-                         for at --speed {} (replayed {played} frames before it; --speed 0 \
-                         plays every frame at once)",
+                         for at --speed {} (replayed {} before it; --speed 0 plays every \
+                         frame at once)",
                         args.file.display(),
                         offset.as_secs(),
-                        args.speed
+                        args.speed,
+                        crate::counted(*played, "frame")
                     ))
                 })?;
             // A link that ends while the replay waits for a record's time is said at
@@ -194,4 +227,19 @@ async fn play(
         *played += 1;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn received_frames_onto_a_tcp_link_are_warned_of() {
+        let tcp: Link = "tcp:127.0.0.1:9750".parse().unwrap();
+        let listen: Link = "tcp-listen:127.0.0.1:9750".parse().unwrap();
+        assert!(radio_side_warning(&tcp, Which::Rx).is_some());
+        assert!(radio_side_warning(&tcp, Which::Both).is_some());
+        assert_eq!(radio_side_warning(&tcp, Which::Tx), None);
+        assert_eq!(radio_side_warning(&listen, Which::Rx), None);
+    }
 }

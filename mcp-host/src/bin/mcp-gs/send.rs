@@ -14,6 +14,10 @@ use crate::{Failure, Format};
 
 /// Arguments of `send`.
 #[derive(Debug, Args)]
+#[command(mut_arg("timeout", |arg| arg.help(
+    "Seconds to wait to connect, for the radio's transmit status, and, for a \
+trajectory to one MAV, for the MAV's report of it [default: 12]"
+)))]
 pub(crate) struct SendArgs {
     #[command(flatten)]
     link: LinkArgs,

@@ -53,7 +53,7 @@ pub(crate) struct GuardTime {
         long = "guard-time",
         value_name = "MS",
         default_value_t = 1000,
-        value_parser = clap::value_parser!(u64).range(1..=10_000)
+        value_parser = crate::whole_number(1u64, 10_000)
     )]
     ms: u64,
 }

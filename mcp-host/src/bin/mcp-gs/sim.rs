@@ -28,7 +28,7 @@ pub(crate) struct SimArgs {
     /// Number of MAVs, no fewer than the `--address` options: the given addresses, then
     /// the known MAVs 0013A20040B599B9, 0013A20040B599BF, 0013A20040B599BD,
     /// 0013A20040B599B8, then made-up ones.
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u16).range(1..=4096))]
+    #[arg(long, value_name = "N", value_parser = crate::whole_number(1u16, 4096))]
     mavs: Option<u16>,
     /// API mode of the link (what the ground station's XBee is set to): 1, 2, or 0 for
     /// a radio in transparent mode (AP=0) as XBee modules leave the factory, which

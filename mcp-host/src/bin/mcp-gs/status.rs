@@ -1,7 +1,7 @@
 //! `mcp-gs status`: send a status request and print the report.
 
 use clap::Args;
-use mcp_core::{Command, CommandType, Packet, TelemetryId};
+use mcp_core::{Command, CommandType, Packet};
 use mcp_host::RequestError;
 use xbee_api::Address64;
 
@@ -12,6 +12,9 @@ use crate::{Failure, Format};
 
 /// Arguments of `status`.
 #[derive(Debug, Args)]
+#[command(mut_arg("timeout", |arg| arg.help(
+    "Seconds to wait to connect, and for the MAV's report [default: 12]"
+)))]
 pub(crate) struct StatusArgs {
     #[command(flatten)]
     link: LinkArgs,
@@ -31,8 +34,9 @@ pub(crate) struct StatusArgs {
     #[arg(value_parser = crate::command::parse_status_kind)]
     kind: CommandType,
     /// For telemetry_to_coordinator: the telemetry id (a name or a number).
-    #[arg(value_parser = crate::command::parse_telemetry_id)]
-    id: Option<TelemetryId>,
+    // Parsed once the kind is known: another kind takes no id at all, which is what a
+    // wrong one should hear.
+    id: Option<String>,
 }
 
 /// Runs `status`.
@@ -43,7 +47,7 @@ pub(crate) async fn run(args: StatusArgs) -> Result<(), Failure> {
              MAV, `send --to 000000000000ffff status ...` and watch the reports with `monitor`)",
         ));
     }
-    let request = status_request(args.kind, args.id).map_err(Failure::input)?;
+    let request = status_request(args.kind, args.id.as_deref()).map_err(Failure::input)?;
     let (_stream, sender) = args.link.open(false).await?;
     let report = sender
         .request_with(args.to, request, Some(args.link.timeout()))
