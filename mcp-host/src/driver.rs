@@ -1265,6 +1265,7 @@ impl Driver {
                     timeout: w.timeout,
                     delivered: w.delivered,
                     undecodable: undecodable.saturating_sub(w.undecodable_before),
+                    heard: self.healthy,
                 }));
             } else {
                 i += 1;

@@ -187,7 +187,7 @@ pub enum RequestError {
     /// time.
     #[error(
         "no {what} report from {from} within {timeout:?} ({})",
-        timeout_cause(*delivered, *undecodable)
+        timeout_cause(*delivered, *heard, *undecodable)
     )]
     #[non_exhaustive]
     Timeout {
@@ -207,6 +207,11 @@ pub enum RequestError {
         ///
         /// [`Stats::diagnose`]: crate::Stats::diagnose
         undecodable: u64,
+        /// Whether a frame came from the radio on this connection before the timeout,
+        /// as in [`SendError::Timeout`] (true where the link cannot tell): if none did
+        /// and delivery was not confirmed, the radio may not speak the link's API mode
+        /// or baud rate, or the peer may serve another connection first.
+        heard: bool,
     },
 }
 
@@ -238,7 +243,7 @@ impl RequestError {
 }
 
 /// Why a report did not come, as far as the link can tell.
-fn timeout_cause(delivered: bool, undecodable: u64) -> String {
+fn timeout_cause(delivered: bool, heard: bool, undecodable: u64) -> String {
     let lost = (undecodable > 0).then(|| {
         format!(
             "{} from the radio could not be decoded meanwhile",
@@ -252,6 +257,9 @@ fn timeout_cause(delivered: bool, undecodable: u64) -> String {
         (true, Some(lost)) => {
             format!("the radio delivered the request, but {lost}: the report may have been one")
         }
+        (false, None) if !heard => "the radio did not confirm delivery; no frame has come from \
+                                    the radio since the link came up"
+            .to_owned(),
         (false, None) => "the radio did not confirm delivery".to_owned(),
         (false, Some(lost)) => format!("the radio did not confirm delivery, and {lost}"),
     }
@@ -341,6 +349,7 @@ mod tests {
             timeout,
             delivered: true,
             undecodable: 0,
+            heard: true,
         };
         assert!(no_report.is_timeout());
         let unsent = RequestError::from(SendError::NotSent { timeout });

@@ -273,6 +273,7 @@ impl CommandSender {
                     timeout,
                     delivered: false,
                     undecodable: 0,
+                    heard: true,
                 }),
             }
         };

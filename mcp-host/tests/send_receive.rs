@@ -534,7 +534,7 @@ async fn request_fails_on_delivery_failure_and_times_out_without_report() {
 
 #[tokio::test]
 async fn a_request_the_radio_never_confirms_says_so_when_it_times_out() {
-    let (_stream, sender, mut fake) = pty_link(ApiMode::Unescaped).await;
+    let (mut stream, sender, mut fake) = pty_link(ApiMode::Unescaped).await;
     let request = tokio::spawn({
         let sender = sender.clone();
         async move {
@@ -555,13 +555,49 @@ async fn a_request_the_radio_never_confirms_says_so_when_it_times_out() {
             err,
             RequestError::Timeout {
                 delivered: false,
+                heard: false,
                 ..
             }
         ),
         "{err:?}"
     );
     assert!(
-        err.to_string().contains("did not confirm delivery"),
+        err.to_string().contains(
+            "the radio did not confirm delivery; no frame has come from the radio since the \
+             link came up"
+        ),
+        "{err}"
+    );
+
+    // Once the radio has said something, its silence is about this request alone.
+    fake.receive(MAV, b"r\x02\x04").await;
+    let heard = next_packet(&mut stream).await;
+    assert_eq!(heard.origin.src64, MAV);
+    let request = tokio::spawn({
+        let sender = sender.clone();
+        async move {
+            let timeout = Some(Duration::from_millis(200));
+            sender
+                .request_with(MAV, StatusRequest::Landing, timeout)
+                .await
+        }
+    });
+    fake.next_tx().await;
+    let err = request.await.unwrap().unwrap_err();
+    assert!(
+        matches!(
+            err,
+            RequestError::Timeout {
+                delivered: false,
+                heard: true,
+                ..
+            }
+        ),
+        "{err:?}"
+    );
+    assert!(
+        err.to_string()
+            .ends_with("(the radio did not confirm delivery)"),
         "{err}"
     );
 }
