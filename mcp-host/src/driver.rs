@@ -499,13 +499,20 @@ impl Driver {
         tried: bool,
         last_failure: Option<&str>,
     ) -> Result<Transport, Stop> {
+        // A tcp-listen link on port 0 is named by the port it got.
+        let link = match (self.connector.link(), self.connector.local_addr()) {
+            (crate::Link::TcpListen { .. }, Some(addr)) => {
+                crate::Link::tcp_listen(addr.ip().to_string(), addr.port()).to_string()
+            }
+            (link, _) => link.to_string(),
+        };
         let down = if ever_connected {
             match last_failure {
-                Some(reason) => format!("{reason}; reconnecting to {}", self.connector.link()),
-                None => format!("reconnecting to {}", self.connector.link()),
+                Some(reason) => format!("{reason}; reconnecting to {link}"),
+                None => format!("reconnecting to {link}"),
             }
         } else {
-            format!("not connected yet to {}", self.connector.link())
+            format!("not connected yet to {link}")
         };
         let policy = self.options.reconnect.clone();
         let connector = &mut self.connector;

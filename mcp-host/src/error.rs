@@ -111,11 +111,13 @@ pub enum SendError {
         /// The timeout that expired.
         timeout: Duration,
     },
-    /// The transport went away while the request was in flight, or is down now.
-    #[error("link disconnected: {reason}")]
+    /// The transport went away while the request was in flight, or is down now: gone
+    /// and reconnecting, or not connected yet (a `tcp-listen:` or `pty` link before its
+    /// first peer, a link waiting for its device), as `reason` says.
+    #[error("link down: {reason}")]
     #[non_exhaustive]
     Disconnected {
-        /// Why the transport went away.
+        /// Why the transport is down (`not connected yet to LINK`, or why it went away).
         reason: String,
     },
     /// The link has ended for good (a request made after it ended; one in flight when

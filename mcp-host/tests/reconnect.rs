@@ -94,7 +94,7 @@ async fn tcp_link_reconnects_and_fails_requests_in_flight() {
     assert!(reason.contains("end of stream"), "{reason}");
     let err = send.await.unwrap().unwrap_err();
     assert!(matches!(err, SendError::Disconnected { .. }), "{err}");
-    assert!(err.to_string().starts_with("link disconnected"), "{err}");
+    assert!(err.to_string().starts_with("link down: "), "{err}");
     let err = request.await.unwrap().unwrap_err();
     assert!(
         matches!(err, RequestError::Send(SendError::Disconnected { .. })),
@@ -847,5 +847,20 @@ async fn an_answer_late_across_a_reconnection_reaches_no_new_request() {
     assert!(
         matches!(result, Err(SendError::Delivery { .. })),
         "{result:?}"
+    );
+}
+
+#[tokio::test]
+async fn a_request_before_the_first_peer_says_the_link_is_not_connected_yet() {
+    let link = mcp_host::Link::tcp_listen("127.0.0.1", 0);
+    let (stream, sender) = mcp_host::connect(&link, LinkOptions::default())
+        .await
+        .unwrap();
+    let addr = stream.info().local_addr.unwrap();
+    let err = sender.send(MAV, &Command::landing(true)).await.unwrap_err();
+    assert!(matches!(err, SendError::Disconnected { .. }), "{err:?}");
+    assert_eq!(
+        err.to_string(),
+        format!("link down: not connected yet to tcp-listen:{addr}")
     );
 }
