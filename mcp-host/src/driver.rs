@@ -804,15 +804,21 @@ impl Driver {
         match mcp_core::parse(&payload) {
             Ok(packet) => {
                 let packet = packet.map_bytes(|s| payload.slice_ref(s));
-                if let mcp_core::Packet::Report(report) = &packet {
-                    self.resolve_waiters(origin.src64, report);
-                }
+                let report = match &packet {
+                    mcp_core::Packet::Report(report) => Some(report.clone()),
+                    _ => None,
+                };
                 self.emit(Event::Packet(Received {
                     origin,
                     packet,
                     payload,
                     frame,
                 }));
+                // After the event: a subscription taken once the request has its report
+                // starts after that report, as it does after anything else it saw.
+                if let Some(report) = report {
+                    self.resolve_waiters(origin.src64, &report);
+                }
             }
             Err(error) => {
                 bump(&self.counters.invalid_packets);

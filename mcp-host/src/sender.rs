@@ -223,7 +223,9 @@ impl CommandSender {
     /// timeout. To [`Address64::BROADCAST`], the first matching report from anyone.
     ///
     /// Reports are matched inside the background task: this works whether or not the
-    /// [`crate::PacketStream`] is read. The report also appears on the stream. Any
+    /// [`crate::PacketStream`] is read. The report also appears on the stream and to
+    /// every [`Subscription`](crate::Subscription), handed to them before this
+    /// resolves: a subscription taken after it resolved starts after the report. Any
     /// report of the matching kind from `to` that arrives after the request is sent
     /// answers it, so one the MAV sent by itself just before it got the request (the
     /// report that follows a trajectory set or a landing change) may be the answer; it
