@@ -5,6 +5,9 @@ id_enum! {
     /// valid on the wire and decode as `Unknown`. A set of them (the ids enabled for
     /// telemetry, say) is a [`TelemetrySet`](crate::TelemetrySet).
     ///
+    /// Each value is an `f32`; the protocol names the quantities but gives no units
+    /// (the MAV's firmware decides them), so none are stated here either.
+    ///
     /// ```
     /// use mcp_core::TelemetryId;
     /// assert_eq!(TelemetryId::from(0x11), TelemetryId::ValidBlob);
