@@ -56,7 +56,9 @@
 //! Packets, commands and identifiers are [`mcp_core`]'s, addresses and frames
 //! [`xbee_api`]'s, payloads [`bytes::Bytes`]: all three are re-exported here, so that a
 //! program that depends on this crate alone names them at the versions it uses
-//! (`use mcp_host::mcp_core::Command;`), as every example of these docs does.
+//! (`use mcp_host::mcp_core::Command;`), as every example of these docs does. So is
+//! [`tokio_serial`], whose errors a [`LinkError::Serial`] holds
+//! (`mcp_host::tokio_serial::ErrorKind::NoDevice`: on Unix, the port is in use).
 //!
 //! ```
 //! use mcp_host::bytes::Bytes;
@@ -140,6 +142,7 @@ use tokio::sync::mpsc;
 
 pub use bytes;
 pub use mcp_core;
+pub use tokio_serial;
 pub use xbee_api;
 
 pub use answers::Answers;

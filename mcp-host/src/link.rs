@@ -116,6 +116,9 @@ pub enum LinkParseError {
     /// `tcp:`/`tcp-listen:` with an empty host or address.
     #[error("missing host in {0:?} (expected HOST:PORT)")]
     MissingHost(String),
+    /// The host or address holds white space (`tcp: 127.0.0.1:9750`).
+    #[error("invalid host {0:?} (no spaces in a host name or address)")]
+    InvalidHost(String),
     /// The port is not an integer in 0..=65535.
     #[error("invalid port {0:?} (expected 0-65535)")]
     InvalidPort(String),
@@ -133,8 +136,13 @@ pub enum LinkParseError {
     UrlForm(String),
 }
 
-/// For a link string that is a bare device path: the `serial:` link meant.
+/// For a link string that is a bare device path: the `serial:` link meant; for a kind
+/// in capitals: the kind meant.
 fn bare_path_hint(kind: &str) -> String {
+    let lower = kind.to_ascii_lowercase();
+    if lower != kind && matches!(lower.as_str(), "serial" | "tcp" | "tcp-listen" | "pty") {
+        return format!("; kinds are lower case: {lower}");
+    }
     let com_port = kind
         .strip_prefix("COM")
         .is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()));
@@ -314,6 +322,9 @@ fn parse_host_port(rest: &str) -> Result<(String, u16), LinkParseError> {
     if host.is_empty() {
         return Err(LinkParseError::MissingHost(rest.to_owned()));
     }
+    if host.contains(char::is_whitespace) {
+        return Err(LinkParseError::InvalidHost(host.to_owned()));
+    }
     if port.is_empty() {
         return Err(LinkParseError::MissingPort(rest.to_owned()));
     }
@@ -436,6 +447,9 @@ mod tests {
             ("tcp://127.0.0.1:9750", UrlForm("tcp".into())),
             ("tcp-listen://0.0.0.0:9750", UrlForm("tcp-listen".into())),
             ("127.0.0.1:9750", UnknownKind("127.0.0.1".into())),
+            ("tcp: 127.0.0.1:9750", InvalidHost(" 127.0.0.1".into())),
+            ("tcp-listen:0.0.0.0 :9750", InvalidHost("0.0.0.0 ".into())),
+            ("TCP:127.0.0.1:9750", UnknownKind("TCP".into())),
         ];
         for (text, expected) in cases {
             assert_eq!(text.parse::<Link>().as_ref(), Err(expected), "{text:?}");
@@ -460,6 +474,8 @@ mod tests {
             ("127.0.0.1:9750", "write tcp:127.0.0.1:PORT"),
             ("localhost:9750", "write tcp:localhost:PORT"),
             ("tcp://127.0.0.1:9750", "write tcp:HOST:PORT, without //"),
+            ("TCP:127.0.0.1:9750", "kinds are lower case: tcp"),
+            ("Serial:/dev/ttyUSB0", "kinds are lower case: serial"),
         ] {
             let message = text.parse::<Link>().unwrap_err().to_string();
             assert!(message.contains(hint), "{message}");

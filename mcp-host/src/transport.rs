@@ -61,7 +61,7 @@ pub enum LinkError {
     #[error("cannot listen on {addr}: {error}")]
     #[non_exhaustive]
     Listen {
-        /// `ADDR:PORT` as given.
+        /// The link as given, `tcp-listen:ADDR:PORT`.
         addr: String,
         /// What the system said.
         error: io::Error,
@@ -70,7 +70,7 @@ pub enum LinkError {
     #[error("cannot accept a peer on {addr}: {error}")]
     #[non_exhaustive]
     Accept {
-        /// `ADDR:PORT` as given.
+        /// The link as given, `tcp-listen:ADDR:PORT`.
         addr: String,
         /// What the system said.
         error: io::Error,
