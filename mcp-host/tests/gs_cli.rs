@@ -712,6 +712,11 @@ fn a_peer_that_closes_at_once_is_said_to_turn_us_away() {
         "{stderr}"
     );
     assert!(stderr.contains("use mcp-gs hub"), "{stderr}");
+    // Through a hub, its radio gone: the hub did it, not a peer serving another.
+    assert!(
+        stderr.contains("a hub closes its clients' connections when it loses its radio"),
+        "{stderr}"
+    );
     peer.join().unwrap();
 
     // monitor reconnects, and says it once the peer has done it three times.

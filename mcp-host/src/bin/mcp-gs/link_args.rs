@@ -534,7 +534,8 @@ pub(crate) fn nothing_came(stats: &Stats) -> bool {
 pub(crate) fn turned_away_hint() -> String {
     "hint: the peer closed the connection before anything came from the radio: mcp-gs sim \
      and radio serve one connection at a time, let one more wait its turn and close any \
-     other at once (to share one, use mcp-gs hub)"
+     other at once (to share one, use mcp-gs hub); a hub closes its clients' connections \
+     when it loses its radio (its own lines say so)"
         .to_owned()
 }
 
