@@ -100,6 +100,36 @@ impl Record {
     pub fn parse(&self) -> Result<xbee_api::Frame<'_>, xbee_api::FrameError> {
         xbee_api::Frame::parse_bytes(&self.frame)
     }
+
+    /// The MCP packet the frame carries, with the other radio's address (the MAV a
+    /// received packet came from, or the one a sent one went to): the RF data of a
+    /// Receive Packet, Explicit Rx Indicator, Transmit Request or Explicit Addressing
+    /// Command ([`Frame::rf_data`](xbee_api::Frame::rf_data)), parsed. `None` for any
+    /// other frame (AT commands and answers, statuses) and for one that does not read;
+    /// the parse's error for data that is no MCP packet.
+    ///
+    /// ```
+    /// use std::time::SystemTime;
+    /// use mcp_host::mcp_core::{Command, Packet};
+    /// use mcp_host::record::{Direction, Record};
+    ///
+    /// // A landing command as a Receive Packet from 0013A20040B599B9.
+    /// let mut frame = vec![0x90, 0x00, 0x13, 0xA2, 0x00, 0x40, 0xB5, 0x99, 0xB9, 0xFF, 0xFE, 0x01];
+    /// frame.extend_from_slice(b"c\x02\x01");
+    /// let record = Record { time: SystemTime::now(), direction: Direction::Received, frame };
+    /// let (from, packet) = record.mcp().expect("a frame that carries data");
+    /// assert_eq!(from.to_string(), "0013a20040b599b9");
+    /// assert_eq!(packet, Ok(Packet::Command(Command::landing(true))));
+    /// ```
+    pub fn mcp(
+        &self,
+    ) -> Option<(
+        xbee_api::Address64,
+        Result<mcp_core::Packet<&[u8]>, mcp_core::Error>,
+    )> {
+        let (peer, data) = self.parse().ok()?.rf_data()?;
+        Some((peer, mcp_core::parse(data)))
+    }
 }
 
 /// Writes a recording.
@@ -294,6 +324,45 @@ fn read_full(input: &mut impl Read, buf: &mut [u8]) -> io::Result<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_mcp_packet_of_a_record_is_found_both_ways() {
+        use xbee_api::{EncodeFrame, ExplicitAddressingCommandRepr, TransmitRequestRepr};
+        let mav = xbee_api::Address64(0x0013_A200_40B5_99B9);
+        fn data<F: EncodeFrame>(frame: &F) -> Vec<u8> {
+            let mut data = Vec::new();
+            frame.write_frame_data(&mut |chunk: &[u8]| data.extend_from_slice(chunk));
+            data
+        }
+        let record = |direction, frame| Record {
+            time: UNIX_EPOCH,
+            direction,
+            frame,
+        };
+        let landing = mcp_core::Packet::Command(mcp_core::Command::landing(true));
+        let tx = TransmitRequestRepr::unicast(mav, b"c\x02\x01");
+        let sent = record(Direction::Sent, data(&tx));
+        assert_eq!(sent.mcp(), Some((mav, Ok(landing))));
+        let explicit = ExplicitAddressingCommandRepr {
+            frame_id: 8,
+            dst64: mav,
+            dst16: xbee_api::Address16::UNKNOWN,
+            src_endpoint: 0xE8,
+            dst_endpoint: 0xE8,
+            cluster_id: 0x0011,
+            profile_id: 0xC105,
+            radius: 0,
+            options: 0,
+            data: b"c\xff",
+        };
+        let explicit = record(Direction::Sent, data(&explicit));
+        let (to, packet) = explicit.mcp().unwrap();
+        assert_eq!(to, mav);
+        assert!(packet.is_err(), "{packet:?}");
+        // A frame that carries no data over the air, or that does not read: none.
+        assert_eq!(record(Direction::Received, vec![0x8A, 0x06]).mcp(), None);
+        assert_eq!(record(Direction::Received, vec![0x90, 0x00]).mcp(), None);
+    }
 
     #[test]
     fn round_trip() {

@@ -3,7 +3,7 @@
 //! `*Repr` holding the fields that parses from the view and encodes with
 //! [`EncodeFrame`]; plus [`Frame`], the enum over all of them.
 
-use crate::{EncodeFrame, FrameError, RawFrame};
+use crate::{Address64, EncodeFrame, FrameError, RawFrame};
 
 pub mod at_command;
 pub mod at_command_response;
@@ -254,6 +254,36 @@ impl<'a> Frame<'a> {
             | Self::ExplicitRxIndicator(_)
             | Self::NodeIdentificationIndicator(_)
             | Self::Unknown { .. } => None,
+        }
+    }
+
+    /// The RF data of a frame that carries some over the air, with the other radio's
+    /// address: the source of a Receive Packet (0x90) or an Explicit Rx Indicator
+    /// (0x91), the destination of a Transmit Request (0x10) or an Explicit Addressing
+    /// Command (0x11). `None` for every other frame. An MCP packet is such data, both
+    /// ways, as a recording of a ground station's link holds them.
+    ///
+    /// ```
+    /// use xbee_api::{Address64, Frame};
+    ///
+    /// // A Receive Packet from 0013A20040B599B9 carrying b"r\x02\x04".
+    /// let data = [
+    ///     0x90, 0x00, 0x13, 0xA2, 0x00, 0x40, 0xB5, 0x99, 0xB9, 0xFF, 0xFE, 0x01, b'r', 0x02,
+    ///     0x04,
+    /// ];
+    /// let frame = Frame::parse_bytes(&data).unwrap();
+    /// assert_eq!(
+    ///     frame.rf_data(),
+    ///     Some((Address64(0x0013_A200_40B5_99B9), &b"r\x02\x04"[..]))
+    /// );
+    /// ```
+    pub fn rf_data(&self) -> Option<(Address64, &'a [u8])> {
+        match self {
+            Self::ReceivePacket(rx) => Some((rx.src64, rx.data)),
+            Self::ExplicitRxIndicator(rx) => Some((rx.src64, rx.data)),
+            Self::TransmitRequest(tx) => Some((tx.dst64, tx.data)),
+            Self::ExplicitAddressingCommand(tx) => Some((tx.dst64, tx.data)),
+            _ => None,
         }
     }
 }

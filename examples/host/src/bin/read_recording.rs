@@ -8,7 +8,6 @@ use std::io::BufReader;
 use std::time::UNIX_EPOCH;
 
 use mcp_host::record::{Direction, RecordReader};
-use mcp_host::xbee_api::Frame;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let path = std::env::args()
@@ -24,24 +23,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             Direction::Received => "rx",
             Direction::Sent => "tx",
         };
-        // A record holds the frame's data: frame type first, unescaped.
-        let (peer, payload) = match record.parse() {
-            Ok(Frame::ReceivePacket(rx)) => (rx.src64, rx.data),
-            Ok(Frame::ExplicitRxIndicator(rx)) => (rx.src64, rx.data),
-            Ok(Frame::TransmitRequest(tx)) => (tx.dst64, tx.data),
-            Ok(Frame::ExplicitAddressingCommand(tx)) => (tx.dst64, tx.data),
-            Ok(other) => {
-                println!("{time:.3} {way} frame 0x{:02x}", other.frame_type());
-                continue;
-            }
-            Err(e) => {
-                println!("{time:.3} {way} unreadable frame: {e}");
-                continue;
-            }
-        };
-        match mcp_host::mcp_core::parse(payload) {
-            Ok(packet) => println!("{time:.3} {way} {peer}: {packet}"),
-            Err(e) => println!("{time:.3} {way} {peer}: not an MCP packet: {e}"),
+        // A record holds the frame's data: frame type first, unescaped. An MCP packet
+        // is the data of a frame to or from another radio.
+        match record.mcp() {
+            Some((peer, Ok(packet))) => println!("{time:.3} {way} {peer}: {packet}"),
+            Some((peer, Err(e))) => println!("{time:.3} {way} {peer}: not an MCP packet: {e}"),
+            None => match record.parse() {
+                Ok(other) => println!("{time:.3} {way} frame 0x{:02x}", other.frame_type()),
+                Err(e) => println!("{time:.3} {way} unreadable frame: {e}"),
+            },
         }
     }
     Ok(())
