@@ -121,16 +121,15 @@ impl Record {
     /// assert_eq!(from.to_string(), "0013a20040b599b9");
     /// assert_eq!(packet, Ok(Packet::Command(Command::landing(true))));
     /// ```
-    pub fn mcp(
-        &self,
-    ) -> Option<(
-        xbee_api::Address64,
-        Result<mcp_core::Packet<&[u8]>, mcp_core::Error>,
-    )> {
+    pub fn mcp(&self) -> Option<(xbee_api::Address64, ParsedPacket<'_>)> {
         let (peer, data) = self.parse().ok()?.rf_data()?;
         Some((peer, mcp_core::parse(data)))
     }
 }
+
+/// An MCP packet read from a frame's data, borrowing it, or why the data is none
+/// ([`Record::mcp`]).
+pub type ParsedPacket<'a> = Result<mcp_core::Packet<&'a [u8]>, mcp_core::Error>;
 
 /// Writes a recording.
 #[derive(Debug)]
