@@ -35,6 +35,11 @@ impl Error {
         &self.kind
     }
 
+    /// The one-byte code of its [`kind`](Self::kind) ([`ErrorKind::code`]).
+    pub const fn code(&self) -> u8 {
+        self.kind.code()
+    }
+
     /// The byte offset in the packet at which the problem was found, counted from 0 (the
     /// category byte; the specification's tables count from 1). For a length
     /// error this is the first missing or the first extra byte.
@@ -95,6 +100,48 @@ pub enum ErrorKind {
     TooManyWaypoints(usize),
     /// A firmware-form position slave set command names a slot other than 0-3.
     InvalidSlot(u8),
+}
+
+impl ErrorKind {
+    /// A one-byte code of the error's kind, without its values:
+    ///
+    /// | code | error |
+    /// |---|---|
+    /// | 0x41 | [`Empty`](Self::Empty) |
+    /// | 0x42 | [`UnknownCategory`](Self::UnknownCategory) |
+    /// | 0x43 | [`MissingType`](Self::MissingType) |
+    /// | 0x44 | [`UnknownType`](Self::UnknownType) |
+    /// | 0x45 | [`WrongLength`](Self::WrongLength) |
+    /// | 0x46 | [`SizeMismatch`](Self::SizeMismatch) |
+    /// | 0x47 | [`TooManyWaypoints`](Self::TooManyWaypoints) |
+    /// | 0x48 | [`InvalidSlot`](Self::InvalidSlot) |
+    /// | 0x50 | [`BufferTooSmall`] (its own type: [`BufferTooSmall::CODE`]) |
+    /// | 0x51 | [`Full`] (its own type: [`Full::CODE`]) |
+    ///
+    /// Codes are stable (one is never given to another error) and unique across
+    /// `mcp-core` (0x40-0x7F) and `xbee-api` (0x01-0x3F, as its `DecodeError::code`
+    /// says), 0 being left for "no error": one byte says which error it was, for a
+    /// debug UART or a status register, without the flash that formatting the message
+    /// takes.
+    ///
+    /// ```
+    /// use mcp_core::parse;
+    /// let error = parse(b"c\x02\x01\x00").unwrap_err();
+    /// assert_eq!(error.code(), 0x45); // wrong length
+    /// assert_eq!(error.offset(), 3);
+    /// ```
+    pub const fn code(&self) -> u8 {
+        match self {
+            ErrorKind::Empty => 0x41,
+            ErrorKind::UnknownCategory(_) => 0x42,
+            ErrorKind::MissingType(_) => 0x43,
+            ErrorKind::UnknownType { .. } => 0x44,
+            ErrorKind::WrongLength { .. } => 0x45,
+            ErrorKind::SizeMismatch { .. } => 0x46,
+            ErrorKind::TooManyWaypoints(_) => 0x47,
+            ErrorKind::InvalidSlot(_) => 0x48,
+        }
+    }
 }
 
 /// The packet lengths a type allows (see [`ErrorKind::WrongLength`]).
@@ -193,6 +240,11 @@ pub struct BufferTooSmall {
     pub available: usize,
 }
 
+impl BufferTooSmall {
+    /// Its one-byte code, among those of [`ErrorKind::code`].
+    pub const CODE: u8 = 0x50;
+}
+
 /// An incremental builder is full: one more item would overrun the buffer, the
 /// 255-byte XBee payload limit ([`MAX_PAYLOAD`](crate::MAX_PAYLOAD)) or the
 /// packet's own item limit. The packet built so far is intact.
@@ -200,3 +252,43 @@ pub struct BufferTooSmall {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[error("packet full")]
 pub struct Full;
+
+impl Full {
+    /// Its one-byte code, among those of [`ErrorKind::code`].
+    pub const CODE: u8 = 0x51;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_error_has_its_own_code_in_the_crates_range() {
+        let kinds = [
+            ErrorKind::Empty,
+            ErrorKind::UnknownCategory(b'x'),
+            ErrorKind::MissingType(Category::Command),
+            ErrorKind::UnknownType {
+                category: Category::Report,
+                value: 0x33,
+            },
+            ErrorKind::WrongLength {
+                category: Category::Command,
+                packet_type: None,
+                status_request: false,
+                expected: Expected::Exactly(3),
+                got: 4,
+            },
+            ErrorKind::SizeMismatch {
+                size: 2,
+                waypoints: 1,
+            },
+            ErrorKind::TooManyWaypoints(300),
+            ErrorKind::InvalidSlot(4),
+        ];
+        let codes = kinds.map(|kind| kind.code());
+        assert_eq!(codes, [0x41, 0x42, 0x43, 0x44, 0x45, 0x46, 0x47, 0x48]);
+        assert_eq!(Error::new(ErrorKind::InvalidSlot(4), 2).code(), 0x48);
+        assert_eq!((BufferTooSmall::CODE, Full::CODE), (0x50, 0x51));
+    }
+}

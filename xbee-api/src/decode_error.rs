@@ -45,6 +45,37 @@ pub enum DecodeError {
     },
 }
 
+impl DecodeError {
+    /// A one-byte code of the error's kind, without its values:
+    ///
+    /// | code | error |
+    /// |---|---|
+    /// | 0x01 | [`BadChecksum`](Self::BadChecksum) |
+    /// | 0x02 | [`Oversize`](Self::Oversize) |
+    /// | 0x03 | [`EmptyFrame`](Self::EmptyFrame) |
+    /// | 0x04 | [`Truncated`](Self::Truncated) |
+    /// | 0x05 | [`BadEscape`](Self::BadEscape) |
+    ///
+    /// Codes are stable (one is never given to another error) and unique across `xbee-api`
+    /// (0x01-0x3F) and `mcp-core` (0x40-0x7F), 0 being left for "no error": one byte says
+    /// which error it was, for a debug UART or a status register, without the flash that
+    /// formatting the message takes.
+    ///
+    /// ```
+    /// use xbee_api::DecodeError;
+    /// assert_eq!(DecodeError::EmptyFrame.code(), 0x03);
+    /// ```
+    pub const fn code(&self) -> u8 {
+        match self {
+            Self::BadChecksum { .. } => 0x01,
+            Self::Oversize { .. } => 0x02,
+            Self::EmptyFrame => 0x03,
+            Self::Truncated { .. } => 0x04,
+            Self::BadEscape { .. } => 0x05,
+        }
+    }
+}
+
 impl fmt::Display for DecodeError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
@@ -87,6 +118,69 @@ mod tests {
     extern crate std;
     use super::DecodeError;
     use std::string::ToString;
+
+    #[test]
+    fn each_error_has_its_own_code_in_the_crates_range() {
+        use crate::{EncodeError, FrameError, NodeInfoError};
+        let codes = [
+            DecodeError::BadChecksum {
+                expected: 1,
+                got: 2,
+            }
+            .code(),
+            DecodeError::Oversize {
+                length: 300,
+                capacity: 100,
+            }
+            .code(),
+            DecodeError::EmptyFrame.code(),
+            DecodeError::Truncated {
+                length: None,
+                received: 0,
+            }
+            .code(),
+            DecodeError::BadEscape {
+                byte: 0,
+                received: 0,
+            }
+            .code(),
+            FrameError::Empty.code(),
+            FrameError::WrongType {
+                expected: 0x90,
+                found: 0x8B,
+            }
+            .code(),
+            FrameError::TooShort {
+                frame_type: 0x90,
+                needed: 12,
+                got: 3,
+            }
+            .code(),
+            FrameError::BadNodeInfo {
+                frame_type: 0x95,
+                error: NodeInfoError::UnterminatedIdentifier,
+            }
+            .code(),
+            EncodeError::BufferTooSmall {
+                needed: 9,
+                available: 8,
+            }
+            .code(),
+            EncodeError::EmptyFrame.code(),
+            EncodeError::FrameTooLong { len: 70_000 }.code(),
+            EncodeError::LengthMismatch {
+                announced: 3,
+                written: 2,
+            }
+            .code(),
+        ];
+        assert_eq!(
+            codes,
+            [
+                0x01, 0x02, 0x03, 0x04, 0x05, 0x11, 0x12, 0x13, 0x14, 0x21, 0x22, 0x23, 0x24
+            ]
+        );
+    }
 
     #[test]
     fn a_frame_cut_before_its_checksum_says_so() {

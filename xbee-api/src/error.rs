@@ -35,6 +35,28 @@ pub enum FrameError {
     },
 }
 
+impl FrameError {
+    /// A one-byte code of the error's kind, without its values:
+    ///
+    /// | code | error |
+    /// |---|---|
+    /// | 0x11 | [`Empty`](Self::Empty) |
+    /// | 0x12 | [`WrongType`](Self::WrongType) |
+    /// | 0x13 | [`TooShort`](Self::TooShort) |
+    /// | 0x14 | [`BadNodeInfo`](Self::BadNodeInfo) |
+    ///
+    /// As [`DecodeError::code`](crate::DecodeError::code) says, codes are stable and
+    /// unique across `xbee-api` and `mcp-core`.
+    pub const fn code(&self) -> u8 {
+        match self {
+            Self::Empty => 0x11,
+            Self::WrongType { .. } => 0x12,
+            Self::TooShort { .. } => 0x13,
+            Self::BadNodeInfo { .. } => 0x14,
+        }
+    }
+}
+
 impl fmt::Display for FrameError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
@@ -87,6 +109,28 @@ pub enum EncodeError {
         /// Bytes written.
         written: usize,
     },
+}
+
+impl EncodeError {
+    /// A one-byte code of the error's kind, without its values:
+    ///
+    /// | code | error |
+    /// |---|---|
+    /// | 0x21 | [`BufferTooSmall`](Self::BufferTooSmall) |
+    /// | 0x22 | [`EmptyFrame`](Self::EmptyFrame) |
+    /// | 0x23 | [`FrameTooLong`](Self::FrameTooLong) |
+    /// | 0x24 | [`LengthMismatch`](Self::LengthMismatch) |
+    ///
+    /// As [`DecodeError::code`](crate::DecodeError::code) says, codes are stable and
+    /// unique across `xbee-api` and `mcp-core`.
+    pub const fn code(&self) -> u8 {
+        match self {
+            Self::BufferTooSmall { .. } => 0x21,
+            Self::EmptyFrame => 0x22,
+            Self::FrameTooLong { .. } => 0x23,
+            Self::LengthMismatch { .. } => 0x24,
+        }
+    }
 }
 
 impl fmt::Display for EncodeError {
