@@ -136,11 +136,19 @@ pub use trajectory::{MAX_WAYPOINTS, TrajectoryBuilder, Waypoint, WaypointIter, W
 /// The largest MCP packet: the XBee RF payload limit (unicast, API mode, fragmented).
 ///
 /// Without fragmentation a Zigbee XBee carries at most 84 bytes in a unicast
-/// (`xbee_api::TransmitRequestRepr::MAX_UNICAST_DATA`), as the deployed MAV's radios
-/// do; a firmware that only talks to such radios can size its buffers by that.
+/// ([`MAX_UNFRAGMENTED_PAYLOAD`]), as the deployed MAV's radios do: a firmware sizes
+/// the packets it sends by that, and its receive buffers by this only if the ground
+/// station may send it more (a long trajectory or message, in fragments).
 ///
 /// The builders ([`TelemetryBuilder`], [`TrajectoryBuilder`]) stop at this limit. The
 /// parser and [`Packet::encode`] do not enforce it: a longer packet (read from a radio
 /// that carries more, or built by hand) parses and encodes, and it is up to the sender
 /// to keep to what its radios carry.
 pub const MAX_PAYLOAD: usize = 255;
+
+/// The largest MCP packet a Zigbee XBee carries in one radio packet, without
+/// fragmentation: 84 bytes, its `NP` (`xbee_api::TransmitRequestRepr::MAX_UNICAST_DATA`;
+/// less with APS encryption or source routing). A MAV that sizes the packets it sends
+/// by this (its telemetry buffer, say) keeps each in one radio packet; a longer one
+/// goes out in fragments, lost whole if one fragment is.
+pub const MAX_UNFRAGMENTED_PAYLOAD: usize = 84;

@@ -160,6 +160,11 @@ pub use stats::Stats;
 pub use subscription::Subscription;
 pub use transport::{Connector, LinkError, Transport};
 
+// mcp-core states the radio's unfragmented payload without depending on xbee-api:
+// the two must agree.
+const _: () =
+    assert!(mcp_core::MAX_UNFRAGMENTED_PAYLOAD == xbee_api::TransmitRequestRepr::MAX_UNICAST_DATA);
+
 /// Capacity of the queue of requests from senders to the background task.
 const OPS_CAPACITY: usize = 256;
 

@@ -116,6 +116,10 @@ impl<'b> InPlaceFrame<'b> {
     /// assert_eq!(frame.data_mut().len(), FRAME - 4 - 14);
     /// # Ok::<(), xbee_api::EncodeError>(())
     /// ```
+    ///
+    /// A buffer sized for mode 2 gives more than `N` in mode 1 (nothing needs room to be
+    /// escaped into): [`data_mut_capped`](Self::data_mut_capped) keeps a payload to `N`
+    /// in either mode.
     pub fn data_mut_for(&mut self, mode: impl Into<ApiMode>) -> &mut [u8] {
         // Mode 2 at worst: the delimiter, then every byte after it twice.
         let frame = match mode.into() {
@@ -126,6 +130,30 @@ impl<'b> InPlaceFrame<'b> {
         self.buf
             .get_mut(FRAMING + self.header..end)
             .unwrap_or_default()
+    }
+
+    /// [`data_mut_for`](Self::data_mut_for) `mode`, no longer than `max` bytes: the room
+    /// for a payload that must also fit one radio packet
+    /// ([`TransmitRequestRepr::MAX_UNICAST_DATA`](crate::TransmitRequestRepr::MAX_UNICAST_DATA)),
+    /// from a buffer sized for the larger frames of API mode 2 or for other frames.
+    ///
+    /// ```
+    /// use xbee_api::{Address64, ApiMode, InPlaceFrame, TransmitRequestRepr, max_encoded_len};
+    /// const MAX: usize = TransmitRequestRepr::MAX_UNICAST_DATA;
+    /// // Sized for mode 2, used in either mode.
+    /// const FRAME: usize = max_encoded_len(TransmitRequestRepr::HEADER_LEN + MAX, ApiMode::Escaped);
+    /// let mut buffer = [0u8; FRAME];
+    /// let header = TransmitRequestRepr::unicast(Address64::COORDINATOR, &[]);
+    /// let mut frame = InPlaceFrame::new(&mut buffer, &header)?;
+    /// assert_eq!(frame.data_mut_for(ApiMode::Unescaped).len(), 185);
+    /// assert_eq!(frame.data_mut_capped(ApiMode::Unescaped, MAX).len(), 84);
+    /// assert_eq!(frame.data_mut_capped(ApiMode::Escaped, MAX).len(), 84);
+    /// # Ok::<(), xbee_api::EncodeError>(())
+    /// ```
+    pub fn data_mut_capped(&mut self, mode: impl Into<ApiMode>, max: usize) -> &mut [u8] {
+        let room = self.data_mut_for(mode);
+        let len = room.len().min(max);
+        room.get_mut(..len).unwrap_or_default()
     }
 
     /// Frames the header and the first `data_len` bytes of [`data_mut`](Self::data_mut)

@@ -49,9 +49,9 @@
 //!
 //! let mut sim = Sim { landing: LandingState::Flight, controller: Controller::Manual, time: 0 };
 //! let mut mav = Mav::new(&sim);
-//! // Room for any packet; 84 bytes keep each in one Zigbee radio packet (see
-//! // `Mav::telemetry`).
-//! let mut buf = [0u8; mcp_core::MAX_PAYLOAD];
+//! // Room for any packet the MAV sends that fits one Zigbee radio packet (see
+//! // `Mav::telemetry`; `MAX_PAYLOAD` would let telemetry grow to 251 bytes).
+//! let mut buf = [0u8; mcp_core::MAX_UNFRAGMENTED_PAYLOAD];
 //!
 //! // Landing on: no direct reply, then the unsolicited landing report.
 //! let Ok(Packet::Command(cmd)) = parse(b"c\x02\x01") else { panic!() };
@@ -346,9 +346,9 @@ impl Mav {
     ///
     /// `buf` sets how many records a packet takes: each is 5 bytes after a 1-byte
     /// header. A buffer of [`MAX_PAYLOAD`](crate::MAX_PAYLOAD) takes 50, in a packet of
-    /// up to 251 bytes, which a Zigbee XBee carries only in fragments; one of 84 bytes
-    /// (`xbee_api::TransmitRequestRepr::MAX_UNICAST_DATA`) takes 16, in one radio
-    /// packet.
+    /// up to 251 bytes, which a Zigbee XBee carries only in fragments; one of
+    /// [`MAX_UNFRAGMENTED_PAYLOAD`](crate::MAX_UNFRAGMENTED_PAYLOAD) (84 bytes) takes
+    /// 16, in one radio packet.
     ///
     /// ```
     /// # use mcp_core::mav::{Mav, Vehicle};
