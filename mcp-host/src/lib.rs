@@ -16,6 +16,12 @@
 //! | `tcp-listen:ADDR:PORT` | Listens on `ADDR:PORT` and serves one peer at a time: while one is served the next may wait for its turn (if it leaves first, what it wrote is dropped, never carried out later) and any more are turned away (connection closed at once). Port 0 picks a free port ([`LinkInfo::local_addr`]). |
 //! | `pty` | Creates a pseudo-terminal pair; the far end's path ([`LinkInfo::pty_path`], e.g. `/dev/pts/7`) is for a simulator or test to open. The path stays valid for the life of the link; the link is up while a device has it open (connected, disconnected and reconnected as simulators come and go), and nothing written for one device reaches the next. |
 //!
+//!
+//! A program that opens the byte stream to the radio itself (a Bluetooth serial socket,
+//! a serial port with settings of its own, an in-memory stream in a test) hands it over
+//! with [`connect_io`], or the function that opens it with [`connect_with`], which
+//! reconnects by calling it again: an `io:NAME` link.
+//!
 //! [`LinkOptions`] sets the XBee API mode (1, as the deployed MAVs use, or 2), the frame
 //! size limit, timeouts and the [`ReconnectPolicy`] (exponential backoff, or none).
 //! While the transport is down, requests fail at once with [`SendError::Disconnected`];
@@ -158,7 +164,7 @@ pub use sender::{CommandSender, DeliveryReport, FrameId, SendOptions};
 pub use sink::PacketSink;
 pub use stats::Stats;
 pub use subscription::Subscription;
-pub use transport::{Connector, LinkError, Transport};
+pub use transport::{Connector, LinkError, RadioIo, Transport};
 
 // mcp-core states the radio's unfragmented payload without depending on xbee-api:
 // the two must agree.
@@ -204,6 +210,99 @@ pub async fn connect(
     link: &Link,
     options: LinkOptions,
 ) -> Result<(PacketStream, CommandSender), ConnectError> {
+    check(&options)?;
+    let connector = Connector::new(link, &options).await?;
+    serve(connector, options).await
+}
+
+/// Serves a byte stream to the radio that the program opens itself, with `open`: a
+/// Bluetooth serial socket, a serial port opened with settings of its own, a stream
+/// through a tunnel, an in-memory stream in a test. The link is `io:NAME`, as events
+/// and logs name it; `open` is called to open it first (before this returns, as a
+/// `serial` link's port is opened, or in the background with
+/// [`LinkOptions::wait_for_link`]), and again to reconnect after the stream ends or
+/// fails, under [`LinkOptions::reconnect`]. An error of kind `InvalidInput` or
+/// `Unsupported` from `open` is taken as final; any other is retried.
+///
+/// ```
+/// # #[tokio::main(flavor = "current_thread")]
+/// # async fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// use mcp_host::LinkOptions;
+///
+/// // A serial-to-TCP bridge reached through a port of the program's choosing, say.
+/// let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await?;
+/// let addr = listener.local_addr()?;
+/// let (_stream, sender) = mcp_host::connect_with(
+///     "bridge",
+///     move || tokio::net::TcpStream::connect(addr),
+///     LinkOptions::default(),
+/// )
+/// .await?;
+/// assert_eq!(sender.info().link.to_string(), "io:bridge");
+/// # Ok(())
+/// # }
+/// ```
+pub async fn connect_with<F, Fut, S>(
+    name: impl Into<String>,
+    mut open: F,
+    options: LinkOptions,
+) -> Result<(PacketStream, CommandSender), ConnectError>
+where
+    F: FnMut() -> Fut + Send + 'static,
+    Fut: std::future::Future<Output = std::io::Result<S>> + Send + 'static,
+    S: transport::RadioIo,
+{
+    check(&options)?;
+    let opener: transport::Opener = Box::new(move || {
+        let opening = open();
+        Box::pin(async move { Ok(Box::new(opening.await?) as Box<dyn transport::RadioIo>) })
+    });
+    let connector = Connector::with_opener(name.into(), opener, &options);
+    serve(connector, options).await
+}
+
+/// Serves `stream`, a byte stream to the radio that the program opened itself, as an
+/// `io:NAME` link ([`connect_with`], once): when it ends or fails, the link ends
+/// ([`LinkEvent::Closed`]), as there is nothing to open again.
+///
+/// ```
+/// # #[tokio::main(flavor = "current_thread")]
+/// # async fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// use mcp_host::{LinkOptions, LinkState};
+///
+/// // One end for the ground station, the other for a radio (a simulated one, a test).
+/// let (ours, radio) = tokio::io::duplex(4096);
+/// let (_stream, sender) = mcp_host::connect_io("duplex", ours, LinkOptions::default()).await?;
+/// assert_eq!(sender.link_state(), LinkState::Connected);
+/// drop(radio);
+/// sender.closed().await;
+/// # Ok(())
+/// # }
+/// ```
+pub async fn connect_io<S: transport::RadioIo>(
+    name: impl Into<String>,
+    stream: S,
+    options: LinkOptions,
+) -> Result<(PacketStream, CommandSender), ConnectError> {
+    let mut stream = Some(stream);
+    connect_with(
+        name,
+        move || {
+            let once = stream.take().ok_or_else(|| {
+                std::io::Error::new(
+                    std::io::ErrorKind::Unsupported,
+                    "the stream it was given has ended, and there is no other to open",
+                )
+            });
+            std::future::ready(once)
+        },
+        options,
+    )
+    .await
+}
+
+/// Refuses options no link can take.
+fn check(options: &LinkOptions) -> Result<(), ConnectError> {
     if options.event_capacity == 0 || options.event_capacity > MAX_EVENT_CAPACITY {
         return Err(ConnectError::Options(
             "event_capacity must be in 1..=MAX_EVENT_CAPACITY",
@@ -214,10 +313,18 @@ pub async fn connect(
             "max_frame_len must be in 1..=codec::MAX_FRAME_DATA",
         ));
     }
-    let mut connector = Connector::new(link, &options).await?;
+    Ok(())
+}
+
+/// Opens `connector`'s link where it opens at once, and starts the task serving it.
+async fn serve(
+    mut connector: Connector,
+    options: LinkOptions,
+) -> Result<(PacketStream, CommandSender), ConnectError> {
+    let link = connector.link().clone();
     // Whether the first open was tried here already (and failed).
     let mut tried = false;
-    let transport = match link {
+    let transport = match &link {
         // Their first peer may come at any time: announced by `LinkEvent::Connected`.
         Link::TcpListen { .. } | Link::Pty => None,
         _ => match connector.open().await {

@@ -85,6 +85,17 @@ pub enum Link {
     /// path is in [`LinkInfo::pty_path`](crate::LinkInfo::pty_path) at once. The link is
     /// up while a device (a simulator, a test) has that path open.
     Pty,
+    /// A byte stream the program opens itself (`io:NAME`): a Bluetooth serial socket,
+    /// a serial port opened with settings of its own, an in-memory stream in a test.
+    /// [`connect_with`](crate::connect_with) and [`connect_io`](crate::connect_io) make
+    /// it from the function that opens the stream, or the stream; `NAME` says what it is
+    /// in events and logs. [`connect`](crate::connect) cannot open one (it has nothing
+    /// to open it with) and says so.
+    #[non_exhaustive]
+    Io {
+        /// What the stream is, as its opener named it.
+        name: String,
+    },
 }
 
 /// Why a link string could not be parsed.
@@ -188,6 +199,9 @@ impl FromStr for Link {
                 let (addr, port) = parse_host_port(rest.unwrap_or(""))?;
                 Ok(Link::TcpListen { addr, port })
             }
+            "io" => Ok(Link::Io {
+                name: rest.unwrap_or("").to_owned(),
+            }),
             other => Err(LinkParseError::UnknownKind(other.to_owned())),
         }
     }
@@ -243,6 +257,12 @@ impl Link {
             host: host.into(),
             port,
         }
+    }
+
+    /// An `io:` link named `name`: a stream the program opens itself, which
+    /// [`connect_with`](crate::connect_with) serves (not [`connect`](crate::connect)).
+    pub fn io(name: impl Into<String>) -> Link {
+        Link::Io { name: name.into() }
     }
 
     /// A `tcp-listen:` link on the local address `addr` (IPv6 without brackets) and
@@ -368,6 +388,7 @@ impl fmt::Display for Link {
             Link::Tcp { host, port } => write!(f, "tcp:{}", HostPort(host, *port)),
             Link::TcpListen { addr, port } => write!(f, "tcp-listen:{}", HostPort(addr, *port)),
             Link::Pty => f.write_str("pty"),
+            Link::Io { name } => write!(f, "io:{name}"),
         }
     }
 }

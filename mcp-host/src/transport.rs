@@ -10,6 +10,7 @@ use std::task::{Context, Poll};
 use std::time::Duration;
 
 use bytes::{Bytes, BytesMut};
+use futures::future::BoxFuture;
 use tokio::io::{AsyncRead, AsyncWrite, ReadBuf};
 use tokio::net::{TcpListener, TcpStream};
 use tokio_serial::{SerialPortBuilderExt, SerialStream};
@@ -75,6 +76,19 @@ pub enum LinkError {
         /// What the system said.
         error: io::Error,
     },
+    /// A stream the program opens itself (an `io:` link) could not be opened: its
+    /// opener failed, or, for [`connect_io`](crate::connect_io)'s stream, it was asked
+    /// for another after the one it was given (which cannot be retried), or
+    /// [`connect`](crate::connect) was given an `io:` link, which it has nothing to open
+    /// with.
+    #[error("cannot open io:{name}: {error}")]
+    #[non_exhaustive]
+    Io {
+        /// The stream's name.
+        name: String,
+        /// What its opener said.
+        error: io::Error,
+    },
     /// The pseudo-terminal pair could not be created.
     #[error("cannot create a pseudo-terminal pair: {0}")]
     Pty(tokio_serial::Error),
@@ -107,6 +121,9 @@ impl LinkError {
             }
             LinkError::Connect { error, .. } => {
                 !matches!(error.kind(), Io::InvalidInput | Io::AddrNotAvailable)
+            }
+            LinkError::Io { error, .. } => {
+                !matches!(error.kind(), Io::InvalidInput | Io::Unsupported)
             }
             LinkError::Listen { .. }
             | LinkError::Pty(_)
@@ -145,7 +162,19 @@ enum Inner {
     },
     Serial(SerialStream),
     Pty(Lent),
+    Io(Box<dyn RadioIo>),
 }
+
+/// A byte stream to a radio that a program opens itself, for an `io:` link
+/// ([`connect_with`](crate::connect_with)): any `AsyncRead + AsyncWrite` that can go to
+/// another task.
+pub trait RadioIo: AsyncRead + AsyncWrite + Send + Unpin + 'static {}
+
+impl<T: AsyncRead + AsyncWrite + Send + Unpin + 'static> RadioIo for T {}
+
+/// What opens an `io:` link's stream, each time the link is opened.
+pub(crate) type Opener =
+    Box<dyn FnMut() -> BoxFuture<'static, io::Result<Box<dyn RadioIo>>> + Send>;
 
 /// An open byte stream to the radio: a serial port, a TCP connection or the local side of
 /// a pseudo-terminal. Implements [`AsyncRead`] and [`AsyncWrite`].
@@ -228,6 +257,7 @@ impl AsyncRead for Transport {
             }
             Inner::Serial(s) => Pin::new(s).poll_read(cx, buf),
             Inner::Pty(s) => s.stream()?.poll_read(cx, buf),
+            Inner::Io(s) => Pin::new(s).poll_read(cx, buf),
         }
     }
 }
@@ -242,6 +272,7 @@ impl AsyncWrite for Transport {
             Inner::Tcp(s) | Inner::Accepted { stream: s, .. } => Pin::new(s).poll_write(cx, buf),
             Inner::Serial(s) => Pin::new(s).poll_write(cx, buf),
             Inner::Pty(s) => s.stream()?.poll_write(cx, buf),
+            Inner::Io(s) => Pin::new(s).poll_write(cx, buf),
         }
     }
 
@@ -250,6 +281,7 @@ impl AsyncWrite for Transport {
             Inner::Tcp(s) | Inner::Accepted { stream: s, .. } => Pin::new(s).poll_flush(cx),
             Inner::Serial(s) => Pin::new(s).poll_flush(cx),
             Inner::Pty(s) => s.stream()?.poll_flush(cx),
+            Inner::Io(s) => Pin::new(s).poll_flush(cx),
         }
     }
 
@@ -258,6 +290,7 @@ impl AsyncWrite for Transport {
             Inner::Tcp(s) | Inner::Accepted { stream: s, .. } => Pin::new(s).poll_shutdown(cx),
             Inner::Serial(s) => Pin::new(s).poll_shutdown(cx),
             Inner::Pty(s) => s.stream()?.poll_shutdown(cx),
+            Inner::Io(s) => Pin::new(s).poll_shutdown(cx),
         }
     }
 }
@@ -306,6 +339,7 @@ enum Kind {
     },
     Listen(Listen),
     Pty(PtyLink),
+    Io(Opener),
 }
 
 /// How long the accepting task waits after a failed accept (such as too many open
@@ -734,15 +768,34 @@ impl Connector {
                 port: PtyPort::new()?,
                 back: Arc::default(),
             }),
+            Link::Io { name } => {
+                return Err(LinkError::Io {
+                    name: name.clone(),
+                    error: io::Error::new(
+                        io::ErrorKind::Unsupported,
+                        "an io: link is opened by the program's own function \
+                         (mcp_host::connect_with), which a link string does not give",
+                    ),
+                });
+            }
         };
-        Ok(Connector {
-            link: link.clone(),
+        Ok(Self::with_kind(link.clone(), kind, options))
+    }
+
+    /// Opens an `io:` link named `name` with `open`, each time it is opened.
+    pub(crate) fn with_opener(name: String, open: Opener, options: &LinkOptions) -> Self {
+        Self::with_kind(Link::Io { name }, Kind::Io(open), options)
+    }
+
+    fn with_kind(link: Link, kind: Kind, options: &LinkOptions) -> Self {
+        Connector {
+            link,
             kind,
             connect_timeout: options.connect_timeout,
             delay: None,
             opened_at: None,
             healthy: false,
-        })
+        }
     }
 
     /// The link this connector opens.
@@ -892,6 +945,19 @@ impl Connector {
                     }),
                     peer: pty.port.path().display().to_string(),
                 })
+            }
+            Kind::Io(open) => {
+                let name = match &self.link {
+                    Link::Io { name } => name.clone(),
+                    other => other.to_string(),
+                };
+                match open().await {
+                    Ok(stream) => Ok(Transport {
+                        inner: Inner::Io(stream),
+                        peer: name,
+                    }),
+                    Err(error) => Err(LinkError::Io { name, error }),
+                }
             }
         }
     }
