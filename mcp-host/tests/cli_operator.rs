@@ -1024,3 +1024,29 @@ fn decode_on_a_terminal_says_it_waits_for_input() {
         .unwrap();
     assert_eq!(stderr(&output), "");
 }
+
+#[test]
+fn encode_warns_of_a_packet_too_long_for_the_mav_or_for_a_broadcast() {
+    let text = "x".repeat(100);
+    let warnings = |to: &str| {
+        let output = run(&["encode", "--to", to, "message", &text]);
+        assert!(output.status.success(), "{output:?}");
+        String::from_utf8_lossy(&output.stderr).into_owned()
+    };
+    let unicast = warnings(M);
+    assert!(
+        unicast.contains("the deployed MAV firmware drops frames over 60 bytes"),
+        "{unicast}"
+    );
+    assert!(!unicast.contains("broadcast"), "{unicast}");
+    let broadcast = warnings("000000000000ffff");
+    assert!(
+        broadcast.contains(
+            "this 101-byte packet is broadcast, and a broadcast carries at most 92 bytes"
+        ),
+        "{broadcast}"
+    );
+    // Short enough for both: nothing said.
+    let output = run(&["encode", "--to", "000000000000ffff", "landing", "on"]);
+    assert!(output.stderr.is_empty(), "{output:?}");
+}

@@ -36,6 +36,7 @@ pub(crate) struct EncodeArgs {
 /// Runs `encode`.
 pub(crate) fn run(args: EncodeArgs) -> Result<(), Failure> {
     let payload = args.command.payload().map_err(Failure::input)?;
+    crate::send::warn_of_size(&args.command, &payload, args.to);
     let frame = TransmitRequestRepr {
         frame_id: args.frame_id,
         dst64: args.to,

@@ -47,14 +47,14 @@ pub(crate) struct SendArgs {
 /// longer frames.
 const DEPLOYED_MAV_FRAME: usize = 60;
 
-/// Runs `send`.
-pub(crate) async fn run(args: SendArgs) -> Result<(), Failure> {
-    let payload = args.command.payload().map_err(Failure::input)?;
+/// Warns of a payload that the deployed MAV firmware drops for its size, or that no
+/// radio broadcasts (a broadcast goes out in one radio packet, never in fragments).
+pub(crate) fn warn_of_size(command: &CommandArgs, payload: &[u8], to: Address64) {
     // The MAV receives the payload in a Receive Packet: 4 framing bytes and 12 of header.
     let frame = payload.len() + 4 + ReceivePacketRepr::HEADER_LEN;
     if frame > DEPLOYED_MAV_FRAME {
         let largest = DEPLOYED_MAV_FRAME - 4 - ReceivePacketRepr::HEADER_LEN;
-        let what = match &args.command {
+        let what = match command {
             // A trajectory set: category, type and count, then 16 bytes a waypoint.
             CommandArgs::Trajectory { .. } => {
                 format!("a trajectory of more than {} waypoints", (largest - 3) / 16)
@@ -71,6 +71,21 @@ pub(crate) async fn run(args: SendArgs) -> Result<(), Failure> {
             payload.len(),
         );
     }
+    let most = xbee_api::TransmitRequestRepr::MAX_BROADCAST_DATA;
+    if to == Address64::BROADCAST && payload.len() > most {
+        err!(
+            "mcp-gs: warning: this {}-byte packet is broadcast, and a broadcast carries at \
+             most {most} bytes (in one radio packet, never in fragments): a Zigbee radio \
+             refuses it (payload_too_large); send it to each MAV instead",
+            payload.len(),
+        );
+    }
+}
+
+/// Runs `send`.
+pub(crate) async fn run(args: SendArgs) -> Result<(), Failure> {
+    let payload = args.command.payload().map_err(Failure::input)?;
+    warn_of_size(&args.command, &payload, args.to);
     let (mut stream, sender) = args.link.open(false).await?;
     let options = SendOptions {
         timeout: Some(args.link.timeout()),
