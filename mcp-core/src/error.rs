@@ -243,6 +243,11 @@ pub struct BufferTooSmall {
 impl BufferTooSmall {
     /// Its one-byte code, among those of [`ErrorKind::code`].
     pub const CODE: u8 = 0x50;
+
+    /// [`CODE`](Self::CODE), as every error of the crate gives its code.
+    pub const fn code(&self) -> u8 {
+        Self::CODE
+    }
 }
 
 /// An incremental builder is full: one more item would overrun the buffer, the
@@ -256,6 +261,11 @@ pub struct Full;
 impl Full {
     /// Its one-byte code, among those of [`ErrorKind::code`].
     pub const CODE: u8 = 0x51;
+
+    /// [`CODE`](Self::CODE), as every error of the crate gives its code.
+    pub const fn code(&self) -> u8 {
+        Self::CODE
+    }
 }
 
 #[cfg(test)]
@@ -290,5 +300,10 @@ mod tests {
         assert_eq!(codes, [0x41, 0x42, 0x43, 0x44, 0x45, 0x46, 0x47, 0x48]);
         assert_eq!(Error::new(ErrorKind::InvalidSlot(4), 2).code(), 0x48);
         assert_eq!((BufferTooSmall::CODE, Full::CODE), (0x50, 0x51));
+        let small = BufferTooSmall {
+            needed: 3,
+            available: 2,
+        };
+        assert_eq!((small.code(), Full.code()), (0x50, 0x51));
     }
 }

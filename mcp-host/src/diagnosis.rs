@@ -16,6 +16,9 @@ use crate::stats::Stats;
 /// The failed frames it takes for [`Stats::diagnose_running`].
 const RUNNING_FAILURES: u64 = 5;
 
+/// The bytes that begin no frame it takes for [`Stats::diagnose`], when no frame came.
+const SHORT_BYTES: u64 = 2;
+
 /// The bytes that begin no frame it takes for [`Stats::diagnose_running`], when no
 /// frame came: a few are noise on a line, a port opened in the middle of a frame.
 const RUNNING_BYTES: u64 = 80;
@@ -81,8 +84,9 @@ impl Stats {
     pub fn diagnose(&self, mode: ApiMode) -> Option<Diagnosis> {
         // In a short exchange a radio at another baud rate sends few bytes (an AT
         // answer at 9600 read at 115200: six), and a request went unanswered where the
-        // local radio always answers: any byte and no frame is a sign.
-        self.diagnose_with(mode, 1, 1, false)
+        // local radio always answers: a few bytes and no frame are a sign (one alone
+        // may be a glitch as the port opened).
+        self.diagnose_with(mode, 1, SHORT_BYTES, false)
     }
 
     /// What these counters say may be wrong, for the counters of a link over a long
@@ -298,13 +302,18 @@ mod tests {
         };
         assert_eq!(fewer.diagnose_running(mode), None);
         assert!(fewer.diagnose(mode).is_some());
-        // In a short exchange any byte and no frame is a sign.
-        let one = Stats {
-            bytes_skipped: 1,
+        // In a short exchange two bytes and no frame are a sign; one may be a glitch.
+        let two = Stats {
+            bytes_skipped: 2,
             ..Stats::default()
         };
-        assert_eq!(one.diagnose(mode), Some(Diagnosis::NoFrames { bytes: 1 }));
-        assert_eq!(one.diagnose_running(mode), None);
+        assert_eq!(two.diagnose(mode), Some(Diagnosis::NoFrames { bytes: 2 }));
+        assert_eq!(two.diagnose_running(mode), None);
+        let one = Stats {
+            bytes_skipped: 1,
+            ..two
+        };
+        assert_eq!(one.diagnose(mode), None);
         let lengths = Stats {
             oversize: 3,
             truncated: 2,

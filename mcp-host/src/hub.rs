@@ -57,9 +57,11 @@
 //!   rather than takes (its high bit set: 0x88 AT Command Response, 0x90 Receive
 //!   Packet, ...) is refused, whatever its second byte, and counted in
 //!   [`HubStats::frames_refused`]: a radio would drop it unanswered. Other frames with
-//!   frame id 0 (no answer wanted) are written as they are, whatever their type. Every
-//!   refused frame is said as a warning (the first at once, then at most one a second
-//!   with the number not said). A frame with a frame
+//!   frame id 0 (no answer wanted) are written as they are, whatever their type. A
+//!   frame refused for what it is (its type, its id, its length, no id free) is said as
+//!   a warning (the first at once, then at most one a second with the number not
+//!   said); one dropped because the radio's link was down or its client was ended is
+//!   counted alone. A frame with a frame
 //!   id (its second byte, in every XBee request) is refused and counted in
 //!   [`HubStats::frames_refused`] if its type is not in the table (the hub cannot tell
 //!   its answers from those to other clients' requests), or if it is cut short of the

@@ -62,7 +62,8 @@ pub enum Link {
         path: String,
         /// Baud rate.
         baud: u32,
-        /// Flow control: none (the default), or RTS/CTS (`:rtscts`).
+        /// Flow control: none (the default, or `:none`), or RTS/CTS (`:rtscts`, after
+        /// the baud rate or before it).
         flow_control: FlowControl,
     },
     /// A TCP connection to `HOST:PORT` (`tcp:HOST:PORT`).
@@ -228,6 +229,8 @@ fn option_message(word: &str) -> String {
 /// (`rts`, `fast`, `rts/cts`). No device's name ends so; the colons in names such as
 /// `/dev/serial/by-path/pci-0000:00:14.0-usb-0:1:1.0-port0` come before digits.
 fn is_option_word(word: &str) -> bool {
+    // Spaces around it are a typing slip (`:rtscts `), not part of a device's name.
+    let word = word.trim();
     word.bytes().any(|b| b.is_ascii_alphabetic())
         && word
             .bytes()
@@ -310,6 +313,16 @@ fn parse_serial(rest: &str) -> Result<Link, LinkParseError> {
             return Err(LinkParseError::InvalidBaud(baud.to_owned()));
         }
         _ => (rest, DEFAULT_BAUD),
+    };
+    // The flow control written before the rate (`PATH:rtscts:115200`) is taken as
+    // well; any other word there is refused as it is at the end.
+    let (path, flow_control) = match path.rsplit_once(':') {
+        Some((path, "rtscts")) if flow_control == FlowControl::None => (path, FlowControl::RtsCts),
+        Some((path, "none")) => (path, flow_control),
+        Some((_, word)) if is_option_word(word) => {
+            return Err(LinkParseError::UnknownSerialOption(word.to_owned()));
+        }
+        _ => (path, flow_control),
     };
     if path.is_empty() {
         return Err(LinkParseError::MissingPath);
@@ -539,6 +552,15 @@ mod tests {
             "serial:/dev/ttyUSB0:9600:none".parse(),
             Ok(Link::serial("/dev/ttyUSB0", 9600))
         );
+        // Before the rate, as well.
+        assert_eq!(
+            "serial:/dev/ttyUSB0:rtscts:115200".parse(),
+            Ok(rts_cts("/dev/ttyUSB0", 115_200))
+        );
+        assert_eq!(
+            "serial:/dev/ttyUSB0:rtscts:".parse(),
+            Ok(rts_cts("/dev/ttyUSB0", DEFAULT_BAUD))
+        );
         let by_path = "/dev/serial/by-path/pci-0000:00:14.0-usb-0:1:1.0-port0";
         assert_eq!(
             format!("serial:{by_path}:rtscts").parse(),
@@ -556,6 +578,9 @@ mod tests {
             ("serial:/dev/ttyUSB0:115200:rts", "rts"),
             ("serial:/dev/ttyUSB0:fast", "fast"),
             ("serial:COM3:rts_cts", "rts_cts"),
+            ("serial:/dev/ttyUSB0:rts:115200", "rts"),
+            ("serial:/dev/ttyUSB0:115200:rtscts ", "rtscts "),
+            ("serial:/dev/ttyUSB0:rtscts:rtscts", "rtscts"),
         ] {
             assert_eq!(
                 text.parse::<Link>(),

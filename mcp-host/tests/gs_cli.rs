@@ -1227,18 +1227,7 @@ fn monitor_hints_at_the_baud_rate_when_nothing_makes_sense() {
 fn a_few_bytes_that_make_no_frame_point_a_request_to_the_baud_rate() {
     // A radio at 9600 baud read at 115200: its answer is a few bytes of nothing.
     let (link, peer) = common::talking_peer(vec![0x56, 0xA5, 0xB5, 0xF1, 0x95, 0xDE]);
-    let output = run(&[
-        "status",
-        "--link",
-        &link,
-        "--to",
-        "0013A20040B599B9",
-        "--timeout",
-        "1",
-        "landing",
-    ]);
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert_eq!(output.status.code(), Some(4), "{stderr}");
+    let stderr = unanswered_status(&link);
     assert!(
         stderr.contains("hint: 6 bytes came from the radio and none began a frame")
             && stderr.contains("baud rate may differ"),
@@ -1247,24 +1236,31 @@ fn a_few_bytes_that_make_no_frame_point_a_request_to_the_baud_rate() {
     peer.join().unwrap();
 }
 
-#[test]
-fn a_radio_in_transparent_mode_is_named_by_status_and_monitor() {
-    // A radio in transparent mode (AP=0) passes on what it hears as it is: text from a
-    // MAV's console, with no frame in it.
-    let text = b"MAV booting... IMU ok, GPS waiting for fix\r\n".repeat(4);
-    let (link, peer) = common::talking_peer(text.clone());
+/// The standard error of a landing status request on `link` that no answer comes to
+/// within a second (exit code 4).
+fn unanswered_status(link: &str) -> String {
     let output = run(&[
         "status",
         "--link",
-        &link,
+        link,
         "--to",
         "0013A20040B599B9",
         "--timeout",
         "1",
         "landing",
     ]);
-    let stderr = String::from_utf8_lossy(&output.stderr);
+    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
     assert_eq!(output.status.code(), Some(4), "{stderr}");
+    stderr
+}
+
+#[test]
+fn a_radio_in_transparent_mode_is_named_by_status_and_monitor() {
+    // A radio in transparent mode (AP=0) passes on what it hears as it is: text from a
+    // MAV's console, with no frame in it.
+    let text = b"MAV booting... IMU ok, GPS waiting for fix\r\n".repeat(4);
+    let (link, peer) = common::talking_peer(text.clone());
+    let stderr = unanswered_status(&link);
     assert!(
         stderr.contains("hint: 176 bytes came from the radio and none began a frame")
             && stderr.contains("the radio may be in transparent mode (AP=0)")

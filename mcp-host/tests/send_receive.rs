@@ -535,21 +535,21 @@ async fn request_fails_on_delivery_failure_and_times_out_without_report() {
 #[tokio::test]
 async fn a_request_the_radio_never_confirms_says_so_when_it_times_out() {
     let (mut stream, sender, mut fake) = pty_link(ApiMode::Unescaped).await;
-    let request = tokio::spawn({
-        let sender = sender.clone();
-        async move {
-            sender
-                .request_with(
-                    MAV,
-                    StatusRequest::Landing,
-                    Some(Duration::from_millis(200)),
-                )
-                .await
-        }
-    });
-    // The radio reads the request and says nothing.
-    fake.next_tx().await;
-    let err = request.await.unwrap().unwrap_err();
+    // A landing request the radio reads and says nothing to: its error.
+    let unanswered = async |fake: &mut FakeXBee| {
+        let request = tokio::spawn({
+            let sender = sender.clone();
+            async move {
+                let timeout = Some(Duration::from_millis(200));
+                sender
+                    .request_with(MAV, StatusRequest::Landing, timeout)
+                    .await
+            }
+        });
+        fake.next_tx().await;
+        request.await.unwrap().unwrap_err()
+    };
+    let err = unanswered(&mut fake).await;
     assert!(
         matches!(
             err,
@@ -573,17 +573,7 @@ async fn a_request_the_radio_never_confirms_says_so_when_it_times_out() {
     fake.receive(MAV, b"r\x02\x04").await;
     let heard = next_packet(&mut stream).await;
     assert_eq!(heard.origin.src64, MAV);
-    let request = tokio::spawn({
-        let sender = sender.clone();
-        async move {
-            let timeout = Some(Duration::from_millis(200));
-            sender
-                .request_with(MAV, StatusRequest::Landing, timeout)
-                .await
-        }
-    });
-    fake.next_tx().await;
-    let err = request.await.unwrap().unwrap_err();
+    let err = unanswered(&mut fake).await;
     assert!(
         matches!(
             err,

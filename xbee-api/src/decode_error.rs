@@ -56,6 +56,10 @@ impl DecodeError {
     /// | 0x04 | [`Truncated`](Self::Truncated) |
     /// | 0x05 | [`BadEscape`](Self::BadEscape) |
     ///
+    /// [`FrameError::code`](crate::FrameError::code) gives 0x11-0x14,
+    /// [`EncodeError::code`](crate::EncodeError::code) 0x21-0x24, and `io::WriteError`'s
+    /// 0x31-0x32.
+    ///
     /// Codes are stable (one is never given to another error) and unique across `xbee-api`
     /// (0x01-0x3F) and `mcp-core` (0x40-0x7F), 0 being left for "no error": one byte says
     /// which error it was, for a debug UART or a status register, without the flash that

@@ -445,6 +445,20 @@ pub enum WriteError<E> {
     },
 }
 
+impl<E> WriteError<E> {
+    /// A one-byte code, among those of [`DecodeError::code`](crate::DecodeError::code):
+    /// the [`EncodeError`](crate::EncodeError)'s code for
+    /// [`Encode`](Self::Encode), 0x31 for [`Io`](Self::Io) (the writer's error is the
+    /// writer's to code) and 0x32 for [`WriteZero`](Self::WriteZero).
+    pub const fn code(&self) -> u8 {
+        match self {
+            Self::Encode(e) => e.code(),
+            Self::Io(_) => 0x31,
+            Self::WriteZero { .. } => 0x32,
+        }
+    }
+}
+
 impl<E: fmt::Display> fmt::Display for WriteError<E> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {

@@ -412,6 +412,7 @@ fn a_write_error_is_the_writers_and_ends_the_frame() {
     let mut out = tx(40, 7);
     let error = write_frame(&mut out, ApiMode::Unescaped, &frame).unwrap_err();
     assert_eq!(error, WriteError::Io(ErrorKind::WriteZero));
+    assert_eq!(error.code(), 0x31);
     assert_eq!(embedded_io::Error::kind(&error), ErrorKind::WriteZero);
     assert_eq!(error.to_string(), "cannot write the frame: WriteZero");
     // The writer's error is in the message, so no source: a report that follows the
@@ -435,6 +436,7 @@ fn a_frame_that_cannot_be_encoded_writes_nothing() {
     let mut out = tx(usize::MAX, 64);
     let error = write_frame(&mut out, ApiMode::Escaped, &Empty).unwrap_err();
     assert_eq!(error, WriteError::Encode(EncodeError::EmptyFrame));
+    assert_eq!(error.code(), EncodeError::EmptyFrame.code());
     assert!(std::error::Error::source(&error).is_none());
     assert_eq!(embedded_io::Error::kind(&error), ErrorKind::InvalidInput);
     assert!(out.sent.is_empty() && !out.flushed);
@@ -524,6 +526,7 @@ fn a_writer_that_takes_no_byte_is_an_error_not_a_panic() {
         room: 40,
     };
     let expected = WriteError::WriteZero { written: 40 };
+    assert_eq!(expected.code(), 0x32);
 
     let mut out = full();
     assert_eq!(

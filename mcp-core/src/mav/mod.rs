@@ -49,9 +49,9 @@
 //!
 //! let mut sim = Sim { landing: LandingState::Flight, controller: Controller::Manual, time: 0 };
 //! let mut mav = Mav::new(&sim);
-//! // Room for any packet the MAV sends that fits one Zigbee radio packet (see
-//! // `Mav::telemetry`; `MAX_PAYLOAD` would let telemetry grow to 251 bytes).
-//! let mut buf = [0u8; mcp_core::MAX_UNFRAGMENTED_PAYLOAD];
+//! // Room for any reply: a trajectory report of 15 waypoints takes 243 bytes. The
+//! // telemetry buffer is best kept to `MAX_UNFRAGMENTED_PAYLOAD` (see `Mav::telemetry`).
+//! let mut buf = [0u8; mcp_core::MAX_PAYLOAD];
 //!
 //! // Landing on: no direct reply, then the unsolicited landing report.
 //! let Ok(Packet::Command(cmd)) = parse(b"c\x02\x01") else { panic!() };

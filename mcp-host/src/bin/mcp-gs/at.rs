@@ -173,12 +173,19 @@ fn change_note(command: &[u8; 2], value: &[u8], link: &LinkArgs) -> Option<Strin
         Link::Tcp { .. } => " (through a hub, restart the hub with it)",
         _ => "",
     };
+    // Command mode (`+++`) reaches the radio through its own port, or a bridge, never
+    // through a hub, which passes API frames alone.
+    let setup = match &link.link {
+        Link::Tcp { .. } => "`mcp-gs setup` on the radio's own port (stop a hub first: it \
+                             passes API frames alone, not `+++`)"
+            .to_owned(),
+        other => format!("`mcp-gs setup --link {other}`"),
+    };
     match command {
         b"AP" => match crate::link_args::at_number(value) {
             0 => Some(format!(
                 "the radio is now in transparent mode (AP=0) and answers no API frame: \
-                 `mcp-gs setup --link {}` puts it back into API mode",
-                link.link
+                 {setup} puts it back into API mode"
             )),
             mode @ (1 | 2) => {
                 let spoken = match link.api_mode {
@@ -195,8 +202,7 @@ fn change_note(command: &[u8; 2], value: &[u8], link: &LinkArgs) -> Option<Strin
             }
             mode => Some(format!(
                 "the radio now reads AP={mode}, a mode this ground station does not speak: \
-                 `mcp-gs setup --link {}` sets 1",
-                link.link
+                 {setup} sets 1"
             )),
         },
         b"BD" => {
@@ -584,7 +590,17 @@ mod tests {
             note.contains("--api-mode 1") && note.contains("hub"),
             "{note}"
         );
-        assert!(change_note(b"AP", &[0], &hub).unwrap().contains("setup"));
+        // Command mode does not pass a hub: setup on the radio's own port.
+        let note = change_note(b"AP", &[0], &hub).unwrap();
+        assert!(
+            note.contains("`mcp-gs setup` on the radio's own port") && !note.contains("tcp:"),
+            "{note}"
+        );
+        let note = change_note(b"AP", &[0], &serial).unwrap();
+        assert!(
+            note.contains("`mcp-gs setup --link serial:/dev/ttyUSB0:115200:rtscts`"),
+            "{note}"
+        );
         assert_eq!(change_note(b"NI", b"MAV", &hub), None);
     }
 

@@ -450,10 +450,22 @@ pub(crate) fn hint(found: Diagnosis, link: &Link) -> String {
 /// What to do about a baud rate that may differ from the radio's, on `link`.
 fn baud_advice(link: &Link) -> String {
     match link {
-        Link::Serial { path, baud, .. } => format!(
-            "the link runs at {baud} baud: give the radio's rate as serial:{path}:BAUD (XBee \
-             modules ship at 9600), or let `mcp-gs probe --link serial:{path}` find it"
-        ),
+        Link::Serial {
+            path,
+            baud,
+            flow_control,
+            ..
+        } => {
+            let flow = match flow_control {
+                mcp_host::link::FlowControl::RtsCts => ":rtscts",
+                _ => "",
+            };
+            format!(
+                "the link runs at {baud} baud: give the radio's rate as \
+                 serial:{path}:BAUD{flow} (XBee modules ship at 9600), or let `mcp-gs probe \
+                 --link serial:{path}{flow}` find it"
+            )
+        }
         _ => "the radio's baud rate is set where it is attached (XBee modules ship at 9600)"
             .to_owned(),
     }
