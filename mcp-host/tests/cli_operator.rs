@@ -1050,3 +1050,19 @@ fn encode_warns_of_a_packet_too_long_for_the_mav_or_for_a_broadcast() {
     let output = run(&["encode", "--to", "000000000000ffff", "landing", "on"]);
     assert!(output.stderr.is_empty(), "{output:?}");
 }
+
+#[test]
+fn an_io_link_is_a_programs_own_and_said_to_be_once() {
+    let output = run(&["status", "--link", "io:bluetooth", "--to", M, "landing"]);
+    assert_eq!(output.status.code(), Some(3), "{output:?}");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(
+        stderr.matches("cannot open io:bluetooth").count(),
+        1,
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains("mcp-gs takes serial:, tcp:, tcp-listen: or pty"),
+        "{stderr}"
+    );
+}

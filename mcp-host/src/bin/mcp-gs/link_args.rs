@@ -713,6 +713,7 @@ pub(crate) fn connect_failure(link: &Link, error: ConnectError) -> Failure {
                     | LinkError::ConnectTimeout { .. }
                     | LinkError::Listen { .. }
                     | LinkError::Accept { .. }
+                    | LinkError::Io { .. }
             );
             match names_it {
                 true => Failure::link(format!("{e}{hint}")),
@@ -755,6 +756,12 @@ fn link_hint(error: &LinkError, link: &Link) -> Option<String> {
             )),
             _ => not_a_serial_port(&error.description, link),
         },
+        // A link string names no program's own stream: mcp-gs has nothing to open it.
+        LinkError::Io { .. } => Some(
+            "io: links are for programs that open the stream themselves; mcp-gs takes \
+             serial:, tcp:, tcp-listen: or pty"
+                .into(),
+        ),
         LinkError::Connect { error, .. } if error.kind() == Io::ConnectionRefused => Some(
             "nothing listens there: is the radio bridge, `mcp-gs hub` or `mcp-gs sim` \
              running? A hub whose radio is disconnected refuses connections"
