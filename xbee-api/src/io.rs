@@ -447,7 +447,7 @@ pub enum WriteError<E> {
 
 impl<E> WriteError<E> {
     /// A one-byte code, among those of [`DecodeError::code`](crate::DecodeError::code):
-    /// the [`EncodeError`](crate::EncodeError)'s code for
+    /// the [`EncodeError`]'s code for
     /// [`Encode`](Self::Encode), 0x31 for [`Io`](Self::Io) (the writer's error is the
     /// writer's to code) and 0x32 for [`WriteZero`](Self::WriteZero).
     pub const fn code(&self) -> u8 {
