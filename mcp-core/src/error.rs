@@ -244,7 +244,7 @@ impl BufferTooSmall {
     /// Its one-byte code, among those of [`ErrorKind::code`].
     pub const CODE: u8 = 0x50;
 
-    /// [`CODE`](Self::CODE), as every error of the crate gives its code.
+    /// [`CODE`](Self::CODE), as the other errors of parsing and encoding give theirs.
     pub const fn code(&self) -> u8 {
         Self::CODE
     }
@@ -262,7 +262,7 @@ impl Full {
     /// Its one-byte code, among those of [`ErrorKind::code`].
     pub const CODE: u8 = 0x51;
 
-    /// [`CODE`](Self::CODE), as every error of the crate gives its code.
+    /// [`CODE`](Self::CODE), as the other errors of parsing and encoding give theirs.
     pub const fn code(&self) -> u8 {
         Self::CODE
     }

@@ -60,7 +60,8 @@ pub enum Diagnosis {
 
 impl Stats {
     /// What these counters say may be wrong with the settings of a radio read in
-    /// `mode`, if anything, taking any sign as one: for the counters of a short
+    /// `mode`, if anything, taking any sign as one (two bytes that begin no frame, with
+    /// no frame at all, among them): for the counters of a short
     /// exchange that went unanswered ([`since`](Stats::since) gives those).
     ///
     /// The counters see only what comes from the radio. A radio in the other API mode

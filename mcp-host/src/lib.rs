@@ -16,7 +16,6 @@
 //! | `tcp-listen:ADDR:PORT` | Listens on `ADDR:PORT` and serves one peer at a time: while one is served the next may wait for its turn (if it leaves first, what it wrote is dropped, never carried out later) and any more are turned away (connection closed at once). Port 0 picks a free port ([`LinkInfo::local_addr`]). |
 //! | `pty` | Creates a pseudo-terminal pair; the far end's path ([`LinkInfo::pty_path`], e.g. `/dev/pts/7`) is for a simulator or test to open. The path stays valid for the life of the link; the link is up while a device has it open (connected, disconnected and reconnected as simulators come and go), and nothing written for one device reaches the next. |
 //!
-//!
 //! A program that opens the byte stream to the radio itself (a Bluetooth serial socket,
 //! a serial port with settings of its own, an in-memory stream in a test) hands it over
 //! with [`connect_io`], or the function that opens it with [`connect_with`], which
@@ -222,7 +221,9 @@ pub async fn connect(
 /// `serial` link's port is opened, or in the background with
 /// [`LinkOptions::wait_for_link`]), and again to reconnect after the stream ends or
 /// fails, under [`LinkOptions::reconnect`]. An error of kind `InvalidInput` or
-/// `Unsupported` from `open` is taken as final; any other is retried.
+/// `Unsupported` from `open` is taken as final; any other is retried, and so is an
+/// open that takes longer than [`LinkOptions::connect_timeout`]. Must be called within
+/// a tokio runtime.
 ///
 /// ```
 /// # #[tokio::main(flavor = "current_thread")]
@@ -262,8 +263,10 @@ where
 }
 
 /// Serves `stream`, a byte stream to the radio that the program opened itself, as an
-/// `io:NAME` link ([`connect_with`], once): when it ends or fails, the link ends
-/// ([`LinkEvent::Closed`]), as there is nothing to open again.
+/// `io:NAME` link ([`connect_with`], once): when it ends or fails, the link says so
+/// ([`LinkEvent::Disconnected`], with why) and ends ([`LinkEvent::Closed`]) once the
+/// reconnection policy's first delay has passed, as there is nothing to open again
+/// (requests fail with [`SendError::Disconnected`] meanwhile).
 ///
 /// ```
 /// # #[tokio::main(flavor = "current_thread")]

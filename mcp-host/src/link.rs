@@ -287,50 +287,49 @@ impl From<std::net::SocketAddr> for Link {
 }
 
 fn parse_serial(rest: &str) -> Result<Link, LinkParseError> {
-    // A trailing `:rtscts` is the flow control.
-    let (rest, flow_control) = match rest.rsplit_once(':') {
-        Some((rest, "rtscts")) => (rest, FlowControl::RtsCts),
-        Some((rest, "none")) => (rest, FlowControl::None),
-        Some((_, word)) if is_option_word(word) => {
-            return Err(LinkParseError::UnknownSerialOption(word.to_owned()));
+    // From the end: the flow control (`:rtscts`, `:none`) and the rate (`:DIGITS`), once
+    // each and in either order; anything else belongs to the path.
+    let (mut path, mut flow_control, mut baud) = (rest, None, None);
+    while let Some((head, part)) = path.rsplit_once(':') {
+        match part {
+            "rtscts" | "none" if flow_control.is_none() => {
+                flow_control = Some(match part {
+                    "rtscts" => FlowControl::RtsCts,
+                    _ => FlowControl::None,
+                });
+            }
+            _ if baud.is_none() && part.bytes().all(|b| b.is_ascii_digit()) => {
+                // An empty part (`serial:COM3:`) leaves the default rate.
+                let value = match part {
+                    "" => DEFAULT_BAUD,
+                    digits => digits
+                        .parse::<u32>()
+                        .ok()
+                        .filter(|b| *b > 0)
+                        .ok_or_else(|| LinkParseError::InvalidBaud(digits.to_owned()))?,
+                };
+                baud = Some(value);
+            }
+            // A word no device's name ends in: an option mistyped, or given twice.
+            _ if is_option_word(part) => {
+                return Err(LinkParseError::UnknownSerialOption(part.to_owned()));
+            }
+            // A baud rate mistyped (`115k`, `9600 `) rather than part of the path: a
+            // device's name holds no such ending (`/dev/serial/by-path/...-usb-0:1:1.0-port0`).
+            _ if baud.is_none() && mistyped_baud(part) => {
+                return Err(LinkParseError::InvalidBaud(part.to_owned()));
+            }
+            _ => break,
         }
-        _ => (rest, FlowControl::None),
-    };
-    // A trailing `:DIGITS` is the baud rate; anything else belongs to the path.
-    let (path, baud) = match rest.rsplit_once(':') {
-        Some((path, baud)) if !baud.is_empty() && baud.bytes().all(|b| b.is_ascii_digit()) => {
-            let value = baud
-                .parse::<u32>()
-                .ok()
-                .filter(|b| *b > 0)
-                .ok_or_else(|| LinkParseError::InvalidBaud(baud.to_owned()))?;
-            (path, value)
-        }
-        Some((path, "")) => (path, DEFAULT_BAUD),
-        // A baud rate mistyped (`115k`, `9600 `) rather than part of the path: a device's
-        // name holds no such ending (`/dev/serial/by-path/...-usb-0:1:1.0-port0`).
-        Some((_, baud)) if mistyped_baud(baud) => {
-            return Err(LinkParseError::InvalidBaud(baud.to_owned()));
-        }
-        _ => (rest, DEFAULT_BAUD),
-    };
-    // The flow control written before the rate (`PATH:rtscts:115200`) is taken as
-    // well; any other word there is refused as it is at the end.
-    let (path, flow_control) = match path.rsplit_once(':') {
-        Some((path, "rtscts")) if flow_control == FlowControl::None => (path, FlowControl::RtsCts),
-        Some((path, "none")) => (path, flow_control),
-        Some((_, word)) if is_option_word(word) => {
-            return Err(LinkParseError::UnknownSerialOption(word.to_owned()));
-        }
-        _ => (path, flow_control),
-    };
+        path = head;
+    }
     if path.is_empty() {
         return Err(LinkParseError::MissingPath);
     }
     Ok(Link::Serial {
         path: path.to_owned(),
-        baud,
-        flow_control,
+        baud: baud.unwrap_or(DEFAULT_BAUD),
+        flow_control: flow_control.unwrap_or_default(),
     })
 }
 
@@ -581,6 +580,8 @@ mod tests {
             ("serial:/dev/ttyUSB0:rts:115200", "rts"),
             ("serial:/dev/ttyUSB0:115200:rtscts ", "rtscts "),
             ("serial:/dev/ttyUSB0:rtscts:rtscts", "rtscts"),
+            ("serial:/dev/ttyUSB0:rtscts:none:9600", "rtscts"),
+            ("serial:/dev/ttyUSB0:rtscts:9600:none", "rtscts"),
         ] {
             assert_eq!(
                 text.parse::<Link>(),

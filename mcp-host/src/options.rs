@@ -114,15 +114,16 @@ pub struct LinkOptions {
     /// so that no frame inside one is lost). At most [`crate::codec::MAX_FRAME_DATA`]
     /// (4 less in API mode 1), the decoder's capacity.
     pub max_frame_len: usize,
-    /// Timeout for opening a TCP connection (serial ports and pseudo-terminals open at
-    /// once or fail).
+    /// Timeout for opening a TCP connection, or an `io:` link's stream
+    /// ([`connect_with`](crate::connect_with)); serial ports and pseudo-terminals open at
+    /// once or fail.
     pub connect_timeout: Duration,
     /// Default timeout of [`crate::CommandSender::send`] and friends (delivery status or
     /// response).
     pub send_timeout: Duration,
     /// Reconnection after the transport goes away.
     pub reconnect: ReconnectPolicy,
-    /// `serial` and `tcp` links: when the first open fails in a way a later try may
+    /// `serial`, `tcp` and `io:` links: when the first open fails in a way a later try may
     /// fix (the device is not plugged in yet, nothing listens yet),
     /// [`connect`](crate::connect) returns anyway, in
     /// [`LinkState::Connecting`](crate::LinkState::Connecting), and the link is opened

@@ -106,7 +106,8 @@ impl LinkError {
     /// listening); false for errors that no retry can fix: settings a serial port
     /// refuses, a serial path that is there but is no device (a regular file, a
     /// directory: on Unix, anything but a character device), an address nobody can
-    /// connect to (port 0, an address of no interface), and the listening and
+    /// connect to (port 0, an address of no interface), an `io:` link's opener that
+    /// failed with `InvalidInput` or `Unsupported`, and the listening and
     /// pseudo-terminal errors.
     ///
     /// A serial path that is not there may be a device still to come (a USB adapter
@@ -162,7 +163,9 @@ enum Inner {
     },
     Serial(SerialStream),
     Pty(Lent),
-    Io(Box<dyn RadioIo>),
+    /// In a mutex only to be `Sync`, as the other transports are: polling takes
+    /// `&mut self`, which reaches the stream without locking.
+    Io(Mutex<Box<dyn RadioIo>>),
 }
 
 /// A byte stream to a radio that a program opens itself, for an `io:` link
@@ -172,12 +175,18 @@ pub trait RadioIo: AsyncRead + AsyncWrite + Send + Unpin + 'static {}
 
 impl<T: AsyncRead + AsyncWrite + Send + Unpin + 'static> RadioIo for T {}
 
+/// The stream of an `io:` transport, reached without locking.
+fn io_of(stream: &mut Mutex<Box<dyn RadioIo>>) -> &mut Box<dyn RadioIo> {
+    stream.get_mut().unwrap_or_else(PoisonError::into_inner)
+}
+
 /// What opens an `io:` link's stream, each time the link is opened.
 pub(crate) type Opener =
     Box<dyn FnMut() -> BoxFuture<'static, io::Result<Box<dyn RadioIo>>> + Send>;
 
-/// An open byte stream to the radio: a serial port, a TCP connection or the local side of
-/// a pseudo-terminal. Implements [`AsyncRead`] and [`AsyncWrite`].
+/// An open byte stream to the radio: a serial port, a TCP connection, the local side of
+/// a pseudo-terminal or a stream the program opened itself (`io:`). Implements
+/// [`AsyncRead`] and [`AsyncWrite`].
 pub struct Transport {
     inner: Inner,
     peer: String,
@@ -257,7 +266,7 @@ impl AsyncRead for Transport {
             }
             Inner::Serial(s) => Pin::new(s).poll_read(cx, buf),
             Inner::Pty(s) => s.stream()?.poll_read(cx, buf),
-            Inner::Io(s) => Pin::new(s).poll_read(cx, buf),
+            Inner::Io(s) => Pin::new(io_of(s)).poll_read(cx, buf),
         }
     }
 }
@@ -272,7 +281,7 @@ impl AsyncWrite for Transport {
             Inner::Tcp(s) | Inner::Accepted { stream: s, .. } => Pin::new(s).poll_write(cx, buf),
             Inner::Serial(s) => Pin::new(s).poll_write(cx, buf),
             Inner::Pty(s) => s.stream()?.poll_write(cx, buf),
-            Inner::Io(s) => Pin::new(s).poll_write(cx, buf),
+            Inner::Io(s) => Pin::new(io_of(s)).poll_write(cx, buf),
         }
     }
 
@@ -281,7 +290,7 @@ impl AsyncWrite for Transport {
             Inner::Tcp(s) | Inner::Accepted { stream: s, .. } => Pin::new(s).poll_flush(cx),
             Inner::Serial(s) => Pin::new(s).poll_flush(cx),
             Inner::Pty(s) => s.stream()?.poll_flush(cx),
-            Inner::Io(s) => Pin::new(s).poll_flush(cx),
+            Inner::Io(s) => Pin::new(io_of(s)).poll_flush(cx),
         }
     }
 
@@ -290,7 +299,7 @@ impl AsyncWrite for Transport {
             Inner::Tcp(s) | Inner::Accepted { stream: s, .. } => Pin::new(s).poll_shutdown(cx),
             Inner::Serial(s) => Pin::new(s).poll_shutdown(cx),
             Inner::Pty(s) => s.stream()?.poll_shutdown(cx),
-            Inner::Io(s) => Pin::new(s).poll_shutdown(cx),
+            Inner::Io(s) => Pin::new(io_of(s)).poll_shutdown(cx),
         }
     }
 }
@@ -339,7 +348,8 @@ enum Kind {
     },
     Listen(Listen),
     Pty(PtyLink),
-    Io(Opener),
+    /// In a mutex only to be `Sync`, as the other kinds are.
+    Io(Mutex<Opener>),
 }
 
 /// How long the accepting task waits after a failed accept (such as too many open
@@ -784,7 +794,7 @@ impl Connector {
 
     /// Opens an `io:` link named `name` with `open`, each time it is opened.
     pub(crate) fn with_opener(name: String, open: Opener, options: &LinkOptions) -> Self {
-        Self::with_kind(Link::Io { name }, Kind::Io(open), options)
+        Self::with_kind(Link::Io { name }, Kind::Io(Mutex::new(open)), options)
     }
 
     fn with_kind(link: Link, kind: Kind, options: &LinkOptions) -> Self {
@@ -951,12 +961,22 @@ impl Connector {
                     Link::Io { name } => name.clone(),
                     other => other.to_string(),
                 };
-                match open().await {
-                    Ok(stream) => Ok(Transport {
-                        inner: Inner::Io(stream),
+                let open = open.get_mut().unwrap_or_else(PoisonError::into_inner);
+                // An opener may hang (a connection to a host that stopped answering):
+                // given up as a TCP connection is, and tried again.
+                match tokio::time::timeout(self.connect_timeout, open()).await {
+                    Ok(Ok(stream)) => Ok(Transport {
+                        inner: Inner::Io(Mutex::new(stream)),
                         peer: name,
                     }),
-                    Err(error) => Err(LinkError::Io { name, error }),
+                    Ok(Err(error)) => Err(LinkError::Io { name, error }),
+                    Err(_) => Err(LinkError::Io {
+                        name,
+                        error: io::Error::new(
+                            io::ErrorKind::TimedOut,
+                            format!("not opened within {:?}", self.connect_timeout),
+                        ),
+                    }),
                 }
             }
         }
@@ -970,7 +990,7 @@ impl Connector {
     ///
     /// The delay carries over between calls; it starts again from `initial_delay` after
     /// a transport that carried data ([`Connector::mark_healthy`]) and, for the links
-    /// that open the radio themselves (`serial`, `tcp`), stayed open for at least
+    /// that open the radio themselves (`serial`, `tcp`, `io:`), stayed open for at least
     /// `max_delay`. So a transport that opens and fails at once keeps backing off, and
     /// so does a TCP peer that sends a frame and hangs up, again and again.
     ///

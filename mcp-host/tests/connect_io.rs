@@ -125,3 +125,34 @@ async fn an_opener_that_fails_for_good_fails_connect_and_a_link_string_cannot_op
         .unwrap_err();
     assert!(err.to_string().contains("mcp_host::connect_with"), "{err}");
 }
+
+#[tokio::test]
+async fn an_opener_that_hangs_is_given_up_after_the_connect_timeout() {
+    let hangs = || std::future::pending::<std::io::Result<tokio::io::DuplexStream>>();
+    let options = LinkOptions {
+        connect_timeout: Duration::from_millis(50),
+        ..LinkOptions::default()
+    };
+    let connecting = mcp_host::connect_with("tunnel", hangs, options);
+    let err = tokio::time::timeout(GUARD, connecting)
+        .await
+        .expect("connect_with returns")
+        .unwrap_err();
+    let ConnectError::Link(LinkError::Io { error, .. }) = &err else {
+        panic!("{err:?}")
+    };
+    assert_eq!(error.kind(), std::io::ErrorKind::TimedOut);
+    assert_eq!(
+        err.to_string(),
+        "cannot open io:tunnel: not opened within 50ms"
+    );
+    // A retry may fix it: with wait_for_link, the link waits for it.
+    assert!(matches!(&err, ConnectError::Link(e) if e.is_retryable()));
+}
+
+#[test]
+fn an_io_link_keeps_the_handles_shareable_between_threads() {
+    fn shareable<T: Send + Sync>() {}
+    shareable::<mcp_host::Transport>();
+    shareable::<mcp_host::Connector>();
+}

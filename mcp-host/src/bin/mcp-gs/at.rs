@@ -176,9 +176,12 @@ fn change_note(command: &[u8; 2], value: &[u8], link: &LinkArgs) -> Option<Strin
     // Command mode (`+++`) reaches the radio through its own port, or a bridge, never
     // through a hub, which passes API frames alone.
     let setup = match &link.link {
-        Link::Tcp { .. } => "`mcp-gs setup` on the radio's own port (stop a hub first: it \
-                             passes API frames alone, not `+++`)"
-            .to_owned(),
+        Link::Tcp { .. } => format!(
+            "`mcp-gs setup` on the radio's own port if {} is a hub (stop it first: it passes \
+             API frames alone, not `+++`), or `mcp-gs setup --link {}` through a serial \
+             bridge",
+            link.link, link.link
+        ),
         other => format!("`mcp-gs setup --link {other}`"),
     };
     match command {
@@ -593,7 +596,9 @@ mod tests {
         // Command mode does not pass a hub: setup on the radio's own port.
         let note = change_note(b"AP", &[0], &hub).unwrap();
         assert!(
-            note.contains("`mcp-gs setup` on the radio's own port") && !note.contains("tcp:"),
+            note.contains("`mcp-gs setup` on the radio's own port if tcp:127.0.0.1:9750 is a hub")
+                && note
+                    .contains("`mcp-gs setup --link tcp:127.0.0.1:9750` through a serial bridge"),
             "{note}"
         );
         let note = change_note(b"AP", &[0], &serial).unwrap();

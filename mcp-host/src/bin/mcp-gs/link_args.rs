@@ -214,9 +214,12 @@ impl LinkArgs {
                 DetectError::Connect(e) => connect_failure(link, e),
                 DetectError::NoAnswer(SendError::Timeout { .. }) => {
                     let fix = match link {
-                        Link::Serial { path, .. } => format!(
-                            "`mcp-gs probe --link serial:{path}` finds its rate and mode, and \
-                             `mcp-gs setup` puts it into API mode"
+                        Link::Serial {
+                            path, flow_control, ..
+                        } => format!(
+                            "`mcp-gs probe --link {}` finds its rate and mode, and `mcp-gs \
+                             setup` puts it into API mode",
+                            serial_at(path, *flow_control, None)
                         ),
                         // A hub or a bridge (for a command that is a hub itself too):
                         // setup and probe need the radio's own port, or the bridge.
@@ -447,6 +450,23 @@ pub(crate) fn hint(found: Diagnosis, link: &Link) -> String {
     format!("hint: {found}; {advice}")
 }
 
+/// A serial link's string at the rate `baud` (a number, `BAUD`; `None`: no rate, for
+/// `probe`), its flow control kept: `serial:/dev/ttyUSB0:9600:rtscts`.
+pub(crate) fn serial_at(
+    path: &str,
+    flow_control: mcp_host::link::FlowControl,
+    baud: Option<&str>,
+) -> String {
+    let flow = match flow_control {
+        mcp_host::link::FlowControl::RtsCts => ":rtscts",
+        _ => "",
+    };
+    match baud {
+        Some(baud) => format!("serial:{path}:{baud}{flow}"),
+        None => format!("serial:{path}{flow}"),
+    }
+}
+
 /// What to do about a baud rate that may differ from the radio's, on `link`.
 fn baud_advice(link: &Link) -> String {
     match link {
@@ -455,17 +475,12 @@ fn baud_advice(link: &Link) -> String {
             baud,
             flow_control,
             ..
-        } => {
-            let flow = match flow_control {
-                mcp_host::link::FlowControl::RtsCts => ":rtscts",
-                _ => "",
-            };
-            format!(
-                "the link runs at {baud} baud: give the radio's rate as \
-                 serial:{path}:BAUD{flow} (XBee modules ship at 9600), or let `mcp-gs probe \
-                 --link serial:{path}{flow}` find it"
-            )
-        }
+        } => format!(
+            "the link runs at {baud} baud: give the radio's rate as {} (XBee modules ship \
+             at 9600), or let `mcp-gs probe --link {}` find it",
+            serial_at(path, *flow_control, Some("BAUD")),
+            serial_at(path, *flow_control, None),
+        ),
         _ => "the radio's baud rate is set where it is attached (XBee modules ship at 9600)"
             .to_owned(),
     }
@@ -943,6 +958,14 @@ mod tests {
         );
         assert!(
             text.contains("`mcp-gs probe --link serial:/dev/ttyUSB0` find it"),
+            "{text}"
+        );
+        // The link's flow control goes with it.
+        let rts_cts = mcp_host::link::FlowControl::RtsCts;
+        let text = hint(found, &Link::serial_with("/dev/ttyUSB0", 9600, rts_cts));
+        assert!(
+            text.contains("as serial:/dev/ttyUSB0:BAUD:rtscts (XBee")
+                && text.contains("`mcp-gs probe --link serial:/dev/ttyUSB0:rtscts` find it"),
             "{text}"
         );
         // Over TCP the rate is not the link's to give.

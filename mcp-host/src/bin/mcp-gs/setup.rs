@@ -14,7 +14,7 @@ use xbee_api::{ApiMode, Frame};
 
 use crate::link_args::{
     ask_ap, ask_parameter, at_exchange, at_number, connect_failure, open_once, parse_seconds,
-    send_failure,
+    send_failure, serial_at,
 };
 use crate::{ApiModeArg, Failure};
 
@@ -445,13 +445,21 @@ fn command_failure(error: CommandModeError, link: &Link) -> Failure {
             let rates = match link {
                 // The factory's rate, unless it was the one tried.
                 Link::Serial {
-                    path, baud: 9600, ..
-                } => {
-                    format!("`mcp-gs probe --link serial:{path}` tries every rate")
-                }
-                Link::Serial { path, .. } => format!(
-                    "XBee modules leave the factory at 9600: serial:{path}:9600; `mcp-gs probe \
-                     --link serial:{path}` tries every rate"
+                    path,
+                    baud: 9600,
+                    flow_control,
+                    ..
+                } => format!(
+                    "`mcp-gs probe --link {}` tries every rate",
+                    serial_at(path, *flow_control, None)
+                ),
+                Link::Serial {
+                    path, flow_control, ..
+                } => format!(
+                    "XBee modules leave the factory at 9600: {}; `mcp-gs probe --link {}` \
+                     tries every rate",
+                    serial_at(path, *flow_control, Some("9600")),
+                    serial_at(path, *flow_control, None)
                 ),
                 _ => "XBee modules leave the factory at 9600: set the bridge's serial side to \
                       the radio's rate"
