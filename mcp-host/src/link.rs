@@ -292,12 +292,8 @@ fn parse_serial(rest: &str) -> Result<Link, LinkParseError> {
     let (mut path, mut flow_control, mut baud) = (rest, None, None);
     while let Some((head, part)) = path.rsplit_once(':') {
         match part {
-            "rtscts" | "none" if flow_control.is_none() => {
-                flow_control = Some(match part {
-                    "rtscts" => FlowControl::RtsCts,
-                    _ => FlowControl::None,
-                });
-            }
+            "rtscts" if flow_control.is_none() => flow_control = Some(FlowControl::RtsCts),
+            "none" if flow_control.is_none() => flow_control = Some(FlowControl::None),
             _ if baud.is_none() && part.bytes().all(|b| b.is_ascii_digit()) => {
                 // An empty part (`serial:COM3:`) leaves the default rate.
                 let value = match part {

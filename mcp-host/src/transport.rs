@@ -348,8 +348,12 @@ enum Kind {
     },
     Listen(Listen),
     Pty(PtyLink),
-    /// In a mutex only to be `Sync`, as the other kinds are.
-    Io(Mutex<Opener>),
+    Io {
+        /// The stream's name, as its opener gave it.
+        name: String,
+        /// In a mutex only to be `Sync`, as the other kinds are.
+        open: Mutex<Opener>,
+    },
 }
 
 /// How long the accepting task waits after a failed accept (such as too many open
@@ -794,7 +798,11 @@ impl Connector {
 
     /// Opens an `io:` link named `name` with `open`, each time it is opened.
     pub(crate) fn with_opener(name: String, open: Opener, options: &LinkOptions) -> Self {
-        Self::with_kind(Link::Io { name }, Kind::Io(Mutex::new(open)), options)
+        let kind = Kind::Io {
+            name: name.clone(),
+            open: Mutex::new(open),
+        };
+        Self::with_kind(Link::Io { name }, kind, options)
     }
 
     fn with_kind(link: Link, kind: Kind, options: &LinkOptions) -> Self {
@@ -956,11 +964,8 @@ impl Connector {
                     peer: pty.port.path().display().to_string(),
                 })
             }
-            Kind::Io(open) => {
-                let name = match &self.link {
-                    Link::Io { name } => name.clone(),
-                    other => other.to_string(),
-                };
+            Kind::Io { name, open } => {
+                let name = name.clone();
                 let open = open.get_mut().unwrap_or_else(PoisonError::into_inner);
                 // An opener may hang (a connection to a host that stopped answering):
                 // given up as a TCP connection is, and tried again.

@@ -41,18 +41,16 @@ struct ProbeLink {
 
 fn parse_probe_link(s: &str) -> Result<ProbeLink, String> {
     let link: Link = s.parse().map_err(|e| format!("{e}"))?;
-    // Where the link parser took the path to end: a rate was written if more than a
-    // bare `:` follows it (`serial:115200` is a path).
+    // After where the link parser took the path to end, a rate was written if a part
+    // is digits (`serial:115200` is a path; `:rtscts` may come before or after it).
     let given = match &link {
         Link::Serial { path, baud, .. } => s
             .strip_prefix("serial:")
             .and_then(|rest| rest.strip_prefix(path.as_str()))
-            .map(|rest| {
-                // The flow control, after the rate if there is one.
-                let flow = [":rtscts", ":none"].into_iter();
-                flow.fold(rest, |rest, word| rest.strip_suffix(word).unwrap_or(rest))
+            .is_some_and(|rest| {
+                rest.split(':')
+                    .any(|part| !part.is_empty() && part.bytes().all(|b| b.is_ascii_digit()))
             })
-            .is_some_and(|rest| rest.len() > 1)
             .then_some(*baud),
         _ => None,
     };
@@ -197,6 +195,8 @@ mod tests {
         assert_eq!(given("serial:/dev/ttyUSB0:rtscts"), None);
         assert_eq!(given("serial:/dev/ttyUSB0::rtscts"), None);
         assert_eq!(given("serial:/dev/ttyUSB0:57600:rtscts"), Some(57_600));
+        assert_eq!(given("serial:/dev/ttyUSB0:rtscts:57600"), Some(57_600));
+        assert_eq!(given("serial:/dev/ttyUSB0:none:"), None);
         assert_eq!(given("tcp:127.0.0.1:9750"), None);
         assert!(parse_probe_link("serial:/dev/ttyUSB0:0").is_err());
     }
