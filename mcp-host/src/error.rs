@@ -13,9 +13,45 @@ pub enum ConnectError {
     /// The link could not be opened.
     #[error(transparent)]
     Link(#[from] LinkError),
-    /// The options are inconsistent.
+    /// The options are out of range ([`LinkOptions::check`](crate::LinkOptions::check)
+    /// says the same before connecting).
     #[error("invalid link options: {0}")]
-    Options(&'static str),
+    Options(#[from] OptionsError),
+}
+
+/// Which of the [`LinkOptions`](crate::LinkOptions) is out of range, and its range.
+///
+/// ```
+/// use mcp_host::{LinkOptions, OptionsError};
+/// let options = LinkOptions { event_capacity: 0, ..LinkOptions::default() };
+/// let err = options.check().unwrap_err();
+/// assert!(matches!(err, OptionsError::EventCapacity { value: 0, .. }));
+/// assert_eq!(
+///     err.to_string(),
+///     "event_capacity is 0, outside its range 1..=1048576",
+/// );
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum OptionsError {
+    /// [`LinkOptions::event_capacity`](crate::LinkOptions::event_capacity) is 0 or more
+    /// than [`MAX_EVENT_CAPACITY`](crate::MAX_EVENT_CAPACITY).
+    #[error("event_capacity is {value}, outside its range 1..={max}")]
+    EventCapacity {
+        /// The value given.
+        value: usize,
+        /// The largest value taken.
+        max: usize,
+    },
+    /// [`LinkOptions::max_frame_len`](crate::LinkOptions::max_frame_len) is 0 or more
+    /// than [`MAX_FRAME_DATA`](crate::codec::MAX_FRAME_DATA).
+    #[error("max_frame_len is {value}, outside its range 1..={max}")]
+    MaxFrameLen {
+        /// The value given.
+        value: usize,
+        /// The largest value taken.
+        max: usize,
+    },
 }
 
 impl ConnectError {

@@ -153,7 +153,7 @@ pub use xbee_api;
 pub use answers::Answers;
 pub use api_mode::{DetectError, detect_api_mode};
 pub use diagnosis::{Diagnoser, Diagnosis};
-pub use error::{ConnectError, RequestError, SendError};
+pub use error::{ConnectError, OptionsError, RequestError, SendError};
 pub use event::{
     Event, InvalidPacket, LinkEvent, LinkState, Origin, OwnedFrame, OwnedPacket, Received,
 };
@@ -209,7 +209,7 @@ pub async fn connect(
     link: &Link,
     options: LinkOptions,
 ) -> Result<(PacketStream, CommandSender), ConnectError> {
-    check(&options)?;
+    options.check()?;
     let connector = Connector::new(link, &options).await?;
     serve(connector, options).await
 }
@@ -253,7 +253,7 @@ where
     Fut: std::future::Future<Output = std::io::Result<S>> + Send + 'static,
     S: transport::RadioIo,
 {
-    check(&options)?;
+    options.check()?;
     let opener: transport::Opener = Box::new(move || {
         let opening = open();
         Box::pin(async move { Ok(Box::new(opening.await?) as Box<dyn transport::RadioIo>) })
@@ -302,21 +302,6 @@ pub async fn connect_io<S: transport::RadioIo>(
         options,
     )
     .await
-}
-
-/// Refuses options no link can take.
-fn check(options: &LinkOptions) -> Result<(), ConnectError> {
-    if options.event_capacity == 0 || options.event_capacity > MAX_EVENT_CAPACITY {
-        return Err(ConnectError::Options(
-            "event_capacity must be in 1..=MAX_EVENT_CAPACITY",
-        ));
-    }
-    if options.max_frame_len == 0 || options.max_frame_len > codec::MAX_FRAME_DATA {
-        return Err(ConnectError::Options(
-            "max_frame_len must be in 1..=codec::MAX_FRAME_DATA",
-        ));
-    }
-    Ok(())
 }
 
 /// Opens `connector`'s link where it opens at once, and starts the task serving it.

@@ -1,6 +1,7 @@
 //! Link and send options.
 
 use std::time::Duration;
+use crate::error::OptionsError;
 
 /// Default timeout for a delivery status: longer than a Zigbee route discovery (10 s).
 pub const DEFAULT_SEND_TIMEOUT: Duration = Duration::from_secs(12);
@@ -158,6 +159,34 @@ pub struct LinkOptions {
 /// The largest [`LinkOptions::event_capacity`]: about a million events, minutes of
 /// every frame a radio can pass.
 pub const MAX_EVENT_CAPACITY: usize = 1 << 20;
+
+impl LinkOptions {
+    /// Whether every option is in its range, as [`connect`](crate::connect) and
+    /// [`connect_with`](crate::connect_with) check before they open anything (they fail
+    /// with [`ConnectError::Options`](crate::ConnectError::Options) otherwise).
+    ///
+    /// ```
+    /// use mcp_host::{LinkOptions, OptionsError, codec::MAX_FRAME_DATA};
+    /// assert_eq!(LinkOptions::default().check(), Ok(()));
+    /// let long = LinkOptions { max_frame_len: MAX_FRAME_DATA + 1, ..LinkOptions::default() };
+    /// assert!(matches!(long.check(), Err(OptionsError::MaxFrameLen { .. })));
+    /// ```
+    pub fn check(&self) -> Result<(), OptionsError> {
+        if !(1..=MAX_EVENT_CAPACITY).contains(&self.event_capacity) {
+            return Err(OptionsError::EventCapacity {
+                value: self.event_capacity,
+                max: MAX_EVENT_CAPACITY,
+            });
+        }
+        if !(1..=crate::codec::MAX_FRAME_DATA).contains(&self.max_frame_len) {
+            return Err(OptionsError::MaxFrameLen {
+                value: self.max_frame_len,
+                max: crate::codec::MAX_FRAME_DATA,
+            });
+        }
+        Ok(())
+    }
+}
 
 impl Default for LinkOptions {
     fn default() -> Self {

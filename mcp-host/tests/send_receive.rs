@@ -989,31 +989,73 @@ async fn send_frame_takes_an_802_15_4_transmit_request() {
 
 #[tokio::test]
 async fn options_out_of_range_are_refused_before_the_link_opens() {
-    use mcp_host::{ConnectError, Link, MAX_EVENT_CAPACITY};
+    use mcp_host::{ConnectError, Link, MAX_EVENT_CAPACITY, OptionsError, codec::MAX_FRAME_DATA};
+    let capacity = |value| OptionsError::EventCapacity {
+        value,
+        max: MAX_EVENT_CAPACITY,
+    };
+    let frame_len = |value| OptionsError::MaxFrameLen {
+        value,
+        max: MAX_FRAME_DATA,
+    };
+    for (options, expected) in [
+        (
+            LinkOptions {
+                event_capacity: 0,
+                ..LinkOptions::default()
+            },
+            capacity(0),
+        ),
+        (
+            LinkOptions {
+                event_capacity: MAX_EVENT_CAPACITY + 1,
+                ..LinkOptions::default()
+            },
+            capacity(MAX_EVENT_CAPACITY + 1),
+        ),
+        // "Unbounded", as someone may try: an error, not a panic in the channel.
+        (
+            LinkOptions {
+                event_capacity: usize::MAX,
+                ..LinkOptions::default()
+            },
+            capacity(usize::MAX),
+        ),
+        (
+            LinkOptions {
+                max_frame_len: 0,
+                ..LinkOptions::default()
+            },
+            frame_len(0),
+        ),
+        (
+            LinkOptions {
+                max_frame_len: MAX_FRAME_DATA + 1,
+                ..LinkOptions::default()
+            },
+            frame_len(MAX_FRAME_DATA + 1),
+        ),
+    ] {
+        assert_eq!(options.check(), Err(expected));
+        match mcp_host::connect(&Link::Pty, options).await {
+            Err(ConnectError::Options(why)) => assert_eq!(why, expected),
+            other => panic!("{expected}: {:?}", other.map(|_| ())),
+        }
+    }
+    // The edges are in range.
     for options in [
         LinkOptions {
-            event_capacity: 0,
+            event_capacity: 1,
+            max_frame_len: 1,
             ..LinkOptions::default()
         },
         LinkOptions {
-            event_capacity: MAX_EVENT_CAPACITY + 1,
-            ..LinkOptions::default()
-        },
-        // "Unbounded", as someone may try: an error, not a panic in the channel.
-        LinkOptions {
-            event_capacity: usize::MAX,
-            ..LinkOptions::default()
-        },
-        LinkOptions {
-            max_frame_len: 0,
+            event_capacity: MAX_EVENT_CAPACITY,
+            max_frame_len: MAX_FRAME_DATA,
             ..LinkOptions::default()
         },
     ] {
-        let capacity = options.event_capacity;
-        match mcp_host::connect(&Link::Pty, options).await {
-            Err(ConnectError::Options(why)) => assert!(!why.is_empty()),
-            other => panic!("event_capacity {capacity}: {:?}", other.map(|_| ())),
-        }
+        assert_eq!(options.check(), Ok(()));
     }
 }
 
