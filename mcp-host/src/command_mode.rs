@@ -53,7 +53,10 @@ pub enum CommandModeError {
     Closed,
     /// No answer line came in time: to `+++`, a radio in API mode, at another baud rate
     /// or with a longer guard time (`GT`).
-    #[error("command mode: no answer to {sent} within {timeout:?}")]
+    #[error(
+        "command mode: no answer to {sent} within {secs}",
+        secs = crate::render::Seconds(*.timeout)
+    )]
     #[non_exhaustive]
     NoAnswer {
         /// What was sent, as text (`+++`, `ATAP`).
@@ -300,7 +303,7 @@ mod tests {
             .unwrap_err();
         assert_eq!(
             error.to_string(),
-            "command mode: no answer to +++ within 3s"
+            "command mode: no answer to +++ within 3 s"
         );
     }
 }

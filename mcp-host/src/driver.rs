@@ -54,7 +54,7 @@ pub(crate) enum Op {
     Request {
         to: Address64,
         payload: Bytes,
-        key: ReportKey,
+        request: mcp_core::StatusRequest,
         deadline: Instant,
         timeout: Duration,
         reply: oneshot::Sender<Result<mcp_core::Report<Bytes>, RequestError>>,
@@ -317,6 +317,8 @@ impl PendingKind {
 struct Waiter {
     id: u64,
     from: Address64,
+    /// The request, and which report answers it.
+    request: mcp_core::StatusRequest,
     key: ReportKey,
     deadline: Instant,
     timeout: Duration,
@@ -1099,7 +1101,7 @@ impl Driver {
             Op::Request {
                 to,
                 payload,
-                key,
+                request,
                 deadline,
                 timeout,
                 reply,
@@ -1123,7 +1125,8 @@ impl Driver {
                 self.waiters.push(Waiter {
                     id: waiter,
                     from: to,
-                    key,
+                    request,
+                    key: ReportKey::of_request(&request),
                     deadline,
                     timeout,
                     delivered: false,
@@ -1274,7 +1277,7 @@ impl Driver {
                 let undecodable = self.counters.snapshot().decode_errors();
                 let _ = w.reply.send(Err(RequestError::Timeout {
                     from: w.from,
-                    what: w.key.to_string(),
+                    request: w.request,
                     timeout: w.timeout,
                     delivered: w.delivered,
                     undecodable: undecodable.saturating_sub(w.undecodable_before),

@@ -4,6 +4,10 @@ use std::time::Duration;
 
 use xbee_api::{Address16, Address64, DeliveryStatus, DiscoveryStatus};
 
+use mcp_core::StatusRequest;
+
+use crate::driver::ReportKey;
+use crate::render::Seconds;
 use crate::transport::LinkError;
 
 /// Why [`crate::connect`] failed.
@@ -109,8 +113,9 @@ pub enum SendError {
     /// while, so that a late answer is passed on as an unclaimed frame, never taken
     /// for another request's.
     #[error(
-        "no answer to frame id {frame_id} within {timeout:?}{}",
-        if *heard { "" } else { " (no frame has come from the radio since the link came up)" }
+        "no answer to frame id {frame_id} within {secs}{}",
+        if *heard { "" } else { " (no frame has come from the radio since the link came up)" },
+        secs = Seconds(*.timeout)
     )]
     #[non_exhaustive]
     Timeout {
@@ -130,7 +135,10 @@ pub enum SendError {
     /// answer, e.g. one in another API mode). The id of a request that timed out after
     /// its frame went out stays taken 10 s more, for its late answer: against a radio
     /// that never answers, more than 255 requests in their timeout and 10 s end so.
-    #[error("not sent: all 255 frame ids were waiting for answers for {timeout:?}")]
+    #[error(
+        "not sent: all 255 frame ids were waiting for answers for {secs}",
+        secs = Seconds(*.timeout)
+    )]
     #[non_exhaustive]
     NoFreeFrameId {
         /// The timeout that expired.
@@ -141,7 +149,10 @@ pub enum SendError {
     /// whose queue stayed full, or a frame still waiting to be written when its
     /// timeout ran out (a transport that takes bytes more slowly than requests come),
     /// which is then taken back: none of it reaches the radio.
-    #[error("not sent: its timeout of {timeout:?} ran out before it went out to the radio")]
+    #[error(
+        "not sent: its timeout of {secs} ran out before it went out to the radio",
+        secs = Seconds(*.timeout)
+    )]
     #[non_exhaustive]
     NotSent {
         /// The timeout that expired.
@@ -224,15 +235,17 @@ pub enum RequestError {
     /// The request was delivered (or no status came) but no matching report arrived in
     /// time.
     #[error(
-        "no {what} report from {from} within {timeout:?} ({})",
-        timeout_cause(*delivered, *heard, *undecodable)
+        "no {what} report from {from} within {secs} ({})",
+        timeout_cause(*delivered, *heard, *undecodable),
+        what = ReportKey::of_request(.request),
+        secs = Seconds(*.timeout)
     )]
     #[non_exhaustive]
     Timeout {
         /// Whom the request went to.
         from: Address64,
-        /// Which report was awaited.
-        what: String,
+        /// The request that got no report.
+        request: StatusRequest,
         /// The timeout that expired.
         timeout: Duration,
         /// Whether the radio confirmed delivery of the request (a Transmit Status
@@ -383,13 +396,34 @@ mod tests {
         let timeout = Duration::from_secs(1);
         let no_report = RequestError::Timeout {
             from: Address64(1),
-            what: "landing".into(),
+            request: mcp_core::StatusRequest::Landing,
             timeout,
             delivered: true,
             undecodable: 0,
             heard: true,
         };
         assert!(no_report.is_timeout());
+        assert_eq!(
+            no_report.to_string(),
+            "no landing report from 0000000000000001 within 1 s (the radio delivered the \
+             request; the MAV did not answer, or its report was lost on the way)"
+        );
+        let telemetry = RequestError::Timeout {
+            from: Address64(2),
+            request: mcp_core::StatusRequest::TelemetryToCoordinator(
+                mcp_core::TelemetryId::Altitude,
+            ),
+            timeout: Duration::from_millis(1500),
+            delivered: true,
+            undecodable: 0,
+            heard: true,
+        };
+        assert_eq!(
+            telemetry.to_string(),
+            "no telemetry_to_coordinator (altitude) report from 0000000000000002 within 1.5 s \
+             (the radio delivered the request; the MAV did not answer, or its report was \
+             lost on the way)"
+        );
         let unsent = RequestError::from(SendError::NotSent { timeout });
         assert!(unsent.is_timeout());
         assert!(!RequestError::from(SendError::Closed).is_timeout());

@@ -1122,10 +1122,11 @@ async fn check_radio_mode(
                 _ => "",
             };
             tracing::warn!(
-                "hub: the radio did not answer AT AP (asked twice, {MODE_CHECK_TIMEOUT:?} \
+                "hub: the radio did not answer AT AP (asked twice, {} \
                  each) in API mode {hub}: it may be in transparent mode (AP=0), or its baud \
                  rate may differ from the link's{busy}; clients will hear nothing until \
-                 that is fixed"
+                 that is fixed",
+                crate::render::Seconds(MODE_CHECK_TIMEOUT)
             )
         }
         Err(_) => {}

@@ -1,7 +1,7 @@
 //! Link and send options.
 
-use std::time::Duration;
 use crate::error::OptionsError;
+use std::time::Duration;
 
 /// Default timeout for a delivery status: longer than a Zigbee route discovery (10 s).
 pub const DEFAULT_SEND_TIMEOUT: Duration = Duration::from_secs(12);

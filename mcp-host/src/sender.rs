@@ -11,7 +11,7 @@ use xbee_api::{Address16, Address64, DiscoveryStatus};
 use crate::LinkInfo;
 use crate::answers::Answers;
 use crate::discovery::{DiscoverError, Discovery};
-use crate::driver::{Op, ReportKey};
+use crate::driver::Op;
 use crate::error::{RequestError, SendError};
 use crate::event::{LinkState, OwnedFrame, carries_frame_id};
 use crate::stats::{Counters, Stats};
@@ -252,11 +252,10 @@ impl CommandSender {
         let timeout = timeout.unwrap_or(self.default_timeout);
         let deadline = crate::options::later(Instant::now(), timeout);
         let (reply, answer) = oneshot::channel();
-        let key = ReportKey::of_request(&request);
         let op = Op::Request {
             to,
             payload,
-            key,
+            request,
             deadline,
             timeout,
             reply,
@@ -271,7 +270,7 @@ impl CommandSender {
                 // A stalled task: whether the radio confirmed delivery is not known.
                 Err(_) => Err(RequestError::Timeout {
                     from: to,
-                    what: key.to_string(),
+                    request,
                     timeout,
                     delivered: false,
                     undecodable: 0,

@@ -50,7 +50,10 @@ pub enum LinkError {
         error: io::Error,
     },
     /// The TCP connection did not complete within the connect timeout.
-    #[error("timed out after {timeout:?} connecting to {addr}")]
+    #[error(
+        "timed out after {secs} connecting to {addr}",
+        secs = crate::render::Seconds(*.timeout)
+    )]
     #[non_exhaustive]
     ConnectTimeout {
         /// `HOST:PORT` as given.
@@ -979,7 +982,10 @@ impl Connector {
                         name,
                         error: io::Error::new(
                             io::ErrorKind::TimedOut,
-                            format!("not opened within {:?}", self.connect_timeout),
+                            format!(
+                                "not opened within {}",
+                                crate::render::Seconds(self.connect_timeout)
+                            ),
                         ),
                     }),
                 }

@@ -134,7 +134,7 @@ fn an_at_command_without_answer_exits_4() {
             .output()
             .unwrap();
         assert_eq!(out.status.code(), Some(4), "{args:?}: {out:?}");
-        assert!(stderr(&out).contains("within 500ms"), "{out:?}");
+        assert!(stderr(&out).contains("within 0.5 s"), "{out:?}");
     }
     peer.join().unwrap();
     // Without --timeout a local command is waited for 3 s: the radio answers at once.
@@ -144,7 +144,7 @@ fn an_at_command_without_answer_exits_4() {
         .output()
         .unwrap();
     assert_eq!(out.status.code(), Some(4), "{out:?}");
-    assert!(stderr(&out).contains("within 3s"), "{out:?}");
+    assert!(stderr(&out).contains("within 3 s"), "{out:?}");
     peer.join().unwrap();
 }
 

@@ -144,7 +144,7 @@ async fn an_opener_that_hangs_is_given_up_after_the_connect_timeout() {
     assert_eq!(error.kind(), std::io::ErrorKind::TimedOut);
     assert_eq!(
         err.to_string(),
-        "cannot open io:tunnel: not opened within 50ms"
+        "cannot open io:tunnel: not opened within 0.05 s"
     );
     // A retry may fix it: with wait_for_link, the link waits for it.
     assert!(matches!(&err, ConnectError::Link(e) if e.is_retryable()));

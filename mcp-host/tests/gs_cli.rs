@@ -683,7 +683,7 @@ fn monitor_on_a_radio_that_says_nothing_says_what_keeps_it_silent() {
     let (link, peer) = common::silent_peer(1);
     let hint = first_monitor_hint(&link);
     assert!(
-        hint.contains("did not answer AT AP within 3s, and nothing at all came from it"),
+        hint.contains("did not answer AT AP within 3 s, and nothing at all came from it"),
         "{hint}"
     );
     assert!(
@@ -1413,7 +1413,7 @@ fn a_one_shot_command_on_tcp_listen_waits_for_its_peer() {
         assert_eq!(output.status.code(), Some(3), "{command:?}: {stderr}");
         assert!(
             stderr.contains("mcp-gs: no peer connected to 127.0.0.1:")
-                && stderr.contains(" within 300ms"),
+                && stderr.contains(" within 0.3 s"),
             "{command:?}: {stderr}"
         );
     }

@@ -519,12 +519,12 @@ async fn request_fails_on_delivery_failure_and_times_out_without_report() {
     match &err {
         RequestError::Timeout {
             from,
-            what,
+            request,
             delivered,
             ..
         } => {
             assert_eq!(*from, OTHER_MAV);
-            assert_eq!(what, "landing");
+            assert_eq!(*request, StatusRequest::Landing);
             assert!(*delivered, "the radio confirmed delivery");
         }
         other => panic!("{other}"),
@@ -812,7 +812,7 @@ async fn a_timeout_too_short_to_send_in_says_so_not_that_frame_ids_ran_out() {
     assert_eq!(at.err(), Some(not_sent.clone()));
     assert_eq!(
         not_sent.to_string(),
-        "not sent: its timeout of 0ns ran out before it went out to the radio"
+        "not sent: its timeout of 0 s ran out before it went out to the radio"
     );
     // None went out: the next frame the radio reads is the next request's.
     sender.write_frame(&[0x08, 0x00, b'N', b'I']).await.unwrap();

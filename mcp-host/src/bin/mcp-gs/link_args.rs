@@ -4,6 +4,7 @@ use std::time::Duration;
 
 use clap::Args;
 use futures::StreamExt;
+use mcp_host::render::Seconds;
 use mcp_host::{
     CommandSender, ConnectError, Connector, DetectError, Diagnosis, Link, LinkError, LinkOptions,
     PacketStream, ReconnectPolicy, SendError, Stats,
@@ -132,8 +133,8 @@ impl LinkArgs {
             if let Some(addr) = stream.info().local_addr {
                 // A one-shot subcommand on `tcp-listen:` waits for its peer first.
                 err!(
-                    "mcp-gs: waiting up to {:?} for a peer on {addr}",
-                    self.timeout()
+                    "mcp-gs: waiting up to {} for a peer on {addr}",
+                    Seconds(self.timeout())
                 );
                 let connected = async {
                     while let Some(event) = stream.next().await {
@@ -148,8 +149,8 @@ impl LinkArgs {
                 // a radio that did not answer.
                 if tokio::time::timeout(self.timeout(), connected).await != Ok(true) {
                     return Err(Failure::link(format!(
-                        "no peer connected to {addr} within {:?}",
-                        self.timeout()
+                        "no peer connected to {addr} within {}",
+                        Seconds(self.timeout())
                     )));
                 }
             }
@@ -231,8 +232,9 @@ impl LinkArgs {
                     Failure::new(
                         Failure::TIMEOUT,
                         format!(
-                            "the radio on {link} did not answer AT AP within {timeout:?}: it \
-                             may be in transparent mode (AP=0) or at another baud rate ({fix})"
+                            "the radio on {link} did not answer AT AP within {}: it \
+                             may be in transparent mode (AP=0) or at another baud rate ({fix})",
+                            Seconds(timeout)
                         ),
                     )
                 }
@@ -346,7 +348,8 @@ pub(crate) async fn check_mode(sender: &CommandSender, configured: ApiMode, time
         // peer that lets this connection wait its turn).
         Err(e) if e.is_timeout() => {
             let lead = format!(
-                "the radio did not answer AT AP within {timeout:?}, and nothing at all came from it: check its API mode"
+                "the radio did not answer AT AP within {}, and nothing at all came from it: check its API mode",
+                Seconds(timeout)
             );
             if let Some(hint) = silence_hint(&sender.info().link, &sender.stats(), &lead) {
                 err!("mcp-gs: {hint}");
@@ -367,9 +370,10 @@ pub(crate) async fn check_mode(sender: &CommandSender, configured: ApiMode, time
 pub(crate) fn warn_hub_window(link: &Link, window: Duration) {
     if matches!(link, Link::Tcp { .. }) && window > mcp_host::hub::ANSWER_WINDOW {
         err!(
-            "mcp-gs: through a hub, answers come for {:?} after it writes the request, \
-             not for all of the {window:?} asked",
-            mcp_host::hub::ANSWER_WINDOW
+            "mcp-gs: through a hub, answers come for {} after it writes the request, \
+             not for all of the {} asked",
+            Seconds(mcp_host::hub::ANSWER_WINDOW),
+            Seconds(window)
         );
     }
 }

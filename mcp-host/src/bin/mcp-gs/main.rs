@@ -324,19 +324,6 @@ where
     }
 }
 
-/// A duration as seconds, `0.1001 s`, `100 s`: as an operator gives them (`--duration`,
-/// `--cut`), not as Rust's `100.1ms`.
-pub(crate) fn seconds(duration: std::time::Duration) -> String {
-    // From the whole seconds and the nanoseconds, not a float: 1.14 s, not
-    // 1.1400000000000001 s.
-    let fraction = format!("{:09}", duration.subsec_nanos());
-    let fraction = fraction.trim_end_matches('0');
-    match fraction {
-        "" => format!("{} s", duration.as_secs()),
-        _ => format!("{}.{fraction} s", duration.as_secs()),
-    }
-}
-
 #[tokio::main]
 async fn main() -> ExitCode {
     let cli = parse(hoist_options(std::env::args_os().collect()));
@@ -412,17 +399,5 @@ mod tests {
             Err("expected a whole number from 1 to 4096, got `0`".to_owned())
         );
         assert!(parse("-1").is_err() && parse("x").is_err());
-    }
-
-    #[test]
-    fn durations_print_as_seconds() {
-        use std::time::Duration;
-        assert_eq!(seconds(Duration::ZERO), "0 s");
-        assert_eq!(seconds(Duration::from_secs(100)), "100 s");
-        assert_eq!(seconds(Duration::from_micros(100_100)), "0.1001 s");
-        // Not through a float: 1.14 s is 1.1400000000000001 as an f64.
-        assert_eq!(seconds(Duration::from_millis(1140)), "1.14 s");
-        assert_eq!(seconds(Duration::from_millis(1118)), "1.118 s");
-        assert_eq!(seconds(Duration::from_nanos(1)), "0.000000001 s");
     }
 }

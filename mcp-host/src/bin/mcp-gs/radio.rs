@@ -224,8 +224,8 @@ impl NetArgs {
             out!(
                 "{} out of range from {} to {} after start",
                 c.address,
-                crate::seconds(c.start),
-                crate::seconds(c.start + c.length)
+                mcp_host::render::Seconds(c.start),
+                mcp_host::render::Seconds(c.start + c.length)
             );
         }
     }
@@ -570,7 +570,10 @@ fn ended_failure(named: &NamedLink, error: &str) -> Failure {
 /// The line saying the network runs: until Ctrl-C, or for `duration` (0: no limit).
 fn running_line(duration: Option<Duration>) -> String {
     match duration.filter(|d| !d.is_zero()) {
-        Some(d) => format!("running for {}; Ctrl-C stops it sooner", crate::seconds(d)),
+        Some(d) => format!(
+            "running for {}; Ctrl-C stops it sooner",
+            mcp_host::render::Seconds(d)
+        ),
         None => "running; Ctrl-C stops".to_owned(),
     }
 }
@@ -630,7 +633,7 @@ pub(crate) async fn watch(
                     let now = SystemTime::now();
                     date_line(now);
                     let time = mcp_host::render::text::time(now);
-                    out!("{time} stopped after {} (--duration)", crate::seconds(duration));
+                    out!("{time} stopped after {} (--duration)", mcp_host::render::Seconds(duration));
                 }
                 return Ok(());
             }

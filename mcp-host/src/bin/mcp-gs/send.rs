@@ -5,6 +5,7 @@ use std::time::Duration;
 use clap::Args;
 use futures::StreamExt;
 use mcp_core::{Packet, Report, Waypoint};
+use mcp_host::render::Seconds;
 use mcp_host::{DeliveryReport, Event, FrameId, PacketStream, SendError, SendOptions};
 use xbee_api::{Address64, DeliveryStatus, DiscoveryStatus, ReceivePacketRepr};
 
@@ -322,9 +323,9 @@ impl Unconfirmed {
             None => Failure::new(
                 Failure::TIMEOUT,
                 format!(
-                    "no trajectory report from {to} within {:?}: the MAV did not take the \
+                    "no trajectory report from {to} within {}: the MAV did not take the \
                      trajectory, or its report was lost on the way",
-                    self.timeout
+                    Seconds(self.timeout)
                 ),
             ),
         }

@@ -9,6 +9,7 @@ use std::time::Duration;
 use clap::Args;
 use futures::StreamExt;
 use mcp_host::command_mode::{BAUD_RATES, CommandMode, CommandModeError};
+use mcp_host::render::Seconds;
 use mcp_host::{Link, LinkOptions, ReconnectPolicy};
 use xbee_api::{ApiMode, Frame};
 
@@ -171,7 +172,10 @@ pub(crate) async fn run(args: SetupArgs) -> Result<(), Failure> {
         ..LinkOptions::default()
     };
     let port = open_once(&args.link, timeout).await?;
-    err!("mcp-gs: entering the radio's command mode (+++ between {guard:?} of silence)");
+    err!(
+        "mcp-gs: entering the radio's command mode (+++ between {} of silence)",
+        Seconds(guard)
+    );
     let failed = |e| command_failure(e, &args.link);
     let mut radio = match CommandMode::enter(port, guard, timeout).await {
         Ok(radio) => radio,
