@@ -66,7 +66,7 @@ pub enum CommandModeError {
     },
     /// The radio answered something else than `OK`: `ERROR` for a command it does not
     /// know or a value it refuses.
-    #[error("command mode: the radio answered {sent} with {answer:?}")]
+    #[error("command mode: the radio answered {sent} with \"{answer}\"")]
     #[non_exhaustive]
     Refused {
         /// What was sent, as text.
@@ -203,13 +203,14 @@ impl<T: AsyncRead + AsyncWrite + Unpin> CommandMode<T> {
         }
     }
 
-    /// The next line the radio writes, without its carriage return (or line feed);
-    /// empty lines are passed over, and a line longer than [`LINE_MAX`] keeps its end.
+    /// The next line the radio writes, without its carriage return (or line feed), safe
+    /// to print ([`printable`]); empty lines are passed over, and a line longer than
+    /// [`LINE_MAX`] keeps its end.
     async fn line(&mut self) -> Result<String, CommandModeError> {
         loop {
             if let Some(end) = self.pending.iter().position(|&b| b == b'\r' || b == b'\n') {
                 let line: Vec<u8> = self.pending.drain(..=end).collect();
-                let line = String::from_utf8_lossy(&line[..end]).trim().to_owned();
+                let line = printable(line.get(..end).unwrap_or_default().trim_ascii());
                 if !line.is_empty() {
                     return Ok(line);
                 }
@@ -233,6 +234,21 @@ impl<T: AsyncRead + AsyncWrite + Unpin> CommandMode<T> {
 /// `AT` `command` `value`, as sent (without the carriage return).
 fn text(command: [u8; 2], value: &str) -> String {
     format!("AT{}{value}", String::from_utf8_lossy(&command))
+}
+
+/// A line from the radio as text that is safe to print: printable ASCII as it is, any
+/// other byte as `\xNN`. A radio answers in printable ASCII; whatever else is on the
+/// line (a bridge, noise) must not reach a terminal as its control sequences.
+fn printable(line: &[u8]) -> String {
+    let mut text = String::with_capacity(line.len());
+    for &b in line {
+        if b == b' ' || b.is_ascii_graphic() {
+            text.push(char::from(b));
+        } else {
+            text.push_str(&format!("\\x{b:02x}"));
+        }
+    }
+    text
 }
 
 #[cfg(test)]
@@ -259,6 +275,9 @@ mod tests {
                 let line: Vec<u8> = seen.drain(..=end).collect();
                 let answer: &[u8] = match &line[..end] {
                     b"ATAP" => b"0\r",
+                    // What noise or a hostile bridge may write: a terminal's escape
+                    // sequences (set the window title, clear the screen).
+                    b"ATNI" => b"\x1b]0;owned\x07\x1b[2J MAV \xc3\xa9\r",
                     b"ATAP1" | b"ATCN" => b"OK\r\n",
                     _ => b"ERROR\r",
                 };
@@ -292,6 +311,11 @@ mod tests {
         }
         // The exchange goes on as before.
         assert_eq!(mode.read(*b"AP").await.unwrap(), "0");
+        // An answer is safe to print, whatever bytes came.
+        assert_eq!(
+            mode.read(*b"NI").await.unwrap(),
+            r"\x1b]0;owned\x07\x1b[2J MAV \xc3\xa9"
+        );
         mode.exit().await.unwrap();
     }
 

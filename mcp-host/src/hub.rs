@@ -575,12 +575,16 @@ impl Routes {
 /// discovery and active scan, and a remote AT command to the broadcast address (every
 /// radio in range answers).
 fn answered_many_times(data: &[u8]) -> bool {
-    matches!(
-        data,
-        [0x08 | 0x09, _, b'N', b'D', ..]
-            | [0x08 | 0x09, _, b'A', b'S', ..]
-            | [0x17, _, 0, 0, 0, 0, 0, 0, 0xFF, 0xFF, ..]
-    )
+    match data {
+        // A radio may take a command's letters in either case.
+        [0x08 | 0x09, _, command @ ..] => [b"ND", b"AS"].iter().any(|name| {
+            command
+                .get(..2)
+                .is_some_and(|c| c.eq_ignore_ascii_case(*name))
+        }),
+        [0x17, _, 0, 0, 0, 0, 0, 0, 0xFF, 0xFF, ..] => true,
+        _ => false,
+    }
 }
 
 /// How the hub reads its clients' frames: as it reads the radio's, with its
@@ -1416,4 +1420,34 @@ fn encode(data: &[u8], mode: ApiMode) -> Option<Bytes> {
     let mut buf = BytesMut::new();
     encode_frame(&frame, mode, &mut buf).ok()?;
     Some(buf.freeze())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn discovery_is_answered_many_times_in_either_case_and_other_commands_once() {
+        for many in [
+            &[0x08, 1, b'N', b'D'][..],
+            &[0x08, 1, b'n', b'd'],
+            &[0x09, 1, b'A', b's', 0],
+            &[
+                0x17, 1, 0, 0, 0, 0, 0, 0, 0xFF, 0xFF, 0xFF, 0xFE, 0, b'N', b'D',
+            ],
+        ] {
+            assert!(answered_many_times(many), "{many:02x?}");
+        }
+        for once in [
+            &[0x08, 1, b'N', b'I'][..],
+            &[0x08, 1, b'N'],
+            &[0x08, 1],
+            &[0x10, 1, b'N', b'D'],
+            &[
+                0x17, 1, 0, 0, 0, 0, 0, 0, 0x12, 0x34, 0xFF, 0xFE, 0, b'N', b'D',
+            ],
+        ] {
+            assert!(!answered_many_times(once), "{once:02x?}");
+        }
+    }
 }

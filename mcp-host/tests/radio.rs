@@ -671,6 +671,32 @@ async fn latency_and_jitter_keep_every_frame_in_order() {
 }
 
 #[tokio::test]
+async fn a_latency_of_forever_holds_frames_back_and_breaks_nothing() {
+    let config = NetworkConfig {
+        seed: 3,
+        ..NetworkConfig::default()
+    };
+    let (network, mut devs) = in_process(config, &[COORD, MAV_A]).await;
+    network.set_faults(
+        COORD,
+        Some(Faults {
+            latency: Duration::MAX,
+            ..Faults::default()
+        }),
+    );
+    let [_ground, dev_a] = &mut devs[..] else {
+        unreachable!()
+    };
+    // Whatever goes to the coordinator's link waits "forever"; the network goes on.
+    dev_a.tx(1, COORD, b"m\x01").await;
+    assert_eq!(
+        dev_a.status().await,
+        (1, Address16::COORDINATOR, DeliveryStatus::Success, OK)
+    );
+    assert_eq!(dev_a.at(2, b"AP", &[]).await, (AtStatus::Ok, vec![1]));
+}
+
+#[tokio::test]
 async fn seeded_faults_replay_identically() {
     let faults = Faults {
         loss: 0.3,

@@ -214,7 +214,7 @@ impl State {
                     node.stats.reordered += 1;
                     reorder = Some(faults.reorder_window);
                 }
-                at = now + fate.delay;
+                at = crate::options::later(now, fate.delay);
                 match (fate.corrupt, payload) {
                     (Some((index, mask)), Some(payload)) => {
                         node.stats.corrupted += 1;

@@ -14,6 +14,7 @@ use mcp_core::{
 use serde_json::{Map, Value, json};
 use xbee_api::{DecodeError, Frame};
 
+use super::text::at_name;
 use crate::{Event, LinkEvent, Origin};
 
 /// Lowercase hex of `bytes`, no separators.
@@ -218,15 +219,6 @@ pub fn frame_type_name(frame_type: u8) -> Option<&'static str> {
         REMOTE_AT_RESPONSE => "remote_at_response",
         _ => return None,
     })
-}
-
-/// An AT command name: its two characters, or hex when they are not printable.
-pub(crate) fn at_name(command: [u8; 2]) -> String {
-    if command.iter().all(|b| b.is_ascii_graphic()) {
-        command.iter().map(|&b| char::from(b)).collect()
-    } else {
-        hex(&command)
-    }
 }
 
 /// A frame the decoder dropped, at byte `offset` of the input when known.

@@ -146,8 +146,21 @@ pub fn frame(frame: &Frame<'_>) -> String {
     s
 }
 
-fn at_name(command: [u8; 2]) -> String {
-    super::json::at_name(command)
+/// An AT command name as it may be shown: its two characters, or their hex when either
+/// is not a printable ASCII character (a name from a peer may hold a terminal's escape
+/// byte).
+///
+/// ```
+/// use mcp_host::render::text::at_name;
+/// assert_eq!(at_name(*b"AP"), "AP");
+/// assert_eq!(at_name(*b"\x1bc"), "1b63");
+/// ```
+pub fn at_name(command: [u8; 2]) -> String {
+    if command.iter().all(|b| b.is_ascii_graphic()) {
+        command.iter().map(|&b| char::from(b)).collect()
+    } else {
+        hex(&command)
+    }
 }
 
 fn data_suffix(data: &[u8]) -> String {

@@ -489,7 +489,7 @@ pub(crate) fn event_line(event: &NetEvent, verbose: bool, now: SystemTime) -> Op
             status,
         } if verbose => format!(
             "{node}: AT {} answered {status} (0x{:02x})",
-            String::from_utf8_lossy(command),
+            mcp_host::render::text::at_name(*command),
             u8::from(*status)
         ),
         NetEvent::Ignored { node, frame_type } if verbose => {
@@ -761,6 +761,22 @@ pub(crate) async fn run(args: RadioArgs) -> Result<(), Failure> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_at_command_name_that_is_not_printable_is_shown_in_hex() {
+        // Any device on the network may send an AT command of any two bytes: ESC c
+        // would reset the operator's terminal.
+        let event = NetEvent::AtCommand {
+            node: Address64::COORDINATOR,
+            command: *b"\x1bc",
+            status: xbee_api::AtStatus::InvalidCommand,
+        };
+        let line = event_line(&event, true, SystemTime::now()).expect("a line");
+        assert!(
+            line.ends_with(": AT 1b63 answered invalid_command (0x02)"),
+            "{line:?}"
+        );
+    }
 
     #[test]
     fn repeated_failures_are_counted_then_printed_again() {
