@@ -20,7 +20,9 @@ pub const MAX_WAYPOINTS: usize = 254;
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Waypoint {
-    /// Time, `u32`.
+    /// Time of the waypoint (table 9). The protocol gives it no unit; the MAV's clock
+    /// counts POSIX seconds ([`Command::Time`](crate::Command::Time)), and `mcp-gs`
+    /// reads a waypoint's time so.
     pub time: u32,
     /// Elevator position.
     pub elevator: f32,

@@ -54,9 +54,9 @@ pub enum CodecItem {
 /// any [`EncodeFrame`] (typed frame reprs of `xbee-api`, or a [`xbee_api::RawFrame`]).
 ///
 /// ```
-/// use bytes::BytesMut;
+/// use mcp_host::bytes::BytesMut;
 /// use mcp_host::codec::{CodecItem, XBeeCodec};
-/// use tokio_util::codec::Decoder;
+/// use mcp_host::tokio_util::codec::Decoder;
 /// use mcp_host::xbee_api::ApiMode;
 ///
 /// let mut codec = XBeeCodec::new(ApiMode::Unescaped);
@@ -116,9 +116,9 @@ impl XBeeCodec {
     /// length is reached.
     ///
     /// ```
-    /// use bytes::BytesMut;
+    /// use mcp_host::bytes::BytesMut;
     /// use mcp_host::codec::{CodecItem, XBeeCodec};
-    /// use tokio_util::codec::Decoder;
+    /// use mcp_host::tokio_util::codec::Decoder;
     /// use mcp_host::xbee_api::ApiMode;
     ///
     /// let mut codec = XBeeCodec::new(ApiMode::Unescaped);

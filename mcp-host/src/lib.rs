@@ -63,7 +63,8 @@
 //! program that depends on this crate alone names them at the versions it uses
 //! (`use mcp_host::mcp_core::Command;`), as every example of these docs does. So is
 //! [`tokio_serial`], whose errors a [`LinkError::Serial`] holds
-//! (`mcp_host::tokio_serial::ErrorKind::NoDevice`: on Unix, the port is in use).
+//! (`mcp_host::tokio_serial::ErrorKind::NoDevice`: on Unix, the port is in use), and
+//! [`tokio_util`], whose `Decoder` and `Encoder` traits [`codec::XBeeCodec`] implements.
 //!
 //! ```
 //! use mcp_host::bytes::Bytes;
@@ -148,6 +149,7 @@ use tokio::sync::mpsc;
 pub use bytes;
 pub use mcp_core;
 pub use tokio_serial;
+pub use tokio_util;
 pub use xbee_api;
 
 pub use answers::Answers;
@@ -388,7 +390,11 @@ async fn serve(
 /// never lost and the stream always ends with [`LinkEvent::Closed`].
 ///
 /// It has one reader; other tasks read the same events through
-/// [`CommandSender::subscribe`].
+/// [`CommandSender::subscribe`]. For the MCP packets alone, as
+/// [`Subscription::packets`] gives them:
+/// `stream.filter_map(|event| std::future::ready(event.into_packet()))`
+/// ([`Event::into_packet`]); [`by_ref`](futures::StreamExt::by_ref) first keeps the
+/// stream's [`stats`](Self::stats) at hand.
 #[derive(Debug)]
 pub struct PacketStream {
     events: mpsc::Receiver<Event>,

@@ -114,7 +114,7 @@ pub enum LinkParseError {
     /// `serial:` without a device path.
     #[error("serial link without a device path (expected serial:PATH[:BAUD][:rtscts])")]
     MissingPath,
-    /// A serial link ending in a word that is neither a baud rate nor `rtscts`
+    /// A serial link ending in a word that is neither a baud rate, `rtscts` nor `none`
     /// (`serial:/dev/ttyUSB0:115200:rts`): no device's name ends so, and taken as part of
     /// the path it would be waited for in vain.
     #[error("{}", option_message(.0))]
@@ -143,6 +143,9 @@ pub enum LinkParseError {
     /// `pty` followed by anything.
     #[error("unexpected text after pty: {0:?}")]
     TrailingPty(String),
+    /// `io` or `io:` without the name of the stream (`io:NAME`).
+    #[error("io link without a name (expected io:NAME, the name of a stream the program opens)")]
+    MissingIoName,
     /// A link written as a URL, `tcp://HOST:PORT`: the kind and the `//`.
     #[error("{0}:// is no link kind: write {0}:HOST:PORT, without //")]
     UrlForm(String),
@@ -200,9 +203,12 @@ impl FromStr for Link {
                 let (addr, port) = parse_host_port(rest.unwrap_or(""))?;
                 Ok(Link::TcpListen { addr, port })
             }
-            "io" => Ok(Link::Io {
-                name: rest.unwrap_or("").to_owned(),
-            }),
+            "io" => match rest {
+                Some(name) if !name.is_empty() => Ok(Link::Io {
+                    name: name.to_owned(),
+                }),
+                _ => Err(LinkParseError::MissingIoName),
+            },
             other => Err(LinkParseError::UnknownKind(other.to_owned())),
         }
     }
@@ -263,7 +269,9 @@ impl Link {
     }
 
     /// An `io:` link named `name`: a stream the program opens itself, which
-    /// [`connect_with`](crate::connect_with) serves (not [`connect`](crate::connect)).
+    /// [`connect_with`](crate::connect_with) serves (not [`connect`](crate::connect)). The
+    /// name says what the stream is in messages and logs; as a link string (`io:NAME`)
+    /// it cannot be empty.
     pub fn io(name: impl Into<String>) -> Link {
         Link::Io { name: name.into() }
     }
@@ -479,6 +487,8 @@ mod tests {
             ("tcp: 127.0.0.1:9750", InvalidHost(" 127.0.0.1".into())),
             ("tcp-listen:0.0.0.0 :9750", InvalidHost("0.0.0.0 ".into())),
             ("TCP:127.0.0.1:9750", UnknownKind("TCP".into())),
+            ("io", MissingIoName),
+            ("io:", MissingIoName),
         ];
         for (text, expected) in cases {
             assert_eq!(text.parse::<Link>().as_ref(), Err(expected), "{text:?}");

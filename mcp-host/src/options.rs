@@ -3,11 +3,13 @@
 use crate::error::OptionsError;
 use std::time::Duration;
 
-/// Default timeout for a delivery status: longer than a Zigbee route discovery (10 s).
+/// Default of [`LinkOptions::send_timeout`], for a delivery status or a response: longer
+/// than a Zigbee route discovery (10 s).
 pub const DEFAULT_SEND_TIMEOUT: Duration = Duration::from_secs(12);
 /// Default of [`LinkOptions::partial_frame_timeout`].
 pub const DEFAULT_PARTIAL_FRAME_TIMEOUT: Duration = Duration::from_secs(1);
-/// Default timeout for opening a TCP connection.
+/// Default of [`LinkOptions::connect_timeout`]: for opening a TCP connection or an `io:`
+/// link's stream.
 pub const DEFAULT_CONNECT_TIMEOUT: Duration = Duration::from_secs(5);
 
 /// `start + d`, or about thirty years after `start` where that would overflow: a
@@ -107,22 +109,24 @@ pub struct LinkOptions {
     /// must find every real frame after a damaged one. A node that can send payloads can
     /// thus plant, say, a Transmit Status for a request in flight. Mode 2 escapes 0x7E
     /// in frame data, so no payload can be read as a frame: prefer it wherever the
-    /// radios may carry hostile data.
+    /// radios may carry hostile data. Default mode 1.
     pub api_mode: xbee_api::ApiMode,
     /// Largest frame data length (frame type byte included) accepted from the radio;
     /// longer frames are dropped as soon as their length field is read and counted as
     /// oversize (in API mode 1 the bytes after their start delimiter are scanned again,
-    /// so that no frame inside one is lost). At most [`crate::codec::MAX_FRAME_DATA`]
-    /// (4 less in API mode 1), the decoder's capacity.
+    /// so that no frame inside one is lost). Default and largest value
+    /// [`crate::codec::MAX_FRAME_DATA`]; in API mode 1 a value above
+    /// `MAX_FRAME_DATA - 4`, the decoder's capacity there, is taken as that.
     pub max_frame_len: usize,
     /// Timeout for opening a TCP connection, or an `io:` link's stream
     /// ([`connect_with`](crate::connect_with)); serial ports and pseudo-terminals open at
-    /// once or fail.
+    /// once or fail. Default [`DEFAULT_CONNECT_TIMEOUT`], 5 s.
     pub connect_timeout: Duration,
     /// Default timeout of [`crate::CommandSender::send`] and friends (delivery status or
-    /// response).
+    /// response). Default [`DEFAULT_SEND_TIMEOUT`], 12 s.
     pub send_timeout: Duration,
-    /// Reconnection after the transport goes away.
+    /// Reconnection after the transport goes away. Default: enabled, from 0.1 s to 5 s
+    /// between tries ([`ReconnectPolicy::default`]).
     pub reconnect: ReconnectPolicy,
     /// `serial`, `tcp` and `io:` links: when the first open fails in a way a later try may
     /// fix (the device is not plugged in yet, nothing listens yet),
@@ -152,7 +156,7 @@ pub struct LinkOptions {
     /// counted too), and the stream always ends with
     /// [`LinkEvent::Closed`](crate::LinkEvent::Closed). At most [`MAX_EVENT_CAPACITY`]; each
     /// [`crate::Subscription`] channel takes room for this many events (rounded up to a
-    /// power of two) when the first is taken.
+    /// power of two) when the first is taken. Default 1024.
     pub event_capacity: usize,
 }
 
@@ -189,6 +193,10 @@ impl LinkOptions {
 }
 
 impl Default for LinkOptions {
+    /// API mode 1 (as the deployed MAVs' radios), frames up to
+    /// [`MAX_FRAME_DATA`](crate::codec::MAX_FRAME_DATA), a 5 s connect timeout, a 12 s
+    /// send timeout, reconnection from 0.1 s to 5 s between tries, no waiting for a
+    /// first link, partial frames given up after 1 s, 1024 events queued.
     fn default() -> Self {
         LinkOptions {
             api_mode: xbee_api::ApiMode::Unescaped,

@@ -145,7 +145,9 @@ impl<W: Write> RecordWriter<W> {
         Ok(Self { out })
     }
 
-    /// Appends one frame.
+    /// Appends one frame: its frame data (frame type first, no delimiter, length or
+    /// checksum), taken at `time`. Fails with [`io::ErrorKind::InvalidInput`] for frame
+    /// data that is empty or longer than 65535 bytes, and with the writer's errors.
     pub fn write(
         &mut self,
         time: SystemTime,

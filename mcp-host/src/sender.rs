@@ -29,7 +29,8 @@ pub enum FrameId {
     None,
 }
 
-/// Per-call options of [`CommandSender::send_with`].
+/// Per-call options of [`CommandSender::send_with`], [`CommandSender::send_packet`] and
+/// [`CommandSender::send_payload`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct SendOptions {
     /// How long to wait for the status; `None` uses the link's
@@ -94,6 +95,12 @@ pub struct CommandSender {
 impl CommandSender {
     /// Sends an MCP command to `to` (16-bit address FFFE, radius 0, options 0) and waits
     /// for the radio's delivery status.
+    ///
+    /// Fails with [`SendError::Delivery`] when the radio reports that delivery failed,
+    /// [`SendError::Timeout`] when no status came within the link's
+    /// [`send_timeout`](crate::LinkOptions::send_timeout), [`SendError::TooLarge`] for a
+    /// command that does not fit a frame, and [`SendError::Disconnected`] or
+    /// [`SendError::Closed`] when the link is down or closed.
     pub async fn send<B: AsRef<[u8]>>(
         &self,
         to: Address64,

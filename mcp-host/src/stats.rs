@@ -3,6 +3,10 @@
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// A snapshot of a link's counters since [`connect`](crate::connect), across reconnections.
+///
+/// Not to be confused with [`xbee_api::Stats`], one decoder's counters (`u32`, wrapping;
+/// its `frames_ok` is [`frames`](Self::frames) here, its `errors()`
+/// [`decode_errors`](Self::decode_errors)).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
 pub struct Stats {
     /// Frames with a good checksum.
@@ -40,7 +44,9 @@ pub struct Stats {
 impl Stats {
     /// Frames dropped for any framing error.
     pub fn decode_errors(&self) -> u64 {
-        self.bad_checksum + self.oversize + self.empty + self.truncated + self.bad_escape
+        [self.oversize, self.empty, self.truncated, self.bad_escape]
+            .iter()
+            .fold(self.bad_checksum, |sum, n| sum.saturating_add(*n))
     }
 
     /// What an [`xbee_api::Decoder`] counted between two snapshots of its counters,

@@ -32,7 +32,7 @@ fn link() -> impl Strategy<Value = Link> {
         (host.clone(), any::<u16>()).prop_map(|(host, port)| Link::tcp(host, port)),
         (host, any::<u16>()).prop_map(|(addr, port)| Link::tcp_listen(addr, port)),
         Just(Link::Pty),
-        "\\PC{0,20}".prop_map(Link::io),
+        "\\PC{1,20}".prop_map(Link::io),
     ]
 }
 

@@ -49,6 +49,9 @@ pub const fn decoder_buffer_len(frame_data_len: usize, mode: ApiMode) -> usize {
 
 /// What the decoder yields: a frame borrowed from its buffer, or why a candidate frame
 /// was dropped. The frame stays valid until the decoder is called again.
+///
+/// Not to be confused with `mcp_host::Event`, what happens on a host's link (packets,
+/// frames, decode errors and link events, owned).
 pub type Event<'a> = Result<RawFrame<'a>, DecodeError>;
 
 /// An event before it borrows the buffer: a frame as a range of the buffer.
@@ -83,7 +86,9 @@ enum State {
 /// [`RawFrame`]s borrowed from its buffer (or, from `decode_each`, from the input), or a
 /// [`DecodeError`] for each candidate frame it drops, and counts both in
 /// [`stats`](Self::stats). At the end of input, call [`finish`](Self::finish) until it
-/// returns `None`.
+/// returns `None`; on a live line (a UART), call `finish` once when the line goes quiet
+/// part way through a frame, then take the rest with [`poll`](Self::poll) (needed in API
+/// mode 1, see `finish`).
 ///
 /// # API mode
 ///

@@ -40,6 +40,53 @@
 //! assert_eq!(frame, Frame::TransmitRequest(request));
 //! ```
 //!
+//! # On a microcontroller
+//!
+//! A MAV's receive path feeds each byte from the UART to [`Decoder::push`] and takes
+//! whatever else that byte completed with [`Decoder::poll`]; a Receive Packet's view
+//! ([`ReceivePacket::new_checked`]) hands over the MCP payload in place. In API mode 1 a
+//! timer calls [`Decoder::finish`] once, then `poll`, when the line goes quiet part way
+//! through a frame (see `finish`). The reply goes to the coordinator in a Transmit
+//! Request ([`TransmitRequestRepr::unicast`]), encoded with [`EncodeFrame::encode`] or
+//! built where it goes out from with [`InPlaceFrame`].
+//!
+//! ```
+//! use xbee_api::{
+//!     Address64, ApiMode, Decoder, EncodeFrame, Mode2, ReceivePacket, TransmitRequestRepr,
+//! };
+//!
+//! // In a `static`, as `Decoder::fixed` is `const`; the mode fixed in its type.
+//! let mut decoder: Decoder<128, Mode2> = Decoder::fixed();
+//! // A Receive Packet from 0013A20040522BAA holding `c 02 FF`, as the UART gives it.
+//! let uart = [
+//!     0x7E, 0x00, 0x0F, 0x90, 0x00, 0x7D, 0x33, 0xA2, 0x00, 0x40, 0x52, 0x2B, 0xAA,
+//!     0xFF, 0xFE, 0x01, 0x63, 0x02, 0xFF, 0xF1,
+//! ];
+//! let mut reply = [0u8; 64];
+//! let mut reply_len = 0;
+//! for byte in uart {
+//!     // The receive interrupt: one byte, then every event it completes.
+//!     let mut event = decoder.push(byte);
+//!     while let Some(result) = event {
+//!         // A bad frame is an `Err` saying why, counted in `decoder.stats()`.
+//!         let frame = result.ok();
+//!         if let Some(rx) = frame.and_then(|f| ReceivePacket::new_checked(f.data()).ok()) {
+//!             // `rx.data()` is the MCP packet (`mcp_core::parse`); answer it.
+//!             assert_eq!(rx.data(), b"c\x02\xff");
+//!             let answer = TransmitRequestRepr::unicast(Address64::COORDINATOR, b"r\x02\x01");
+//!             reply_len = answer.encode(ApiMode::Escaped, &mut reply).unwrap_or(0);
+//!         }
+//!         event = decoder.poll();
+//!     }
+//! }
+//! // 17 bytes of frame data: the length's 0x11 (XON) goes out escaped in mode 2.
+//! assert_eq!(reply.get(..5), Some(&[0x7E, 0x00, 0x7D, 0x31, 0x10][..]));
+//! assert_eq!(reply_len, 23); // and its checksum, 0x7D, escaped too
+//! ```
+//!
+//! The repository's README ("On a microcontroller") has a whole interrupt-driven recipe
+//! with a fixed-size inbox, and its `examples/firmware` a MAV firmware run in QEMU.
+//!
 //! # Features
 //!
 //! - `defmt`: [`defmt::Format`](https://docs.rs/defmt/1/defmt/trait.Format.html) for

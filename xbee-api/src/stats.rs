@@ -3,6 +3,10 @@
 /// What a [`Decoder`](crate::Decoder) has seen since it was made. Counters wrap at
 /// `u32::MAX`.
 ///
+/// Not to be confused with `mcp_host::Stats`, a host link's counters across
+/// reconnections (`u64`; `frames_ok` is `frames` there, [`errors`](Self::errors) is
+/// `decode_errors`).
+///
 /// In API mode 1 the bytes of a failed candidate frame are scanned again, so a byte can
 /// be part of a failed candidate and then be counted in `bytes_skipped` too.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]

@@ -3,7 +3,11 @@
 //! [`Mav`] holds the protocol state (which telemetry ids are enabled, the four slave
 //! addresses, the last landing state and controller it reported); everything else goes
 //! through the [`Vehicle`] trait, which the firmware or a simulator implements. Answers
-//! are written into caller buffers; nothing allocates.
+//! are written into caller buffers; nothing allocates. Each answer goes back as the RF
+//! data of a Transmit Request to the coordinator (with `xbee-api`:
+//! `TransmitRequestRepr::unicast(Address64::COORDINATOR, reply)`, encoded or built in
+//! place); the commands come from the RF data of the Receive Packets the radio hands
+//! over (`ReceivePacket::new_checked(frame.data())?.data()`).
 //!
 //! Behaviour:
 //!

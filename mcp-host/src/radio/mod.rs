@@ -230,6 +230,9 @@ impl NodeOptions {
 }
 
 /// A node as added to the network.
+///
+/// Not to be confused with [`xbee_api::NodeInfo`], a node discovery answer as the radio
+/// gives it, nor with [`crate::discovery::Node`], such an answer owned.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct NodeInfo {
     /// Its 64-bit address.

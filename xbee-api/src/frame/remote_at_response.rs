@@ -32,6 +32,7 @@ pub mod field {
 /// [`RemoteAtResponseRepr::parse`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[doc(alias = "RemoteAtCommandResponse")]
 pub struct RemoteAtResponse<T: AsRef<[u8]>> {
     buffer: T,
 }

@@ -1,7 +1,9 @@
 //! Status of a Modem Status frame.
 
 code_enum! {
-    /// Status of a Modem Status (0x8A) frame, with Digi's codes.
+    /// Status of a Modem Status (0x8A) frame, with Digi's codes. The frame's view is
+    /// [`ModemStatusFrame`](crate::ModemStatusFrame), its repr
+    /// [`ModemStatusRepr`](crate::ModemStatusRepr).
     ///
     /// Codes 0x80 and above are stack errors ([`ModemStatus::StackError`]); any other code
     /// this crate does not name is [`ModemStatus::Unknown`]. Both keep the byte.
