@@ -211,6 +211,20 @@ impl SendError {
         )
     }
 
+    /// Whether the link failed, not the radio or the MAV: it is down
+    /// ([`Disconnected`](Self::Disconnected): gone and reconnecting, or not connected
+    /// yet) or ended ([`Closed`](Self::Closed)). The link's own
+    /// [`LinkEvent`](crate::LinkEvent)s say when it is back.
+    ///
+    /// ```
+    /// use mcp_host::SendError;
+    /// assert!(SendError::Closed.is_link_down());
+    /// assert!(!SendError::EmptyFrame.is_link_down());
+    /// ```
+    pub fn is_link_down(&self) -> bool {
+        matches!(self, SendError::Disconnected { .. } | SendError::Closed)
+    }
+
     /// The frame id the request went out under, when it went out with one and failed
     /// for want of an answer or of delivery ([`Timeout`](Self::Timeout),
     /// [`Delivery`](Self::Delivery)); `None` otherwise.
@@ -289,6 +303,21 @@ impl RequestError {
         match self {
             RequestError::Send(error) => error.is_timeout(),
             RequestError::Timeout { .. } => true,
+        }
+    }
+
+    /// Whether the request failed because the link is down or ended, as
+    /// [`SendError::is_link_down`] says: not for want of an answer from the radio or the
+    /// MAV.
+    ///
+    /// ```
+    /// use mcp_host::{RequestError, SendError};
+    /// assert!(RequestError::from(SendError::Closed).is_link_down());
+    /// ```
+    pub fn is_link_down(&self) -> bool {
+        match self {
+            RequestError::Send(error) => error.is_link_down(),
+            RequestError::Timeout { .. } => false,
         }
     }
 }

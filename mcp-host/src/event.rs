@@ -144,6 +144,18 @@ pub enum LinkState {
     Closed,
 }
 
+/// Shown as `connecting`, `connected`, `reconnecting` or `closed`.
+impl fmt::Display for LinkState {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            LinkState::Connecting => "connecting",
+            LinkState::Connected => "connected",
+            LinkState::Reconnecting => "reconnecting",
+            LinkState::Closed => "closed",
+        })
+    }
+}
+
 /// A transport state change.
 #[derive(Debug, Clone, PartialEq, Eq)]
 #[non_exhaustive]
@@ -175,6 +187,18 @@ pub enum LinkEvent {
         /// Why.
         reason: String,
     },
+}
+
+/// The line [`Event::Link`] shows too: `link disconnected: REASON`.
+impl fmt::Display for LinkEvent {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            LinkEvent::Connected { peer } => write!(f, "link connected: {peer}"),
+            LinkEvent::Disconnected { reason } => write!(f, "link disconnected: {reason}"),
+            LinkEvent::Reconnected { peer } => write!(f, "link reconnected: {peer}"),
+            LinkEvent::Closed { reason } => write!(f, "link closed: {reason}"),
+        }
+    }
 }
 
 /// An XBee API frame, owned: the frame data (frame type byte first) without delimiter,
@@ -269,3 +293,32 @@ pub(crate) const TX_STATUS_802_15_4: u8 = 0x89;
 
 /// Register Joining Device Status, the answer to a Register Joining Device (0x24).
 pub(crate) const REGISTER_JOINING_DEVICE_STATUS: u8 = 0xA4;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn link_states_and_events_show_as_the_event_lines_do() {
+        let states = [
+            LinkState::Connecting,
+            LinkState::Connected,
+            LinkState::Reconnecting,
+            LinkState::Closed,
+        ];
+        let shown: Vec<String> = states.iter().map(ToString::to_string).collect();
+        assert_eq!(shown, ["connecting", "connected", "reconnecting", "closed"]);
+        let down = LinkEvent::Disconnected {
+            reason: "read: connection reset".into(),
+        };
+        assert_eq!(
+            down.to_string(),
+            "link disconnected: read: connection reset"
+        );
+        assert_eq!(Event::Link(down.clone()).to_string(), down.to_string());
+        let up = LinkEvent::Reconnected {
+            peer: "127.0.0.1:9750".into(),
+        };
+        assert_eq!(up.to_string(), "link reconnected: 127.0.0.1:9750");
+    }
+}

@@ -608,6 +608,12 @@ impl CommandSender {
     /// The link's state as it changes: await a change, or a state, without reading the
     /// [`PacketStream`](crate::PacketStream).
     ///
+    /// A watch holds the latest state only: a link that goes down and comes back between
+    /// two looks shows no change. What must see every reconnection (to turn a MAV's
+    /// telemetry on again, say) reads the [`LinkEvent`](crate::LinkEvent)s, on the stream
+    /// or a [`subscribe`](Self::subscribe)r, or compares
+    /// [`Stats::reconnects`](crate::Stats::reconnects).
+    ///
     /// ```
     /// # #[tokio::main(flavor = "current_thread")]
     /// # async fn main() -> Result<(), Box<dyn std::error::Error>> {

@@ -223,7 +223,9 @@ impl Subscription<Event> {
 
     /// The MCP packets from the radio `src64` alone: one MAV's telemetry and reports
     /// among many. It ends with the link; [`missed`](Self::missed) counts every event
-    /// missed, whoever it came from.
+    /// missed, whoever it came from. It holds no link events: a reader that must also
+    /// see reconnections, in line with the packets, filters the whole subscription
+    /// itself.
     ///
     /// ```
     /// # async fn run(sender: mcp_host::CommandSender) {

@@ -12,6 +12,9 @@
 //! - `record [LINK] [FILE] [SECONDS]`: every frame of the link, both ways, to a
 //!   recording, while asking the MAV's landing state.
 //! - `read_recording FILE`: the MCP packets of a recording, with their times.
+//! - `watchdog [LINK] [SECONDS] [DISCOVERY_WINDOW]`: every MAV in range, found by node
+//!   discovery, a line each a second; a silent one asked its state, and reported lost
+//!   if it does not answer; across the link dropping and coming back.
 //!
 //! Each takes the link as its first argument (`tcp:127.0.0.1:9750` by default;
 //! `serial:/dev/ttyUSB0` for a real radio), and a MAV's address where it needs one

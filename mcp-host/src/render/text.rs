@@ -183,7 +183,7 @@ pub fn decode_error(error: &DecodeError, offset: Option<u64>) -> String {
 /// An event of a [`crate::PacketStream`] as a line of text (no time stamp: see
 /// [`time()`]).
 pub fn event(event: &crate::Event) -> String {
-    use crate::{Event, LinkEvent};
+    use crate::Event;
     match event {
         Event::Packet(rx) => format!(
             "rx  {}/{} opt {:02x}: {}",
@@ -204,10 +204,7 @@ pub fn event(event: &crate::Event) -> String {
             Err(error) => format!("error: {error}: {}", hex(owned.data())),
         },
         Event::DecodeError(error) => decode_error(error, None),
-        Event::Link(LinkEvent::Connected { peer }) => format!("link connected: {peer}"),
-        Event::Link(LinkEvent::Disconnected { reason }) => format!("link disconnected: {reason}"),
-        Event::Link(LinkEvent::Reconnected { peer }) => format!("link reconnected: {peer}"),
-        Event::Link(LinkEvent::Closed { reason }) => format!("link closed: {reason}"),
+        Event::Link(event) => event.to_string(),
     }
 }
 
