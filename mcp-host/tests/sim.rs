@@ -517,3 +517,46 @@ async fn the_ground_station_link_of_a_coordinator_on_every_interface_is_loopback
     sim.stop().await;
     drop(listener);
 }
+
+#[tokio::test]
+async fn a_dropped_ground_station_link_comes_back_to_mavs_that_kept_their_state() {
+    let mut g = over_tcp(&[MAV]).await;
+    g.send(MAV, Command::Controllers(Controller::Mpc)).await;
+    assert_eq!(g.report(MAV).await, Report::Controllers(Controller::Mpc));
+    let coordinator = g.sim.coordinator().address;
+    assert!(g.sim.network().disconnect(coordinator));
+    // The ground station sees its link drop and come back (its `tcp:` link reconnects
+    // to the coordinator's `tcp-listen:` port, which takes it again).
+    let events = tokio::time::timeout(GUARD, async {
+        let mut seen = Vec::new();
+        while let Some(event) = g.stream.next().await {
+            if let Event::Link(link) = event {
+                let back = matches!(link, mcp_host::LinkEvent::Reconnected { .. });
+                seen.push(link);
+                if back {
+                    break;
+                }
+            }
+        }
+        seen
+    })
+    .await
+    .expect("the link comes back");
+    assert!(
+        matches!(
+            &events[..],
+            [
+                mcp_host::LinkEvent::Disconnected { .. },
+                mcp_host::LinkEvent::Reconnected { .. }
+            ]
+        ),
+        "{events:?}"
+    );
+    // The MAV flew on: its controller is the one set before.
+    assert_eq!(
+        g.request(MAV, StatusRequest::Controllers).await,
+        Report::Controllers(Controller::Mpc)
+    );
+    // Unknown nodes, and links that are not up, are not hung up on.
+    assert!(!g.sim.network().disconnect(Address64(0x1234)));
+}

@@ -534,6 +534,7 @@ impl Network {
                     discovery_time: router::DISCOVERY_TIME,
                     new_ap: None,
                     relink: Arc::default(),
+                    hangup: Arc::default(),
                     ended: None,
                 },
             );
@@ -614,6 +615,26 @@ impl Network {
     /// Returns `false` if the node is unknown.
     pub fn cut(&self, address: Address64) -> bool {
         self.set_cut(address, true)
+    }
+
+    /// Closes a node's link of the moment, as if its cable were pulled, the node's
+    /// state kept (its settings, a MAV's program): its device sees the stream end, and
+    /// the node's link is opened again as after any disconnection (a `tcp-listen` link
+    /// takes the next peer, a `tcp` one connects again; a stream given to
+    /// [`add_stream`](Self::add_stream) or [`add_in_process`](Self::add_in_process) was
+    /// the only one, and the node stays down). Returns `false` if the node is unknown
+    /// or its link is not up.
+    ///
+    /// The simulator's ground-station link so dropped tests a ground station's
+    /// reconnection while the MAVs fly on.
+    pub fn disconnect(&self, address: Address64) -> bool {
+        match lock(&self.state).nodes.get(&address) {
+            Some(node) if node.connected => {
+                node.hangup.notify_one();
+                true
+            }
+            _ => false,
+        }
     }
 
     /// Brings a node cut by [`Network::cut`] back in range.

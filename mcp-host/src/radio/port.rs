@@ -197,7 +197,14 @@ async fn run_node(
         }
         source.give_back(io);
         let ended = matches!(reason, End::NetworkGone);
-        lock(&state).disconnected(addr, reason.to_string());
+        let mut shared = lock(&state);
+        // A hang-up asked for as this stream ended on its own is for this stream alone,
+        // not the next.
+        if let Some(node) = shared.nodes.get(&addr) {
+            let _ = node.hangup.notified().now_or_never();
+        }
+        shared.disconnected(addr, reason.to_string());
+        drop(shared);
         if ended {
             return;
         }
@@ -214,6 +221,7 @@ enum End {
     Closed,
     Io(std::io::Error),
     NetworkGone,
+    HungUp,
 }
 
 impl std::fmt::Display for End {
@@ -222,6 +230,7 @@ impl std::fmt::Display for End {
             End::Closed => f.write_str("the peer closed the link"),
             End::Io(e) => write!(f, "{e}"),
             End::NetworkGone => f.write_str("the network was shut down"),
+            End::HungUp => f.write_str("the network hung up (Network::disconnect)"),
         }
     }
 }
@@ -286,10 +295,16 @@ async fn serve_until_end(
         inner: writer,
         mismatched: &mismatched,
     };
-    let (mut link_mode, relink) = {
+    let (mut link_mode, relink, hangup) = {
         let state = lock(state);
-        let relink = state.nodes.get(&addr).map(|node| node.relink.clone());
-        (state.link_mode(addr), relink.unwrap_or_default())
+        let node = state.nodes.get(&addr);
+        let relink = node.map(|node| node.relink.clone());
+        let hangup = node.map(|node| node.hangup.clone());
+        (
+            state.link_mode(addr),
+            relink.unwrap_or_default(),
+            hangup.unwrap_or_default(),
+        )
     };
     let mut command_mode = (link_mode == LinkMode::Transparent).then(CommandMode::new);
     let mut frames = FramedRead::new(reader, NodeCodec::new(link_mode));
@@ -335,6 +350,7 @@ async fn serve_until_end(
                 Some(Err(e)) => return End::Io(e),
                 None => return End::Closed,
             },
+            () = hangup.notified() => return End::HungUp,
             // `AP` set remotely (or in the frame just read: nothing left to do then).
             () = relink.notified() => {
                 let now = lock(state).link_mode(addr);

@@ -105,6 +105,9 @@ pub(crate) struct Node {
     /// Told when what it speaks to its device changes (an `AP` applied), for its
     /// link's task to read its device's writes the new way.
     pub(crate) relink: Arc<Notify>,
+    /// Told to close its device's stream of the moment (`Network::disconnect`); given a
+    /// permit only while its link is up, under the state's lock.
+    pub(crate) hangup: Arc<Notify>,
     /// Why its link ended for good (it cannot be opened, and waiting will not change
     /// that), once it did.
     pub(crate) ended: Option<String>,
