@@ -1052,17 +1052,29 @@ fn encode_warns_of_a_packet_too_long_for_the_mav_or_for_a_broadcast() {
 }
 
 #[test]
-fn an_io_link_is_a_programs_own_and_said_to_be_once() {
-    let output = run(&["status", "--link", "io:bluetooth", "--to", M, "landing"]);
-    assert_eq!(output.status.code(), Some(3), "{output:?}");
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert_eq!(
-        stderr.matches("cannot open io:bluetooth").count(),
-        1,
-        "{stderr}"
-    );
-    assert!(
-        stderr.contains("mcp-gs takes serial:, tcp:, tcp-listen: or pty"),
-        "{stderr}"
-    );
+fn an_io_link_is_a_programs_own_and_refused_as_a_usage_error() {
+    // Wherever a link is taken: a link's own option, `sim`, `setup`, `probe`, `radio`.
+    for args in [
+        &["status", "--link", "io:bluetooth", "--to", M, "landing"][..],
+        &["sim", "--link", "io:bluetooth"],
+        &["setup", "--link", "io:bluetooth"],
+        &["probe", "--link", "io:bluetooth"],
+        &["radio", "--node", "0013a20040b599b9=io:bluetooth"],
+    ] {
+        let output = run(args);
+        // As any other link string mcp-gs cannot take: before anything is opened.
+        assert_eq!(output.status.code(), Some(2), "{args:?}: {output:?}");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(
+            stderr
+                .matches("io: links are for programs that open their stream themselves")
+                .count(),
+            1,
+            "{stderr}"
+        );
+        assert!(
+            stderr.contains("mcp-gs takes serial:, tcp:, tcp-listen: or pty"),
+            "{stderr}"
+        );
+    }
 }

@@ -40,6 +40,7 @@ pub(crate) struct LinkArgs {
     #[arg(
         long,
         value_name = "LINK",
+        value_parser = parse_link,
         help = "The local radio: serial:PATH[:BAUD][:rtscts] (default 115200 8N1), tcp:HOST:PORT, \
                 tcp-listen:ADDR:PORT or pty"
     )]
@@ -74,6 +75,19 @@ pub(crate) fn parse_address64(s: &str) -> Result<Address64, String> {
     digits
         .parse()
         .map_err(|e| format!("bad 64-bit address `{s}`: {e}"))
+}
+
+/// A link `mcp-gs` can open: any but `io:`, which a program opens itself.
+pub(crate) fn parse_link(s: &str) -> Result<Link, String> {
+    match s.parse::<Link>().map_err(|e| e.to_string())? {
+        Link::Io { .. } => Err(
+            "io: links are for programs that open their stream themselves \
+                                (mcp_host::connect_with); mcp-gs takes serial:, tcp:, \
+                                tcp-listen: or pty"
+                .to_owned(),
+        ),
+        link => Ok(link),
+    }
 }
 
 pub(crate) fn parse_seconds(s: &str) -> Result<f64, String> {
@@ -775,12 +789,6 @@ fn link_hint(error: &LinkError, link: &Link) -> Option<String> {
             )),
             _ => not_a_serial_port(&error.description, link),
         },
-        // A link string names no program's own stream: mcp-gs has nothing to open it.
-        LinkError::Io { .. } => Some(
-            "io: links are for programs that open the stream themselves; mcp-gs takes \
-             serial:, tcp:, tcp-listen: or pty"
-                .into(),
-        ),
         LinkError::Connect { error, .. } if error.kind() == Io::ConnectionRefused => Some(
             "nothing listens there: is the radio bridge, `mcp-gs hub` or `mcp-gs sim` \
              running? A hub whose radio is disconnected refuses connections"

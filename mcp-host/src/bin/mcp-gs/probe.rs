@@ -40,7 +40,7 @@ struct ProbeLink {
 }
 
 fn parse_probe_link(s: &str) -> Result<ProbeLink, String> {
-    let link: Link = s.parse().map_err(|e| format!("{e}"))?;
+    let link = crate::link_args::parse_link(s)?;
     // After where the link parser took the path to end, a rate was written if a part
     // is digits (`serial:115200` is a path; `:rtscts` may come before or after it).
     let given = match &link {

@@ -347,7 +347,7 @@ impl std::str::FromStr for LinkArg {
             Some((link, mode)) => (link, Some(mode.parse::<RadioModeArg>()?)),
             None => (s, None),
         };
-        let link = link.parse::<Link>().map_err(|e| e.to_string())?;
+        let link = crate::link_args::parse_link(link)?;
         Ok(LinkArg { link, mode })
     }
 }

@@ -25,6 +25,7 @@ pub(crate) struct SetupArgs {
     #[arg(
         long,
         value_name = "LINK",
+        value_parser = crate::link_args::parse_link,
         help = "The local radio: serial:PATH[:BAUD][:rtscts] (XBee modules leave the factory at 9600 \
                 baud: serial:/dev/ttyUSB0:9600) or tcp:HOST:PORT (a serial-to-TCP bridge, not \
                 a hub: a radio set to another mode would be cut off from it)"

@@ -20,7 +20,7 @@ use crate::radio::{
 pub(crate) struct SimArgs {
     /// Where the ground station connects: the link of the network's coordinator
     /// (`pty`, `tcp-listen:127.0.0.1:9750`, `serial:/dev/pts/5`...).
-    #[arg(long, value_name = "LINK")]
+    #[arg(long, value_name = "LINK", value_parser = crate::link_args::parse_link)]
     link: Link,
     /// A simulated MAV's 64-bit address (repeat for more). Default 0013A20040B599B9.
     #[arg(long = "address", value_name = "ADDR", value_parser = parse_address)]
