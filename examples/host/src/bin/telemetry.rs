@@ -16,21 +16,15 @@ async fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mav = mcp_host_examples::mav(args.next())?;
     let seconds: u64 = args.next().map_or(Ok(10), |s| s.parse())?;
 
-    let (mut stream, sender) = mcp_host::connect(&link, LinkOptions::default()).await?;
+    let (stream, sender) = mcp_host::connect(&link, LinkOptions::default()).await?;
     let on = Command::telemetry_to_coordinator(true, TelemetryId::Altitude);
     // Resolves once the MAV's radio confirmed delivery.
     sender.send(mav, &on).await?;
 
+    // Every event until the time is up (or the link has ended).
     let end = tokio::time::sleep(Duration::from_secs(seconds));
-    let mut end = std::pin::pin!(end);
-    loop {
-        let event = tokio::select! {
-            () = &mut end => break,
-            event = stream.next() => match event {
-                Some(event) => event,
-                None => break,
-            },
-        };
+    let mut events = std::pin::pin!(stream.take_until(end));
+    while let Some(event) = events.next().await {
         match event {
             Event::Packet(rx) if rx.origin.src64 == mav => match &rx.packet {
                 Packet::Telemetry(telemetry) => {

@@ -44,10 +44,11 @@ async fn main() -> Result<(), Box<dyn std::error::Error>> {
         .map(|s| s.parse::<f64>().map(Duration::from_secs_f64))
         .transpose()?;
 
-    let (mut stream, sender) = mcp_host::connect(&link, LinkOptions::default()).await?;
+    let (stream, sender) = mcp_host::connect(&link, LinkOptions::default()).await?;
     let watched: Arc<Mutex<HashSet<Address64>>> = Arc::default();
     spawn_discovery(&sender, window, &watched);
 
+    // Every event until Ctrl-C or the time is up (or the link has ended).
     let end = async {
         if seconds == 0 {
             let _ = tokio::signal::ctrl_c().await;
@@ -55,15 +56,8 @@ async fn main() -> Result<(), Box<dyn std::error::Error>> {
             tokio::time::sleep(Duration::from_secs(seconds)).await;
         }
     };
-    let mut end = std::pin::pin!(end);
-    loop {
-        let event = tokio::select! {
-            () = &mut end => break,
-            event = stream.next() => match event {
-                Some(event) => event,
-                None => break,
-            },
-        };
+    let mut events = std::pin::pin!(stream.take_until(end));
+    while let Some(event) = events.next().await {
         match event {
             // A MAV discovery missed (it came in range later): watched from now on.
             Event::Packet(rx) => {
