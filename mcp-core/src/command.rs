@@ -4,7 +4,7 @@ use nom::{Parser, combinator::all_consuming};
 
 use crate::{
     address::{Address, Slot},
-    error::{BufferTooSmall, Error, ErrorKind, Expected},
+    error::{BufferTooSmall, Error, ErrorKind, Expected, check_category},
     field,
     id::{Category, CommandType, Controller, TelemetryId},
     read,
@@ -186,8 +186,25 @@ impl<B> From<StatusRequest> for Command<B> {
 }
 
 impl<'a> Command<&'a [u8]> {
-    /// Parses a command packet (`bytes` starts with the `c`).
+    /// Parses a command packet, its `c` included: any other packet is an error
+    /// ([`ErrorKind::WrongCategory`], or [`ErrorKind::Empty`]). A MAV that acts on
+    /// commands alone links less code with this than with [`parse`](crate::parse), which
+    /// reads every category.
+    ///
+    /// ```
+    /// use mcp_core::{Command, ErrorKind};
+    /// assert_eq!(Command::parse(b"c\x02\x01"), Ok(Command::Landing { on: true }));
+    /// // A landing report holds the same bytes after its `r`: no command.
+    /// let report = Command::parse(b"r\x02\x01").unwrap_err();
+    /// assert!(matches!(report.kind(), ErrorKind::WrongCategory { found: b'r', .. }));
+    /// ```
     pub fn parse(bytes: &'a [u8]) -> Result<Self, Error> {
+        check_category(bytes, Category::Command)?;
+        Self::parse_typed(bytes)
+    }
+
+    /// [`parse`](Self::parse) of a packet whose category byte was read already.
+    pub(crate) fn parse_typed(bytes: &'a [u8]) -> Result<Self, Error> {
         let len = bytes.len();
         let Some(&type_byte) = bytes.get(field::TYPE) else {
             return Err(Error::new(

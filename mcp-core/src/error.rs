@@ -48,6 +48,16 @@ impl Error {
     }
 }
 
+/// That `bytes` is a packet of the category `expected`: [`ErrorKind::WrongCategory`]
+/// (or [`ErrorKind::Empty`]) if not.
+pub(crate) fn check_category(bytes: &[u8], expected: Category) -> Result<(), Error> {
+    match bytes.first() {
+        None => Err(Error::new(ErrorKind::Empty, 0)),
+        Some(&found) if Category::from(found) == expected => Ok(()),
+        Some(&found) => Err(Error::new(ErrorKind::WrongCategory { expected, found }, 0)),
+    }
+}
+
 /// What was wrong with a packet.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -100,6 +110,15 @@ pub enum ErrorKind {
     TooManyWaypoints(usize),
     /// A firmware-form position slave set command names a slot other than 0-3.
     InvalidSlot(u8),
+    /// [`Command::parse`](crate::Command::parse) or
+    /// [`Report::parse`](crate::Report::parse) was given a packet of another category:
+    /// a report is no command, however its bytes read.
+    WrongCategory {
+        /// The category the parser reads.
+        expected: Category,
+        /// The packet's category byte.
+        found: u8,
+    },
 }
 
 impl ErrorKind {
@@ -115,6 +134,7 @@ impl ErrorKind {
     /// | 0x46 | [`SizeMismatch`](Self::SizeMismatch) |
     /// | 0x47 | [`TooManyWaypoints`](Self::TooManyWaypoints) |
     /// | 0x48 | [`InvalidSlot`](Self::InvalidSlot) |
+    /// | 0x49 | [`WrongCategory`](Self::WrongCategory) |
     /// | 0x50 | [`BufferTooSmall`] (its own type: [`BufferTooSmall::CODE`]) |
     /// | 0x51 | [`Full`] (its own type: [`Full::CODE`]) |
     ///
@@ -140,6 +160,7 @@ impl ErrorKind {
             ErrorKind::SizeMismatch { .. } => 0x46,
             ErrorKind::TooManyWaypoints(_) => 0x47,
             ErrorKind::InvalidSlot(_) => 0x48,
+            ErrorKind::WrongCategory { .. } => 0x49,
         }
     }
 }
@@ -188,6 +209,12 @@ impl fmt::Display for ErrorKind {
         match self {
             ErrorKind::Empty => f.write_str("empty packet"),
             ErrorKind::UnknownCategory(c) => write!(f, "unknown packet category {c:#04x}"),
+            ErrorKind::WrongCategory { expected, found } => {
+                write!(
+                    f,
+                    "not a {expected} packet: its category byte is {found:#04x}"
+                )
+            }
             ErrorKind::MissingType(c) => write!(f, "{c} packet ends before its type byte"),
             ErrorKind::UnknownType { category, value } => {
                 write!(f, "unknown {category} type {value:#04x}")
@@ -295,9 +322,16 @@ mod tests {
             },
             ErrorKind::TooManyWaypoints(300),
             ErrorKind::InvalidSlot(4),
+            ErrorKind::WrongCategory {
+                expected: Category::Command,
+                found: b'r',
+            },
         ];
         let codes = kinds.map(|kind| kind.code());
-        assert_eq!(codes, [0x41, 0x42, 0x43, 0x44, 0x45, 0x46, 0x47, 0x48]);
+        assert_eq!(
+            codes,
+            [0x41, 0x42, 0x43, 0x44, 0x45, 0x46, 0x47, 0x48, 0x49]
+        );
         assert_eq!(Error::new(ErrorKind::InvalidSlot(4), 2).code(), 0x48);
         assert_eq!((BufferTooSmall::CODE, Full::CODE), (0x50, 0x51));
         let small = BufferTooSmall {

@@ -94,8 +94,8 @@ fn parse_other(bytes: &[u8]) -> Result<Packet<&[u8]>, Error> {
     };
     let rest = bytes.get(field::CATEGORY + 1..).unwrap_or_default();
     Ok(match Category::from(category) {
-        Category::Command => Packet::Command(Command::parse(bytes)?),
-        Category::Report => Packet::Report(Report::parse(bytes)?),
+        Category::Command => Packet::Command(Command::parse_typed(bytes)?),
+        Category::Report => Packet::Report(Report::parse_typed(bytes)?),
         Category::Telemetry => Packet::Telemetry(Telemetry::new_checked(rest)?),
         Category::Message => Packet::Message(Text::new(rest)),
         Category::Warning => Packet::Warning(Text::new(rest)),

@@ -5,7 +5,7 @@ use nom::{Parser, combinator::all_consuming};
 use crate::{
     address::Address,
     command::waypoints_checked,
-    error::{BufferTooSmall, Error, ErrorKind, Expected},
+    error::{BufferTooSmall, Error, ErrorKind, Expected, check_category},
     field,
     id::{Category, CommandType, Controller, LandingState, TelemetryId},
     read,
@@ -114,8 +114,22 @@ fn four_addresses(i: &[u8]) -> read::Res<'_, [Address; 4]> {
 }
 
 impl<'a> Report<&'a [u8]> {
-    /// Parses a report packet (`bytes` starts with the `r`).
+    /// Parses a report packet, its `r` included: any other packet is an error
+    /// ([`ErrorKind::WrongCategory`], or [`ErrorKind::Empty`]).
+    ///
+    /// ```
+    /// use mcp_core::{ErrorKind, LandingState, Report};
+    /// assert_eq!(Report::parse(b"r\x02\x01"), Ok(Report::Landing(LandingState::Landing)));
+    /// let command = Report::parse(b"c\x02\x01").unwrap_err();
+    /// assert!(matches!(command.kind(), ErrorKind::WrongCategory { found: b'c', .. }));
+    /// ```
     pub fn parse(bytes: &'a [u8]) -> Result<Self, Error> {
+        check_category(bytes, Category::Report)?;
+        Self::parse_typed(bytes)
+    }
+
+    /// [`parse`](Self::parse) of a packet whose category byte was read already.
+    pub(crate) fn parse_typed(bytes: &'a [u8]) -> Result<Self, Error> {
         let len = bytes.len();
         let Some(&type_byte) = bytes.get(field::TYPE) else {
             return Err(Error::new(

@@ -2,8 +2,8 @@
 //! panic; whatever parses encodes back to the same bytes (on/off bytes normalised).
 
 use mcp_core::{
-    Address, Command, Packet, Report, SlaveAddresses, Slot, StatusRequest, Telemetry, Text,
-    Waypoint, Waypoints, parse,
+    Address, Command, ErrorKind, Packet, Report, SlaveAddresses, Slot, StatusRequest, Telemetry,
+    Text, Waypoint, Waypoints, parse,
 };
 use proptest::prelude::*;
 
@@ -203,6 +203,30 @@ proptest! {
     fn arbitrary_bytes_never_panic(bytes in prop::collection::vec(any::<u8>(), 0..400)) {
         if let Ok(p) = parse(&bytes) {
             prop_assert_eq!(encode(&p), normalise_on_off(&bytes, &p));
+        }
+    }
+
+    #[test]
+    fn command_and_report_parsers_read_their_own_category_alone(bytes in packet_like_bytes()) {
+        // Each agrees with `parse` on a packet of its category, and refuses any other.
+        let whole = parse(&bytes);
+        match (Command::parse(&bytes), &whole) {
+            (Ok(c), Ok(Packet::Command(p))) => prop_assert_eq!(&c, p),
+            (Err(e), Err(w)) if bytes.first() == Some(&b'c') => prop_assert_eq!(&e, w),
+            (Err(e), _) if bytes.first() != Some(&b'c') => prop_assert!(
+                bytes.is_empty() || matches!(e.kind(), ErrorKind::WrongCategory { .. }),
+                "{e}"
+            ),
+            (c, w) => prop_assert!(false, "command {c:?}, packet {w:?}"),
+        }
+        match (Report::parse(&bytes), &whole) {
+            (Ok(r), Ok(Packet::Report(p))) => prop_assert_eq!(&r, p),
+            (Err(e), Err(w)) if bytes.first() == Some(&b'r') => prop_assert_eq!(&e, w),
+            (Err(e), _) if bytes.first() != Some(&b'r') => prop_assert!(
+                bytes.is_empty() || matches!(e.kind(), ErrorKind::WrongCategory { .. }),
+                "{e}"
+            ),
+            (r, w) => prop_assert!(false, "report {r:?}, packet {w:?}"),
         }
     }
 

@@ -1,6 +1,7 @@
 //! The firmware's main loop: received payloads through the MCP state machine, the
 //! 20 Hz model step and telemetry, unsolicited reports, sleep until the next interrupt.
 
+use mcp_core::Command;
 use mcp_core::mav::Mav;
 
 use crate::model::FlightModel;
@@ -10,7 +11,8 @@ use crate::{clock, hw, tx};
 /// Counters of the application layer.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct AppStats {
-    /// Payloads that were not valid MCP packets, ignored.
+    /// Payloads that were no valid MCP command (telemetry, reports and text included:
+    /// a MAV acts on commands alone), ignored.
     pub invalid: u32,
     /// Answers that did not fit a payload, not sent.
     pub unsent: u32,
@@ -46,14 +48,12 @@ impl App {
     /// Handles one received MCP payload: commands are carried out and answered,
     /// other packets and invalid ones ignored. `send` transmits each answer.
     pub fn on_payload(&mut self, payload: &[u8], send: &mut impl FnMut(&[u8])) {
-        let Ok(packet) = mcp_core::parse(payload) else {
+        // Commands alone: the parsers of the other categories are not linked.
+        let Ok(command) = Command::parse(payload) else {
             self.stats.invalid = self.stats.invalid.wrapping_add(1);
             return;
         };
-        match self
-            .mav
-            .handle_packet(&mut self.model, &packet, &mut self.buf)
-        {
+        match self.mav.handle(&mut self.model, &command, &mut self.buf) {
             Ok(Some(len)) => self.send(len, send),
             Ok(None) => {}
             Err(_) => self.stats.unsent = self.stats.unsent.wrapping_add(1),

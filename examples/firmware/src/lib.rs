@@ -2,7 +2,7 @@
 //!
 //! UART0 carries XBee API frames (API mode 1, 115200 8N1) to and from the MAV's XBee.
 //! The UART0 receive interrupt feeds [`xbee_api::Decoder`] byte by byte; the payloads
-//! of Receive Packets (0x90) are MCP packets, parsed by [`mcp_core::parse`] and
+//! of Receive Packets (0x90) are MCP commands, parsed by [`mcp_core::Command::parse`] and
 //! handled by [`mcp_core::mav::Mav`] over a small flight model ([`model`]). Answers,
 //! unsolicited reports and the 20 Hz telemetry go to the coordinator in Transmit
 //! Requests (0x10). No heap; `unsafe` only in [`hw`], for register access.

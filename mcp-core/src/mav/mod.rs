@@ -7,7 +7,11 @@
 //! data of a Transmit Request to the coordinator (with `xbee-api`:
 //! `TransmitRequestRepr::unicast(Address64::COORDINATOR, reply)`, encoded or built in
 //! place); the commands come from the RF data of the Receive Packets the radio hands
-//! over (`ReceivePacket::new_checked(frame.data())?.data()`).
+//! over (`ReceivePacket::new_checked(frame.data())?.data()`). A MAV acts on commands
+//! alone: parsed with [`Command::parse`](crate::Command::parse) and given to
+//! [`Mav::handle`], they take less flash than [`parse`](crate::parse) and
+//! [`Mav::handle_packet`], which link the parsers of every category (600 bytes less in
+//! the repository's Cortex-M3 firmware example).
 //!
 //! Behaviour:
 //!
