@@ -72,11 +72,14 @@ const CHUNK: usize = 32;
 ///
 /// A line that goes quiet part way through a frame leaves it waiting for its rest:
 /// give it up with [`drop_partial`](Self::drop_partial) when no byte came for longer
-/// than a frame takes. With that same `select` and a timer: note
-/// [`bytes_read`](Self::bytes_read) before the wait, and when the timer wins with no
-/// byte read meanwhile (a long frame at a slow baud rate may take longer than the timer
-/// with its bytes still coming), give the frame up. In API mode 1 a stray 0x7E can hold
-/// real frames back that way (see [`Decoder::finish`]).
+/// than a frame takes. With that same `select` and a quiet-line timeout started with
+/// each wait (a fresh `Timer::after(QUIET)`): note [`bytes_read`](Self::bytes_read)
+/// before the wait, and when the timeout wins with no byte read meanwhile, give the
+/// frame up (a long frame at a slow baud rate may take longer than the timeout with its
+/// bytes still coming: only an unchanged `bytes_read` says the line was quiet). Not a
+/// periodic ticker (the 20 Hz telemetry's, say): it may be due already when the wait
+/// begins, and would give up a frame whose rest is on its way. In API mode 1 a stray
+/// 0x7E can hold real frames back that way (see [`Decoder::finish`]).
 ///
 /// `M` is the decoder's [`DecoderMode`]: a firmware whose radio's API mode is set once
 /// fixes it in the type ([`fixed`](FrameReader::fixed)), so that only that mode's code
@@ -445,6 +448,14 @@ pub enum WriteError<E> {
     },
 }
 
+/// A frame that cannot be encoded, built in place say: `?` turns an
+/// [`InPlaceFrame`](crate::InPlaceFrame)'s error into the write's.
+impl<E> From<EncodeError> for WriteError<E> {
+    fn from(error: EncodeError) -> Self {
+        WriteError::Encode(error)
+    }
+}
+
 impl<E> WriteError<E> {
     /// A one-byte code, among those of [`DecodeError::code`](crate::DecodeError::code):
     /// the [`EncodeError`]'s code for
@@ -580,6 +591,10 @@ fn write_all<W: embedded_io::Write>(
 /// Writes `frame` to an async `writer` in `mode`: encodes it into `buf`, then writes it
 /// and flushes the writer; returns the number of bytes written.
 ///
+/// Not cancel safe: dropped part way (in a `select` with a timer, say), it leaves part
+/// of a frame on the line, and in API mode 1 the radio reads the next frame as its
+/// rest. Await it to the end.
+///
 /// `buf` must hold the encoded frame: [`max_encoded_len`](crate::max_encoded_len) of
 /// the largest frame data sizes one at compile time. A frame that does not fit, or that
 /// cannot be encoded, fails with [`WriteError::Encode`] before anything is written; a
@@ -597,7 +612,7 @@ pub async fn write_frame_async<W: embedded_io_async::Write>(
 
 /// [`write_encoded`] to an async `writer`: the bytes of a frame already encoded (an
 /// [`InPlaceFrame`](crate::InPlaceFrame)'s, say: the frame goes out from the buffer it
-/// was built in), then a flush.
+/// was built in), then a flush. Not cancel safe, as [`write_frame_async`] is not.
 ///
 /// ```
 /// # futures::executor::block_on(async {

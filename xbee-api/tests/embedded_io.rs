@@ -423,6 +423,31 @@ fn a_write_error_is_the_writers_and_ends_the_frame() {
     assert!(!out.flushed);
 }
 
+/// A reply built in place and written, every failure one error: `?` takes the
+/// building's [`EncodeError`] as the write's.
+fn reply<W: Write>(uart: &mut W, payload: &[u8]) -> Result<usize, WriteError<W::Error>> {
+    let mut buf = [0u8; 48];
+    let header = xbee_api::TransmitRequestRepr::unicast(xbee_api::Address64::COORDINATOR, &[]);
+    let mut frame = xbee_api::InPlaceFrame::new(&mut buf, &header)?;
+    let room = frame.data_mut();
+    let len = payload.len().min(room.len());
+    room[..len].copy_from_slice(&payload[..len]);
+    let wire = frame.finish(payload.len(), ApiMode::Escaped)?;
+    write_encoded(uart, wire)
+}
+
+#[test]
+fn building_a_frame_in_place_and_writing_it_fail_as_one_error() {
+    let mut out = tx(usize::MAX, 64);
+    let n = reply(&mut out, b"r\x02\x01").unwrap();
+    assert_eq!(out.sent.len(), n);
+    // Too long for the buffer: the building's error, nothing written.
+    let mut out = tx(usize::MAX, 64);
+    let error = reply(&mut out, &[0x61; 40]).unwrap_err();
+    assert!(matches!(error, WriteError::Encode(_)), "{error:?}");
+    assert!(out.sent.is_empty());
+}
+
 #[test]
 fn a_frame_that_cannot_be_encoded_writes_nothing() {
     /// Frame data of no bytes, not even a type byte.
