@@ -85,7 +85,8 @@
 //! ```
 //!
 //! The repository's README ("On a microcontroller") has a whole interrupt-driven recipe
-//! with a fixed-size inbox, and its `examples/firmware` a MAV firmware run in QEMU.
+//! with a fixed-size inbox, its `examples/firmware` a MAV firmware run in QEMU, and
+//! `examples/firmware-async` the same MAV as one async task over `embedded-io-async`.
 //!
 //! # Features
 //!
