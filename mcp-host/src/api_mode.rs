@@ -31,8 +31,17 @@ pub enum DetectError {
     Transparent,
     /// The radio answered something else than a mode this crate speaks: `AP=3` and
     /// above (MicroPython, Bluetooth), or an error status (`None`).
-    #[error("the radio answered AT AP with {0:?}, not 1 or 2")]
+    #[error("the radio answered AT AP with {}, not 1 or 2", answer(.0.as_deref()))]
     Unexpected(Option<Vec<u8>>),
+}
+
+/// The radio's answer to `AT AP` in words: its value in hex, or the error it gave.
+fn answer(value: Option<&[u8]>) -> String {
+    match value {
+        Some([]) => "no value".to_owned(),
+        Some(value) => format!("AP={}", crate::render::json::hex(value)),
+        None => "an error status".to_owned(),
+    }
 }
 
 /// Asks the radio on `link` its API mode (`AT AP`) and returns it, for a link opened
@@ -84,5 +93,27 @@ pub async fn detect_api_mode(link: &Link, options: LinkOptions) -> Result<ApiMod
         Some(2) => Ok(ApiMode::Escaped),
         Some(0) => Err(DetectError::Transparent),
         _ => Err(DetectError::Unexpected(Some(value))),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_answer_that_is_no_mode_is_said_in_words() {
+        let said = |value: Option<&[u8]>| DetectError::Unexpected(value.map(<[u8]>::to_vec));
+        assert_eq!(
+            said(Some(&[3])).to_string(),
+            "the radio answered AT AP with AP=03, not 1 or 2"
+        );
+        assert_eq!(
+            said(None).to_string(),
+            "the radio answered AT AP with an error status, not 1 or 2"
+        );
+        assert_eq!(
+            said(Some(&[])).to_string(),
+            "the radio answered AT AP with no value, not 1 or 2"
+        );
     }
 }

@@ -1091,6 +1091,24 @@ fn monitor_keeps_an_existing_recording() {
     let output = run(&["monitor", "--link", missing, "--record", path, "--force"]);
     assert_eq!(output.status.code(), Some(3));
     assert_eq!(std::fs::read(&file).unwrap(), b"yesterday's flight");
+    // Nothing could be recorded: refused before the link is opened, for the hub too,
+    // which would otherwise serve a whole session unrecorded.
+    let nowhere = dir.path().join("no-such-dir").join("flight.mcprec");
+    let nowhere = nowhere.to_str().unwrap();
+    for command in ["monitor", "hub"] {
+        let output = run(&[command, "--link", missing, "--record", nowhere]);
+        assert_eq!(output.status.code(), Some(2), "{command}: {output:?}");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(
+            stderr.contains(&format!(
+                "cannot record to {nowhere}: no file can be made in"
+            )),
+            "{stderr}"
+        );
+    }
+    // The check leaves nothing behind.
+    let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+    assert_eq!(left.len(), 1, "{left:?}");
 }
 
 #[test]

@@ -224,20 +224,21 @@ fn sim_and_ground_station_over_a_pseudo_terminal() {
 #[test]
 fn unknown_mav_is_a_delivery_failure() {
     let sim = Sim::start("tcp-listen:127.0.0.1:0");
-    let out = sim.gs(&["send", "--to", "0013a200deadbeef", "landing", "on"]);
-    assert_eq!(
-        out.status.code(),
-        Some(5),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(stderr.contains("address_not_found"), "{stderr}");
-    // Where to find the addresses there are.
-    assert!(
-        stderr.contains("hint: no radio of the network has that address: `mcp-gs nodes"),
-        "{stderr}"
-    );
+    // A command, and a status request: the same failure, the same hint.
+    for args in [
+        &["send", "--to", "0013a200deadbeef", "landing", "on"][..],
+        &["status", "--to", "0013a200deadbeef", "landing"],
+    ] {
+        let out = sim.gs(args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(5), "{args:?}: {stderr}");
+        assert!(stderr.contains("address_not_found"), "{stderr}");
+        // Where to find the addresses there are.
+        assert!(
+            stderr.contains("hint: no radio of the network has that address: `mcp-gs nodes"),
+            "{args:?}: {stderr}"
+        );
+    }
     // In JSON the refusal prints too, and the exit code is the same.
     let out = sim.gs(&[
         "send",

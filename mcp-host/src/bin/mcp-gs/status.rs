@@ -6,7 +6,7 @@ use mcp_host::RequestError;
 use xbee_api::Address64;
 
 use crate::command::status_request;
-use crate::link_args::{LinkArgs, diagnosed, diagnosed_unanswered, send_failure};
+use crate::link_args::{LinkArgs, diagnosed, diagnosed_send, diagnosed_unanswered};
 use crate::send::{failure_json, timeout_json};
 use crate::{Failure, Format};
 
@@ -96,21 +96,25 @@ pub(crate) async fn run(args: StatusArgs) -> Result<(), Failure> {
     {
         args.link.check_mode_after_silence(&sender).await;
     }
-    let report = report
-        .map_err(|e| match e {
-            RequestError::Send(e) => send_failure(e),
-            timeout @ RequestError::Timeout { .. } => {
-                Failure::new(Failure::TIMEOUT, timeout.to_string())
-            }
-            other => Failure::new(Failure::OTHER, other.to_string()),
-        })
-        .map_err(|failure| {
+    let stats = sender.stats();
+    let report = report.map_err(|e| match e {
+        // As `send` says it: with what its failure itself points to (an address no
+        // radio has, a frame the link did not take in time).
+        RequestError::Send(e) => diagnosed_send(e, &args.link, &stats),
+        timeout @ RequestError::Timeout { .. } => {
+            let failure = Failure::new(Failure::TIMEOUT, timeout.to_string());
             if unanswered {
-                diagnosed_unanswered(failure, &args.link, &sender.stats())
+                diagnosed_unanswered(failure, &args.link, &stats)
             } else {
-                diagnosed(failure, &args.link, &sender.stats())
+                diagnosed(failure, &args.link, &stats)
             }
-        })?;
+        }
+        other => diagnosed(
+            Failure::new(Failure::OTHER, other.to_string()),
+            &args.link,
+            &stats,
+        ),
+    })?;
     let received_at = std::time::SystemTime::now();
     let packet = Packet::Report(report);
     match args.format {
