@@ -190,8 +190,10 @@ pub async fn window(sender: &CommandSender) -> Result<Duration, SendError> {
     };
     if time > MAX_DISCOVERY_TIME {
         tracing::warn!(
-            "node discovery: the radio's discovery time, {time:?}, is longer than any radio's: \
-             {MAX_DISCOVERY_TIME:?} taken"
+            "node discovery: the radio's discovery time, {}, is longer than any radio's: {} \
+             taken",
+            crate::render::Seconds(time),
+            crate::render::Seconds(MAX_DISCOVERY_TIME)
         );
     }
     Ok(time.min(MAX_DISCOVERY_TIME) + DISCOVERY_MARGIN)

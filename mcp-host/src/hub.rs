@@ -967,11 +967,13 @@ impl Serve {
         let (client, since) = (gone.peer, since.elapsed());
         if lock(&gone.closed).is_some() {
             // As a client that left.
-            tracing::debug!("hub: client {client} let go for {peer}: {why} for {since:.1?}");
+            let since = crate::render::Seconds(since);
+            tracing::debug!("hub: client {client} let go for {peer}: {why} for {since}");
         } else {
+            let since = crate::render::Seconds(since);
             tracing::warn!(
                 "hub: client {client} dropped for {peer} ({MAX_CLIENTS} connected): {why} for \
-                 {since:.1?}"
+                 {since}"
             );
         }
         true
@@ -1110,7 +1112,8 @@ async fn check_radio_mode(
                     (true, &[ap]) if ap != hub => tracing::warn!(
                         "hub: the radio is in API mode {ap} (AP={ap}) but the hub speaks \
                          API mode {hub}: most of its frames will be dropped, and clients \
-                         will hear little; start the hub with API mode {ap}"
+                         will hear little; start the hub in API mode {ap} \
+                         (`mcp-gs hub --api-mode {ap}`)"
                     ),
                     _ => {}
                 }

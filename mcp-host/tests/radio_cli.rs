@@ -126,7 +126,7 @@ async fn sim_serves_a_fleet_on_the_link_it_prints() {
         "120",
     ]);
     let addr = sim.listening("ground station link");
-    let fleet = sim.line(|l| l.starts_with("simulating 2 MAV(s): "));
+    let fleet = sim.line(|l| l.starts_with("simulating 2 MAVs: "));
     assert!(fleet.contains("0013a20040b599b9/") && fleet.contains("0013a20040b599bf/"));
     let link: Link = format!("tcp:{addr}").parse().unwrap();
     let (_stream, sender) = mcp_host::connect(&link, LinkOptions::default())
@@ -144,7 +144,7 @@ async fn sim_serves_a_fleet_on_the_link_it_prints() {
 #[test]
 fn a_fleet_is_listed_a_few_mavs_a_line() {
     let sim = Running::start(&["sim", "--link", "tcp-listen:127.0.0.1:0", "--mavs", "9"]);
-    sim.line(|l| l == "simulating 9 MAV(s):");
+    sim.line(|l| l == "simulating 9 MAVs:");
     let lines: Vec<String> = (0..3).map(|_| sim.line(|_| true)).collect();
     let addresses: Vec<&str> = lines
         .iter()

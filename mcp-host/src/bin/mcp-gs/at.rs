@@ -144,8 +144,10 @@ fn value_line(name: &str, command: &[u8; 2], data: &[u8]) -> String {
         return format!("{name} = {:?}", String::from_utf8_lossy(data));
     }
     if let (b"BD", Some(rate)) = (command, baud_rate(data)) {
-        // As `setup` prints it: the rate is what the operator gives a serial link.
-        return format!("{name} = {} ({rate} baud)", hex(data).to_uppercase());
+        // As `setup` prints it (the value as the radio's command mode writes it, hex
+        // without leading zeros): the rate is what the operator gives a serial link.
+        let code = crate::link_args::at_number(data);
+        return format!("{name} = {code:X} ({rate} baud)");
     }
     if data.len() <= 16 {
         let number = data.iter().fold(0u128, |n, &b| (n << 8) | u128::from(b));
@@ -351,9 +353,9 @@ async fn broadcast(
             Failure::new(
                 Failure::TIMEOUT,
                 format!(
-                    "{name}: no radio answered the broadcast within {:.1} s: the others are \
+                    "{name}: no radio answered the broadcast within {}: the others are \
                      off, out of range, or in another network (ID, CH)",
-                    window.as_secs_f64()
+                    mcp_host::render::Seconds(window)
                 ),
             ),
             &args.link,
@@ -561,7 +563,11 @@ mod tests {
 
     #[test]
     fn bd_reads_as_its_baud_rate() {
-        assert_eq!(value_line("BD", b"BD", &[3]), "BD = 03 (9600 baud)");
+        assert_eq!(value_line("BD", b"BD", &[3]), "BD = 3 (9600 baud)");
+        assert_eq!(
+            value_line("BD", b"BD", &[0, 0, 0, 7]),
+            "BD = 7 (115200 baud)"
+        );
         assert_eq!(value_line("BD", b"BD", &[0x20]), "BD = 20 (0x20, 32)");
         assert_eq!(value_line("ID", b"ID", &[3]), "ID = 03 (0x03, 3)");
     }

@@ -29,7 +29,7 @@ use crate::interrupt::Interrupt;
 #[derive(Debug, Args)]
 pub(crate) struct DemoArgs {
     /// How long the demo runs, seconds; 0 runs until Ctrl-C.
-    #[arg(long, default_value = "10", value_name = "S", value_parser = crate::radio::parse_duration)]
+    #[arg(long, default_value = "10", value_name = "SECONDS", value_parser = crate::radio::parse_duration)]
     duration: Duration,
     /// Show every Nth telemetry packet (they arrive at 20 Hz); at least 1.
     #[arg(long, default_value = "10", value_name = "N", value_parser = parse_every)]
@@ -295,13 +295,13 @@ pub(crate) async fn run(args: DemoArgs) -> Result<(), Failure> {
         "  Lines: time (UTC), MAV address, what happened. `->` is a command sent, `<-` a report received."
     );
     out!(
-        "  Telemetry arrives at 20 Hz: every {}th packet is shown (#n counts them all).",
-        args.telemetry_every
+        "  Telemetry arrives at 20 Hz: {} is shown (#n counts them all).",
+        every_nth(args.telemetry_every.get())
     );
     match deadline {
         Some(_) => out!(
-            "  Runs for {} s, then prints a summary.",
-            args.duration.as_secs_f64()
+            "  Runs for {}, then prints a summary.",
+            mcp_host::render::Seconds(args.duration)
         ),
         None => out!("  Runs until Ctrl-C, then prints a summary."),
     }
@@ -519,9 +519,50 @@ async fn steps(
     Ok(())
 }
 
+/// Which packets of a series are shown: `every packet`, `every 2nd packet`, `every 3rd
+/// packet`, `every 11th packet`...
+fn every_nth(n: u64) -> String {
+    let suffix = match (n % 10, n % 100) {
+        (_, 11..=13) => "th",
+        (1, _) => "st",
+        (2, _) => "nd",
+        (3, _) => "rd",
+        _ => "th",
+    };
+    match n {
+        0 | 1 => "every packet".to_owned(),
+        n => format!("every {n}{suffix} packet"),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn every_nth_packet_reads_as_english() {
+        let said: Vec<String> = [1, 2, 3, 4, 11, 12, 13, 21, 22, 23, 101, 111]
+            .into_iter()
+            .map(every_nth)
+            .collect();
+        assert_eq!(
+            said,
+            [
+                "every packet",
+                "every 2nd packet",
+                "every 3rd packet",
+                "every 4th packet",
+                "every 11th packet",
+                "every 12th packet",
+                "every 13th packet",
+                "every 21st packet",
+                "every 22nd packet",
+                "every 23rd packet",
+                "every 101st packet",
+                "every 111th packet",
+            ]
+        );
+    }
 
     #[tokio::test]
     async fn ctrl_c_after_the_time_is_up_still_interrupts() {

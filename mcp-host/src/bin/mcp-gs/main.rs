@@ -227,9 +227,10 @@ pub(crate) fn output_failure(error: &std::io::Error) -> Option<Failure> {
 /// Output format of the subcommands that print what the radio said.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub(crate) enum Format {
-    /// One readable line per frame.
+    /// Readable lines, as the option says what each is.
     Text,
-    /// JSON Lines: one object per frame (schema in the README).
+    /// JSON Lines: one object a line, as the option says what each is (schema in the
+    /// README).
     Json,
 }
 

@@ -35,8 +35,8 @@ pub(crate) async fn run(args: NodesArgs) -> Result<(), Failure> {
         None => mcp_host::discovery::window(&sender).await.map_err(failed)?,
     };
     err!(
-        "mcp-gs: asking who is there (ND), answers for {:.1} s",
-        window.as_secs_f64()
+        "mcp-gs: asking who is there (ND), answers for {}",
+        mcp_host::render::Seconds(window)
     );
     crate::link_args::warn_hub_window(&args.link.link, window);
     let found = sender.discover(Some(window)).await.map_err(|e| match e {

@@ -38,7 +38,7 @@ pub(crate) struct RadioArgs {
     #[arg(long, short)]
     verbose: bool,
     /// Stop after this many seconds; 0, the default, runs until Ctrl-C.
-    #[arg(long, value_name = "S", value_parser = parse_duration)]
+    #[arg(long, value_name = "SECONDS", value_parser = parse_duration)]
     duration: Option<Duration>,
 }
 

@@ -307,10 +307,10 @@ impl Unconfirmed {
             Some(report) => Failure::new(
                 Failure::OTHER,
                 format!(
-                    "the MAV reports another trajectory than the one sent: {} waypoint(s) [{}], \
+                    "the MAV reports another trajectory than the one sent: {} [{}], \
                      sent {} [{}] (it may have kept fewer, or another ground station set one \
                      meanwhile)",
-                    report.len(),
+                    crate::counted(report.len() as u64, "waypoint"),
                     show(report),
                     sent.len(),
                     show(sent)
@@ -409,7 +409,7 @@ mod tests {
         assert!(
             failure
                 .message
-                .contains("1 waypoint(s) [1,0.5,-0.25,2], sent 2 [1,0.5,-0.25,2 2,0.5,-0.25,2]"),
+                .contains("1 waypoint [1,0.5,-0.25,2], sent 2 [1,0.5,-0.25,2 2,0.5,-0.25,2]"),
             "{}",
             failure.message
         );

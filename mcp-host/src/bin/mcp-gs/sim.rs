@@ -46,7 +46,7 @@ pub(crate) struct SimArgs {
     #[arg(long, short)]
     verbose: bool,
     /// Stop after this many seconds; 0, the default, runs until Ctrl-C.
-    #[arg(long, value_name = "S", value_parser = parse_duration)]
+    #[arg(long, value_name = "SECONDS", value_parser = parse_duration)]
     duration: Option<Duration>,
 }
 
@@ -148,10 +148,14 @@ pub(crate) async fn run(args: SimArgs) -> Result<(), Failure> {
         .map(|m| format!("{}/{}", m.address, m.addr16))
         .collect();
     if list.len() <= MAVS_A_LINE {
-        out!("simulating {} MAV(s): {}", list.len(), list.join(", "));
+        out!(
+            "simulating {}: {}",
+            crate::counted(list.len() as u64, "MAV"),
+            list.join(", ")
+        );
     } else {
         // A fleet is listed a few to a line, not on one line of thousands of bytes.
-        out!("simulating {} MAV(s):", list.len());
+        out!("simulating {}:", crate::counted(list.len() as u64, "MAV"));
         for line in list.chunks(MAVS_A_LINE) {
             out!("  {}", line.join(", "));
         }
