@@ -29,7 +29,9 @@ pub const DEFAULT_CAPACITY: usize = 512;
 /// The buffer size `N` a [`Decoder<N>`](Decoder) needs to take frame data of up to
 /// `frame_data_len` bytes in `mode`: mode 2 keeps only the frame data, mode 1 the whole
 /// frame (delimiter, length and checksum: 4 bytes more). For decoders sized at compile
-/// time; [`Decoder::capacity`] says what a decoder takes.
+/// time; [`Decoder::capacity`] says what a decoder takes. Code generic over the mode's
+/// type cannot size an array with `M::MODE` on stable Rust: it sizes for
+/// [`ApiMode::Unescaped`], the larger.
 ///
 /// ```
 /// use xbee_api::{ApiMode, Decoder, Mode1, ReceivePacketRepr, TransmitRequestRepr, decoder_buffer_len};

@@ -13,6 +13,8 @@ pub const MAX_FRAME_DATA_LEN: usize = 0xFFFF;
 /// The most bytes a frame with `frame_data_len` bytes of frame data takes on the wire
 /// in `mode`: exact in mode 1; in mode 2 as if every byte after the delimiter were
 /// escaped. For buffers sized at compile time; [`EncodeFrame::encoded_len`] is exact.
+/// Code generic over the mode's type cannot size an array with `M::MODE` on stable
+/// Rust: it sizes for [`ApiMode::Escaped`], the larger.
 ///
 /// ```
 /// use xbee_api::{ApiMode, TransmitRequestRepr, max_encoded_len};
