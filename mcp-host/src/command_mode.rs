@@ -8,6 +8,11 @@
 //! the line between two guard times of silence (`GT`, one second by default), and left
 //! by `ATCN` (or after `CT`, ten seconds by default, with no command).
 //!
+//! The radio's answers come back as text that is safe to print: printable ASCII as it
+//! came, a backslash doubled, any other byte as `\xNN` (a node identifier `café` reads
+//! `caf\xc3\xa9`; noise or a hostile bridge on the line cannot send a terminal its
+//! control sequences).
+//!
 //! ```no_run
 //! use std::time::Duration;
 //! use mcp_host::command_mode::CommandMode;
@@ -71,7 +76,7 @@ pub enum CommandModeError {
     Refused {
         /// What was sent, as text.
         sent: String,
-        /// The radio's answer line.
+        /// The radio's answer line, as [safe text](self).
         answer: String,
     },
     /// A value holding a comma or a line end, which the radio would read as the end of
@@ -160,7 +165,7 @@ impl<T: AsyncRead + AsyncWrite + Unpin> CommandMode<T> {
     }
 
     /// Reads a parameter (`AT` `command`): the radio's answer, its value in hex as the
-    /// radio writes it (`AP` in transparent mode: `0`).
+    /// radio writes it (`AP` in transparent mode: `0`), as [safe text](self).
     pub async fn read(&mut self, command: [u8; 2]) -> Result<String, CommandModeError> {
         self.send(command, "").await
     }
@@ -236,13 +241,16 @@ fn text(command: [u8; 2], value: &str) -> String {
     format!("AT{}{value}", String::from_utf8_lossy(&command))
 }
 
-/// A line from the radio as text that is safe to print: printable ASCII as it is, any
-/// other byte as `\xNN`. A radio answers in printable ASCII; whatever else is on the
-/// line (a bridge, noise) must not reach a terminal as its control sequences.
+/// A line from the radio as text that is safe to print: printable ASCII as it is, a
+/// backslash doubled, any other byte as `\xNN`. A radio answers in printable ASCII;
+/// whatever else is on the line (a bridge, noise) must not reach a terminal as its
+/// control sequences, nor pass for an escape.
 fn printable(line: &[u8]) -> String {
     let mut text = String::with_capacity(line.len());
     for &b in line {
-        if b == b' ' || b.is_ascii_graphic() {
+        if b == b'\\' {
+            text.push_str("\\\\");
+        } else if b == b' ' || b.is_ascii_graphic() {
             text.push(char::from(b));
         } else {
             text.push_str(&format!("\\x{b:02x}"));
@@ -277,7 +285,7 @@ mod tests {
                     b"ATAP" => b"0\r",
                     // What noise or a hostile bridge may write: a terminal's escape
                     // sequences (set the window title, clear the screen).
-                    b"ATNI" => b"\x1b]0;owned\x07\x1b[2J MAV \xc3\xa9\r",
+                    b"ATNI" => b"\x1b]0;owned\x07\x1b[2J MAV \xc3\xa9 \\x1b\r",
                     b"ATAP1" | b"ATCN" => b"OK\r\n",
                     _ => b"ERROR\r",
                 };
@@ -314,7 +322,7 @@ mod tests {
         // An answer is safe to print, whatever bytes came.
         assert_eq!(
             mode.read(*b"NI").await.unwrap(),
-            r"\x1b]0;owned\x07\x1b[2J MAV \xc3\xa9"
+            r"\x1b]0;owned\x07\x1b[2J MAV \xc3\xa9 \\x1b"
         );
         mode.exit().await.unwrap();
     }

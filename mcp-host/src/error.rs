@@ -41,6 +41,7 @@ pub enum OptionsError {
     /// [`LinkOptions::event_capacity`](crate::LinkOptions::event_capacity) is 0 or more
     /// than [`MAX_EVENT_CAPACITY`](crate::MAX_EVENT_CAPACITY).
     #[error("event_capacity is {value}, outside its range 1..={max}")]
+    #[non_exhaustive]
     EventCapacity {
         /// The value given.
         value: usize,
@@ -50,6 +51,7 @@ pub enum OptionsError {
     /// [`LinkOptions::max_frame_len`](crate::LinkOptions::max_frame_len) is 0 or more
     /// than [`MAX_FRAME_DATA`](crate::codec::MAX_FRAME_DATA).
     #[error("max_frame_len is {value}, outside its range 1..={max}")]
+    #[non_exhaustive]
     MaxFrameLen {
         /// The value given.
         value: usize,

@@ -576,7 +576,8 @@ impl Routes {
 /// radio in range answers).
 fn answered_many_times(data: &[u8]) -> bool {
     match data {
-        // A radio may take a command's letters in either case.
+        // Command mode takes a command's letters in either case, and a radio may in
+        // API frames too: kept open for the window at worst, never cut short.
         [0x08 | 0x09, _, command @ ..] => [b"ND", b"AS"].iter().any(|name| {
             command
                 .get(..2)
@@ -964,13 +965,14 @@ impl Serve {
         };
         let gone = self.clients.swap_remove(index);
         gone.end.cancel();
-        let (client, since) = (gone.peer, since.elapsed());
+        let client = gone.peer;
+        // Measured: to the millisecond is enough.
+        let millis = u64::try_from(since.elapsed().as_millis()).unwrap_or(u64::MAX);
+        let since = crate::render::Seconds(Duration::from_millis(millis));
         if lock(&gone.closed).is_some() {
             // As a client that left.
-            let since = crate::render::Seconds(since);
             tracing::debug!("hub: client {client} let go for {peer}: {why} for {since}");
         } else {
-            let since = crate::render::Seconds(since);
             tracing::warn!(
                 "hub: client {client} dropped for {peer} ({MAX_CLIENTS} connected): {why} for \
                  {since}"

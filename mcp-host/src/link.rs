@@ -32,7 +32,9 @@ pub enum FlowControl {
 /// Where the XBee API byte stream comes from.
 ///
 /// Parsed from and displayed as a string; `Display` always writes the baud rate of a
-/// serial link, so `link.to_string().parse()` gives the same link back.
+/// serial link, so `link.to_string().parse()` gives the same link back (but for the
+/// strings no parse takes, built by hand: an `io` link of no name, a serial link whose
+/// path ends in a word such as `:rtscts`).
 ///
 /// ```
 /// use mcp_host::link::FlowControl;

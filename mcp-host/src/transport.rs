@@ -1033,7 +1033,7 @@ impl Connector {
                 // The outage was logged when it began (a warning); each attempt only
                 // at debug level, so that a long outage is one line.
                 Err(e) if e.is_retryable() => {
-                    tracing::debug!(error = %e, retry_in = ?next, "reconnect attempt failed");
+                    tracing::debug!(error = %e, retry_in = %crate::render::Seconds(next), "reconnect attempt failed");
                 }
                 Err(e) => return Err(e),
             }

@@ -1056,6 +1056,7 @@ fn an_io_link_is_a_programs_own_and_refused_as_a_usage_error() {
     // Wherever a link is taken: a link's own option, `sim`, `setup`, `probe`, `radio`.
     for args in [
         &["status", "--link", "io:bluetooth", "--to", M, "landing"][..],
+        &["monitor", "--link", "io"],
         &["sim", "--link", "io:bluetooth"],
         &["setup", "--link", "io:bluetooth"],
         &["probe", "--link", "io:bluetooth"],

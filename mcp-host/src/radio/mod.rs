@@ -618,12 +618,14 @@ impl Network {
     }
 
     /// Closes a node's link of the moment, as if its cable were pulled, the node's
-    /// state kept (its settings, a MAV's program): its device sees the stream end, and
-    /// the node's link is opened again as after any disconnection (a `tcp-listen` link
-    /// takes the next peer, a `tcp` one connects again; a stream given to
-    /// [`add_stream`](Self::add_stream) or [`add_in_process`](Self::add_in_process) was
-    /// the only one, and the node stays down). Returns `false` if the node is unknown
-    /// or its link is not up.
+    /// state kept (its settings, a MAV's program), and opens it again as after any
+    /// disconnection. What its device sees depends on the link: over TCP the
+    /// connection ends (a `tcp-listen` link then takes the next peer, a `tcp` one
+    /// connects again); a pseudo-terminal or serial port stays open on the device's
+    /// side, so it sees no end, only the frames queued for it dropped and a new modem
+    /// status; a stream given to [`add_stream`](Self::add_stream) or
+    /// [`add_in_process`](Self::add_in_process) was the only one, and the node stays
+    /// down. Returns `false` if the node is unknown or its link is not up.
     ///
     /// The simulator's ground-station link so dropped tests a ground station's
     /// reconnection while the MAVs fly on.

@@ -24,11 +24,14 @@ impl fmt::Display for Seconds {
         // From the whole seconds and the nanoseconds, not a float: 1.14 s, not
         // 1.1400000000000001 s.
         let (whole, nanos) = (self.0.as_secs(), self.0.subsec_nanos());
-        if nanos == 0 {
-            return write!(f, "{whole} s");
-        }
-        let fraction = format!("{nanos:09}");
-        write!(f, "{whole}.{} s", fraction.trim_end_matches('0'))
+        let text = if nanos == 0 {
+            format!("{whole} s")
+        } else {
+            let fraction = format!("{nanos:09}");
+            format!("{whole}.{} s", fraction.trim_end_matches('0'))
+        };
+        // Width and alignment as for any text: `{:>8}`.
+        f.pad(&text)
     }
 }
 
@@ -51,5 +54,9 @@ mod tests {
         ] {
             assert_eq!(Seconds(duration).to_string(), text);
         }
+        assert_eq!(
+            format!("[{:>7}]", Seconds(Duration::from_secs(3))),
+            "[    3 s]"
+        );
     }
 }

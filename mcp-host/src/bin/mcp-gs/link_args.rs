@@ -7,7 +7,7 @@ use futures::StreamExt;
 use mcp_host::render::Seconds;
 use mcp_host::{
     CommandSender, ConnectError, Connector, DetectError, Diagnosis, Link, LinkError, LinkOptions,
-    PacketStream, ReconnectPolicy, SendError, Stats,
+    LinkParseError, PacketStream, ReconnectPolicy, SendError, Stats,
 };
 use xbee_api::{Address64, ApiMode, DeliveryStatus, Frame};
 
@@ -79,14 +79,14 @@ pub(crate) fn parse_address64(s: &str) -> Result<Address64, String> {
 
 /// A link `mcp-gs` can open: any but `io:`, which a program opens itself.
 pub(crate) fn parse_link(s: &str) -> Result<Link, String> {
-    match s.parse::<Link>().map_err(|e| e.to_string())? {
-        Link::Io { .. } => Err(
+    match s.parse::<Link>() {
+        Ok(Link::Io { .. }) | Err(LinkParseError::MissingIoName) => Err(
             "io: links are for programs that open their stream themselves \
-                                (mcp_host::connect_with); mcp-gs takes serial:, tcp:, \
-                                tcp-listen: or pty"
+             (mcp_host::connect_with); mcp-gs takes serial:, tcp:, tcp-listen: or pty"
                 .to_owned(),
         ),
-        link => Ok(link),
+        Ok(link) => Ok(link),
+        Err(e) => Err(e.to_string()),
     }
 }
 

@@ -33,6 +33,15 @@ impl RecordingFile {
         if !force && path.exists() {
             return Err(exists(path));
         }
+        // Overwritten with --force: it must take writes (opened without truncating).
+        if force && path.exists() {
+            if let Err(e) = std::fs::OpenOptions::new().write(true).open(path) {
+                return Err(Failure::input(format!(
+                    "cannot record to {}: {e}",
+                    path.display()
+                )));
+            }
+        }
         let dir = match path.parent() {
             Some(dir) if !dir.as_os_str().is_empty() => dir,
             _ => Path::new("."),
