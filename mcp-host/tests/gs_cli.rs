@@ -635,6 +635,40 @@ fn send_status_and_at_in_json_print_a_link_lost_meanwhile() {
 }
 
 #[test]
+fn send_status_and_at_in_json_print_a_request_never_sent_when_the_link_does_not_open() {
+    // A port nothing listens on: the link is refused before anything is sent.
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let link = format!("tcp:{}", listener.local_addr().unwrap());
+    drop(listener);
+    let json = |sub: &str, args: &[&str]| {
+        let options = ["--link", &link, "--format", "json"];
+        let output = run(&[&[sub][..], &options, args].concat());
+        assert_eq!(output.status.code(), Some(3), "{sub} {args:?}: {output:?}");
+        let json: Value = serde_json::from_slice(&output.stdout).expect("one JSON object");
+        assert_eq!(json["result"], "not_sent", "{json}");
+        // The reason, as standard error's first line says it, without its hints.
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        let reason = json["reason"].as_str().expect("a reason");
+        assert!(reason.starts_with("cannot connect to "), "{json}");
+        assert!(
+            stderr.contains(reason) && !reason.contains('\n'),
+            "{stderr}"
+        );
+        json
+    };
+    let sent = json("send", &["--to", "0013A20040B599B9", "landing", "on"]);
+    assert_eq!(sent["dst64"], "0013a20040b599b9");
+    assert_eq!(sent["mcp"]["type"], "landing");
+    let asked = json("status", &["--to", "0013A20040B599B9", "landing"]);
+    assert_eq!(asked["mcp"]["status_request"], true);
+    let at = json("at", &["NI"]);
+    assert_eq!(at["command"], "NI");
+    assert!(at.get("dst64").is_none(), "{at}");
+    let remote = json("at", &["--to", "0013A20040B599B9", "NI"]);
+    assert_eq!(remote["dst64"], "0013a20040b599b9");
+}
+
+#[test]
 fn a_broadcast_nobody_answers_says_so_and_what_keeps_the_radio_silent() {
     // A peer that reads every request but never answers, as a radio in the other API
     // mode would not.

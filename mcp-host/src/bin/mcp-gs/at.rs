@@ -49,7 +49,8 @@ pub(crate) struct AtArgs {
     /// Output format: `json` prints each answer as the response frame's object (as
     /// `monitor` does), with `value` added: the value read as a number, or as text for a
     /// text parameter; no answer in time as `{"result":"timeout","command":...}`, a link
-    /// lost meanwhile as `{"result":"disconnected",...}`.
+    /// lost meanwhile as `{"result":"disconnected",...}`, one that could not be opened
+    /// as `{"result":"not_sent",...}`.
     #[arg(long, value_enum, default_value_t = Format::Text)]
     format: Format,
 }
@@ -442,7 +443,13 @@ pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
         }
         None => Vec::new(),
     };
-    let (_stream, sender) = args.link.open(false).await?;
+    let (_stream, sender) = args.link.open(false).await.inspect_err(|failure| {
+        if args.format == Format::Json {
+            let name = String::from_utf8_lossy(&command);
+            let fields = outcome_json("not_sent", &name, args.to);
+            out!("{}", crate::link_args::not_sent_json(failure, fields));
+        }
+    })?;
     if args.to == Some(Address64::BROADCAST) {
         return broadcast(&args, &sender, command, &parameter).await;
     }

@@ -77,6 +77,18 @@ pub(crate) fn parse_address64(s: &str) -> Result<Address64, String> {
         .map_err(|e| format!("bad 64-bit address `{s}`: {e}"))
 }
 
+/// A request that never went out, its link not opened (or its API mode not found), as
+/// `--format json` says it: `{"result":"not_sent",...,"reason":"..."}`, with `fields`
+/// (what names the request) between. The exit code is the failure's.
+pub(crate) fn not_sent_json(failure: &Failure, fields: serde_json::Value) -> serde_json::Value {
+    let mut json = serde_json::json!({ "result": "not_sent" });
+    if let (Some(map), serde_json::Value::Object(fields)) = (json.as_object_mut(), fields) {
+        map.extend(fields);
+    }
+    json["reason"] = failure.reason().into();
+    json
+}
+
 /// A link `mcp-gs` can open: any but `io:`, which a program opens itself.
 pub(crate) fn parse_link(s: &str) -> Result<Link, String> {
     match s.parse::<Link>() {

@@ -291,6 +291,11 @@ impl Failure {
         self.code
     }
 
+    /// Its message without the hints after it.
+    pub(crate) fn reason(&self) -> &str {
+        self.message.lines().next().unwrap_or_default()
+    }
+
     /// The same failure with a hint line after its message.
     pub(crate) fn with_hint(mut self, hint: String) -> Self {
         self.message = format!("{}\nmcp-gs: {hint}", self.message);

@@ -32,7 +32,8 @@ pub(crate) struct SendArgs {
     /// Output format: `json` prints one object, `{"result":"delivered",...}` or
     /// `{"result":"failed",...}` with the transmit status's fields,
     /// `{"result":"timeout",...}` when no status came in time,
-    /// `{"result":"disconnected",...}` when the link went away meanwhile, or
+    /// `{"result":"disconnected",...}` when the link went away meanwhile,
+    /// `{"result":"not_sent",...}` when it could not be opened, or
     /// `{"result":"written",...}` (--no-status); the packet as `mcp`; and, for a
     /// trajectory to one MAV with a status asked, `trajectory_confirmed` (and, when
     /// false, `trajectory_reported`: the waypoints the MAV reported instead, or null
@@ -87,7 +88,13 @@ pub(crate) fn warn_of_size(command: &CommandArgs, payload: &[u8], to: Address64)
 pub(crate) async fn run(args: SendArgs) -> Result<(), Failure> {
     let payload = args.command.payload().map_err(Failure::input)?;
     warn_of_size(&args.command, &payload, args.to);
-    let (mut stream, sender) = args.link.open(false).await?;
+    let (mut stream, sender) = args.link.open(false).await.inspect_err(|failure| {
+        if args.format == Format::Json {
+            let mcp = mcp_host::render::json::mcp(&payload);
+            let fields = serde_json::json!({ "dst64": args.to.to_string(), "mcp": mcp });
+            out!("{}", crate::link_args::not_sent_json(failure, fields));
+        }
+    })?;
     let options = SendOptions {
         timeout: Some(args.link.timeout()),
         frame_id: if args.no_status {

@@ -24,8 +24,9 @@ pub(crate) struct StatusArgs {
     /// Output format: `json` prints the report's object, with `"result":"answered"`,
     /// `src64` and `received_at` added; a failure as `send` does,
     /// `{"result":"failed",...}` with the transmit status's fields,
-    /// `{"result":"timeout",...}` with whether the radio delivered the request, or
-    /// `{"result":"disconnected",...}` when the link went away.
+    /// `{"result":"timeout",...}` with whether the radio delivered the request,
+    /// `{"result":"disconnected",...}` when the link went away, or
+    /// `{"result":"not_sent",...}` when it could not be opened.
     #[arg(long, value_enum, default_value_t = Format::Text)]
     format: Format,
     /// What to ask: telemetry_to_coordinator (or telemetry), landing, controllers
@@ -48,7 +49,15 @@ pub(crate) async fn run(args: StatusArgs) -> Result<(), Failure> {
         ));
     }
     let request = status_request(args.kind, args.id.as_deref()).map_err(Failure::input)?;
-    let (_stream, sender) = args.link.open(false).await?;
+    let (_stream, sender) = args.link.open(false).await.inspect_err(|failure| {
+        if args.format == Format::Json {
+            let mcp = mcp_host::render::json::packet_json(&Packet::<&[u8]>::Command(
+                Command::StatusRequest(request),
+            ));
+            let fields = serde_json::json!({ "dst64": args.to.to_string(), "mcp": mcp });
+            out!("{}", crate::link_args::not_sent_json(failure, fields));
+        }
+    })?;
     let report = sender
         .request_with(args.to, request, Some(args.link.timeout()))
         .await;
