@@ -7,6 +7,10 @@
 //! - they parse again to the same packet, which encodes to the same bytes;
 //! - moving the packet to owned storage keeps it, and `Display` does not panic.
 //!
+//! And whatever the payload, `Command::parse` and `Report::parse` give what `parse`
+//! gives for a packet of their category (the packet, or the same error), and an error
+//! for any other.
+//!
 //! Packets are compared through `Debug`: float fields may be NaN, which `==` rejects.
 #![no_main]
 
@@ -14,7 +18,35 @@ use libfuzzer_sys::fuzz_target;
 use mcp_core::MAX_PAYLOAD;
 
 fuzz_target!(|payload: &[u8]| {
-    let Ok(packet) = mcp_core::parse(payload) else {
+    let whole = mcp_core::parse(payload);
+    let (command, report) = (
+        mcp_core::Command::parse(payload),
+        mcp_core::Report::parse(payload),
+    );
+    match (payload.first(), &whole) {
+        (Some(b'c'), Ok(mcp_core::Packet::Command(c))) => {
+            assert_eq!(format!("{command:?}"), format!("{:?}", Ok::<_, ()>(c)));
+        }
+        (Some(b'r'), Ok(mcp_core::Packet::Report(r))) => {
+            assert_eq!(format!("{report:?}"), format!("{:?}", Ok::<_, ()>(r)));
+        }
+        (Some(b'c'), Err(e)) => assert_eq!(command.as_ref().err(), Some(e)),
+        (Some(b'r'), Err(e)) => assert_eq!(report.as_ref().err(), Some(e)),
+        _ => {}
+    }
+    if payload.first() != Some(&b'c') {
+        assert!(
+            command.is_err(),
+            "a command from a packet of another category"
+        );
+    }
+    if payload.first() != Some(&b'r') {
+        assert!(
+            report.is_err(),
+            "a report from a packet of another category"
+        );
+    }
+    let Ok(packet) = whole else {
         return;
     };
     let len = packet.encoded_len();
