@@ -2,9 +2,8 @@
 
 use std::time::Duration;
 
-use xbee_api::{Address16, Address64, DeliveryStatus, DiscoveryStatus};
-
 use mcp_core::StatusRequest;
+use xbee_api::{Address16, Address64, DeliveryStatus, DiscoveryStatus};
 
 use crate::driver::ReportKey;
 use crate::render::Seconds;

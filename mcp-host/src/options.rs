@@ -1,7 +1,8 @@
 //! Link and send options.
 
-use crate::error::OptionsError;
 use std::time::Duration;
+
+use crate::error::OptionsError;
 
 /// Default of [`LinkOptions::send_timeout`], for a delivery status or a response: longer
 /// than a Zigbee route discovery (10 s).
