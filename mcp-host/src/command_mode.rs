@@ -33,6 +33,7 @@
 //! # }
 //! ```
 
+use std::fmt::Write as _;
 use std::io;
 use std::time::Duration;
 
@@ -253,7 +254,7 @@ fn printable(line: &[u8]) -> String {
         } else if b == b' ' || b.is_ascii_graphic() {
             text.push(char::from(b));
         } else {
-            text.push_str(&format!("\\x{b:02x}"));
+            let _ = write!(text, "\\x{b:02x}");
         }
     }
     text

@@ -601,6 +601,27 @@ fn send_status_and_at_in_json_print_a_timeout_object() {
     peer.join().unwrap();
 }
 
+/// `mcp-gs SUB --link LINK --format json ARGS...` that fails on its link (exit 3),
+/// printing one object of `result` with a `reason`: the object, and standard error.
+fn json_link_failure(link: &str, result: &str, sub: &str, args: &[&str]) -> (Value, String) {
+    let options = ["--link", link, "--format", "json"];
+    let output = run(&[&[sub][..], &options, args].concat());
+    assert_eq!(output.status.code(), Some(3), "{sub} {args:?}: {output:?}");
+    let json: Value = serde_json::from_slice(&output.stdout).expect("one JSON object");
+    assert_eq!(json["result"], result, "{json}");
+    assert!(json["reason"].is_string(), "{json}");
+    (json, String::from_utf8_lossy(&output.stderr).into_owned())
+}
+
+/// That `send` and `status` name their request in their JSON failure (`json` runs one).
+fn send_and_status_name_their_request(json: impl Fn(&str, &[&str]) -> Value) {
+    let sent = json("send", &["--to", "0013A20040B599B9", "landing", "on"]);
+    assert_eq!(sent["dst64"], "0013a20040b599b9");
+    assert_eq!(sent["mcp"]["type"], "landing");
+    let asked = json("status", &["--to", "0013A20040B599B9", "landing"]);
+    assert_eq!(asked["mcp"]["status_request"], true);
+}
+
 #[test]
 fn send_status_and_at_in_json_print_a_link_lost_meanwhile() {
     // A peer that takes each request and hangs up before it answers.
@@ -613,20 +634,8 @@ fn send_status_and_at_in_json_print_a_link_lost_meanwhile() {
             std::io::Read::read_exact(&mut stream, &mut byte).unwrap();
         }
     });
-    let json = |sub: &str, args: &[&str]| {
-        let options = ["--link", &link, "--format", "json"];
-        let output = run(&[&[sub][..], &options, args].concat());
-        assert_eq!(output.status.code(), Some(3), "{sub} {args:?}: {output:?}");
-        let json: Value = serde_json::from_slice(&output.stdout).expect("one JSON object");
-        assert_eq!(json["result"], "disconnected", "{json}");
-        assert!(json["reason"].is_string(), "{json}");
-        json
-    };
-    let sent = json("send", &["--to", "0013A20040B599B9", "landing", "on"]);
-    assert_eq!(sent["dst64"], "0013a20040b599b9");
-    assert_eq!(sent["mcp"]["type"], "landing");
-    let asked = json("status", &["--to", "0013A20040B599B9", "landing"]);
-    assert_eq!(asked["mcp"]["status_request"], true);
+    let json = |sub: &str, args: &[&str]| json_link_failure(&link, "disconnected", sub, args).0;
+    send_and_status_name_their_request(json);
     let at = json("at", &["NI"]);
     assert_eq!(at["command"], "NI");
     let all = json("at", &["--to", "000000000000ffff", "NI"]);
@@ -641,13 +650,8 @@ fn send_status_and_at_in_json_print_a_request_never_sent_when_the_link_does_not_
     let link = format!("tcp:{}", listener.local_addr().unwrap());
     drop(listener);
     let json = |sub: &str, args: &[&str]| {
-        let options = ["--link", &link, "--format", "json"];
-        let output = run(&[&[sub][..], &options, args].concat());
-        assert_eq!(output.status.code(), Some(3), "{sub} {args:?}: {output:?}");
-        let json: Value = serde_json::from_slice(&output.stdout).expect("one JSON object");
-        assert_eq!(json["result"], "not_sent", "{json}");
+        let (json, stderr) = json_link_failure(&link, "not_sent", sub, args);
         // The reason, as standard error's first line says it, without its hints.
-        let stderr = String::from_utf8_lossy(&output.stderr);
         let reason = json["reason"].as_str().expect("a reason");
         assert!(reason.starts_with("cannot connect to "), "{json}");
         assert!(
@@ -656,11 +660,7 @@ fn send_status_and_at_in_json_print_a_request_never_sent_when_the_link_does_not_
         );
         json
     };
-    let sent = json("send", &["--to", "0013A20040B599B9", "landing", "on"]);
-    assert_eq!(sent["dst64"], "0013a20040b599b9");
-    assert_eq!(sent["mcp"]["type"], "landing");
-    let asked = json("status", &["--to", "0013A20040B599B9", "landing"]);
-    assert_eq!(asked["mcp"]["status_request"], true);
+    send_and_status_name_their_request(json);
     let at = json("at", &["NI"]);
     assert_eq!(at["command"], "NI");
     assert!(at.get("dst64").is_none(), "{at}");

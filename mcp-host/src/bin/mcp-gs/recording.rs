@@ -20,9 +20,10 @@ pub(crate) struct RecordingFile {
 }
 
 impl RecordingFile {
-    /// `path`, checked: not a directory, not there unless `force` (overwrite it), and in
-    /// a directory where a file can be made (a file is made there and removed), so that
-    /// a session is never served unrecorded for want of the file.
+    /// `path`, checked: not a directory; if there, overwritten only with `force` and only
+    /// if it takes writes; if not, in a directory where a file can be made (a file is
+    /// made there and removed): a session is never served unrecorded for want of the
+    /// file.
     pub(crate) fn check(path: &Path, force: bool) -> Result<Self, Failure> {
         if path.is_dir() {
             return Err(Failure::input(format!(
@@ -30,33 +31,34 @@ impl RecordingFile {
                 path.display()
             )));
         }
-        if !force && path.exists() {
-            return Err(exists(path));
-        }
-        // Overwritten with --force: it must take writes (opened without truncating).
-        if force && path.exists() {
+        if path.exists() {
+            if !force {
+                return Err(exists(path));
+            }
+            // Overwritten with --force: it must take writes (opened without truncating).
             if let Err(e) = std::fs::OpenOptions::new().write(true).open(path) {
                 return Err(Failure::input(format!(
                     "cannot record to {}: {e}",
                     path.display()
                 )));
             }
-        }
-        let dir = match path.parent() {
-            Some(dir) if !dir.as_os_str().is_empty() => dir,
-            _ => Path::new("."),
-        };
-        let probe = dir.join(format!(".mcp-gs-record-check-{}", std::process::id()));
-        match File::create_new(&probe) {
-            Ok(_) => {
-                let _ = std::fs::remove_file(&probe);
-            }
-            Err(e) => {
-                return Err(Failure::input(format!(
-                    "cannot record to {}: no file can be made in {}: {e}",
-                    path.display(),
-                    dir.display()
-                )));
+        } else {
+            let dir = match path.parent() {
+                Some(dir) if !dir.as_os_str().is_empty() => dir,
+                _ => Path::new("."),
+            };
+            let probe = dir.join(format!(".mcp-gs-record-check-{}", std::process::id()));
+            match File::create_new(&probe) {
+                Ok(_) => {
+                    let _ = std::fs::remove_file(&probe);
+                }
+                Err(e) => {
+                    return Err(Failure::input(format!(
+                        "cannot record to {}: no file can be made in {}: {e}",
+                        path.display(),
+                        dir.display()
+                    )));
+                }
             }
         }
         Ok(RecordingFile {
