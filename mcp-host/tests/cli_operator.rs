@@ -99,12 +99,24 @@ fn sigterm_and_sighup_stop_a_running_command_as_ctrl_c_does() {
         let mut sim = Running(child);
         let link = tcp_link(&line_with(&lines, "listening on"));
         line_with(&lines, "running; Ctrl-C stops");
-        let (child, lines) = spawn_lines(&["monitor", "--link", &link]);
+        let (child, monitor_lines) = spawn_lines(&["monitor", "--link", &link]);
         let mut monitor = Running(child);
-        line_with(&lines, "link connected");
+        line_with(&monitor_lines, "link connected");
         send_signal(&monitor.0, signal);
         assert_eq!(exit_code(&mut monitor.0), Some(0), "signal {signal}");
         send_signal(&sim.0, signal);
+        // The log's last line says why it ended.
+        let name = if signal == libc::SIGTERM {
+            "SIGTERM"
+        } else {
+            "SIGHUP"
+        };
+        let last = rest(&lines);
+        assert!(
+            last.last()
+                .is_some_and(|l| l.ends_with(&format!(" stopped by {name}"))),
+            "{last:?}"
+        );
         assert_eq!(exit_code(&mut sim.0), Some(0), "signal {signal}");
     }
 }
@@ -138,6 +150,12 @@ fn duration_0_runs_until_ctrl_c_in_sim_and_radio() {
     assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
     assert!(stdout(&output).starts_with("AP = "), "{}", stdout(&output));
     interrupt(&radio.0);
+    let last = rest(&lines);
+    assert!(
+        last.last()
+            .is_some_and(|l| l.ends_with(" stopped by Ctrl-C")),
+        "{last:?}"
+    );
     assert_eq!(exit_code(&mut radio.0), Some(0));
 
     // The help says so.

@@ -599,8 +599,8 @@ pub(crate) async fn watch(
         .map(|d| Instant::now() + d);
     let ctrl_c = crate::interrupt::ctrl_c();
     out!("{}", running_line(duration));
-    // Whether the time ran out (said, as a run that stops by itself would otherwise
-    // end without a word), or Ctrl-C came.
+    // The signal that stopped the run, or none when the time ran out: either is said, as
+    // the last line of a log that would otherwise end without a word.
     let stop = async {
         let time_up = async {
             match deadline {
@@ -609,8 +609,8 @@ pub(crate) async fn watch(
             }
         };
         tokio::select! {
-            () = time_up => true,
-            _ = ctrl_c => false,
+            () = time_up => None,
+            by = ctrl_c => Some(by),
         }
     };
     tokio::pin!(stop);
@@ -628,12 +628,18 @@ pub(crate) async fn watch(
     loop {
         let next = timeline.peek().map(|step| step.0);
         tokio::select! {
-            time_up = &mut stop => {
-                if let (true, Some(duration)) = (time_up, duration) {
-                    let now = SystemTime::now();
-                    date_line(now);
-                    let time = mcp_host::render::text::time(now);
-                    out!("{time} stopped after {} (--duration)", mcp_host::render::Seconds(duration));
+            by = &mut stop => {
+                let now = SystemTime::now();
+                date_line(now);
+                let time = mcp_host::render::text::time(now);
+                match (by, duration) {
+                    (Some(by), _) => out!("{time} stopped by {by}"),
+                    (None, Some(duration)) => out!(
+                        "{time} stopped after {} (--duration)",
+                        mcp_host::render::Seconds(duration)
+                    ),
+                    // No deadline: only a signal stops the run.
+                    (None, None) => {}
                 }
                 return Ok(());
             }
