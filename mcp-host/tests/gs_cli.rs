@@ -471,6 +471,47 @@ fn bad_arguments_exit_2_with_one_line() {
 }
 
 #[test]
+fn a_bad_16_bit_address_says_what_one_looks_like() {
+    for (to16, why) in [
+        ("zz", "invalid hex digit at byte 0"),
+        ("12345", "5 hex digits"),
+        ("", "empty"),
+    ] {
+        let output = run(&[
+            "encode",
+            "--to",
+            "0013a20040b599b9",
+            "--to16",
+            to16,
+            "landing",
+            "on",
+        ]);
+        assert_eq!(output.status.code(), Some(2), "{to16:?}");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        let first = stderr.lines().next().unwrap_or_default();
+        assert!(
+            first.contains(&format!(
+                "bad 16-bit address `{to16}` (1 to 4 hex digits, e.g. fffe"
+            )) && first.contains(why),
+            "{first}"
+        );
+    }
+    // Any case, with or without `0x`.
+    for to16 in ["0x0000", "FFFE", "1a2"] {
+        let output = run(&[
+            "encode",
+            "--to",
+            "0013a20040b599b9",
+            "--to16",
+            to16,
+            "landing",
+            "on",
+        ]);
+        assert_eq!(output.status.code(), Some(0), "{to16:?}: {output:?}");
+    }
+}
+
+#[test]
 fn missing_device_exits_3() {
     let send = |link: &str| {
         run(&[

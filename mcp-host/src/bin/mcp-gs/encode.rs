@@ -14,7 +14,12 @@ pub(crate) struct EncodeArgs {
     #[arg(long, value_name = "ADDR", value_parser = crate::link_args::parse_address64)]
     to: Address64,
     /// Destination 16-bit address (FFFE when unknown).
-    #[arg(long, default_value = "fffe")]
+    #[arg(
+        long,
+        value_name = "ADDR16",
+        default_value = "fffe",
+        value_parser = crate::link_args::parse_address16
+    )]
     to16: Address16,
     /// Frame id (0 asks the radio for no transmit status; decimal or 0x-hex).
     #[arg(long, default_value = "1", value_parser = crate::command::parse_byte)]

@@ -9,7 +9,7 @@ use mcp_host::{
     CommandSender, ConnectError, Connector, DetectError, Diagnosis, Link, LinkError, LinkOptions,
     LinkParseError, PacketStream, ReconnectPolicy, SendError, Stats,
 };
-use xbee_api::{Address64, ApiMode, DeliveryStatus, Frame};
+use xbee_api::{Address16, Address64, ApiMode, DeliveryStatus, Frame};
 
 use crate::Failure;
 
@@ -75,6 +75,17 @@ pub(crate) fn parse_address64(s: &str) -> Result<Address64, String> {
     digits
         .parse()
         .map_err(|e| format!("bad 64-bit address `{s}`: {e}"))
+}
+
+/// A 16-bit address on the command line: 1 to 4 hex digits (an optional `0x`), its error
+/// saying what one looks like.
+pub(crate) fn parse_address16(s: &str) -> Result<Address16, String> {
+    s.trim().parse().map_err(|e| {
+        format!(
+            "bad 16-bit address `{s}` (1 to 4 hex digits, e.g. fffe when unknown, 0000 \
+             for the coordinator): {e}"
+        )
+    })
 }
 
 /// A request that never went out, its link not opened (or its API mode not found), as
