@@ -5,7 +5,7 @@ mod common;
 
 use std::time::Duration;
 
-use futures::{SinkExt, StreamExt};
+use futures::{FutureExt, SinkExt, StreamExt};
 use mcp_host::codec::{CodecItem, XBeeCodec};
 use mcp_host::radio::{Faults, NetEvent, Network, NetworkConfig, NodeOptions};
 use mcp_host::{Link, OwnedFrame};
@@ -684,7 +684,7 @@ async fn a_latency_of_forever_holds_frames_back_and_breaks_nothing() {
             ..Faults::default()
         }),
     );
-    let [_ground, dev_a] = &mut devs[..] else {
+    let [ground, dev_a] = &mut devs[..] else {
         unreachable!()
     };
     // Whatever goes to the coordinator's link waits "forever"; the network goes on.
@@ -694,6 +694,11 @@ async fn a_latency_of_forever_holds_frames_back_and_breaks_nothing() {
         (1, Address16::COORDINATOR, DeliveryStatus::Success, OK)
     );
     assert_eq!(dev_a.at(2, b"AP", &[]).await, (AtStatus::Ok, vec![1]));
+    // The frame was queued for the coordinator's link before the status went back, and
+    // two round trips on this single-threaded runtime later it would long have been
+    // written: it is held back.
+    assert_eq!(network.stats(COORD).unwrap().frames_out, 2);
+    assert!(ground.framed.next().now_or_never().is_none());
 }
 
 #[tokio::test]
