@@ -1230,3 +1230,55 @@ async fn the_commissioning_button_announces_a_radio_to_the_others() {
         (AtStatus::InvalidParameter, vec![])
     );
 }
+
+#[tokio::test]
+async fn a_pty_node_hung_up_on_sees_no_end_only_a_new_modem_status() {
+    let network = Network::new(NetworkConfig::default());
+    let coord = common::tcp_coordinator(&network).await;
+    let a = network
+        .add_link(MAV_A, &Link::Pty, NodeOptions::default())
+        .await
+        .unwrap();
+    let mut ground = Dev::tcp(coord.local_addr.unwrap(), ApiMode::Unescaped).await;
+    let mut dev_a = Dev::pty(a.pty_path.as_deref().unwrap(), ApiMode::Unescaped);
+    assert_eq!(ground.modem_status().await, ModemStatus::CoordinatorStarted);
+    assert_eq!(dev_a.modem_status().await, ModemStatus::JoinedNetwork);
+    // Its settings are kept through the hang-up.
+    assert_eq!(dev_a.at(1, b"NI", b"kept").await, (AtStatus::Ok, vec![]));
+
+    let mut events = network.subscribe();
+    assert!(network.disconnect(MAV_A));
+    let back = tokio::time::timeout(GUARD, async {
+        let mut seen = Vec::new();
+        loop {
+            match events.recv().await.expect("events go on") {
+                NetEvent::Connected { node, .. } if node == MAV_A => return seen,
+                event => seen.push(event),
+            }
+        }
+    })
+    .await
+    .expect("the link comes back");
+    assert!(
+        matches!(&back[..], [NetEvent::Disconnected { node, .. }] if *node == MAV_A),
+        "{back:?}"
+    );
+    assert_eq!(network.stats(MAV_A).unwrap().connections, 2);
+
+    // The device, which kept its end open all along, reads the new modem status next,
+    // and the node works as before, with its settings.
+    assert_eq!(dev_a.modem_status().await, ModemStatus::JoinedNetwork);
+    assert_eq!(
+        dev_a.at(2, b"NI", &[]).await,
+        (AtStatus::Ok, b"kept".to_vec())
+    );
+    dev_a.tx(3, COORD, b"r\x02\x04").await;
+    assert_eq!(
+        ground.rx().await,
+        (MAV_A, a.addr16, 0x01, b"r\x02\x04".to_vec())
+    );
+    assert_eq!(
+        dev_a.status().await,
+        (3, Address16::COORDINATOR, DeliveryStatus::Success, OK)
+    );
+}
