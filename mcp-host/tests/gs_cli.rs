@@ -472,12 +472,8 @@ fn bad_arguments_exit_2_with_one_line() {
 
 #[test]
 fn a_bad_16_bit_address_says_what_one_looks_like() {
-    for (to16, why) in [
-        ("zz", "invalid hex digit at byte 0"),
-        ("12345", "5 hex digits"),
-        ("", "empty"),
-    ] {
-        let output = run(&[
+    let encode = |to16: &str| {
+        run(&[
             "encode",
             "--to",
             "0013a20040b599b9",
@@ -485,7 +481,14 @@ fn a_bad_16_bit_address_says_what_one_looks_like() {
             to16,
             "landing",
             "on",
-        ]);
+        ])
+    };
+    for (to16, why) in [
+        ("zz", "invalid hex digit at byte 0"),
+        ("12345", "5 hex digits"),
+        ("", "empty"),
+    ] {
+        let output = encode(to16);
         assert_eq!(output.status.code(), Some(2), "{to16:?}");
         let stderr = String::from_utf8_lossy(&output.stderr);
         let first = stderr.lines().next().unwrap_or_default();
@@ -498,15 +501,7 @@ fn a_bad_16_bit_address_says_what_one_looks_like() {
     }
     // Any case, with or without `0x`.
     for to16 in ["0x0000", "FFFE", "1a2"] {
-        let output = run(&[
-            "encode",
-            "--to",
-            "0013a20040b599b9",
-            "--to16",
-            to16,
-            "landing",
-            "on",
-        ]);
+        let output = encode(to16);
         assert_eq!(output.status.code(), Some(0), "{to16:?}: {output:?}");
     }
 }
