@@ -9,6 +9,7 @@ use mcp_core::{
     Address, Command, Controller, LandingState, Packet, Report, SlaveAddresses, Slot,
     StatusRequest, TelemetryId, TrajectoryBuilder, Waypoint,
 };
+use mcp_host::radio::NetworkError;
 use mcp_host::sim::{Simulator, fleet_addresses};
 use mcp_host::{CommandSender, DeliveryReport, Event, Link, LinkOptions, PacketStream, SendError};
 use xbee_api::{Address64, ApiMode, DeliveryStatus};
@@ -559,4 +560,46 @@ async fn a_dropped_ground_station_link_comes_back_to_mavs_that_kept_their_state(
     );
     // Unknown nodes, and links that are not up, are not hung up on.
     assert!(!g.sim.network().disconnect(Address64(0x1234)));
+}
+
+#[tokio::test]
+async fn a_mav_added_while_running_flies_like_the_others() {
+    let fleet = fleet_addresses(2);
+    let mut g = over_tcp(&fleet[..1]).await;
+    g.send(fleet[0], Command::Controllers(Controller::Mpc))
+        .await;
+    let info = g.sim.add_mav(fleet[1]).unwrap();
+    assert_eq!(info.address, fleet[1]);
+    assert_eq!(
+        g.sim.mavs().iter().map(|m| m.address).collect::<Vec<_>>(),
+        fleet
+    );
+    // It takes commands and sends telemetry; the first MAV keeps its state.
+    g.send(fleet[1], telemetry(true, TelemetryId::Altitude))
+        .await;
+    assert_eq!(
+        ids(&g.telemetry_ids(fleet[1]).await),
+        [TelemetryId::Altitude]
+    );
+    g.send(fleet[1], Command::Controllers(Controller::Altitude))
+        .await;
+    assert_eq!(
+        g.request(fleet[1], StatusRequest::Controllers).await,
+        Report::Controllers(Controller::Altitude)
+    );
+    assert_eq!(
+        g.request(fleet[0], StatusRequest::Controllers).await,
+        Report::Controllers(Controller::Mpc)
+    );
+    // An address taken, by a MAV or by the coordinator, and the broadcast address are
+    // refused, and the fleet stays as it was.
+    for address in [fleet[0], Address64::COORDINATOR] {
+        assert!(matches!(g.sim.add_mav(address), Err(NetworkError::Duplicate(a)) if a == address));
+    }
+    assert!(matches!(
+        g.sim.add_mav(Address64::BROADCAST),
+        Err(NetworkError::Broadcast(_))
+    ));
+    assert_eq!(g.sim.mavs().len(), 2);
+    g.sim.stop().await;
 }

@@ -275,6 +275,7 @@ pub struct Simulator {
     network: Network,
     coordinator: NodeInfo,
     mavs: Vec<NodeInfo>,
+    options: SimOptions,
 }
 
 impl Simulator {
@@ -305,22 +306,67 @@ impl Simulator {
         let coordinator = network
             .add_link(Address64::COORDINATOR, link, coordinator_options)
             .await?;
-        let mut mavs = Vec::new();
-        for &address in addresses {
-            let (info, io) =
-                network.add_in_process(address, NodeOptions::with_mode(ApiMode::Unescaped))?;
-            network.spawn_beside(async move {
-                if let Err(error) = run_mav_with(io, SimMav::new(posix_now()), options).await {
-                    tracing::warn!(mav = %address, %error, "simulated MAV stopped");
-                }
-            });
-            mavs.push(info);
-        }
-        Ok(Simulator {
+        let mut sim = Simulator {
             network,
             coordinator,
-            mavs,
-        })
+            mavs: Vec::with_capacity(addresses.len()),
+            options,
+        };
+        for &address in addresses {
+            sim.add_mav(address)?;
+        }
+        Ok(sim)
+    }
+
+    /// Adds a simulated MAV to the running network, as one switched on mid-flight: its
+    /// radio joins, and it takes commands, sends the telemetry they turn on and answers
+    /// status requests like the MAVs given at the start, with the same [`SimOptions`],
+    /// its clock at the current time.
+    ///
+    /// # Errors
+    ///
+    /// [`NetworkError::Duplicate`] if a node has this address (a MAV, or the coordinator),
+    /// [`NetworkError::Broadcast`] for the broadcast address.
+    ///
+    /// ```
+    /// use mcp_core::{Report, StatusRequest};
+    /// use mcp_host::sim::{Simulator, fleet_addresses};
+    /// use mcp_host::{Link, LinkOptions};
+    /// use xbee_api::ApiMode;
+    ///
+    /// # #[tokio::main(flavor = "current_thread")]
+    /// # async fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// let fleet = fleet_addresses(2);
+    /// let mut sim = Simulator::start(
+    ///     &Link::tcp_listen("127.0.0.1", 0),
+    ///     ApiMode::Unescaped,
+    ///     &fleet[..1],
+    ///     Simulator::network_config(),
+    /// )
+    /// .await?;
+    /// let link = sim.ground_station_link().expect("a tcp-listen link has one");
+    /// let (_stream, sender) = mcp_host::connect(&link, LinkOptions::default()).await?;
+    /// // The second MAV is switched on later.
+    /// sim.add_mav(fleet[1])?;
+    /// let report = sender.request(fleet[1], StatusRequest::Landing).await?;
+    /// assert!(matches!(report, Report::Landing(_)));
+    /// assert_eq!(sim.mavs().len(), 2);
+    /// sim.stop().await;
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub fn add_mav(&mut self, address: Address64) -> Result<&NodeInfo, NetworkError> {
+        let (info, io) = self
+            .network
+            .add_in_process(address, NodeOptions::with_mode(ApiMode::Unescaped))?;
+        let options = self.options;
+        self.network.spawn_beside(async move {
+            if let Err(error) = run_mav_with(io, SimMav::new(posix_now()), options).await {
+                tracing::warn!(mav = %address, %error, "simulated MAV stopped");
+            }
+        });
+        self.mavs.push(info);
+        Ok(&self.mavs[self.mavs.len() - 1])
     }
 
     /// The network settings a simulator should use unless it emulates something else:
