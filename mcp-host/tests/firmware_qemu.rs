@@ -5,11 +5,12 @@
 //! into the firmware's UART0 and reads the Transmit Requests (0x10) the firmware writes
 //! back, all in API mode 1.
 //!
-//! Needs `qemu-system-arm`: where it is absent the tests print why and pass without
-//! running. The firmware is built by the test (`cargo build --release` in
-//! `examples/firmware`, into that directory's own `target/`, with the
-//! `thumbv7m-none-eabi` target installed: `rustup target add thumbv7m-none-eabi`). Set
-//! `MCP_FIRMWARE_ELF` to the path of an ELF built beforehand to skip that build.
+//! Needs `qemu-system-arm` and the `thumbv7m-none-eabi` target (`rustup target add
+//! thumbv7m-none-eabi`): where either is absent the tests print why and pass without
+//! running, unless `MCP_REQUIRE_FIRMWARE_TESTS` is set (as CI does), which makes that a
+//! failure. The firmware is built by the test (`cargo build --release` in
+//! `examples/firmware`, into that directory's own `target/`). Set `MCP_FIRMWARE_ELF` to
+//! the path of an ELF built beforehand to skip that build, and the need for the target.
 //!
 //! Waiting is on frames only; the timeouts are failure guards, never synchronisation.
 
@@ -40,21 +41,54 @@ const STARTUP_MESSAGE: &[u8] = b"mMAV started";
 /// Largest MCP payload the firmware takes (unicast, unfragmented).
 const MAX_PAYLOAD: usize = 84;
 
-/// `true` if QEMU can run; otherwise prints why the test is skipped. The message goes
-/// straight to the process's stderr, past the test harness's output capture, so it
-/// shows in every run.
+/// The firmware's target.
+const TARGET: &str = "thumbv7m-none-eabi";
+
+/// `true` if QEMU can run and the firmware can be had (built beforehand, or its target
+/// installed); otherwise prints why the test is skipped, or fails where
+/// `MCP_REQUIRE_FIRMWARE_TESTS` is set. The message goes straight to the process's
+/// stderr, past the test harness's output capture, so it shows in every run.
 fn qemu_available(test: &str) -> bool {
-    match Command::new(QEMU).arg("--version").output() {
-        Ok(out) if out.status.success() => true,
-        _ => {
-            let _ = writeln!(
-                std::io::stderr(),
-                "SKIPPED {test}: `{QEMU}` not found; install it (Debian: \
-                 `apt-get install qemu-system-arm`) to run the firmware end-to-end tests"
-            );
-            false
-        }
+    let missing = match Command::new(QEMU).arg("--version").output() {
+        Ok(out) if out.status.success() => firmware_target_missing(),
+        _ => Some(format!(
+            "`{QEMU}` not found (Debian: `apt-get install qemu-system-arm`)"
+        )),
+    };
+    let Some(missing) = missing else {
+        return true;
+    };
+    assert!(
+        std::env::var_os("MCP_REQUIRE_FIRMWARE_TESTS").is_none(),
+        "{test}: {missing}, and MCP_REQUIRE_FIRMWARE_TESTS is set"
+    );
+    let _ = writeln!(
+        std::io::stderr(),
+        "SKIPPED {test}: {missing}: the firmware end-to-end tests need it"
+    );
+    false
+}
+
+/// Why the firmware cannot be built here, if it cannot: no `MCP_FIRMWARE_ELF`, and the
+/// standard library of its target is not installed (rustup installs it at
+/// `rustc --print target-libdir --target thumbv7m-none-eabi`). A `rustc` that cannot
+/// say is left to the build to try.
+fn firmware_target_missing() -> Option<String> {
+    if std::env::var_os("MCP_FIRMWARE_ELF").is_some() {
+        return None;
     }
+    let out = Command::new("rustc")
+        .args(["--print", "target-libdir", "--target", TARGET])
+        .output()
+        .ok()
+        .filter(|out| out.status.success())?;
+    let dir = PathBuf::from(String::from_utf8_lossy(&out.stdout).trim());
+    (!dir.is_dir()).then(|| {
+        format!(
+            "the `{TARGET}` target is not installed (`rustup target add {TARGET}`, or set \
+             MCP_FIRMWARE_ELF to a firmware built beforehand)"
+        )
+    })
 }
 
 /// The firmware ELF: `MCP_FIRMWARE_ELF`, or built once per test process.
@@ -90,11 +124,11 @@ fn build_firmware() -> Result<PathBuf, String> {
         .stderr(Stdio::inherit())
         .status()
         .map_err(|e| format!("running cargo to build the firmware: {e}"))?;
-    let elf = dir.join("target/thumbv7m-none-eabi/release/mav-firmware");
+    let elf = dir.join(format!("target/{TARGET}/release/mav-firmware"));
     if !status.success() || !elf.is_file() {
         return Err(format!(
             "building the firmware failed ({status}); build it by hand with\n  \
-             rustup target add thumbv7m-none-eabi\n  \
+             rustup target add {TARGET}\n  \
              cd {} && cargo build --release\nor set MCP_FIRMWARE_ELF to a prebuilt ELF",
             dir.display()
         ));

@@ -666,4 +666,24 @@ async fn probe_says_when_nothing_answers_at_any_rate() {
     let out = mcp_gs(&["probe", "--link", "tcp:127.0.0.1:9"]).await;
     assert_eq!(out.status.code(), Some(2), "{out:?}");
     assert!(stderr(&out).contains("give serial:PATH"), "{out:?}");
+
+    // A port that is not there is named at the first rate probe would try, not at the
+    // links' default rate.
+    for (link, named) in [
+        (
+            "serial:/dev/mcp-gs-no-such-port",
+            "serial:/dev/mcp-gs-no-such-port:9600",
+        ),
+        (
+            "serial:/dev/mcp-gs-no-such-port:57600",
+            "serial:/dev/mcp-gs-no-such-port:57600",
+        ),
+    ] {
+        let out = mcp_gs(&["probe", "--link", link]).await;
+        assert_eq!(out.status.code(), Some(3), "{out:?}");
+        assert!(
+            stderr(&out).starts_with(&format!("mcp-gs: cannot open {named}: no such device")),
+            "{out:?}"
+        );
+    }
 }

@@ -83,7 +83,13 @@ pub(crate) async fn run(args: ProbeArgs) -> Result<(), Failure> {
             "probe tries the baud rates of a serial port: give serial:PATH",
         ));
     };
-    crate::link_args::check_serial_path(&args.link.link, false)?;
+    // Named at the first rate to try: the link's own (115200 unless given) may be none
+    // of those tried first.
+    let first = rates(args.link.given).next().unwrap_or(ORDER[0]);
+    crate::link_args::check_serial_path(
+        &Link::serial_with(path.clone(), first, *flow_control),
+        false,
+    )?;
     let timeout = Duration::from_secs_f64(args.timeout);
     let guard = args.guard.duration();
     for baud in rates(args.link.given) {
