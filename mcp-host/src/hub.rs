@@ -26,11 +26,11 @@
 //!   | 0x00, 0x01 Transmit Request 64-/16-bit (802.15.4), 0x20 Transmit Request IPv4 | 0x89 TX Status |
 //!   | 0x24 Register Joining Device | 0xA4 Register Joining Device Status |
 //!
-//!   A request is answered once, but for node discovery (`ND`), active scan (`AS`) and
-//!   a remote AT command to the broadcast address, whose answers keep coming for
-//!   [`ANSWER_WINDOW`] from when the hub writes the request to the radio (not while it
-//!   waits its turn); a request unanswered by then gives its id back. An answer under the
-//!   id of a request not yet written is dropped.
+//!   A request is answered once, but for node discovery (`ND`), find neighbors (`FN`),
+//!   active scan (`AS`) and a remote AT command to the broadcast address, whose answers
+//!   keep coming for [`ANSWER_WINDOW`] from when the hub writes the request to the
+//!   radio (not while it waits its turn); a request unanswered by then gives its id
+//!   back. An answer under the id of a request not yet written is dropped.
 //! - **Fairness:** the hub takes its clients' frames in turn, one frame of each client
 //!   with frames waiting, and writes them at the pace of the radio's UART (its baud
 //!   rate on a serial link, [`DEFAULT_RADIO_BAUD`] on others), never more than
@@ -45,21 +45,32 @@
 //!   so a client that floods the hub with requests slows itself first. A request
 //!   holds its id until the radio answers it (a local AT command in milliseconds, a
 //!   transmission or a remote AT command within seconds, with a status saying whether
-//!   it got through); requests answered many times (node discovery, active scan,
-//!   broadcast remote AT commands) hold theirs for [`ANSWER_WINDOW`], and a client has
-//!   [`MANY_ANSWER_PER_CLIENT`] of those at most (all clients together, 128 of the
-//!   255), so that no flood of them leaves the others without ids for half a minute.
-//!   When every id is taken, requests of all clients wait for one in the order they
-//!   came. When a client leaves (its connection fails, or the hub ends it), its
-//!   requests' ids are free again (their late answers are dropped); a client that
-//!   closed its connection keeps them until it is let go (see below). Requests that
-//!   waited are counted in [`HubStats::requests_held`]. A frame of a type a radio sends
+//!   it got through); requests answered many times (node discovery, find neighbors,
+//!   active scan, broadcast remote AT commands) hold theirs for [`ANSWER_WINDOW`], and
+//!   a client has [`MANY_ANSWER_PER_CLIENT`] of those at most. A client's first
+//!   [`IDS_PER_CLIENT`] requests waiting for answers always find an id (all
+//!   [`MAX_CLIENTS`] clients' together, 128); its others share the other
+//!   [`SHARED_IDS`] (127) with every client's, so that a few clients whose requests
+//!   the radio is slow to answer, or never answers, cannot leave the others without
+//!   ids. Requests waiting for a shared id get one in the order they came. A request
+//!   that waits [`REQUEST_WAIT`] in all (for its client's places, then for an id) is
+//!   not sent: it is refused, and answered at once as the radio answers a request it
+//!   could not carry out (an AT command `ERROR`, a transmission's delivery status 0x32,
+//!   resource error, a remote AT command's transmission failure; other requests get no
+//!   answer), so that a command does not reach a MAV after its client gave up on it, or
+//!   left; the client's requests after it wait no more until one goes. When a client
+//!   leaves (its connection fails, or the hub ends it), its requests not yet written
+//!   give their ids back; those written keep them until their answers come (which are
+//!   dropped) or [`ANSWER_WINDOW`] ends, so that a late answer never reaches a new
+//!   request under the same id. A client that closed its connection still gets its
+//!   answers until it is let go (see below). Requests that waited are counted in
+//!   [`HubStats::requests_held`]. A frame of a type a radio sends
 //!   rather than takes (its high bit set: 0x88 AT Command Response, 0x90 Receive
 //!   Packet, ...) is refused, whatever its second byte, and counted in
 //!   [`HubStats::frames_refused`]: a radio would drop it unanswered. Other frames with
 //!   frame id 0 (no answer wanted) are written as they are, whatever their type. A
-//!   frame refused for what it is (its type, its id, its length, no id free) is said as
-//!   a warning (the first at once, then at most one a second with the number not
+//!   frame refused for what it is (its type, its id, its length, its checksum or
+//!   escapes, no id in time) is said as a warning (the first at once, then at most one a second with the number not
 //!   said); one dropped because the radio's link was down or its client was ended is
 //!   counted alone. A frame with a frame
 //!   id (its second byte, in every XBee request) is refused and counted in
@@ -180,13 +191,33 @@ pub const MAX_CLIENTS: usize = 64;
 /// first.
 pub const ROUTES_PER_CLIENT: usize = 16;
 
-/// Requests answered many times (node discovery, active scan, a broadcast remote AT
-/// command: each keeps its frame id for [`ANSWER_WINDOW`]) of one client waiting for
-/// answers at once, at most; its next such request waits (and the hub reads no more of
-/// its frames meanwhile) until one ends. Two: all [`MAX_CLIENTS`] clients together hold
-/// 128 such ids at most, and the other 127 stay for requests the radio answers once,
-/// within seconds, however many of them the clients send.
+/// Requests answered many times (node discovery, find neighbors, active scan, a
+/// broadcast remote AT command: each keeps its frame id for [`ANSWER_WINDOW`]) of one
+/// client waiting for answers at once, at most; its next such request waits (and the
+/// hub reads no more of its frames meanwhile) until one ends.
 pub const MANY_ANSWER_PER_CLIENT: usize = 2;
+
+/// Requests waiting for answers of each client that always find a frame id:
+/// [`MAX_CLIENTS`] clients with as many each hold 128 of the 255. A client's requests
+/// beyond these (up to [`ROUTES_PER_CLIENT`]) share the other 127 ([`SHARED_IDS`]) with
+/// every client's, so that a few clients sending many requests the radio is slow to
+/// answer (or never answers) can hold no more: a client with fewer requests waiting
+/// than this does not wait for an id (but for the hub's own few, held for late answers
+/// to its `AT AP`).
+pub const IDS_PER_CLIENT: usize = 2;
+
+/// The frame ids shared by the clients' requests beyond their first
+/// [`IDS_PER_CLIENT`]: 127.
+pub const SHARED_IDS: usize = u8::MAX as usize - MAX_CLIENTS * IDS_PER_CLIENT;
+
+/// How long a client's request waits, at most, to be let go to the radio: for one of
+/// its client's [`ROUTES_PER_CLIENT`] (or [`MANY_ANSWER_PER_CLIENT`]) places, then for a
+/// frame id. A request still waiting then is refused, and answered at once with a
+/// failure of its type where it has one (see the [module](self) docs): its client may
+/// have given up on it, or gone, and a command must not reach a MAV long after its
+/// sender was told it failed. The client's next requests (as stale) are then refused
+/// unless they can go at once, until one goes.
+pub const REQUEST_WAIT: Duration = Duration::from_secs(5);
 
 /// Frames of one client read by the hub and waiting for their turn to the radio, at
 /// most; the hub reads no more of the client's frames meanwhile.
@@ -205,9 +236,9 @@ pub const RADIO_BACKLOG: Duration = Duration::from_millis(250);
 pub const DEFAULT_RADIO_BAUD: u32 = 115_200;
 
 /// How long the hub routes answers to a request: the first answer ends it, but for node
-/// discovery, active scan and a broadcast remote AT command. A request still unanswered
-/// then gives its id back (its client has given up long before: `mcp-gs` waits 12 s by
-/// default).
+/// discovery, find neighbors, active scan and a broadcast remote AT command. A request
+/// still unanswered then gives its id back (its client has given up long before:
+/// `mcp-gs` waits 12 s by default).
 pub const ANSWER_WINDOW: Duration = Duration::from_secs(30);
 
 /// Why a hub could not start.
@@ -345,6 +376,7 @@ impl Hub {
         let radio_up = sender.link_state() == crate::LinkState::Connected;
         let routes = Arc::new(Mutex::new(Routes::new()));
         let ids = Arc::new(Semaphore::new(usize::from(u8::MAX)));
+        let shared = Arc::new(Semaphore::new(SHARED_IDS));
         let listener = if radio_up {
             check_radio_mode(&sender, mode, &routes, &ids).await;
             Some(listener)
@@ -372,6 +404,7 @@ impl Hub {
             counters: hub.counters.clone(),
             routes,
             ids,
+            shared,
             client_input,
             turned_away: Repeats::default(),
             clients: Vec::new(),
@@ -486,14 +519,21 @@ struct Route {
     /// to the radio; `None` while it waits its turn (no answer is due yet, and the route
     /// does not expire).
     until: Cell<Option<Instant>>,
-    /// Answers keep coming until `until` (node discovery, active scan, broadcast remote
-    /// AT).
+    /// Answers keep coming until `until` (node discovery, find neighbors, active scan,
+    /// broadcast remote AT).
     many: bool,
+    /// Its client has gone since the request was written: its answers are dropped, and
+    /// its id stays taken until they have come (or `until`), so that no late answer
+    /// of its reaches a new request under the same id.
+    orphan: Cell<bool>,
     /// One of the client's [`ROUTES_PER_CLIENT`] permits, given back with the route.
     _permit: OwnedSemaphorePermit,
     /// For a request answered many times, one of the client's
     /// [`MANY_ANSWER_PER_CLIENT`] permits.
     _many: Option<OwnedSemaphorePermit>,
+    /// For a request beyond its client's first [`IDS_PER_CLIENT`], one of the
+    /// [`SHARED_IDS`] permits.
+    _shared: Option<OwnedSemaphorePermit>,
     /// One of the 255 frame ids' permits: requests of all clients wait for a free id in
     /// the order they came.
     _id: OwnedSemaphorePermit,
@@ -544,9 +584,19 @@ impl Routes {
         }
     }
 
-    /// Ends the routes of client `client` (gone).
+    /// Ends the routes of client `client` (gone) whose requests were not written: the
+    /// others stay, orphans, until their answers have come or are no longer due.
     fn forget(&mut self, client: u64) {
-        self.0.remove_where(|r| r.client == client, |_, _| {});
+        self.0.remove_where(
+            |r| {
+                let written = r.until.get().is_some();
+                if r.client == client && written {
+                    r.orphan.set(true);
+                }
+                r.client == client && !written
+            },
+            |_, _| {},
+        );
     }
 
     /// Where an answer of type `frame_type` under hub id `id` goes, and the client's own
@@ -563,8 +613,9 @@ impl Routes {
         if route.answer_type != frame_type {
             return None;
         }
-        let to = (until > now).then(|| (route.queue.clone(), route.own_id));
-        if to.is_none() || !route.many {
+        // An orphan's answer is taken, and goes nowhere.
+        let to = (until > now && !route.orphan.get()).then(|| (route.queue.clone(), route.own_id));
+        if until <= now || !route.many {
             self.0.remove(id);
         }
         to
@@ -572,13 +623,13 @@ impl Routes {
 }
 
 /// Whether a request gets several answers under its id: AT (or queued AT) node
-/// discovery and active scan, and a remote AT command to the broadcast address (every
-/// radio in range answers).
+/// discovery, find neighbors and active scan, and a remote AT command to the broadcast
+/// address (every radio in range answers).
 fn answered_many_times(data: &[u8]) -> bool {
     match data {
         // Command mode takes a command's letters in either case, and a radio may in
         // API frames too: kept open for the window at worst, never cut short.
-        [0x08 | 0x09, _, command @ ..] => [b"ND", b"AS"].iter().any(|name| {
+        [0x08 | 0x09, _, command @ ..] => [b"ND", b"AS", b"FN"].iter().any(|name| {
             command
                 .get(..2)
                 .is_some_and(|c| c.eq_ignore_ascii_case(*name))
@@ -753,6 +804,9 @@ struct Serve {
     routes: Arc<Mutex<Routes>>,
     /// The permits of the 255 frame ids, one held by each route.
     ids: Arc<Semaphore>,
+    /// The permits of the [`SHARED_IDS`], one held by each route beyond its client's
+    /// first [`IDS_PER_CLIENT`].
+    shared: Arc<Semaphore>,
     /// How the clients' frames are read.
     client_input: ClientInput,
     /// Clients turned away, for the warning.
@@ -810,6 +864,12 @@ impl Serve {
         rebind.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
         let mut expire = tokio::time::interval(EXPIRE_EVERY);
         expire.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+        // After a failed accept (out of file descriptors, say), accepting waits a
+        // moment; the radio's frames go on meanwhile.
+        let accept_again = tokio::time::sleep(Duration::ZERO);
+        tokio::pin!(accept_again);
+        let mut accept_paused = false;
+        let mut accept_failures = Repeats::default();
         loop {
             tokio::select! {
                 () = self.stop.cancelled() => break,
@@ -833,14 +893,24 @@ impl Serve {
                         );
                     }
                 }
-                accepted = accept(listener.as_ref()) => match accepted {
+                accepted = accept(listener.as_ref()), if !accept_paused => match accepted {
                     Ok((socket, peer)) => self.accept(socket, peer),
                     Err(error) => {
                         // Out of file descriptors, say: not again at once.
-                        tracing::warn!(%error, "hub: accepting a client failed");
-                        tokio::time::sleep(Duration::from_millis(100)).await;
+                        match accept_failures.count(Instant::now()) {
+                            Some(0) => tracing::warn!(%error, "hub: accepting a client failed"),
+                            Some(more) => tracing::warn!(
+                                %error,
+                                "hub: accepting a client failed, and {more} more times since \
+                                 the last such warning"
+                            ),
+                            None => tracing::debug!(%error, "hub: accepting a client failed"),
+                        }
+                        accept_paused = true;
+                        accept_again.as_mut().reset(Instant::now() + ACCEPT_RETRY);
                     }
                 },
+                () = &mut accept_again, if accept_paused => accept_paused = false,
                 // The port again, if it could not be taken back at once.
                 _ = rebind.tick(), if listener.is_none() && self.radio_up => {
                     listener = self.listen_again().await;
@@ -925,6 +995,7 @@ impl Serve {
             queue,
             routes: self.routes.clone(),
             ids: self.ids.clone(),
+            shared: self.shared.clone(),
             permits: Arc::new(Semaphore::new(ROUTES_PER_CLIENT)),
             many: Arc::new(Semaphore::new(MANY_ANSWER_PER_CLIENT)),
             input: self.client_input,
@@ -932,6 +1003,7 @@ impl Serve {
             end,
             behind,
             closed,
+            refusing: AtomicBool::new(false),
         });
         let (rd, wr) = socket.into_split();
         let (frames_to_radio, queue) = mpsc::channel(CLIENT_FRAMES_TO_RADIO);
@@ -1050,6 +1122,10 @@ impl Serve {
         }
     }
 }
+
+/// How long the hub waits to accept clients again after accepting one failed (out of
+/// file descriptors, say), serving the others meanwhile.
+const ACCEPT_RETRY: Duration = Duration::from_millis(100);
 
 /// How often routes whose answers are no longer due are ended.
 const EXPIRE_EVERY: Duration = Duration::from_secs(1);
@@ -1170,6 +1246,9 @@ struct Client {
     routes: Arc<Mutex<Routes>>,
     /// The permits of the 255 frame ids, shared by all clients.
     ids: Arc<Semaphore>,
+    /// The permits of the [`SHARED_IDS`], shared by all clients' requests beyond their
+    /// first [`IDS_PER_CLIENT`].
+    shared: Arc<Semaphore>,
     /// Its [`ROUTES_PER_CLIENT`] permits to have a request waiting for answers.
     permits: Arc<Semaphore>,
     /// Its [`MANY_ANSWER_PER_CLIENT`] permits to have a request answered many times
@@ -1186,6 +1265,9 @@ struct Client {
     behind: Arc<Mutex<Option<Instant>>>,
     /// Since when it has sent nothing more (see [`Connected::closed`]).
     closed: Arc<Mutex<Option<Instant>>>,
+    /// Its last request waited [`REQUEST_WAIT`] in vain: the next ones are refused
+    /// unless they can go at once.
+    refusing: AtomicBool,
 }
 
 impl Drop for Client {
@@ -1288,13 +1370,18 @@ impl Client {
                     self.to_radio.ready.notify_one();
                 }
             }
+            // Longer than the hub takes, or not a frame: refused, and said, as a radio
+            // would drop it without a word.
             CodecItem::Error(error) => {
-                if let xbee_api::DecodeError::Oversize { .. } = error {
-                    // Longer than the hub takes: refused.
-                    self.refuse(format_args!("{error}"));
-                } else {
-                    tracing::debug!(%error, "hub: a client's frame dropped");
-                }
+                let hint = match error {
+                    xbee_api::DecodeError::BadChecksum { .. }
+                    | xbee_api::DecodeError::BadEscape { .. } => format!(
+                        " (the hub speaks API mode {}: is the client in the other?)",
+                        u8::from(self.mode)
+                    ),
+                    _ => String::new(),
+                };
+                self.refuse(format_args!("{error}{hint}"));
             }
         }
         true
@@ -1325,6 +1412,17 @@ impl Client {
             self.end.cancel();
         }
         tracing::info!(peer = %self.peer, %reason, "hub: client gone");
+    }
+
+    /// Answers `request`, which was not sent, as failed ([`not_sent_answer`]), in its
+    /// place among the radio's frames to this client.
+    fn answer_not_sent(&self, request: &[u8]) {
+        let answer = not_sent_answer(request).and_then(|answer| encode(&answer, self.mode));
+        if let Some(bytes) = answer {
+            if self.queue.try_send(bytes).is_err() {
+                bump(&self.counters.frames_dropped);
+            }
+        }
     }
 
     /// A client's frame as it goes to the radio: under a hub id if it is a request with
@@ -1365,8 +1463,9 @@ impl Client {
                     return None;
                 }
                 // Waits while the client has ROUTES_PER_CLIENT requests waiting for
-                // answers (MANY_ANSWER_PER_CLIENT answered many times), then for a
-                // free frame id (the semaphores are never closed).
+                // answers (MANY_ANSWER_PER_CLIENT answered many times), then, beyond its
+                // first IDS_PER_CLIENT, for one of the shared ids, then for a free frame
+                // id (the semaphores are never closed); REQUEST_WAIT in all at most.
                 let many = answered_many_times(&data);
                 let mut held = false;
                 let mut take = async |permits: &Arc<Semaphore>| {
@@ -1378,13 +1477,40 @@ impl Client {
                     }
                     permits.clone().acquire_owned().await.ok()
                 };
-                let permit = take(&self.permits).await?;
-                let many_permit = if many {
-                    Some(take(&self.many).await?)
-                } else {
-                    None
+                // Once one request has waited in vain, the client's next ones (sent
+                // meanwhile, and as stale) wait no more until one gets through.
+                let wait = match self.refusing.load(Ordering::Relaxed) {
+                    true => Duration::ZERO,
+                    false => REQUEST_WAIT,
                 };
-                let id = take(&self.ids).await?;
+                let taken = tokio::time::timeout(wait, async {
+                    let permit = take(&self.permits).await?;
+                    let many = match many {
+                        true => Some(take(&self.many).await?),
+                        false => None,
+                    };
+                    let waiting = ROUTES_PER_CLIENT - self.permits.available_permits();
+                    let shared = match waiting > IDS_PER_CLIENT {
+                        true => Some(take(&self.shared).await?),
+                        false => None,
+                    };
+                    let id = take(&self.ids).await?;
+                    Some((permit, many, shared, id))
+                })
+                .await;
+                self.refusing
+                    .store(!matches!(taken, Ok(Some(_))), Ordering::Relaxed);
+                let Ok(Some((permit, many_permit, shared, id))) = taken else {
+                    // The answer first: once the refusal is counted, it is on its way.
+                    self.answer_not_sent(&data);
+                    self.refuse(format_args!(
+                        "a request of type 0x{frame_type:02x} waited {} for a frame id (this \
+                         client's earlier requests, or other clients', wait for answers): \
+                         not sent, and answered as failed",
+                        crate::render::Seconds(REQUEST_WAIT)
+                    ));
+                    return None;
+                };
                 let route = Route {
                     client: self.number,
                     queue: self.queue.clone(),
@@ -1392,8 +1518,10 @@ impl Client {
                     answer_type,
                     until: Cell::new(None),
                     many,
+                    orphan: Cell::new(false),
                     _permit: permit,
                     _many: many_permit,
+                    _shared: shared,
                     _id: id,
                 };
                 // An id is free: the route holds one of the 255 permits.
@@ -1407,6 +1535,31 @@ impl Client {
             }
         }
         Some(data)
+    }
+}
+
+/// The answer the hub gives a request it did not send ([`REQUEST_WAIT`]), as the radio
+/// answers one it could not carry out, under the client's own id: an AT command
+/// `ERROR` (1), a transmission's delivery status 0x32 (resource error: the radio's own
+/// word for a lack of buffers), a remote AT command's transmission failure (4). `None`
+/// for the other requests, whose clients wait for their own timeouts.
+fn not_sent_answer(request: &[u8]) -> Option<Vec<u8>> {
+    match request {
+        [0x08 | 0x09, id, a, b, ..] => Some(vec![0x88, *id, *a, *b, 0x01]),
+        // The 16-bit address after the 64-bit one; no retries, no discovery.
+        [0x10 | 0x11, id, _, _, _, _, _, _, _, _, hi, lo, ..] => {
+            Some(vec![0x8B, *id, *hi, *lo, 0x00, 0x32, 0x00])
+        }
+        // The 64- and 16-bit addresses, options, the command.
+        [0x17, id, rest @ ..] => {
+            let (addresses, command) = (rest.get(..10)?, rest.get(11..13)?);
+            let mut answer = vec![0x97, *id];
+            answer.extend_from_slice(addresses);
+            answer.extend_from_slice(command);
+            answer.push(0x04);
+            Some(answer)
+        }
+        _ => None,
     }
 }
 
@@ -1436,6 +1589,7 @@ mod tests {
         for many in [
             &[0x08, 1, b'N', b'D'][..],
             &[0x08, 1, b'n', b'd'],
+            &[0x08, 1, b'F', b'N'],
             &[0x09, 1, b'A', b's', 0],
             &[
                 0x17, 1, 0, 0, 0, 0, 0, 0, 0xFF, 0xFF, 0xFF, 0xFE, 0, b'N', b'D',
@@ -1453,6 +1607,55 @@ mod tests {
             ],
         ] {
             assert!(!answered_many_times(once), "{once:02x?}");
+        }
+    }
+
+    #[test]
+    fn a_request_not_sent_is_answered_as_the_radio_answers_one_it_could_not_carry_out() {
+        use xbee_api::{AtStatus, DeliveryStatus, Frame};
+        let at = not_sent_answer(&[0x08, 7, b'N', b'I', b'G', b'S']).unwrap();
+        match Frame::parse_bytes(&at) {
+            Ok(Frame::AtCommandResponse(r)) => {
+                assert_eq!(
+                    (r.frame_id, r.command, r.status),
+                    (7, *b"NI", AtStatus::Error)
+                );
+            }
+            other => panic!("{other:?}"),
+        }
+        let mut tx = vec![
+            0x10, 9, 0, 0x13, 0xA2, 0, 0x40, 0xB5, 0x99, 0xB9, 0x12, 0x34, 0, 0,
+        ];
+        tx.extend_from_slice(b"c\x02\x01");
+        match Frame::parse_bytes(&not_sent_answer(&tx).unwrap()) {
+            Ok(Frame::TransmitStatus(s)) => {
+                assert_eq!(s.frame_id, 9);
+                assert_eq!(s.dst16.0, 0x1234);
+                assert_eq!(s.delivery, DeliveryStatus::ResourceError);
+            }
+            other => panic!("{other:?}"),
+        }
+        let remote = [
+            0x17, 3, 0, 0x13, 0xA2, 0, 0x40, 0xB5, 0x99, 0xB9, 0xFF, 0xFE, 0x02, b'D', b'H',
+        ];
+        match Frame::parse_bytes(&not_sent_answer(&remote).unwrap()) {
+            Ok(Frame::RemoteAtResponse(r)) => {
+                assert_eq!(r.frame_id, 3);
+                assert_eq!(r.src64.0, 0x0013_A200_40B5_99B9);
+                assert_eq!(r.src16.0, 0xFFFE);
+                assert_eq!(r.command, *b"DH");
+                assert_eq!(r.status, AtStatus::TxFailure);
+            }
+            other => panic!("{other:?}"),
+        }
+        // Requests cut short, and those of other types, get no answer.
+        for none in [
+            &[0x08, 1, b'N'][..],
+            &tx[..11],
+            &remote[..14],
+            &[0x24, 1, 0],
+        ] {
+            assert_eq!(not_sent_answer(none), None, "{none:02x?}");
         }
     }
 }

@@ -532,3 +532,34 @@ fn frames_a_radio_sends_replayed_onto_the_hub_are_refused_and_said() {
         "{stopped}"
     );
 }
+
+#[test]
+fn a_clients_frame_that_fails_its_checksum_is_refused_and_said_with_the_hubs_mode() {
+    let (_sim, radio, _sim_out) = sim_on_tcp("1");
+    let (mut hub, out, err) = start_hub(&radio);
+    let (_, addr) = serving(&out);
+    // `AT AP` with its checksum byte off by one, as a client in the other API mode (or
+    // a noisy bridge) would send it.
+    let mut client = std::net::TcpStream::connect(&addr).unwrap();
+    std::io::Write::write_all(
+        &mut client,
+        &[0x7E, 0x00, 0x04, 0x08, 0x01, b'A', b'P', 0x66],
+    )
+    .unwrap();
+    let refused = line_with(&err, "a client's frame refused");
+    assert_timed(&refused, " warning: hub: a client's frame refused");
+    assert!(
+        refused.contains("bad checksum")
+            && refused.contains("(the hub speaks API mode 1: is the client in the other?)"),
+        "{refused}"
+    );
+    let pid = i32::try_from(hub.0.id()).expect("pid");
+    // SAFETY: kill(2) with the pid of a child of this process and a valid signal.
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
+    assert_eq!(hub.0.wait().unwrap().code(), Some(0));
+    let stopped = line_with(&out, "stopped:");
+    assert!(
+        stopped.ends_with(" 1 frame from clients refused"),
+        "{stopped}"
+    );
+}

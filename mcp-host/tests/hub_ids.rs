@@ -1,16 +1,18 @@
 //! No client can take the hub's frame ids from the others: each has at most
 //! `ROUTES_PER_CLIENT` requests waiting for answers (`MANY_ANSWER_PER_CLIENT` answered
-//! many times), and a client's requests give their ids back when it leaves. Over real
-//! TCP sockets.
+//! many times), its first `IDS_PER_CLIENT` on ids of its own and the others on
+//! `SHARED_IDS`; a request that waits too long is answered as failed, never sent; and
+//! the late answer to a client that left reaches no other. Over real TCP sockets.
 
 mod common;
 
 use std::time::Duration;
 
 use common::hub_wire::*;
-use futures::{SinkExt, StreamExt};
-use mcp_host::codec::CodecItem;
-use mcp_host::hub::{ANSWER_WINDOW, MANY_ANSWER_PER_CLIENT, ROUTES_PER_CLIENT};
+use futures::SinkExt;
+use mcp_host::hub::{
+    ANSWER_WINDOW, IDS_PER_CLIENT, MANY_ANSWER_PER_CLIENT, MAX_CLIENTS, SHARED_IDS,
+};
 use mcp_host::{Link, LinkOptions, SendOptions};
 use xbee_api::{Address64, ApiMode, RawFrame};
 
@@ -62,15 +64,15 @@ async fn a_client_flooding_the_hub_with_discoveries_leaves_frame_ids_for_the_oth
     sim.stop().await;
 }
 
-/// 16 clients of `hub`, each of which has sent 16 requests (`AT SL`): 256 together, one
-/// more than the frame ids.
+/// 16 clients of `hub`, each of which has sent 16 requests (`AT NI`, its number as the
+/// parameter): 256 together, one more than the frame ids.
 async fn clients_asking_16_each(hub: &mcp_host::hub::Hub) -> Vec<Wire> {
     let mut clients = Vec::new();
-    for _ in 0..16 {
+    for number in 0..16 {
         let mut client = raw_client(hub).await;
         for id in 1..=16u8 {
             client
-                .feed(&RawFrame::new(&[0x08, id, b'S', b'L']).unwrap())
+                .feed(&RawFrame::new(&[0x08, id, b'N', b'I', number]).unwrap())
                 .await
                 .unwrap();
         }
@@ -80,113 +82,91 @@ async fn clients_asking_16_each(hub: &mcp_host::hub::Hub) -> Vec<Wire> {
     clients
 }
 
-/// Clients that send requests the radio never answers, enough together for every frame
-/// id, and go away: their requests' ids are free again once the hub has seen them go,
-/// long before the answer window ends.
+/// Clients that send requests the radio never answers, more together than there are
+/// frame ids: each gets its first `IDS_PER_CLIENT` through, and the others share
+/// `SHARED_IDS`, so that a new client's request still goes out at once. The requests
+/// left waiting are refused after `REQUEST_WAIT`, and answered as failed (AT `ERROR`)
+/// under their clients' own ids, never sent.
 #[tokio::test]
-async fn the_ids_of_a_client_that_left_are_free_again() {
+async fn clients_with_many_unanswered_requests_leave_ids_for_a_new_client() {
     let (hub, mut radio) = hub_and_radio().await;
-
     // 16 clients with 16 requests each: more than the 255 ids.
-    let gone = clients_asking_16_each(&hub).await;
-    // The radio got all it will get of them (none answered), then they leave.
-    let mut written = 0;
-    while written < usize::from(u8::MAX) {
+    let mut waiting = clients_asking_16_each(&hub).await;
+    let through = 16 * IDS_PER_CLIENT + SHARED_IDS;
+    let mut sent = [0; 16];
+    for _ in 0..through {
         let frame = next(&mut radio).await;
-        assert_eq!(&frame[2..], b"SL");
-        written += 1;
+        assert_eq!(&frame[2..4], b"NI");
+        sent[usize::from(frame[4])] += 1;
     }
-    drop(gone);
+    // Every client got its own ids' worth through, some more.
+    assert!(sent.iter().all(|&n| n >= IDS_PER_CLIENT), "{sent:?}");
+    // Every request left waiting is answered as failed, under its own id, from the
+    // hub: the radio saw none of them. They went out in order: the last ones failed.
+    for (client, sent) in waiting.iter_mut().zip(sent) {
+        for own_id in sent + 1..=16 {
+            assert_eq!(next(client).await, [0x88, own_id as u8, b'N', b'I', 0x01]);
+        }
+    }
+    assert_eq!(hub.stats().frames_refused, (16 * 16 - through) as u64);
 
-    // Another client asks; the hub sees the others gone when it writes to them (the
-    // radio's modem status frames).
+    // A new client asks, while every request that went out still waits for its answer.
     let mut client = raw_client(&hub).await;
     send(&mut client, &[0x08, 0x01, b'S', b'H']).await;
-    let deadline = tokio::time::Instant::now() + GUARD;
-    let hub_id = loop {
-        assert!(
-            tokio::time::Instant::now() < deadline,
-            "the request never reached the radio: {:?}",
-            hub.stats()
-        );
-        send(&mut radio, &[0x8A, 0x00]).await;
-        tokio::select! {
-            frame = next(&mut radio) => {
-                if &frame[2..] == b"SH" {
-                    break frame[1];
-                }
-            }
-            frame = next(&mut client) => assert_eq!(frame, [0x8A, 0x00]),
-        }
-    };
+    let frame = next(&mut radio).await;
+    assert_eq!(&frame[2..], b"SH", "{frame:02X?}");
     send(
         &mut radio,
-        &[0x88, hub_id, b'S', b'H', 0x00, 0x00, 0x13, 0xA2, 0x00],
+        &[0x88, frame[1], b'S', b'H', 0x00, 0x00, 0x13, 0xA2, 0x00],
     )
     .await;
-    loop {
-        let frame = next(&mut client).await;
-        if frame[0] == 0x88 {
-            assert_eq!(
-                frame,
-                [0x88, 0x01, b'S', b'H', 0x00, 0x00, 0x13, 0xA2, 0x00]
-            );
-            break;
-        }
-    }
+    assert_eq!(
+        next(&mut client).await,
+        [0x88, 0x01, b'S', b'H', 0x00, 0x00, 0x13, 0xA2, 0x00]
+    );
     hub.stop().await;
 }
 
-/// While one client keeps the radio busy (transmissions nonstop), clients that each
-/// take `ROUTES_PER_CLIENT` ids and leave (connection reset) with their requests
-/// unanswered give their ids back at once: after more than 255 ids so taken, a new
-/// client's requests still all reach the radio.
-#[tokio::test(flavor = "multi_thread")]
-async fn the_ids_of_clients_that_left_are_free_again_while_another_client_keeps_the_radio_busy() {
+/// A client leaves with a request written and unanswered: its id is not given to
+/// another request until the answer comes, so that the late answer reaches no one
+/// (here another client's requests, answered at once, go round every id the hub has
+/// more than once meanwhile).
+#[tokio::test]
+async fn the_late_answer_to_a_client_that_left_reaches_no_other_client() {
     let (hub, mut radio) = hub_and_radio().await;
-    let (requests, mut written) = tokio::sync::mpsc::unbounded_channel();
-    tokio::spawn(async move {
-        while let Some(Ok(item)) = radio.next().await {
-            if let CodecItem::Frame(frame) = item {
-                if frame.data()[0] == 0x08 {
-                    let _ = requests.send(frame.data().to_vec());
-                }
-            }
-        }
-    });
-    let mut flood = raw_client(&hub).await;
-    let flooding = tokio::spawn(async move {
-        let mut data = vec![0x10, 0x00];
-        data.resize(200, 0x55);
-        while flood.send(&RawFrame::new(&data).unwrap()).await.is_ok() {}
-    });
-    let mut written_one = async || {
-        tokio::time::timeout(GUARD, written.recv())
-            .await
-            .unwrap_or_else(|_| panic!("a request held: {:?}", hub.stats()))
-            .expect("the radio stays")
-    };
-    for _ in 0..usize::from(u8::MAX) / ROUTES_PER_CLIENT {
-        let mut client = raw_client(&hub).await;
-        for id in 1..=ROUTES_PER_CLIENT as u8 {
-            send(&mut client, &[0x08, id, b'S', b'H']).await;
-        }
-        for _ in 0..ROUTES_PER_CLIENT {
-            written_one().await;
-        }
-        let socket = client.into_inner();
-        #[allow(deprecated)]
-        socket.set_linger(Some(Duration::ZERO)).unwrap();
-        drop(socket);
-    }
+    let mut gone = raw_client(&hub).await;
+    send(&mut gone, &[0x08, 0x01, b'N', b'I']).await;
+    let orphan = next(&mut radio).await[1];
+    // It leaves at once (connection reset): the hub sees it gone when it reads.
+    let socket = gone.into_inner();
+    #[allow(deprecated)]
+    socket.set_linger(Some(Duration::ZERO)).unwrap();
+    drop(socket);
+
     let mut client = raw_client(&hub).await;
-    for id in 1..=ROUTES_PER_CLIENT as u8 {
-        send(&mut client, &[0x08, id, b'S', b'H']).await;
+    for round in 0..2 * usize::from(u8::MAX) {
+        send(&mut client, &[0x08, 0x01, b'V', b'R']).await;
+        let frame = next(&mut radio).await;
+        assert_eq!(&frame[2..], b"VR");
+        assert_ne!(
+            frame[1], orphan,
+            "round {round}: the id of the unanswered request"
+        );
+        send(&mut radio, &[0x88, frame[1], b'V', b'R', 0x00, 0x20, 0x0B]).await;
+        assert_eq!(
+            next(&mut client).await,
+            [0x88, 0x01, b'V', b'R', 0x00, 0x20, 0x0B]
+        );
     }
-    for _ in 0..ROUTES_PER_CLIENT {
-        written_one().await;
-    }
-    flooding.abort();
+    // The late answer is dropped; the client's next request gets its own.
+    send(&mut radio, &[0x88, orphan, b'N', b'I', 0x00, b'G', b'S']).await;
+    send(&mut client, &[0x08, 0x01, b'V', b'R']).await;
+    let frame = next(&mut radio).await;
+    send(&mut radio, &[0x88, frame[1], b'V', b'R', 0x00, 0x20, 0x0B]).await;
+    assert_eq!(
+        next(&mut client).await,
+        [0x88, 0x01, b'V', b'R', 0x00, 0x20, 0x0B]
+    );
     hub.stop().await;
 }
 
@@ -277,13 +257,14 @@ async fn a_late_answer_to_the_hubs_own_at_ap_goes_to_no_client() {
     hub.stop().await;
 }
 
-/// The ids held for the hub's own late answers count among the 255: with the other 253
-/// waiting for answers, requests wait for an id rather than being refused.
+/// The ids held for the hub's own late answers count among the 255: with every other
+/// id waiting for an answer (`MAX_CLIENTS` clients, each with its own ids and a share
+/// of the others), requests wait for an id rather than being refused.
 #[tokio::test]
 async fn with_ids_held_for_late_answers_requests_wait_rather_than_being_refused() {
     let (hub, mut radio, held) = hub_whose_radio_did_not_answer_ap().await;
-    // 16 clients with 16 requests each: 256, more than the 253 ids left.
-    let _clients = clients_asking_16_each(&hub).await;
+    // 4 requests from each of the 64 clients: 256, more than the 253 ids left.
+    let _clients = flood(&hub, MAX_CLIENTS, 4, *b"SL").await;
     // 253 go out, under none of the held ids; then, answered, they let the rest go.
     let mut ids = Vec::new();
     for _ in 0..253 {

@@ -1,5 +1,5 @@
-//! What a hub takes from its clients: requests cut short take no frame id, ids come free
-//! in order, requests answered many times leave ids for the others, frames longer than
+//! What a hub takes from its clients: requests cut short take no frame id, shared ids
+//! come free in order, requests answered many times leave ids for the others, frames longer than
 //! any request are refused, and a stray start delimiter (API mode 1) holds nothing back
 //! for long. Over real TCP sockets, with the radio played by the test.
 
@@ -10,7 +10,9 @@ use std::time::Duration;
 use common::hub_wire::*;
 use futures::SinkExt;
 use mcp_host::codec::{MAX_REQUEST_DATA, XBeeCodec};
-use mcp_host::hub::{Hub, HubStats, MANY_ANSWER_PER_CLIENT, ROUTES_PER_CLIENT};
+use mcp_host::hub::{
+    Hub, HubStats, IDS_PER_CLIENT, MANY_ANSWER_PER_CLIENT, ROUTES_PER_CLIENT, SHARED_IDS,
+};
 use mcp_host::options::DEFAULT_PARTIAL_FRAME_TIMEOUT;
 use mcp_host::{Link, LinkOptions};
 use tokio::io::AsyncWriteExt;
@@ -114,33 +116,63 @@ async fn frames_a_radio_sends_are_refused_and_counted() {
     hub.stop().await;
 }
 
-/// With every frame id taken by requests the radio has not answered yet, requests of
-/// all clients wait for one in the order they came: the flood's that came first, then
-/// a newcomer's.
+/// With the shared frame ids all taken by requests the radio has not answered yet,
+/// requests beyond their clients' own ids wait for one in the order they came, whoever
+/// sent them, while newcomers' first requests, on their own ids, go at once. Each
+/// request says whose it is: `AT NI` with its client's number and its own id as the
+/// parameter.
 #[tokio::test(flavor = "multi_thread")]
-async fn when_every_id_is_taken_requests_get_the_ids_that_come_free_in_order() {
+async fn requests_beyond_their_own_ids_get_the_shared_ids_that_come_free_in_order() {
     let (hub, mut radio) = hub_and_radio().await;
-    let _flood = flood(&hub, 16, 16, *b"SL").await;
-    let mut taken = Vec::new();
-    for _ in 0..u8::MAX {
-        let frame = next(&mut radio).await;
-        assert_eq!(&frame[2..], b"SL");
-        taken.push(frame[1]);
+    let ask = async |client: &mut Wire, number: u8, own: std::ops::RangeInclusive<u8>| {
+        for own in own {
+            let frame = [0x08, own, b'N', b'I', number, own];
+            client.feed(&RawFrame::new(&frame).unwrap()).await.unwrap();
+        }
+        SinkExt::<&RawFrame<'_>>::flush(client).await.unwrap();
+    };
+    // Hub ids of the requests on shared ids (a client's third on), as the radio got them.
+    let mut shared = Vec::new();
+    let mut clients = Vec::new();
+    let went = async |radio: &mut Wire, n: usize, shared: &mut Vec<u8>| {
+        for _ in 0..n {
+            let frame = next_within(radio, Duration::from_secs(5), &hub).await;
+            if usize::from(frame[5]) > IDS_PER_CLIENT {
+                shared.push(frame[1]);
+            }
+        }
+    };
+    // Nine clients with 16 requests each, and one with 3: every shared id taken.
+    for number in 0..10 {
+        let mut client = raw_client(&hub).await;
+        let last = if number < 9 { 16 } else { 3 };
+        ask(&mut client, number, 1..=last).await;
+        went(&mut radio, usize::from(last), &mut shared).await;
+        clients.push(client);
     }
-    // 256 requests: one of the flood's waits for an id.
-    until(&hub, |stats| stats.requests_held >= 1).await;
-
+    assert_eq!(shared.len(), SHARED_IDS);
+    // The tenth client's fourth request waits; then two newcomers' first two go at once
+    // and their third waits, in that order.
     let held = hub.stats().requests_held;
-    let mut late = raw_client(&hub).await;
-    send(&mut late, &[0x08, 0x01, b'S', b'H']).await;
+    ask(&mut clients[9], 9, 4..=4).await;
     until(&hub, |stats| stats.requests_held > held).await;
-    // The radio answers two of the flood's requests: their ids go to the waiting
-    // request of the flood, then to the newcomer's.
-    for (answered, waiting) in [(taken[0], b"SL"), (taken[1], b"SH")] {
-        send(&mut radio, &[0x88, answered, b'S', b'L', 0x00, 0x00]).await;
-        let at = next_within(&mut radio, Duration::from_secs(5), &hub).await;
-        assert_eq!(&at[2..], waiting, "{at:02X?}; {:?}", hub.stats());
+    for number in [10, 11] {
+        let mut client = raw_client(&hub).await;
+        let held = hub.stats().requests_held;
+        ask(&mut client, number, 1..=3).await;
+        went(&mut radio, 2, &mut shared).await;
+        until(&hub, |stats| stats.requests_held > held).await;
+        clients.push(client);
     }
+    assert_eq!(shared.len(), SHARED_IDS);
+    // The radio answers requests on shared ids one at a time: each id that comes free
+    // goes to the next request in line.
+    for (&answered, waiting) in shared.iter().zip([[9, 4], [10, 3], [11, 3]]) {
+        send(&mut radio, &[0x88, answered, b'N', b'I', 0x00]).await;
+        let frame = next_within(&mut radio, Duration::from_secs(5), &hub).await;
+        assert_eq!(frame[4..], waiting, "{frame:02X?}");
+    }
+    assert_eq!(hub.stats().frames_refused, 0);
     hub.stop().await;
 }
 

@@ -603,7 +603,8 @@ pub(crate) fn turned_away_hint() -> String {
     "hint: the peer closed the connection before anything came from the radio: mcp-gs sim \
      and radio serve one connection at a time, let one more wait its turn and close any \
      other at once (to share one, use mcp-gs hub); a hub closes its clients' connections \
-     when it loses its radio (its own lines say so)"
+     when it loses its radio, and turns new ones away while it serves 64 (its own lines \
+     say so)"
         .to_owned()
 }
 
