@@ -91,12 +91,16 @@
 //!   radio's frames and its answers still go to it (its requests keep their ids
 //!   meanwhile, [`ANSWER_WINDOW`] at most); it is let go at once if writing to it
 //!   fails. A client falls behind once the radio has sent it more than the operating
-//!   system's buffers of its connection and its queue of [`CLIENT_QUEUE`] frames hold
-//!   (on Linux, a few thousand frames): connections that read nothing (a script that
-//!   forgot its sockets) give their places up only then, while a monitor that reads,
-//!   even one that sends nothing for hours, never loses its place; no client is
-//!   dropped for being quiet, as quiet is what a monitor is on a quiet network. A
-//!   client is not dropped either for falling behind while the hub has room.
+//!   system's buffers of its connection (the hub asks for 64 KiB on its side; Linux
+//!   doubles that) and its queue of [`CLIENT_QUEUE`] frames hold (1 500 frames of 250
+//!   bytes on Linux): connections that read nothing (a script that forgot its sockets)
+//!   give their places up only then, while a monitor that reads, even one that sends
+//!   nothing for hours, never loses its place; no client is dropped for being quiet, as
+//!   quiet is what a monitor is on a quiet network. A client is not dropped either for
+//!   falling behind while the hub has room. A connection whose peer is gone without a
+//!   word (a laptop asleep, a cable pulled) is found out by TCP keepalive probes, from a
+//!   minute quiet on, every 10 s until the system gives up (9 probes on Linux: two and
+//!   a half minutes in all), and the client let go.
 //! - **Reading clients:** a client's frames are read as the radio's, with the hub's
 //!   [`LinkOptions`]: a frame longer than [`LinkOptions::max_frame_len`] is refused
 //!   (counted in [`HubStats::frames_refused`]) as soon as its length is read, and in
@@ -974,6 +978,15 @@ impl Serve {
         bump(&self.counters.clients);
         // Frames one at a time, as the radio writes them.
         let _ = socket.set_nodelay(true);
+        // What the system holds for a client that reads nothing is bounded (it would
+        // otherwise grow to megabytes, thousands of frames), and a peer that went away
+        // without a word (a laptop asleep) is found out even on a quiet network.
+        let sock = socket2::SockRef::from(&socket);
+        let _ = sock.set_send_buffer_size(CLIENT_SEND_BUFFER);
+        let keepalive = socket2::TcpKeepalive::new()
+            .with_time(CLIENT_KEEPALIVE)
+            .with_interval(CLIENT_KEEPALIVE_INTERVAL);
+        let _ = sock.set_tcp_keepalive(&keepalive);
         let (queue, frames) = mpsc::channel(CLIENT_QUEUE);
         let end = self.stop.child_token();
         let behind = Arc::new(Mutex::new(None));
@@ -1122,6 +1135,18 @@ impl Serve {
         }
     }
 }
+
+/// The send buffer the hub asks the system for on each client's connection (Linux
+/// doubles it): with [`CLIENT_QUEUE`], how far a client that reads nothing can be
+/// behind before frames are dropped for it.
+const CLIENT_SEND_BUFFER: usize = 64 * 1024;
+
+/// A client's connection quiet for this long is probed (TCP keepalive), every
+/// [`CLIENT_KEEPALIVE_INTERVAL`], until its peer answers or the system gives it up.
+const CLIENT_KEEPALIVE: Duration = Duration::from_secs(60);
+
+/// See [`CLIENT_KEEPALIVE`].
+const CLIENT_KEEPALIVE_INTERVAL: Duration = Duration::from_secs(10);
 
 /// How long the hub waits to accept clients again after accepting one failed (out of
 /// file descriptors, say), serving the others meanwhile.
