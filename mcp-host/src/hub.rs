@@ -976,17 +976,7 @@ impl Serve {
         }
         tracing::info!(%peer, "hub: client connected");
         bump(&self.counters.clients);
-        // Frames one at a time, as the radio writes them.
-        let _ = socket.set_nodelay(true);
-        // What the system holds for a client that reads nothing is bounded (it would
-        // otherwise grow to megabytes, thousands of frames), and a peer that went away
-        // without a word (a laptop asleep) is found out even on a quiet network.
-        let sock = socket2::SockRef::from(&socket);
-        let _ = sock.set_send_buffer_size(CLIENT_SEND_BUFFER);
-        let keepalive = socket2::TcpKeepalive::new()
-            .with_time(CLIENT_KEEPALIVE)
-            .with_interval(CLIENT_KEEPALIVE_INTERVAL);
-        let _ = sock.set_tcp_keepalive(&keepalive);
+        tune_client_socket(&socket);
         let (queue, frames) = mpsc::channel(CLIENT_QUEUE);
         let end = self.stop.child_token();
         let behind = Arc::new(Mutex::new(None));
@@ -1244,6 +1234,21 @@ async fn check_radio_mode(
 }
 
 /// The next client of `listener`; never, without one.
+/// Sets a client's connection up: frames one at a time, as the radio writes them; what
+/// the system holds for a client that reads nothing bounded (it would otherwise grow to
+/// megabytes, thousands of frames); a peer that went away without a word (a laptop
+/// asleep) found out even on a quiet network. A setting the system refuses is left as
+/// it was.
+fn tune_client_socket(socket: &TcpStream) {
+    let _ = socket.set_nodelay(true);
+    let sock = socket2::SockRef::from(socket);
+    let _ = sock.set_send_buffer_size(CLIENT_SEND_BUFFER);
+    let keepalive = socket2::TcpKeepalive::new()
+        .with_time(CLIENT_KEEPALIVE)
+        .with_interval(CLIENT_KEEPALIVE_INTERVAL);
+    let _ = sock.set_tcp_keepalive(&keepalive);
+}
+
 async fn accept(listener: Option<&TcpListener>) -> std::io::Result<(TcpStream, SocketAddr)> {
     match listener {
         Some(listener) => listener.accept().await,
@@ -1682,5 +1687,28 @@ mod tests {
         ] {
             assert_eq!(not_sent_answer(none), None, "{none:02x?}");
         }
+    }
+
+    #[cfg(target_os = "linux")]
+    #[tokio::test]
+    async fn a_clients_connection_has_a_bounded_send_buffer_and_keepalive() {
+        let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
+        let (client, accepted) = tokio::join!(
+            TcpStream::connect(listener.local_addr().unwrap()),
+            listener.accept()
+        );
+        let (socket, _) = accepted.unwrap();
+        let _client = client.unwrap();
+        tune_client_socket(&socket);
+        let sock = socket2::SockRef::from(&socket);
+        assert!(socket.nodelay().unwrap());
+        // Linux doubles what is asked, for its own bookkeeping.
+        assert_eq!(sock.send_buffer_size().unwrap(), 2 * CLIENT_SEND_BUFFER);
+        assert!(sock.keepalive().unwrap());
+        assert_eq!(sock.tcp_keepalive_time().unwrap(), CLIENT_KEEPALIVE);
+        assert_eq!(
+            sock.tcp_keepalive_interval().unwrap(),
+            CLIENT_KEEPALIVE_INTERVAL
+        );
     }
 }
