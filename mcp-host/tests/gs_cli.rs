@@ -1703,3 +1703,27 @@ fn a_missing_on_or_off_is_named_so() {
         assert!(err.contains("<on|off>"), "{args:?}: {err}");
     }
 }
+
+#[test]
+fn a_radio_or_hub_without_room_says_to_try_again_shortly() {
+    let (link, radio) = common::refusing_radio(0x32);
+    let output = run(&[
+        "send",
+        "--link",
+        &link,
+        "--to",
+        "0013a20040b599b9",
+        "landing",
+        "on",
+    ]);
+    radio.join().unwrap();
+    assert_eq!(output.status.code(), Some(5), "{output:?}");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("resource_error"), "{stderr}");
+    assert!(
+        stderr.contains("hint: the radio had no room for the frame")
+            && stderr.contains("a hub between had no frame id free for it in time")
+            && stderr.contains("try again shortly"),
+        "{stderr}"
+    );
+}

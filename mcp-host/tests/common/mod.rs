@@ -328,6 +328,39 @@ fn peer_writing(connections: usize, bytes: Vec<u8>) -> (String, std::thread::Joi
     (link, peer)
 }
 
+/// A TCP peer that takes one connection and answers every Transmit Request (0x10) it
+/// reads, in API mode 1, with a Transmit Status of `delivery` (from the 16-bit address
+/// 0xFFFE, no retries), until the other side hangs up: a radio that refuses. Its `tcp:`
+/// link, and the thread to join.
+pub fn refusing_radio(delivery: u8) -> (String, std::thread::JoinHandle<()>) {
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let link = format!("tcp:{}", listener.local_addr().unwrap());
+    let peer = std::thread::spawn(move || {
+        let (mut socket, _) = listener.accept().unwrap();
+        let mut decoder = xbee_api::Decoder::<512>::new(ApiMode::Unescaped);
+        let mut buf = [0u8; 256];
+        while let Ok(n @ 1..) = std::io::Read::read(&mut socket, &mut buf) {
+            let mut ids = Vec::new();
+            decoder.decode_each(&buf[..n], |event| {
+                if let Ok(frame) = event {
+                    if let [0x10, id, ..] = frame.data() {
+                        ids.push(*id);
+                    }
+                }
+            });
+            for id in ids {
+                let status = [0x8B, id, 0xFF, 0xFE, 0x00, delivery, 0x00];
+                let frame = xbee_api::RawFrame::new(&status).unwrap();
+                let mut out = [0u8; 32];
+                let len =
+                    xbee_api::EncodeFrame::encode(&frame, ApiMode::Unescaped, &mut out).unwrap();
+                std::io::Write::write_all(&mut socket, &out[..len]).unwrap();
+            }
+        }
+    });
+    (link, peer)
+}
+
 /// A TCP peer that takes one connection and keeps what it reads until the other side
 /// hangs up: where a replay goes. Its `tcp:` link, and the thread that gives the bytes.
 pub fn recording_peer() -> (String, std::thread::JoinHandle<Vec<u8>>) {

@@ -632,6 +632,12 @@ pub(crate) fn diagnosed_send(error: SendError, link: &LinkArgs, stats: &Stats) -
                 link.link
             ))
         }
+        SendError::Delivery { status, .. } if *status == DeliveryStatus::ResourceError => Some(
+            "hint: the radio had no room for the frame (buffers, timers), or a hub between \
+             had no frame id free for it in time (many requests of its clients waiting for \
+             answers): try again shortly"
+                .to_owned(),
+        ),
         _ => None,
     };
     let unanswered = matches!(error, SendError::Timeout { .. });
