@@ -36,13 +36,16 @@ async fn served(hub: &Hub, radio: &mut Wire) -> Wire {
     client
 }
 
-#[tokio::test(flavor = "multi_thread")]
-async fn connections_that_take_nothing_give_their_place_to_new_clients_but_readers_keep_theirs() {
-    let (hub, mut radio) = hub_and_radio().await;
-
-    // A monitor that reads all the radio's frames, and connections that never read.
+/// A monitor of `hub` that reads every frame: the number each received packet from
+/// [`radio_batch`] carries, on the channel.
+async fn numbered_monitor(
+    hub: &Hub,
+) -> (
+    tokio::task::JoinHandle<()>,
+    tokio::sync::mpsc::UnboundedReceiver<u32>,
+) {
     let reader = TcpStream::connect(hub.local_addr()).await.unwrap();
-    let (seen, mut seen_rx) = tokio::sync::mpsc::unbounded_channel();
+    let (seen, seen_rx) = tokio::sync::mpsc::unbounded_channel();
     let reading = tokio::spawn(async move {
         let mut reader = Framed::new(reader, XBeeCodec::new(ApiMode::Unescaped));
         while let Some(Ok(CodecItem::Frame(frame))) = reader.next().await {
@@ -50,6 +53,42 @@ async fn connections_that_take_nothing_give_their_place_to_new_clients_but_reade
             let _ = seen.send(u32::from_be_bytes(data[12..16].try_into().unwrap()));
         }
     });
+    (reading, seen_rx)
+}
+
+/// The radio sends `batch` received packets of 250 bytes, numbered on from `number`;
+/// returns once the [`numbered_monitor`] has them all.
+async fn radio_batch(
+    radio: &mut Wire,
+    number: &mut u32,
+    batch: u32,
+    seen: &mut tokio::sync::mpsc::UnboundedReceiver<u32>,
+) {
+    let mut packet = vec![
+        0x90, 0, 0x13, 0xA2, 0, 0x40, 0xB5, 0x99, 0xB9, 0xFF, 0xFE, 0x01,
+    ];
+    for _ in 0..batch {
+        *number += 1;
+        packet.truncate(12);
+        packet.extend_from_slice(&number.to_be_bytes());
+        packet.resize(250, b'm');
+        radio.feed(&RawFrame::new(&packet).unwrap()).await.unwrap();
+    }
+    SinkExt::<&RawFrame<'_>>::flush(radio).await.unwrap();
+    loop {
+        let got = tokio::time::timeout(GUARD, seen.recv()).await.unwrap();
+        if got.expect("the monitor stays") == *number {
+            return;
+        }
+    }
+}
+
+#[tokio::test(flavor = "multi_thread")]
+async fn connections_that_take_nothing_give_their_place_to_new_clients_but_readers_keep_theirs() {
+    let (hub, mut radio) = hub_and_radio().await;
+
+    // A monitor that reads all the radio's frames, and connections that never read.
+    let (reading, mut seen_rx) = numbered_monitor(&hub).await;
     let mut idle = Vec::new();
     for _ in 1..MAX_CLIENTS {
         idle.push(TcpStream::connect(hub.local_addr()).await.unwrap());
@@ -61,30 +100,14 @@ async fn connections_that_take_nothing_give_their_place_to_new_clients_but_reade
 
     // The radio sends received packets until every idle connection has fallen behind:
     // each packet of a batch dropped for all of them.
-    let mut packet = vec![
-        0x90, 0, 0x13, 0xA2, 0, 0x40, 0xB5, 0x99, 0xB9, 0xFF, 0xFE, 0x01,
-    ];
     let mut number = 0u32;
     let batch = 200;
     loop {
         let dropped = hub.stats().frames_dropped;
-        for _ in 0..batch {
-            number += 1;
-            packet.truncate(12);
-            packet.extend_from_slice(&number.to_be_bytes());
-            packet.resize(250, b'm');
-            radio.feed(&RawFrame::new(&packet).unwrap()).await.unwrap();
-        }
-        SinkExt::<&RawFrame<'_>>::flush(&mut radio).await.unwrap();
         // The monitor keeps up.
-        loop {
-            let seen = tokio::time::timeout(GUARD, seen_rx.recv()).await.unwrap();
-            if seen.expect("the monitor stays") == number {
-                break;
-            }
-        }
+        radio_batch(&mut radio, &mut number, batch, &mut seen_rx).await;
         let idle_count = (MAX_CLIENTS - 1) as u64;
-        if hub.stats().frames_dropped - dropped == idle_count * batch {
+        if hub.stats().frames_dropped - dropped == idle_count * u64::from(batch) {
             break;
         }
     }
@@ -97,11 +120,7 @@ async fn connections_that_take_nothing_give_their_place_to_new_clients_but_reade
     // Now nobody is behind: the monitor kept its place, and the next is turned away.
     let mut late = TcpStream::connect(hub.local_addr()).await.unwrap();
     assert!(turned_away(&mut late).await);
-    packet.truncate(12);
-    packet.extend_from_slice(&(number + 1).to_be_bytes());
-    send(&mut radio, &packet).await;
-    let seen = tokio::time::timeout(GUARD, seen_rx.recv()).await.unwrap();
-    assert_eq!(seen, Some(number + 1));
+    radio_batch(&mut radio, &mut number, 1, &mut seen_rx).await;
     assert!(!reading.is_finished());
     drop(idle);
     hub.stop().await;
@@ -131,15 +150,7 @@ async fn clients_that_closed_their_connections_give_their_places_up_on_a_quiet_r
 async fn a_connection_that_reads_nothing_falls_behind_after_a_bounded_number_of_frames() {
     let (hub, mut radio) = hub_and_radio().await;
     // A monitor that reads, to know when the hub has passed every frame on.
-    let reader = TcpStream::connect(hub.local_addr()).await.unwrap();
-    let (seen, mut seen_rx) = tokio::sync::mpsc::unbounded_channel();
-    tokio::spawn(async move {
-        let mut reader = Framed::new(reader, XBeeCodec::new(ApiMode::Unescaped));
-        while let Some(Ok(CodecItem::Frame(frame))) = reader.next().await {
-            let data = frame.data();
-            let _ = seen.send(u32::from_be_bytes(data[12..16].try_into().unwrap()));
-        }
-    });
+    let (_reading, mut seen_rx) = numbered_monitor(&hub).await;
     // A connection that reads nothing, with a small receive buffer of its own.
     let socket = tokio::net::TcpSocket::new_v4().unwrap();
     socket.set_recv_buffer_size(4096).unwrap();
@@ -150,25 +161,9 @@ async fn a_connection_that_reads_nothing_falls_behind_after_a_bounded_number_of_
     assert_eq!(next(&mut radio).await, [0x08, 0x00, b'S', b'H']);
 
     // 250-byte frames in batches, until one is dropped for the idle connection.
-    let mut packet = vec![
-        0x90, 0, 0x13, 0xA2, 0, 0x40, 0xB5, 0x99, 0xB9, 0xFF, 0xFE, 0x01,
-    ];
     let mut number = 0u32;
     while hub.stats().frames_dropped == 0 {
-        for _ in 0..100 {
-            number += 1;
-            packet.truncate(12);
-            packet.extend_from_slice(&number.to_be_bytes());
-            packet.resize(250, b'm');
-            radio.feed(&RawFrame::new(&packet).unwrap()).await.unwrap();
-        }
-        SinkExt::<&RawFrame<'_>>::flush(&mut radio).await.unwrap();
-        loop {
-            let seen = tokio::time::timeout(GUARD, seen_rx.recv()).await.unwrap();
-            if seen.expect("the monitor stays") == number {
-                break;
-            }
-        }
+        radio_batch(&mut radio, &mut number, 100, &mut seen_rx).await;
         assert!(number < 10_000, "never behind: {:?}", hub.stats());
     }
     // The queue, 1024 frames, and about 128 KiB in the system's buffers on the hub's
