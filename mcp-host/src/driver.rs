@@ -352,6 +352,12 @@ pub(crate) struct Driver {
     pub(crate) ops: mpsc::Receiver<Op>,
     /// Requests that need no frame id (raw writes, transmits without status).
     pub(crate) writes: mpsc::Receiver<Op>,
+    /// Closed once every handle that can send (a sender, a sink) is dropped: seen even
+    /// while no request is taken (writes backed up), where `ops` and `writes` are not
+    /// polled.
+    alive: mpsc::Receiver<()>,
+    /// Whether a handle that can send is left ([`Self::alive`] not closed yet).
+    handles_alive: bool,
     pub(crate) events: mpsc::Sender<Event>,
     /// The [`Subscription`](crate::Subscription)s: every event goes there too.
     subscribers: EndSubscriptions,
@@ -389,16 +395,16 @@ const PENDING_LINKS_MAX: usize = 64;
 const CLOSE_FLUSH: Duration = Duration::from_secs(1);
 
 impl Driver {
-    /// Whether a [`crate::CommandSender`] is left to send requests.
+    /// Whether a [`crate::CommandSender`] (or a sink) is left to send requests.
     fn senders_open(&self) -> bool {
-        self.ops_open || self.writes_open
+        self.handles_alive && (self.ops_open || self.writes_open)
     }
 
     pub(crate) fn new(
         connector: Connector,
         options: LinkOptions,
         // Requests that need a frame id, and those that need none.
-        (ops, writes): (mpsc::Receiver<Op>, mpsc::Receiver<Op>),
+        (ops, writes, alive): (mpsc::Receiver<Op>, mpsc::Receiver<Op>, mpsc::Receiver<()>),
         (events, subscribers): (mpsc::Sender<Event>, Arc<Subscribers>),
         counters: Arc<Counters>,
         close_requested: Arc<Notify>,
@@ -410,6 +416,8 @@ impl Driver {
             options,
             ops,
             writes,
+            alive,
+            handles_alive: true,
             events,
             subscribers: EndSubscriptions(subscribers),
             counters,
@@ -547,7 +555,8 @@ impl Driver {
                 permit = async { self.events.clone().reserve_owned().await }, if !self.pending_links.is_empty() => {
                     deliver_pending_link(&mut self.pending_links, permit);
                 }
-                _ = self.events.closed(), if !(self.ops_open || self.writes_open) => return Err(Stop::Shutdown),
+                None = self.alive.recv(), if self.handles_alive => self.handles_alive = false,
+                _ = self.events.closed(), if !(self.handles_alive && (self.ops_open || self.writes_open)) => return Err(Stop::Shutdown),
                 () = self.close_requested.notified() => {
                     return Err(Stop::Fatal(CLOSED_BY_APPLICATION.to_owned()));
                 }
@@ -625,6 +634,9 @@ impl Driver {
                 permit = async { self.events.clone().reserve_owned().await }, if !self.pending_links.is_empty() => {
                     deliver_pending_link(&mut self.pending_links, permit);
                 }
+                // The last handle that can send gone, seen even while writes are backed up
+                // and no request is taken.
+                None = self.alive.recv(), if self.handles_alive => self.handles_alive = false,
                 _ = self.events.closed(), if !self.senders_open() => {
                     self.flush_before_end(&mut wr, &mut out, &mut sent).await;
                     return Served::Shutdown;

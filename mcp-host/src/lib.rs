@@ -337,6 +337,9 @@ async fn serve(
     let counters = Arc::new(stats::Counters::default());
     let (ops_tx, ops_rx) = mpsc::channel(OPS_CAPACITY);
     let (writes_tx, writes_rx) = mpsc::channel(OPS_CAPACITY);
+    // Never sent on: it closes when the last handle that can send (a sender, a sink) is
+    // dropped, which the link's task sees even while it takes no requests.
+    let (alive_tx, alive_rx) = mpsc::channel(1);
     let (events_tx, events_rx) = mpsc::channel(options.event_capacity);
     let subscribers = Arc::new(subscription::Subscribers::new(options.event_capacity));
     let close_requested = Arc::new(tokio::sync::Notify::new());
@@ -350,6 +353,7 @@ async fn serve(
     let sender = CommandSender {
         ops: ops_tx,
         writes: writes_tx,
+        alive: alive_tx,
         default_timeout: options.send_timeout,
         counters: counters.clone(),
         info: info.clone(),
@@ -360,7 +364,7 @@ async fn serve(
     let driver = driver::Driver::new(
         connector,
         options,
-        (ops_rx, writes_rx),
+        (ops_rx, writes_rx, alive_rx),
         (events_tx, subscribers),
         counters.clone(),
         close_requested,

@@ -83,6 +83,9 @@ pub struct CommandSender {
     pub(crate) ops: mpsc::Sender<Op>,
     /// Requests that need none, which go out while those wait for one.
     pub(crate) writes: mpsc::Sender<Op>,
+    /// Held, never sent on, by every handle that can send: closed once they are all
+    /// dropped.
+    pub(crate) alive: mpsc::Sender<()>,
     pub(crate) default_timeout: Duration,
     pub(crate) counters: Arc<Counters>,
     pub(crate) info: Arc<LinkInfo>,
@@ -536,7 +539,7 @@ impl CommandSender {
     /// sent without a transmit status (frame id 0), in order: for feeding a stream of
     /// packets to the radio (see [`PacketSink`](crate::PacketSink)).
     pub fn packet_sink<B: AsRef<[u8]>>(&self) -> crate::PacketSink<B> {
-        crate::PacketSink::new(self.writes.clone(), self.state.clone())
+        crate::PacketSink::new(self.writes.clone(), self.alive.clone(), self.state.clone())
     }
 
     /// The link's counters.

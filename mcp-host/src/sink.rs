@@ -75,6 +75,9 @@ use crate::{LinkState, SendError};
 /// ```
 pub struct PacketSink<B = Bytes> {
     writes: PollSender<Op>,
+    /// Held, never sent on, so that the link's task sees when the last handle that can
+    /// send is gone (see [`CommandSender`](crate::CommandSender)).
+    _alive: mpsc::Sender<()>,
     /// The answer of the last packet handed over and not yet flushed: the link's task
     /// takes the queue's packets in order, so once it took this one it took them all.
     last: Option<oneshot::Receiver<Result<(), SendError>>>,
@@ -87,7 +90,11 @@ pub struct PacketSink<B = Bytes> {
 }
 
 impl<B> PacketSink<B> {
-    pub(crate) fn new(writes: mpsc::Sender<Op>, state: watch::Receiver<LinkState>) -> Self {
+    pub(crate) fn new(
+        writes: mpsc::Sender<Op>,
+        alive: mpsc::Sender<()>,
+        state: watch::Receiver<LinkState>,
+    ) -> Self {
         let now = *state.borrow();
         let changes = futures::stream::unfold(state, |mut state| async move {
             state.changed().await.ok()?;
@@ -96,6 +103,7 @@ impl<B> PacketSink<B> {
         });
         Self {
             writes: PollSender::new(writes),
+            _alive: alive,
             last: None,
             state: now,
             changes: Box::pin(changes),

@@ -156,3 +156,60 @@ fn an_io_link_keeps_the_handles_shareable_between_threads() {
     shareable::<mcp_host::Transport>();
     shareable::<mcp_host::Connector>();
 }
+
+/// A radio that takes no more bytes (flow control held, a hung bridge) leaves requests
+/// backed up in the link's task; once the stream and every sender are dropped, the link
+/// still ends (its transport closed, its subscriptions told), rather than waiting for a
+/// radio that may never read again.
+#[tokio::test]
+async fn dropping_every_handle_ends_the_link_while_writes_are_backed_up() {
+    let (ours, mut radio) = tokio::io::duplex(64);
+    let (stream, sender) = mcp_host::connect_io("stuck", ours, LinkOptions::default())
+        .await
+        .unwrap();
+    let mut subscription = sender.subscribe();
+    let options = mcp_host::SendOptions {
+        timeout: None,
+        frame_id: mcp_host::FrameId::None,
+    };
+    // Fire-and-forget frames (218 bytes each) are written, as far as their callers
+    // know, once queued: the 76 first fill the queue past 16 KiB, after which the link's
+    // task takes no more requests. The others wait to be taken.
+    let mut sends = Vec::new();
+    for _ in 0..100 {
+        let sender = sender.clone();
+        sends.push(tokio::spawn(async move {
+            sender.send_payload(MAV, vec![0u8; 200], options).await
+        }));
+    }
+    let waiting = sends.split_off(76);
+    for send in sends {
+        let written = tokio::time::timeout(GUARD, send).await.unwrap().unwrap();
+        assert_eq!(written.unwrap(), mcp_host::DeliveryReport::Written);
+    }
+    for send in &waiting {
+        send.abort();
+    }
+    // Given up, and every handle dropped: the link ends.
+    for send in waiting {
+        assert!(send.await.unwrap_err().is_cancelled());
+    }
+    drop(stream);
+    drop(sender);
+    let ended = tokio::time::timeout(GUARD, async {
+        let mut last = None;
+        while let Some(event) = futures::StreamExt::next(&mut subscription).await {
+            last = Some(event);
+        }
+        last
+    })
+    .await
+    .expect("the link ends");
+    assert!(
+        matches!(ended, Some(mcp_host::Event::Link(LinkEvent::Closed { .. }))),
+        "{ended:?}"
+    );
+    // Its transport is closed: the radio's end finds no one there.
+    let written = tokio::io::AsyncWriteExt::write_all(&mut radio, b"x").await;
+    assert!(written.is_err(), "{written:?}");
+}
