@@ -53,26 +53,31 @@
 //!   [`SHARED_IDS`] (127) with every client's, so that a few clients whose requests
 //!   the radio is slow to answer, or never answers, cannot leave the others without
 //!   ids. Requests waiting for a shared id get one in the order they came. A request
-//!   that waits [`REQUEST_WAIT`] in all (for its client's places, then for an id) is
-//!   not sent: it is refused, and answered at once as the radio answers a request it
-//!   could not carry out (an AT command `ERROR`, a transmission's delivery status 0x32,
-//!   resource error, a remote AT command's transmission failure; other requests get no
-//!   answer), so that a command does not reach a MAV after its client gave up on it, or
-//!   left; the client's requests after it wait no more until one goes. When a client
+//!   that has not gone to the radio [`REQUEST_WAIT`] after the hub could first have
+//!   read it (it waited for its client's places, for an id, or its turn; while a
+//!   request waits, the hub reads none of the client's bytes, so the frames behind it
+//!   are counted as waiting since then) is not sent: it is refused, and answered at
+//!   once as the radio answers a request it could not carry out (an AT command
+//!   `ERROR`, a transmission's delivery status 0x32, resource error, a remote AT
+//!   command's transmission failure; other requests get no answer), so that a command
+//!   does not reach a MAV after its client gave up on it, or left. When a client
 //!   leaves (its connection fails, or the hub ends it), its requests not yet written
-//!   give their ids back; those written keep them until their answers come (which are
-//!   dropped) or [`ANSWER_WINDOW`] ends, so that a late answer never reaches a new
-//!   request under the same id. A client that closed its connection still gets its
-//!   answers until it is let go (see below). Requests that waited are counted in
-//!   [`HubStats::requests_held`]. A frame of a type a radio sends
+//!   give their ids back; those written keep them, each on one of the shared ids,
+//!   until their answers come (which are dropped) or [`ANSWER_WINDOW`] ends, so that a
+//!   late answer never reaches a new request under the same id (with no shared id
+//!   free, one gives its id back: an answer also goes to a request only if it is of
+//!   the request's type and, for an AT command, echoes its command). A client that
+//!   closed its connection still gets its answers until it is let go (see below).
+//!   Requests that waited are counted in [`HubStats::requests_held`]. A frame of a
+//!   type a radio sends
 //!   rather than takes (its high bit set: 0x88 AT Command Response, 0x90 Receive
 //!   Packet, ...) is refused, whatever its second byte, and counted in
 //!   [`HubStats::frames_refused`]: a radio would drop it unanswered. Other frames with
 //!   frame id 0 (no answer wanted) are written as they are, whatever their type. A
 //!   frame refused for what it is (its type, its id, its length, its checksum or
-//!   escapes, no id in time) is said as a warning (the first at once, then at most one a second with the number not
-//!   said); one dropped because the radio's link was down or its client was ended is
-//!   counted alone. A frame with a frame
+//!   escapes, not sent in time) is said as a warning (the first at once, then at most
+//!   one a second with the number not said); one dropped because the radio's link was
+//!   down or its client was ended is counted alone. A frame with a frame
 //!   id (its second byte, in every XBee request) is refused and counted in
 //!   [`HubStats::frames_refused`] if its type is not in the table (the hub cannot tell
 //!   its answers from those to other clients' requests), or if it is cut short of the
@@ -214,13 +219,14 @@ pub const IDS_PER_CLIENT: usize = 2;
 /// [`IDS_PER_CLIENT`]: 127.
 pub const SHARED_IDS: usize = u8::MAX as usize - MAX_CLIENTS * IDS_PER_CLIENT;
 
-/// How long a client's request waits, at most, to be let go to the radio: for one of
-/// its client's [`ROUTES_PER_CLIENT`] (or [`MANY_ANSWER_PER_CLIENT`]) places, then for a
-/// frame id. A request still waiting then is refused, and answered at once with a
-/// failure of its type where it has one (see the [module](self) docs): its client may
-/// have given up on it, or gone, and a command must not reach a MAV long after its
-/// sender was told it failed. The client's next requests (as stale) are then refused
-/// unless they can go at once, until one goes.
+/// How long after the hub could first have read a client's request it must have gone to
+/// the radio: it may wait for one of its client's [`ROUTES_PER_CLIENT`] (or
+/// [`MANY_ANSWER_PER_CLIENT`]) places, for a frame id, then for its turn. A request
+/// still waiting then is refused, and answered at once with a failure of its type where
+/// it has one (see the [module](self) docs): its client may have given up on it, or
+/// gone, and a command must not reach a MAV long after its sender was told it failed.
+/// While one request waits, the hub reads none of the client's bytes: the requests
+/// behind it, read after, count from when it began to wait.
 pub const REQUEST_WAIT: Duration = Duration::from_secs(5);
 
 /// Frames of one client read by the hub and waiting for their turn to the radio, at
@@ -279,16 +285,17 @@ pub struct HubStats {
     pub frames_from_clients: u64,
     /// Frames from the radio not given to a client that had fallen behind.
     pub frames_dropped: u64,
-    /// Frames of clients not written: a frame of a type a radio sends (0x80 and up),
-    /// all 255 frame ids were waiting for answers, a frame id on a frame type the hub
-    /// does not know or on a request cut short of its
-    /// fixed fields (see the [module](self) docs), frames longer than the hub takes
-    /// ([`LinkOptions::max_frame_len`]), the link to the radio was down, or the client
-    /// was ended before their turn.
+    /// Frames of clients not written: a frame of a type a radio sends (0x80 and up), a
+    /// request not sent in [`REQUEST_WAIT`], a frame id on a frame type the hub does not
+    /// know or on a request cut short of its fixed fields (see the [module](self)
+    /// docs), frames longer than the hub takes ([`LinkOptions::max_frame_len`]) or that
+    /// fail their checksum or escapes (or are cut off), the link to the radio was
+    /// down, or the client was ended before their turn.
     pub frames_refused: u64,
     /// Requests of clients that had to wait for a frame id before they went to the
-    /// radio: their client had [`ROUTES_PER_CLIENT`] requests waiting for answers (or
-    /// [`MANY_ANSWER_PER_CLIENT`] answered many times), or all 255 ids were taken.
+    /// radio (or were refused for it): their client had [`ROUTES_PER_CLIENT`] requests
+    /// waiting for answers (or [`MANY_ANSWER_PER_CLIENT`] answered many times), the
+    /// [`SHARED_IDS`] were all taken, or all 255 ids were.
     pub requests_held: u64,
     /// Clients turned away: [`MAX_CLIENTS`] were connected and none could give its
     /// place. The first is logged as a warning, the next ones counted in a warning at
@@ -519,6 +526,9 @@ struct Route {
     /// The frame type of the answers (see [`answer_type`]): an answer of another type
     /// under the same id is not this request's.
     answer_type: u8,
+    /// The AT command of an AT or remote AT request ([`at_command`]): an answer that
+    /// echoes another is not this request's either.
+    command: Option<[u8; 2]>,
     /// Until when answers are due: [`ANSWER_WINDOW`] from when the request was written
     /// to the radio; `None` while it waits its turn (no answer is due yet, and the route
     /// does not expire).
@@ -528,7 +538,9 @@ struct Route {
     many: bool,
     /// Its client has gone since the request was written: its answers are dropped, and
     /// its id stays taken until they have come (or `until`), so that no late answer
-    /// of its reaches a new request under the same id.
+    /// of its reaches a new request under the same id. An orphan holds one of the
+    /// [`SHARED_IDS`] (taken when it became one, if it had none): orphans never take
+    /// the ids each client's first requests find.
     orphan: Cell<bool>,
     /// One of the client's [`ROUTES_PER_CLIENT`] permits, given back with the route.
     _permit: OwnedSemaphorePermit,
@@ -589,33 +601,36 @@ impl Routes {
     }
 
     /// Ends the routes of client `client` (gone) whose requests were not written: the
-    /// others stay, orphans, until their answers have come or are no longer due.
-    fn forget(&mut self, client: u64) {
-        self.0.remove_where(
-            |r| {
-                let written = r.until.get().is_some();
-                if r.client == client && written {
-                    r.orphan.set(true);
+    /// others stay, orphans, until their answers have come or are no longer due, each
+    /// on one of the `shared` ids. One that finds none free ends too (its late answer,
+    /// if any comes, could then reach another request under its id, of the same type
+    /// and, for an AT command, the same command: rare).
+    fn forget(&mut self, client: u64, shared: &Arc<Semaphore>) {
+        for route in self.0.values_mut() {
+            if route.client == client && route.until.get().is_some() {
+                if route._shared.is_none() {
+                    route._shared = shared.clone().try_acquire_owned().ok();
                 }
-                r.client == client && !written
-            },
-            |_, _| {},
-        );
+                route.orphan.set(route._shared.is_some());
+            }
+        }
+        self.0
+            .remove_where(|r| r.client == client && !r.orphan.get(), |_, _| {});
     }
 
-    /// Where an answer of type `frame_type` under hub id `id` goes, and the client's own
-    /// id; the route ends with it unless more answers are due.
-    fn answer(
-        &mut self,
-        id: u8,
-        frame_type: u8,
-        now: Instant,
-    ) -> Option<(mpsc::Sender<Bytes>, u8)> {
+    /// Where `answer` (frame data) under hub id `id` goes, and the client's own id; the
+    /// route ends with it unless more answers are due.
+    fn answer(&mut self, id: u8, answer: &[u8], now: Instant) -> Option<(mpsc::Sender<Bytes>, u8)> {
         let route = self.0.get(id)?;
         // Not yet written: not its answer (a late one to an earlier request).
         let until = route.until.get()?;
-        if route.answer_type != frame_type {
+        if Some(&route.answer_type) != answer.first() {
             return None;
+        }
+        if let (Some(asked), Some(echoed)) = (route.command, at_command(answer)) {
+            if !asked.eq_ignore_ascii_case(&echoed) {
+                return None;
+            }
         }
         // An orphan's answer is taken, and goes nowhere.
         let to = (until > now && !route.orphan.get()).then(|| (route.queue.clone(), route.own_id));
@@ -626,21 +641,31 @@ impl Routes {
     }
 }
 
-/// Whether a request gets several answers under its id: AT (or queued AT) node
-/// discovery, find neighbors and active scan, and a remote AT command to the broadcast
-/// address (every radio in range answers).
+/// Whether a request gets several answers under its id: node discovery, find neighbors
+/// and active scan, as local AT (or queued AT) commands or remote ones (a remote radio
+/// sends each answer on its own), and any remote AT command to the broadcast address
+/// (every radio in range answers).
 fn answered_many_times(data: &[u8]) -> bool {
-    match data {
-        // Command mode takes a command's letters in either case, and a radio may in
-        // API frames too: kept open for the window at worst, never cut short.
-        [0x08 | 0x09, _, command @ ..] => [b"ND", b"AS", b"FN"].iter().any(|name| {
-            command
-                .get(..2)
-                .is_some_and(|c| c.eq_ignore_ascii_case(*name))
-        }),
-        [0x17, _, 0, 0, 0, 0, 0, 0, 0xFF, 0xFF, ..] => true,
-        _ => false,
-    }
+    // Command mode takes a command's letters in either case, and a radio may in API
+    // frames too: kept open for the window at worst, never cut short.
+    let gathers = at_command(data).is_some_and(|command| {
+        [b"ND", b"AS", b"FN"]
+            .iter()
+            .any(|name| command.eq_ignore_ascii_case(*name))
+    });
+    gathers || matches!(data, [0x17, _, 0, 0, 0, 0, 0, 0, 0xFF, 0xFF, ..])
+}
+
+/// The AT command of an AT request or answer (frame data): local (0x08, 0x09, 0x88) or
+/// remote (0x17, 0x97); `None` for other frames, or one cut short of it.
+fn at_command(data: &[u8]) -> Option<[u8; 2]> {
+    let at = match data.first()? {
+        0x08 | 0x09 | 0x88 => 2,
+        0x97 => 12,
+        0x17 => 13,
+        _ => return None,
+    };
+    data.get(at..at + 2)?.try_into().ok()
 }
 
 /// How the hub reads its clients' frames: as it reads the radio's, with its
@@ -676,7 +701,16 @@ fn is_whole_request(data: &[u8]) -> bool {
 
 /// A client's queue of frames to the radio, and the client (kept until the queue is
 /// drained, so that the routes of its last frames stay until these are written).
-type ClientFrames = (mpsc::Receiver<Vec<u8>>, Arc<Client>);
+type ClientFrames = (mpsc::Receiver<Queued>, Arc<Client>);
+
+/// A client's frame on its way to the radio.
+struct Queued {
+    /// Its frame data, a request's under its hub id.
+    data: Vec<u8>,
+    /// For a request: when it must have gone to the radio ([`REQUEST_WAIT`] after the
+    /// hub could first have read it); one still waiting its turn then is not sent.
+    deadline: Option<Instant>,
+}
 
 /// The clients' queues of frames to the radio, taken by the [`RadioWriter`].
 #[derive(Default)]
@@ -716,10 +750,22 @@ impl RadioWriter {
                     () = tokio::time::sleep(ahead - RADIO_BACKLOG) => {}
                 }
             }
-            let data = tokio::select! {
+            let (Queued { data, deadline }, client) = tokio::select! {
                 () = stop.cancelled() => return,
-                data = self.next_frame(&mut queues, &mut next) => data,
+                queued = self.next_frame(&mut queues, &mut next) => queued,
             };
+            // A request that waited its turn too long: not sent, answered as failed.
+            if let (Some(deadline), [_, hub_id, ..]) = (deadline, &data[..]) {
+                if Instant::now() >= deadline {
+                    let route = lock(&self.routes).0.remove(*hub_id);
+                    if let Some(route) = route {
+                        let mut request = data.clone();
+                        request[1] = route.own_id;
+                        client.not_sent(&request, "its turn to the radio");
+                    }
+                    continue;
+                }
+            }
             // A request's answers are due from now on (the window does not start while
             // the request waits its turn), and not before: the route is marked before the
             // radio can answer.
@@ -750,7 +796,11 @@ impl RadioWriter {
     }
 
     /// The next client's next frame, in turn.
-    async fn next_frame(&self, queues: &mut Vec<ClientFrames>, next: &mut usize) -> Vec<u8> {
+    async fn next_frame(
+        &self,
+        queues: &mut Vec<ClientFrames>,
+        next: &mut usize,
+    ) -> (Queued, Arc<Client>) {
         loop {
             queues.append(&mut lock(&self.to_radio.new));
             // Whatever the other queues hold: the queues of clients ended (their frames
@@ -771,9 +821,9 @@ impl RadioWriter {
             let n = queues.len();
             for step in 0..n {
                 let index = (*next + step) % n;
-                if let Ok(data) = queues[index].0.try_recv() {
+                if let Ok(queued) = queues[index].0.try_recv() {
                     *next = index + 1;
-                    return data;
+                    return (queued, queues[index].1.clone());
                 }
             }
             // A frame queued (or a queue added) since the look above has left a permit.
@@ -896,6 +946,10 @@ impl Serve {
                              warning"
                         );
                     }
+                    // And the failed accepts.
+                    if let Some(more) = accept_failures.take_due(Instant::now()) {
+                        tracing::warn!("hub: accepting a client failed {more} more times");
+                    }
                 }
                 accepted = accept(listener.as_ref()), if !accept_paused => match accepted {
                     Ok((socket, peer)) => self.accept(socket, peer),
@@ -1006,7 +1060,6 @@ impl Serve {
             end,
             behind,
             closed,
-            refusing: AtomicBool::new(false),
         });
         let (rd, wr) = socket.into_split();
         let (frames_to_radio, queue) = mpsc::channel(CLIENT_FRAMES_TO_RADIO);
@@ -1085,7 +1138,7 @@ impl Serve {
         bump(&self.counters.frames_from_radio);
         if let [frame_type, id, ..] = data[..] {
             if is_response(frame_type) && id != 0 {
-                self.answer(data, frame_type, id);
+                self.answer(data, id);
                 return;
             }
         }
@@ -1105,11 +1158,11 @@ impl Serve {
             });
     }
 
-    /// An answer of type `frame_type` under hub id `id`: to the client that asked, under
-    /// its own id; dropped if nobody asked for an answer of that type (every id on the
-    /// hub's link is the hub's).
-    fn answer(&self, data: &[u8], frame_type: u8, id: u8) {
-        let to = lock(&self.routes).answer(id, frame_type, Instant::now());
+    /// An answer under hub id `id`: to the client that asked, under its own id; dropped
+    /// if nobody asked for an answer of that type (and AT command) under it (every id on
+    /// the hub's link is the hub's).
+    fn answer(&self, data: &[u8], id: u8) {
+        let to = lock(&self.routes).answer(id, data, Instant::now());
         let Some((client, own_id)) = to else {
             tracing::debug!(id, "hub: an answer nobody waits for dropped");
             return;
@@ -1137,6 +1190,11 @@ const CLIENT_KEEPALIVE: Duration = Duration::from_secs(60);
 
 /// See [`CLIENT_KEEPALIVE`].
 const CLIENT_KEEPALIVE_INTERVAL: Duration = Duration::from_secs(10);
+
+/// Linux: a client's connection whose data has gone unacknowledged this long is given
+/// up (`TCP_USER_TIMEOUT`), as a quiet one is by keepalive.
+#[cfg(target_os = "linux")]
+const CLIENT_USER_TIMEOUT: Duration = Duration::from_secs(150);
 
 /// How long the hub waits to accept clients again after accepting one failed (out of
 /// file descriptors, say), serving the others meanwhile.
@@ -1233,7 +1291,6 @@ async fn check_radio_mode(
     }
 }
 
-/// The next client of `listener`; never, without one.
 /// Sets a client's connection up: frames one at a time, as the radio writes them; what
 /// the system holds for a client that reads nothing bounded (it would otherwise grow to
 /// megabytes, thousands of frames); a peer that went away without a word (a laptop
@@ -1247,8 +1304,14 @@ fn tune_client_socket(socket: &TcpStream) {
         .with_time(CLIENT_KEEPALIVE)
         .with_interval(CLIENT_KEEPALIVE_INTERVAL);
     let _ = sock.set_tcp_keepalive(&keepalive);
+    // Keepalive probes only go out while nothing is unacknowledged: while the radio's
+    // frames flow to a peer that is gone, the system would otherwise retransmit for
+    // a quarter of an hour before giving it up.
+    #[cfg(target_os = "linux")]
+    let _ = sock.set_tcp_user_timeout(Some(CLIENT_USER_TIMEOUT));
 }
 
+/// The next client of `listener`; never, without one.
 async fn accept(listener: Option<&TcpListener>) -> std::io::Result<(TcpStream, SocketAddr)> {
     match listener {
         Some(listener) => listener.accept().await,
@@ -1295,16 +1358,13 @@ struct Client {
     behind: Arc<Mutex<Option<Instant>>>,
     /// Since when it has sent nothing more (see [`Connected::closed`]).
     closed: Arc<Mutex<Option<Instant>>>,
-    /// Its last request waited [`REQUEST_WAIT`] in vain: the next ones are refused
-    /// unless they can go at once.
-    refusing: AtomicBool,
 }
 
 impl Drop for Client {
     /// Once both its tasks have ended: its requests' answers are no longer routed, and
     /// their frame ids are free again.
     fn drop(&mut self) {
-        lock(&self.routes).forget(self.number);
+        lock(&self.routes).forget(self.number, &self.shared);
     }
 }
 
@@ -1315,36 +1375,49 @@ impl Client {
     /// client when the hub is full; until then it still gets its answers and the radio's
     /// frames, and its frames already read still go to the radio. A connection that
     /// fails ends the client. Its frames are read as the radio's (see [`ClientInput`]).
-    async fn read(self: Arc<Self>, rd: OwnedReadHalf, to_radio: mpsc::Sender<Vec<u8>>) {
+    async fn read(self: Arc<Self>, rd: OwnedReadHalf, to_radio: mpsc::Sender<Queued>) {
         let max_frame_len = self.input.max_frame_len;
         let codec = XBeeCodec::with_counters(self.mode, max_frame_len, Arc::default());
         let mut reader = FramedRead::new(rd, codec);
         let timeout = self.input.partial_frame_timeout;
+        // Since when the hub has read none of the client's bytes for waiting on its
+        // frames (see `admit`), while they kept coming: the frames read meanwhile may
+        // be that old. Ended once the client's bytes read so far are all taken.
+        let mut stalled: Option<Instant> = None;
         let read = async {
             loop {
                 let check_stale_at = reader.decoder().stale_check_at(timeout);
-                let item = tokio::select! {
-                    item = reader.next() => item,
-                    () = tokio::time::sleep_until(check_stale_at.unwrap_or_else(Instant::now)), if check_stale_at.is_some() => {
-                        // Bytes may be waiting unread (this task ran late): they come
-                        // first, and the next turn looks again.
-                        if let Some(item) = reader.next().now_or_never() {
-                            item
-                        } else {
-                            if reader.decoder().is_stale(timeout, Instant::now()) {
-                                for item in reader.decoder_mut().drop_partial() {
-                                    if !self.pass(item, &to_radio).await {
-                                        return;
+                // A frame read at once was there already; else the next is new.
+                let ready = reader.next().now_or_never();
+                if ready.is_none() {
+                    stalled = None;
+                }
+                let item = if let Some(item) = ready {
+                    item
+                } else {
+                    tokio::select! {
+                        item = reader.next() => item,
+                        () = tokio::time::sleep_until(check_stale_at.unwrap_or_else(Instant::now)), if check_stale_at.is_some() => {
+                            // Bytes may be waiting unread (this task ran late): they come
+                            // first, and the next turn looks again.
+                            if let Some(item) = reader.next().now_or_never() {
+                                item
+                            } else {
+                                if reader.decoder().is_stale(timeout, Instant::now()) {
+                                    for item in reader.decoder_mut().drop_partial() {
+                                        if !self.pass(item, &to_radio, &mut stalled).await {
+                                            return;
+                                        }
                                     }
                                 }
+                                continue;
                             }
-                            continue;
                         }
                     }
                 };
                 match item {
                     Some(Ok(item)) => {
-                        if !self.pass(item, &to_radio).await {
+                        if !self.pass(item, &to_radio, &mut stalled).await {
                             return; // The hub stops.
                         }
                     }
@@ -1390,12 +1463,29 @@ impl Client {
     /// Passes an item of the client's reader on: a frame admitted to the radio's queue
     /// (waiting while [`CLIENT_FRAMES_TO_RADIO`] frames wait their turn); `false` once
     /// the hub stops.
-    async fn pass(&self, item: CodecItem, to_radio: &mpsc::Sender<Vec<u8>>) -> bool {
+    async fn pass(
+        &self,
+        item: CodecItem,
+        to_radio: &mpsc::Sender<Queued>,
+        stalled: &mut Option<Instant>,
+    ) -> bool {
         match item {
             CodecItem::Frame(frame) => {
-                if let Some(data) = self.admit(frame.data()).await {
-                    if to_radio.send(data).await.is_err() {
-                        return false;
+                if let Some(queued) = self.admit(frame.data(), stalled).await {
+                    let queued = match to_radio.try_send(queued) {
+                        Ok(()) => None,
+                        Err(mpsc::error::TrySendError::Full(queued)) => {
+                            // Its turn waited for: the client's bytes are not read.
+                            stalled.get_or_insert_with(Instant::now);
+                            Some(queued)
+                        }
+                        Err(mpsc::error::TrySendError::Closed(_)) => return false,
+                    };
+                    if let Some(queued) = queued {
+                        self.to_radio.ready.notify_one();
+                        if to_radio.send(queued).await.is_err() {
+                            return false;
+                        }
                     }
                     self.to_radio.ready.notify_one();
                 }
@@ -1444,15 +1534,23 @@ impl Client {
         tracing::info!(peer = %self.peer, %reason, "hub: client gone");
     }
 
-    /// Answers `request`, which was not sent, as failed ([`not_sent_answer`]), in its
+    /// Refuses `request` (under the client's own id), which waited [`REQUEST_WAIT`] for
+    /// `what` in vain: not sent, and answered as failed ([`not_sent_answer`]) in its
     /// place among the radio's frames to this client.
-    fn answer_not_sent(&self, request: &[u8]) {
+    fn not_sent(&self, request: &[u8], what: &str) {
+        // The answer first: once the refusal is counted, it is on its way.
         let answer = not_sent_answer(request).and_then(|answer| encode(&answer, self.mode));
         if let Some(bytes) = answer {
             if self.queue.try_send(bytes).is_err() {
                 bump(&self.counters.frames_dropped);
             }
         }
+        let frame_type = request.first().copied().unwrap_or_default();
+        self.refuse(format_args!(
+            "a request of type 0x{frame_type:02x} waited {} for {what}: not sent, and \
+             answered as failed",
+            crate::render::Seconds(REQUEST_WAIT)
+        ));
     }
 
     /// A client's frame as it goes to the radio: under a hub id if it is a request with
@@ -1461,8 +1559,11 @@ impl Client {
     /// frame id (byte 1): its answers could not be told from those to other clients'
     /// requests. So is a request with a frame id cut short of its fixed fields: no
     /// radio answers it.
-    async fn admit(&self, data: &Bytes) -> Option<Vec<u8>> {
+    async fn admit(&self, data: &Bytes, stalled: &mut Option<Instant>) -> Option<Queued> {
         let mut data = data.to_vec();
+        // REQUEST_WAIT from when the hub could first have read it.
+        let deadline = stalled.unwrap_or_else(Instant::now) + REQUEST_WAIT;
+        let mut request_deadline = None;
         if let Some(&frame_type) = data.first() {
             if is_from_radio(frame_type) {
                 self.refuse(format_args!(
@@ -1496,6 +1597,8 @@ impl Client {
                 // answers (MANY_ANSWER_PER_CLIENT answered many times), then, beyond its
                 // first IDS_PER_CLIENT, for one of the shared ids, then for a free frame
                 // id (the semaphores are never closed); REQUEST_WAIT in all at most.
+                // Meanwhile the client's bytes are not read: the frames after it, there
+                // already, wait as long, and not much longer (see `read`).
                 let many = answered_many_times(&data);
                 let mut held = false;
                 let mut take = async |permits: &Arc<Semaphore>| {
@@ -1504,16 +1607,11 @@ impl Client {
                     }
                     if !std::mem::replace(&mut held, true) {
                         bump(&self.counters.requests_held);
+                        stalled.get_or_insert_with(Instant::now);
                     }
                     permits.clone().acquire_owned().await.ok()
                 };
-                // Once one request has waited in vain, the client's next ones (sent
-                // meanwhile, and as stale) wait no more until one gets through.
-                let wait = match self.refusing.load(Ordering::Relaxed) {
-                    true => Duration::ZERO,
-                    false => REQUEST_WAIT,
-                };
-                let taken = tokio::time::timeout(wait, async {
+                let taken = tokio::time::timeout_at(deadline, async {
                     let permit = take(&self.permits).await?;
                     let many = match many {
                         true => Some(take(&self.many).await?),
@@ -1528,17 +1626,12 @@ impl Client {
                     Some((permit, many, shared, id))
                 })
                 .await;
-                self.refusing
-                    .store(!matches!(taken, Ok(Some(_))), Ordering::Relaxed);
                 let Ok(Some((permit, many_permit, shared, id))) = taken else {
-                    // The answer first: once the refusal is counted, it is on its way.
-                    self.answer_not_sent(&data);
-                    self.refuse(format_args!(
-                        "a request of type 0x{frame_type:02x} waited {} for a frame id (this \
-                         client's earlier requests, or other clients', wait for answers): \
-                         not sent, and answered as failed",
-                        crate::render::Seconds(REQUEST_WAIT)
-                    ));
+                    self.not_sent(
+                        &data,
+                        "a frame id (this client's earlier requests, or \
+                                          other clients', wait for answers)",
+                    );
                     return None;
                 };
                 let route = Route {
@@ -1546,6 +1639,7 @@ impl Client {
                     queue: self.queue.clone(),
                     own_id,
                     answer_type,
+                    command: at_command(&data),
                     until: Cell::new(None),
                     many,
                     orphan: Cell::new(false),
@@ -1554,17 +1648,22 @@ impl Client {
                     _shared: shared,
                     _id: id,
                 };
-                // An id is free: the route holds one of the 255 permits.
+                // An id is free: the route holds one of the 255 permits (but for ids
+                // the hub holds for late answers to its own requests without one).
                 let Some(id) = lock(&self.routes).insert(route, Instant::now()) else {
-                    self.refuse(format_args!("every frame id waits for an answer"));
+                    self.not_sent(&data, "a frame id (every one waits for an answer)");
                     return None;
                 };
                 if let Some(slot) = data.get_mut(1) {
                     *slot = id;
                 }
+                request_deadline = Some(deadline);
             }
         }
-        Some(data)
+        Some(Queued {
+            data,
+            deadline: request_deadline,
+        })
     }
 }
 
@@ -1621,8 +1720,12 @@ mod tests {
             &[0x08, 1, b'n', b'd'],
             &[0x08, 1, b'F', b'N'],
             &[0x09, 1, b'A', b's', 0],
+            // Any remote command to every radio, and a remote radio's discovery.
             &[
-                0x17, 1, 0, 0, 0, 0, 0, 0, 0xFF, 0xFF, 0xFF, 0xFE, 0, b'N', b'D',
+                0x17, 1, 0, 0, 0, 0, 0, 0, 0xFF, 0xFF, 0xFF, 0xFE, 0, b'N', b'I',
+            ],
+            &[
+                0x17, 1, 0, 0, 0, 0, 0, 0, 0x12, 0x34, 0xFF, 0xFE, 0, b'f', b'n',
             ],
         ] {
             assert!(answered_many_times(many), "{many:02x?}");
@@ -1633,8 +1736,9 @@ mod tests {
             &[0x08, 1],
             &[0x10, 1, b'N', b'D'],
             &[
-                0x17, 1, 0, 0, 0, 0, 0, 0, 0x12, 0x34, 0xFF, 0xFE, 0, b'N', b'D',
+                0x17, 1, 0, 0, 0, 0, 0, 0, 0x12, 0x34, 0xFF, 0xFE, 0, b'D', b'H',
             ],
+            &[0x17, 1, 0, 0, 0, 0, 0, 0, 0x12, 0x34, 0xFF, 0xFE, 0, b'N'],
         ] {
             assert!(!answered_many_times(once), "{once:02x?}");
         }
@@ -1703,12 +1807,15 @@ mod tests {
         let sock = socket2::SockRef::from(&socket);
         assert!(socket.nodelay().unwrap());
         // Linux doubles what is asked, for its own bookkeeping.
-        assert_eq!(sock.send_buffer_size().unwrap(), 2 * CLIENT_SEND_BUFFER);
+        // (A system whose `net.core.wmem_max` is lower caps it.)
+        let buffer = sock.send_buffer_size().unwrap();
+        assert!(buffer <= 2 * CLIENT_SEND_BUFFER, "{buffer}");
         assert!(sock.keepalive().unwrap());
         assert_eq!(sock.tcp_keepalive_time().unwrap(), CLIENT_KEEPALIVE);
         assert_eq!(
             sock.tcp_keepalive_interval().unwrap(),
             CLIENT_KEEPALIVE_INTERVAL
         );
+        assert_eq!(sock.tcp_user_timeout().unwrap(), Some(CLIENT_USER_TIMEOUT));
     }
 }

@@ -11,7 +11,7 @@ use std::time::Duration;
 use common::hub_wire::*;
 use futures::SinkExt;
 use mcp_host::hub::{
-    ANSWER_WINDOW, IDS_PER_CLIENT, MANY_ANSWER_PER_CLIENT, MAX_CLIENTS, SHARED_IDS,
+    IDS_PER_CLIENT, MANY_ANSWER_PER_CLIENT, MAX_CLIENTS, REQUEST_WAIT, SHARED_IDS,
 };
 use mcp_host::{Link, LinkOptions, SendOptions};
 use xbee_api::{Address64, ApiMode, RawFrame};
@@ -170,11 +170,12 @@ async fn the_late_answer_to_a_client_that_left_reaches_no_other_client() {
     hub.stop().await;
 }
 
-/// A request that waits its turn to the radio longer than the answer window (other
-/// frames ahead of it on a slow radio) still gets its answer: the window starts when
-/// the hub writes the request. Time stands still but for `tokio::time::advance`.
+/// A request that waits its turn to the radio (other frames ahead of it on a slow
+/// radio) longer than `REQUEST_WAIT` is not sent: it is answered as failed, under its
+/// client's own id, and the client's next frame goes. Time stands still but for
+/// `tokio::time::advance`.
 #[tokio::test(flavor = "current_thread")]
-async fn a_request_that_waited_its_turn_longer_than_the_answer_window_gets_its_answer() {
+async fn a_request_that_waited_its_turn_too_long_is_answered_as_failed_not_sent() {
     let (hub, mut radio) = hub_and_radio().await;
     let mut client = raw_client(&hub).await;
     tokio::time::pause();
@@ -196,13 +197,12 @@ async fn a_request_that_waited_its_turn_longer_than_the_answer_window_gets_its_a
     tokio::task::spawn_blocking(|| std::thread::sleep(Duration::from_millis(200)))
         .await
         .unwrap();
-    tokio::time::advance(ANSWER_WINDOW + Duration::from_secs(5)).await;
-    let request = next(&mut radio).await;
-    assert_eq!(request[0], 0x08);
-    send(&mut radio, &[0x88, request[1], b'N', b'I', 0x00]).await;
-    // A frame for every client after the answer: the answer comes first.
-    send(&mut radio, &[0x8A, 0x00]).await;
-    assert_eq!(next(&mut client).await, [0x88, 0x01, b'N', b'I', 0x00]);
+    tokio::time::advance(REQUEST_WAIT + Duration::from_secs(1)).await;
+    assert_eq!(next(&mut client).await, [0x88, 0x01, b'N', b'I', 0x01]);
+    // The radio gets the client's next frame, never the request.
+    send(&mut client, &[0x08, 0x00, b'V', b'R']).await;
+    assert_eq!(next(&mut radio).await, [0x08, 0x00, b'V', b'R']);
+    assert_eq!(hub.stats().frames_refused, 1);
     release.send(()).unwrap();
     clock_held.await.unwrap().unwrap();
     hub.stop().await;
@@ -280,6 +280,37 @@ async fn with_ids_held_for_late_answers_requests_wait_rather_than_being_refused(
             .await
             .expect("a request was refused rather than held");
         assert_eq!(&frame[2..], b"SL");
+    }
+    assert_eq!(hub.stats().frames_refused, 0);
+    hub.stop().await;
+}
+
+/// Clients that come, ask for node discoveries (answered many times: their ids are
+/// kept for the answer window) and go, one after another, leave orphans that take only
+/// shared ids: each new client's first requests still go at once, however many came
+/// before it.
+#[tokio::test]
+async fn clients_that_come_and_go_leave_each_newcomer_its_own_ids() {
+    let (hub, mut radio) = hub_and_radio().await;
+    for round in 0..2 * MAX_CLIENTS {
+        let mut client = raw_client(&hub).await;
+        for own in 1..=IDS_PER_CLIENT as u8 {
+            send(&mut client, &[0x08, own, b'N', b'D']).await;
+            let asked = tokio::time::timeout(Duration::from_secs(4), next(&mut radio))
+                .await
+                .unwrap_or_else(|_| panic!("round {round}: held; {:?}", hub.stats()));
+            assert_eq!(&asked[2..], b"ND");
+            send(&mut radio, &[0x88, asked[1], b'N', b'D', 0x00, 0xFF, 0xFE]).await;
+            assert_eq!(
+                next(&mut client).await,
+                [0x88, own, b'N', b'D', 0x00, 0xFF, 0xFE]
+            );
+        }
+        // Gone (connection reset): the hub sees it when it reads.
+        let socket = client.into_inner();
+        #[allow(deprecated)]
+        socket.set_linger(Some(Duration::ZERO)).unwrap();
+        drop(socket);
     }
     assert_eq!(hub.stats().frames_refused, 0);
     hub.stop().await;

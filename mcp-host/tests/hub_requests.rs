@@ -259,3 +259,41 @@ async fn a_stray_start_delimiter_holds_a_request_back_for_the_partial_frame_time
     assert_eq!(next(&mut client).await, [0x88, 0x05, b'S', b'H', 0x00]);
     hub.stop().await;
 }
+
+/// An answer goes back only if it answers the request under its id: of the matching
+/// type and, for an AT command, echoing the same command (in either case). A remote
+/// radio's find neighbors (`FN`) is answered many times, each answer on its own, all to
+/// the client that asked.
+#[tokio::test]
+async fn answers_echo_their_requests_command_and_a_remote_fn_gets_all_its_answers() {
+    let (hub, mut radio) = hub_and_radio().await;
+    let mut client = raw_client(&hub).await;
+    send(&mut client, &[0x08, 0x01, b'n', b'i']).await;
+    let asked = next(&mut radio).await;
+    // A late answer to another command under the id, then the answer.
+    send(&mut radio, &[0x88, asked[1], b'V', b'R', 0x00, 0x20, 0x0B]).await;
+    send(&mut radio, &[0x88, asked[1], b'N', b'I', 0x00, b'G', b'S']).await;
+    assert_eq!(
+        next(&mut client).await,
+        [0x88, 0x01, b'N', b'I', 0x00, b'G', b'S']
+    );
+
+    let remote = [
+        0x17, 0x02, 0, 0x13, 0xA2, 0, 0x40, 0xB5, 0x99, 0xB9, 0xFF, 0xFE, 0x02, b'F', b'N',
+    ];
+    send(&mut client, &remote).await;
+    let asked = next(&mut radio).await;
+    assert_eq!(asked[2..], remote[2..]);
+    for neighbor in [0xA1, 0xA2] {
+        let mut answer = vec![0x97, asked[1]];
+        answer.extend_from_slice(&remote[2..12]);
+        answer.extend_from_slice(&[b'F', b'N', 0x00, neighbor]);
+        send(&mut radio, &answer).await;
+        let got = next(&mut client).await;
+        assert_eq!(
+            (got[1], &got[12..]),
+            (0x02, &[b'F', b'N', 0x00, neighbor][..])
+        );
+    }
+    hub.stop().await;
+}
