@@ -40,6 +40,10 @@ const HIGH_WATER: usize = 16 * 1024;
 /// ([`crate::CommandSender`] picks it), so they still go out meanwhile.
 const PARKED_MAX: usize = 64;
 
+/// How often the link's task looks for callers that gave up on their requests while it
+/// takes no new ones and requests wait for a frame id.
+const PRUNE_EVERY: Duration = Duration::from_millis(100);
+
 /// A request from a [`crate::CommandSender`] to the background task.
 #[derive(Debug)]
 pub(crate) enum Op {
@@ -67,6 +71,10 @@ pub(crate) enum Op {
     },
     Write {
         data: Bytes,
+        /// For [`write_frame`](crate::CommandSender::write_frame): when its caller stops
+        /// waiting, and its timeout; a write not taken by then is not written. `None`
+        /// for a sink's packets, which are handed over.
+        deadline: Option<(Instant, Duration)>,
         reply: oneshot::Sender<Result<(), SendError>>,
     },
     /// A frame whose answers are gathered until the deadline, not just the first.
@@ -101,14 +109,14 @@ impl Op {
         }
     }
 
-    /// When the request times out (`None` for raw writes, which do not wait).
+    /// When the request times out (`None` for a sink's writes, which do not wait).
     fn deadline(&self) -> Option<Instant> {
         match self {
             Op::Transmit { deadline, .. }
             | Op::Request { deadline, .. }
             | Op::Frame { deadline, .. }
             | Op::Answers { deadline, .. } => Some(*deadline),
-            Op::Write { .. } => None,
+            Op::Write { deadline, .. } => deadline.map(|(at, _)| at),
         }
     }
 
@@ -126,8 +134,9 @@ impl Op {
 
     /// Answers a request that timed out before it was sent: if `parked`, it waited
     /// for a frame id ([`SendError::NoFreeFrameId`]); else its deadline had passed when
-    /// it was taken ([`SendError::NotSent`]).
-    fn time_out(self, parked: bool) {
+    /// it was taken ([`SendError::NotSent`]). Whether its caller was there to be told
+    /// (the timeouts counted are those).
+    fn time_out(self, parked: bool) -> bool {
         let error = |timeout| {
             if parked {
                 SendError::NoFreeFrameId { timeout }
@@ -136,20 +145,19 @@ impl Op {
             }
         };
         match self {
-            Op::Transmit { timeout, reply, .. } => {
-                let _ = reply.send(Err(error(timeout)));
-            }
-            Op::Request { timeout, reply, .. } => {
-                let _ = reply.send(Err(error(timeout).into()));
-            }
-            Op::Frame { timeout, reply, .. } => {
-                let _ = reply.send(Err(error(timeout)));
-            }
+            Op::Transmit { timeout, reply, .. } => reply.send(Err(error(timeout))).is_ok(),
+            Op::Request { timeout, reply, .. } => reply.send(Err(error(timeout).into())).is_ok(),
+            Op::Frame { timeout, reply, .. } => reply.send(Err(error(timeout))).is_ok(),
             Op::Answers {
                 timeout, answers, ..
-            } => fail_answers(&answers, error(timeout)),
-            // Never parked nor timed out: it needs no frame id and waits for nothing.
-            Op::Write { .. } => {}
+            } => answers.try_send(Err(error(timeout))).is_ok(),
+            // Never parked: it needs no frame id.
+            Op::Write {
+                deadline, reply, ..
+            } => {
+                let timeout = deadline.map_or(Duration::ZERO, |(_, timeout)| timeout);
+                reply.send(Err(SendError::NotSent { timeout })).is_ok()
+            }
         }
     }
 }
@@ -578,6 +586,8 @@ impl Driver {
         self.healthy = false;
         self.diagnoser = Diagnoser::new(self.options.api_mode, self.counters.snapshot());
         self.warned = false;
+        let mut prune = tokio::time::interval(PRUNE_EVERY);
+        prune.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
         loop {
             self.unpark(&mut out);
             let deadline = self.next_deadline();
@@ -614,6 +624,10 @@ impl Driver {
                 _ = tokio::time::sleep_until(deadline.unwrap_or_else(Instant::now)), if deadline.is_some() => {
                     self.expire(Instant::now(), &mut out);
                 }
+                // No request taken (parked ones fill their queue, or writes are backed
+                // up) while some wait for a frame id: the next turn looks for callers
+                // that gave up (`unpark`), now and then, nothing else waking this task.
+                _ = prune.tick(), if !accept_ops && !self.parked.is_empty() => {}
                 _ = tokio::time::sleep_until(check_stale_at.unwrap_or_else(Instant::now)), if check_stale_at.is_some() => {
                     // Bytes may be waiting unread (this task ran late): they come first,
                     // and the next turn looks again.
@@ -721,8 +735,15 @@ impl Driver {
     }
 
     /// Nobody holds the stream or a sender any more: the link ends, and the
-    /// subscriptions with it, told why.
+    /// subscriptions with it, told why. The answers of a request still gathered (an
+    /// [`Answers`](crate::Answers) stream outlives the sender that made it) end with
+    /// [`SendError::Closed`], not as a window that ran out.
     fn shut_down(&self) {
+        for pending in self.ids.values() {
+            if let PendingKind::Answers { answers, .. } = &pending.kind {
+                fail_answers(answers, SendError::Closed);
+            }
+        }
         self.subscribers.0.end(Some(&Event::Link(LinkEvent::Closed {
             reason: DROPPED.to_owned(),
         })));
@@ -1049,8 +1070,15 @@ impl Driver {
         }
     }
 
-    /// Starts parked requests, in order, while frame ids are free.
+    /// Starts parked requests, in order, while frame ids are free. While none is, the
+    /// parked requests whose callers gave up are dropped, and the ids of those in
+    /// flight taken back ([`Self::reclaim_abandoned`]): at every turn, so that their
+    /// frames not yet written are not (the transport may take them any moment).
     fn unpark(&mut self, out: &mut BytesMut) {
+        if !self.parked.is_empty() && !self.ids.has_free() {
+            self.parked.retain(|op| !op.caller_gone());
+            self.reclaim_abandoned(out);
+        }
         while self.ids.has_free() {
             let Some(op) = self.parked.pop_front() else {
                 return;
@@ -1067,8 +1095,9 @@ impl Driver {
             return;
         }
         if op.deadline().is_some_and(|d| d <= Instant::now()) {
-            bump(&self.counters.timeouts);
-            op.time_out(parked);
+            if op.time_out(parked) {
+                bump(&self.counters.timeouts);
+            }
             return;
         }
         match op {
@@ -1156,7 +1185,7 @@ impl Driver {
                 let kind = PendingKind::Frame { reply, answer_type };
                 self.write_under_id(out, &data, deadline, timeout, kind);
             }
-            Op::Write { data, reply } => {
+            Op::Write { data, reply, .. } => {
                 let _ = reply.send(write_raw(self.options.api_mode, out, &data));
             }
             Op::Answers {
@@ -1213,8 +1242,9 @@ impl Driver {
             .partition(|op| op.deadline().is_some_and(|d| d <= now));
         self.parked = parked;
         for op in expired {
-            bump(&self.counters.timeouts);
-            op.time_out(true);
+            if op.time_out(true) {
+                bump(&self.counters.timeouts);
+            }
         }
         let counters = &self.counters;
         let written = self.written;
@@ -1238,12 +1268,14 @@ impl Driver {
                 let kept = if unsent { None } else { p.expired(now) };
                 match p.kind {
                     PendingKind::Transmit { reply, .. } => {
-                        bump(&counters.timeouts);
-                        let _ = reply.send(Err(error));
+                        if reply.send(Err(error)).is_ok() {
+                            bump(&counters.timeouts);
+                        }
                     }
                     PendingKind::Frame { reply, .. } => {
-                        bump(&counters.timeouts);
-                        let _ = reply.send(Err(error));
+                        if reply.send(Err(error)).is_ok() {
+                            bump(&counters.timeouts);
+                        }
                     }
                     // Its window is over: dropping the sender ends the answers; a
                     // request that never went out says so.
@@ -1277,17 +1309,17 @@ impl Driver {
         for (waiter, error) in unsent_waiters {
             if let Some(pos) = self.waiters.iter().position(|w| w.id == waiter) {
                 let w = self.waiters.swap_remove(pos);
-                bump(&self.counters.timeouts);
-                let _ = w.reply.send(Err(error.into()));
+                if w.reply.send(Err(error.into())).is_ok() {
+                    bump(&self.counters.timeouts);
+                }
             }
         }
         let mut i = 0;
         while i < self.waiters.len() {
             if self.waiters[i].deadline <= now {
                 let w = self.waiters.swap_remove(i);
-                bump(&self.counters.timeouts);
                 let undecodable = self.counters.snapshot().decode_errors();
-                let _ = w.reply.send(Err(RequestError::Timeout {
+                let told = w.reply.send(Err(RequestError::Timeout {
                     from: w.from,
                     request: w.request,
                     timeout: w.timeout,
@@ -1295,6 +1327,9 @@ impl Driver {
                     undecodable: undecodable.saturating_sub(w.undecodable_before),
                     heard: self.healthy,
                 }));
+                if told.is_ok() {
+                    bump(&self.counters.timeouts);
+                }
             } else {
                 i += 1;
             }

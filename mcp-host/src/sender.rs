@@ -69,14 +69,27 @@ pub enum DeliveryReport {
 /// task's answer) and fails with a clear [`SendError`] when the link goes down while the
 /// request is in flight, or is down when it is made.
 ///
-/// Dropping a method's future before it resolves (in a `tokio::time::timeout`, say) does
-/// not take the request back at once: once queued, its frame may still go out. When a
-/// new request finds no frame id free, a dropped request whose frame has not gone out
-/// yet is taken back (none of it is sent), and the frame id of one whose frame went out
-/// is kept until its late answer comes (as an [`Event::Frame`](crate::Event::Frame)) or
-/// for 10 s (from the end of its window, for a request every radio answers), so that
-/// no answer is taken for another request's; a request still waiting for an id is
-/// dropped unsent. A request that times out, or fails with the link, goes the same way.
+/// Dropping a method's future before it resolves (in a `tokio::time::timeout`, a
+/// `select!`, a task aborted) does not take the request back at once: once queued, its
+/// frame may still go out. While requests wait for a frame id (none free), the dropped
+/// ones are looked for at every turn of the link's task: a dropped request whose frame
+/// has not gone out yet is taken back (none of it is sent), one still waiting for an id
+/// is dropped unsent, and the frame id of one whose frame went out is kept until its
+/// late answer comes (as an [`Event::Frame`](crate::Event::Frame)) or for 10 s after its
+/// own deadline (or the end of its window, for a request every radio answers), so that
+/// no answer is taken for another request's. Otherwise a dropped request keeps its id
+/// to its deadline and those 10 s (22 s with the default timeout). A request that times
+/// out, or fails with the link, goes the same way; after a reconnection, the ids of the
+/// requests in flight at the disconnection are kept the same 10 s, so a burst of
+/// requests right then may find none free ([`SendError::NoFreeFrameId`]).
+///
+/// A request the link's task has not taken by its deadline (its writes backed up by a
+/// radio that takes no bytes, or requests waiting for an id beyond what it holds) fails
+/// with [`SendError::NotSent`] and is never sent; [`write_frame`](Self::write_frame)
+/// too. [`Stats::timeouts`](crate::Stats::timeouts) counts the timeouts callers were
+/// told of. The link ends (its transport closed) once its stream and every sender and
+/// sink are dropped, even with writes backed up; an [`Answers`] stream still open then
+/// ends with [`SendError::Closed`].
 #[derive(Debug, Clone)]
 pub struct CommandSender {
     /// Requests that need a frame id.
@@ -272,20 +285,11 @@ impl CommandSender {
         };
         let exchange = async {
             self.enqueue(op, deadline, timeout).await?;
-            // The background task answers by the deadline; the grace only guards
-            // against a stalled task.
+            // As in `call`: not taken by the deadline, never sent.
             match tokio::time::timeout_at(deadline + GRACE, answer).await {
                 Ok(Ok(result)) => result,
                 Ok(Err(_)) => Err(SendError::Closed.into()),
-                // A stalled task: whether the radio confirmed delivery is not known.
-                Err(_) => Err(RequestError::Timeout {
-                    from: to,
-                    request,
-                    timeout,
-                    delivered: false,
-                    undecodable: 0,
-                    heard: true,
-                }),
+                Err(_) => Err(self.not_taken(timeout).into()),
             }
         };
         exchange.await
@@ -321,14 +325,18 @@ impl CommandSender {
         self.call(op, answer, deadline, timeout).await
     }
 
-    /// Writes any XBee frame as given (frame data, frame type first), awaiting nothing.
+    /// Writes any XBee frame as given (frame data, frame type first), awaiting nothing
+    /// but its being taken: within the link's
+    /// [`send_timeout`](crate::LinkOptions::send_timeout), or it fails with
+    /// [`SendError::NotSent`] and is never written.
     pub async fn write_frame(&self, frame_data: &[u8]) -> Result<(), SendError> {
         let (reply, answer) = oneshot::channel();
+        let deadline = crate::options::later(Instant::now(), self.default_timeout);
         let op = Op::Write {
             data: Bytes::copy_from_slice(frame_data),
+            deadline: Some((deadline, self.default_timeout)),
             reply,
         };
-        let deadline = crate::options::later(Instant::now(), self.default_timeout);
         self.call(op, answer, deadline, self.default_timeout).await
     }
 
@@ -507,6 +515,9 @@ impl CommandSender {
     /// act on each radio as it answers, or to stop at the one looked for, read the
     /// answers to `ND` as they come with [`at_answers`](Self::at_answers) and
     /// [`NodeInfo::parse`](xbee_api::NodeInfo::parse).
+    ///
+    /// Dropping its future before the window ends drops the answers gathered so far;
+    /// its frame id goes as any dropped request's does (see [`CommandSender`]).
     ///
     /// ```no_run
     /// # async fn run(sender: mcp_host::CommandSender) -> Result<(), Box<dyn std::error::Error>> {
@@ -723,6 +734,13 @@ impl CommandSender {
         }
     }
 
+    /// A request the background task did not take by its deadline (it never sends it
+    /// then), counted as a timeout.
+    fn not_taken(&self, timeout: Duration) -> SendError {
+        crate::stats::bump(&self.counters.timeouts);
+        SendError::NotSent { timeout }
+    }
+
     async fn call<T>(
         &self,
         op: Op,
@@ -731,15 +749,12 @@ impl CommandSender {
         timeout: Duration,
     ) -> Result<T, SendError> {
         self.enqueue(op, deadline, timeout).await?;
-        // The background task answers by the deadline; the grace only guards against a
-        // stalled task.
+        // The background task answers a request it took by the deadline; one it has not
+        // taken by then (its writes backed up, its queue of requests waiting for a frame
+        // id full) it never sends.
         match tokio::time::timeout_at(deadline + GRACE, answer).await {
             Ok(result) => result.unwrap_or(Err(SendError::Closed)),
-            Err(_) => Err(SendError::Timeout {
-                frame_id: 0,
-                timeout,
-                heard: true,
-            }),
+            Err(_) => Err(self.not_taken(timeout)),
         }
     }
 }

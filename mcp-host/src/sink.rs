@@ -153,7 +153,11 @@ impl<B: AsRef<[u8]>> Sink<(Address64, mcp_core::Packet<B>)> for PacketSink<B> {
         let (reply, taken) = oneshot::channel();
         let this = self.get_mut();
         this.writes
-            .send_item(Op::Write { data, reply })
+            .send_item(Op::Write {
+                data,
+                deadline: None,
+                reply,
+            })
             .map_err(|_| SendError::Closed)?;
         this.last = Some(taken);
         Ok(())

@@ -31,7 +31,8 @@ pub struct Stats {
     pub malformed_frames: u64,
     /// Transmit statuses and responses that matched no request in flight.
     pub unclaimed_responses: u64,
-    /// Requests (sends, frames, status requests) that timed out.
+    /// Requests (sends, frames, status requests) that timed out, their callers told: one
+    /// whose caller had given up on it first (dropped its future) is not counted.
     pub timeouts: u64,
     /// Events dropped because the [`crate::PacketStream`] consumer fell behind.
     pub events_dropped: u64,
