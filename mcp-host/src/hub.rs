@@ -226,7 +226,8 @@ pub const SHARED_IDS: usize = u8::MAX as usize - MAX_CLIENTS * IDS_PER_CLIENT;
 /// it has one (see the [module](self) docs): its client may have given up on it, or
 /// gone, and a command must not reach a MAV long after its sender was told it failed.
 /// While one request waits, the hub reads none of the client's bytes: the requests
-/// behind it, read after, count from when it began to wait.
+/// behind it that the hub had already read (whole, in its buffer) count from when it
+/// began to wait.
 pub const REQUEST_WAIT: Duration = Duration::from_secs(5);
 
 /// Frames of one client read by the hub and waiting for their turn to the radio, at
@@ -776,7 +777,12 @@ impl RadioWriter {
             if let Some(id) = hub_id {
                 lock(&self.routes).written(id, Instant::now());
             }
-            match self.sender.write_frame(&data).await {
+            // A request is taken by the link by its deadline, or not written.
+            let written = match deadline {
+                Some(deadline) => self.sender.write_frame_until(&data, deadline).await,
+                None => self.sender.write_frame(&data).await,
+            };
+            match written {
                 Ok(()) => {
                     bump(&self.counters.frames_from_clients);
                     let len = encode(&data, self.mode).map_or(data.len(), |bytes| bytes.len());
@@ -786,9 +792,15 @@ impl RadioWriter {
                 Err(error) => {
                     // Not written: no pacing time spent, and no answer due.
                     tracing::debug!(%error, "hub: a client's frame not written");
-                    bump(&self.counters.frames_refused);
-                    if let Some(id) = hub_id {
-                        lock(&self.routes).0.remove(id);
+                    let route = hub_id.and_then(|id| lock(&self.routes).0.remove(id));
+                    match (route, error) {
+                        // The link did not take it in time: answered as failed.
+                        (Some(route), crate::SendError::NotSent { .. }) => {
+                            let mut request = data.clone();
+                            request[1] = route.own_id;
+                            client.not_sent(&request, "the radio's link to take it");
+                        }
+                        _ => bump(&self.counters.frames_refused),
                     }
                 }
             }
@@ -1380,18 +1392,15 @@ impl Client {
         let codec = XBeeCodec::with_counters(self.mode, max_frame_len, Arc::default());
         let mut reader = FramedRead::new(rd, codec);
         let timeout = self.input.partial_frame_timeout;
-        // Since when the hub has read none of the client's bytes for waiting on its
-        // frames (see `admit`), while they kept coming: the frames read meanwhile may
-        // be that old. Ended once the client's bytes read so far are all taken.
-        let mut stalled: Option<Instant> = None;
+        // The client's bytes that were in the reader's buffer when one of its frames
+        // began to wait (see `admit`), and since when: frames wholly among them were
+        // there all that time, and their own wait counts from then.
+        let mut old: Option<(Instant, usize)> = None;
         let read = async {
             loop {
                 let check_stale_at = reader.decoder().stale_check_at(timeout);
-                // A frame read at once was there already; else the next is new.
+                let before = reader.read_buffer().len();
                 let ready = reader.next().now_or_never();
-                if ready.is_none() {
-                    stalled = None;
-                }
                 let item = if let Some(item) = ready {
                     item
                 } else {
@@ -1404,8 +1413,9 @@ impl Client {
                                 item
                             } else {
                                 if reader.decoder().is_stale(timeout, Instant::now()) {
+                                    old = None;
                                     for item in reader.decoder_mut().drop_partial() {
-                                        if !self.pass(item, &to_radio, &mut stalled).await {
+                                        if self.pass(item, &to_radio, None).await.is_err() {
                                             return;
                                         }
                                     }
@@ -1415,12 +1425,29 @@ impl Client {
                         }
                     }
                 };
-                match item {
-                    Some(Ok(item)) => {
-                        if !self.pass(item, &to_radio, &mut stalled).await {
-                            return; // The hub stops.
-                        }
+                // Taken from the old bytes alone (none read since), or not.
+                let after = reader.read_buffer().len();
+                let since = match old {
+                    Some((since, bytes)) if after <= before && before - after <= bytes => {
+                        old = (bytes > before - after).then(|| (since, bytes - (before - after)));
+                        Some(since)
                     }
+                    _ => {
+                        old = None;
+                        None
+                    }
+                };
+                match item {
+                    Some(Ok(item)) => match self.pass(item, &to_radio, since).await {
+                        Err(()) => return, // The hub stops.
+                        // The bytes waiting behind it now were there when it began to
+                        // wait (or, if it was itself old, when the first of its line did).
+                        Ok(Some(waited)) => {
+                            let buffered = reader.read_buffer().len();
+                            old = (buffered > 0).then(|| (since.unwrap_or(waited), buffered));
+                        }
+                        Ok(None) => {}
+                    },
                     Some(Err(error)) => {
                         tracing::debug!(peer = %self.peer, %error, "hub: reading from a client failed");
                         self.end.cancel();
@@ -1467,24 +1494,25 @@ impl Client {
         &self,
         item: CodecItem,
         to_radio: &mpsc::Sender<Queued>,
-        stalled: &mut Option<Instant>,
-    ) -> bool {
+        since: Option<Instant>,
+    ) -> Result<Option<Instant>, ()> {
+        let mut waited = None;
         match item {
             CodecItem::Frame(frame) => {
-                if let Some(queued) = self.admit(frame.data(), stalled).await {
+                if let Some(queued) = self.admit(frame.data(), since, &mut waited).await {
                     let queued = match to_radio.try_send(queued) {
                         Ok(()) => None,
                         Err(mpsc::error::TrySendError::Full(queued)) => {
                             // Its turn waited for: the client's bytes are not read.
-                            stalled.get_or_insert_with(Instant::now);
+                            waited.get_or_insert_with(Instant::now);
                             Some(queued)
                         }
-                        Err(mpsc::error::TrySendError::Closed(_)) => return false,
+                        Err(mpsc::error::TrySendError::Closed(_)) => return Err(()),
                     };
                     if let Some(queued) = queued {
                         self.to_radio.ready.notify_one();
                         if to_radio.send(queued).await.is_err() {
-                            return false;
+                            return Err(());
                         }
                     }
                     self.to_radio.ready.notify_one();
@@ -1504,7 +1532,7 @@ impl Client {
                 self.refuse(format_args!("{error}{hint}"));
             }
         }
-        true
+        Ok(waited)
     }
 
     /// Writes the radio's frames to the client, until its connection fails or it is
@@ -1559,10 +1587,15 @@ impl Client {
     /// frame id (byte 1): its answers could not be told from those to other clients'
     /// requests. So is a request with a frame id cut short of its fixed fields: no
     /// radio answers it.
-    async fn admit(&self, data: &Bytes, stalled: &mut Option<Instant>) -> Option<Queued> {
+    async fn admit(
+        &self,
+        data: &Bytes,
+        since: Option<Instant>,
+        waited: &mut Option<Instant>,
+    ) -> Option<Queued> {
         let mut data = data.to_vec();
         // REQUEST_WAIT from when the hub could first have read it.
-        let deadline = stalled.unwrap_or_else(Instant::now) + REQUEST_WAIT;
+        let deadline = since.unwrap_or_else(Instant::now) + REQUEST_WAIT;
         let mut request_deadline = None;
         if let Some(&frame_type) = data.first() {
             if is_from_radio(frame_type) {
@@ -1607,7 +1640,7 @@ impl Client {
                     }
                     if !std::mem::replace(&mut held, true) {
                         bump(&self.counters.requests_held);
-                        stalled.get_or_insert_with(Instant::now);
+                        waited.get_or_insert_with(Instant::now);
                     }
                     permits.clone().acquire_owned().await.ok()
                 };

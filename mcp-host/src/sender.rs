@@ -84,10 +84,12 @@ pub enum DeliveryReport {
 /// requests right then may find none free ([`SendError::NoFreeFrameId`]).
 ///
 /// A request the link's task has not taken by its deadline (its writes backed up by a
-/// radio that takes no bytes, or requests waiting for an id beyond what it holds) fails
-/// with [`SendError::NotSent`] and is never sent; [`write_frame`](Self::write_frame)
-/// too. [`Stats::timeouts`](crate::Stats::timeouts) counts the timeouts callers were
-/// told of. The link ends (its transport closed) once its stream and every sender and
+/// radio that takes no bytes, or requests waiting for an id beyond what it holds) is
+/// never sent: it fails with [`SendError::Timeout`] of frame id 0 (which a task merely
+/// running late gives too: whether the frame went out is then not known), and
+/// [`write_frame`](Self::write_frame) with [`SendError::NotSent`].
+/// [`Stats::timeouts`](crate::Stats::timeouts) counts the timeouts callers were told
+/// of. The link ends (its transport closed) once its stream and every sender and
 /// sink are dropped, even with writes backed up; an [`Answers`] stream still open then
 /// ends with [`SendError::Closed`].
 #[derive(Debug, Clone)]
@@ -285,11 +287,11 @@ impl CommandSender {
         };
         let exchange = async {
             self.enqueue(op, deadline, timeout).await?;
-            // As in `call`: not taken by the deadline, never sent.
+            // As in `call`.
             match tokio::time::timeout_at(deadline + GRACE, answer).await {
                 Ok(Ok(result)) => result,
                 Ok(Err(_)) => Err(SendError::Closed.into()),
-                Err(_) => Err(self.not_taken(timeout).into()),
+                Err(_) => Err(self.unanswered(timeout).into()),
             }
         };
         exchange.await
@@ -330,14 +332,24 @@ impl CommandSender {
     /// [`send_timeout`](crate::LinkOptions::send_timeout), or it fails with
     /// [`SendError::NotSent`] and is never written.
     pub async fn write_frame(&self, frame_data: &[u8]) -> Result<(), SendError> {
-        let (reply, answer) = oneshot::channel();
         let deadline = crate::options::later(Instant::now(), self.default_timeout);
+        self.write_frame_until(frame_data, deadline).await
+    }
+
+    /// [`write_frame`](Self::write_frame), taken by `deadline` or never written.
+    pub(crate) async fn write_frame_until(
+        &self,
+        frame_data: &[u8],
+        deadline: Instant,
+    ) -> Result<(), SendError> {
+        let timeout = deadline.saturating_duration_since(Instant::now());
+        let (reply, answer) = oneshot::channel();
         let op = Op::Write {
             data: Bytes::copy_from_slice(frame_data),
-            deadline: Some((deadline, self.default_timeout)),
+            deadline: Some((deadline, timeout)),
             reply,
         };
-        self.call(op, answer, deadline, self.default_timeout).await
+        self.call(op, answer, deadline, timeout).await
     }
 
     /// Sends a local AT command (0x08) and resolves with its AT Command Response (0x88),
@@ -734,11 +746,23 @@ impl CommandSender {
         }
     }
 
-    /// A request the background task did not take by its deadline (it never sends it
+    /// A write the background task did not take by its deadline (it never writes it
     /// then), counted as a timeout.
     fn not_taken(&self, timeout: Duration) -> SendError {
         crate::stats::bump(&self.counters.timeouts);
         SendError::NotSent { timeout }
+    }
+
+    /// A request the background task did not answer by its deadline and the grace
+    /// after it (it ran late, or never took the request), counted as a timeout:
+    /// whether its frame went out is not known.
+    fn unanswered(&self, timeout: Duration) -> SendError {
+        crate::stats::bump(&self.counters.timeouts);
+        SendError::Timeout {
+            frame_id: 0,
+            timeout,
+            heard: self.counters.snapshot().frames > 0,
+        }
     }
 
     async fn call<T>(
@@ -748,13 +772,15 @@ impl CommandSender {
         deadline: Instant,
         timeout: Duration,
     ) -> Result<T, SendError> {
+        // A write is answered as soon as it is taken: one not answered by then was not
+        // taken, and never will be. Another request the task answers by its deadline,
+        // unless the task runs late (or never took it: whether it went out is not known).
+        let write = matches!(op, Op::Write { .. });
         self.enqueue(op, deadline, timeout).await?;
-        // The background task answers a request it took by the deadline; one it has not
-        // taken by then (its writes backed up, its queue of requests waiting for a frame
-        // id full) it never sends.
         match tokio::time::timeout_at(deadline + GRACE, answer).await {
             Ok(result) => result.unwrap_or(Err(SendError::Closed)),
-            Err(_) => Err(self.not_taken(timeout)),
+            Err(_) if write => Err(self.not_taken(timeout)),
+            Err(_) => Err(self.unanswered(timeout)),
         }
     }
 }

@@ -297,3 +297,82 @@ async fn answers_echo_their_requests_command_and_a_remote_fn_gets_all_its_answer
     }
     hub.stop().await;
 }
+
+/// A client that keeps the hub's writes to the radio a little behind (frames without
+/// frame id sent slightly faster than the radio's UART takes them) still gets its
+/// requests through: their wait counts from when each could be read, not from when the
+/// client's backlog began.
+#[tokio::test(flavor = "multi_thread")]
+async fn a_client_a_little_ahead_of_the_radio_gets_its_requests_through() {
+    let (hub, mut radio) = hub_and_radio().await;
+    // The radio answers every AT command at once.
+    let answering = tokio::spawn(async move {
+        loop {
+            let frame = next(&mut radio).await;
+            if frame[0] == 0x08 && frame[1] != 0 {
+                send(
+                    &mut radio,
+                    &[0x88, frame[1], frame[2], frame[3], 0x00, 0x20],
+                )
+                .await;
+            }
+        }
+    });
+    let socket = tokio::net::TcpStream::connect(hub.local_addr())
+        .await
+        .unwrap();
+    let (from_hub, mut to_hub) = socket.into_split();
+    let mut from_hub =
+        tokio_util::codec::FramedRead::new(from_hub, XBeeCodec::new(ApiMode::Unescaped));
+    let frame = |data: &[u8]| {
+        let mut bytes = vec![0u8; data.len() + 4];
+        let n = xbee_api::EncodeFrame::encode(
+            &RawFrame::new(data).unwrap(),
+            ApiMode::Unescaped,
+            &mut bytes,
+        )
+        .unwrap();
+        bytes.truncate(n);
+        bytes
+    };
+    // 100-byte frames every 8 ms: 12.5 kB/s, against the 11.5 kB/s of 115200 baud; an
+    // AT command every second, for 7 s (past REQUEST_WAIT).
+    let writing = tokio::spawn(async move {
+        let mut filler = vec![0x10, 0x00];
+        filler.resize(100, 0x55);
+        let mut tick = tokio::time::interval(Duration::from_millis(8));
+        for n in 1..=875u32 {
+            tick.tick().await;
+            to_hub.write_all(&frame(&filler)).await.unwrap();
+            if n % 125 == 0 {
+                let own = (n / 125) as u8;
+                to_hub
+                    .write_all(&frame(&[0x08, own, b'V', b'R']))
+                    .await
+                    .unwrap();
+            }
+        }
+    });
+    for own in 1..=7u8 {
+        let answer = loop {
+            let item = tokio::time::timeout(GUARD, futures::StreamExt::next(&mut from_hub))
+                .await
+                .expect("an answer")
+                .expect("the connection stays")
+                .unwrap();
+            if let mcp_host::codec::CodecItem::Frame(frame) = item {
+                break frame.data().to_vec();
+            }
+        };
+        assert_eq!(
+            answer,
+            [0x88, own, b'V', b'R', 0x00, 0x20],
+            "{:?}",
+            hub.stats()
+        );
+    }
+    writing.await.unwrap();
+    answering.abort();
+    assert_eq!(hub.stats().frames_refused, 0);
+    hub.stop().await;
+}
