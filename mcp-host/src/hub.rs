@@ -56,7 +56,7 @@
 //!   that has not gone to the radio [`REQUEST_WAIT`] after the hub could first have
 //!   read it (it waited for its client's places, for an id, or its turn; while a
 //!   request waits, the hub reads none of the client's bytes, so the frames behind it
-//!   are counted as waiting since then) is not sent: it is refused, and answered at
+//!   that the hub had already read count as waiting since then) is not sent: it is refused, and answered at
 //!   once as the radio answers a request it could not carry out (an AT command
 //!   `ERROR`, a transmission's delivery status 0x32, resource error, a remote AT
 //!   command's transmission failure; other requests get no answer), so that a command
@@ -69,16 +69,15 @@
 //!   the request's type and, for an AT command, echoes its command). A client that
 //!   closed its connection still gets its answers until it is let go (see below).
 //!   Requests that waited are counted in [`HubStats::requests_held`]. A frame of a
-//!   type a radio sends
-//!   rather than takes (its high bit set: 0x88 AT Command Response, 0x90 Receive
-//!   Packet, ...) is refused, whatever its second byte, and counted in
-//!   [`HubStats::frames_refused`]: a radio would drop it unanswered. Other frames with
-//!   frame id 0 (no answer wanted) are written as they are, whatever their type. A
-//!   frame refused for what it is (its type, its id, its length, its checksum or
-//!   escapes, not sent in time) is said as a warning (the first at once, then at most
-//!   one a second with the number not said); one dropped because the radio's link was
-//!   down or its client was ended is counted alone. A frame with a frame
-//!   id (its second byte, in every XBee request) is refused and counted in
+//!   type a radio sends rather than takes (its high bit set: 0x88 AT Command
+//!   Response, 0x90 Receive Packet, ...) is refused, whatever its second byte, and
+//!   counted in [`HubStats::frames_refused`]: a radio would drop it unanswered. Other
+//!   frames with frame id 0 (no answer wanted) are written as they are, whatever their
+//!   type. A frame refused for what it is (its type, its id, its length, its checksum
+//!   or escapes, not sent in time) is said as a warning (the first at once, then at
+//!   most one a second with the number not said); one dropped because the radio's link
+//!   was down or its client was ended is counted alone. A frame with a frame id (its
+//!   second byte, in every XBee request) is refused and counted in
 //!   [`HubStats::frames_refused`] if its type is not in the table (the hub cannot tell
 //!   its answers from those to other clients' requests), or if it is cut short of the
 //!   fixed fields of its type (`10 01`, a Transmit Request that ends after its frame
@@ -755,25 +754,20 @@ impl RadioWriter {
                 () = stop.cancelled() => return,
                 queued = self.next_frame(&mut queues, &mut next) => queued,
             };
+            let hub_id = match data[..] {
+                [_, id, ..] if id != 0 => Some(id),
+                _ => None,
+            };
             // A request that waited its turn too long: not sent, answered as failed.
-            if let (Some(deadline), [_, hub_id, ..]) = (deadline, &data[..]) {
+            if let (Some(deadline), Some(id)) = (deadline, hub_id) {
                 if Instant::now() >= deadline {
-                    let route = lock(&self.routes).0.remove(*hub_id);
-                    if let Some(route) = route {
-                        let mut request = data.clone();
-                        request[1] = route.own_id;
-                        client.not_sent(&request, "its turn to the radio");
-                    }
+                    self.give_up(&client, &data, id, "its turn to the radio");
                     continue;
                 }
             }
             // A request's answers are due from now on (the window does not start while
             // the request waits its turn), and not before: the route is marked before the
             // radio can answer.
-            let hub_id = match data[..] {
-                [_, id, ..] if id != 0 => Some(id),
-                _ => None,
-            };
             if let Some(id) = hub_id {
                 lock(&self.routes).written(id, Instant::now());
             }
@@ -792,19 +786,33 @@ impl RadioWriter {
                 Err(error) => {
                     // Not written: no pacing time spent, and no answer due.
                     tracing::debug!(%error, "hub: a client's frame not written");
-                    let route = hub_id.and_then(|id| lock(&self.routes).0.remove(id));
-                    match (route, error) {
-                        // The link did not take it in time: answered as failed.
-                        (Some(route), crate::SendError::NotSent { .. }) => {
-                            let mut request = data.clone();
-                            request[1] = route.own_id;
-                            client.not_sent(&request, "the radio's link to take it");
+                    // The link did not take it in time: answered as failed.
+                    let answered = matches!(error, crate::SendError::NotSent { .. })
+                        && hub_id.is_some_and(|id| {
+                            self.give_up(&client, &data, id, "the radio's link to take it")
+                        });
+                    if !answered {
+                        if let Some(id) = hub_id {
+                            lock(&self.routes).0.remove(id);
                         }
-                        _ => bump(&self.counters.frames_refused),
+                        bump(&self.counters.frames_refused);
                     }
                 }
             }
         }
+    }
+
+    /// Ends the route of `client`'s request `data`, under hub id `hub_id`, which waited
+    /// for `what` in vain: answered as failed under the client's own id, not sent
+    /// ([`Client::not_sent`]). Whether it had a route still.
+    fn give_up(&self, client: &Client, data: &[u8], hub_id: u8, what: &str) -> bool {
+        let Some(route) = lock(&self.routes).0.remove(hub_id) else {
+            return false;
+        };
+        let mut request = data.to_vec();
+        request[1] = route.own_id;
+        client.not_sent(&request, what);
+        true
     }
 
     /// The next client's next frame, in turn.
@@ -1373,8 +1381,9 @@ struct Client {
 }
 
 impl Drop for Client {
-    /// Once both its tasks have ended: its requests' answers are no longer routed, and
-    /// their frame ids are free again.
+    /// Once both its tasks have ended: its requests' answers are no longer routed; the
+    /// frame ids of those not written are free again, and those written stay orphans
+    /// ([`Routes::forget`]).
     fn drop(&mut self) {
         lock(&self.routes).forget(self.number, &self.shared);
     }
@@ -1488,8 +1497,9 @@ impl Client {
     }
 
     /// Passes an item of the client's reader on: a frame admitted to the radio's queue
-    /// (waiting while [`CLIENT_FRAMES_TO_RADIO`] frames wait their turn); `false` once
-    /// the hub stops.
+    /// (waiting while [`CLIENT_FRAMES_TO_RADIO`] frames wait their turn), its wait
+    /// counted from `since` if it was read then already (see `read`). Since when it
+    /// waited, if it did; `Err` once the hub stops.
     async fn pass(
         &self,
         item: CodecItem,
@@ -1662,8 +1672,8 @@ impl Client {
                 let Ok(Some((permit, many_permit, shared, id))) = taken else {
                     self.not_sent(
                         &data,
-                        "a frame id (this client's earlier requests, or \
-                                          other clients', wait for answers)",
+                        "a frame id (this client's earlier requests, or other clients', wait \
+                         for answers)",
                     );
                     return None;
                 };
