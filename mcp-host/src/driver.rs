@@ -364,7 +364,9 @@ pub(crate) struct Driver {
     /// while no request is taken (writes backed up), where `ops` and `writes` are not
     /// polled.
     alive: mpsc::Receiver<()>,
-    /// Whether a handle that can send is left ([`Self::alive`] not closed yet).
+    /// Whether a handle that can send is left ([`Self::alive`] not closed yet): every
+    /// [`crate::CommandSender`] and sink holds `alive` as well as `ops` or `writes`, so
+    /// this alone says whether one is left.
     handles_alive: bool,
     pub(crate) events: mpsc::Sender<Event>,
     /// The [`Subscription`](crate::Subscription)s: every event goes there too.
@@ -403,11 +405,6 @@ const PENDING_LINKS_MAX: usize = 64;
 const CLOSE_FLUSH: Duration = Duration::from_secs(1);
 
 impl Driver {
-    /// Whether a [`crate::CommandSender`] (or a sink) is left to send requests.
-    fn senders_open(&self) -> bool {
-        self.handles_alive && (self.ops_open || self.writes_open)
-    }
-
     pub(crate) fn new(
         connector: Connector,
         options: LinkOptions,
@@ -564,7 +561,7 @@ impl Driver {
                     deliver_pending_link(&mut self.pending_links, permit);
                 }
                 None = self.alive.recv(), if self.handles_alive => self.handles_alive = false,
-                _ = self.events.closed(), if !(self.handles_alive && (self.ops_open || self.writes_open)) => return Err(Stop::Shutdown),
+                _ = self.events.closed(), if !self.handles_alive => return Err(Stop::Shutdown),
                 () = self.close_requested.notified() => {
                     return Err(Stop::Fatal(CLOSED_BY_APPLICATION.to_owned()));
                 }
@@ -651,7 +648,7 @@ impl Driver {
                 // The last handle that can send gone, seen even while writes are backed up
                 // and no request is taken.
                 None = self.alive.recv(), if self.handles_alive => self.handles_alive = false,
-                _ = self.events.closed(), if !self.senders_open() => {
+                _ = self.events.closed(), if !self.handles_alive => {
                     self.flush_before_end(&mut wr, &mut out, &mut sent).await;
                     return Served::Shutdown;
                 }
