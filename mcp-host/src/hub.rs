@@ -58,8 +58,9 @@
 //!   request waits, the hub reads none of the client's bytes, so the frames behind it
 //!   that the hub had already read count as waiting since then) is not sent: it is refused, and answered at
 //!   once as the radio answers a request it could not carry out (an AT command
-//!   `ERROR`, a transmission's delivery status 0x32, resource error, a remote AT
-//!   command's transmission failure; other requests get no answer), so that a command
+//!   `ERROR`, a transmission's delivery status 0x32, resource error, in its Transmit
+//!   Status or TX Status, a remote AT command's transmission failure; a Register
+//!   Joining Device gets no answer), so that a command
 //!   does not reach a MAV after its client gave up on it, or left. When a client
 //!   leaves (its connection fails, or the hub ends it), its requests not yet written
 //!   give their ids back; those written keep them, each on one of the shared ids,
@@ -1713,11 +1714,17 @@ impl Client {
 /// The answer the hub gives a request it did not send ([`REQUEST_WAIT`]), as the radio
 /// answers one it could not carry out, under the client's own id: an AT command
 /// `ERROR` (1), a transmission's delivery status 0x32 (resource error: the radio's own
-/// word for a lack of buffers), a remote AT command's transmission failure (4). `None`
-/// for the other requests, whose clients wait for their own timeouts.
+/// word for a lack of buffers; in a Transmit Status 0x8B, or a TX Status 0x89 for the
+/// 802.15.4 and IPv4 Transmit Requests), a remote AT command's transmission failure
+/// (4). `None` for the other requests (Register Joining Device), and for requests cut
+/// short ([`is_whole_request`]), whose clients wait for their own timeouts.
 fn not_sent_answer(request: &[u8]) -> Option<Vec<u8>> {
+    if !is_whole_request(request) {
+        return None;
+    }
     match request {
         [0x08 | 0x09, id, a, b, ..] => Some(vec![0x88, *id, *a, *b, 0x01]),
+        [0x00 | 0x01 | 0x20, id, ..] => Some(vec![0x89, *id, 0x32]),
         // The 16-bit address after the 64-bit one; no retries, no discovery.
         [0x10 | 0x11, id, _, _, _, _, _, _, _, _, hi, lo, ..] => {
             Some(vec![0x8B, *id, *hi, *lo, 0x00, 0x32, 0x00])
@@ -1825,12 +1832,34 @@ mod tests {
             }
             other => panic!("{other:?}"),
         }
+        // 802.15.4 (64- and 16-bit addresses) and IPv4 Transmit Requests: TX Status
+        // 0x89, the same resource error.
+        let tx64 = [
+            0x00, 4, 0, 0x13, 0xA2, 0, 0x40, 0xB5, 0x99, 0xB9, 0x00, b'c',
+        ];
+        let tx16 = [0x01, 5, 0x12, 0x34, 0x00, b'c'];
+        let ipv4 = [
+            0x20, 6, 10, 0, 0, 2, 0x26, 0x16, 0x26, 0x16, 0x00, 0x00, b'c',
+        ];
+        for (request, id) in [(&tx64[..], 4), (&tx16[..], 5), (&ipv4[..], 6)] {
+            assert_eq!(
+                not_sent_answer(request),
+                Some(vec![0x89, id, 0x32]),
+                "{request:02x?}"
+            );
+            // Cut short of their fixed fields: no answer, as from the radio.
+            let short = &request[..request.len() - 2];
+            assert_eq!(not_sent_answer(short), None, "{short:02x?}");
+        }
         // Requests cut short, and those of other types, get no answer.
         for none in [
             &[0x08, 1, b'N'][..],
             &tx[..11],
             &remote[..14],
             &[0x24, 1, 0],
+            &[
+                0x24, 1, 0, 0x13, 0xA2, 0, 0x40, 0xB5, 0x99, 0xB9, 0xFF, 0xFE, 0,
+            ],
         ] {
             assert_eq!(not_sent_answer(none), None, "{none:02x?}");
         }
