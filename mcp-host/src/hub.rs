@@ -1577,6 +1577,15 @@ impl Client {
     /// `what` in vain: not sent, and answered as failed ([`not_sent_answer`]) in its
     /// place among the radio's frames to this client.
     fn not_sent(&self, request: &[u8], what: &str) {
+        self.refuse_request(
+            request,
+            format_args!("waited {} for {what}", crate::render::Seconds(REQUEST_WAIT)),
+        );
+    }
+
+    /// Refuses `request` (under the client's own id) for `why`, and answers it as failed
+    /// ([`not_sent_answer`]) in its place among the radio's frames to this client.
+    fn refuse_request(&self, request: &[u8], why: std::fmt::Arguments<'_>) {
         // The answer first: once the refusal is counted, it is on its way.
         let answer = not_sent_answer(request).and_then(|answer| encode(&answer, self.mode));
         if let Some(bytes) = answer {
@@ -1586,9 +1595,7 @@ impl Client {
         }
         let frame_type = request.first().copied().unwrap_or_default();
         self.refuse(format_args!(
-            "a request of type 0x{frame_type:02x} waited {} for {what}: not sent, and \
-             answered as failed",
-            crate::render::Seconds(REQUEST_WAIT)
+            "a request of type 0x{frame_type:02x} {why}: not sent, and answered as failed"
         ));
     }
 
@@ -1695,7 +1702,13 @@ impl Client {
                 // An id is free: the route holds one of the 255 permits (but for ids
                 // the hub holds for late answers to its own requests without one).
                 let Some(id) = lock(&self.routes).insert(route, Instant::now()) else {
-                    self.not_sent(&data, "a frame id (every one waits for an answer)");
+                    self.refuse_request(
+                        &data,
+                        format_args!(
+                            "found no frame id free (those left are kept for late answers \
+                             to the hub's own requests)"
+                        ),
+                    );
                     return None;
                 };
                 if let Some(slot) = data.get_mut(1) {
