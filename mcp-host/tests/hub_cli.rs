@@ -563,3 +563,87 @@ fn a_clients_frame_that_fails_its_checksum_is_refused_and_said_with_the_hubs_mod
         "{stopped}"
     );
 }
+
+/// Sends `AT AP` under `id` (API mode 1) on `client` and reads frames until its answer:
+/// the hub served the client.
+fn answered_at_ap(client: &mut std::net::TcpStream, id: u8) {
+    use std::io::{Read, Write};
+    let sum = [0x08, id, b'A', b'P']
+        .iter()
+        .fold(0u8, |s, b| s.wrapping_add(*b));
+    client
+        .write_all(&[0x7E, 0x00, 0x04, 0x08, id, b'A', b'P', 0xFF - sum])
+        .unwrap();
+    client.set_read_timeout(Some(GUARD)).unwrap();
+    loop {
+        let mut head = [0u8; 3];
+        client.read_exact(&mut head[..1]).expect("a frame");
+        if head[0] != 0x7E {
+            continue;
+        }
+        client.read_exact(&mut head[1..]).expect("a frame's length");
+        let mut data = vec![0; usize::from(u16::from_be_bytes([head[1], head[2]])) + 1];
+        client.read_exact(&mut data).expect("a frame's data");
+        if data.starts_with(&[0x88, id, b'A', b'P']) {
+            return;
+        }
+    }
+}
+
+#[test]
+fn a_hub_out_of_file_descriptors_says_so_serves_its_clients_and_takes_the_next_once_it_can() {
+    use std::os::unix::process::CommandExt;
+    let (_sim, radio, _sim_out) = sim_on_tcp("1");
+    let mut command = Command::new(env!("CARGO_BIN_EXE_mcp-gs"));
+    command
+        .args(["hub", "--link", &radio, "--listen", "127.0.0.1:0"])
+        .env_remove("MCP_LOG")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped());
+    // Room for a few clients: the hub takes about a dozen file descriptors itself
+    // (standard streams, tokio's, its radio's link, its listener). Those the test
+    // process leaves open in it are kept whatever their number.
+    // SAFETY: setrlimit(2) alone between fork and exec, with a valid limit.
+    unsafe {
+        command.pre_exec(|| {
+            let limit = libc::rlimit {
+                rlim_cur: 24,
+                rlim_max: 24,
+            };
+            match libc::setrlimit(libc::RLIMIT_NOFILE, &limit) {
+                0 => Ok(()),
+                _ => Err(std::io::Error::last_os_error()),
+            }
+        });
+    }
+    let mut child = command.spawn().expect("run mcp-gs");
+    let out = lines(child.stdout.take().unwrap());
+    let err = lines(child.stderr.take().unwrap());
+    let _hub = Running(child);
+    let (_, addr) = serving(&out);
+    // More clients than descriptors left: the system takes them all into the
+    // listener's queue, the hub accepts the first ones.
+    let mut clients: Vec<_> = (0..24)
+        .map(|_| std::net::TcpStream::connect(&addr).unwrap())
+        .collect();
+    let failed = line_with(&err, "accepting a client failed");
+    assert_timed(&failed, " warning: hub: accepting a client failed");
+    assert!(failed.contains("Too many open files"), "{failed}");
+    // The hub tries again and again (every 100 ms), said together at most once a
+    // second, and serves the clients it has meanwhile.
+    let again = line_with(&err, "hub: accepting a client failed");
+    assert!(again.contains(" more times"), "{again}");
+    answered_at_ap(&mut clients[0], 1);
+    // Clients that go free their descriptors: the last one, still in the queue, is
+    // accepted and served.
+    let last = clients.pop().unwrap();
+    for client in clients.drain(..) {
+        // A reset rather than a close: the hub serves a client that closed its
+        // connection until its place is taken (it may only have shut its sending side).
+        socket2::SockRef::from(&client)
+            .set_linger(Some(Duration::ZERO))
+            .unwrap();
+    }
+    let mut last = last;
+    answered_at_ap(&mut last, 2);
+}
