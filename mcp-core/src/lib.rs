@@ -109,6 +109,7 @@
 
 mod address;
 mod command;
+mod confirm;
 mod display;
 mod error;
 mod field;
@@ -124,6 +125,7 @@ mod write;
 
 pub use address::{Address, ParseAddressError, Slot};
 pub use command::{Command, StatusRequest};
+pub use confirm::TIME_CONFIRM_WINDOW;
 pub use error::{BufferTooSmall, Error, ErrorKind, Expected, Full};
 pub use id::{Category, CommandType, Controller, LandingState, ParseIdError, TelemetryId};
 pub use mav::{TelemetrySet, TelemetrySetIter};

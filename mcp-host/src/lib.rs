@@ -114,6 +114,7 @@ mod answers;
 mod api_mode;
 pub mod codec;
 pub mod command_mode;
+mod confirm;
 mod diagnosis;
 pub mod discovery;
 mod driver;
@@ -154,6 +155,7 @@ pub use xbee_api;
 
 pub use answers::Answers;
 pub use api_mode::{DetectError, detect_api_mode};
+pub use confirm::{ConfirmError, Confirmed};
 pub use diagnosis::{Diagnoser, Diagnosis};
 pub use error::{ConnectError, OptionsError, RequestError, SendError};
 pub use event::{
