@@ -3,7 +3,7 @@
 use std::time::Duration;
 
 use bytes::Bytes;
-use mcp_core::{Command, CommandType, Report};
+use mcp_core::{Command, CommandType, Report, StatusRequest};
 use xbee_api::Address64;
 
 use crate::{CommandSender, DeliveryReport, RequestError, SendError, SendOptions};
@@ -67,8 +67,6 @@ pub enum ConfirmError {
     #[error("the MAV did not take the command: it reports {report}")]
     #[non_exhaustive]
     NotTaken {
-        /// The command's delivery status.
-        delivery: DeliveryReport,
         /// The last report, which does not confirm the command.
         report: Report<Bytes>,
     },
@@ -88,13 +86,10 @@ impl ConfirmError {
 
 impl CommandSender {
     /// Sends a set command to the MAV at `to`, waits for the radio's delivery status,
-    /// then asks the MAV the matching status request
-    /// ([`Command::confirming_request`]) and checks that its report shows the command
-    /// taken ([`Command::is_confirmed_by`]). MCP set commands get no reply of their
-    /// own: this is how a ground station knows a MAV landed, switched controller or
-    /// took a trajectory. A report that does not confirm the command is asked for once
-    /// more (it may have been sent before the MAV took the command) before the command
-    /// is said not taken.
+    /// then asks the MAV whether it took it ([`confirm`](Self::confirm)): the matching
+    /// status request, whose report must show the command taken. MCP set commands get
+    /// no reply of their own: this is how a ground station knows a MAV landed,
+    /// switched controller or took a trajectory.
     ///
     /// Each of the two waits (the delivery status, each report) takes the link's
     /// [`send_timeout`](crate::LinkOptions::send_timeout); see
@@ -137,15 +132,7 @@ impl CommandSender {
         command: &Command<B>,
         timeout: Option<Duration>,
     ) -> Result<Confirmed, ConfirmError> {
-        let Some(request) = command.confirming_request() else {
-            return Err(ConfirmError::Unconfirmable {
-                command_type: command.command_type(),
-                status_request: command.is_status_request(),
-            });
-        };
-        if to == Address64::BROADCAST {
-            return Err(ConfirmError::Broadcast);
-        }
+        confirming_request(to, command)?;
         let options = SendOptions {
             timeout,
             ..SendOptions::default()
@@ -154,6 +141,49 @@ impl CommandSender {
             .send_with(to, command, options)
             .await
             .map_err(ConfirmError::Send)?;
+        let report = self.confirm_with(to, command, timeout).await?;
+        Ok(Confirmed { delivery, report })
+    }
+
+    /// Asks the MAV at `to` whether it took `command`, sent before (by
+    /// [`send`](Self::send), fire and forget, or by another program): the matching
+    /// status request ([`Command::confirming_request`]), and its report if it shows the
+    /// command taken ([`Command::is_confirmed_by`]). A report that does not is asked
+    /// for once more (it may have been sent before the MAV took the command) before the
+    /// command is said [`NotTaken`](ConfirmError::NotTaken). Each report is waited for
+    /// the link's [`send_timeout`](crate::LinkOptions::send_timeout).
+    ///
+    /// ```no_run
+    /// # async fn run(sender: mcp_host::CommandSender) -> Result<(), Box<dyn std::error::Error>> {
+    /// use mcp_host::mcp_core::Command;
+    /// use mcp_host::{FrameId, SendOptions};
+    ///
+    /// let mav = "0013A20040B599B9".parse()?;
+    /// let land = Command::landing(true);
+    /// let forget = SendOptions { frame_id: FrameId::None, ..SendOptions::default() };
+    /// sender.send_with(mav, &land, forget).await?;
+    /// let report = sender.confirm(mav, &land).await?;
+    /// println!("the MAV reports {report}");
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub async fn confirm<B: AsRef<[u8]>>(
+        &self,
+        to: Address64,
+        command: &Command<B>,
+    ) -> Result<Report<Bytes>, ConfirmError> {
+        self.confirm_with(to, command, None).await
+    }
+
+    /// [`CommandSender::confirm`] with a timeout for each report (`None`: the link's
+    /// default).
+    pub async fn confirm_with<B: AsRef<[u8]>>(
+        &self,
+        to: Address64,
+        command: &Command<B>,
+        timeout: Option<Duration>,
+    ) -> Result<Report<Bytes>, ConfirmError> {
+        let request = confirming_request(to, command)?;
         let mut asked = 0;
         loop {
             let report = self
@@ -162,11 +192,28 @@ impl CommandSender {
                 .map_err(ConfirmError::Request)?;
             asked += 1;
             if command.is_confirmed_by(&report) {
-                return Ok(Confirmed { delivery, report });
+                return Ok(report);
             }
             if asked == ASKS {
-                return Err(ConfirmError::NotTaken { delivery, report });
+                return Err(ConfirmError::NotTaken { report });
             }
         }
+    }
+}
+
+/// The status request that confirms `command` to `to`, or why there is none.
+fn confirming_request<B: AsRef<[u8]>>(
+    to: Address64,
+    command: &Command<B>,
+) -> Result<StatusRequest, ConfirmError> {
+    let Some(request) = command.confirming_request() else {
+        return Err(ConfirmError::Unconfirmable {
+            command_type: command.command_type(),
+            status_request: command.is_status_request(),
+        });
+    };
+    match to {
+        Address64::BROADCAST => Err(ConfirmError::Broadcast),
+        _ => Ok(request),
     }
 }

@@ -12,7 +12,10 @@ use mcp_core::{
 };
 use mcp_host::record::Direction;
 use mcp_host::sim::{SimVehicle, Simulator};
-use mcp_host::{CommandSender, ConfirmError, DeliveryReport, LinkOptions, PacketStream, SendError};
+use mcp_host::{
+    CommandSender, ConfirmError, DeliveryReport, FrameId, LinkOptions, PacketStream, SendError,
+    SendOptions,
+};
 use proptest::prelude::*;
 use xbee_api::{Address64, ApiMode, DeliveryStatus};
 
@@ -116,17 +119,36 @@ async fn a_controller_the_mav_does_not_have_is_not_taken_and_the_report_says_whi
                 "the MAV did not take the command: it reports controllers altitude"
             );
             assert!(!error.is_timeout());
-            let ConfirmError::NotTaken {
-                delivery, report, ..
-            } = error
-            else {
+            let ConfirmError::NotTaken { report, .. } = error else {
                 panic!("{error:?}")
             };
-            assert!(matches!(delivery, DeliveryReport::Delivered { .. }));
             assert_eq!(report, Report::Controllers(Controller::Altitude));
         }
         other => panic!("{other:?}"),
     }
+}
+
+#[tokio::test]
+async fn a_command_sent_fire_and_forget_is_confirmed_afterwards() {
+    let (_sim, _stream, sender) = ground().await;
+    let forget = SendOptions {
+        frame_id: FrameId::None,
+        ..SendOptions::default()
+    };
+    let land = Command::landing(true);
+    let written = sender.send_with(MAV, &land, forget).await.unwrap();
+    assert_eq!(written, DeliveryReport::Written);
+    let report = sender.confirm(MAV, &land).await.unwrap();
+    assert_eq!(report, Report::Landing(LandingState::Landing));
+    // Asked again, a command the MAV did not take (it lands) is not confirmed.
+    let error = sender
+        .confirm(MAV, &Command::landing(false))
+        .await
+        .unwrap_err();
+    assert!(
+        matches!(&error, ConfirmError::NotTaken { report, .. } if *report == Report::Landing(LandingState::Landing)),
+        "{error:?}"
+    );
 }
 
 #[tokio::test]
