@@ -902,3 +902,117 @@ fn telemetry_to_a_ground_station_gone_is_said_once() {
     );
     assert!(sim.wait().unwrap().success());
 }
+
+#[test]
+fn send_confirm_asks_the_mav_and_fails_unless_its_report_shows_the_command_taken() {
+    let sim = Sim::start("tcp-listen:127.0.0.1:0");
+    let confirm = |command: &[&str], format: &str| {
+        let args = [
+            &["send", "--to", MAV, "--confirm", "--format", format],
+            command,
+        ]
+        .concat();
+        sim.gs(&args)
+    };
+    // The MAV takes the command: the report says so.
+    let out = confirm(&["controller", "mpc"], "text");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert!(
+        lines[0].starts_with(&format!("delivered to {MAV}/")),
+        "{stdout}"
+    );
+    assert_eq!(
+        lines[1..],
+        ["confirmed: report controllers mpc"],
+        "{stdout}"
+    );
+    // In JSON: one object, the delivery, `confirmed` and the report.
+    let out = confirm(&["landing", "on"], "json");
+    assert_eq!(out.status.code(), Some(0));
+    let object: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(
+        (
+            &object["result"],
+            &object["confirmed"],
+            &object["reported"]["type"],
+            &object["reported"]["state_name"]
+        ),
+        (
+            &"delivered".into(),
+            &true.into(),
+            &"landing".into(),
+            &"landing".into()
+        ),
+        "{object}"
+    );
+    // A controller the MAV does not have: delivered, not taken (exit 1), and the report
+    // says which is active.
+    let out = confirm(&["controller", "9"], "json");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("the MAV did not take the command: it reports controllers mpc"),
+        "{stderr}"
+    );
+    let object: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(
+        (
+            &object["result"],
+            &object["confirmed"],
+            &object["reported"]["controller_name"]
+        ),
+        (&"delivered".into(), &false.into(), &"mpc".into()),
+        "{object}"
+    );
+    // What cannot be confirmed is refused before anything is sent (exit 2).
+    for (command, said) in [
+        (
+            &["position-set", "0.5", "0.5"][..],
+            "a position_set command cannot be confirmed",
+        ),
+        (
+            &["status", "landing"][..],
+            "a status request is not confirmed",
+        ),
+        (
+            &["message", "hello"][..],
+            "a message or another packet cannot be confirmed",
+        ),
+    ] {
+        let out = confirm(command, "text");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{command:?}: {stderr}");
+        assert!(stderr.contains(said), "{command:?}: {stderr}");
+        assert_eq!(String::from_utf8_lossy(&out.stdout), "", "{command:?}");
+    }
+    let args = [
+        "send",
+        "--to",
+        "000000000000ffff",
+        "--confirm",
+        "landing",
+        "on",
+    ];
+    let out = sim.gs(&args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("send the command to each MAV's address"),
+        "{stderr}"
+    );
+    // Fire and forget cannot be confirmed: a usage error.
+    let args = [
+        "send",
+        "--to",
+        MAV,
+        "--confirm",
+        "--no-status",
+        "landing",
+        "on",
+    ];
+    let out = sim.gs(&args);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("cannot be used with"));
+}

@@ -1,10 +1,12 @@
-//! A command, its delivery, and the MAV's report of what it did: the landing command,
-//! then a landing status request, whose report is matched to it by type and source.
+//! A command, its delivery, and the MAV's report that it took it: the landing command
+//! sent with `send_confirmed`, which asks the landing status once the command is
+//! delivered and succeeds only if the report shows the MAV landing (or on the ground;
+//! taking off, stabilizing or in flight for `off`).
 //!
 //! `land [LINK] [MAV] [on|off]` (default `on`).
 
-use mcp_host::mcp_core::{Command, StatusRequest};
-use mcp_host::{DeliveryReport, LinkOptions};
+use mcp_host::mcp_core::Command;
+use mcp_host::{ConfirmError, DeliveryReport, LinkOptions};
 
 #[tokio::main]
 async fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -18,15 +20,19 @@ async fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
 
     let (_stream, sender) = mcp_host::connect(&link, LinkOptions::default()).await?;
-    // The radio's delivery status: the MAV's radio got it.
-    if let DeliveryReport::Delivered { retries, .. } =
-        sender.send(mav, &Command::landing(on)).await?
-    {
-        println!("delivered after {retries} retries");
-    }
-    // The MAV's own word on it, with the link's default timeout (12 s).
-    match sender.request(mav, StatusRequest::Landing).await {
-        Ok(report) => println!("{report}"),
+    // The radio's delivery status (the MAV's radio got it), then the MAV's own word on
+    // it, each waited for the link's default timeout (12 s).
+    match sender.send_confirmed(mav, &Command::landing(on)).await {
+        Ok(confirmed) => {
+            if let DeliveryReport::Delivered { retries, .. } = confirmed.delivery {
+                println!("delivered after {retries} retries");
+            }
+            println!("{}", confirmed.report);
+        }
+        // The MAV says it is in another state: it did not take the command.
+        Err(ConfirmError::NotTaken { report, .. }) => {
+            return Err(format!("the MAV did not take it: {report}").into());
+        }
         // A timeout is worth another try; anything else is not.
         Err(e) if e.is_timeout() => return Err(format!("{e} (try again)").into()),
         Err(e) => return Err(e.into()),

@@ -4,9 +4,11 @@ use std::time::Duration;
 
 use clap::Args;
 use futures::StreamExt;
-use mcp_core::{Packet, Report, Waypoint};
+use mcp_core::{Command, Packet, Report, Waypoint};
 use mcp_host::render::Seconds;
-use mcp_host::{DeliveryReport, Event, FrameId, PacketStream, SendError, SendOptions};
+use mcp_host::{
+    ConfirmError, DeliveryReport, Event, FrameId, PacketStream, SendError, SendOptions,
+};
 use xbee_api::{Address64, DeliveryStatus, DiscoveryStatus, ReceivePacketRepr};
 
 use crate::command::CommandArgs;
@@ -27,17 +29,26 @@ pub(crate) struct SendArgs {
     #[arg(long, value_name = "ADDR", value_parser = crate::link_args::parse_address64)]
     to: Address64,
     /// Fire and forget: frame id 0, the radio sends no transmit status.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "confirm")]
     no_status: bool,
+    /// Once the command is delivered, ask the MAV the matching status request and
+    /// fail unless its report shows the command taken (exit 1 if it shows otherwise,
+    /// 4 if no report comes): landing on confirmed by `landing` or `on_ground`, a
+    /// controller by being active, ... A trajectory to one MAV is always confirmed (by
+    /// the report the MAV answers it with); a position set, a status request, a
+    /// message or a broadcast cannot be.
+    #[arg(long)]
+    confirm: bool,
     /// Output format: `json` prints one object, `{"result":"delivered",...}` or
     /// `{"result":"failed",...}` with the transmit status's fields,
     /// `{"result":"timeout",...}` when no status came in time,
     /// `{"result":"disconnected",...}` when the link went away meanwhile,
     /// `{"result":"not_sent",...}` when it could not be opened, or
-    /// `{"result":"written",...}` (--no-status); the packet as `mcp`; and, for a
+    /// `{"result":"written",...}` (--no-status); the packet as `mcp`; for a
     /// trajectory to one MAV with a status asked, `trajectory_confirmed` (and, when
     /// false, `trajectory_reported`: the waypoints the MAV reported instead, or null
-    /// when it reported none in time).
+    /// when it reported none in time); with --confirm, `confirmed` and `reported` (the
+    /// MAV's report as `monitor` prints a report's fields, or null when none came).
     #[arg(long, value_enum, default_value_t = Format::Text)]
     format: Format,
     /// The command.
@@ -87,6 +98,10 @@ pub(crate) fn warn_of_size(command: &CommandArgs, payload: &[u8], to: Address64)
 /// Runs `send`.
 pub(crate) async fn run(args: SendArgs) -> Result<(), Failure> {
     let payload = args.command.payload().map_err(Failure::input)?;
+    let confirm = match args.confirm {
+        true => Some(to_confirm(&args, &payload)?),
+        false => None,
+    };
     warn_of_size(&args.command, &payload, args.to);
     let (mut stream, sender) = args.link.open(false).await.inspect_err(|failure| {
         if args.format == Format::Json {
@@ -159,7 +174,41 @@ pub(crate) async fn run(args: SendArgs) -> Result<(), Failure> {
             "mcp-gs: note: the MAV answers with a report on the link; `mcp-gs status` waits \
              for it and prints it"
         ),
-        _ => {}
+        _ => {
+            if let Some(command) = confirm {
+                let confirmed = sender
+                    .confirm_with(args.to, &command, Some(args.link.timeout()))
+                    .await;
+                if let Some(json) = &mut json {
+                    let reported = match &confirmed {
+                        Ok(report) | Err(ConfirmError::NotTaken { report, .. }) => {
+                            mcp_host::render::json::packet_json(&Packet::Report(report.clone()))
+                        }
+                        Err(_) => serde_json::Value::Null,
+                    };
+                    json["confirmed"] = confirmed.is_ok().into();
+                    json["reported"] = reported;
+                }
+                let failure = match confirmed {
+                    Ok(report) => {
+                        if args.format == Format::Text {
+                            out!("confirmed: {}", Packet::Report(report));
+                        }
+                        None
+                    }
+                    Err(ConfirmError::Request(error)) => {
+                        Some(crate::status::request_failure(error, &args.link, &sender).await)
+                    }
+                    Err(other) => Some(Failure::new(Failure::OTHER, other.to_string())),
+                };
+                if let Some(failure) = failure {
+                    if let Some(json) = json {
+                        out!("{json}");
+                    }
+                    return Err(failure);
+                }
+            }
+        }
     }
     if let Some(json) = json {
         out!("{json}");
@@ -171,6 +220,36 @@ pub(crate) async fn run(args: SendArgs) -> Result<(), Failure> {
     sender.close();
     sender.closed().await;
     Ok(())
+}
+
+/// The command `--confirm` confirms, or why it cannot be (nothing is sent then).
+fn to_confirm(args: &SendArgs, payload: &[u8]) -> Result<Command<Vec<u8>>, Failure> {
+    let command = match mcp_core::parse(payload) {
+        Ok(Packet::Command(command)) => command,
+        _ => {
+            return Err(Failure::input(
+                "--confirm confirms a command by the MAV's report: a message or another \
+                 packet cannot be confirmed",
+            ));
+        }
+    };
+    if args.to == Address64::BROADCAST {
+        return Err(Failure::input(
+            "--confirm asks one MAV for its report, which cannot speak for the others: send \
+             the command to each MAV's address",
+        ));
+    }
+    if command.confirming_request().is_none() {
+        let what = match command.is_status_request() {
+            true => "a status request is not confirmed: `mcp-gs status` waits for its report",
+            false => {
+                "a position_set command cannot be confirmed: no report says whether a \
+                      MAV took it"
+            }
+        };
+        return Err(Failure::input(format!("{what} (drop --confirm)")));
+    }
+    Ok(command.map_bytes(<[u8]>::to_vec))
 }
 
 /// The delivery report as a JSON object, with the fields of a transmit status frame's

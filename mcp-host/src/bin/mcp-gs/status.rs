@@ -2,7 +2,7 @@
 
 use clap::Args;
 use mcp_core::{Command, CommandType, Packet};
-use mcp_host::RequestError;
+use mcp_host::{CommandSender, RequestError};
 use xbee_api::Address64;
 
 use crate::command::status_request;
@@ -87,43 +87,10 @@ pub(crate) async fn run(args: StatusArgs) -> Result<(), Failure> {
             out!("{json}");
         }
     }
-    // The local radio never confirmed delivery: as for a send nobody answered.
-    let unanswered = matches!(
-        report,
-        Err(RequestError::Timeout {
-            delivered: false,
-            ..
-        })
-    );
-    // Delivered, no report, and nothing undecodable here: the report may have been
-    // dropped on the way by a hub in another API mode than the radio's.
-    if let Err(RequestError::Timeout {
-        delivered: true,
-        undecodable: 0,
-        ..
-    }) = report
-    {
-        args.link.check_mode_after_silence(&sender).await;
-    }
-    let stats = sender.stats();
-    let report = report.map_err(|e| match e {
-        // As `send` says it: with what its failure itself points to (an address no
-        // radio has, a frame the link did not take in time).
-        RequestError::Send(e) => diagnosed_send(e, &args.link, &stats),
-        timeout @ RequestError::Timeout { .. } => {
-            let failure = Failure::new(Failure::TIMEOUT, timeout.to_string());
-            if unanswered {
-                diagnosed_unanswered(failure, &args.link, &stats)
-            } else {
-                diagnosed(failure, &args.link, &stats)
-            }
-        }
-        other => diagnosed(
-            Failure::new(Failure::OTHER, other.to_string()),
-            &args.link,
-            &stats,
-        ),
-    })?;
+    let report = match report {
+        Ok(report) => report,
+        Err(error) => return Err(request_failure(error, &args.link, &sender).await),
+    };
     let received_at = std::time::SystemTime::now();
     let packet = Packet::Report(report);
     match args.format {
@@ -142,4 +109,51 @@ pub(crate) async fn run(args: StatusArgs) -> Result<(), Failure> {
         }
     }
     Ok(())
+}
+
+/// A status request's failure as the operator hears it (`status`, `send --confirm`): a
+/// request not delivered as `send` says it, with what its failure points to (an address
+/// no radio has, a frame the link did not take in time); no report in time (exit 4),
+/// after checking, when it was delivered and nothing undecodable came, whether a hub in
+/// another API mode than the radio's dropped it.
+pub(crate) async fn request_failure(
+    error: RequestError,
+    link: &LinkArgs,
+    sender: &CommandSender,
+) -> Failure {
+    // The local radio never confirmed delivery: as for a send nobody answered.
+    let unanswered = matches!(
+        error,
+        RequestError::Timeout {
+            delivered: false,
+            ..
+        }
+    );
+    // Delivered, no report, and nothing undecodable here: the report may have been
+    // dropped on the way by a hub in another API mode than the radio's.
+    if let RequestError::Timeout {
+        delivered: true,
+        undecodable: 0,
+        ..
+    } = error
+    {
+        link.check_mode_after_silence(sender).await;
+    }
+    let stats = sender.stats();
+    match error {
+        RequestError::Send(e) => diagnosed_send(e, link, &stats),
+        timeout @ RequestError::Timeout { .. } => {
+            let failure = Failure::new(Failure::TIMEOUT, timeout.to_string());
+            if unanswered {
+                diagnosed_unanswered(failure, link, &stats)
+            } else {
+                diagnosed(failure, link, &stats)
+            }
+        }
+        other => diagnosed(
+            Failure::new(Failure::OTHER, other.to_string()),
+            link,
+            &stats,
+        ),
+    }
 }
