@@ -30,12 +30,17 @@ pub fn hex(bytes: &[u8]) -> String {
 
 /// A float as JSON: a number in the shortest digits that read back as the same `f32`
 /// (`0.9999998`, not the `0.9999998211860657` of the `f64` it widens to), or `"NaN"`,
-/// `"Infinity"`, `"-Infinity"`.
+/// `"Infinity"`, `"-Infinity"`. A subnormal (below 1.2e-38 in size) is written as the
+/// `f64` it widens to: its shortest digits can be far from it in relative terms (`1e-45`
+/// for 1.401298464324817e-45), and a reader that takes the number as an `f64`, not back
+/// to an `f32`, gets its value within a millionth then too.
 pub fn float(value: f32) -> Value {
     if value.is_nan() {
         Value::from("NaN")
     } else if value.is_infinite() {
         Value::from(if value > 0.0 { "Infinity" } else { "-Infinity" })
+    } else if value.is_subnormal() {
+        Value::from(f64::from(value))
     } else {
         // The f64 nearest the f32's shortest decimal, which serde_json writes in those
         // same digits (an f64 has more than enough to keep them).
@@ -558,14 +563,21 @@ mod tests {
             (0.999_999_8_f32, "0.9999998"),
             (1.5, "1.5"),
             (-0.1, "-0.1"),
-            (1e-45, "1e-45"),
             (f32::MAX, "3.4028235e+38"),
+            (f32::MIN_POSITIVE, "1.1754944e-38"),
             (0.0, "0.0"),
+            // Subnormals: the f64 they widen to.
+            (1e-45, "1.401298464324817e-45"),
+            (1e-40, "9.99994610111476e-41"),
+            (-1e-39, "-1.0000002153053333e-39"),
         ] {
             let json = float(value).to_string();
             assert_eq!(json, text, "{value}");
             let back: f64 = serde_json::from_str(&json).unwrap();
             assert_eq!(back as f32, value, "{json}");
+            // Within a millionth of the exact value, relative, read as an f64.
+            let exact = f64::from(value);
+            assert!((back - exact).abs() <= 1e-6 * exact.abs(), "{json}");
         }
         assert_eq!(float(f32::NAN), "NaN");
         assert_eq!(float(f32::NEG_INFINITY), "-Infinity");
