@@ -86,7 +86,7 @@ fn poll(mav: &mut Mav, sim: &Sim) -> Option<Vec<u8>> {
         .map(|len| buf[..len].to_vec())
 }
 
-fn telemetry(mav: &Mav, sim: &Sim) -> Option<Vec<u8>> {
+fn telemetry(mav: &mut Mav, sim: &Sim) -> Option<Vec<u8>> {
     let mut buf = [0u8; 255];
     mav.telemetry(sim, &mut buf)
         .unwrap()
@@ -120,8 +120,8 @@ fn telemetry_without_room_for_one_record_is_an_error_not_an_empty_packet() {
 #[test]
 fn no_telemetry_is_sent_when_none_is_enabled() {
     let sim = Sim::flying();
-    let mav = Mav::new(&sim);
-    assert_eq!(telemetry(&mav, &sim), None);
+    let mut mav = Mav::new(&sim);
+    assert_eq!(telemetry(&mut mav, &sim), None);
 }
 
 #[test]
@@ -132,7 +132,7 @@ fn telemetry_to_coordinator_enables_ids_and_reports_them() {
     assert_eq!(send(&mut mav, &mut sim, b"c\x01\x07\xf0"), None);
     assert_eq!(send(&mut mav, &mut sim, b"c\x01\x01\x01"), None);
     // Ascending id order, values from the vehicle.
-    let packet = telemetry(&mav, &sim).unwrap();
+    let packet = telemetry(&mut mav, &sim).unwrap();
     assert_eq!(ids_in(&packet), [0x01, 0x19, 0xF0]);
     let Ok(Packet::Telemetry(t)) = parse(&packet) else {
         unreachable!()
@@ -148,21 +148,67 @@ fn telemetry_to_coordinator_enables_ids_and_reports_them() {
         send(&mut mav, &mut sim, b"c\x01\xff\x19").unwrap(),
         b"r\x01\x00\x19"
     );
-    assert_eq!(ids_in(&telemetry(&mav, &sim).unwrap()), [0x01, 0xF0]);
+    assert_eq!(ids_in(&telemetry(&mut mav, &sim).unwrap()), [0x01, 0xF0]);
     assert_eq!(mav.enabled().len(), 2);
 }
 
 #[test]
-fn telemetry_stops_at_the_payload_limit() {
+fn telemetry_past_the_payload_limit_goes_on_in_the_next_packets() {
     let mut sim = Sim::flying();
     let mut mav = Mav::new(&sim);
     for id in 0..=255u8 {
         send(&mut mav, &mut sim, &[b'c', 0x01, 0x01, id]);
     }
     assert_eq!(mav.enabled().len(), 256);
-    let packet = telemetry(&mav, &sim).unwrap();
-    assert_eq!(packet.len(), 1 + 50 * 5);
-    assert_eq!(ids_in(&packet), (0..50).collect::<Vec<u8>>());
+    // 50 records a packet: 0-49, 50-99, ..., 250-255, then 0-49 again.
+    for first in [0u8, 50, 100, 150, 200, 250, 0] {
+        let packet = telemetry(&mut mav, &sim).unwrap();
+        let last = first.saturating_add(49);
+        assert_eq!(ids_in(&packet), (first..=last).collect::<Vec<u8>>());
+        assert_eq!(packet.len(), 1 + (usize::from(last - first) + 1) * 5);
+    }
+    // Ids disabled meanwhile are not waited for: past the last one enabled, the next
+    // packet starts from the lowest again.
+    let packet = telemetry(&mut mav, &sim).unwrap();
+    assert_eq!(ids_in(&packet)[0], 50);
+    for id in 100..=255u8 {
+        send(&mut mav, &mut sim, &[b'c', 0x01, 0x00, id]);
+    }
+    assert_eq!(
+        ids_in(&telemetry(&mut mav, &sim).unwrap()),
+        (0..50).collect::<Vec<u8>>()
+    );
+    assert_eq!(
+        ids_in(&telemetry(&mut mav, &sim).unwrap()),
+        (50..100).collect::<Vec<u8>>()
+    );
+}
+
+proptest::proptest! {
+    /// However many ids are enabled and whatever the buffer, every enabled id is sent
+    /// within as many packets as a round takes, each packet in ascending order.
+    #[test]
+    fn every_enabled_id_is_sent_within_a_round(
+        ids in proptest::collection::btree_set(proptest::prelude::any::<u8>(), 1..=256),
+        buf_len in 6usize..=300,
+    ) {
+        let sim = Sim::flying();
+        let mut mav = Mav::new(&sim);
+        for id in &ids {
+            mav.enabled_mut().insert(TelemetryId::from(*id));
+        }
+        let per_packet = ((buf_len.min(255) - 1) / 5).max(1);
+        let round = ids.len().div_ceil(per_packet);
+        let mut sent = std::collections::BTreeSet::new();
+        let mut buf = vec![0u8; buf_len];
+        for _ in 0..round {
+            let len = mav.telemetry(&sim, &mut buf).unwrap().unwrap();
+            let packet = ids_in(&buf[..len]);
+            proptest::prop_assert!(packet.windows(2).all(|w| w[0] < w[1]), "{packet:?}");
+            sent.extend(packet);
+        }
+        proptest::prop_assert_eq!(sent, ids);
+    }
 }
 
 #[test]

@@ -25,7 +25,8 @@
 //!   its own, e.g. when a landing ends), until it returns `None`.
 //! - [`Mav::telemetry`] builds the 20 Hz telemetry packet: every enabled id in
 //!   ascending order, nothing when none is enabled. 50 records fill the 255-byte
-//!   payload; ids past those are left out.
+//!   payload (16 an 84-byte one): the ids past those go in the next packets, each
+//!   starting where the last one stopped, so that every enabled id is sent, less often.
 //! - Position slave set: the MAV keeps the firmware's four slots. A spec-form command
 //!   (no slot) sets slot 0. The status request is answered with the firmware-form
 //!   report (four addresses, 34 bytes), as the deployed MAV answers it; a MAV built
@@ -99,6 +100,9 @@ pub struct Mav {
     spec_slave_report: bool,
     landing: LandingState,
     controller: Controller,
+    /// The id the next telemetry packet starts from: past 0 while the enabled ids take
+    /// more than one packet, the first the last packet left out.
+    telemetry_from: u8,
 }
 
 impl Mav {
@@ -127,6 +131,7 @@ impl Mav {
             enabled: TelemetrySet::new(),
             slaves: [Address([0; 8]); 4],
             spec_slave_report: false,
+            telemetry_from: 0,
             landing,
             controller,
         }
@@ -349,9 +354,16 @@ impl Mav {
 
     /// Writes the periodic telemetry packet: every enabled id in ascending order with
     /// its value from [`Vehicle::telemetry`]. Returns `None` (send nothing) when no id
-    /// is enabled. Records that do not fit `buf` or the 255-byte payload are left out;
-    /// if not even one fits `buf`, the error (a packet with no record would say that
-    /// none is enabled), which needs room for one record, 6 bytes.
+    /// is enabled. If not even one record fits `buf`, the error (a packet with no
+    /// record would say that none is enabled), which needs room for one record, 6
+    /// bytes.
+    ///
+    /// When the enabled ids take more records than fit `buf` (or the 255-byte payload),
+    /// the packet holds the first ones, and the next packet goes on from the first id
+    /// left out, up to the highest enabled id; the one after starts from the lowest
+    /// again. Each packet is in ascending order, and every enabled id is sent (the
+    /// status report that says an id is on never lies): with `k` packets to a round,
+    /// each id once every `k` periods.
     ///
     /// `buf` sets how many records a packet takes: each is 5 bytes after a 1-byte
     /// header. A buffer of [`MAX_PAYLOAD`](crate::MAX_PAYLOAD) takes 50, in a packet of
@@ -379,9 +391,14 @@ impl Mav {
     /// for id in 1..=20 {
     ///     mav.enabled_mut().insert(TelemetryId::from(id));
     /// }
-    /// // One radio packet: the first 16 ids of the 20.
+    /// // One radio packet: the first 16 ids of the 20, then the 4 left, then again.
     /// let mut buf = [0u8; 84];
     /// assert_eq!(mav.telemetry(&Sim, &mut buf), Ok(Some(1 + 16 * 5)));
+    /// assert_eq!(buf[1], 1);
+    /// assert_eq!(mav.telemetry(&Sim, &mut buf), Ok(Some(1 + 4 * 5)));
+    /// assert_eq!(buf[1], 17);
+    /// assert_eq!(mav.telemetry(&Sim, &mut buf), Ok(Some(1 + 16 * 5)));
+    /// assert_eq!(buf[1], 1);
     /// // No room for a record.
     /// for len in [0, 5] {
     ///     let error = mav.telemetry(&Sim, &mut buf[..len]).unwrap_err();
@@ -389,7 +406,7 @@ impl Mav {
     /// }
     /// ```
     pub fn telemetry<V: Vehicle + ?Sized>(
-        &self,
+        &mut self,
         vehicle: &V,
         buf: &mut [u8],
     ) -> Result<Option<usize>, BufferTooSmall> {
@@ -401,14 +418,25 @@ impl Mav {
             available: buf.len(),
         };
         let mut builder = TelemetryBuilder::new(buf).map_err(|_| too_small)?;
-        for id in self.enabled.iter() {
-            if builder.push(id, vehicle.telemetry(id)).is_err() {
+        let mut from = self.telemetry_from;
+        let mut left_out = 0;
+        loop {
+            for id in self.enabled.iter_from(from) {
+                if builder.push(id, vehicle.telemetry(id)).is_err() {
+                    left_out = u8::from(id);
+                    break;
+                }
+            }
+            // None left from `from` on (disabled meanwhile): from the lowest again.
+            if builder.count() > 0 || from == 0 {
                 break;
             }
+            from = 0;
         }
         if builder.count() == 0 {
             return Err(too_small);
         }
+        self.telemetry_from = left_out;
         Ok(Some(builder.finish()))
     }
 }

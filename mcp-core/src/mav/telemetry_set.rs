@@ -98,9 +98,14 @@ impl TelemetrySet {
 
     /// The ids in ascending order.
     pub fn iter(&self) -> TelemetrySetIter<'_> {
+        self.iter_from(0)
+    }
+
+    /// The ids from `first` on, in ascending order.
+    pub(crate) fn iter_from(&self, first: u8) -> TelemetrySetIter<'_> {
         TelemetrySetIter {
             set: self,
-            next: Some(0),
+            next: Some(first),
         }
     }
 }
