@@ -119,6 +119,10 @@ pub enum ErrorKind {
         /// The packet's category byte.
         found: u8,
     },
+    /// A controllers report names controller 0xFF, outside the identifiers a
+    /// controller can have (0x00-0xFE, table 20): in a command that byte is the
+    /// status request.
+    InvalidController(u8),
 }
 
 impl ErrorKind {
@@ -135,6 +139,7 @@ impl ErrorKind {
     /// | 0x47 | [`TooManyWaypoints`](Self::TooManyWaypoints) |
     /// | 0x48 | [`InvalidSlot`](Self::InvalidSlot) |
     /// | 0x49 | [`WrongCategory`](Self::WrongCategory) |
+    /// | 0x4A | [`InvalidController`](Self::InvalidController) |
     /// | 0x50 | [`BufferTooSmall`] (its own type: [`BufferTooSmall::CODE`]) |
     /// | 0x51 | [`Full`] (its own type: [`Full::CODE`]) |
     ///
@@ -161,6 +166,7 @@ impl ErrorKind {
             ErrorKind::TooManyWaypoints(_) => 0x47,
             ErrorKind::InvalidSlot(_) => 0x48,
             ErrorKind::WrongCategory { .. } => 0x49,
+            ErrorKind::InvalidController(_) => 0x4A,
         }
     }
 }
@@ -252,6 +258,12 @@ impl fmt::Display for ErrorKind {
                 write!(f, "{n} trajectory waypoints, at most 254 allowed")
             }
             ErrorKind::InvalidSlot(s) => write!(f, "position slave slot {s} is not 0-3"),
+            ErrorKind::InvalidController(c) => {
+                write!(
+                    f,
+                    "controller 0x{c:02x} is not 0x00-0xfe (0xff is no controller)"
+                )
+            }
         }
     }
 }
@@ -326,11 +338,12 @@ mod tests {
                 expected: Category::Command,
                 found: b'r',
             },
+            ErrorKind::InvalidController(0xFF),
         ];
         let codes = kinds.map(|kind| kind.code());
         assert_eq!(
             codes,
-            [0x41, 0x42, 0x43, 0x44, 0x45, 0x46, 0x47, 0x48, 0x49]
+            [0x41, 0x42, 0x43, 0x44, 0x45, 0x46, 0x47, 0x48, 0x49, 0x4A]
         );
         assert_eq!(Error::new(ErrorKind::InvalidSlot(4), 2).code(), 0x48);
         assert_eq!((BufferTooSmall::CODE, Full::CODE), (0x50, 0x51));

@@ -28,7 +28,8 @@ pub enum Report<B> {
     },
     /// `r 02 state` (table 19): the landing state.
     Landing(LandingState),
-    /// `r 03 id` (table 20): the active controller.
+    /// `r 03 id` (table 20): the active controller, 0x00-0xFE. `Controller::Unknown(0xFF)`
+    /// encodes a packet that parsers refuse ([`ErrorKind::InvalidController`]).
     Controllers(Controller),
     /// `r 04 size waypoints...` (table 21): the trajectory.
     TrajectorySet(Waypoints<B>),
@@ -158,6 +159,11 @@ impl<'a> Report<&'a [u8]> {
                 let (i, state) = read::u8(i)?;
                 Ok((i, Report::Landing(state.into())))
             }),
+            // 0xFF, the status request's byte in a command, is no controller.
+            CommandType::Controllers if body == [field::STATUS_REQUEST] => Err(Error::new(
+                ErrorKind::InvalidController(field::STATUS_REQUEST),
+                field::ARG,
+            )),
             CommandType::Controllers => fixed(field::ONE_BYTE_LEN, |i| {
                 let (i, c) = read::u8(i)?;
                 Ok((i, Report::Controllers(c.into())))

@@ -138,6 +138,31 @@ fn unknown_identifiers_are_valid() {
     assert_eq!((r.id, r.value), (TelemetryId::Unknown(0xF0), 1.0));
 }
 
+#[test]
+fn a_controllers_report_of_0xff_is_no_controller() {
+    // Table 20: 0x00-0xFE; in a command 0xFF is the status request.
+    let e = err(b"r\x03\xff");
+    assert_eq!(*e.kind(), ErrorKind::InvalidController(0xFF));
+    assert_eq!((e.offset(), e.code()), (2, 0x4A));
+    assert_eq!(
+        e.to_string(),
+        "controller 0xff is not 0x00-0xfe (0xff is no controller) (at offset 2)"
+    );
+    assert_eq!(
+        Report::parse(b"r\x03\xff").unwrap_err().kind(),
+        &ErrorKind::InvalidController(0xFF)
+    );
+    // A length error first.
+    assert!(matches!(
+        err(b"r\x03\xff\x00").kind(),
+        ErrorKind::WrongLength { .. }
+    ));
+    assert_eq!(
+        parse(b"c\x03\xff").unwrap(),
+        Packet::Command(Command::StatusRequest(StatusRequest::Controllers))
+    );
+}
+
 const A: [u8; 8] = [0x00, 0x13, 0xA2, 0x00, 0x40, 0xB5, 0x99, 0xBF];
 
 #[test]

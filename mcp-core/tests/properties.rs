@@ -73,7 +73,8 @@ fn report() -> impl Strategy<Value = Report<Vec<u8>>> {
         (any::<bool>(), any::<u8>())
             .prop_map(|(on, id)| Report::TelemetryToCoordinator { on, id: id.into() }),
         any::<u8>().prop_map(|s| Report::Landing(s.into())),
-        any::<u8>().prop_map(|c| Report::Controllers(c.into())),
+        // 0xFF is no controller.
+        (0u8..0xFF).prop_map(|c| Report::Controllers(c.into())),
         waypoints().prop_map(Report::TrajectorySet),
         address().prop_map(|a| Report::PositionSlaveSet(SlaveAddresses::Single(a))),
         prop::array::uniform4(address())
