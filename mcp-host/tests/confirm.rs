@@ -23,7 +23,8 @@ const MAV: Address64 = Address64(0x0013_A200_40B5_99B9);
 /// Failure guard only: every wait ends on a frame long before this.
 const GUARD: Duration = Duration::from_secs(20);
 
-/// A ground station on a simulated network of one MAV (in flight, manual control).
+/// A ground station on a simulated network of one MAV (in flight, on its altitude
+/// controller).
 async fn ground() -> (Simulator, PacketStream, CommandSender) {
     let link = "tcp-listen:127.0.0.1:0".parse().unwrap();
     let sim = Simulator::start(
