@@ -855,6 +855,138 @@ fn replay_of_no_frame_of_the_chosen_direction_says_so_up_front() {
     assert!(stderr(&output).contains("records received frames only"));
 }
 
+/// A recording of `records`: direction (0 received, 1 sent), time in µs since 1970,
+/// frame data.
+fn recording_of(records: &[(u8, u64, &[u8])]) -> Vec<u8> {
+    let mut bytes = b"MCPREC\x01\x00".to_vec();
+    for &(direction, micros, frame) in records {
+        bytes.extend_from_slice(&micros.to_le_bytes());
+        bytes.push(direction);
+        bytes.extend_from_slice(&u16::try_from(frame.len()).unwrap().to_le_bytes());
+        bytes.extend_from_slice(frame);
+    }
+    bytes
+}
+
+/// `frame` (frame data) on the wire in API mode 1.
+fn wire(frame: &[u8]) -> Vec<u8> {
+    let mut bytes = vec![0x7E, 0x00, u8::try_from(frame.len()).unwrap()];
+    bytes.extend_from_slice(frame);
+    bytes.push(0xFF - frame.iter().fold(0u8, |s, b| s.wrapping_add(*b)));
+    bytes
+}
+
+#[test]
+fn replay_of_sent_frames_leaves_the_at_commands_out_unless_asked() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("hub.mcprec");
+    // As a hub records: its own AT AP, a client's NI set, a remote AT to a MAV's
+    // radio, a landing command, and the radio's answers.
+    let remote_at: &[u8] = &[
+        0x17, 3, 0, 0x13, 0xA2, 0, 0x40, 0xB5, 0x99, 0xB9, 0xFF, 0xFE, 0x02, b'I', b'D', 7,
+    ];
+    let landing: &[u8] = &[
+        0x10, 4, 0, 0x13, 0xA2, 0, 0x40, 0xB5, 0x99, 0xB9, 0xFF, 0xFE, 0, 0, b'c', 2, 1,
+    ];
+    let records = [
+        (1, 0, &[0x08, 1, b'A', b'P'][..]),
+        (0, 1_000, &[0x88, 1, b'A', b'P', 0, 1][..]),
+        (1, 2_000, &[0x08, 2, b'N', b'I', b'X'][..]),
+        (1, 3_000, remote_at),
+        (1, 4_000, landing),
+    ];
+    std::fs::write(&file, recording_of(&records)).unwrap();
+    let (link, peer) = common::recording_peer();
+    let path = file.to_str().unwrap();
+    let output = run(&["replay", path, "--link", &link, "--frames", "tx"]);
+    let said = stderr(&output);
+    assert_eq!(output.status.code(), Some(0), "{said}");
+    assert_eq!(peer.join().unwrap(), wire(landing));
+    assert!(
+        said.contains(
+            "3 AT commands to radios in the recording not replayed: they would set the \
+             radios' parameters again (--with-at plays them)"
+        ),
+        "{said}"
+    );
+    assert!(said.contains("replayed 1 frame"), "{said}");
+    // Asked for: every sent frame, in order.
+    let (link, peer) = common::recording_peer();
+    let output = run(&[
+        "replay",
+        path,
+        "--link",
+        &link,
+        "--frames",
+        "tx",
+        "--with-at",
+    ]);
+    let said = stderr(&output);
+    assert_eq!(output.status.code(), Some(0), "{said}");
+    let sent: Vec<u8> = [0, 2, 3, 4]
+        .iter()
+        .flat_map(|&i| wire(records[i].2))
+        .collect();
+    assert_eq!(peer.join().unwrap(), sent);
+    assert!(!said.contains("not replayed"), "{said}");
+    // A recording of AT commands alone: nothing to replay, said before the link opens.
+    let at_only = dir.path().join("at.mcprec");
+    std::fs::write(&at_only, recording_of(&records[..3])).unwrap();
+    let output = run(&[
+        "replay",
+        at_only.to_str().unwrap(),
+        "--link",
+        "tcp:127.0.0.1:9",
+        "--frames",
+        "tx",
+    ]);
+    let said = stderr(&output);
+    assert_eq!(output.status.code(), Some(2), "{said}");
+    assert!(
+        said.contains("nothing to replay: 2 AT commands to radios in the recording"),
+        "{said}"
+    );
+}
+
+#[test]
+fn replay_keeps_its_pace_across_a_clock_set_back_and_max_gap_shortens_the_waits() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("clock.mcprec");
+    let hour = 3_600_000_000u64;
+    // The clock set back an hour after the second frame; a day's silence before the
+    // last.
+    let times = [
+        10 * hour,
+        10 * hour + 1_000,
+        9 * hour,
+        9 * hour + 1_000,
+        33 * hour,
+    ];
+    let records: Vec<(u8, u64)> = times.iter().map(|&t| (0, t)).collect();
+    std::fs::write(&file, recording(&records)).unwrap();
+    let (link, peer) = common::recording_peer();
+    let output = run(&[
+        "replay",
+        file.to_str().unwrap(),
+        "--link",
+        &link,
+        "--max-gap",
+        "0.5",
+    ]);
+    let stderr = stderr(&output);
+    assert_eq!(output.status.code(), Some(0), "{stderr}");
+    assert_eq!(peer.join().unwrap().len(), 5 * 6);
+    assert!(
+        stderr.contains(
+            "warning: the recording's clock goes back 3600 s before its frame 3: played at \
+             once"
+        ),
+        "{stderr}"
+    );
+    assert!(stderr.contains("replayed 5 frames"), "{stderr}");
+    assert!(!stderr.contains("quiet"), "{stderr}");
+}
+
 #[test]
 fn replay_of_a_hostile_recording_is_an_input_error_at_a_slow_speed() {
     let dir = tempfile::tempdir().unwrap();
@@ -899,6 +1031,14 @@ fn replay_says_how_far_it_got_when_its_peer_leaves() {
     let stderr = stderr(&output);
     assert_eq!(peer.join().unwrap(), [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F]);
     assert_eq!(output.status.code(), Some(3), "{stderr}");
+    // The wait said as it began.
+    assert!(
+        stderr.contains(
+            "mcp-gs: the recording is quiet for 60 s after its frame 1: waiting for the next \
+             (--max-gap shortens such waits)"
+        ),
+        "{stderr}"
+    );
     // After the warning that a `tcp:` link is most often a radio's side.
     assert_eq!(
         stderr.trim_end().lines().last(),

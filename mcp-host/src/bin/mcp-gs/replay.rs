@@ -11,6 +11,7 @@ use mcp_host::{CommandSender, Link, SendError};
 
 use crate::Failure;
 use crate::link_args::{LinkArgs, send_failure};
+use mcp_host::render::Seconds;
 
 /// Which recorded frames to play.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -47,6 +48,23 @@ pub(crate) struct ReplayArgs {
     /// Which frames to play.
     #[arg(long, value_enum, default_value_t = Which::Rx)]
     frames: Which,
+    /// Also play the AT commands sent to radios (0x08, 0x09 to the local radio, 0x17
+    /// to a remote one), left out by default: they set the radios' parameters (network,
+    /// API mode, node identifier, ...) again as they were set when recorded.
+    #[arg(long)]
+    with_at: bool,
+    /// The longest a replay waits between two frames, in the recording's seconds (before
+    /// --speed): a recording quiet for an hour then plays on after this long.
+    #[arg(long, value_name = "SECONDS", value_parser = parse_max_gap)]
+    max_gap: Option<Duration>,
+}
+
+/// `--max-gap`: a finite number of seconds, 0 or more.
+fn parse_max_gap(s: &str) -> Result<Duration, String> {
+    s.parse::<f64>()
+        .ok()
+        .and_then(|x| Duration::try_from_secs_f64(x).ok())
+        .ok_or_else(|| format!("expected a number of seconds, 0 or more, got `{s}`"))
 }
 
 /// `--speed`: a finite number, 0 or more.
@@ -67,7 +85,7 @@ pub(crate) async fn run(args: ReplayArgs) -> Result<(), Failure> {
         .map_err(|e| Failure::input(format!("cannot open {}: {e}", args.file.display())))?;
     let mut reader = RecordReader::new(BufReader::new(file))
         .map_err(|e| Failure::input(format!("{}: {e}", args.file.display())))?;
-    let first = first_wanted(&args, &mut reader)?;
+    let (first, mut at_left_out) = first_wanted(&args, &mut reader)?;
     if let Some(warning) = radio_side_warning(&args.link.link, args.frames) {
         err!("mcp-gs: warning: {warning}");
     }
@@ -78,16 +96,43 @@ pub(crate) async fn run(args: ReplayArgs) -> Result<(), Failure> {
     let start = tokio::time::Instant::now();
     let mut played = 0u64;
     let records = std::iter::once(Ok(first)).chain(reader);
-    let result = play(&args, records, &sender, start, &mut played).await;
+    let result = play(
+        &args,
+        records,
+        &sender,
+        start,
+        &mut played,
+        &mut at_left_out,
+    )
+    .await;
     // What was written goes out before the process ends, also after an error. (The
     // stream is dropped first: its queue, full of what nobody read, would hold up the
     // last event of the link.)
     drop(stream);
     sender.close();
     sender.closed().await;
+    if at_left_out > 0 {
+        err!("mcp-gs: {}", at_left_out_note(at_left_out));
+    }
     result?;
     err!("mcp-gs: replayed {}", crate::counted(played, "frame"));
     Ok(())
+}
+
+/// Whether a recorded frame is an AT command to a radio: a local one (AT Command 0x08,
+/// Queue Parameter Value 0x09) or a remote one (0x17), which sets a radio's parameters
+/// when it has a value.
+fn is_at_command(record: &Record) -> bool {
+    record.direction == Direction::Sent && matches!(record.frame.first(), Some(0x08 | 0x09 | 0x17))
+}
+
+/// What to say of the AT commands not replayed.
+fn at_left_out_note(count: u64) -> String {
+    format!(
+        "{} to radios in the recording not replayed: they would set the radios' \
+         parameters again (--with-at plays them)",
+        crate::counted(count, "AT command")
+    )
 }
 
 /// What to say when the received frames (what a radio said, for a ground station) go
@@ -122,16 +167,35 @@ fn wanted(which: Which, direction: Direction) -> bool {
     )
 }
 
-/// Reads the recording up to its first frame `--frames` plays, before the link is
-/// opened, and returns it (the records before it are not played): one that holds no
+/// `duration` to the second (to the millisecond below one), as said to an operator.
+fn rounded(duration: Duration) -> Duration {
+    match duration.as_secs() {
+        0 => Duration::from_millis(duration.as_millis().try_into().unwrap_or(0)),
+        _ => Duration::from_secs_f64(duration.as_secs_f64().round()),
+    }
+}
+
+/// Whether the replay plays `record`: of the direction `--frames` plays, and no AT
+/// command to a radio unless `--with-at`.
+fn plays(args: &ReplayArgs, record: &Record) -> bool {
+    wanted(args.frames, record.direction) && (args.with_at || !is_at_command(record))
+}
+
+/// A wait between two frames this long or longer is said as it begins: the replay
+/// seems stuck otherwise.
+const LONG_QUIET: Duration = Duration::from_secs(10);
+
+/// Reads the recording up to its first frame the replay plays, before the link is
+/// opened, and returns it (the records before it are not played) with the number of AT
+/// commands left out before it: one that holds no
 /// such frame is an input error (a recording made by `monitor` holds received frames
 /// only), and so is one damaged before it. The recording is read once, so that a pipe
 /// or a FIFO plays as a file does.
 fn first_wanted(
     args: &ReplayArgs,
     reader: &mut RecordReader<BufReader<File>>,
-) -> Result<Record, Failure> {
-    let (mut received, mut sent) = (0u64, 0u64);
+) -> Result<(Record, u64), Failure> {
+    let (mut received, mut sent, mut at) = (0u64, 0u64, 0u64);
     for record in reader {
         let record = record.map_err(|e| {
             Failure::input(format!(
@@ -143,13 +207,20 @@ fn first_wanted(
             Direction::Received => received += 1,
             Direction::Sent => sent += 1,
         }
+        if plays(args, &record) {
+            return Ok((record, at));
+        }
         if wanted(args.frames, record.direction) {
-            return Ok(record);
+            at += 1;
         }
     }
     let file = args.file.display();
     Err(Failure::input(match args.frames {
         _ if received + sent == 0 => format!("{file} holds no frames: nothing to replay"),
+        // Every frame it would play was an AT command.
+        Which::Tx | Which::Both if at > 0 => {
+            format!("{file}: nothing to replay: {}", at_left_out_note(at))
+        }
         Which::Tx => format!(
             "{file} holds no sent frames (--frames tx), only {received} received ones \
              (`monitor --record` records received frames only, `hub --record` both): \
@@ -173,15 +244,21 @@ fn lost(error: SendError, played: u64) -> Failure {
     Failure::new(failure.code(), message)
 }
 
-/// Writes the wanted records of `records` at their pace; counts them in `played`.
+/// Writes the records of `records` the replay plays at their pace, each the time after
+/// the one before that the recording says (none when its clock went back, at most
+/// `--max-gap`); counts them in `played`, and the AT commands it leaves out in
+/// `at_left_out`.
 async fn play(
     args: &ReplayArgs,
     records: impl Iterator<Item = std::io::Result<Record>>,
     sender: &CommandSender,
     start: tokio::time::Instant,
     played: &mut u64,
+    at_left_out: &mut u64,
 ) -> Result<(), Failure> {
-    let mut first = None;
+    let mut previous = None;
+    let mut at = start;
+    let mut went_back = false;
     for record in records {
         let record = record.map_err(|e| {
             Failure::input(format!(
@@ -190,29 +267,56 @@ async fn play(
                 crate::counted(*played, "frame")
             ))
         })?;
-        if !wanted(args.frames, record.direction) {
+        if !plays(args, &record) {
+            if wanted(args.frames, record.direction) {
+                *at_left_out += 1;
+            }
             continue;
         }
-        let first = *first.get_or_insert(record.time);
+        let gap = match previous.replace(record.time) {
+            None => Duration::ZERO,
+            Some(previous) => record.time.duration_since(previous).unwrap_or_else(|back| {
+                // The recording machine's clock was set back (a time server's
+                // correction, a clock set at boot): the frames after it keep their
+                // pace from there.
+                if !std::mem::replace(&mut went_back, true) {
+                    err!(
+                        "mcp-gs: warning: the recording's clock goes back {} before its \
+                         frame {}: played at once, and the frames after it at their pace \
+                         from there",
+                        Seconds(rounded(back.duration())),
+                        *played + 1
+                    );
+                }
+                Duration::ZERO
+            }),
+        };
+        let gap = args.max_gap.map_or(gap, |max| gap.min(max));
         if args.speed > 0.0 {
-            let offset = record.time.duration_since(first).unwrap_or_default();
             // A hostile or damaged recording may stamp a record beyond any time a clock
             // can wait for (at a slow speed, all the more).
-            let at = Duration::try_from_secs_f64(offset.as_secs_f64() / args.speed)
+            let wait = Duration::try_from_secs_f64(gap.as_secs_f64() / args.speed)
                 .ok()
-                .filter(|wait| *wait <= MAX_WAIT)
-                .and_then(|wait| start.checked_add(wait))
-                .ok_or_else(|| {
-                    Failure::input(format!(
-                        "{}: a record stamped {} s after the first is too far ahead to wait \
-                         for at --speed {} (replayed {} before it; --speed 0 plays every \
-                         frame at once)",
-                        args.file.display(),
-                        offset.as_secs(),
-                        args.speed,
-                        crate::counted(*played, "frame")
-                    ))
-                })?;
+                .filter(|wait| *wait <= MAX_WAIT);
+            at = wait.and_then(|wait| at.checked_add(wait)).ok_or_else(|| {
+                Failure::input(format!(
+                    "{}: a record stamped {} s after the one before it is too far ahead to \
+                     wait for at --speed {} (replayed {} before it; --speed 0 plays every \
+                     frame at once, --max-gap shortens the waits)",
+                    args.file.display(),
+                    gap.as_secs(),
+                    args.speed,
+                    crate::counted(*played, "frame")
+                ))
+            })?;
+            if wait.is_some_and(|wait| wait >= LONG_QUIET) {
+                err!(
+                    "mcp-gs: the recording is quiet for {} after its frame {}: waiting for \
+                     the next (--max-gap shortens such waits)",
+                    Seconds(rounded(wait.unwrap_or_default())),
+                    *played
+                );
+            }
             // A link that ends while the replay waits for a record's time is said at
             // once, not at the record.
             tokio::select! {
