@@ -222,6 +222,43 @@ fn sim_and_ground_station_over_a_pseudo_terminal() {
 }
 
 #[test]
+fn a_mav_out_of_reach_or_a_packet_too_large_fails_with_what_to_do() {
+    // The MAV's radio cut off from the start: no acknowledgement (network_ack_failure);
+    // unicast payloads of 84 bytes at most (no fragments).
+    let sim = Sim::start_with(
+        &["--cut", "0013A20040B599B9@0+300", "--max-unicast", "84"],
+        "tcp-listen:127.0.0.1:0",
+    );
+    for args in [
+        &["send", "--to", MAV, "landing", "on"][..],
+        &["status", "--to", MAV, "landing"],
+    ] {
+        let out = sim.gs(args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(5), "{args:?}: {stderr}");
+        assert!(stderr.contains("network_ack_failure"), "{stderr}");
+        assert!(
+            stderr.contains(
+                "hint: the MAV's radio did not acknowledge it: it is off, out of range, or in \
+                 another network (its ID and CH must be this radio's); `mcp-gs nodes --link tcp:"
+            ),
+            "{args:?}: {stderr}"
+        );
+    }
+    let text = "x".repeat(100);
+    let args = ["send", "--to", SLAVE, "message", &text];
+    let out = sim.gs(&args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(5), "{stderr}");
+    assert!(stderr.contains("payload_too_large"), "{stderr}");
+    assert!(
+        stderr.contains("hint: the packet is larger than the radio carries to that address")
+            && stderr.contains("NP` gives the most it sends in one radio packet"),
+        "{stderr}"
+    );
+}
+
+#[test]
 fn unknown_mav_is_a_delivery_failure() {
     let sim = Sim::start("tcp-listen:127.0.0.1:0");
     // A command, and a status request: the same failure, the same hint.

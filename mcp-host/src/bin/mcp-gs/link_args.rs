@@ -608,6 +608,17 @@ pub(crate) fn turned_away_hint() -> String {
         .to_owned()
 }
 
+/// The link of `link`, with `--api-mode` when it is not the default: the arguments of
+/// another `mcp-gs` command on the same radio.
+fn link_and_mode(link: &LinkArgs) -> String {
+    let mode = match link.api_mode {
+        ApiModeChoice::Fixed(ApiMode::Unescaped) => String::new(),
+        ApiModeChoice::Fixed(mode) => format!(" --api-mode {}", u8::from(mode)),
+        ApiModeChoice::Auto => " --api-mode auto".to_owned(),
+    };
+    format!("{}{mode}", link.link)
+}
+
 /// A request's failure, [`diagnosed_unanswered`] when no answer to its frame id came
 /// (not even the local radio's status), else [`diagnosed`].
 pub(crate) fn diagnosed_send(error: SendError, link: &LinkArgs, stats: &Stats) -> Failure {
@@ -621,15 +632,39 @@ pub(crate) fn diagnosed_send(error: SendError, link: &LinkArgs, stats: &Stats) -
                 .to_owned(),
         ),
         SendError::Delivery { status, .. } if *status == DeliveryStatus::AddressNotFound => {
-            let mode = match link.api_mode {
-                ApiModeChoice::Fixed(ApiMode::Unescaped) => String::new(),
-                ApiModeChoice::Fixed(mode) => format!(" --api-mode {}", u8::from(mode)),
-                ApiModeChoice::Auto => " --api-mode auto".to_owned(),
-            };
             Some(format!(
-                "hint: no radio of the network has that address: `mcp-gs nodes --link {}{mode}` \
+                "hint: no radio of the network has that address: `mcp-gs nodes --link {}` \
                  lists the radios that answer",
-                link.link
+                link_and_mode(link)
+            ))
+        }
+        // Digi's words for a destination that did not acknowledge: 802.15.4 (0x01),
+        // Zigbee and DigiMesh (0x21), no route to it (0x25).
+        SendError::Delivery {
+            status:
+                DeliveryStatus::MacAckFailure
+                | DeliveryStatus::NetworkAckFailure
+                | DeliveryStatus::RouteNotFound,
+            ..
+        } => Some(format!(
+            "hint: the MAV's radio did not acknowledge it: it is off, out of range, or in \
+                 another network (its ID and CH must be this radio's); `mcp-gs nodes --link {}` \
+                 lists the radios that answer",
+            link_and_mode(link)
+        )),
+        SendError::Delivery { status, .. } if *status == DeliveryStatus::NotJoinedToNetwork => {
+            Some(format!(
+                "hint: this radio has joined no network: is its coordinator on, and its ID \
+                 and CH the network's? (`mcp-gs at --link {} AI` says how joining went)",
+                link_and_mode(link)
+            ))
+        }
+        SendError::Delivery { status, .. } if *status == DeliveryStatus::PayloadTooLarge => {
+            Some(format!(
+                "hint: the packet is larger than the radio carries to that address (`mcp-gs at \
+                 --link {} NP` gives the most it sends in one radio packet; a broadcast is never \
+                 cut into fragments): send a shorter one (fewer waypoints, a shorter message)",
+                link_and_mode(link)
             ))
         }
         SendError::Delivery { status, .. } if *status == DeliveryStatus::ResourceError => Some(
