@@ -166,9 +166,17 @@ impl<T: AsyncRead + AsyncWrite + Unpin> CommandMode<T> {
     }
 
     /// Reads a parameter (`AT` `command`): the radio's answer, its value in hex as the
-    /// radio writes it (`AP` in transparent mode: `0`), as [safe text](self).
+    /// radio writes it (`AP` in transparent mode: `0`), as [safe text](self). `ERROR`,
+    /// a command the radio does not know, is [`CommandModeError::Refused`], not a value.
     pub async fn read(&mut self, command: [u8; 2]) -> Result<String, CommandModeError> {
-        self.send(command, "").await
+        let answer = self.send(command, "").await?;
+        if answer == "ERROR" {
+            return Err(CommandModeError::Refused {
+                sent: text(command, ""),
+                answer,
+            });
+        }
+        Ok(answer)
     }
 
     /// Sets a parameter, or runs a command that takes no value with `value` empty
@@ -320,6 +328,12 @@ mod tests {
         }
         // The exchange goes on as before.
         assert_eq!(mode.read(*b"AP").await.unwrap(), "0");
+        // A parameter the radio does not know: refused, not a value of "ERROR".
+        let unknown = mode.read(*b"ZZ").await.unwrap_err();
+        assert_eq!(
+            unknown.to_string(),
+            "command mode: the radio answered ATZZ with \"ERROR\""
+        );
         // An answer is safe to print, whatever bytes came.
         assert_eq!(
             mode.read(*b"NI").await.unwrap(),

@@ -52,6 +52,9 @@ struct Radio {
     api: Vec<String>,
     /// `WR` in an API frame is refused (a radio that cannot save).
     refuse_wr: bool,
+    /// `ATAP` in command mode is answered `ERROR` (a firmware without API mode, or no
+    /// XBee at all).
+    refuse_ap: bool,
 }
 
 /// Plays the radio on the pseudo-terminal of `connector`, for each device that opens
@@ -96,6 +99,7 @@ async fn serve(mut port: Transport, radio: &Mutex<Radio>) {
                     let mut radio = radio.lock().unwrap();
                     radio.commands.push(text.clone());
                     let answer = match text.as_str() {
+                        "ATAP" if radio.refuse_ap => "ERROR".to_owned(),
                         "ATAP" => format!("{:X}", radio.ap),
                         "ATAP0" | "ATAP1" | "ATAP2" => {
                             radio.pending = text[4..].parse().ok();
@@ -631,6 +635,43 @@ async fn a_simulated_radio_in_api_mode_is_found_at_115200_baud_only() {
     assert!(out.status.success(), "{out:?}");
     assert_eq!(stdout(&out), found, "{out:?}");
     assert_eq!(stderr(&out), "mcp-gs: 115200 baud...\n", "{out:?}");
+}
+
+#[tokio::test]
+async fn probe_and_setup_say_when_plus_plus_plus_is_answered_but_atap_is_not() {
+    let (radio, path) = fake_radio(0).await;
+    radio.lock().unwrap().refuse_ap = true;
+    let link = format!("serial:{path}");
+    let out = mcp_gs(&["probe", "--link", &link, "--guard-time", "50"]).await;
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(out.stdout.is_empty(), "{out:?}");
+    // Found at the first rate: no other tried.
+    assert!(!err.contains("115200 baud"), "{err}");
+    assert!(
+        err.contains(&format!(
+            "{link}:9600: something answered +++ with OK, but not ATAP (command mode: the \
+             radio answered ATAP with \"ERROR\"): a radio slow to answer (give a longer \
+             --timeout), an XBee whose firmware has no API mode, or no XBee"
+        )),
+        "{err}"
+    );
+    // Setup says the same refusal, and sets nothing.
+    let out = setup(&format!("{link}:9600"), &[]).await;
+    let err = stderr(&out);
+    assert_ne!(out.status.code(), Some(0), "{err}");
+    assert!(
+        err.contains("the radio answered ATAP with \"ERROR\""),
+        "{err}"
+    );
+    assert!(!err.contains("AP = ERROR"), "{err}");
+    let commands = radio.lock().unwrap().commands.clone();
+    assert!(
+        !commands
+            .iter()
+            .any(|c| c.starts_with("ATAP") && c.len() > 4),
+        "{commands:?}"
+    );
 }
 
 #[tokio::test]

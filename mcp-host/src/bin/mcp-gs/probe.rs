@@ -98,8 +98,19 @@ pub(crate) async fn run(args: ProbeArgs) -> Result<(), Failure> {
         let found = match ask_api(&link, timeout).await? {
             Some(mode) => Found::Api(mode),
             None => match ask_command_mode(&link, guard, timeout).await? {
-                Some(ap) => Found::CommandMode(ap),
-                None => continue,
+                CommandModeAnswer::Ap(ap) => Found::CommandMode(ap),
+                CommandModeAnswer::NoAp(error) => {
+                    // The rate is right (+++ was answered): no use trying the others.
+                    return Err(Failure::new(
+                        Failure::OTHER,
+                        format!(
+                            "{link}: something answered +++ with OK, but not ATAP ({error}): \
+                             a radio slow to answer (give a longer --timeout), an XBee whose \
+                             firmware has no API mode, or no XBee"
+                        ),
+                    ));
+                }
+                CommandModeAnswer::None => continue,
             },
         };
         match found {
@@ -151,21 +162,33 @@ fn connect_timeout(timeout: Duration) -> Duration {
     timeout.max(Duration::from_secs(3))
 }
 
-/// `AP` read in AT command mode, left again at once; `None` if the radio did not answer
-/// `+++`.
+/// What a radio said in AT command mode.
+enum CommandModeAnswer {
+    /// No `OK` to `+++`.
+    None,
+    /// `OK` to `+++`, and `AP` read.
+    Ap(String),
+    /// `OK` to `+++`, but `ATAP` refused or not answered in time.
+    NoAp(mcp_host::command_mode::CommandModeError),
+}
+
+/// `AP` read in AT command mode, left again at once.
 async fn ask_command_mode(
     link: &Link,
     guard: Duration,
     timeout: Duration,
-) -> Result<Option<String>, Failure> {
+) -> Result<CommandModeAnswer, Failure> {
     let port = open_once(link, connect_timeout(timeout)).await?;
     let Ok(mut radio) = CommandMode::enter(port, guard, timeout).await else {
-        return Ok(None);
+        return Ok(CommandModeAnswer::None);
     };
-    let ap = radio.read(*b"AP").await.ok();
+    let ap = radio.read(*b"AP").await;
     // Left as found: nothing was set.
     let _ = radio.exit().await;
-    Ok(ap)
+    Ok(match ap {
+        Ok(ap) => CommandModeAnswer::Ap(ap),
+        Err(error) => CommandModeAnswer::NoAp(error),
+    })
 }
 
 #[cfg(test)]
