@@ -48,21 +48,8 @@ impl<B: AsRef<[u8]>> Command<B> {
         })
     }
 
-    /// Whether `report` shows this command carried out:
-    ///
-    /// - telemetry to coordinator: the same telemetry id, sent or not as commanded;
-    /// - landing on: the MAV is landing or on the ground; off: taking off, stabilizing
-    ///   or in flight (landing off on the ground takes off; table 27's states);
-    /// - controllers: the controller commanded is active;
-    /// - trajectory set: the same waypoints, bit for bit (a MAV that kept fewer did not
-    ///   take it);
-    /// - position slave set: the address is in the slot set (slot 0 for the spec form);
-    ///   a spec-form report holds slot 0 alone, so it confirms nothing of another slot;
-    /// - time: the MAV's time is the time set, or up to [`TIME_CONFIRM_WINDOW`] seconds
-    ///   past it;
-    /// - position set and status requests: never (no report says).
-    ///
-    /// A report of another type never confirms.
+    /// Whether `report` shows this command carried out ([`Command::confirmation`]
+    /// is [`Confirmation::Taken`]).
     ///
     /// ```
     /// use mcp_core::{Command, Controller, LandingState, Report};
@@ -81,6 +68,42 @@ impl<B: AsRef<[u8]>> Command<B> {
     /// assert!(!time.is_confirmed_by(&Report::time(1_699_999_999)));
     /// ```
     pub fn is_confirmed_by<R: AsRef<[u8]>>(&self, report: &Report<R>) -> bool {
+        self.confirmation(report) == Confirmation::Taken
+    }
+
+    /// What `report`, the answer to this command's
+    /// [`confirming_request`](Self::confirming_request), says of it:
+    ///
+    /// - telemetry to coordinator: the same telemetry id, sent or not as commanded;
+    /// - landing on: taken when the MAV is landing or on the ground, not taken when it
+    ///   is taking off, stabilizing or in flight; landing off: not taken when it is
+    ///   landing, taken in any other state of table 27 (the protocol does not say
+    ///   whether a MAV on the ground takes off);
+    /// - controllers: the controller commanded is active;
+    /// - trajectory set: the same waypoints, bit for bit (a MAV that kept fewer did not
+    ///   take it);
+    /// - position slave set: the address is in the slot set (slot 0 for the spec
+    ///   form); a spec-form report holds slot 0 alone, so it cannot say of another
+    ///   slot ([`Confirmation::Unknown`]);
+    /// - time: the MAV's time is the time set, or up to [`TIME_CONFIRM_WINDOW`] seconds
+    ///   past it (a ground station that knows when it sent the command holds the report
+    ///   to the seconds since, as `mcp-host` does);
+    /// - a report of another type, a landing state outside table 27, and any report for
+    ///   a position set or a status request: [`Confirmation::Unknown`].
+    ///
+    /// ```
+    /// use mcp_core::{Address, Command, Confirmation, Report, SlaveAddresses, Slot};
+    ///
+    /// let slave = Address::from_u64(0x0013_A200_40B5_99BF);
+    /// let set = Command::position_slave_set(Slot::new(2), slave);
+    /// let spec_form = Report::position_slave_set(SlaveAddresses::Single(slave));
+    /// assert_eq!(set.confirmation(&spec_form), Confirmation::Unknown);
+    /// let firmware_form = Report::position_slave_set(SlaveAddresses::Slots([slave; 4]));
+    /// assert_eq!(set.confirmation(&firmware_form), Confirmation::Taken);
+    /// ```
+    pub fn confirmation<R: AsRef<[u8]>>(&self, report: &Report<R>) -> Confirmation {
+        use Confirmation::{NotTaken, Taken, Unknown};
+        let taken = |yes: bool| if yes { Taken } else { NotTaken };
         match (self, report) {
             (
                 Command::TelemetryToCoordinator { on, id },
@@ -88,31 +111,50 @@ impl<B: AsRef<[u8]>> Command<B> {
                     on: sent,
                     id: reported,
                 },
-            ) => on == sent && id == reported,
-            (Command::Landing { on }, Report::Landing(state)) => {
-                use LandingState::*;
-                match on {
-                    true => matches!(state, Landing | OnGround),
-                    false => matches!(state, TakeOff | Stabilization | Flight),
-                }
+            ) => taken(on == sent && id == reported),
+            (Command::Landing { .. }, Report::Landing(LandingState::Unknown(_))) => Unknown,
+            (Command::Landing { on: true }, Report::Landing(state)) => taken(matches!(
+                state,
+                LandingState::Landing | LandingState::OnGround
+            )),
+            (Command::Landing { on: false }, Report::Landing(state)) => {
+                taken(*state != LandingState::Landing)
             }
-            (Command::Controllers(set), Report::Controllers(active)) => set == active,
+            (Command::Controllers(set), Report::Controllers(active)) => taken(set == active),
             (Command::TrajectorySet(set), Report::TrajectorySet(reported)) => {
-                same_waypoints(set, reported)
+                taken(same_waypoints(set, reported))
             }
             (Command::PositionSlaveSet { slot, address }, Report::PositionSlaveSet(slaves)) => {
                 let slot = slot.unwrap_or_default();
                 match slaves {
-                    SlaveAddresses::Single(first) => slot == Slot::default() && first == address,
-                    SlaveAddresses::Slots(slots) => slots.get(slot.index()) == Some(address),
+                    SlaveAddresses::Single(first) if slot == Slot::default() => {
+                        taken(first == address)
+                    }
+                    SlaveAddresses::Single(_) => Unknown,
+                    SlaveAddresses::Slots(slots) => taken(slots.get(slot.index()) == Some(address)),
                 }
             }
-            (Command::Time(set), Report::Time(time)) => time
-                .checked_sub(*set)
-                .is_some_and(|past| past <= TIME_CONFIRM_WINDOW),
-            _ => false,
+            (Command::Time(set), Report::Time(time)) => taken(
+                time.checked_sub(*set)
+                    .is_some_and(|past| past <= TIME_CONFIRM_WINDOW),
+            ),
+            _ => Unknown,
         }
     }
+}
+
+/// What a MAV's report says of a set command: [`Command::confirmation`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Confirmation {
+    /// The report shows the command carried out.
+    Taken,
+    /// The report shows another state: the MAV did not take the command (an unknown
+    /// controller, fewer waypoints than sent), or something changed it since.
+    NotTaken,
+    /// The report cannot say: a spec-form slave report of a command for slot 1-3, a
+    /// landing state outside table 27, a report of another type.
+    Unknown,
 }
 
 /// Whether two trajectories hold the same waypoints, bit for bit.
@@ -128,28 +170,31 @@ mod tests {
     use super::*;
     use crate::{Address, Controller, TelemetryId, TrajectoryBuilder, Waypoint};
 
-    const ALL_STATES: [LandingState; 6] = [
-        LandingState::OnGround,
-        LandingState::Landing,
-        LandingState::Stabilization,
-        LandingState::TakeOff,
-        LandingState::Flight,
-        LandingState::Unknown(0x05),
-    ];
-
     #[test]
-    fn landing_on_is_confirmed_by_landing_or_on_ground_and_off_by_the_flying_states() {
+    fn landing_on_is_taken_when_landing_or_on_the_ground_and_off_when_not_landing() {
+        use Confirmation::*;
         use LandingState::*;
-        for state in ALL_STATES {
+        for (state, on, off) in [
+            (OnGround, Taken, Taken),
+            (Landing, Taken, NotTaken),
+            (Stabilization, NotTaken, Taken),
+            (TakeOff, NotTaken, Taken),
+            (Flight, NotTaken, Taken),
+            (
+                LandingState::Unknown(0x05),
+                Confirmation::Unknown,
+                Confirmation::Unknown,
+            ),
+        ] {
             let report = Report::landing(state);
             assert_eq!(
-                Command::landing(true).is_confirmed_by(&report),
-                matches!(state, OnGround | Landing),
+                Command::landing(true).confirmation(&report),
+                on,
                 "{state:?}"
             );
             assert_eq!(
-                Command::landing(false).is_confirmed_by(&report),
-                matches!(state, Stabilization | TakeOff | Flight),
+                Command::landing(false).confirmation(&report),
+                off,
                 "{state:?}"
             );
         }
@@ -202,6 +247,8 @@ mod tests {
                 );
             }
         }
+        // Another type cannot say.
+        assert_eq!(commands[0].confirmation(&reports[1]), Confirmation::Unknown);
         // Nothing confirms a position set or a status request.
         for report in reports {
             assert!(!Command::position_set(0.5, 0.5).is_confirmed_by(&report));
@@ -227,6 +274,14 @@ mod tests {
         assert!(Command::position_slave_set(Some(Slot::default()), a).is_confirmed_by(&single));
         // A spec-form report says nothing of slot 2.
         assert!(!Command::position_slave_set(Some(slot2), a).is_confirmed_by(&single));
+        assert_eq!(
+            Command::position_slave_set(Some(slot2), a).confirmation(&single),
+            Confirmation::Unknown
+        );
+        assert_eq!(
+            Command::position_slave_set(None, b).confirmation(&single),
+            Confirmation::NotTaken
+        );
     }
 
     #[test]

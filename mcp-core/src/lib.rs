@@ -125,7 +125,7 @@ mod write;
 
 pub use address::{Address, ParseAddressError, Slot};
 pub use command::{Command, StatusRequest};
-pub use confirm::TIME_CONFIRM_WINDOW;
+pub use confirm::{Confirmation, TIME_CONFIRM_WINDOW};
 pub use error::{BufferTooSmall, Error, ErrorKind, Expected, Full};
 pub use id::{Category, CommandType, Controller, LandingState, ParseIdError, TelemetryId};
 pub use mav::{TelemetrySet, TelemetrySetIter};

@@ -3,15 +3,16 @@
 use std::time::Duration;
 
 use bytes::Bytes;
-use mcp_core::{Command, CommandType, Report, StatusRequest};
+use mcp_core::{Command, CommandType, Confirmation, Report, StatusRequest};
+use tokio::time::Instant;
 use xbee_api::Address64;
 
 use crate::{CommandSender, DeliveryReport, RequestError, SendError, SendOptions};
 
-/// How many times [`CommandSender::send_confirmed`] asks for the report: a second time
-/// if the first report does not confirm the command, in case it was one the MAV sent
-/// before it took the command.
-const ASKS: usize = 2;
+/// How many times [`CommandSender::confirm`] asks for the report at most: again while
+/// a report does not confirm the command, in case it was one the MAV sent before it
+/// took the command (a landing's state changes, reported as they come).
+const ASKS: usize = 3;
 
 /// A command delivered, and the MAV's report that says it took it.
 #[derive(Debug, Clone, PartialEq)]
@@ -58,23 +59,35 @@ pub enum ConfirmError {
     /// refusal, no status in time, the link down.
     #[error("{0}")]
     Send(SendError),
-    /// The command was delivered, but no report came back to say what the MAV did.
-    #[error("the command was delivered, but {0}")]
+    /// No report came to say what the MAV did (the status request failed, or went
+    /// unanswered).
+    #[error("no report to confirm the command: {0}")]
     Request(RequestError),
-    /// The MAV reported another state than the command sets: it did not take the
-    /// command (an unknown controller, fewer waypoints than sent), or something
-    /// changed it back meanwhile (another ground station, the MAV itself).
+    /// The MAV reported another state than the command sets, each time it was asked:
+    /// it did not take the command (an unknown controller, fewer waypoints than sent),
+    /// or something changed it back meanwhile (another ground station, the MAV
+    /// itself).
     #[error("the MAV did not take the command: it reports {report}")]
     #[non_exhaustive]
     NotTaken {
         /// The last report, which does not confirm the command.
         report: Report<Bytes>,
     },
+    /// The MAV's report cannot say whether it took the command
+    /// ([`Confirmation::Unknown`]): a MAV that reports its slave addresses in the
+    /// spec's form (slot 0's alone) asked of another slot, or a landing state outside
+    /// the protocol's table.
+    #[error("the MAV's report cannot say whether it took the command: it reports {report}")]
+    #[non_exhaustive]
+    Unverifiable {
+        /// The report.
+        report: Report<Bytes>,
+    },
 }
 
 impl ConfirmError {
     /// Whether the command or the report ran out of time: the MAV may have taken the
-    /// command, and asking again ([`CommandSender::request`]) may tell.
+    /// command, and asking again ([`CommandSender::confirm`]) may tell.
     pub fn is_timeout(&self) -> bool {
         match self {
             ConfirmError::Send(e) => e.is_timeout(),
@@ -91,15 +104,18 @@ impl CommandSender {
     /// no reply of their own: this is how a ground station knows a MAV landed,
     /// switched controller or took a trajectory.
     ///
-    /// Each of the two waits (the delivery status, each report) takes the link's
-    /// [`send_timeout`](crate::LinkOptions::send_timeout); see
-    /// [`send_confirmed_with`](Self::send_confirmed_with).
+    /// Each wait (the delivery status, then each report asked for, three at most) takes
+    /// the link's [`send_timeout`](crate::LinkOptions::send_timeout); see
+    /// [`send_confirmed_with`](Self::send_confirmed_with). A time command is confirmed
+    /// by a time report no further past the time set than the seconds since the command
+    /// went (and one more).
     ///
     /// Fails with [`ConfirmError::Unconfirmable`] for a position set or a status
     /// request and [`ConfirmError::Broadcast`] to [`Address64::BROADCAST`] (nothing is
     /// sent), [`ConfirmError::Send`] when the command was not delivered,
-    /// [`ConfirmError::Request`] when no report came, and
-    /// [`ConfirmError::NotTaken`] when the MAV reports another state.
+    /// [`ConfirmError::Request`] when no report came, [`ConfirmError::NotTaken`] when
+    /// the MAV reports another state, and [`ConfirmError::Unverifiable`] when its
+    /// report cannot say.
     ///
     /// ```no_run
     /// # async fn run(sender: mcp_host::CommandSender) -> Result<(), Box<dyn std::error::Error>> {
@@ -132,26 +148,33 @@ impl CommandSender {
         command: &Command<B>,
         timeout: Option<Duration>,
     ) -> Result<Confirmed, ConfirmError> {
-        confirming_request(to, command)?;
+        let request = confirming_request(to, command)?;
         let options = SendOptions {
             timeout,
             ..SendOptions::default()
         };
+        let sent = Instant::now();
         let delivery = self
             .send_with(to, command, options)
             .await
             .map_err(ConfirmError::Send)?;
-        let report = self.confirm_with(to, command, timeout).await?;
+        let report = self
+            .ask_until_confirmed(to, command, request, timeout, Some(sent))
+            .await?;
         Ok(Confirmed { delivery, report })
     }
 
     /// Asks the MAV at `to` whether it took `command`, sent before (by
     /// [`send`](Self::send), fire and forget, or by another program): the matching
     /// status request ([`Command::confirming_request`]), and its report if it shows the
-    /// command taken ([`Command::is_confirmed_by`]). A report that does not is asked
-    /// for once more (it may have been sent before the MAV took the command) before the
-    /// command is said [`NotTaken`](ConfirmError::NotTaken). Each report is waited for
-    /// the link's [`send_timeout`](crate::LinkOptions::send_timeout).
+    /// command taken ([`Command::confirmation`]). While a report does not, it is asked
+    /// for again (it may have been sent before the MAV took the command), three times
+    /// in all, before the command is said [`NotTaken`](ConfirmError::NotTaken); a
+    /// report that came is not lost to a later request that fails. Each report is
+    /// waited for the link's [`send_timeout`](crate::LinkOptions::send_timeout). A time
+    /// command is confirmed by a time report up to
+    /// [`TIME_CONFIRM_WINDOW`](mcp_core::TIME_CONFIRM_WINDOW) seconds past the time set:
+    /// this call does not know when the command went.
     ///
     /// ```no_run
     /// # async fn run(sender: mcp_host::CommandSender) -> Result<(), Box<dyn std::error::Error>> {
@@ -184,21 +207,64 @@ impl CommandSender {
         timeout: Option<Duration>,
     ) -> Result<Report<Bytes>, ConfirmError> {
         let request = confirming_request(to, command)?;
+        self.ask_until_confirmed(to, command, request, timeout, None)
+            .await
+    }
+
+    /// Asks `request` of `to` until a report confirms `command`, [`ASKS`] times at
+    /// most; a time report no further past the time set than the seconds since `sent`.
+    async fn ask_until_confirmed<B: AsRef<[u8]>>(
+        &self,
+        to: Address64,
+        command: &Command<B>,
+        request: StatusRequest,
+        timeout: Option<Duration>,
+        sent: Option<Instant>,
+    ) -> Result<Report<Bytes>, ConfirmError> {
+        let mut not_taken = None;
         let mut asked = 0;
         loop {
-            let report = self
-                .request_with(to, request, timeout)
-                .await
-                .map_err(ConfirmError::Request)?;
+            let report = match self.request_with(to, request, timeout).await {
+                Ok(report) => report,
+                // A report that came says more than a request that failed after it.
+                Err(error) => {
+                    return Err(match not_taken {
+                        Some(report) => ConfirmError::NotTaken { report },
+                        None => ConfirmError::Request(error),
+                    });
+                }
+            };
             asked += 1;
-            if command.is_confirmed_by(&report) {
-                return Ok(report);
-            }
-            if asked == ASKS {
-                return Err(ConfirmError::NotTaken { report });
+            match judge(command, &report, sent) {
+                Confirmation::Taken => return Ok(report),
+                Confirmation::Unknown => return Err(ConfirmError::Unverifiable { report }),
+                Confirmation::NotTaken if asked >= ASKS => {
+                    return Err(ConfirmError::NotTaken { report });
+                }
+                Confirmation::NotTaken => not_taken = Some(report),
             }
         }
     }
+}
+
+/// What `report` says of `command` ([`Command::confirmation`]), a time report held to
+/// the seconds since `sent` (rounded up, and one more for the MAV's clock ticking over
+/// meanwhile): a MAV whose clock was already a little ahead did not take it.
+fn judge<B: AsRef<[u8]>>(
+    command: &Command<B>,
+    report: &Report<Bytes>,
+    sent: Option<Instant>,
+) -> Confirmation {
+    let confirmation = command.confirmation(report);
+    if let (Command::Time(set), Report::Time(time), Some(sent), Confirmation::Taken) =
+        (command, report, sent, confirmation)
+    {
+        let since = sent.elapsed().as_secs().saturating_add(2);
+        if u64::from(time.saturating_sub(*set)) > since {
+            return Confirmation::NotTaken;
+        }
+    }
+    confirmation
 }
 
 /// The status request that confirms `command` to `to`, or why there is none.

@@ -2,6 +2,8 @@
 //! against the simulated MAV behind the virtual network, and the MAV state machine's
 //! reports confirming every command it takes.
 
+mod common;
+
 use std::time::Duration;
 
 use futures::StreamExt;
@@ -40,6 +42,14 @@ async fn ground() -> (Simulator, PacketStream, CommandSender) {
         .await
         .unwrap();
     (sim, stream, sender)
+}
+
+/// Answers the host's next Transmit Request on `radio`, which must hold `payload`,
+/// with a delivery success.
+async fn delivered(radio: &mut common::FakeXBee, payload: &[u8]) {
+    let tx = radio.next_tx().await;
+    assert_eq!(tx.data, payload);
+    radio.status(tx.frame_id, DeliveryStatus::Success).await;
 }
 
 /// A trajectory set command of `waypoints`, as bytes.
@@ -285,4 +295,117 @@ proptest! {
         };
         prop_assert!(command.is_confirmed_by(&report), "{} -> {}", command, report);
     }
+}
+
+#[tokio::test]
+async fn a_report_sent_before_the_command_was_taken_is_asked_past() {
+    let (_stream, sender, mut radio) = common::pty_link(ApiMode::Unescaped).await;
+    let confirming =
+        tokio::spawn(async move { sender.send_confirmed(MAV, &Command::landing(true)).await });
+    delivered(&mut radio, b"c\x02\x01").await;
+    delivered(&mut radio, b"c\x02\xff").await;
+    // A report of the state before (in flight), then, asked again, the landing.
+    radio.receive(MAV, b"r\x02\x04").await;
+    delivered(&mut radio, b"c\x02\xff").await;
+    radio.receive(MAV, b"r\x02\x01").await;
+    let confirmed = tokio::time::timeout(GUARD, confirming)
+        .await
+        .unwrap()
+        .unwrap()
+        .unwrap();
+    assert_eq!(confirmed.report, Report::Landing(LandingState::Landing));
+}
+
+#[tokio::test]
+async fn a_report_that_came_is_not_lost_to_a_later_request_that_fails() {
+    let (_stream, sender, mut radio) = common::pty_link(ApiMode::Unescaped).await;
+    let confirming = tokio::spawn(async move {
+        let quick = Some(Duration::from_millis(300));
+        sender
+            .send_confirmed_with(MAV, &Command::landing(true), quick)
+            .await
+    });
+    delivered(&mut radio, b"c\x02\x01").await;
+    delivered(&mut radio, b"c\x02\xff").await;
+    radio.receive(MAV, b"r\x02\x04").await;
+    // Asked again: no report this time.
+    delivered(&mut radio, b"c\x02\xff").await;
+    let error = tokio::time::timeout(GUARD, confirming)
+        .await
+        .unwrap()
+        .unwrap()
+        .unwrap_err();
+    assert!(
+        matches!(&error, ConfirmError::NotTaken { report, .. } if *report == Report::Landing(LandingState::Flight)),
+        "{error:?}"
+    );
+}
+
+#[tokio::test]
+async fn a_time_report_is_held_to_the_seconds_since_the_command_went() {
+    let (_stream, sender, mut radio) = common::pty_link(ApiMode::Unescaped).await;
+    let sender = std::sync::Arc::new(sender);
+    let set = 1_800_000_000u32;
+    // A MAV whose clock runs 45 s ahead of the time set, and which did not take it.
+    let ahead = [b"r\x06".as_slice(), &(set + 45).to_le_bytes()].concat();
+    let time = Command::time(set);
+    let mut command = [0u8; 8];
+    let len = time.encode(&mut command).unwrap();
+    let confirming = tokio::spawn({
+        let sender = sender.clone();
+        async move { sender.send_confirmed(MAV, &time).await }
+    });
+    delivered(&mut radio, &command[..len]).await;
+    for _ in 0..3 {
+        delivered(&mut radio, b"c\x06\xff").await;
+        radio.receive(MAV, &ahead).await;
+    }
+    let error = tokio::time::timeout(GUARD, confirming)
+        .await
+        .unwrap()
+        .unwrap()
+        .unwrap_err();
+    assert!(
+        matches!(&error, ConfirmError::NotTaken { report, .. } if *report == Report::Time(set + 45)),
+        "{error:?}"
+    );
+    // Asked alone, not knowing when the command went: within the window.
+    let confirming = tokio::spawn(async move { sender.confirm(MAV, &time).await });
+    delivered(&mut radio, b"c\x06\xff").await;
+    radio.receive(MAV, &ahead).await;
+    let report = tokio::time::timeout(GUARD, confirming)
+        .await
+        .unwrap()
+        .unwrap()
+        .unwrap();
+    assert_eq!(report, Report::Time(set + 45));
+}
+
+#[tokio::test]
+async fn a_spec_form_slave_report_cannot_say_of_another_slot() {
+    let (_stream, sender, mut radio) = common::pty_link(ApiMode::Unescaped).await;
+    let slave = Address::from_u64(0x0013_A200_40B5_99BF);
+    let set = Command::position_slave_set(Slot::new(2), slave);
+    let mut command = [0u8; 16];
+    let len = set.encode(&mut command).unwrap();
+    let confirming = tokio::spawn(async move { sender.send_confirmed(MAV, &set).await });
+    delivered(&mut radio, &command[..len]).await;
+    delivered(&mut radio, b"c\x05\xff").await;
+    radio
+        .receive(MAV, b"r\x05\x00\x00\x00\x00\x00\x00\x00\x00")
+        .await;
+    let error = tokio::time::timeout(GUARD, confirming)
+        .await
+        .unwrap()
+        .unwrap()
+        .unwrap_err();
+    assert!(
+        matches!(error, ConfirmError::Unverifiable { .. }),
+        "{error:?}"
+    );
+    assert_eq!(
+        error.to_string(),
+        "the MAV's report cannot say whether it took the command: it reports \
+         position_slave_set 0000000000000000"
+    );
 }

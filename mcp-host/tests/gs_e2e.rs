@@ -984,6 +984,15 @@ fn send_confirm_asks_the_mav_and_fails_unless_its_report_shows_the_command_taken
         ),
         "{object}"
     );
+    // A trajectory with --confirm: confirmed by a status request too, said as the others.
+    let out = confirm(&["trajectory", "--waypoint", "1800000000,0.5,0,1"], "json");
+    assert_eq!(out.status.code(), Some(0));
+    let object: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(
+        (&object["confirmed"], &object["reported"]["type"]),
+        (&true.into(), &"trajectory_set".into()),
+        "{object}"
+    );
     // A controller the MAV does not have: delivered, not taken (exit 1), and the report
     // says which is active.
     let out = confirm(&["controller", "9"], "json");

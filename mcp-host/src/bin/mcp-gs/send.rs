@@ -19,7 +19,7 @@ use crate::{Failure, Format};
 #[derive(Debug, Args)]
 #[command(mut_arg("timeout", |arg| arg.help(
     "Seconds to wait to connect, for the radio's transmit status, and, for a \
-trajectory to one MAV, for the MAV's report of it [default: 12]"
+trajectory to one MAV or with --confirm, for each of the MAV's reports [default: 12]"
 )))]
 pub(crate) struct SendArgs {
     #[command(flatten)]
@@ -32,11 +32,11 @@ pub(crate) struct SendArgs {
     #[arg(long, conflicts_with = "confirm")]
     no_status: bool,
     /// Once the command is delivered, ask the MAV the matching status request and
-    /// fail unless its report shows the command taken (exit 1 if it shows otherwise,
-    /// 4 if no report comes): landing on confirmed by `landing` or `on_ground`, a
-    /// controller by being active, ... A trajectory to one MAV is always confirmed (by
-    /// the report the MAV answers it with); a position set, a status request, a
-    /// message or a broadcast cannot be.
+    /// fail unless its report shows the command taken (exit 1 if it shows otherwise
+    /// or cannot say, 4 if no report comes in time): landing on confirmed by `landing`
+    /// or `on_ground`, a controller by being active, ... (a trajectory to one MAV is
+    /// checked without it, by the report the MAV answers it with); a position set, a
+    /// status request, a message or a broadcast cannot be.
     #[arg(long)]
     confirm: bool,
     /// Output format: `json` prints one object, `{"result":"delivered",...}` or
@@ -149,7 +149,7 @@ pub(crate) async fn run(args: SendArgs) -> Result<(), Failure> {
         // The MAV answers a trajectory set at once with the trajectory it took (unless
         // the command went out fire and forget).
         CommandArgs::Trajectory { waypoints }
-            if args.to != Address64::BROADCAST && !args.no_status =>
+            if args.to != Address64::BROADCAST && !args.no_status && confirm.is_none() =>
         {
             let checked = check_trajectory(&mut stream, &args, waypoints).await;
             if let Some(mut json) = json.take() {
@@ -181,9 +181,11 @@ pub(crate) async fn run(args: SendArgs) -> Result<(), Failure> {
                     .await;
                 if let Some(json) = &mut json {
                     let reported = match &confirmed {
-                        Ok(report) | Err(ConfirmError::NotTaken { report, .. }) => {
-                            mcp_host::render::json::packet_json(&Packet::Report(report.clone()))
-                        }
+                        Ok(report)
+                        | Err(
+                            ConfirmError::NotTaken { report, .. }
+                            | ConfirmError::Unverifiable { report, .. },
+                        ) => mcp_host::render::json::packet_json(&Packet::Report(report.clone())),
                         Err(_) => serde_json::Value::Null,
                     };
                     json["confirmed"] = confirmed.is_ok().into();
