@@ -17,8 +17,11 @@
 //! | N | the API frame's data: frame type byte first, unescaped, without start delimiter, length or checksum |
 //!
 //! Frames are stored without their API-mode framing so that a recording replays onto a
-//! link in either mode. A reader stops with an error at a truncated record, after
-//! handing out every whole record before it.
+//! link in either mode. A reader stops with an error at a truncated or damaged record,
+//! after handing out every whole record before it, and gives no record after it (the
+//! bytes after a damaged record cannot be trusted to start one). Recordings joined one
+//! after the other (`cat a.mcprec b.mcprec`) read as one: a header of this version where
+//! a record would start is passed over.
 //!
 //! # Writing and reading one
 //!
@@ -206,6 +209,8 @@ pub fn is_recording(bytes: &[u8]) -> bool {
 pub struct RecordReader<R: Read> {
     input: R,
     offset: u64,
+    /// A record failed: no more are read.
+    failed: bool,
 }
 
 impl<R: Read> RecordReader<R> {
@@ -228,6 +233,7 @@ impl<R: Read> RecordReader<R> {
         Ok(Self {
             input,
             offset: HEADER_LEN as u64,
+            failed: false,
         })
     }
 
@@ -236,10 +242,27 @@ impl<R: Read> RecordReader<R> {
         self.offset
     }
 
-    /// The next record; `None` at the end of the file.
+    /// The next record; `None` at the end of the file, and after an error (a damaged
+    /// or truncated record: what follows it is not read).
     pub fn next_record(&mut self) -> io::Result<Option<Record>> {
+        if self.failed {
+            return Ok(None);
+        }
+        let record = self.read_record();
+        self.failed = record.is_err();
+        record
+    }
+
+    fn read_record(&mut self) -> io::Result<Option<Record>> {
         let mut head = [0u8; 11];
-        let got = read_full(&mut self.input, &mut head)?;
+        let mut got = read_full(&mut self.input, &mut head)?;
+        // Another recording's header, joined on: passed over.
+        while got >= HEADER_LEN && head[..6] == *MAGIC && head[6..8] == VERSION.to_le_bytes() {
+            head.copy_within(HEADER_LEN..got, 0);
+            let kept = got - HEADER_LEN;
+            got = kept + read_full(&mut self.input, &mut head[kept..])?;
+            self.offset += HEADER_LEN as u64;
+        }
         if got == 0 {
             return Ok(None);
         }
@@ -403,6 +426,58 @@ mod tests {
         assert!(r.next_record().unwrap().is_some());
         let err = r.next_record().unwrap_err();
         assert!(err.to_string().contains("cut off"), "{err}");
+    }
+
+    #[test]
+    fn after_a_damaged_record_no_record_is_made_up() {
+        let mut w = RecordWriter::new(Vec::new()).unwrap();
+        for _ in 0..3 {
+            w.write(UNIX_EPOCH, Direction::Received, &[0x8A, 0x06])
+                .unwrap();
+        }
+        let mut bytes = w.into_inner();
+        // The second record's direction byte damaged: what follows is not read as
+        // records (its bytes, read from there, would make some up).
+        bytes[HEADER_LEN + 13 + 8] = 0x80;
+        let mut r = RecordReader::new(&bytes[..]).unwrap();
+        assert!(r.next_record().unwrap().is_some());
+        let err = r.next_record().unwrap_err();
+        assert!(err.to_string().contains("direction byte 128"), "{err}");
+        assert!(r.next_record().unwrap().is_none());
+        assert_eq!(r.offset(), (HEADER_LEN + 13) as u64);
+        let r = RecordReader::new(&bytes[..]).unwrap();
+        let results: Vec<_> = r.collect();
+        assert_eq!(results.len(), 2, "{results:?}");
+        assert!(results[1].is_err());
+    }
+
+    #[test]
+    fn recordings_joined_one_after_the_other_read_as_one() {
+        let recording = |frames: &[&[u8]]| {
+            let mut w = RecordWriter::new(Vec::new()).unwrap();
+            for frame in frames {
+                w.write(UNIX_EPOCH, Direction::Received, frame).unwrap();
+            }
+            w.into_inner()
+        };
+        let a = recording(&[&[0x8A, 0x01], &[0x8A, 0x02]]);
+        let b = recording(&[&[0x8A, 0x03]]);
+        let empty = recording(&[]);
+        let joined = [&a[..], &empty, &b, &empty].concat();
+        let r = RecordReader::new(&joined[..]).unwrap();
+        let frames: Vec<Vec<u8>> = r.map(|r| r.unwrap().frame).collect();
+        assert_eq!(
+            frames,
+            [vec![0x8A, 0x01], vec![0x8A, 0x02], vec![0x8A, 0x03]]
+        );
+        // A header of another version is no record.
+        let mut other = b.clone();
+        other[6] = 2;
+        let joined = [&a[..], &other].concat();
+        let mut r = RecordReader::new(&joined[..]).unwrap();
+        assert!(r.next_record().unwrap().is_some());
+        assert!(r.next_record().unwrap().is_some());
+        assert!(r.next_record().is_err());
     }
 
     #[test]

@@ -197,11 +197,16 @@ fn a_recording_cut_off_names_the_file_and_the_frames_decoded_before_it() {
         err.starts_with("mcp-gs: recording cut off part way through the record"),
         "{err}"
     );
-    // Cut off in a record's header, before any frame.
+    // Cut off in a record's header, before any frame: the summary counts it among the
+    // errors too.
     let header = TempFile::new("head.mcprec", &common::modem_status_recording(1)[..12]);
     let output = decode(&["--summary", header.path()]);
     let err = text(&output.stderr);
     assert_eq!(output.status.code(), Some(2), "{err}");
+    assert!(
+        text(&output.stdout).contains("\n  damaged_record: 1\n"),
+        "{output:?}"
+    );
     assert_eq!(
         err.trim_end(),
         format!(
@@ -210,6 +215,17 @@ fn a_recording_cut_off_names_the_file_and_the_frames_decoded_before_it() {
             header.path()
         )
     );
+}
+
+#[test]
+fn recordings_joined_one_after_the_other_decode_whole() {
+    let one = common::modem_status_recording(3);
+    let joined = TempFile::new("joined.mcprec", &[&one[..], &one].concat());
+    let output = decode(&["--summary", "--format", "json", joined.path()]);
+    assert_eq!(output.status.code(), Some(0), "{}", text(&output.stderr));
+    let summary: Value = serde_json::from_str(text(&output.stdout).trim()).unwrap();
+    assert_eq!(summary["frames"], 6, "{summary}");
+    assert_eq!(summary["errors"]["damaged_record"], 0, "{summary}");
 }
 
 #[test]

@@ -545,6 +545,7 @@ fn decode_stream(
             offset,
             stats,
             bad_lines,
+            None,
         )?;
     }
     let hint = mode_hint(mode, stats);
@@ -622,6 +623,7 @@ fn decode_recording(
     // how many frames came before it. (A line of a hex dump that is not hex ends it too:
     // records cannot be found again after bytes left out.)
     let mut decoded = 0u64;
+    let mut damaged = 0u64;
     let result = loop {
         match reader.next_record() {
             Ok(Some(record)) => {
@@ -638,8 +640,9 @@ fn decode_recording(
                 });
             }
             Err(e) => {
-                if let Some(bad) = BadText::of(&e) {
-                    skipped.add(bad);
+                match BadText::of(&e) {
+                    Some(bad) => skipped.add(bad),
+                    None => damaged = 1,
                 }
                 let message = format!("{e}; {}", decoded_before(decoded));
                 break Err(io::Error::new(e.kind(), source.says(message)));
@@ -655,6 +658,7 @@ fn decode_recording(
             input.n,
             &mcp_host::Stats::default(),
             bad_lines,
+            Some(damaged),
         )?;
     }
     result
@@ -684,7 +688,8 @@ impl<R: Read> Read for Counted<R> {
 }
 
 /// Prints the counts of `--summary`; `bad_hex_lines`, the lines of hex text skipped as
-/// not hex, are among the errors of hex input.
+/// not hex, are among the errors of hex input, and `damaged_records` (1 at most: the
+/// rest is not read) among those of a recording.
 fn print_summary(
     out: &mut impl Write,
     summary: &Summary,
@@ -692,6 +697,7 @@ fn print_summary(
     bytes: u64,
     stats: &mcp_host::Stats,
     bad_hex_lines: Option<u64>,
+    damaged_records: Option<u64>,
 ) -> io::Result<()> {
     let mut errors = serde_json::json!({
         "checksum": stats.bad_checksum,
@@ -704,6 +710,9 @@ fn print_summary(
     });
     if let (Some(n), Some(errors)) = (bad_hex_lines, errors.as_object_mut()) {
         errors.insert("bad_hex_line".into(), n.into());
+    }
+    if let (Some(n), Some(errors)) = (damaged_records, errors.as_object_mut()) {
+        errors.insert("damaged_record".into(), n.into());
     }
     match format {
         Format::Json => {
