@@ -284,6 +284,35 @@ async fn the_baud_rate_is_set_with_the_mode_and_the_check_runs_at_it() {
 }
 
 #[tokio::test]
+async fn a_change_made_before_command_mode_fails_is_said_and_applied_at_once() {
+    // A radio that takes AP but not BD 8 (230400 baud: an older one tops out lower).
+    let (radio, path) = fake_radio(0).await;
+    let out = setup(&format!("serial:{path}:9600"), &["--baud", "230400"]).await;
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("the radio answered ATBD8 with \"ERROR\""),
+        "{err}"
+    );
+    assert!(
+        err.contains(
+            "made already, in effect but not saved: AP = 0 (transparent mode) -> 1 (API mode \
+             1) (powering the radio off and on undoes it"
+        ),
+        "{err}"
+    );
+    // Command mode left, so that the change applies now, not when it times out.
+    let radio = radio.lock().unwrap();
+    assert_eq!(
+        radio.commands.last().map(String::as_str),
+        Some("ATCN"),
+        "{:?}",
+        radio.commands
+    );
+    assert_eq!((radio.ap, radio.saved), (1, false));
+}
+
+#[tokio::test]
 async fn a_baud_rate_the_radio_does_not_take_is_refused() {
     let out = setup("serial:/dev/null", &["--baud", "100000"]).await;
     assert_eq!(out.status.code(), Some(2), "{out:?}");

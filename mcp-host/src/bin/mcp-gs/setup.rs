@@ -191,24 +191,14 @@ pub(crate) async fn run(args: SetupArgs) -> Result<(), Failure> {
     };
     // What each parameter was, and whether it was changed (then saved below).
     let mut lines: Vec<(String, bool)> = Vec::new();
-    let was = radio.read(*b"AP").await.map_err(failed)?;
-    let target_text = target.to_string();
-    let (line, change) = ap_line(&was, &target_text);
-    if change {
-        radio.set(*b"AP", &target_text).await.map_err(failed)?;
-    }
-    lines.push((line, change));
-    if let Some(baud) = args.baud {
-        let was = radio.read(*b"BD").await.map_err(failed)?;
-        let (line, change) = bd_line(Some(&was), baud);
-        if change {
-            let bd = format!("{:X}", bd_value(baud));
-            radio.set(*b"BD", &bd).await.map_err(failed)?;
+    if let Err(error) = change_in_command_mode(&mut radio, &args, target, &mut lines).await {
+        // Changes made before the failure take effect when command mode is left: now,
+        // rather than when the radio's command mode times out while the operator
+        // believes nothing changed.
+        if lines.iter().any(|(_, changed)| *changed) {
+            let _ = radio.exit().await;
         }
-        lines.push((line, change));
-    }
-    if lines.iter().any(|(_, changed)| *changed) {
-        radio.set(*b"WR", "").await.map_err(failed)?;
+        return Err(unsaved(&lines)(failed(error)));
     }
     print_lines(&lines);
     // Leaving command mode applies the changes; the port is closed for the check.
@@ -230,6 +220,37 @@ pub(crate) async fn run(args: SetupArgs) -> Result<(), Failure> {
         (link, _) => link.clone(),
     };
     check(&link, args.api_mode.0, options, timeout).await
+}
+
+/// Reads `AP` (and `BD` with `--baud`) in command mode, sets those not as asked and
+/// saves them (`WR`); each line of `lines` says what a parameter was, and whether it
+/// was changed, as soon as it was.
+async fn change_in_command_mode<T: tokio::io::AsyncRead + tokio::io::AsyncWrite + Unpin>(
+    radio: &mut CommandMode<T>,
+    args: &SetupArgs,
+    target: u8,
+    lines: &mut Vec<(String, bool)>,
+) -> Result<(), CommandModeError> {
+    let was = radio.read(*b"AP").await?;
+    let target_text = target.to_string();
+    let (line, change) = ap_line(&was, &target_text);
+    if change {
+        radio.set(*b"AP", &target_text).await?;
+    }
+    lines.push((line, change));
+    if let Some(baud) = args.baud {
+        let was = radio.read(*b"BD").await?;
+        let (line, change) = bd_line(Some(&was), baud);
+        if change {
+            let bd = format!("{:X}", bd_value(baud));
+            radio.set(*b"BD", &bd).await?;
+        }
+        lines.push((line, change));
+    }
+    if lines.iter().any(|(_, changed)| *changed) {
+        radio.set(*b"WR", "").await?;
+    }
+    Ok(())
 }
 
 /// For a radio that did not answer `+++` (older firmware takes it in transparent mode
@@ -351,8 +372,8 @@ async fn set_up_in_api_frames(
     Ok(Some(()))
 }
 
-/// A failure after the changes in `lines` were made in API frames, saying that they
-/// are in effect but not saved.
+/// A failure after the changes in `lines` were made (in API frames, or in command mode
+/// then left), saying that they are in effect but not saved.
 fn unsaved(lines: &[(String, bool)]) -> impl Fn(Failure) -> Failure + '_ {
     move |failure| {
         let made: Vec<&str> = lines
