@@ -647,3 +647,33 @@ fn a_hub_out_of_file_descriptors_says_so_serves_its_clients_and_takes_the_next_o
     let mut last = last;
     answered_at_ap(&mut last, 2);
 }
+
+#[test]
+fn setup_through_a_hub_that_changes_the_radios_mode_says_to_restart_the_hub() {
+    let (_sim, radio, _sim_out) = sim_on_tcp("1");
+    let (_hub, out, _err) = start_hub(&radio);
+    let (_, addr) = serving(&out);
+    let link = format!("tcp:{addr}");
+    let setup = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args([
+            "setup",
+            "--link",
+            &link,
+            "--api-mode",
+            "2",
+            "--guard-time",
+            "50",
+        ])
+        .args(["--timeout", "3"])
+        .env_remove("MCP_LOG")
+        .output()
+        .expect("run mcp-gs setup");
+    let stderr = String::from_utf8_lossy(&setup.stderr);
+    assert!(
+        stderr.contains(&format!(
+            "mcp-gs: note: if {link} is a hub, restart it with --api-mode 2 --link to the \
+             radio"
+        )),
+        "{stderr}"
+    );
+}

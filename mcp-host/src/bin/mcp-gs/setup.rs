@@ -368,6 +368,22 @@ async fn set_up_in_api_frames(
             .map_err(unsaved(&lines))?;
     }
     print_lines(&lines);
+    if let (true, Link::Tcp { .. }) = (was != target, &args.link) {
+        // A hub speaks to its radio in the mode it was started with: from now on it
+        // cannot read the radio's frames, whatever its clients speak.
+        let flag = if target == 2 { " --api-mode 2" } else { "" };
+        err!(
+            "mcp-gs: note: if {} is a hub, restart it with{} --link to the radio: it speaks \
+             to its radio in the API mode it was started with, and cannot read the radio's \
+             frames in API mode {target}",
+            args.link,
+            if flag.is_empty() {
+                " no --api-mode (mode 1),"
+            } else {
+                flag
+            }
+        );
+    }
     check(&now.0, args.api_mode.0, options, timeout).await?;
     Ok(Some(()))
 }
