@@ -283,6 +283,14 @@ fn a_queued_change_is_applied_with_ac_and_saved_with_wr() {
 }
 
 #[test]
+fn api_mode_auto_waits_for_a_slow_radio_as_long_as_the_timeout_given() {
+    // Every frame to the link 3.5 s late: longer than auto's own 3 s.
+    let sim = Sim::start_with(&["--latency", "3500"]);
+    let out = sim.ok(&["--api-mode", "auto", "AP"]);
+    assert_eq!(out.trim(), "AP = 01 (0x01, 1)", "{out}");
+}
+
+#[test]
 fn reading_ap_in_another_api_mode_warns() {
     let sim = Sim::start();
     // The simulated radio is in mode 1; its AP answer reads the same in mode 2.

@@ -235,9 +235,12 @@ impl LinkArgs {
         }
     }
 
-    /// Asks the radio for its API mode ([`ask_ap`]).
+    /// Asks the radio for its API mode ([`ask_ap`]): within 3 s, or the `--timeout`
+    /// given (a slow radio, a link with latency).
     async fn detect_mode(&self) -> Result<ApiMode, Failure> {
-        let timeout = self.timeout().min(Duration::from_secs(3));
+        let timeout = self
+            .given_timeout()
+            .unwrap_or(DETECT_TIMEOUT.min(DEFAULT_TIMEOUT));
         let options = LinkOptions {
             send_timeout: timeout,
             ..self.options_in(ApiMode::Unescaped, false)
@@ -607,6 +610,11 @@ pub(crate) fn turned_away_hint() -> String {
      say so)"
         .to_owned()
 }
+
+/// How long `--api-mode auto` waits for the radio's `AP` without a `--timeout`: a
+/// radio answers at once, and one that does not is said sooner than the commands'
+/// default timeout would.
+const DETECT_TIMEOUT: Duration = Duration::from_secs(3);
 
 /// The link of `link`, with `--api-mode` when it is not the default: the arguments of
 /// another `mcp-gs` command on the same radio.
