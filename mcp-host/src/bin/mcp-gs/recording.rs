@@ -20,10 +20,10 @@ pub(crate) struct RecordingFile {
 }
 
 impl RecordingFile {
-    /// `path`, checked: not a directory; if there, overwritten only with `force` and only
-    /// if it takes writes; if not, in a directory where a file can be made (a file is
-    /// made there and removed): a session is never served unrecorded for want of the
-    /// file.
+    /// `path`, checked: not a directory; if there, a regular file (not a FIFO or a
+    /// device), overwritten only with `force` and only if it takes writes; if not, in a
+    /// directory where a file can be made (a file is made there and removed): a session
+    /// is never served unrecorded for want of the file.
     pub(crate) fn check(path: &Path, force: bool) -> Result<Self, Failure> {
         if path.is_dir() {
             return Err(Failure::input(format!(
@@ -31,7 +31,17 @@ impl RecordingFile {
                 path.display()
             )));
         }
-        if path.exists() {
+        if let Ok(metadata) = std::fs::metadata(path) {
+            // A FIFO's writer waits for a reader (the program would hang, deaf to
+            // Ctrl-C, in the open), and a device takes no recording to keep.
+            if !metadata.is_file() {
+                return Err(Failure::input(format!(
+                    "{} is not a regular file (a FIFO, a device): --record writes a file; \
+                     to decode a recording as it is made, `tail -c +1 -f FILE | mcp-gs \
+                     decode`",
+                    path.display()
+                )));
+            }
             if !force {
                 return Err(exists(path));
             }
