@@ -356,6 +356,31 @@ impl Hub {
     /// `tcp-listen:` link, or `wait_for_link`), clients are refused from the moment this
     /// returns, the port held on Linux, until the radio is there.
     pub async fn start(link: &Link, options: LinkOptions, listen: &str) -> Result<Hub, HubError> {
+        let (hub, _) = Self::start_inner(link, options, listen, false).await?;
+        Ok(hub)
+    }
+
+    /// [`start`](Self::start), with every frame between the hub and its radio from the
+    /// link's very first ([`tap_frames`](Self::tap_frames) taken before the link's task
+    /// starts): the radio's first frames and the hub's own `AT AP` included, which a
+    /// tap taken once `start` returns misses. For a recording of the whole session, as
+    /// `mcp-gs hub --record` makes.
+    pub async fn start_tapped(
+        link: &Link,
+        options: LinkOptions,
+        listen: &str,
+    ) -> Result<(Hub, crate::Subscription<crate::record::Record>), HubError> {
+        let (hub, tap) = Self::start_inner(link, options, listen, true).await?;
+        let tap = tap.unwrap_or_else(|| hub.tap_frames());
+        Ok((hub, tap))
+    }
+
+    async fn start_inner(
+        link: &Link,
+        options: LinkOptions,
+        listen: &str,
+        tapped: bool,
+    ) -> Result<(Hub, Option<crate::Subscription<crate::record::Record>>), HubError> {
         let mode = options.api_mode;
         // The clients' frames are read as the radio's: as long, and their partial
         // frames waiting as long.
@@ -372,7 +397,16 @@ impl Hub {
             Link::Serial { baud, .. } => *baud,
             _ => DEFAULT_RADIO_BAUD,
         } / 10;
-        let (stream, sender) = crate::connect(link, options).await?;
+        let (stream, sender, tap) = match tapped {
+            true => {
+                let (stream, sender, tap) = crate::connect_tapped(link, options).await?;
+                (stream, sender, Some(tap))
+            }
+            false => {
+                let (stream, sender) = crate::connect(link, options).await?;
+                (stream, sender, None)
+            }
+        };
         let hub = Hub {
             local_addr,
             radio: sender.info().clone(),
@@ -427,7 +461,7 @@ impl Hub {
             rebind_failures: 0,
         };
         hub.tasks.spawn(serve.run(stream, listener));
-        Ok(hub)
+        Ok((hub, tap))
     }
 
     /// The address clients connect to.
@@ -464,7 +498,8 @@ impl Hub {
     /// Every frame between the hub and the radio from now on, both ways: the radio's
     /// frames, and the clients' frames as the hub wrote them (under the frame ids it
     /// gave them), with the hub's own `AT AP` each time the radio comes back (not the
-    /// one [`start`](Self::start) asks before it returns); see
+    /// one [`start`](Self::start) asks before it returns: [`start_tapped`](Self::start_tapped)
+    /// has that too); see
     /// [`CommandSender::tap_frames`]. A recording of them (`mcp-gs hub --record`) is
     /// what the radio heard and said, whichever client it was for. It ends when the hub
     /// does.

@@ -215,7 +215,37 @@ pub async fn connect(
 ) -> Result<(PacketStream, CommandSender), ConnectError> {
     options.check()?;
     let connector = Connector::new(link, &options).await?;
-    serve(connector, options).await
+    let (stream, sender, _) = serve(connector, options, false).await?;
+    Ok((stream, sender))
+}
+
+/// [`connect`], with every frame of the link both ways from its very first
+/// ([`CommandSender::tap_frames`] taken before the link's task starts): a recording of
+/// the whole session, the frames that come the moment the link opens (a radio's Modem
+/// Status, the answer to a first request) included, which a tap taken after `connect`
+/// returns may miss.
+///
+/// ```
+/// # #[tokio::main(flavor = "current_thread")]
+/// # async fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// use mcp_host::{Link, LinkOptions};
+///
+/// let (_stream, sender, frames) = mcp_host::connect_tapped(&Link::Pty, LinkOptions::default()).await?;
+/// drop(frames);
+/// sender.close();
+/// # Ok(())
+/// # }
+/// ```
+pub async fn connect_tapped(
+    link: &Link,
+    options: LinkOptions,
+) -> Result<(PacketStream, CommandSender, Subscription<record::Record>), ConnectError> {
+    options.check()?;
+    let connector = Connector::new(link, &options).await?;
+    let (stream, sender, tap) = serve(connector, options, true).await?;
+    // Taken, as asked.
+    let tap = tap.unwrap_or_else(|| sender.tap_frames());
+    Ok((stream, sender, tap))
 }
 
 /// Serves a byte stream to the radio that the program opens itself, with `open`: a
@@ -263,7 +293,8 @@ where
         Box::pin(async move { Ok(Box::new(opening.await?) as Box<dyn transport::RadioIo>) })
     });
     let connector = Connector::with_opener(name.into(), opener, &options);
-    serve(connector, options).await
+    let (stream, sender, _) = serve(connector, options, false).await?;
+    Ok((stream, sender))
 }
 
 /// Serves `stream`, a byte stream to the radio that the program opened itself, as an
@@ -308,11 +339,20 @@ pub async fn connect_io<S: transport::RadioIo>(
     .await
 }
 
-/// Opens `connector`'s link where it opens at once, and starts the task serving it.
+/// Opens `connector`'s link where it opens at once, and starts the task serving it;
+/// with `tap`, a subscription to its frames taken before.
 async fn serve(
     mut connector: Connector,
     options: LinkOptions,
-) -> Result<(PacketStream, CommandSender), ConnectError> {
+    tap: bool,
+) -> Result<
+    (
+        PacketStream,
+        CommandSender,
+        Option<Subscription<record::Record>>,
+    ),
+    ConnectError,
+> {
     let link = connector.link().clone();
     // Whether the first open was tried here already (and failed).
     let mut tried = false;
@@ -363,6 +403,7 @@ async fn serve(
         state: state.clone(),
         subscribers: subscribers.clone(),
     };
+    let tap = tap.then(|| subscribers.tap_frames());
     let driver = driver::Driver::new(
         connector,
         options,
@@ -384,7 +425,7 @@ async fn serve(
         info,
         state,
     };
-    Ok((stream, sender))
+    Ok((stream, sender, tap))
 }
 
 /// The [`Event`]s of a link, as a [`futures::Stream`]. Ends after [`LinkEvent::Closed`].

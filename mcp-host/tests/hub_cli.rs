@@ -394,10 +394,12 @@ fn a_hub_records_what_its_radio_heard_and_said_for_every_client() {
     // SAFETY: kill(2) with the pid of a child of this process and a valid signal.
     assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
     let recorded = line_with(&out, "recorded ");
-    assert_eq!(recorded, format!("recorded 2 frames to {path}"));
+    assert_eq!(recorded, format!("recorded 5 frames to {path}"));
     assert_eq!(hub.0.wait().unwrap().code(), Some(0));
 
-    // The request as the radio got it (under the hub's frame id), and its answer.
+    // From the link's first frame: the radio's Modem Status as it came up and the
+    // hub's own AT AP with its answer (in either order), then the client's request as
+    // the radio got it (under the hub's frame id), and its answer.
     let decoded = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
         .args(["decode", path, "--format", "json"])
         .output()
@@ -407,8 +409,22 @@ fn a_hub_records_what_its_radio_heard_and_said_for_every_client() {
         .lines()
         .map(|line| serde_json::from_str(line).unwrap())
         .collect();
-    assert_eq!(frames.len(), 2, "{frames:?}");
-    let (request, answer) = (&frames[0], &frames[1]);
+    assert_eq!(frames.len(), 5, "{frames:?}");
+    let mut first: Vec<String> = frames[..3]
+        .iter()
+        .map(|f| format!("{} {} {}", f["direction"], f["frame"], f["command"]))
+        .collect();
+    first.sort();
+    assert_eq!(
+        first,
+        [
+            r#""rx" "at_response" "AP""#,
+            r#""rx" "modem_status" null"#,
+            r#""tx" "at" "AP""#
+        ],
+        "{frames:?}"
+    );
+    let (request, answer) = (&frames[3], &frames[4]);
     assert_eq!(
         (
             &request["direction"],

@@ -90,15 +90,23 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
         ..args.link.options(true).await?
     };
     let radio = &args.link.link;
-    let hub = Hub::start(radio, options, &args.listen)
-        .await
-        .map_err(|e| match e {
-            HubError::Connect(e) => connect_failure(radio, e),
-            HubError::Listen { addr, error, .. } => listen_failure(&addr, &error),
-            other => Failure::link(other.to_string()),
-        })?;
+    // With a recording, the frames from the link's very first: the radio's first ones
+    // and the hub's own AT AP too.
+    let started = match record {
+        Some(_) => Hub::start_tapped(radio, options, &args.listen)
+            .await
+            .map(|(hub, tap)| (hub, Some(tap))),
+        None => Hub::start(radio, options, &args.listen)
+            .await
+            .map(|hub| (hub, None)),
+    };
+    let (hub, tap) = started.map_err(|e| match e {
+        HubError::Connect(e) => connect_failure(radio, e),
+        HubError::Listen { addr, error, .. } => listen_failure(&addr, &error),
+        other => Failure::link(other.to_string()),
+    })?;
     let ctrl_c = crate::interrupt::ctrl_c();
-    let mut recorder = record.map(|file| Recorder::new(file, hub.tap_frames()));
+    let mut recorder = record.zip(tap).map(|(file, tap)| Recorder::new(file, tap));
     crate::link_args::announce_radio_side(hub.radio_link());
     let addr = hub.local_addr();
     let mode = u8::from(hub.api_mode());
