@@ -483,6 +483,8 @@ fn decode_stream(
     // time (64 KiB, far fewer than 2^32 of anything), so a capture of any size is
     // counted whole.
     let mut totals = Totals::default();
+    // The first bytes, decoded again in the other API mode before it is suggested.
+    let mut sample = Vec::new();
     loop {
         let n = match input.read(&mut chunk) {
             Ok(0) => break,
@@ -499,6 +501,8 @@ fn decode_stream(
                 None => return Err(e),
             },
         };
+        let room = MODE_SAMPLE.saturating_sub(sample.len()).min(n);
+        sample.extend_from_slice(&chunk[..room]);
         if let Some(summary) = &mut printer.summary {
             // Errors are counted by the decoder; no offsets are needed.
             decoder.decode_each(&chunk[..n], |event| {
@@ -548,7 +552,7 @@ fn decode_stream(
             None,
         )?;
     }
-    let hint = mode_hint(mode, stats);
+    let hint = mode_hint(mode, stats).filter(|_| other_mode_finds_more(&sample, mode));
     // Lines skipped make the input bad input, said first.
     let skipped = skipped.message(offset).map(|message| source.says(message));
     if offset > 0 && stats.frames == 0 {
@@ -560,8 +564,13 @@ fn decode_stream(
             "its one candidate frame is cut off (a capture that stops part way through a \
              frame?)"
                 .to_owned()
-        } else if errors > 0 {
+        } else if errors > 0 && other_mode_finds_more(&sample, mode) {
             format!("if it is in API mode {other}, decode it with --api-mode {other}")
+        } else if errors > 0 {
+            format!(
+                "API mode {other} finds none either (a capture at another baud rate, or \
+                 noise?)"
+            )
         } else {
             "not a capture of an XBee in API mode (a recording starts with MCPREC; hex text \
              needs --hex)"
@@ -585,6 +594,22 @@ fn decode_stream(
         Some(message) => Err(io::Error::new(io::ErrorKind::InvalidData, message)),
         None => Ok(()),
     }
+}
+
+/// How many bytes of the input [`other_mode_finds_more`] decodes again.
+const MODE_SAMPLE: usize = 1 << 16;
+
+/// Whether the other API mode than `mode` finds more frames in `sample` (the first
+/// bytes of the input): a noisy capture in the right mode fails frames too, and is not
+/// told to try the other.
+fn other_mode_finds_more(sample: &[u8], mode: ApiMode) -> bool {
+    let frames = |mode: ApiMode| {
+        let mut decoder: Decoder = Decoder::new(mode);
+        decoder.decode_each(sample, |_| {});
+        while decoder.finish().is_some() {}
+        decoder.stats().frames_ok
+    };
+    frames(mode.other()) > frames(mode)
 }
 
 /// A hint when many frames failed in a way that reading the stream in the other API

@@ -20,10 +20,10 @@ pub(crate) struct RecordingFile {
 }
 
 impl RecordingFile {
-    /// `path`, checked: not a directory; if there, a regular file (not a FIFO or a
-    /// device), overwritten only with `force` and only if it takes writes; if not, in a
-    /// directory where a file can be made (a file is made there and removed): a session
-    /// is never served unrecorded for want of the file.
+    /// `path`, checked: not a directory; if there, not a FIFO, overwritten only with
+    /// `force` and only if it takes writes; if not, in a directory where a file can be
+    /// made (a file is made there and removed): a session is never served unrecorded
+    /// for want of the file.
     pub(crate) fn check(path: &Path, force: bool) -> Result<Self, Failure> {
         if path.is_dir() {
             return Err(Failure::input(format!(
@@ -32,13 +32,13 @@ impl RecordingFile {
             )));
         }
         if let Ok(metadata) = std::fs::metadata(path) {
-            // A FIFO's writer waits for a reader (the program would hang, deaf to
-            // Ctrl-C, in the open), and a device takes no recording to keep.
-            if !metadata.is_file() {
+            // A FIFO's writer waits for a reader in its open (the program would hang
+            // there, deaf to Ctrl-C), and the check's own open and close would end a
+            // reader's input.
+            if is_fifo(&metadata) {
                 return Err(Failure::input(format!(
-                    "{} is not a regular file (a FIFO, a device): --record writes a file; \
-                     to decode a recording as it is made, `tail -c +1 -f FILE | mcp-gs \
-                     decode`",
+                    "{} is a FIFO: --record writes a file; to decode a recording as it is \
+                     made, `tail -c +1 -f FILE | mcp-gs decode`",
                     path.display()
                 )));
             }
@@ -141,4 +141,16 @@ fn exists(path: &Path) -> Failure {
         "{} exists: choose another file, or add --force to overwrite it",
         path.display()
     ))
+}
+
+/// Whether `metadata` is a FIFO's (a named pipe).
+#[cfg(unix)]
+fn is_fifo(metadata: &std::fs::Metadata) -> bool {
+    std::os::unix::fs::FileTypeExt::is_fifo(&metadata.file_type())
+}
+
+/// Whether `metadata` is a FIFO's: never, where there are none.
+#[cfg(not(unix))]
+fn is_fifo(_metadata: &std::fs::Metadata) -> bool {
+    false
 }
