@@ -218,6 +218,36 @@ fn a_recording_cut_off_names_the_file_and_the_frames_decoded_before_it() {
 }
 
 #[test]
+fn a_noisy_capture_in_the_right_mode_is_not_told_to_try_the_other() {
+    // Receive Packets in API mode 1 whose data holds bytes mode 2 escapes (0x11, 0x13,
+    // 0x7D), one in four with its checksum damaged on the line.
+    let frame = |i: u8| {
+        let data = [
+            0x90, 0, 0x13, 0xA2, 0, 0x40, 0xB5, 0x99, 0xB9, 0x7D, 0x33, 0x01, b'm', 0x11, i,
+        ];
+        let sum = data.iter().fold(0u8, |s, b| s.wrapping_add(*b));
+        let mut bytes = vec![0x7E, 0x00, u8::try_from(data.len()).unwrap()];
+        bytes.extend_from_slice(&data);
+        bytes.push(if i % 4 == 0 {
+            (0xFF - sum) ^ 0x01
+        } else {
+            0xFF - sum
+        });
+        bytes
+    };
+    let capture: Vec<u8> = (0..100).flat_map(frame).collect();
+    let file = TempFile::new("noisy.bin", &capture);
+    let output = decode(&["--summary", file.path()]);
+    let err = text(&output.stderr);
+    assert!(text(&output.stdout).contains("frames: 75\n"), "{output:?}");
+    assert!(!err.contains("--api-mode 2"), "{err}");
+    // The same frames read in the wrong mode: told, since mode 1 finds more.
+    let output = decode(&["--summary", "--api-mode", "2", file.path()]);
+    let err = text(&output.stderr);
+    assert!(err.contains("decode it with --api-mode 1"), "{err}");
+}
+
+#[test]
 fn recordings_joined_one_after_the_other_decode_whole() {
     let one = common::modem_status_recording(3);
     let joined = TempFile::new("joined.mcprec", &[&one[..], &one].concat());
