@@ -1175,8 +1175,12 @@ fn monitor_keeps_an_existing_recording() {
     // The check leaves nothing behind.
     let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
     assert_eq!(left.len(), 1, "{left:?}");
-    // A FIFO (whose open waits for a reader, deaf to Ctrl-C): refused at once, with or
-    // without --force.
+}
+
+#[test]
+fn monitor_records_into_a_pipe_that_is_read_and_refuses_one_that_is_not() {
+    use std::os::unix::fs::OpenOptionsExt;
+    let dir = tempfile::tempdir().unwrap();
     let fifo = dir.path().join("flight.fifo");
     assert!(
         std::process::Command::new("mkfifo")
@@ -1186,15 +1190,36 @@ fn monitor_keeps_an_existing_recording() {
             .success()
     );
     let path = fifo.to_str().unwrap();
-    for command in ["monitor", "hub"] {
-        let output = run(&[command, "--link", missing, "--record", path, "--force"]);
-        assert_eq!(output.status.code(), Some(2), "{command}: {output:?}");
-        let stderr = String::from_utf8_lossy(&output.stderr);
-        assert!(
-            stderr.contains(&format!("{path} is a FIFO: --record writes a file")),
-            "{stderr}"
-        );
-    }
+    // Nothing reads it: refused once a frame is to be recorded, where the open would
+    // wait for a reader, deaf to Ctrl-C.
+    let modem_status = vec![0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F];
+    let (link, peer) = common::talking_peer(modem_status.clone());
+    let output = run(&["monitor", "--link", &link, "--record", path]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains(&format!(
+            "cannot create {path}: it is a FIFO that nothing reads: start its reader first"
+        )),
+        "{stderr}"
+    );
+    peer.join().unwrap();
+    // Read (as `--record >(gzip > f.gz)` is): the recording goes through it. The read
+    // end opened first, without waiting for a writer; what comes stays in the pipe.
+    let mut reader = std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(libc::O_NONBLOCK)
+        .open(&fifo)
+        .unwrap();
+    let (link, peer) = common::talking_peer(modem_status);
+    let output = run(&["monitor", "--link", &link, "--count", "1", "--record", path]);
+    peer.join().unwrap();
+    assert_eq!(output.status.code(), Some(0), "{output:?}");
+    // The writer gone: what it wrote, then the end.
+    let mut recorded = Vec::new();
+    std::io::Read::read_to_end(&mut reader, &mut recorded).unwrap();
+    assert!(recorded.starts_with(b"MCPREC\x01\x00"), "{recorded:02x?}");
+    assert!(recorded.ends_with(&[2, 0, 0x8A, 0x06]), "{recorded:02x?}");
 }
 
 #[test]

@@ -287,14 +287,15 @@ fn a_hub_recording_whose_radio_ends_for_good_says_what_it_recorded() {
         record.to_str().unwrap(),
     ];
     let (running, stdout, stderr) = start(&args);
-    // The hub asks its AT AP, unanswered here: it warns, and serves.
+    // The hub asks its AT AP twice, unanswered here: it warns, and serves. Both are
+    // recorded (4 bytes of frame data each).
     line(&stdout, |l| l.starts_with("serving "));
     // A frame from the radio, recorded: a modem status.
     std::io::Write::write_all(&mut master, &[0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F]).unwrap();
-    // The adapter pulled out once the frame is in the file (until then the hub is given
-    // time: its reads are not seen): the link ends for good.
+    // The adapter pulled out once the three frames are in the file (until then the hub
+    // is given time: its reads are not seen): the link ends for good.
     let wait = std::time::Instant::now();
-    while std::fs::metadata(&record).map_or(0, |m| m.len()) < 8 + 11 + 2 {
+    while std::fs::metadata(&record).map_or(0, |m| m.len()) < 8 + 2 * (11 + 4) + 11 + 2 {
         assert!(wait.elapsed() < GUARD, "the frame is not recorded");
         // Looked at again shortly: the file says nothing when it grows.
         std::thread::sleep(std::time::Duration::from_millis(10));
@@ -305,7 +306,7 @@ fn a_hub_recording_whose_radio_ends_for_good_says_what_it_recorded() {
     assert!(!said.contains("panicked"), "{said}");
     let out: Vec<String> = stdout.try_iter().collect();
     assert!(
-        out.contains(&format!("recorded 1 frame to {}", record.display())),
+        out.contains(&format!("recorded 3 frames to {}", record.display())),
         "{out:?}"
     );
 }

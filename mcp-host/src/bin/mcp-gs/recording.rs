@@ -20,7 +20,7 @@ pub(crate) struct RecordingFile {
 }
 
 impl RecordingFile {
-    /// `path`, checked: not a directory; if there, not a FIFO, overwritten only with
+    /// `path`, checked: not a directory; if there, a pipe, or overwritten only with
     /// `force` and only if it takes writes; if not, in a directory where a file can be
     /// made (a file is made there and removed): a session is never served unrecorded
     /// for want of the file.
@@ -31,17 +31,11 @@ impl RecordingFile {
                 path.display()
             )));
         }
-        if let Ok(metadata) = std::fs::metadata(path) {
-            // A FIFO's writer waits for a reader in its open (the program would hang
-            // there, deaf to Ctrl-C), and the check's own open and close would end a
-            // reader's input.
-            if is_fifo(&metadata) {
-                return Err(Failure::input(format!(
-                    "{} is a FIFO: --record writes a file; to decode a recording as it is \
-                     made, `tail -c +1 -f FILE | mcp-gs decode`",
-                    path.display()
-                )));
-            }
+        if std::fs::metadata(path).is_ok_and(|m| is_fifo(&m)) {
+            // A pipe (`--record >(gzip > f.gz)`, a FIFO): not opened here, as an open
+            // would wait for a reader and a close end the reader's input; whether it has
+            // a reader is seen when it is opened ([`create`](Self::create)).
+        } else if path.exists() {
             if !force {
                 return Err(exists(path));
             }
@@ -77,10 +71,14 @@ impl RecordingFile {
         })
     }
 
-    /// The file, created (truncated with `force`, else it must not exist).
+    /// The file, created (truncated with `force`, else it must not exist); a pipe,
+    /// opened if something reads it (a FIFO with no reader is refused, where its open
+    /// would wait for one, deaf to Ctrl-C).
     pub(crate) fn create(&self) -> Result<Recording, Failure> {
         let path = &self.path;
-        let file = if self.force {
+        let file = if std::fs::metadata(path).is_ok_and(|m| is_fifo(&m)) {
+            open_pipe(path)
+        } else if self.force {
             File::create(path)
         } else {
             File::create_new(path)
@@ -141,6 +139,35 @@ fn exists(path: &Path) -> Failure {
         "{} exists: choose another file, or add --force to overwrite it",
         path.display()
     ))
+}
+
+/// Opens the pipe at `path` to write to it, if something reads it: a FIFO with no
+/// reader is refused (an open would wait for one).
+#[cfg(unix)]
+fn open_pipe(path: &Path) -> io::Result<File> {
+    use std::os::unix::fs::OpenOptionsExt;
+    // Without waiting: ENXIO when nothing reads it.
+    let probe = std::fs::OpenOptions::new()
+        .write(true)
+        .custom_flags(libc::O_NONBLOCK)
+        .open(path);
+    match probe {
+        Err(e) if e.raw_os_error() == Some(libc::ENXIO) => Err(io::Error::new(
+            io::ErrorKind::NotConnected,
+            "it is a FIFO that nothing reads: start its reader first (`mcp-gs decode \
+             FIFO`, say)",
+        )),
+        Err(e) => Err(e),
+        // Something reads it: opened again to be written as a file is (blocking writes),
+        // at once since a reader is there.
+        Ok(_probe) => std::fs::OpenOptions::new().write(true).open(path),
+    }
+}
+
+/// Opens the pipe at `path`: where there are no FIFOs, as a file.
+#[cfg(not(unix))]
+fn open_pipe(path: &Path) -> io::Result<File> {
+    std::fs::OpenOptions::new().write(true).open(path)
 }
 
 /// Whether `metadata` is a FIFO's (a named pipe).
