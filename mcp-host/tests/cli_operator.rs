@@ -953,18 +953,20 @@ fn replay_keeps_its_pace_across_a_clock_set_back_and_max_gap_shortens_the_waits(
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("clock.mcprec");
     let hour = 3_600_000_000u64;
-    // The clock set back an hour after the second frame; a day's silence before the
-    // last.
+    // The clock set back an hour after the second frame, the frames after it 0.3 s
+    // apart; a day's silence before the last.
     let times = [
         10 * hour,
         10 * hour + 1_000,
         9 * hour,
-        9 * hour + 1_000,
+        9 * hour + 300_000,
+        9 * hour + 600_000,
         33 * hour,
     ];
     let records: Vec<(u8, u64)> = times.iter().map(|&t| (0, t)).collect();
     std::fs::write(&file, recording(&records)).unwrap();
     let (link, peer) = common::recording_peer();
+    let start = std::time::Instant::now();
     let output = run(&[
         "replay",
         file.to_str().unwrap(),
@@ -973,9 +975,16 @@ fn replay_keeps_its_pace_across_a_clock_set_back_and_max_gap_shortens_the_waits(
         "--max-gap",
         "0.5",
     ]);
+    // The pace kept after the clock went back (0.6 s), and the day cut to 0.5 s.
+    let took = start.elapsed();
     let stderr = stderr(&output);
     assert_eq!(output.status.code(), Some(0), "{stderr}");
-    assert_eq!(peer.join().unwrap().len(), 5 * 6);
+    assert_eq!(peer.join().unwrap().len(), 6 * 6);
+    assert!(
+        took >= std::time::Duration::from_millis(1_100),
+        "{took:?}: {stderr}"
+    );
+    assert!(took < std::time::Duration::from_secs(60), "{took:?}");
     assert!(
         stderr.contains(
             "warning: the recording's clock goes back 3600 s before its frame 3: played at \
@@ -983,7 +992,7 @@ fn replay_keeps_its_pace_across_a_clock_set_back_and_max_gap_shortens_the_waits(
         ),
         "{stderr}"
     );
-    assert!(stderr.contains("replayed 5 frames"), "{stderr}");
+    assert!(stderr.contains("replayed 6 frames"), "{stderr}");
     assert!(!stderr.contains("quiet"), "{stderr}");
 }
 
@@ -1034,7 +1043,7 @@ fn replay_says_how_far_it_got_when_its_peer_leaves() {
     // The wait said as it began.
     assert!(
         stderr.contains(
-            "mcp-gs: the recording is quiet for 60 s after its frame 1: waiting for the next \
+            "mcp-gs: waiting 60 s: the recording is quiet for 60 s after its frame 1 \
              (--max-gap shortens such waits)"
         ),
         "{stderr}"

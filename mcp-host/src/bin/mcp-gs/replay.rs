@@ -167,9 +167,12 @@ fn wanted(which: Which, direction: Direction) -> bool {
     )
 }
 
-/// `duration` to the second (to the millisecond below one), as said to an operator.
+/// `duration` to the second (to the millisecond below one, as it is below a
+/// millisecond), as said to an operator.
 fn rounded(duration: Duration) -> Duration {
     match duration.as_secs() {
+        // Below a millisecond, as it is.
+        0 if duration.as_millis() == 0 => duration,
         0 => Duration::from_millis(duration.as_millis().try_into().unwrap_or(0)),
         _ => Duration::from_secs_f64(duration.as_secs_f64().round()),
     }
@@ -273,13 +276,14 @@ async fn play(
             }
             continue;
         }
-        let gap = match previous.replace(record.time) {
+        let recorded_gap = match previous.replace(record.time) {
             None => Duration::ZERO,
             Some(previous) => record.time.duration_since(previous).unwrap_or_else(|back| {
                 // The recording machine's clock was set back (a time server's
-                // correction, a clock set at boot): the frames after it keep their
-                // pace from there.
-                if !std::mem::replace(&mut went_back, true) {
+                // correction, a clock set at boot, recordings joined out of order): the
+                // frames after it keep their pace from there. Said where there is a
+                // pace to keep.
+                if args.speed > 0.0 && !std::mem::replace(&mut went_back, true) {
                     err!(
                         "mcp-gs: warning: the recording's clock goes back {} before its \
                          frame {}: played at once, and the frames after it at their pace \
@@ -291,7 +295,9 @@ async fn play(
                 Duration::ZERO
             }),
         };
-        let gap = args.max_gap.map_or(gap, |max| gap.min(max));
+        let gap = args
+            .max_gap
+            .map_or(recorded_gap, |max| recorded_gap.min(max));
         if args.speed > 0.0 {
             // A hostile or damaged recording may stamp a record beyond any time a clock
             // can wait for (at a slow speed, all the more).
@@ -309,11 +315,16 @@ async fn play(
                     crate::counted(*played, "frame")
                 ))
             })?;
-            if wait.is_some_and(|wait| wait >= LONG_QUIET) {
+            if let Some(wait) = wait.filter(|wait| *wait >= LONG_QUIET) {
+                let shorten = match args.max_gap {
+                    Some(_) => "",
+                    None => " (--max-gap shortens such waits)",
+                };
                 err!(
-                    "mcp-gs: the recording is quiet for {} after its frame {}: waiting for \
-                     the next (--max-gap shortens such waits)",
-                    Seconds(rounded(wait.unwrap_or_default())),
+                    "mcp-gs: waiting {}: the recording is quiet for {} after its frame \
+                     {}{shorten}",
+                    Seconds(rounded(wait)),
+                    Seconds(rounded(recorded_gap)),
                     *played
                 );
             }
