@@ -167,7 +167,9 @@ impl<T: AsyncRead + AsyncWrite + Unpin> CommandMode<T> {
 
     /// Reads a parameter (`AT` `command`): the radio's answer, its value in hex as the
     /// radio writes it (`AP` in transparent mode: `0`), as [safe text](self). `ERROR`,
-    /// a command the radio does not know, is [`CommandModeError::Refused`], not a value.
+    /// a command the radio does not know, is [`CommandModeError::Refused`], not a value
+    /// (so a text parameter that reads `ERROR`, a node identifier set so, cannot be told
+    /// from it here: read it in an API frame).
     pub async fn read(&mut self, command: [u8; 2]) -> Result<String, CommandModeError> {
         let answer = self.send(command, "").await?;
         if answer == "ERROR" {

@@ -568,8 +568,8 @@ fn decode_stream(
             format!("if it is in API mode {other}, decode it with --api-mode {other}")
         } else if errors > 0 {
             format!(
-                "API mode {other} finds none either (a capture at another baud rate, or \
-                 noise?)"
+                "API mode {other} finds none either in its first 64 KiB (a capture at \
+                 another baud rate, or noise?)"
             )
         } else {
             "not a capture of an XBee in API mode (a recording starts with MCPREC; hex text \
@@ -667,7 +667,9 @@ fn decode_recording(
             Err(e) => {
                 match BadText::of(&e) {
                     Some(bad) => skipped.add(bad),
-                    None => damaged = 1,
+                    // A damaged or cut-off record, not a failed read.
+                    None if e.kind() == io::ErrorKind::InvalidData => damaged = 1,
+                    None => {}
                 }
                 let message = format!("{e}; {}", decoded_before(decoded));
                 break Err(io::Error::new(e.kind(), source.says(message)));

@@ -45,7 +45,8 @@ pub(crate) struct LinkArgs {
                 tcp-listen:ADDR:PORT or pty"
     )]
     pub(crate) link: Link,
-    /// XBee API mode of the local radio (its AP setting): 1, 2, or auto to ask the radio.
+    /// XBee API mode of the local radio (its AP setting): 1, 2, or auto to ask the radio
+    /// (its answer waited for 3 s, or --timeout if given).
     #[arg(long, value_name = "1|2|auto", default_value = "1")]
     pub(crate) api_mode: ApiModeChoice,
     /// Seconds to wait to connect, and for what the subcommand waits for [default: 12].

@@ -235,7 +235,7 @@ async fn change_in_command_mode<T: tokio::io::AsyncRead + tokio::io::AsyncWrite 
     let target_text = target.to_string();
     let (line, change) = ap_line(&was, &target_text);
     if change {
-        radio.set(*b"AP", &target_text).await?;
+        set_or_say(radio, *b"AP", &target_text, &line, lines).await?;
     }
     lines.push((line, change));
     if let Some(baud) = args.baud {
@@ -243,7 +243,7 @@ async fn change_in_command_mode<T: tokio::io::AsyncRead + tokio::io::AsyncWrite 
         let (line, change) = bd_line(Some(&was), baud);
         if change {
             let bd = format!("{:X}", bd_value(baud));
-            radio.set(*b"BD", &bd).await?;
+            set_or_say(radio, *b"BD", &bd, &line, lines).await?;
         }
         lines.push((line, change));
     }
@@ -251,6 +251,23 @@ async fn change_in_command_mode<T: tokio::io::AsyncRead + tokio::io::AsyncWrite 
         radio.set(*b"WR", "").await?;
     }
     Ok(())
+}
+
+/// Sets `command` to `value` in command mode; if the radio did not answer in time, it
+/// may have taken it: `line` goes into `lines` as a change perhaps made, so that it is
+/// said, and command mode left.
+async fn set_or_say<T: tokio::io::AsyncRead + tokio::io::AsyncWrite + Unpin>(
+    radio: &mut CommandMode<T>,
+    command: [u8; 2],
+    value: &str,
+    line: &str,
+    lines: &mut Vec<(String, bool)>,
+) -> Result<(), CommandModeError> {
+    let set = radio.set(command, value).await;
+    if let Err(CommandModeError::NoAnswer { .. }) = &set {
+        lines.push((format!("{line} (not answered: perhaps)"), true));
+    }
+    set
 }
 
 /// For a radio that did not answer `+++` (older firmware takes it in transparent mode
@@ -342,6 +359,9 @@ async fn set_up_in_api_frames(
     if change {
         set(&now, &asked, *b"AP", &[target]).await?;
         now.1 = args.api_mode.0;
+        if let Link::Tcp { .. } = &args.link {
+            hub_restart_note(&args.link, target);
+        }
     }
     lines.push((line, change));
     if let Some(baud) = args.baud {
@@ -368,24 +388,24 @@ async fn set_up_in_api_frames(
             .map_err(unsaved(&lines))?;
     }
     print_lines(&lines);
-    if let (true, Link::Tcp { .. }) = (was != target, &args.link) {
-        // A hub speaks to its radio in the mode it was started with: from now on it
-        // cannot read the radio's frames, whatever its clients speak.
-        let flag = if target == 2 { " --api-mode 2" } else { "" };
-        err!(
-            "mcp-gs: note: if {} is a hub, restart it with{} --link to the radio: it speaks \
-             to its radio in the API mode it was started with, and cannot read the radio's \
-             frames in API mode {target}",
-            args.link,
-            if flag.is_empty() {
-                " no --api-mode (mode 1),"
-            } else {
-                flag
-            }
-        );
-    }
     check(&now.0, args.api_mode.0, options, timeout).await?;
     Ok(Some(()))
+}
+
+/// Says that a hub at `link` must be restarted in the radio's new API mode `target`: a
+/// hub speaks to its radio in the mode it was started with, and from now on cannot read
+/// the radio's frames, whatever its clients speak.
+fn hub_restart_note(link: &Link, target: u8) {
+    let flags = if target == 2 {
+        " --api-mode 2"
+    } else {
+        " no --api-mode (mode 1),"
+    };
+    err!(
+        "mcp-gs: note: if {link} is a hub, restart it with{flags} --link to the radio: it \
+         speaks to its radio in the API mode it was started with, and cannot read the \
+         radio's frames in API mode {target}"
+    );
 }
 
 /// A failure after the changes in `lines` were made (in API frames, or in command mode
