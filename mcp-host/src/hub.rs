@@ -1763,8 +1763,8 @@ impl Client {
 /// answers one it could not carry out, under the client's own id: an AT command
 /// `ERROR` (1), a transmission's delivery status 0x32 (resource error: the radio's own
 /// word for a lack of buffers; in a Transmit Status 0x8B, or a TX Status 0x89 for the
-/// IPv4 Transmit Request; 0x31, internal error, for the 802.15.4 ones, whose list has
-/// no 0x32), a remote AT command's transmission failure (4). `None` for the other requests (Register Joining Device), and for requests cut
+/// 802.15.4 and IPv4 Transmit Requests), a remote AT command's transmission failure
+/// (4). `None` for the other requests (Register Joining Device), and for requests cut
 /// short ([`is_whole_request`]), whose clients wait for their own timeouts.
 fn not_sent_answer(request: &[u8]) -> Option<Vec<u8>> {
     if !is_whole_request(request) {
@@ -1772,9 +1772,8 @@ fn not_sent_answer(request: &[u8]) -> Option<Vec<u8>> {
     }
     match request {
         [0x08 | 0x09, id, a, b, ..] => Some(vec![0x88, *id, *a, *b, 0x01]),
-        // 802.15.4 lists no 0x32 among its TX Status codes: its internal error, 0x31.
-        [0x00 | 0x01, id, ..] => Some(vec![0x89, *id, 0x31]),
-        [0x20, id, ..] => Some(vec![0x89, *id, 0x32]),
+        // Resource error in a TX Status too, as 802.15.4 (S2C) and IPv4 radios give it.
+        [0x00 | 0x01 | 0x20, id, ..] => Some(vec![0x89, *id, 0x32]),
         // The 16-bit address after the 64-bit one; no retries, no discovery.
         [0x10 | 0x11, id, _, _, _, _, _, _, _, _, hi, lo, ..] => {
             Some(vec![0x8B, *id, *hi, *lo, 0x00, 0x32, 0x00])
@@ -1883,7 +1882,7 @@ mod tests {
             other => panic!("{other:?}"),
         }
         // 802.15.4 (64- and 16-bit addresses) and IPv4 Transmit Requests: TX Status
-        // 0x89, an internal error (802.15.4) or the same resource error (IPv4).
+        // 0x89, the same resource error.
         let tx64 = [
             0x00, 4, 0, 0x13, 0xA2, 0, 0x40, 0xB5, 0x99, 0xB9, 0x00, b'c',
         ];
@@ -1892,8 +1891,8 @@ mod tests {
             0x20, 6, 10, 0, 0, 2, 0x26, 0x16, 0x26, 0x16, 0x00, 0x00, b'c',
         ];
         for (request, id, status) in [
-            (&tx64[..], 4, 0x31),
-            (&tx16[..], 5, 0x31),
+            (&tx64[..], 4, 0x32),
+            (&tx16[..], 5, 0x32),
             (&ipv4[..], 6, 0x32),
         ] {
             assert_eq!(
