@@ -455,7 +455,9 @@ async fn the_simulators_factory_radio_is_set_up_and_then_reaches_the_mav() {
     let factory = format!("{link}:9600");
     let out = mcp_gs(&["at", "--link", &factory, "--timeout", "1", "AP"]).await;
     assert_eq!(out.status.code(), Some(4), "{out:?}");
-    let probe = format!("`mcp-gs probe --link {factory}` finds what it is set to");
+    // Pointed at the port without a rate: probe tries the factory's first, then the
+    // others.
+    let probe = format!("`mcp-gs probe --link {link}` finds what it is set to");
     assert!(stderr(&out).contains(&probe), "{out:?}");
 
     // The emulated radio's guard time is Digi's default, setup's too.

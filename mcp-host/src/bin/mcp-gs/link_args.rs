@@ -575,9 +575,21 @@ fn silence_hint(link: &Link, stats: &Stats, lead: &str) -> Option<String> {
             "hint: {lead} (--api-mode, or auto to ask it), the baud rate (serial:PATH:BAUD), \
              and that no other program reads the port (to share it, use mcp-gs hub); a radio \
              new from the factory is in transparent mode at 9600 baud: `mcp-gs probe --link \
-             {link}` finds what it is set to"
+             {}` finds what it is set to",
+            probe_link(link)
         ),
     })
+}
+
+/// The link `mcp-gs probe` is pointed at for `link`: a serial port without its baud
+/// rate (probe then tries the factory's first), as is.
+fn probe_link(link: &Link) -> String {
+    match link {
+        Link::Serial {
+            path, flow_control, ..
+        } => serial_at(path, *flow_control, None),
+        other => other.to_string(),
+    }
 }
 
 /// `failure`, with the [`timeout_hint`] when it is a timeout, or the

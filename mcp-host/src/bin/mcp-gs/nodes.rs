@@ -55,10 +55,19 @@ pub(crate) async fn run(args: NodesArgs) -> Result<(), Failure> {
         }
         err!("mcp-gs: {unreadable}");
     } else if found.nodes.is_empty() {
+        let stats = sender.stats();
         let failure = Failure::new(
             Failure::TIMEOUT,
-            "no radio answered: the others are off, out of range, or in another network \
-             (ID, CH)",
+            match stats.decode_errors() {
+                // Frames came that could not be read: answers, perhaps, in another mode.
+                0 => "no radio answered: the others are off, out of range, or in another \
+                      network (ID, CH)"
+                    .to_owned(),
+                failed => format!(
+                    "no answer could be read: {} from the radio failed to decode",
+                    crate::counted(failed, "frame")
+                ),
+            },
         );
         // Answers that failed their checksum: the local radio may be in the other mode.
         return Err(with_mode_hint(failure, &args.link, &sender.stats()));
