@@ -56,6 +56,15 @@ pub enum Diagnosis {
         /// Bytes skipped.
         bytes: u64,
     },
+    /// Most frames that came were of the types this side writes (requests, which a
+    /// radio never sends, [`Stats::echoed`]): the port hands back what is written to it
+    /// (a loopback, a cable or adapter with its data lines joined, a terminal's echo),
+    /// and no radio answers there.
+    #[non_exhaustive]
+    Echo {
+        /// Frames of request types that came.
+        frames: u64,
+    },
 }
 
 impl Stats {
@@ -122,6 +131,12 @@ impl Stats {
         min_bytes: u64,
         majority: bool,
     ) -> Option<Diagnosis> {
+        // Echoes pass their checksum: looked at first.
+        if self.echoed >= min_failed && self.echoed.saturating_mul(2) > self.frames {
+            return Some(Diagnosis::Echo {
+                frames: self.echoed,
+            });
+        }
         let failed = self.bad_checksum + self.bad_escape;
         if failed >= min_failed && (!majority || failed > self.frames) {
             return Some(Diagnosis::OtherApiMode {
@@ -264,6 +279,13 @@ impl fmt::Display for Diagnosis {
                 counted(frames, "frame"),
                 counted(bytes, "byte")
             ),
+            Diagnosis::Echo { frames } => write!(
+                f,
+                "{} came back of the types written to the radio (requests, which no radio \
+                 sends): the port hands back what is written to it (a loopback, an adapter \
+                 with its data lines joined, a terminal's echo), and no radio answers there",
+                counted(frames, "frame")
+            ),
         }
     }
 }
@@ -271,6 +293,42 @@ impl fmt::Display for Diagnosis {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn frames_of_the_types_written_coming_back_are_an_echo() {
+        let mode = ApiMode::Unescaped;
+        // The request sent, handed back: one is a sign in a short exchange.
+        let echo = Stats {
+            frames: 1,
+            echoed: 1,
+            ..Stats::default()
+        };
+        assert_eq!(echo.diagnose(mode), Some(Diagnosis::Echo { frames: 1 }));
+        assert_eq!(echo.diagnose_running(mode), None);
+        assert_eq!(
+            Diagnosis::Echo { frames: 1 }.to_string(),
+            "1 frame came back of the types written to the radio (requests, which no radio \
+             sends): the port hands back what is written to it (a loopback, an adapter with \
+             its data lines joined, a terminal's echo), and no radio answers there"
+        );
+        // Over a long time, 5 and most frames.
+        let running = Stats {
+            frames: 9,
+            echoed: 5,
+            ..Stats::default()
+        };
+        assert_eq!(
+            running.diagnose_running(mode),
+            Some(Diagnosis::Echo { frames: 5 })
+        );
+        // A radio's own frames outnumber them: not an echo.
+        let radio = Stats {
+            frames: 10,
+            echoed: 5,
+            ..Stats::default()
+        };
+        assert_eq!(radio.diagnose_running(mode), None);
+    }
 
     #[test]
     fn each_sign_is_read_as_its_cause() {

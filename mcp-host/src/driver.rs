@@ -819,7 +819,13 @@ impl Driver {
                 Err(error) => self.malformed(frame, &error),
             },
             t if is_response(t) => self.on_response(frame),
-            _ => self.emit(Event::Frame(frame)),
+            t => {
+                // A request's type, which a radio takes but never sends: an echo.
+                if t & 0x80 == 0 {
+                    bump(&self.counters.echoed);
+                }
+                self.emit(Event::Frame(frame));
+            }
         }
     }
 

@@ -31,6 +31,10 @@ pub struct Stats {
     pub malformed_frames: u64,
     /// Transmit statuses and responses that matched no request in flight.
     pub unclaimed_responses: u64,
+    /// Frames received of a type a radio takes rather than sends (a request: frame
+    /// types below 0x80, as an AT Command or a Transmit Request): what a port that hands
+    /// back what is written (a loopback, a terminal's echo) gives, never a radio.
+    pub echoed: u64,
     /// Requests (sends, frames, status requests) that timed out, their callers told: one
     /// whose caller had given up on it first (dropped its future) is not counted.
     pub timeouts: u64,
@@ -140,6 +144,7 @@ counters!(
     invalid_packets,
     malformed_frames,
     unclaimed_responses,
+    echoed,
     timeouts,
     events_dropped,
     disconnects,

@@ -1308,6 +1308,30 @@ fn monitor_shows_each_failure_again_once_frames_pass_again() {
 }
 
 #[test]
+fn a_port_that_hands_back_what_is_written_is_said_to_be_no_radio() {
+    // A loopback: every byte written comes back.
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let link = format!("tcp:{}", listener.local_addr().unwrap());
+    let peer = std::thread::spawn(move || {
+        let (mut socket, _) = listener.accept().unwrap();
+        let mut back = socket.try_clone().unwrap();
+        let _ = std::io::copy(&mut socket, &mut back);
+    });
+    let output = run(&["at", "--link", &link, "--timeout", "1", "AP"]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(4), "{stderr}");
+    assert!(
+        stderr.contains(
+            "hint: 1 frame came back of the types written to the radio (requests, which no \
+             radio sends): the port hands back what is written to it"
+        ),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("API mode 2"), "{stderr}");
+    peer.join().unwrap();
+}
+
+#[test]
 fn a_recording_that_cannot_be_written_is_named() {
     // A modem status, recorded to a full disk.
     let (link, peer) = common::talking_peer(vec![0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F]);

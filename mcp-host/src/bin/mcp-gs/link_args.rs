@@ -490,6 +490,11 @@ pub(crate) fn hint(found: Diagnosis, link: &Link) -> String {
             "`mcp-gs setup` puts a radio in transparent mode into API mode; {}",
             baud_advice(link)
         ),
+        Diagnosis::Echo { .. } => {
+            "is the radio on this port (`mcp-gs ports` lists them), and its cable the \
+             right way round?"
+                .to_owned()
+        }
         _ => baud_advice(link),
     };
     format!("hint: {found}; {advice}")
