@@ -52,6 +52,19 @@ async fn delivered(radio: &mut common::FakeXBee, payload: &[u8]) {
     radio.status(tx.frame_id, DeliveryStatus::Success).await;
 }
 
+/// What the spawned `task` gave (failure guard: GUARD).
+async fn outcome<T>(task: tokio::task::JoinHandle<T>) -> T {
+    tokio::time::timeout(GUARD, task).await.unwrap().unwrap()
+}
+
+/// Asserts that `error` is [`ConfirmError::NotTaken`] with `report`.
+fn assert_not_taken(error: &ConfirmError, report: Report<mcp_host::bytes::Bytes>) {
+    assert!(
+        matches!(error, ConfirmError::NotTaken { report: got, .. } if *got == report),
+        "{error:?}"
+    );
+}
+
 /// A trajectory set command of `waypoints`, as bytes.
 fn trajectory(waypoints: &[Waypoint]) -> Vec<u8> {
     let mut buf = [0u8; mcp_core::MAX_PAYLOAD];
@@ -156,10 +169,7 @@ async fn a_command_sent_fire_and_forget_is_confirmed_afterwards() {
         .confirm(MAV, &Command::landing(false))
         .await
         .unwrap_err();
-    assert!(
-        matches!(&error, ConfirmError::NotTaken { report, .. } if *report == Report::Landing(LandingState::Landing)),
-        "{error:?}"
-    );
+    assert_not_taken(&error, Report::Landing(LandingState::Landing));
 }
 
 #[tokio::test]
@@ -308,11 +318,7 @@ async fn a_report_sent_before_the_command_was_taken_is_asked_past() {
     radio.receive(MAV, b"r\x02\x04").await;
     delivered(&mut radio, b"c\x02\xff").await;
     radio.receive(MAV, b"r\x02\x01").await;
-    let confirmed = tokio::time::timeout(GUARD, confirming)
-        .await
-        .unwrap()
-        .unwrap()
-        .unwrap();
+    let confirmed = outcome(confirming).await.unwrap();
     assert_eq!(confirmed.report, Report::Landing(LandingState::Landing));
 }
 
@@ -330,15 +336,8 @@ async fn a_report_that_came_is_not_lost_to_a_later_request_that_fails() {
     radio.receive(MAV, b"r\x02\x04").await;
     // Asked again: no report this time.
     delivered(&mut radio, b"c\x02\xff").await;
-    let error = tokio::time::timeout(GUARD, confirming)
-        .await
-        .unwrap()
-        .unwrap()
-        .unwrap_err();
-    assert!(
-        matches!(&error, ConfirmError::NotTaken { report, .. } if *report == Report::Landing(LandingState::Flight)),
-        "{error:?}"
-    );
+    let error = outcome(confirming).await.unwrap_err();
+    assert_not_taken(&error, Report::Landing(LandingState::Flight));
 }
 
 #[tokio::test]
@@ -360,24 +359,13 @@ async fn a_time_report_is_held_to_the_seconds_since_the_command_went() {
         delivered(&mut radio, b"c\x06\xff").await;
         radio.receive(MAV, &ahead).await;
     }
-    let error = tokio::time::timeout(GUARD, confirming)
-        .await
-        .unwrap()
-        .unwrap()
-        .unwrap_err();
-    assert!(
-        matches!(&error, ConfirmError::NotTaken { report, .. } if *report == Report::Time(set + 45)),
-        "{error:?}"
-    );
+    let error = outcome(confirming).await.unwrap_err();
+    assert_not_taken(&error, Report::Time(set + 45));
     // Asked alone, not knowing when the command went: within the window.
     let confirming = tokio::spawn(async move { sender.confirm(MAV, &time).await });
     delivered(&mut radio, b"c\x06\xff").await;
     radio.receive(MAV, &ahead).await;
-    let report = tokio::time::timeout(GUARD, confirming)
-        .await
-        .unwrap()
-        .unwrap()
-        .unwrap();
+    let report = outcome(confirming).await.unwrap();
     assert_eq!(report, Report::Time(set + 45));
 }
 
@@ -394,11 +382,7 @@ async fn a_spec_form_slave_report_cannot_say_of_another_slot() {
     radio
         .receive(MAV, b"r\x05\x00\x00\x00\x00\x00\x00\x00\x00")
         .await;
-    let error = tokio::time::timeout(GUARD, confirming)
-        .await
-        .unwrap()
-        .unwrap()
-        .unwrap_err();
+    let error = outcome(confirming).await.unwrap_err();
     assert!(
         matches!(error, ConfirmError::Unverifiable { .. }),
         "{error:?}"
