@@ -431,7 +431,8 @@ fn build_mcp(spec: &McpSpec, buf: &mut [u8; MAX_PAYLOAD]) -> usize {
         }
         .into(),
         S::ReportLanding(l) => Report::Landing(LandingState::from(*l)).into(),
-        S::ReportControllers(c) => Report::Controllers(Controller::from(*c)).into(),
+        // 0xFF is no controller (table 20): parsers refuse a report of it.
+        S::ReportControllers(c) => Report::Controllers(Controller::from((*c).min(0xFE))).into(),
         S::ReportSlave(a) => {
             Report::PositionSlaveSet(SlaveAddresses::Single(Address::from(*a))).into()
         }
