@@ -356,7 +356,7 @@ impl Hub {
     /// `tcp-listen:` link, or `wait_for_link`), clients are refused from the moment this
     /// returns, the port held on Linux, until the radio is there.
     pub async fn start(link: &Link, options: LinkOptions, listen: &str) -> Result<Hub, HubError> {
-        let (hub, _) = Self::start_inner(link, options, listen, false).await?;
+        let (hub, ()) = Self::start_then(link, options, listen, |_| ()).await?;
         Ok(hub)
     }
 
@@ -370,17 +370,23 @@ impl Hub {
         options: LinkOptions,
         listen: &str,
     ) -> Result<(Hub, crate::Subscription<crate::record::Record>), HubError> {
-        let (hub, tap) = Self::start_inner(link, options, listen, true).await?;
-        let tap = tap.unwrap_or_else(|| hub.tap_frames());
-        Ok((hub, tap))
+        Self::start_then(
+            link,
+            options,
+            listen,
+            crate::subscription::Subscribers::tap_frames,
+        )
+        .await
     }
 
-    async fn start_inner(
+    /// [`start`](Self::start), with `before` given the radio link's subscriptions
+    /// before its task starts ([`crate::connect_then`]), and what it gives.
+    async fn start_then<T>(
         link: &Link,
         options: LinkOptions,
         listen: &str,
-        tapped: bool,
-    ) -> Result<(Hub, Option<crate::Subscription<crate::record::Record>>), HubError> {
+        before: impl FnOnce(&crate::subscription::Subscribers) -> T,
+    ) -> Result<(Hub, T), HubError> {
         let mode = options.api_mode;
         // The clients' frames are read as the radio's: as long, and their partial
         // frames waiting as long.
@@ -397,16 +403,7 @@ impl Hub {
             Link::Serial { baud, .. } => *baud,
             _ => DEFAULT_RADIO_BAUD,
         } / 10;
-        let (stream, sender, tap) = match tapped {
-            true => {
-                let (stream, sender, tap) = crate::connect_tapped(link, options).await?;
-                (stream, sender, Some(tap))
-            }
-            false => {
-                let (stream, sender) = crate::connect(link, options).await?;
-                (stream, sender, None)
-            }
-        };
+        let (stream, sender, taken) = crate::connect_then(link, options, before).await?;
         let hub = Hub {
             local_addr,
             radio: sender.info().clone(),
@@ -461,7 +458,7 @@ impl Hub {
             rebind_failures: 0,
         };
         hub.tasks.spawn(serve.run(stream, listener));
-        Ok((hub, tap))
+        Ok((hub, taken))
     }
 
     /// The address clients connect to.

@@ -213,9 +213,7 @@ pub async fn connect(
     link: &Link,
     options: LinkOptions,
 ) -> Result<(PacketStream, CommandSender), ConnectError> {
-    options.check()?;
-    let connector = Connector::new(link, &options).await?;
-    let (stream, sender, _) = serve(connector, options, false).await?;
+    let (stream, sender, ()) = connect_then(link, options, |_| ()).await?;
     Ok((stream, sender))
 }
 
@@ -240,12 +238,19 @@ pub async fn connect_tapped(
     link: &Link,
     options: LinkOptions,
 ) -> Result<(PacketStream, CommandSender, Subscription<record::Record>), ConnectError> {
+    connect_then(link, options, subscription::Subscribers::tap_frames).await
+}
+
+/// [`connect`], with `before` given the link's subscriptions before its task starts
+/// (a tap then misses none of its frames), and what it gives.
+pub(crate) async fn connect_then<T>(
+    link: &Link,
+    options: LinkOptions,
+    before: impl FnOnce(&subscription::Subscribers) -> T,
+) -> Result<(PacketStream, CommandSender, T), ConnectError> {
     options.check()?;
     let connector = Connector::new(link, &options).await?;
-    let (stream, sender, tap) = serve(connector, options, true).await?;
-    // Taken, as asked.
-    let tap = tap.unwrap_or_else(|| sender.tap_frames());
-    Ok((stream, sender, tap))
+    serve(connector, options, before).await
 }
 
 /// Serves a byte stream to the radio that the program opens itself, with `open`: a
@@ -293,7 +298,7 @@ where
         Box::pin(async move { Ok(Box::new(opening.await?) as Box<dyn transport::RadioIo>) })
     });
     let connector = Connector::with_opener(name.into(), opener, &options);
-    let (stream, sender, _) = serve(connector, options, false).await?;
+    let (stream, sender, ()) = serve(connector, options, |_| ()).await?;
     Ok((stream, sender))
 }
 
@@ -340,19 +345,12 @@ pub async fn connect_io<S: transport::RadioIo>(
 }
 
 /// Opens `connector`'s link where it opens at once, and starts the task serving it;
-/// with `tap`, a subscription to its frames taken before.
-async fn serve(
+/// `before` is given its subscriptions before the task starts.
+async fn serve<T>(
     mut connector: Connector,
     options: LinkOptions,
-    tap: bool,
-) -> Result<
-    (
-        PacketStream,
-        CommandSender,
-        Option<Subscription<record::Record>>,
-    ),
-    ConnectError,
-> {
+    before: impl FnOnce(&subscription::Subscribers) -> T,
+) -> Result<(PacketStream, CommandSender, T), ConnectError> {
     let link = connector.link().clone();
     // Whether the first open was tried here already (and failed).
     let mut tried = false;
@@ -403,7 +401,7 @@ async fn serve(
         state: state.clone(),
         subscribers: subscribers.clone(),
     };
-    let tap = tap.then(|| subscribers.tap_frames());
+    let taken = before(&subscribers);
     let driver = driver::Driver::new(
         connector,
         options,
@@ -425,7 +423,7 @@ async fn serve(
         info,
         state,
     };
-    Ok((stream, sender, tap))
+    Ok((stream, sender, taken))
 }
 
 /// The [`Event`]s of a link, as a [`futures::Stream`]. Ends after [`LinkEvent::Closed`].
