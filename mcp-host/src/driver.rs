@@ -20,7 +20,8 @@ use crate::codec::{CodecItem, XBeeCodec, encode_frame};
 use crate::diagnosis::Diagnoser;
 use crate::error::{RequestError, SendError};
 use crate::event::{
-    Event, InvalidPacket, LinkEvent, LinkState, Origin, OwnedFrame, Received, is_response,
+    Event, InvalidPacket, LinkEvent, LinkState, Origin, OwnedFrame, Received, is_from_radio,
+    is_response,
 };
 use crate::ids::IdTable;
 use crate::options::LinkOptions;
@@ -821,7 +822,7 @@ impl Driver {
             t if is_response(t) => self.on_response(frame),
             t => {
                 // A request's type, which a radio takes but never sends: an echo.
-                if t & 0x80 == 0 {
+                if !is_from_radio(t) {
                     bump(&self.counters.echoed);
                 }
                 self.emit(Event::Frame(frame));

@@ -257,6 +257,13 @@ pub(crate) fn carries_frame_id(frame_type: u8) -> bool {
     answer_type(frame_type).is_some() || is_response(frame_type)
 }
 
+/// Whether a frame of `frame_type` is one a radio sends, never one it takes: Digi's
+/// API identifiers of responses and indications have the high bit set (0x88 AT Command
+/// Response, 0x90 Receive Packet, ...), those of requests not.
+pub(crate) fn is_from_radio(frame_type: u8) -> bool {
+    frame_type & 0x80 != 0
+}
+
 /// Response frame types answering a request by frame id: those [`answer_type`] gives.
 pub(crate) fn is_response(frame_type: u8) -> bool {
     use xbee_api::frame::frame_type::*;

@@ -1648,7 +1648,9 @@ impl Client {
         let deadline = since.unwrap_or_else(Instant::now) + REQUEST_WAIT;
         let mut request_deadline = None;
         if let Some(&frame_type) = data.first() {
-            if is_from_radio(frame_type) {
+            // A radio drops such a frame unanswered; the hub refuses it, so that the
+            // client's mistake is counted and said rather than lost at the radio.
+            if crate::event::is_from_radio(frame_type) {
                 self.refuse(format_args!(
                     "type 0x{frame_type:02x}{} is a frame a radio sends, not one it takes \
                      (a recording of what a radio said, played onto the hub?)",
@@ -1786,15 +1788,6 @@ fn not_sent_answer(request: &[u8]) -> Option<Vec<u8>> {
         }
         _ => None,
     }
-}
-
-/// Whether a frame of `frame_type` is one a radio sends, never one it takes: Digi's
-/// API identifiers of responses and indications have the high bit set (0x88 AT Command
-/// Response, 0x90 Receive Packet, ...), those of requests not. A radio drops such a
-/// frame unanswered; the hub refuses it, so that the client's mistake is counted and
-/// said rather than lost at the radio.
-fn is_from_radio(frame_type: u8) -> bool {
-    frame_type & 0x80 != 0
 }
 
 /// Frame data encoded whole for the wire; `None` for data no frame can hold.
