@@ -1880,14 +1880,10 @@ mod tests {
         let ipv4 = [
             0x20, 6, 10, 0, 0, 2, 0x26, 0x16, 0x26, 0x16, 0x00, 0x00, b'c',
         ];
-        for (request, id, status) in [
-            (&tx64[..], 4, 0x32),
-            (&tx16[..], 5, 0x32),
-            (&ipv4[..], 6, 0x32),
-        ] {
+        for (request, id) in [(&tx64[..], 4), (&tx16[..], 5), (&ipv4[..], 6)] {
             assert_eq!(
                 not_sent_answer(request),
-                Some(vec![0x89, id, status]),
+                Some(vec![0x89, id, 0x32]),
                 "{request:02x?}"
             );
             // Cut short of their fixed fields: no answer, as from the radio.

@@ -6,8 +6,9 @@
 //! are written into caller buffers; nothing allocates. Each answer goes back as the RF
 //! data of a Transmit Request to the coordinator, frame id 0 and transmit options 0x01,
 //! as the deployed MAV sends them (with `xbee-api`: `TransmitRequestRepr { options:
-//! transmit_options::DISABLE_RETRIES, ..TransmitRequestRepr::unicast(Address64::COORDINATOR,
-//! reply) }`, encoded or built in place); the commands come from the RF data of the Receive Packets the radio hands
+//! transmit_options::DISABLE_RETRIES,
+//! ..TransmitRequestRepr::unicast(Address64::COORDINATOR, reply) }`, encoded or built in
+//! place); the commands come from the RF data of the Receive Packets the radio hands
 //! over (`ReceivePacket::new_checked(frame.data())?.data()`). A MAV acts on commands
 //! alone: parsed with [`Command::parse`](crate::Command::parse) and given to
 //! [`Mav::handle`], they take less flash than [`parse`](crate::parse) and

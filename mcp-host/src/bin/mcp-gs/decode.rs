@@ -552,7 +552,9 @@ fn decode_stream(
             None,
         )?;
     }
-    let hint = mode_hint(mode, stats).filter(|_| other_mode_finds_more(&sample, mode));
+    // Decoded again in the other mode once at most, when frames failed.
+    let other_finds_more = stats.decode_errors() > 0 && other_mode_finds_more(&sample, mode);
+    let hint = mode_hint(mode, stats).filter(|_| other_finds_more);
     // Lines skipped make the input bad input, said first.
     let skipped = skipped.message(offset).map(|message| source.says(message));
     if offset > 0 && stats.frames == 0 {
@@ -564,7 +566,7 @@ fn decode_stream(
             "its one candidate frame is cut off (a capture that stops part way through a \
              frame?)"
                 .to_owned()
-        } else if errors > 0 && other_mode_finds_more(&sample, mode) {
+        } else if errors > 0 && other_finds_more {
             format!("if it is in API mode {other}, decode it with --api-mode {other}")
         } else if errors > 0 {
             format!(

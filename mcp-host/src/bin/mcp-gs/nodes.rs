@@ -70,7 +70,7 @@ pub(crate) async fn run(args: NodesArgs) -> Result<(), Failure> {
             },
         );
         // Answers that failed their checksum: the local radio may be in the other mode.
-        return Err(with_mode_hint(failure, &args.link, &sender.stats()));
+        return Err(with_mode_hint(failure, &args.link, &stats));
     }
     if found.left_out > 0 {
         err!(

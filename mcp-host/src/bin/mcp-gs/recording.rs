@@ -31,7 +31,7 @@ impl RecordingFile {
                 path.display()
             )));
         }
-        if std::fs::metadata(path).is_ok_and(|m| is_fifo(&m)) {
+        if is_fifo(path) {
             // A pipe (`--record >(gzip > f.gz)`, a FIFO): not opened here, as an open
             // would wait for a reader and a close end the reader's input; whether it has
             // a reader is seen when it is opened ([`create`](Self::create)).
@@ -76,7 +76,7 @@ impl RecordingFile {
     /// would wait for one, deaf to Ctrl-C).
     pub(crate) fn create(&self) -> Result<Recording, Failure> {
         let path = &self.path;
-        let file = if std::fs::metadata(path).is_ok_and(|m| is_fifo(&m)) {
+        let file = if is_fifo(path) {
             open_pipe(path)
         } else if self.force {
             File::create(path)
@@ -170,14 +170,14 @@ fn open_pipe(path: &Path) -> io::Result<File> {
     std::fs::OpenOptions::new().write(true).open(path)
 }
 
-/// Whether `metadata` is a FIFO's (a named pipe).
+/// Whether `path` is a FIFO (a named pipe).
 #[cfg(unix)]
-fn is_fifo(metadata: &std::fs::Metadata) -> bool {
-    std::os::unix::fs::FileTypeExt::is_fifo(&metadata.file_type())
+fn is_fifo(path: &Path) -> bool {
+    std::fs::metadata(path).is_ok_and(|m| std::os::unix::fs::FileTypeExt::is_fifo(&m.file_type()))
 }
 
-/// Whether `metadata` is a FIFO's: never, where there are none.
+/// Whether `path` is a FIFO: never, where there are none.
 #[cfg(not(unix))]
-fn is_fifo(_metadata: &std::fs::Metadata) -> bool {
+fn is_fifo(_path: &Path) -> bool {
     false
 }
