@@ -710,6 +710,38 @@ fn a_port_another_program_holds_is_named_as_busy() {
             && stderr.contains("stop the other (a hub, say: setup and probe need the port itself)"),
         "{stderr}"
     );
+    // A hub is not told to let a hub hold the port: whether its mode is given or asked
+    // of the radio (the port opened first for that).
+    for args in [
+        &["hub", "--link", &sim.link, "--listen", "127.0.0.1:0"][..],
+        &[
+            "hub",
+            "--link",
+            &sim.link,
+            "--listen",
+            "127.0.0.1:0",
+            "--api-mode",
+            "auto",
+        ],
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+            .args(args)
+            .output()
+            .expect("run mcp-gs");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(3), "{args:?}: {stderr}");
+        assert!(
+            stderr.contains("another program has the port open")
+                && stderr
+                    .contains("one program at a time can use a serial port: stop the other first")
+                && !stderr.contains("hold it"),
+            "{args:?}: {stderr}"
+        );
+        assert!(
+            stderr.contains("a hub that holds it already shares it"),
+            "{args:?}: {stderr}"
+        );
+    }
 }
 
 #[test]

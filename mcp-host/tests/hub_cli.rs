@@ -550,6 +550,39 @@ fn frames_a_radio_sends_replayed_onto_the_hub_are_refused_and_said() {
 }
 
 #[test]
+fn a_client_turned_away_is_said_at_once_and_counted_when_the_hub_stops() {
+    let (_sim, radio, _sim_out) = sim_on_tcp("1");
+    let (mut hub, out, err) = start_hub(&radio);
+    let (_, addr) = serving(&out);
+    // As many clients as the hub serves, none behind (the radio sends nothing unasked):
+    // the next is turned away.
+    let clients: Vec<_> = (0..mcp_host::hub::MAX_CLIENTS)
+        .map(|_| std::net::TcpStream::connect(&addr).unwrap())
+        .collect();
+    let mut late = std::net::TcpStream::connect(&addr).unwrap();
+    let mut byte = [0u8; 1];
+    late.set_read_timeout(Some(GUARD)).unwrap();
+    assert!(matches!(
+        std::io::Read::read(&mut late, &mut byte),
+        Ok(0) | Err(_)
+    ));
+    let turned = line_with(&err, "turned away");
+    assert_timed(&turned, " warning: hub: ");
+    let pid = i32::try_from(hub.0.id()).expect("pid");
+    // SAFETY: kill(2) with the pid of a child of this process and a valid signal.
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
+    assert_eq!(hub.0.wait().unwrap().code(), Some(0));
+    let stopped = line_with(&out, "stopped:");
+    assert!(stopped.contains(": 64 clients, "), "{stopped}");
+    let summary = line_with(&out, "clients: ");
+    assert_eq!(
+        summary,
+        "clients: 1 client turned away (64 connected), 0 requests waited for a frame id"
+    );
+    drop(clients);
+}
+
+#[test]
 fn a_clients_frame_that_fails_its_checksum_is_refused_and_said_with_the_hubs_mode() {
     let (_sim, radio, _sim_out) = sim_on_tcp("1");
     let (mut hub, out, err) = start_hub(&radio);

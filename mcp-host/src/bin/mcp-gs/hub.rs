@@ -13,7 +13,7 @@ use mcp_host::record::Record;
 use mcp_host::{Diagnoser, Subscription};
 
 use crate::Failure;
-use crate::link_args::{ApiModeChoice, LinkArgs, connect_failure, hint};
+use crate::link_args::{ApiModeChoice, LinkArgs, Role, connect_failure_as, hint};
 use crate::recording::{Recording, RecordingFile};
 
 /// Arguments of `hub`.
@@ -87,7 +87,7 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
         // Its clients may be anyone who reaches its port: no frame longer than a request
         // is (every frame of the radio's fits too).
         max_frame_len: mcp_host::codec::MAX_REQUEST_DATA,
-        ..args.link.options(true).await?
+        ..args.link.options(true, Role::Hub).await?
     };
     let radio = &args.link.link;
     // With a recording, the frames from the link's very first: the radio's first ones
@@ -101,7 +101,7 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
             .map(|hub| (hub, None)),
     };
     let (hub, tap) = started.map_err(|e| match e {
-        HubError::Connect(e) => connect_failure(radio, e),
+        HubError::Connect(e) => connect_failure_as(radio, e, Role::Hub),
         HubError::Listen { addr, error, .. } => listen_failure(&addr, &error),
         other => Failure::link(other.to_string()),
     })?;
@@ -192,6 +192,14 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
         stats.frames_dropped,
         crate::counted(stats.frames_refused, "frame")
     );
+    if stats.clients_turned_away > 0 || stats.requests_held > 0 {
+        out!(
+            "clients: {} turned away ({} connected), {} waited for a frame id",
+            crate::counted(stats.clients_turned_away, "client"),
+            mcp_host::hub::MAX_CLIENTS,
+            crate::counted(stats.requests_held, "request")
+        );
+    }
     let radio = stats.radio;
     if radio.events_dropped > 0 || radio.decode_errors() > 0 {
         out!(

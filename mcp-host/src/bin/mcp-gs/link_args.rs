@@ -162,7 +162,7 @@ impl LinkArgs {
         }
         let options = LinkOptions {
             wait_for_link: wait,
-            ..self.options(reconnect).await?
+            ..self.options(reconnect, Role::Client).await?
         };
         let (mut stream, sender) = mcp_host::connect(&self.link, options)
             .await
@@ -212,12 +212,17 @@ impl LinkArgs {
     }
 
     /// The link options these arguments give, the API mode asked of the radio for
-    /// `--api-mode auto`. `reconnect` as for [`open`](Self::open).
-    pub(crate) async fn options(&self, reconnect: bool) -> Result<LinkOptions, Failure> {
+    /// `--api-mode auto` (a failure to open the link said to a command in `role`).
+    /// `reconnect` as for [`open`](Self::open).
+    pub(crate) async fn options(
+        &self,
+        reconnect: bool,
+        role: Role,
+    ) -> Result<LinkOptions, Failure> {
         warn_unusual_baud(&self.link);
         let mode = match self.api_mode {
             ApiModeChoice::Fixed(mode) => mode,
-            ApiModeChoice::Auto => self.detect_mode().await?,
+            ApiModeChoice::Auto => self.detect_mode(role).await?,
         };
         Ok(self.options_in(mode, reconnect))
     }
@@ -238,7 +243,7 @@ impl LinkArgs {
 
     /// Asks the radio for its API mode ([`ask_ap`]): within 3 s, or the `--timeout`
     /// given (a slow radio, a link with latency).
-    async fn detect_mode(&self) -> Result<ApiMode, Failure> {
+    async fn detect_mode(&self, role: Role) -> Result<ApiMode, Failure> {
         let timeout = self
             .given_timeout()
             .unwrap_or(DETECT_TIMEOUT.min(DEFAULT_TIMEOUT));
@@ -253,7 +258,7 @@ impl LinkArgs {
                 DetectError::NoRadio(_) => Failure::input(
                     "--api-mode auto needs a link to a radio (serial: or tcp:); give 1 or 2",
                 ),
-                DetectError::Connect(e) => connect_failure(link, e),
+                DetectError::Connect(e) => connect_failure_as(link, e, role),
                 DetectError::NoAnswer(SendError::Timeout { .. }) => {
                     let fix = match link {
                         Link::Serial {
@@ -821,12 +826,30 @@ fn no_serial_device(link: &Link, path: &str, what: &str) -> Failure {
     ))
 }
 
-/// A failure to open `link`.
+/// What a command opening a link does with it, for what to say when another program
+/// holds its serial port.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Role {
+    /// A command that could share the radio through a hub (monitor, send, ...), or that
+    /// needs the port itself for a while (setup, probe).
+    Client,
+    /// A hub, which holds the port for others.
+    Hub,
+    /// An emulated network (sim, radio), whose nodes hold their ports.
+    Network,
+}
+
+/// A failure to open `link`, for a [`Role::Client`].
 pub(crate) fn connect_failure(link: &Link, error: ConnectError) -> Failure {
+    connect_failure_as(link, error, Role::Client)
+}
+
+/// A failure to open `link`, said to a command in `role`.
+pub(crate) fn connect_failure_as(link: &Link, error: ConnectError, role: Role) -> Failure {
     match error {
         ConnectError::Options(what) => Failure::input(format!("invalid link options: {what}")),
         ConnectError::Link(e) => {
-            let hint = link_hint(&e, link)
+            let hint = link_hint(&e, link, role)
                 .map(|h| format!(" ({h})"))
                 .unwrap_or_default();
             // Most say what they could not open, and how: once is enough.
@@ -849,8 +872,8 @@ pub(crate) fn connect_failure(link: &Link, error: ConnectError) -> Failure {
 }
 
 /// What an operator can do about a link that cannot be opened, where the cause is
-/// a common one.
-fn link_hint(error: &LinkError, link: &Link) -> Option<String> {
+/// a common one, said to a command in `role`.
+fn link_hint(error: &LinkError, link: &Link, role: Role) -> Option<String> {
     use std::io::ErrorKind as Io;
     use tokio_serial::ErrorKind as Serial;
     match error {
@@ -866,18 +889,31 @@ fn link_hint(error: &LinkError, link: &Link) -> Option<String> {
             // On Unix: the port is open for exclusive use elsewhere (TIOCEXCL or flock).
             // On Windows, serialport also reports a port that does not exist (or may
             // not be opened) as NoDevice: the hint cannot claim it is in use.
-            Serial::NoDevice => Some(format!(
-                "{}: one program at a time can use a serial port: stop the other (a hub, \
-                 say: setup and probe need the port itself); to share the radio among \
-                 monitor, send, status and the like, let `mcp-gs hub --link {link}` hold it \
-                 and give them --link tcp:127.0.0.1:9750",
-                if cfg!(windows) {
+            Serial::NoDevice => {
+                let busy = if cfg!(windows) {
                     "the port is missing (`mcp-gs ports` lists the serial ports present), or \
                      another program, perhaps another mcp-gs, has it open"
                 } else {
                     "another program has the port open, perhaps another mcp-gs"
-                }
-            )),
+                };
+                Some(match role {
+                    Role::Client => format!(
+                        "{busy}: one program at a time can use a serial port: stop the other \
+                         (a hub, say: setup and probe need the port itself); to share the \
+                         radio among monitor, send, status and the like, let `mcp-gs hub \
+                         --link {link}` hold it and give them --link tcp:127.0.0.1:9750"
+                    ),
+                    Role::Hub => format!(
+                        "{busy}: one program at a time can use a serial port: stop the other \
+                         first (a hub that holds it already shares it: give monitor, send and \
+                         the like its --link tcp:ADDR:PORT rather than start another)"
+                    ),
+                    Role::Network => format!(
+                        "{busy}: one program at a time can use a serial port: stop the other \
+                         first"
+                    ),
+                })
+            }
             _ => not_a_serial_port(&error.description, link),
         },
         LinkError::Connect { error, .. } if error.kind() == Io::ConnectionRefused => Some(
@@ -917,7 +953,7 @@ pub(crate) fn listen_hint(error: &std::io::Error) -> Option<&'static str> {
 pub(crate) fn network_failure(error: mcp_host::radio::NetworkError, link: &Link) -> Failure {
     match &error {
         mcp_host::radio::NetworkError::Link { error: cause, .. } => {
-            let hint = link_hint(cause, link)
+            let hint = link_hint(cause, link, Role::Network)
                 .map(|h| format!(" ({h})"))
                 .unwrap_or_default();
             Failure::link(format!("{error}{hint}"))
