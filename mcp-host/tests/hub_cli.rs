@@ -357,11 +357,29 @@ fn a_hub_whose_tcp_peer_says_nothing_names_a_peer_busy_with_another_connection()
     // A peer that takes the connection and never answers, as a simulator serving
     // another ground station lets the next one wait.
     let (link, _peer) = common::silent_peer(1);
-    let (_hub, _out, err) = start_hub(&link);
+    let (_hub, out, err) = start_hub(&link);
     let silent = line_with(&err, "hub: the radio did not answer AT AP");
     assert!(
         silent.contains("or the peer on the other end of the tcp: link serves another connection"),
         "{silent}"
+    );
+    // A client of the hub hears nothing either: it is pointed at the hub's lines too,
+    // not only at a peer that serves another connection.
+    let (_, addr) = serving(&out);
+    let status = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args(["status", "--link", &format!("tcp:{addr}"), "--timeout", "1"])
+        .args(["--to", "0013A20040B599B9", "landing"])
+        .env_remove("MCP_LOG")
+        .output()
+        .expect("run mcp-gs status");
+    let stderr = String::from_utf8_lossy(&status.stderr);
+    assert_eq!(status.status.code(), Some(4), "{stderr}");
+    assert!(
+        stderr.contains("nothing at all came from the radio")
+            && stderr.contains(
+                "if the peer is mcp-gs hub, its own lines say whether it hears its radio"
+            ),
+        "{stderr}"
     );
 }
 

@@ -575,11 +575,13 @@ fn timeout_hint(link: &LinkArgs, stats: &Stats) -> Option<String> {
 fn silence_hint(link: &Link, stats: &Stats, lead: &str) -> Option<String> {
     nothing_came(stats).then(|| match link {
         // A tcp-listen peer (sim, radio) that serves another connection lets this
-        // one wait for its turn, silently.
+        // one wait for its turn, silently; a hub that cannot read its radio drops what
+        // it hears, and says so in its own lines.
         Link::Tcp { .. } => format!(
             "hint: {lead} (--api-mode, or auto to ask it), and whether the peer serves \
              another connection (mcp-gs sim and radio serve one at a time and let the next \
-             wait; to share one, use mcp-gs hub)"
+             wait; to share one, use mcp-gs hub); if the peer is mcp-gs hub, its own lines \
+             say whether it hears its radio"
         ),
         _ => format!(
             "hint: {lead} (--api-mode, or auto to ask it), the baud rate (serial:PATH:BAUD), \
