@@ -1,6 +1,6 @@
 //! The `mcp-gs` binary: decode, encode, argument errors and exit codes.
 
-use std::io::Write;
+use std::io::{BufRead, BufReader, Write};
 use std::path::PathBuf;
 use std::process::{Command, Output, Stdio};
 
@@ -1119,9 +1119,8 @@ fn monitor_says_what_it_lost_for_falling_behind() {
     let (mut socket, _) = radio.accept().unwrap();
     let modem_status = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F];
     socket.write_all(&modem_status.repeat(50_000)).unwrap();
-    // Its output read from now on: it goes on, and says what it lost.
-    let stdout = child.0.stdout.take().unwrap();
-    std::thread::spawn(move || std::io::copy(&mut { stdout }, &mut std::io::sink()));
+    // Its output not read: monitor waits on it, the link reads on and drops what does
+    // not fit its queue, and monitor says so meanwhile.
     let said = loop {
         let line = errors
             .recv_timeout(std::time::Duration::from_secs(30))
@@ -1136,6 +1135,48 @@ fn monitor_says_what_it_lost_for_falling_behind() {
             && said.ends_with(", and are missing from the recording"),
         "{said}"
     );
+    // Its output read from now on: it goes on.
+    let stdout = BufReader::new(child.0.stdout.take().unwrap());
+    let shown = stdout
+        .lines()
+        .map(|line| line.unwrap())
+        .find(|line| line.contains("modem status"));
+    assert!(shown.is_some(), "monitor goes on");
+}
+
+#[cfg(unix)]
+#[test]
+fn monitor_ends_on_ctrl_c_while_its_output_is_not_read() {
+    let radio = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let link = format!("tcp:{}", radio.local_addr().unwrap());
+    let mut monitor = gs()
+        .args(["monitor", "--link", &link])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let errors = common::stderr_lines(&mut monitor);
+    let (mut socket, _) = radio.accept().unwrap();
+    let modem_status = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F];
+    socket.write_all(&modem_status.repeat(50_000)).unwrap();
+    // Stuck on its output (said as frames lost), it still takes Ctrl-C, and ends.
+    while !errors
+        .recv_timeout(common::GUARD)
+        .expect("monitor says what it lost")
+        .contains(" lost: ")
+    {}
+    let pid = i32::try_from(monitor.id()).unwrap();
+    // SAFETY: kill(2) with the pid of a child of this process and a valid signal.
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
+    let (done, ended) = std::sync::mpsc::channel();
+    let stdout = monitor.stdout.take();
+    std::thread::spawn(move || done.send(monitor.wait()));
+    let status = ended
+        .recv_timeout(common::GUARD)
+        .expect("monitor ends")
+        .unwrap();
+    assert_eq!(status.code(), Some(0));
+    drop(stdout);
 }
 
 #[test]

@@ -29,6 +29,7 @@ mod link_args;
 mod log;
 mod monitor;
 mod nodes;
+mod output;
 mod ports;
 mod probe;
 mod radio;

@@ -1,6 +1,6 @@
 //! `mcp-gs monitor`: print live packets, optionally recording them.
 
-use std::io::{self, Write};
+use std::collections::VecDeque;
 use std::path::PathBuf;
 use std::time::SystemTime;
 
@@ -11,6 +11,7 @@ use mcp_host::render;
 use mcp_host::{Diagnoser, Event, LinkEvent};
 
 use crate::link_args::{ApiModeChoice, LinkArgs, check_mode, hint};
+use crate::output::Output;
 use crate::recording::RecordingFile;
 use crate::{Failure, Format};
 
@@ -84,7 +85,18 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
         let timeout = std::time::Duration::from_secs(3);
         tokio::spawn(async move { check_mode(&sender, mode, timeout).await });
     }
-    let stdout = io::stdout();
+    // Written by a thread of its own: a reader slower than the link (a pipe, a
+    // terminal paused) holds up neither Ctrl-C nor the look at the counters, which
+    // says the events the link drops meanwhile. No event is taken while a line waits.
+    let output = Output::stdout().map_err(|e| {
+        Failure::new(
+            Failure::OTHER,
+            format!("cannot start writing standard output: {e}"),
+        )
+    })?;
+    let mut pending: VecDeque<String> = VecDeque::new();
+    let mut interrupted = false;
+    let mut output_failed = false;
     let mut seen = 0u64;
     let mut diagnoser = match args.link.api_mode {
         // From the link's first byte on: what came before this line counts too.
@@ -103,25 +115,41 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
     let mut look = tokio::time::interval(std::time::Duration::from_secs(1));
     let ended = loop {
         let event = tokio::select! {
-            event = stream.next() => event,
-            _ = &mut ctrl_c => None,
+            event = stream.next(), if pending.is_empty() => event,
+            room = output.room(), if !pending.is_empty() => match (room, pending.pop_front()) {
+                (Some(room), Some(line)) => {
+                    room.send(line);
+                    continue;
+                }
+                // Standard output failed: the thread's error ends the monitor.
+                _ => {
+                    output_failed = true;
+                    None
+                }
+            },
+            _ = &mut ctrl_c => {
+                interrupted = true;
+                None
+            }
             _ = look.tick() => {
                 lost.tell(&stream.stats(), recorder.is_some(), false);
                 let found = diagnoser.as_mut().and_then(|d| d.look(stream.stats()));
-                match (&mut quiet, found) {
+                let line = match (&mut quiet, found) {
                     // Still wrong: said with the counts as they are now.
                     (Some(shown), Some(found)) => {
                         shown.hint = hint(found, &args.link.link);
-                        shown.tell_if_due(false);
+                        shown.tell_if_due(false)
                     }
                     (Some(shown), None) => shown.tell_if_due(false),
                     // The hint once a connection; failures counted again without it.
                     (None, Some(found)) if !(hinted && args.format == Format::Json) => {
                         let said = std::mem::replace(&mut hinted, true);
                         quiet = Quiet::after(hint(found, &args.link.link), args.format, !said);
+                        None
                     }
-                    _ => {}
-                }
+                    _ => None,
+                };
+                pending.extend(line);
                 continue;
             }
         };
@@ -138,10 +166,7 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
         // afresh from here (frames of it this monitor has not read yet may be counted
         // already, and are left out).
         if let Event::Link(LinkEvent::Disconnected { .. }) = &event {
-            if let Some(shown) = &mut quiet {
-                shown.tell_if_due(true);
-            }
-            quiet = None;
+            pending.extend(quiet.take().and_then(|mut shown| shown.tell_if_due(true)));
             hinted = false;
             if let ApiModeChoice::Fixed(mode) = args.link.api_mode {
                 diagnoser = Some(Diagnoser::new(mode, stream.stats()));
@@ -161,7 +186,7 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
         }
         if let (Some(shown), Event::DecodeError(_)) = (&mut quiet, &event) {
             // Counted, until frames pass again.
-            shown.count();
+            pending.extend(shown.count());
             seen += 1;
             if args.count.is_some_and(|n| seen >= n) {
                 break Ok(());
@@ -174,6 +199,7 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
             (&mut quiet, &event)
         {
             if shown.passed() {
+                pending.extend(shown.tell_if_due(true));
                 quiet = None;
                 if let ApiModeChoice::Fixed(mode) = args.link.api_mode {
                     diagnoser = Some(Diagnoser::new(mode, stream.stats()));
@@ -194,11 +220,7 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
                 }
             }
         };
-        let mut out = stdout.lock();
-        if let Err(e) = writeln!(out, "{line}").and_then(|()| out.flush()) {
-            // Closed by its reader (piped into `head`): done; anything else is a failure.
-            return crate::output_failure(&e).map_or(Ok(()), Err);
-        }
+        pending.push_back(line);
         // Text output counts failures again without the hint once it was given; JSON
         // output shows each, and the hint once a connection.
         let looking = quiet.is_none() && !(hinted && args.format == Format::Json);
@@ -232,12 +254,37 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
             break Ok(());
         }
     };
-    // What was not shown is counted, however the monitor ends.
-    if let Some(shown) = &mut quiet {
-        shown.tell_if_due(true);
+    if output_failed {
+        return written(output.finish([]).await);
     }
+    // What was not shown is counted, however the monitor ends.
+    pending.extend(quiet.as_mut().and_then(|shown| shown.tell_if_due(true)));
+    let finished = output.finish(pending);
+    // After Ctrl-C, a reader that takes nothing more does not keep the monitor: what it
+    // did not take in time is lost with it.
+    let finished = match interrupted {
+        true => tokio::time::timeout(DRAIN_AFTER_CTRL_C, finished)
+            .await
+            .unwrap_or(Ok(())),
+        false => finished.await,
+    };
     lost.tell(&stream.stats(), recorder.is_some(), true);
-    ended
+    match finished {
+        Ok(()) => ended,
+        failed => written(failed),
+    }
+}
+
+/// How long the lines not yet written may take after Ctrl-C.
+const DRAIN_AFTER_CTRL_C: std::time::Duration = std::time::Duration::from_secs(1);
+
+/// How `monitor` ends after standard output was written: done if it could be, or if its
+/// reader closed it (piped into `head`); with a failure for anything else.
+fn written(result: std::io::Result<()>) -> Result<(), Failure> {
+    match result {
+        Ok(()) => Ok(()),
+        Err(e) => crate::output_failure(&e).map_or(Ok(()), Err),
+    }
 }
 
 /// Events the link dropped because monitor fell behind it (its output slower than the
@@ -312,29 +359,26 @@ impl Quiet {
         })
     }
 
-    /// Counts a frame that failed to decode, not shown.
-    fn count(&mut self) {
+    /// Counts a frame that failed to decode, not shown: the line that says how many
+    /// were not, if it is due.
+    fn count(&mut self) -> Option<String> {
         self.hidden += 1;
         self.good = 0;
-        self.tell_if_due(false);
+        self.tell_if_due(false)
     }
 
-    /// Counts a good frame; whether [`QUIET_UNTIL_GOOD`] came in a row, and the count
-    /// of those not shown was said.
+    /// Counts a good frame; whether [`QUIET_UNTIL_GOOD`] came in a row (the count of
+    /// those not shown is then to be said).
     fn passed(&mut self) -> bool {
         self.good += 1;
-        let done = self.good >= QUIET_UNTIL_GOOD;
-        if done {
-            self.tell_if_due(true);
-        }
-        done
+        self.good >= QUIET_UNTIL_GOOD
     }
 
-    /// Says how many frames were not shown, if any, when [`QUIET_EVERY`] has passed
-    /// since it last did (or at once with `now`, at the end).
-    fn tell_if_due(&mut self, now: bool) {
+    /// The line that says how many frames were not shown, if any, when [`QUIET_EVERY`]
+    /// has passed since it last did (or at once with `now`, at the end).
+    fn tell_if_due(&mut self, now: bool) -> Option<String> {
         if self.hidden == 0 || !(now || self.told.elapsed() >= QUIET_EVERY) {
-            return;
+            return None;
         }
         let line = format!(
             "{} error: {} failed to decode, not shown ({})",
@@ -344,7 +388,7 @@ impl Quiet {
         );
         self.hidden = 0;
         self.told = std::time::Instant::now();
-        out!("{line}");
+        Some(line)
     }
 }
 
