@@ -1237,17 +1237,16 @@ impl Serve {
 /// behind before frames are dropped for it.
 const CLIENT_SEND_BUFFER: usize = 64 * 1024;
 
-/// A client's connection quiet for this long is probed (TCP keepalive), every
-/// [`CLIENT_KEEPALIVE_INTERVAL`], until its peer answers or the system gives it up.
-const CLIENT_KEEPALIVE: Duration = Duration::from_secs(60);
-
-/// See [`CLIENT_KEEPALIVE`].
-const CLIENT_KEEPALIVE_INTERVAL: Duration = Duration::from_secs(10);
-
-/// Linux: a client's connection whose data has gone unacknowledged this long is given
-/// up (`TCP_USER_TIMEOUT`), as a quiet one is by keepalive.
-#[cfg(target_os = "linux")]
-const CLIENT_USER_TIMEOUT: Duration = Duration::from_secs(150);
+/// A client's connection quiet for a minute is probed every 10 s, and given up after 9
+/// probes unanswered (two and a half minutes in all), or once data written has gone
+/// unacknowledged as long: a client is let go later than a radio's link gives its
+/// peer up, as a laptop on a weak network may be slow to answer.
+const CLIENT_KEEPALIVE: crate::transport::KeepAlive = crate::transport::KeepAlive {
+    idle: Duration::from_secs(60),
+    interval: Duration::from_secs(10),
+    probes: 9,
+    unacknowledged: Duration::from_secs(150),
+};
 
 /// How long the hub waits to accept clients again after accepting one failed (out of
 /// file descriptors, say), serving the others meanwhile.
@@ -1353,15 +1352,9 @@ fn tune_client_socket(socket: &TcpStream) {
     let _ = socket.set_nodelay(true);
     let sock = socket2::SockRef::from(socket);
     let _ = sock.set_send_buffer_size(CLIENT_SEND_BUFFER);
-    let keepalive = socket2::TcpKeepalive::new()
-        .with_time(CLIENT_KEEPALIVE)
-        .with_interval(CLIENT_KEEPALIVE_INTERVAL);
-    let _ = sock.set_tcp_keepalive(&keepalive);
-    // Keepalive probes only go out while nothing is unacknowledged: while the radio's
-    // frames flow to a peer that is gone, the system would otherwise retransmit for
-    // a quarter of an hour before giving it up.
-    #[cfg(target_os = "linux")]
-    let _ = sock.set_tcp_user_timeout(Some(CLIENT_USER_TIMEOUT));
+    // While the radio's frames flow to a peer that is gone, the system would otherwise
+    // retransmit for a quarter of an hour before giving it up.
+    crate::transport::keep_alive(socket, &CLIENT_KEEPALIVE);
 }
 
 /// The next client of `listener`; never, without one.
@@ -1921,12 +1914,6 @@ mod tests {
         // (A system whose `net.core.wmem_max` is lower caps it.)
         let buffer = sock.send_buffer_size().unwrap();
         assert!(buffer <= 2 * CLIENT_SEND_BUFFER, "{buffer}");
-        assert!(sock.keepalive().unwrap());
-        assert_eq!(sock.tcp_keepalive_time().unwrap(), CLIENT_KEEPALIVE);
-        assert_eq!(
-            sock.tcp_keepalive_interval().unwrap(),
-            CLIENT_KEEPALIVE_INTERVAL
-        );
-        assert_eq!(sock.tcp_user_timeout().unwrap(), Some(CLIENT_USER_TIMEOUT));
+        crate::transport::assert_kept_alive(&socket, &CLIENT_KEEPALIVE);
     }
 }

@@ -925,6 +925,7 @@ impl Connector {
                     error,
                 })?;
                 let _ = stream.set_nodelay(true);
+                keep_alive(&stream, &LINK_KEEPALIVE);
                 let peer = stream.peer_addr().map(|a| a.to_string()).unwrap_or(addr);
                 Ok(Transport {
                     inner: Inner::Tcp(stream),
@@ -940,6 +941,7 @@ impl Connector {
                 }
                 let (stream, peer, early, turn) = listen.next_peer().await;
                 let _ = stream.set_nodelay(true);
+                keep_alive(&stream, &LINK_KEEPALIVE);
                 Ok(Transport {
                     inner: Inner::Accepted {
                         stream,
@@ -1049,6 +1051,70 @@ impl Connector {
     }
 }
 
+/// How a TCP connection whose peer is gone without a word (a bridge powered off, a
+/// laptop asleep, a cable pulled) is found out: probed by TCP keepalive once quiet for
+/// `idle`, every `interval`, given up after `probes` unanswered (where the system lets
+/// the number be set: Linux, macOS, the BSDs, Windows 10 and later; else its own); and,
+/// on Linux, given up as well once data written has gone unacknowledged for
+/// `unacknowledged`, as keepalive probes only go out while nothing written waits.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct KeepAlive {
+    pub(crate) idle: Duration,
+    pub(crate) interval: Duration,
+    pub(crate) probes: u32,
+    /// Linux alone takes it.
+    #[cfg_attr(not(target_os = "linux"), allow(dead_code))]
+    pub(crate) unacknowledged: Duration,
+}
+
+/// A `tcp:` or `tcp-listen:` link's connection: a peer gone is found out within about
+/// half a minute (a minute on Windows), and the link reconnects, even on a quiet
+/// network where nothing is written.
+pub(crate) const LINK_KEEPALIVE: KeepAlive = KeepAlive {
+    idle: Duration::from_secs(10),
+    interval: Duration::from_secs(5),
+    probes: 4,
+    unacknowledged: Duration::from_secs(30),
+};
+
+/// Sets `socket` to find out a peer gone as `keep` says. A setting the system refuses
+/// is left as it was.
+pub(crate) fn keep_alive(socket: &TcpStream, keep: &KeepAlive) {
+    let sock = socket2::SockRef::from(socket);
+    let keepalive = socket2::TcpKeepalive::new()
+        .with_time(keep.idle)
+        .with_interval(keep.interval);
+    let counted = keepalive.clone();
+    #[cfg(any(
+        target_os = "linux",
+        target_os = "android",
+        target_os = "macos",
+        target_os = "ios",
+        target_os = "freebsd",
+        target_os = "netbsd",
+        windows
+    ))]
+    let counted = counted.with_retries(keep.probes);
+    // A system that takes no number of probes (Windows before 10) keeps its own.
+    if sock.set_tcp_keepalive(&counted).is_err() {
+        let _ = sock.set_tcp_keepalive(&keepalive);
+    }
+    #[cfg(target_os = "linux")]
+    let _ = sock.set_tcp_user_timeout(Some(keep.unacknowledged));
+}
+
+/// Asserts that `stream` is probed when quiet, as `keep` says.
+#[cfg(all(test, any(target_os = "linux", target_os = "macos")))]
+pub(crate) fn assert_kept_alive(stream: &TcpStream, keep: &KeepAlive) {
+    let sock = socket2::SockRef::from(stream);
+    assert!(sock.keepalive().unwrap());
+    assert_eq!(sock.tcp_keepalive_time().unwrap(), keep.idle);
+    assert_eq!(sock.tcp_keepalive_interval().unwrap(), keep.interval);
+    assert_eq!(sock.tcp_keepalive_retries().unwrap(), keep.probes);
+    #[cfg(target_os = "linux")]
+    assert_eq!(sock.tcp_user_timeout().unwrap(), Some(keep.unacknowledged));
+}
+
 #[cfg(test)]
 mod tests {
     use std::sync::atomic::{AtomicBool, Ordering};
@@ -1062,6 +1128,36 @@ mod tests {
         fn wake(self: Arc<Self>) {
             self.0.store(true, Ordering::SeqCst);
         }
+    }
+
+    /// A `tcp:` link's connection and a `tcp-listen:` link's peer are probed when
+    /// quiet: a peer gone without a word (a bridge powered off) is found out, and the
+    /// link reconnects, where nothing else would tell.
+    #[cfg(any(target_os = "linux", target_os = "macos"))]
+    #[tokio::test]
+    async fn tcp_links_probe_a_quiet_peer() {
+        let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
+        let port = listener.local_addr().unwrap().port();
+        let options = LinkOptions::default();
+        let mut connector = Connector::new(&Link::tcp("127.0.0.1", port), &options)
+            .await
+            .unwrap();
+        let transport = connector.open().await.unwrap();
+        let Inner::Tcp(stream) = &transport.inner else {
+            panic!("a tcp: link gives a TCP stream")
+        };
+        assert_kept_alive(stream, &LINK_KEEPALIVE);
+
+        let mut connector = Connector::new(&Link::tcp_listen("127.0.0.1", 0), &options)
+            .await
+            .unwrap();
+        let addr = connector.local_addr().unwrap();
+        let _peer = std::net::TcpStream::connect(addr).unwrap();
+        let transport = connector.open().await.unwrap();
+        let Inner::Accepted { stream, .. } = &transport.inner else {
+            panic!("a tcp-listen: link gives its peer's stream")
+        };
+        assert_kept_alive(stream, &LINK_KEEPALIVE);
     }
 
     /// The listener reads the served peer's bytes (to see whether it hung up) after its
