@@ -95,6 +95,24 @@ impl ConfirmError {
             _ => false,
         }
     }
+
+    /// Whether the command or the report failed because the link is down or ended, as
+    /// [`SendError::is_link_down`] says: the MAV may have taken the command if it went
+    /// out before, and asking again ([`CommandSender::confirm`]) once the link is back
+    /// may tell.
+    ///
+    /// ```
+    /// use mcp_host::{ConfirmError, SendError};
+    /// assert!(ConfirmError::Send(SendError::Closed).is_link_down());
+    /// assert!(!ConfirmError::Broadcast.is_link_down());
+    /// ```
+    pub fn is_link_down(&self) -> bool {
+        match self {
+            ConfirmError::Send(e) => e.is_link_down(),
+            ConfirmError::Request(e) => e.is_link_down(),
+            _ => false,
+        }
+    }
 }
 
 impl CommandSender {

@@ -143,6 +143,7 @@ async fn a_controller_the_mav_does_not_have_is_not_taken_and_the_report_says_whi
                 "the MAV did not take the command: it reports controllers altitude"
             );
             assert!(!error.is_timeout());
+            assert!(!error.is_link_down());
             let ConfirmError::NotTaken { report, .. } = error else {
                 panic!("{error:?}")
             };
@@ -213,6 +214,22 @@ async fn a_command_that_cannot_be_confirmed_is_refused_and_not_sent() {
         }
     };
     assert!(sent.ends_with(b"c\x02\xff"), "{sent:02x?}");
+}
+
+#[tokio::test]
+async fn a_command_on_a_link_closed_fails_as_the_link_being_down() {
+    let (_sim, _stream, sender) = ground().await;
+    sender.close();
+    sender.closed().await;
+    let error = sender
+        .send_confirmed(MAV, &Command::landing(true))
+        .await
+        .unwrap_err();
+    assert!(
+        matches!(error, ConfirmError::Send(SendError::Closed)),
+        "{error:?}"
+    );
+    assert!(error.is_link_down() && !error.is_timeout(), "{error:?}");
 }
 
 #[tokio::test]
