@@ -136,7 +136,12 @@ pub enum LinkState {
     /// `serial` or `tcp` one waiting for its device
     /// ([`LinkOptions::wait_for_link`](crate::LinkOptions::wait_for_link)).
     Connecting,
-    /// The transport is up.
+    /// The transport is up. Over `tcp:`, that the peer took the connection, not that
+    /// it serves it: a peer that serves one connection at a time (`mcp-gs sim` and
+    /// `radio`, many serial-to-TCP bridges) lets the next wait its turn, saying
+    /// nothing, and carries out what it was sent meanwhile once its turn comes, even a
+    /// command whose send timed out here. Share a radio through
+    /// [`hub`](crate::hub) instead.
     Connected,
     /// The transport went away; the link is reconnecting.
     Reconnecting,
@@ -161,6 +166,8 @@ impl fmt::Display for LinkState {
 #[non_exhaustive]
 pub enum LinkEvent {
     /// The transport is up for the first time (for `tcp-listen`: the first peer arrived).
+    /// Over `tcp:`, the peer may still let the connection wait its turn: see
+    /// [`LinkState::Connected`].
     #[non_exhaustive]
     Connected {
         /// What is at the other end.

@@ -107,6 +107,40 @@
 //! # Ok(())
 //! # }
 //! ```
+//!
+//! # Without hardware
+//!
+//! [`sim::Simulator`] runs simulated MAVs behind a simulated coordinator radio, in the
+//! same program, on a link of its own: a ground station (this crate, `mcp-gs`, or
+//! another program) connects to [`sim::Simulator::ground_station_link`] as it would
+//! to a radio. The same program, in a test or a first try:
+//!
+//! ```
+//! use mcp_host::mcp_core::{Command, LandingState, Report, StatusRequest};
+//! use mcp_host::sim::{Simulator, fleet_addresses};
+//! use mcp_host::xbee_api::ApiMode;
+//! use mcp_host::{Link, LinkOptions};
+//!
+//! # #[tokio::main(flavor = "current_thread")]
+//! # async fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let fleet = fleet_addresses(1);
+//! let sim = Simulator::start(
+//!     &Link::tcp_listen("127.0.0.1", 0),
+//!     ApiMode::Unescaped,
+//!     &fleet,
+//!     Simulator::network_config(),
+//! )
+//! .await?;
+//! let link = sim.ground_station_link().expect("a tcp-listen link has one");
+//! let (_stream, sender) = mcp_host::connect(&link, LinkOptions::default()).await?;
+//! sender.send_confirmed(fleet[0], &Command::landing(true)).await?;
+//! let report = sender.request(fleet[0], StatusRequest::Landing).await?;
+//! // Landing, or down already.
+//! use LandingState::{Landing, OnGround};
+//! assert!(matches!(report, Report::Landing(Landing | OnGround)), "{report}");
+//! # Ok(())
+//! # }
+//! ```
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 

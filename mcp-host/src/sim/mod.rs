@@ -329,10 +329,10 @@ impl Simulator {
     /// [`NetworkError::Broadcast`] for the broadcast address.
     ///
     /// ```
-    /// use mcp_core::{Report, StatusRequest};
+    /// use mcp_host::mcp_core::{Report, StatusRequest};
     /// use mcp_host::sim::{Simulator, fleet_addresses};
     /// use mcp_host::{Link, LinkOptions};
-    /// use xbee_api::ApiMode;
+    /// use mcp_host::xbee_api::ApiMode;
     ///
     /// # #[tokio::main(flavor = "current_thread")]
     /// # async fn main() -> Result<(), Box<dyn std::error::Error>> {
