@@ -133,6 +133,12 @@ pub enum LinkParseError {
     /// The host or address holds white space (`tcp: 127.0.0.1:9750`).
     #[error("invalid host {0:?} (no spaces in a host name or address)")]
     InvalidHost(String),
+    /// The host holds a `:` outside brackets (`tcp:::1:9750`, `tcp:host:1:2`): which
+    /// `:` begins the port cannot be told. An IPv6 address goes in brackets.
+    #[error(
+        "invalid host {0:?}: an IPv6 address goes in brackets, as in tcp:[::1]:9750, and a host name holds no ':'"
+    )]
+    UnbracketedHost(String),
     /// The port is not an integer in 0..=65535.
     #[error("invalid port {0:?} (expected 0-65535)")]
     InvalidPort(String),
@@ -160,9 +166,14 @@ fn bare_path_hint(kind: &str) -> String {
     if lower != kind && matches!(lower.as_str(), "serial" | "tcp" | "tcp-listen" | "pty") {
         return format!("; kinds are lower case: {lower}");
     }
-    let com_port = kind
-        .strip_prefix("COM")
-        .is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()));
+    // `COM3`, `com3`, `\\.\COM10`.
+    let port = kind.strip_prefix(r"\\.\").unwrap_or(kind);
+    let com_port = port
+        .get(..3)
+        .is_some_and(|com| com.eq_ignore_ascii_case("com"))
+        && port
+            .get(3..)
+            .is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()));
     let is_path = kind.starts_with('/') || com_port;
     let is_host = kind == "localhost" || kind.parse::<std::net::IpAddr>().is_ok();
     if is_path {
@@ -363,6 +374,9 @@ fn parse_host_port(rest: &str) -> Result<(String, u16), LinkParseError> {
     if host.contains(char::is_whitespace) {
         return Err(LinkParseError::InvalidHost(host.to_owned()));
     }
+    if !rest.starts_with('[') && host.contains(':') {
+        return Err(LinkParseError::UnbracketedHost(host.to_owned()));
+    }
     if port.is_empty() {
         return Err(LinkParseError::MissingPort(rest.to_owned()));
     }
@@ -479,6 +493,9 @@ mod tests {
             ("tcp:[::1:9750", MissingPort("[::1:9750".into())),
             ("tcp-listen:[::]", MissingPort("[::]".into())),
             ("tcp:host:65536", InvalidPort("65536".into())),
+            ("tcp:host:1:2", UnbracketedHost("host:1".into())),
+            ("tcp:::1:9750", UnbracketedHost("::1".into())),
+            ("tcp-listen:::9750", UnbracketedHost(":".into())),
             ("tcp:127.0.0.1:0", PortZero("127.0.0.1:0".into())),
             ("tcp:[::1]:00", PortZero("[::1]:00".into())),
             ("tcp-listen:host:http", InvalidPort("http".into())),
@@ -504,6 +521,8 @@ mod tests {
         for (text, hint) in [
             ("/dev/ttyUSB0", "serial:/dev/ttyUSB0"),
             ("COM3", "serial:COM3"),
+            ("com3", "serial:com3"),
+            (r"\\.\COM10", r"serial:\\.\COM10"),
         ] {
             let message = text.parse::<Link>().unwrap_err().to_string();
             assert!(message.contains(&format!("write {hint}")), "{message}");

@@ -872,8 +872,14 @@ impl Connector {
                     baud: *baud,
                     error,
                 };
+                // The driver adds the device namespace itself, and would double it when
+                // it reopens the port (`\\.\\\.\COM10`).
+                #[cfg(windows)]
+                let name = without_device_namespace(path);
+                #[cfg(not(windows))]
+                let name = path.as_str();
                 #[cfg_attr(not(target_os = "linux"), allow(unused_mut))]
-                let mut stream = tokio_serial::new(path.as_str(), *baud)
+                let mut stream = tokio_serial::new(name, *baud)
                     .data_bits(tokio_serial::DataBits::Eight)
                     .parity(tokio_serial::Parity::None)
                     .stop_bits(tokio_serial::StopBits::One)
@@ -1103,6 +1109,13 @@ pub(crate) fn keep_alive(socket: &TcpStream, keep: &KeepAlive) {
     let _ = sock.set_tcp_user_timeout(Some(keep.unacknowledged));
 }
 
+/// A Windows serial port's name without the device namespace it may be written with:
+/// `COM10` for `\\.\COM10`.
+#[cfg_attr(not(windows), allow(dead_code))]
+fn without_device_namespace(path: &str) -> &str {
+    path.strip_prefix(r"\\.\").unwrap_or(path)
+}
+
 /// Asserts that `stream` is probed when quiet, as `keep` says.
 #[cfg(all(test, any(target_os = "linux", target_os = "macos")))]
 pub(crate) fn assert_kept_alive(stream: &TcpStream, keep: &KeepAlive) {
@@ -1128,6 +1141,13 @@ mod tests {
         fn wake(self: Arc<Self>) {
             self.0.store(true, Ordering::SeqCst);
         }
+    }
+
+    #[test]
+    fn a_windows_port_is_opened_by_its_name_without_the_device_namespace() {
+        assert_eq!(without_device_namespace(r"\\.\COM10"), "COM10");
+        assert_eq!(without_device_namespace("COM3"), "COM3");
+        assert_eq!(without_device_namespace("/dev/ttyUSB0"), "/dev/ttyUSB0");
     }
 
     /// A `tcp:` link's connection and a `tcp-listen:` link's peer are probed when
