@@ -4,8 +4,37 @@ use std::process::Command;
 
 #[test]
 fn demo_runs_for_two_seconds_and_exits_0() {
+    let stdout = demo_runs(&[]);
+    // On Unix, over a pseudo-terminal, as a radio on a serial port.
+    if cfg!(unix) {
+        assert!(
+            stdout.contains("ground station <-> pseudo-terminal /dev/"),
+            "{stdout}"
+        );
+        assert!(stdout.contains("`mcp-gs sim --link pty`"), "{stdout}");
+    }
+}
+
+/// Where there is no pseudo-terminal (Windows), the demo runs over TCP.
+#[test]
+fn demo_runs_over_tcp_too() {
+    let stdout = demo_runs(&["--over", "tcp"]);
+    assert!(
+        stdout.contains("ground station <-> TCP tcp:127.0.0.1:"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("`mcp-gs sim --link tcp-listen:127.0.0.1:9750`"),
+        "{stdout}"
+    );
+}
+
+/// Runs the demo for two seconds with `more` arguments: its output, checked for every
+/// command delivered and every request answered.
+fn demo_runs(more: &[&str]) -> String {
     let output = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
         .args(["demo", "--duration", "2"])
+        .args(more)
         .output()
         .expect("run mcp-gs");
     let stdout = String::from_utf8_lossy(&output.stdout);
@@ -31,6 +60,7 @@ fn demo_runs_for_two_seconds_and_exits_0() {
     assert!(!stdout.contains("NOT delivered"), "{stdout}");
     answers_print_under_their_requests_heading(&stdout);
     dated_before_the_first_time_of_day(&stdout);
+    stdout.into_owned()
 }
 
 /// The lines carry the time of day: a line with the UTC date comes before the first,

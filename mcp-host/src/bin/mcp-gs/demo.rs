@@ -34,6 +34,29 @@ pub(crate) struct DemoArgs {
     /// Show every Nth telemetry packet (they arrive at 20 Hz); at least 1.
     #[arg(long, default_value = "10", value_name = "N", value_parser = parse_every)]
     telemetry_every: NonZeroU64,
+    /// How the ground station reaches the simulated coordinator radio: a
+    /// pseudo-terminal, as a radio on a serial port is reached (Unix), or TCP on
+    /// 127.0.0.1 (a free port). Default: pty on Unix, tcp elsewhere.
+    #[arg(long, value_enum, default_value_t = Over::default())]
+    over: Over,
+}
+
+/// [`DemoArgs::over`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum Over {
+    /// A pseudo-terminal.
+    Pty,
+    /// TCP.
+    Tcp,
+}
+
+impl Default for Over {
+    fn default() -> Self {
+        match cfg!(unix) {
+            true => Over::Pty,
+            false => Over::Tcp,
+        }
+    }
 }
 
 fn parse_every(s: &str) -> Result<NonZeroU64, String> {
@@ -251,24 +274,14 @@ fn heading(text: &str) {
     out!("\n== {text}");
 }
 
-/// Runs `demo`.
-pub(crate) async fn run(args: DemoArgs) -> Result<(), Failure> {
-    let started = Instant::now();
-    let deadline = (!args.duration.is_zero()).then(|| started + args.duration);
-    // Set when the time is up, or at Ctrl-C (which then no longer ends the process
-    // at once: the demo stops where it is and prints the summary).
-    let mut stop = stop_signal(deadline, crate::interrupt::ctrl_c());
-
-    out!("MCP demo: a ground station talking to a simulated MAV. No hardware needed.");
-    // The ground station's end: a pseudo-terminal, as if its XBee were on a serial port.
-    let options = LinkOptions {
-        api_mode: ApiMode::Unescaped,
-        send_timeout: Duration::from_secs(5),
-        ..LinkOptions::default()
-    };
+/// The simulator and the ground station's link to it over a pseudo-terminal, as if
+/// its XBee were on a serial port; and what is between them, said.
+async fn over_pty(
+    options: LinkOptions,
+) -> Result<(Simulator, PacketStream, CommandSender, String), Failure> {
     let (stream, sender) = mcp_host::connect(&Link::Pty, options)
         .await
-        .map_err(|e| Failure::link(e.to_string()))?;
+        .map_err(|e| Failure::link(format!("{e} (`--over tcp` runs the demo over TCP)")))?;
     let path = stream
         .info()
         .pty_path
@@ -287,9 +300,53 @@ pub(crate) async fn run(args: DemoArgs) -> Result<(), Failure> {
     )
     .await
     .map_err(|e| Failure::link(e.to_string()))?;
+    let between = format!("pseudo-terminal {}", path.display());
+    Ok((sim, stream, sender, between))
+}
+
+/// The simulator, listening on a free TCP port of 127.0.0.1, and the ground station's
+/// link to it; and what is between them, said.
+async fn over_tcp(
+    options: LinkOptions,
+) -> Result<(Simulator, PacketStream, CommandSender, String), Failure> {
+    let sim = Simulator::start(
+        &Link::tcp_listen("127.0.0.1", 0),
+        ApiMode::Unescaped,
+        &[MAV],
+        Simulator::network_config(),
+    )
+    .await
+    .map_err(|e| Failure::link(e.to_string()))?;
+    let link = sim
+        .ground_station_link()
+        .ok_or_else(|| Failure::link("the simulator's TCP port is not known"))?;
+    let (stream, sender) = mcp_host::connect(&link, options)
+        .await
+        .map_err(|e| Failure::link(e.to_string()))?;
+    let between = format!("TCP {link}");
+    Ok((sim, stream, sender, between))
+}
+
+/// Runs `demo`.
+pub(crate) async fn run(args: DemoArgs) -> Result<(), Failure> {
+    let started = Instant::now();
+    let deadline = (!args.duration.is_zero()).then(|| started + args.duration);
+    // Set when the time is up, or at Ctrl-C (which then no longer ends the process
+    // at once: the demo stops where it is and prints the summary).
+    let mut stop = stop_signal(deadline, crate::interrupt::ctrl_c());
+
+    out!("MCP demo: a ground station talking to a simulated MAV. No hardware needed.");
+    let options = LinkOptions {
+        api_mode: ApiMode::Unescaped,
+        send_timeout: Duration::from_secs(5),
+        ..LinkOptions::default()
+    };
+    let (sim, stream, sender, between) = match args.over {
+        Over::Pty => over_pty(options).await?,
+        Over::Tcp => over_tcp(options).await?,
+    };
     out!(
-        "  ground station <-> pseudo-terminal {} <-> virtual XBee coordinator <-> radio <-> MAV {MAV} (XBee API mode 1)",
-        path.display()
+        "  ground station <-> {between} <-> virtual XBee coordinator <-> radio <-> MAV {MAV} (XBee API mode 1)"
     );
     out!(
         "  Lines: time (UTC), MAV address, what happened. `->` is a command sent, `<-` a report received."
@@ -366,9 +423,15 @@ pub(crate) async fn run(args: DemoArgs) -> Result<(), Failure> {
         seen.other,
         seen.decode_errors
     );
-    out!(
-        "  Next: `mcp-gs sim --link pty` runs the simulated MAV alone for your own ground station."
-    );
+    match args.over {
+        Over::Pty => out!(
+            "  Next: `mcp-gs sim --link pty` runs the simulated MAV alone for your own ground station."
+        ),
+        Over::Tcp => out!(
+            "  Next: `mcp-gs sim --link tcp-listen:127.0.0.1:9750` runs the simulated MAV alone for \
+             your own ground station, on --link tcp:127.0.0.1:9750."
+        ),
+    }
     match script.failures.into_iter().next() {
         Some(failure) => Err(failure),
         None => Ok(()),
