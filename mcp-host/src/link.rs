@@ -21,7 +21,8 @@ pub const DEFAULT_BAUD: u32 = 115_200;
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
 #[non_exhaustive]
 pub enum FlowControl {
-    /// None: the CTS line is ignored and RTS left asserted.
+    /// None: the CTS line is ignored and RTS left asserted (raised on opening, with DTR,
+    /// on Windows, which opens a port with both off).
     #[default]
     None,
     /// Hardware flow control on RTS/CTS (`serial:PATH:BAUD:rtscts`): nothing is written

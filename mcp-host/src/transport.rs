@@ -878,7 +878,7 @@ impl Connector {
                 let name = without_device_namespace(path);
                 #[cfg(not(windows))]
                 let name = path.as_str();
-                #[cfg_attr(not(target_os = "linux"), allow(unused_mut))]
+                #[cfg_attr(not(any(target_os = "linux", windows)), allow(unused_mut))]
                 let mut stream = tokio_serial::new(name, *baud)
                     .data_bits(tokio_serial::DataBits::Eight)
                     .parity(tokio_serial::Parity::None)
@@ -898,6 +898,18 @@ impl Connector {
                 #[cfg(target_os = "linux")]
                 if is_pty_far_end(Path::new(path)) {
                     stream.set_exclusive(false).map_err(serial_error)?;
+                }
+                // Windows opens a port with DTR and RTS off, where Unix raises both: a
+                // radio that waits for RTS before it sends (D6=1) would say nothing, and
+                // one whose sleep request is wired to DTR would sleep. Raised as on Unix
+                // (RTS only without flow control, which drives it otherwise).
+                #[cfg(windows)]
+                {
+                    use tokio_serial::SerialPort;
+                    let _ = stream.write_data_terminal_ready(true);
+                    if *flow_control == crate::link::FlowControl::None {
+                        let _ = stream.write_request_to_send(true);
+                    }
                 }
                 Ok(Transport {
                     inner: Inner::Serial(stream),

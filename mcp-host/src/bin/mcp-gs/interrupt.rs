@@ -6,8 +6,10 @@ use std::future::Future;
 use futures::FutureExt;
 
 /// Completes at Ctrl-C (SIGINT) and, on Unix, at SIGTERM (`kill`, `timeout`, systemd
-/// stopping a service) or SIGHUP (the terminal closed), which from this call on no longer
-/// end the process: the command stops as cleanly as at Ctrl-C.
+/// stopping a service) or SIGHUP (the terminal closed), on Windows at Ctrl-Break, the
+/// console closed or the system shutting down, which from this call on no longer end
+/// the process: the command stops as cleanly as at Ctrl-C (Windows allows a few
+/// seconds for it after the console is closed).
 ///
 /// Tokio's `ctrl_c` only starts listening when it is first polled, so a command that
 /// printed "Ctrl-C stops" before polling it could still be killed by a Ctrl-C pressed
@@ -38,8 +40,8 @@ pub(crate) fn ctrl_c() -> impl Future<Output = Interrupt> + Send + 'static {
 
 /// What stopped a command.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-// Only Ctrl-C is listened to where there are no Unix signals.
-#[cfg_attr(not(unix), allow(dead_code))]
+// Each system has signals of its own.
+#[allow(dead_code)]
 pub(crate) enum Interrupt {
     /// Ctrl-C (SIGINT).
     CtrlC,
@@ -47,15 +49,24 @@ pub(crate) enum Interrupt {
     Terminate,
     /// SIGHUP.
     HangUp,
+    /// Windows: Ctrl-Break.
+    CtrlBreak,
+    /// Windows: the console window closed.
+    ConsoleClosed,
+    /// Windows: the system shutting down.
+    Shutdown,
 }
 
-/// `Ctrl-C`, `SIGTERM`, `SIGHUP`.
+/// `Ctrl-C`, `SIGTERM`, `SIGHUP`, `Ctrl-Break`, ...
 impl std::fmt::Display for Interrupt {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(match self {
             Self::CtrlC => "Ctrl-C",
             Self::Terminate => "SIGTERM",
             Self::HangUp => "SIGHUP",
+            Self::CtrlBreak => "Ctrl-Break",
+            Self::ConsoleClosed => "closing the console",
+            Self::Shutdown => "the system shutting down",
         })
     }
 }
@@ -82,8 +93,44 @@ fn other_signals() -> impl Future<Output = Interrupt> + Send + 'static {
     }
 }
 
+/// Ctrl-Break, the console closed, or the system shutting down, listened to from this
+/// call on.
+#[cfg(windows)]
+fn other_signals() -> impl Future<Output = Interrupt> + Send + 'static {
+    use tokio::signal::windows::{ctrl_break, ctrl_close, ctrl_shutdown};
+    let mut brk = ctrl_break().ok();
+    let mut close = ctrl_close().ok();
+    let mut shutdown = ctrl_shutdown().ok();
+    async move {
+        // A handler that could not be installed: never.
+        let brk = async {
+            match &mut brk {
+                Some(s) => s.recv().await,
+                None => std::future::pending().await,
+            }
+        };
+        let close = async {
+            match &mut close {
+                Some(s) => s.recv().await,
+                None => std::future::pending().await,
+            }
+        };
+        let shutdown = async {
+            match &mut shutdown {
+                Some(s) => s.recv().await,
+                None => std::future::pending().await,
+            }
+        };
+        tokio::select! {
+            _ = brk => Interrupt::CtrlBreak,
+            _ = close => Interrupt::ConsoleClosed,
+            _ = shutdown => Interrupt::Shutdown,
+        }
+    }
+}
+
 /// No other signal to listen to.
-#[cfg(not(unix))]
+#[cfg(not(any(unix, windows)))]
 fn other_signals() -> impl Future<Output = Interrupt> + Send + 'static {
     std::future::pending()
 }
