@@ -3,7 +3,7 @@
 use std::time::Duration;
 
 use bytes::Bytes;
-use mcp_core::{Command, CommandType, Confirmation, Report, StatusRequest};
+use mcp_core::{Command, CommandType, Confirmation, Report, StatusRequest, Waypoint, Waypoints};
 use tokio::time::Instant;
 use xbee_api::Address64;
 
@@ -180,6 +180,32 @@ impl CommandSender {
             .ask_until_confirmed(to, command, request, timeout, Some(sent))
             .await?;
         Ok(Confirmed { delivery, report })
+    }
+
+    /// [`send_confirmed`](Self::send_confirmed) of a trajectory set command of
+    /// `waypoints`, as [`send_trajectory`](Self::send_trajectory) sends: confirmed by
+    /// the MAV's trajectory report listing the same waypoints. More than 15 do not fit
+    /// a payload: [`ConfirmError::Send`] with [`SendError::TooLarge`], nothing sent.
+    ///
+    /// ```no_run
+    /// # async fn run(sender: mcp_host::CommandSender) -> Result<(), Box<dyn std::error::Error>> {
+    /// use mcp_host::mcp_core::Waypoint;
+    ///
+    /// let mav = "0013A20040B599B9".parse()?;
+    /// let waypoint = Waypoint { time: 1_700_000_000, elevator: 0.5, aileron: 0.0, altitude: 1.2 };
+    /// let confirmed = sender.send_trajectory_confirmed(mav, &[waypoint]).await?;
+    /// println!("the MAV reports {}", confirmed.report);
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub async fn send_trajectory_confirmed(
+        &self,
+        to: Address64,
+        waypoints: &[Waypoint],
+    ) -> Result<Confirmed, ConfirmError> {
+        let bytes: Vec<u8> = waypoints.iter().flat_map(Waypoint::to_bytes).collect();
+        let command = Command::TrajectorySet(Waypoints::new_unchecked(bytes));
+        self.send_confirmed(to, &command).await
     }
 
     /// Asks the MAV at `to` whether it took `command`, sent before (by

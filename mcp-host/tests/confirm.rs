@@ -217,6 +217,46 @@ async fn a_command_that_cannot_be_confirmed_is_refused_and_not_sent() {
 }
 
 #[tokio::test]
+async fn a_trajectory_is_sent_and_confirmed_from_its_waypoints() {
+    let (_sim, _stream, sender) = ground().await;
+    let waypoints: Vec<Waypoint> = (0..3)
+        .map(|i| Waypoint {
+            time: 1_700_000_000 + i,
+            elevator: 0.25 * i as f32,
+            aileron: -0.5,
+            altitude: 1.0 + i as f32,
+        })
+        .collect();
+    let confirmed = sender
+        .send_trajectory_confirmed(MAV, &waypoints)
+        .await
+        .unwrap();
+    let Report::TrajectorySet(reported) = &confirmed.report else {
+        panic!("{}", confirmed.report)
+    };
+    assert_eq!(reported.iter().collect::<Vec<_>>(), waypoints);
+    // An empty one clears the trajectory, and is confirmed so.
+    let cleared = sender.send_trajectory_confirmed(MAV, &[]).await.unwrap();
+    assert!(
+        matches!(&cleared.report, Report::TrajectorySet(w) if w.is_empty()),
+        "{}",
+        cleared.report
+    );
+    // 16 do not fit a payload: refused, nothing sent.
+    let error = sender
+        .send_trajectory_confirmed(MAV, &[waypoints[0]; 16])
+        .await
+        .unwrap_err();
+    assert!(
+        matches!(
+            error,
+            ConfirmError::Send(SendError::TooLarge { len, .. }) if len == Waypoint::packet_len(16)
+        ),
+        "{error:?}"
+    );
+}
+
+#[tokio::test]
 async fn a_command_on_a_link_closed_fails_as_the_link_being_down() {
     let (_sim, _stream, sender) = ground().await;
     sender.close();
