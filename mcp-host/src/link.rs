@@ -238,11 +238,28 @@ fn option_message(word: &str) -> String {
         format!(
             "software flow control ({word:?}) is not offered: XBee radios have hardware flow control alone (write :rtscts)"
         )
+    } else if is_frame_format(word) {
+        format!(
+            "the frame format ({word:?}) is no option: XBee radios use 8N1, which the link always does (leave it out, as in serial:/dev/ttyUSB0:115200)"
+        )
     } else {
         format!(
             "unknown option {word:?} after the serial port's path (expected :BAUD, :rtscts or both, as in serial:/dev/ttyUSB0:115200:rtscts)"
         )
     }
+}
+
+/// Whether the last `:` part of a serial link is a frame format (`8N1`, `7e1`): data
+/// bits, parity and stop bits, as other programs take them.
+fn is_frame_format(word: &str) -> bool {
+    matches!(
+        word.trim().as_bytes(),
+        [
+            b'5'..=b'8',
+            b'N' | b'E' | b'O' | b'M' | b'S' | b'n' | b'e' | b'o' | b'm' | b's',
+            b'1' | b'2'
+        ]
+    )
 }
 
 /// Whether the last `:` part of a serial link is meant as an option: a word of letters
@@ -329,7 +346,7 @@ fn parse_serial(rest: &str) -> Result<Link, LinkParseError> {
                 baud = Some(value);
             }
             // A word no device's name ends in: an option mistyped, or given twice.
-            _ if is_option_word(part) => {
+            _ if is_option_word(part) || is_frame_format(part) => {
                 return Err(LinkParseError::UnknownSerialOption(part.to_owned()));
             }
             // A baud rate mistyped (`115k`, `9600 `) rather than part of the path: a
@@ -610,6 +627,9 @@ mod tests {
             ("serial:/dev/ttyUSB0:rtscts:rtscts", "rtscts"),
             ("serial:/dev/ttyUSB0:rtscts:none:9600", "rtscts"),
             ("serial:/dev/ttyUSB0:rtscts:9600:none", "rtscts"),
+            ("serial:/dev/ttyUSB0:115200:8N1", "8N1"),
+            ("serial:COM3:8n1", "8n1"),
+            ("serial:/dev/ttyUSB0:9600:7E2", "7E2"),
         ] {
             assert_eq!(
                 text.parse::<Link>(),
@@ -633,6 +653,16 @@ mod tests {
             message.contains("XBee radios have hardware flow control alone"),
             "{message}"
         );
+        let message = "serial:/dev/ttyUSB0:115200:8N1"
+            .parse::<Link>()
+            .unwrap_err()
+            .to_string();
+        assert!(
+            message.contains("the frame format (\"8N1\") is no option: XBee radios use 8N1"),
+            "{message}"
+        );
+        // A device whose name ends so is still taken whole, after a rate.
+        assert!("serial:/dev/ttyS8N1".parse::<Link>().is_ok());
     }
 
     #[test]
