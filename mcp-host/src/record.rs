@@ -45,7 +45,7 @@
 //! assert_eq!(first.time, time);
 //! assert_eq!(first.direction, Direction::Received);
 //! assert_eq!(first.frame, [0x8A, 0x06]);
-//! // Or as an iterator of `io::Result<Record>`.
+//! // Or as an iterator of `Result<Record, RecordError>`.
 //! let rest: Vec<_> = records.collect::<Result<_, _>>()?;
 //! assert_eq!(rest.len(), 1);
 //! assert_eq!(rest[0].direction, Direction::Sent);
@@ -204,6 +204,112 @@ pub fn is_recording(bytes: &[u8]) -> bool {
     bytes.starts_with(MAGIC)
 }
 
+/// Why a recording could not be read: its input failed ([`RecordError::Io`]), or its
+/// bytes are not a recording this program reads, or are damaged or cut off at a record
+/// ([`RecordError::offset`] says where). Converts into an [`io::Error`] (of kind
+/// `InvalidData` but for [`RecordError::Io`]) where a program handles those.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum RecordError {
+    /// Reading the input failed.
+    #[error(transparent)]
+    Io(#[from] io::Error),
+    /// The input is shorter than a recording's header.
+    #[error("not a recording: shorter than its header")]
+    TooShort,
+    /// The input does not start with `MCPREC`.
+    #[error("not a recording: no MCPREC header")]
+    NoHeader,
+    /// The recording's format version is not the one this program reads ([`VERSION`]).
+    #[error(
+        "recording format version {version} is not supported (this program reads version {VERSION})"
+    )]
+    #[non_exhaustive]
+    UnsupportedVersion {
+        /// The version in its header.
+        version: u16,
+    },
+    /// The input ends part way through a record's 11-byte head (time, direction,
+    /// length).
+    #[error(
+        "recording cut off part way through the header of the record at offset {offset}: \
+         {got} of its 11 bytes are there"
+    )]
+    #[non_exhaustive]
+    CutOffHead {
+        /// Where the record starts in the input.
+        offset: u64,
+        /// The bytes of its head there are.
+        got: usize,
+    },
+    /// The input ends part way through a record's frame.
+    #[error(
+        "recording cut off part way through the record at offset {offset}: {got} of its \
+         {len} frame bytes are there"
+    )]
+    #[non_exhaustive]
+    CutOffFrame {
+        /// Where the record starts in the input.
+        offset: u64,
+        /// The frame bytes there are.
+        got: usize,
+        /// The frame's length, as the record says.
+        len: usize,
+    },
+    /// A record's direction byte is neither 0 (received) nor 1 (sent).
+    #[error("record at offset {offset}: direction byte {byte} is neither 0 nor 1")]
+    #[non_exhaustive]
+    Direction {
+        /// Where the record starts in the input.
+        offset: u64,
+        /// The byte.
+        byte: u8,
+    },
+    /// A record's frame length is 0.
+    #[error("record at offset {offset}: empty frame")]
+    #[non_exhaustive]
+    EmptyFrame {
+        /// Where the record starts in the input.
+        offset: u64,
+    },
+    /// A record's time is past the latest this system's clock can hold.
+    #[error(
+        "record at offset {offset}: its time ({micros} microseconds since 1970) is past \
+         the latest this system can hold"
+    )]
+    #[non_exhaustive]
+    TimeOutOfRange {
+        /// Where the record starts in the input.
+        offset: u64,
+        /// The time, as the record holds it.
+        micros: u64,
+    },
+}
+
+impl RecordError {
+    /// Where the damaged or cut-off record starts in the input, for an error of one.
+    pub fn offset(&self) -> Option<u64> {
+        match *self {
+            RecordError::CutOffHead { offset, .. }
+            | RecordError::CutOffFrame { offset, .. }
+            | RecordError::Direction { offset, .. }
+            | RecordError::EmptyFrame { offset }
+            | RecordError::TimeOutOfRange { offset, .. } => Some(offset),
+            _ => None,
+        }
+    }
+}
+
+/// [`RecordError::Io`] as the error it holds; any other as `InvalidData`.
+impl From<RecordError> for io::Error {
+    fn from(error: RecordError) -> io::Error {
+        match error {
+            RecordError::Io(error) => error,
+            other => io::Error::new(io::ErrorKind::InvalidData, other),
+        }
+    }
+}
+
 /// Reads a recording record by record.
 #[derive(Debug)]
 pub struct RecordReader<R: Read> {
@@ -215,20 +321,18 @@ pub struct RecordReader<R: Read> {
 
 impl<R: Read> RecordReader<R> {
     /// Reads and checks the header.
-    pub fn new(mut input: R) -> io::Result<Self> {
+    pub fn new(mut input: R) -> Result<Self, RecordError> {
         let mut header = [0u8; HEADER_LEN];
         input.read_exact(&mut header).map_err(|e| match e.kind() {
-            io::ErrorKind::UnexpectedEof => invalid("not a recording: shorter than its header"),
-            _ => e,
+            io::ErrorKind::UnexpectedEof => RecordError::TooShort,
+            _ => RecordError::Io(e),
         })?;
         if &header[..6] != MAGIC {
-            return Err(invalid("not a recording: no MCPREC header"));
+            return Err(RecordError::NoHeader);
         }
         let version = u16::from_le_bytes([header[6], header[7]]);
         if version != VERSION {
-            return Err(invalid(&format!(
-                "recording format version {version} is not supported (this program reads version {VERSION})"
-            )));
+            return Err(RecordError::UnsupportedVersion { version });
         }
         Ok(Self {
             input,
@@ -244,7 +348,7 @@ impl<R: Read> RecordReader<R> {
 
     /// The next record; `None` at the end of the file, and after an error (a damaged
     /// or truncated record: what follows it is not read).
-    pub fn next_record(&mut self) -> io::Result<Option<Record>> {
+    pub fn next_record(&mut self) -> Result<Option<Record>, RecordError> {
         if self.failed {
             return Ok(None);
         }
@@ -253,7 +357,7 @@ impl<R: Read> RecordReader<R> {
         record
     }
 
-    fn read_record(&mut self) -> io::Result<Option<Record>> {
+    fn read_record(&mut self) -> Result<Option<Record>, RecordError> {
         let mut head = [0u8; 11];
         let mut got = read_full(&mut self.input, &mut head)?;
         // Another recording's header, joined on: passed over.
@@ -266,51 +370,29 @@ impl<R: Read> RecordReader<R> {
         if got == 0 {
             return Ok(None);
         }
+        let offset = self.offset;
         if got < head.len() {
-            return Err(invalid(&format!(
-                "recording cut off part way through the header of the record at offset {}: \
-                 {got} of its {} bytes are there",
-                self.offset,
-                head.len()
-            )));
+            return Err(RecordError::CutOffHead { offset, got });
         }
         let micros = u64::from_le_bytes(head[..8].try_into().expect("8 bytes"));
         let direction = match head[8] {
             0 => Direction::Received,
             1 => Direction::Sent,
-            other => {
-                return Err(invalid(&format!(
-                    "record at offset {}: direction byte {other} is neither 0 nor 1",
-                    self.offset
-                )));
-            }
+            byte => return Err(RecordError::Direction { offset, byte }),
         };
         let len = usize::from(u16::from_le_bytes([head[9], head[10]]));
         if len == 0 {
-            return Err(invalid(&format!(
-                "record at offset {}: empty frame",
-                self.offset
-            )));
+            return Err(RecordError::EmptyFrame { offset });
         }
         let mut frame = vec![0u8; len];
         let got = read_full(&mut self.input, &mut frame)?;
         if got < len {
-            return Err(invalid(&format!(
-                "recording cut off part way through the record at offset {}: {got} of its \
-                 {len} frame bytes are there",
-                self.offset
-            )));
+            return Err(RecordError::CutOffFrame { offset, got, len });
         }
         // Every time a record holds is a `SystemTime` on Unix; Windows' ends in 30828.
         let time = UNIX_EPOCH
             .checked_add(Duration::from_micros(micros))
-            .ok_or_else(|| {
-                invalid(&format!(
-                    "record at offset {}: its time ({micros} microseconds since 1970) is \
-                     past the latest this system can hold",
-                    self.offset
-                ))
-            })?;
+            .ok_or(RecordError::TimeOutOfRange { offset, micros })?;
         self.offset += (head.len() + len) as u64;
         Ok(Some(Record {
             time,
@@ -321,14 +403,10 @@ impl<R: Read> RecordReader<R> {
 }
 
 impl<R: Read> Iterator for RecordReader<R> {
-    type Item = io::Result<Record>;
+    type Item = Result<Record, RecordError>;
     fn next(&mut self) -> Option<Self::Item> {
         self.next_record().transpose()
     }
-}
-
-fn invalid(message: &str) -> io::Error {
-    io::Error::new(io::ErrorKind::InvalidData, message.to_string())
 }
 
 /// Reads until `buf` is full or the input ends; returns the bytes read.
@@ -425,7 +503,78 @@ mod tests {
         let mut r = RecordReader::new(&bytes[..]).unwrap();
         assert!(r.next_record().unwrap().is_some());
         let err = r.next_record().unwrap_err();
-        assert!(err.to_string().contains("cut off"), "{err}");
+        assert!(
+            matches!(err, RecordError::CutOffFrame { offset, got: 1, len: 2 }
+                if offset == (HEADER_LEN + 13) as u64),
+            "{err:?}"
+        );
+        assert_eq!(
+            err.to_string(),
+            "recording cut off part way through the record at offset 21: 1 of its 2 frame \
+             bytes are there"
+        );
+        assert_eq!(io::Error::from(err).kind(), io::ErrorKind::InvalidData);
+        // Cut in a record's head.
+        bytes.truncate(HEADER_LEN + 13 + 5);
+        let mut r = RecordReader::new(&bytes[..]).unwrap();
+        assert!(r.next_record().unwrap().is_some());
+        let err = r.next_record().unwrap_err();
+        assert!(
+            matches!(err, RecordError::CutOffHead { offset: 21, got: 5 }),
+            "{err:?}"
+        );
+        assert_eq!(err.offset(), Some(21));
+    }
+
+    #[test]
+    fn each_damage_is_its_own_error_with_its_offset() {
+        let record = |micros: u64, direction: u8, frame: &[u8]| {
+            let mut bytes = micros.to_le_bytes().to_vec();
+            bytes.push(direction);
+            bytes.extend_from_slice(&u16::try_from(frame.len()).unwrap().to_le_bytes());
+            bytes.extend_from_slice(frame);
+            bytes
+        };
+        let first = record(0, 0, &[0x8A, 0x06]);
+        let after = |damaged: Vec<u8>| {
+            let bytes = [&b"MCPREC\x01\x00"[..], &first, &damaged].concat();
+            let mut r = RecordReader::new(&bytes[..]).unwrap();
+            assert!(r.next_record().unwrap().is_some());
+            r.next_record().unwrap_err()
+        };
+        assert!(matches!(
+            after(record(0, 2, &[0x8A])),
+            RecordError::Direction {
+                offset: 21,
+                byte: 2
+            }
+        ));
+        assert!(matches!(
+            after(record(0, 1, &[])),
+            RecordError::EmptyFrame { offset: 21 }
+        ));
+        // Past what a `SystemTime` holds (on Unix, every u64 of microseconds fits).
+        if UNIX_EPOCH
+            .checked_add(Duration::from_micros(u64::MAX))
+            .is_none()
+        {
+            assert!(matches!(
+                after(record(u64::MAX, 0, &[0x8A])),
+                RecordError::TimeOutOfRange { offset: 21, .. }
+            ));
+        }
+        // A failed read is the reader's error, as it came.
+        #[derive(Debug)]
+        struct Failing;
+        impl Read for Failing {
+            fn read(&mut self, _: &mut [u8]) -> io::Result<usize> {
+                Err(io::Error::new(io::ErrorKind::PermissionDenied, "no"))
+            }
+        }
+        let err = RecordReader::new(Failing).unwrap_err();
+        assert!(matches!(&err, RecordError::Io(e) if e.kind() == io::ErrorKind::PermissionDenied));
+        assert_eq!(err.offset(), None);
+        assert_eq!(io::Error::from(err).kind(), io::ErrorKind::PermissionDenied);
     }
 
     #[test]
@@ -482,8 +631,19 @@ mod tests {
 
     #[test]
     fn rejects_other_files_and_versions() {
-        assert!(RecordReader::new(&b"\x7e\x00\x02\x8a\x06\x6f\x00\x00"[..]).is_err());
+        assert!(matches!(
+            RecordReader::new(&b"\x7e\x00\x02\x8a\x06\x6f\x00\x00"[..]),
+            Err(RecordError::NoHeader)
+        ));
+        assert!(matches!(
+            RecordReader::new(&b"MCPREC"[..]),
+            Err(RecordError::TooShort)
+        ));
         let err = RecordReader::new(&b"MCPREC\x02\x00"[..]).unwrap_err();
+        assert!(
+            matches!(err, RecordError::UnsupportedVersion { version: 2 }),
+            "{err:?}"
+        );
         assert!(err.to_string().contains("version 2"), "{err}");
     }
 }

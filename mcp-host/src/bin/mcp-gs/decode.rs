@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use clap::Args;
 use xbee_api::{ApiMode, DecodeError, Decoder, Frame};
 
-use mcp_host::record::{self, Direction, RecordReader};
+use mcp_host::record::{self, Direction, RecordError, RecordReader};
 use mcp_host::render;
 
 use crate::hex_input::{BadText, HexReader};
@@ -643,8 +643,10 @@ fn decode_recording(
 ) -> io::Result<()> {
     // The summary counts every byte, a record cut off at the end included.
     let mut input = Counted { inner: input, n: 0 };
-    let mut reader =
-        RecordReader::new(&mut input).map_err(|e| io::Error::new(e.kind(), source.says(&e)))?;
+    let mut reader = RecordReader::new(&mut input).map_err(|e| {
+        let e = io::Error::from(e);
+        io::Error::new(e.kind(), source.says(&e))
+    })?;
     // A recording cut off (a power lost mid-flight) or damaged part way: what came
     // before it is still decoded and counted, then the error is said, with the file and
     // how many frames came before it. (A line of a hex dump that is not hex ends it too:
@@ -667,14 +669,18 @@ fn decode_recording(
                 });
             }
             Err(e) => {
-                match BadText::of(&e) {
-                    Some(bad) => skipped.add(bad),
+                match &e {
+                    RecordError::Io(e) => {
+                        if let Some(bad) = BadText::of(e) {
+                            skipped.add(bad);
+                        }
+                    }
                     // A damaged or cut-off record, not a failed read.
-                    None if e.kind() == io::ErrorKind::InvalidData => damaged = 1,
-                    None => {}
+                    _ => damaged = 1,
                 }
                 let message = format!("{e}; {}", decoded_before(decoded));
-                break Err(io::Error::new(e.kind(), source.says(message)));
+                let kind = io::Error::from(e).kind();
+                break Err(io::Error::new(kind, source.says(message)));
             }
         }
     };

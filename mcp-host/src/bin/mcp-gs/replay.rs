@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use clap::{Args, ValueEnum};
-use mcp_host::record::{Direction, Record, RecordReader};
+use mcp_host::record::{Direction, Record, RecordError, RecordReader};
 use mcp_host::{CommandSender, Link, SendError};
 
 use crate::Failure;
@@ -253,7 +253,7 @@ fn lost(error: SendError, played: u64) -> Failure {
 /// `at_left_out`.
 async fn play(
     args: &ReplayArgs,
-    records: impl Iterator<Item = std::io::Result<Record>>,
+    records: impl Iterator<Item = Result<Record, RecordError>>,
     sender: &CommandSender,
     start: tokio::time::Instant,
     played: &mut u64,
