@@ -1,11 +1,15 @@
 //! `detect_api_mode`: the radio asked its `AP`, over a real TCP socket to the virtual
 //! network's coordinator in either mode, and to a peer that says nothing.
 
+#[cfg(unix)]
 use std::time::Duration;
 
 use mcp_host::sim::{Simulator, fleet_addresses};
 use mcp_host::xbee_api::ApiMode;
-use mcp_host::{DetectError, Link, LinkOptions, SendError, detect_api_mode};
+use mcp_host::{Link, LinkOptions, detect_api_mode};
+// For the test that also asks a pseudo-terminal (Unix only).
+#[cfg(unix)]
+use mcp_host::{DetectError, SendError};
 
 /// A simulator whose coordinator is in `mode`, on a TCP port, and the link to it.
 async fn radio_in(mode: ApiMode) -> (Simulator, Link) {
@@ -38,6 +42,7 @@ async fn the_radio_says_its_mode_whichever_it_is() {
     }
 }
 
+#[cfg(unix)]
 #[tokio::test]
 async fn a_radio_that_does_not_answer_and_a_link_with_no_radio_say_so() {
     // A peer that reads and says nothing, as a radio in transparent mode.

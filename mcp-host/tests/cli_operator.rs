@@ -51,11 +51,13 @@ fn rest(lines: &Receiver<String>) -> Vec<String> {
 }
 
 /// What an operator's Ctrl-C sends.
+#[cfg(unix)]
 fn interrupt(child: &std::process::Child) {
     send_signal(child, libc::SIGINT);
 }
 
 /// Sends `signal` to `child`.
+#[cfg(unix)]
 fn send_signal(child: &std::process::Child, signal: libc::c_int) {
     let pid = i32::try_from(child.id()).expect("pid");
     // SAFETY: kill(2) with a pid of a child of this process and a valid signal.
@@ -91,6 +93,7 @@ fn link_after(line: &str, words: &str) -> String {
     line[start..start + end].to_owned()
 }
 
+#[cfg(unix)]
 #[test]
 fn sigterm_and_sighup_stop_a_running_command_as_ctrl_c_does() {
     for signal in [libc::SIGTERM, libc::SIGHUP] {
@@ -121,6 +124,7 @@ fn sigterm_and_sighup_stop_a_running_command_as_ctrl_c_does() {
     }
 }
 
+#[cfg(unix)]
 #[test]
 fn duration_0_runs_until_ctrl_c_in_sim_and_radio() {
     // sim: a ground station can still ask the MAV once the sim says it is running.
@@ -168,6 +172,7 @@ fn duration_0_runs_until_ctrl_c_in_sim_and_radio() {
     }
 }
 
+#[cfg(unix)]
 #[test]
 fn ctrl_c_stops_monitor_hub_and_a_timed_sim_cleanly() {
     // Each is interrupted as soon as its output says it runs: Ctrl-C is listened for
@@ -246,6 +251,7 @@ fn a_kind_that_takes_no_telemetry_id_says_so_whatever_the_id() {
     assert!(stderr(&output).contains("`foo` is not a telemetry id: give a name"));
 }
 
+#[cfg(unix)]
 #[test]
 fn a_path_that_is_no_serial_port_says_so() {
     let dir = tempfile::tempdir().unwrap();
@@ -389,6 +395,7 @@ fn a_refused_connection_hints_at_a_hub_without_its_radio() {
     );
 }
 
+#[cfg(unix)]
 #[test]
 fn sim_and_radio_check_their_addresses_before_they_start() {
     let other = "0013a20040b599aa";
@@ -1056,6 +1063,7 @@ fn replay_says_how_far_it_got_when_its_peer_leaves() {
     );
 }
 
+#[cfg(unix)]
 #[test]
 fn ctrl_c_stops_the_demo_script_at_once() {
     // And a signal to stop does the same, said as what it is.
@@ -1147,6 +1155,7 @@ fn decode_from_a_pipe_shows_each_frame_as_it_comes() {
     assert_eq!(exit_code(&mut decode.0), Some(2), "{out:?}");
 }
 
+#[cfg(unix)]
 #[test]
 fn decode_on_a_terminal_says_it_waits_for_input() {
     use serialport::SerialPort;

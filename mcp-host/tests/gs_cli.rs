@@ -502,6 +502,7 @@ fn a_bad_16_bit_address_says_what_one_looks_like() {
     }
 }
 
+#[cfg(unix)]
 #[test]
 fn missing_device_exits_3() {
     let send = |link: &str| {
@@ -851,6 +852,7 @@ fn closed_standard_output_ends_quietly() {
 }
 
 /// `/dev/full`, opened for writing: every write fails with "no space left on device".
+#[cfg(target_os = "linux")]
 fn dev_full() -> std::fs::File {
     std::fs::OpenOptions::new()
         .write(true)
@@ -858,6 +860,7 @@ fn dev_full() -> std::fs::File {
         .unwrap()
 }
 
+#[cfg(target_os = "linux")]
 #[test]
 fn standard_output_that_cannot_be_written_is_a_failure() {
     // A full disk, unlike a reader that went away, loses what was to be printed: a
@@ -892,6 +895,7 @@ fn standard_output_that_cannot_be_written_is_a_failure() {
     }
 }
 
+#[cfg(target_os = "linux")]
 #[test]
 fn standard_error_that_cannot_be_written_keeps_the_exit_status() {
     // A logger that went away, or a full disk: the message is lost, the status is not
@@ -951,6 +955,7 @@ fn a_recording_on_a_pipe_is_decoded_as_it_comes() {
     assert!(child.wait().unwrap().success());
 }
 
+#[cfg(unix)]
 #[test]
 fn log_lines_into_a_pipe_carry_no_colour_codes() {
     let output = gs()
@@ -1007,6 +1012,7 @@ fn a_time_before_2000_is_warned_about_once() {
     );
 }
 
+#[cfg(unix)]
 #[test]
 fn a_log_filter_that_cannot_be_read_is_said_so() {
     let output = gs()
@@ -1218,6 +1224,7 @@ fn monitor_keeps_an_existing_recording() {
     assert_eq!(left.len(), 1, "{left:?}");
 }
 
+#[cfg(unix)]
 #[test]
 fn monitor_records_into_a_pipe_that_is_read_and_refuses_one_that_is_not() {
     use std::os::unix::fs::OpenOptionsExt;
@@ -1372,6 +1379,7 @@ fn a_port_that_hands_back_what_is_written_is_said_to_be_no_radio() {
     peer.join().unwrap();
 }
 
+#[cfg(target_os = "linux")]
 #[test]
 fn a_recording_that_cannot_be_written_is_named() {
     // A modem status, recorded to a full disk.

@@ -214,6 +214,7 @@ fn sim_and_ground_station_over_tcp() {
     every_command_and_report(&sim);
 }
 
+#[cfg(unix)]
 #[test]
 fn sim_and_ground_station_over_a_pseudo_terminal() {
     let sim = Sim::start("pty");
@@ -525,6 +526,7 @@ fn a_status_request_the_radio_never_answers_points_at_the_api_mode() {
     );
 }
 
+#[cfg(unix)]
 #[test]
 fn api_mode_detection_over_a_serial_port() {
     // A serial port is opened for exclusive use: the link that asks the radio its mode
@@ -692,6 +694,7 @@ fn a_recording_keeps_each_frame_as_it_came() {
     );
 }
 
+#[cfg(unix)]
 #[test]
 fn a_port_another_program_holds_is_named_as_busy() {
     let sim = Sim::start("pty");
@@ -841,6 +844,7 @@ fn send_trajectory_checks_the_mavs_report() {
     assert!(stderr.contains("`mcp-gs status` waits for it"), "{stderr}");
 }
 
+#[cfg(unix)]
 #[test]
 fn a_hub_lets_monitor_and_send_share_the_radio() {
     let sim = Sim::start_with(&["--api-mode", "2"], "pty");

@@ -416,6 +416,7 @@ async fn clients_see_the_radios_outage_and_come_back_with_it() {
     hub.stop().await;
 }
 
+#[cfg(unix)]
 #[tokio::test]
 async fn a_hub_whose_radio_is_not_there_yet_refuses_clients_from_the_start() {
     // A `pty` link has no radio until a device opens its far end.

@@ -30,6 +30,7 @@ fn a_listen_address_without_a_host_is_a_usage_error() {
     assert!(!stderr.contains("cannot listen"), "{stderr}");
 }
 
+#[cfg(unix)]
 #[test]
 fn a_listen_address_that_cannot_be_had_says_why() {
     let taken = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
@@ -167,6 +168,7 @@ fn the_hub_says_when_the_radio_is_lost_and_when_it_is_back() {
     );
 }
 
+#[cfg(target_os = "linux")]
 #[test]
 fn a_hub_on_a_pty_listens_once_a_radio_is_there() {
     let (_hub, out, err) = start_hub("pty");
@@ -517,6 +519,7 @@ fn a_recording_that_cannot_be_written_stops_and_the_hub_goes_on_serving() {
     assert_eq!(hub.0.wait().unwrap().code(), Some(1));
 }
 
+#[cfg(unix)]
 #[test]
 fn frames_a_radio_sends_replayed_onto_the_hub_are_refused_and_said() {
     let (_sim, radio, _sim_out) = sim_on_tcp("1");
@@ -567,6 +570,7 @@ fn frames_a_radio_sends_replayed_onto_the_hub_are_refused_and_said() {
     );
 }
 
+#[cfg(unix)]
 #[test]
 fn a_client_turned_away_is_said_at_once_and_counted_when_the_hub_stops() {
     let (_sim, radio, _sim_out) = sim_on_tcp("1");
@@ -600,6 +604,7 @@ fn a_client_turned_away_is_said_at_once_and_counted_when_the_hub_stops() {
     drop(clients);
 }
 
+#[cfg(unix)]
 #[test]
 fn a_clients_frame_that_fails_its_checksum_is_refused_and_said_with_the_hubs_mode() {
     let (_sim, radio, _sim_out) = sim_on_tcp("1");
@@ -633,6 +638,7 @@ fn a_clients_frame_that_fails_its_checksum_is_refused_and_said_with_the_hubs_mod
 
 /// Sends `AT AP` under `id` (API mode 1) on `client` and reads frames until its answer:
 /// the hub served the client.
+#[cfg(unix)]
 fn answered_at_ap(client: &mut std::net::TcpStream, id: u8) {
     use std::io::{Read, Write};
     let sum = [0x08, id, b'A', b'P']
@@ -657,6 +663,7 @@ fn answered_at_ap(client: &mut std::net::TcpStream, id: u8) {
     }
 }
 
+#[cfg(unix)]
 #[test]
 fn a_hub_out_of_file_descriptors_says_so_serves_its_clients_and_takes_the_next_once_it_can() {
     use std::os::unix::process::CommandExt;

@@ -1,6 +1,10 @@
 //! `mcp-gs` on a serial link that can never be a serial port, or that ends for good
 //! while `radio` or `sim` run: refused, or stopped, with the link named, rather than
 //! waited for forever.
+//!
+//! Unix only, the whole file: every test runs `mcp-gs` on a device path (`/dev/null`,
+//! a pseudo-terminal's far end), and all but one need Linux.
+#![cfg(unix)]
 
 #[cfg(target_os = "linux")]
 use serialport::SerialPort;
@@ -50,6 +54,7 @@ fn finish(mut running: Running, lines: &Receiver<String>, args: &[&str]) -> (Opt
 }
 
 /// The next line on `lines` that satisfies `f`; the others are dropped.
+#[cfg(target_os = "linux")]
 fn line(lines: &Receiver<String>, mut f: impl FnMut(&str) -> bool) -> String {
     loop {
         let line = lines.recv_timeout(GUARD).expect("a line in time");

@@ -40,6 +40,7 @@ impl Dev {
         }
     }
 
+    #[cfg(unix)]
     fn pty(path: &std::path::Path, mode: ApiMode) -> Self {
         let port = tokio_serial::SerialStream::open(&tokio_serial::new(
             path.to_str().expect("utf-8 path"),
@@ -186,6 +187,7 @@ async fn in_process(config: NetworkConfig, nodes: &[Address64]) -> (Network, Vec
     (network, devs)
 }
 
+#[cfg(unix)]
 #[tokio::test]
 async fn unicast_and_broadcast_between_a_tcp_coordinator_and_pty_nodes() {
     let network = Network::new(NetworkConfig::default());
@@ -1134,6 +1136,7 @@ async fn a_pty_peer_that_writes_and_leaves_at_once_is_served_now() {
     assert_eq!(mav.rx().await.3, b"fresh");
 }
 
+#[cfg(unix)]
 #[tokio::test]
 async fn a_pty_peer_that_writes_at_once_is_answered() {
     // The peer's first frame may arrive before the radio has seen it open the far end.
@@ -1231,6 +1234,7 @@ async fn the_commissioning_button_announces_a_radio_to_the_others() {
     );
 }
 
+#[cfg(unix)]
 #[tokio::test]
 async fn a_pty_node_hung_up_on_sees_no_end_only_a_new_modem_status() {
     let network = Network::new(NetworkConfig::default());

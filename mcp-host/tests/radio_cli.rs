@@ -406,6 +406,7 @@ async fn radio_logs_statuses_by_their_snake_case_names() {
     );
 }
 
+#[cfg(unix)]
 #[test]
 fn sim_on_a_pty_is_connected_while_a_ground_station_has_it_open() {
     let sim = Running::start(&["sim", "--link", "pty", "--duration", "120"]);

@@ -216,6 +216,7 @@ async fn connect_fails_fast_when_the_first_connection_fails() {
     );
 }
 
+#[cfg(unix)]
 #[tokio::test]
 async fn serial_link_reports_the_device_going_away() {
     // A pseudo-terminal stands in for a USB serial adapter: the test holds the radio
@@ -256,6 +257,7 @@ async fn serial_link_reports_the_device_going_away() {
     }
 }
 
+#[cfg(unix)]
 #[tokio::test]
 async fn a_closed_serial_link_frees_its_port_at_once() {
     // Serial ports are opened for exclusive use: each round opens the device again

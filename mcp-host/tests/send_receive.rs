@@ -684,6 +684,7 @@ async fn at_and_remote_at_commands_get_their_responses() {
     );
 }
 
+#[cfg(unix)]
 #[tokio::test]
 async fn link_state_says_connected_as_soon_as_connect_returns_with_a_transport() {
     use mcp_host::{Link, LinkState};

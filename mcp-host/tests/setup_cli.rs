@@ -408,6 +408,7 @@ async fn a_change_in_api_frames_that_cannot_be_saved_is_said_to_be_in_effect() {
     assert_eq!(radio.lock().unwrap().ap, 1);
 }
 
+#[cfg(unix)]
 #[tokio::test]
 async fn a_radio_that_answers_neither_plus_plus_plus_nor_api_frames_sends_the_operator_to_probe() {
     // A pseudo-terminal nobody serves.
@@ -648,6 +649,7 @@ async fn probe_finds_a_factory_radio_and_one_in_api_mode_2() {
     assert!(radio.lock().unwrap().commands.is_empty());
 }
 
+#[cfg(unix)]
 #[tokio::test]
 async fn a_simulated_radio_in_api_mode_is_found_at_115200_baud_only() {
     // Its UART runs at its BD, 7: at 9600 baud (tried first) it is not understood.
@@ -705,6 +707,7 @@ async fn probe_and_setup_say_when_plus_plus_plus_is_answered_but_atap_is_not() {
     );
 }
 
+#[cfg(unix)]
 #[tokio::test]
 async fn probe_says_when_nothing_answers_at_any_rate() {
     // A pseudo-terminal nobody serves.

@@ -90,6 +90,7 @@ async fn read_exact_n<R: AsyncReadExt + Unpin>(r: &mut R, n: usize) -> Vec<u8> {
     buf
 }
 
+#[cfg(unix)]
 #[tokio::test]
 async fn pty_is_up_while_a_device_has_the_far_end_open_and_nothing_stale_reaches_the_next() {
     let mut connector = Connector::new(&Link::Pty, &LinkOptions::default())
@@ -134,6 +135,7 @@ async fn pty_is_up_while_a_device_has_the_far_end_open_and_nothing_stale_reaches
 
 /// Opens the far end of a pseudo-terminal as a short-lived program does (`echo > PATH`),
 /// writes `bytes` and closes it again at once.
+#[cfg(unix)]
 fn write_and_leave(path: &std::path::Path, bytes: &[u8]) {
     use std::io::Write;
     use std::os::unix::fs::OpenOptionsExt;
@@ -146,6 +148,7 @@ fn write_and_leave(path: &std::path::Path, bytes: &[u8]) {
     far.write_all(bytes).unwrap();
 }
 
+#[cfg(unix)]
 #[tokio::test]
 async fn pty_serves_a_device_that_writes_and_leaves_between_two_looks() {
     let mut connector = Connector::new(&Link::Pty, &LinkOptions::default())
@@ -588,6 +591,7 @@ async fn a_serial_link_opens_its_port_with_the_flow_control_it_names() {
 }
 
 // Paused clock: the delays below are the reconnection's own sleeps, exactly.
+#[cfg(unix)]
 #[tokio::test(start_paused = true)]
 async fn backoff_starts_again_only_after_a_connection_that_lasted() {
     use tokio::time::Instant;
