@@ -17,7 +17,9 @@ use crate::{AnyMode, ApiMode, DecodeError, DecoderMode, FixedMode, RawFrame, Sta
 use core::fmt;
 use core::marker::PhantomData;
 
-/// Default buffer capacity of [`Decoder`]: 512 bytes.
+/// Default buffer size `N` of [`Decoder`]: 512 bytes. The frame data it takes, its
+/// [`capacity`](Decoder::capacity), is 512 bytes in mode 2 and 508 in mode 1, which
+/// buffers the 4 framing bytes too ([`decoder_buffer_len`] goes the other way).
 ///
 /// XBee frame data tops out near 273 bytes (a 255-byte fragmented payload plus the
 /// Explicit Rx Indicator's 18-byte header,

@@ -60,7 +60,9 @@
 //!
 //! let mut sim = Sim { landing: LandingState::Flight, controller: Controller::Manual, time: 0 };
 //! let mut mav = Mav::new(&sim);
-//! // Room for any reply: a trajectory report of 15 waypoints takes 243 bytes. The
+//! // Room for any reply: a trajectory report of 15 waypoints takes 243 bytes. A firmware
+//! // whose Transmit Requests take `MAX_UNFRAGMENTED_PAYLOAD` (84) bytes gives it that,
+//! // and a trajectory report then holds the first 5 waypoints (as many as fit). The
 //! // telemetry buffer is best kept to `MAX_UNFRAGMENTED_PAYLOAD` (see `Mav::telemetry`).
 //! let mut buf = [0u8; mcp_core::MAX_PAYLOAD];
 //!
