@@ -18,6 +18,7 @@ const SYS_TTY: &str = "/sys/class/tty";
 pub(crate) fn run(_args: PortsArgs) -> Result<(), Failure> {
     let ports = available_ports(Path::new(SYS_TTY))
         .map_err(|e| Failure::new(Failure::OTHER, format!("cannot list serial ports: {e}")))?;
+    let ports = without_dial_in_twins(ports);
     if ports.is_empty() {
         out!("no serial ports found");
     }
@@ -57,11 +58,53 @@ fn available_ports(sys_tty: &Path) -> Result<Vec<SerialPortInfo>, String> {
     serialport::available_ports().map_err(|e| e.to_string())
 }
 
-// Its only test reads Linux's sysfs.
-#[cfg(all(test, target_os = "linux"))]
+/// `ports` without the dial-in twin of a call-out device: macOS lists each port twice,
+/// as `/dev/tty.NAME` (dial-in: opening it may wait for the carrier signal, which an
+/// XBee adapter does not raise) and `/dev/cu.NAME` (call-out), the one to use. The
+/// `tty.` one is left out when its `cu.` twin is listed.
+fn without_dial_in_twins(ports: Vec<SerialPortInfo>) -> Vec<SerialPortInfo> {
+    let call_out = |name: &str| {
+        name.strip_prefix("/dev/tty.")
+            .map(|rest| format!("/dev/cu.{rest}"))
+    };
+    let names: Vec<String> = ports.iter().map(|p| p.port_name.clone()).collect();
+    ports
+        .into_iter()
+        .filter(|port| !call_out(&port.port_name).is_some_and(|cu| names.contains(&cu)))
+        .collect()
+}
+
+#[cfg(test)]
 mod tests {
     use super::*;
 
+    #[test]
+    fn a_port_listed_twice_on_macos_is_listed_by_its_call_out_name() {
+        let port = |name: &str| SerialPortInfo {
+            port_name: name.to_owned(),
+            port_type: SerialPortType::Unknown,
+        };
+        let listed = without_dial_in_twins(vec![
+            port("/dev/tty.usbserial-A1"),
+            port("/dev/cu.usbserial-A1"),
+            port("/dev/tty.Bluetooth-Incoming-Port"),
+            port("/dev/ttyUSB0"),
+            port("COM3"),
+        ]);
+        let names: Vec<_> = listed.iter().map(|p| p.port_name.as_str()).collect();
+        assert_eq!(
+            names,
+            [
+                "/dev/cu.usbserial-A1",
+                "/dev/tty.Bluetooth-Incoming-Port",
+                "/dev/ttyUSB0",
+                "COM3"
+            ]
+        );
+    }
+
+    // It reads Linux's sysfs.
+    #[cfg(target_os = "linux")]
     #[test]
     fn a_missing_sysfs_is_an_error_not_a_panic() {
         let err = available_ports(Path::new("/nonexistent/sys/class/tty")).unwrap_err();
