@@ -902,7 +902,7 @@ impl Connector {
                 // Windows opens a port with DTR and RTS off, where Unix raises both: a
                 // radio that waits for RTS before it sends (D6=1) would say nothing, and
                 // one whose sleep request is wired to DTR would sleep. Raised as on Unix
-                // (RTS only without flow control, which drives it otherwise).
+                // (RTS only without flow control: with it, the driver holds RTS itself).
                 #[cfg(windows)]
                 {
                     use tokio_serial::SerialPort;
@@ -1072,13 +1072,26 @@ impl Connector {
 /// How a TCP connection whose peer is gone without a word (a bridge powered off, a
 /// laptop asleep, a cable pulled) is found out: probed by TCP keepalive once quiet for
 /// `idle`, every `interval`, given up after `probes` unanswered (where the system lets
-/// the number be set: Linux, macOS, the BSDs, Windows 10 and later; else its own); and,
+/// the number be set: Linux, Android, macOS, iOS, FreeBSD, NetBSD, Windows 10 and
+/// later; else its own); and,
 /// on Linux, given up as well once data written has gone unacknowledged for
 /// `unacknowledged`, as keepalive probes only go out while nothing written waits.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct KeepAlive {
     pub(crate) idle: Duration,
     pub(crate) interval: Duration,
+    #[cfg_attr(
+        not(any(
+            target_os = "linux",
+            target_os = "android",
+            target_os = "macos",
+            target_os = "ios",
+            target_os = "freebsd",
+            target_os = "netbsd",
+            windows
+        )),
+        allow(dead_code)
+    )]
     pub(crate) probes: u32,
     /// Linux alone takes it.
     #[cfg_attr(not(target_os = "linux"), allow(dead_code))]

@@ -1,6 +1,6 @@
 //! The `mcp-gs` binary: decode, encode, argument errors and exit codes.
 
-use std::io::{BufRead, BufReader, Write};
+use std::io::Write;
 use std::path::PathBuf;
 use std::process::{Command, Output, Stdio};
 
@@ -1141,13 +1141,71 @@ fn monitor_says_what_it_lost_for_falling_behind() {
             && said.ends_with(", and are missing from the recording"),
         "{said}"
     );
-    // Its output read from now on: it goes on.
-    let stdout = BufReader::new(child.0.stdout.take().unwrap());
-    let shown = stdout
-        .lines()
-        .map(|line| line.unwrap())
-        .find(|line| line.contains("modem status"));
-    assert!(shown.is_some(), "monitor goes on");
+    // Its output read from now on: it goes on, and shows what came after, the radio's
+    // link lost (a link event waits for room in the queue, never dropped).
+    drop(socket);
+    let lines = common::stdout_lines(&mut child.0);
+    while !lines
+        .recv_timeout(common::GUARD)
+        .expect("monitor goes on")
+        .contains("link disconnected")
+    {}
+}
+
+/// A reader that took part of monitor's output and no more (a pager paused), the link
+/// quiet since: Ctrl-C still ends monitor, whether it was still taking frames or had
+/// taken its `--count` and was writing its last lines.
+#[cfg(target_os = "linux")]
+#[test]
+fn monitor_ends_on_ctrl_c_with_its_last_lines_not_read() {
+    use std::os::fd::AsRawFd;
+    for count in [None, Some("100")] {
+        let radio = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+        let link = format!("tcp:{}", radio.local_addr().unwrap());
+        let dir = tempfile::tempdir().unwrap();
+        let record = dir.path().join("taken.mcprec");
+        let mut args = vec!["monitor", "--link", &link, "--record"];
+        args.push(record.to_str().unwrap());
+        args.extend(count.iter().flat_map(|n| ["--count", n]));
+        let mut monitor = gs()
+            .args(&args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        // A pipe of 4 KiB: 100 lines of modem status (50 bytes each) fill it (it holds
+        // 2.5 to 4 KiB of them), and the rest wait in monitor, fewer than it queues.
+        let stdout = monitor.stdout.take().unwrap();
+        let fd = stdout.as_raw_fd();
+        // SAFETY: fcntl(2) and ioctl(2) on the pipe's read end, which `stdout` owns.
+        assert_eq!(unsafe { libc::fcntl(fd, libc::F_SETPIPE_SZ, 4096) }, 4096);
+        let (mut socket, _) = radio.accept().unwrap();
+        let modem_status = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F];
+        socket.write_all(&modem_status.repeat(100)).unwrap();
+        // Monitor has taken every frame once its recording holds them all (a record
+        // is written, and flushed, before its line): their lines fill the pipe, the
+        // rest wait, and the link says nothing more.
+        let all = (8 + 100 * 13) as u64;
+        let deadline = std::time::Instant::now() + common::GUARD;
+        while std::fs::metadata(&record).map_or(0, |m| m.len()) < all {
+            assert!(
+                std::time::Instant::now() < deadline,
+                "{args:?}: not recorded"
+            );
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+        let pid = i32::try_from(monitor.id()).unwrap();
+        // SAFETY: kill(2) with the pid of a child of this process and a valid signal.
+        assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
+        let (done, ended) = std::sync::mpsc::channel();
+        std::thread::spawn(move || done.send(monitor.wait()));
+        let status = ended
+            .recv_timeout(common::GUARD)
+            .unwrap_or_else(|_| panic!("{args:?}: monitor did not end"))
+            .unwrap();
+        assert_eq!(status.code(), Some(0), "{args:?}");
+        drop(stdout);
+    }
 }
 
 #[cfg(unix)]

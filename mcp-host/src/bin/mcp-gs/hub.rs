@@ -192,13 +192,22 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
         stats.frames_dropped,
         crate::counted(stats.frames_refused, "frame")
     );
-    if stats.clients_turned_away > 0 || stats.requests_held > 0 {
-        out!(
-            "clients: {} turned away ({} connected), {} waited for a frame id",
+    let turned_away = (stats.clients_turned_away > 0).then(|| {
+        format!(
+            "{} turned away ({} connected)",
             crate::counted(stats.clients_turned_away, "client"),
-            mcp_host::hub::MAX_CLIENTS,
+            mcp_host::hub::MAX_CLIENTS
+        )
+    });
+    let held = (stats.requests_held > 0).then(|| {
+        format!(
+            "{} waited for a frame id",
             crate::counted(stats.requests_held, "request")
-        );
+        )
+    });
+    let clients: Vec<String> = turned_away.into_iter().chain(held).collect();
+    if !clients.is_empty() {
+        out!("clients: {}", clients.join(", "));
     }
     let radio = stats.radio;
     if radio.events_dropped > 0 || radio.decode_errors() > 0 {

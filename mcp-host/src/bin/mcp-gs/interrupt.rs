@@ -6,10 +6,10 @@ use std::future::Future;
 use futures::FutureExt;
 
 /// Completes at Ctrl-C (SIGINT) and, on Unix, at SIGTERM (`kill`, `timeout`, systemd
-/// stopping a service) or SIGHUP (the terminal closed), on Windows at Ctrl-Break, the
-/// console closed or the system shutting down, which from this call on no longer end
-/// the process: the command stops as cleanly as at Ctrl-C (Windows allows a few
-/// seconds for it after the console is closed).
+/// stopping a service) or SIGHUP (the terminal closed), on Windows at Ctrl-Break or the
+/// console closed (and the system shutting down, which Windows says to services alone),
+/// which from this call on no longer end the process: the command stops as cleanly as
+/// at Ctrl-C (Windows allows a few seconds for it after the console is closed).
 ///
 /// Tokio's `ctrl_c` only starts listening when it is first polled, so a command that
 /// printed "Ctrl-C stops" before polling it could still be killed by a Ctrl-C pressed

@@ -260,19 +260,25 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
     // What was not shown is counted, however the monitor ends.
     pending.extend(quiet.as_mut().and_then(|shown| shown.tell_if_due(true)));
     let finished = output.finish(pending);
-    // After Ctrl-C, a reader that takes nothing more does not keep the monitor: what it
-    // did not take in time is lost with it.
-    let finished = match interrupted {
-        true => tokio::time::timeout(DRAIN_AFTER_CTRL_C, finished)
+    tokio::pin!(finished);
+    // After Ctrl-C (before, or while the last lines are written), a reader that takes
+    // nothing more does not keep the monitor: what it did not take in time is lost.
+    let drain_after_ctrl_c = async |finished| {
+        tokio::time::timeout(DRAIN_AFTER_CTRL_C, finished)
             .await
-            .unwrap_or(Ok(())),
-        false => finished.await,
+            .unwrap_or(Ok(()))
+    };
+    let finished = match interrupted {
+        true => drain_after_ctrl_c(&mut finished).await,
+        false => tokio::select! {
+            finished = &mut finished => finished,
+            _ = &mut ctrl_c => drain_after_ctrl_c(&mut finished).await,
+        },
     };
     lost.tell(&stream.stats(), recorder.is_some(), true);
-    match finished {
-        Ok(()) => ended,
-        failed => written(failed),
-    }
+    // A failure of the monitor itself (a recording that could not be written) is said
+    // before one of its output, and not hidden by a reader gone.
+    ended.and_then(|()| written(finished))
 }
 
 /// How long the lines not yet written may take after Ctrl-C.

@@ -5,27 +5,32 @@
 //! behind on rather than stalling with it.
 
 use std::io::{self, Write};
-use std::thread::JoinHandle;
 
-use tokio::sync::mpsc;
+use tokio::sync::{mpsc, oneshot};
 
-/// Lines queued for the thread before [`Output::line`] waits for room.
+/// Lines queued for the thread before [`Output::room`] waits.
 const QUEUE: usize = 64;
 
 /// Standard output, written by its own thread, line by line in the order given.
 pub(crate) struct Output {
     lines: mpsc::Sender<String>,
-    thread: JoinHandle<io::Result<()>>,
+    /// What the thread ended with, sent as it ends: awaited rather than joined, so that
+    /// a wait given up (on a reader that takes nothing more) leaves nothing behind that
+    /// the runtime would wait for as it shuts down.
+    ended: oneshot::Receiver<io::Result<()>>,
 }
 
 impl Output {
     /// Starts the thread.
     pub(crate) fn stdout() -> io::Result<Self> {
         let (lines, queued) = mpsc::channel(QUEUE);
-        let thread = std::thread::Builder::new()
+        let (done, ended) = oneshot::channel();
+        std::thread::Builder::new()
             .name("mcp-gs stdout".into())
-            .spawn(move || write_all(queued))?;
-        Ok(Output { lines, thread })
+            .spawn(move || {
+                let _ = done.send(write_all(queued));
+            })?;
+        Ok(Output { lines, ended })
     }
 
     /// Room for a line (given without its line end), once fewer than [`QUEUE`] are
@@ -36,7 +41,7 @@ impl Output {
     }
 
     /// Writes `lines` after those queued, and ends the thread: whether they could all
-    /// be written.
+    /// be written. Cancel-safe in that dropping it leaves the thread to end by itself.
     pub(crate) async fn finish(self, lines: impl IntoIterator<Item = String>) -> io::Result<()> {
         for line in lines {
             match self.room().await {
@@ -44,15 +49,14 @@ impl Output {
                 None => break,
             }
         }
-        let Output { lines, thread } = self;
+        let Output { lines, ended } = self;
         drop(lines);
-        match tokio::task::spawn_blocking(move || thread.join()).await {
-            Ok(Ok(written)) => written,
-            // The thread panicked (it does not: a bug), or the runtime is shutting down.
-            _ => Err(io::Error::other(
+        // The thread panicked (it does not: a bug) if it sent nothing.
+        ended.await.unwrap_or_else(|_| {
+            Err(io::Error::other(
                 "the thread writing standard output failed",
-            )),
-        }
+            ))
+        })
     }
 }
 
