@@ -275,14 +275,7 @@ fn a_report_lost_by_a_hub_in_another_api_mode_is_not_blamed_on_the_mav() {
     let (_sim, radio, _sim_out) = sim_on_tcp("2");
     let (_hub, out, _err) = start_hub(&radio);
     let (_, addr) = serving(&out);
-    let status = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
-        .args(["status", "--link", &format!("tcp:{addr}"), "--timeout", "2"])
-        .args(["--to", "0013A20040B599B9", "landing"])
-        .env_remove("MCP_LOG")
-        .output()
-        .expect("run mcp-gs status");
-    let stderr = String::from_utf8_lossy(&status.stderr);
-    assert_eq!(status.status.code(), Some(4), "{stderr}");
+    let stderr = status_timing_out(&addr, "2");
     assert!(
         stderr.contains("the MAV did not answer, or its report was lost on the way"),
         "{stderr}"
@@ -292,6 +285,26 @@ fn a_report_lost_by_a_hub_in_another_api_mode_is_not_blamed_on_the_mav() {
             && stderr.contains("the hub itself must be started with --api-mode 2"),
         "{stderr}"
     );
+}
+
+/// `mcp-gs status` of the landing state through the hub at `addr`, with `timeout`
+/// seconds, which must time out (exit 4): its standard error.
+fn status_timing_out(addr: &str, timeout: &str) -> String {
+    let status = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args([
+            "status",
+            "--link",
+            &format!("tcp:{addr}"),
+            "--timeout",
+            timeout,
+        ])
+        .args(["--to", "0013A20040B599B9", "landing"])
+        .env_remove("MCP_LOG")
+        .output()
+        .expect("run mcp-gs status");
+    let stderr = String::from_utf8_lossy(&status.stderr).into_owned();
+    assert_eq!(status.status.code(), Some(4), "{stderr}");
+    stderr
 }
 
 #[test]
@@ -368,14 +381,7 @@ fn a_hub_whose_tcp_peer_says_nothing_names_a_peer_busy_with_another_connection()
     // A client of the hub hears nothing either: it is pointed at the hub's lines too,
     // not only at a peer that serves another connection.
     let (_, addr) = serving(&out);
-    let status = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
-        .args(["status", "--link", &format!("tcp:{addr}"), "--timeout", "1"])
-        .args(["--to", "0013A20040B599B9", "landing"])
-        .env_remove("MCP_LOG")
-        .output()
-        .expect("run mcp-gs status");
-    let stderr = String::from_utf8_lossy(&status.stderr);
-    assert_eq!(status.status.code(), Some(4), "{stderr}");
+    let stderr = status_timing_out(&addr, "1");
     assert!(
         stderr.contains("nothing at all came from the radio")
             && stderr.contains(
