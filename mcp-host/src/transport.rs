@@ -874,10 +874,10 @@ impl Connector {
                 };
                 // The driver adds the device namespace itself, and would double it when
                 // it reopens the port (`\\.\\\.\COM10`).
-                #[cfg(windows)]
-                let name = without_device_namespace(path);
-                #[cfg(not(windows))]
-                let name = path.as_str();
+                let name = match cfg!(windows) {
+                    true => without_device_namespace(path),
+                    false => path.as_str(),
+                };
                 #[cfg_attr(not(any(target_os = "linux", windows)), allow(unused_mut))]
                 let mut stream = tokio_serial::new(name, *baud)
                     .data_bits(tokio_serial::DataBits::Eight)
@@ -1073,25 +1073,15 @@ impl Connector {
 /// laptop asleep, a cable pulled) is found out: probed by TCP keepalive once quiet for
 /// `idle`, every `interval`, given up after `probes` unanswered (where the system lets
 /// the number be set: Linux, Android, macOS, iOS, FreeBSD, NetBSD, Windows 10 and
-/// later; else its own); and,
-/// on Linux, given up as well once data written has gone unacknowledged for
-/// `unacknowledged`, as keepalive probes only go out while nothing written waits.
+/// later; else its own); and, on Linux, given up as well once data written has gone
+/// unacknowledged for `unacknowledged`, as keepalive probes only go out while nothing
+/// written waits.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct KeepAlive {
     pub(crate) idle: Duration,
     pub(crate) interval: Duration,
-    #[cfg_attr(
-        not(any(
-            target_os = "linux",
-            target_os = "android",
-            target_os = "macos",
-            target_os = "ios",
-            target_os = "freebsd",
-            target_os = "netbsd",
-            windows
-        )),
-        allow(dead_code)
-    )]
+    /// Read where the system takes it ([`keep_alive`] says where).
+    #[allow(dead_code)]
     pub(crate) probes: u32,
     /// Linux alone takes it.
     #[cfg_attr(not(target_os = "linux"), allow(dead_code))]
@@ -1136,7 +1126,6 @@ pub(crate) fn keep_alive(socket: &TcpStream, keep: &KeepAlive) {
 
 /// A Windows serial port's name without the device namespace it may be written with:
 /// `COM10` for `\\.\COM10`.
-#[cfg_attr(not(windows), allow(dead_code))]
 fn without_device_namespace(path: &str) -> &str {
     path.strip_prefix(r"\\.\").unwrap_or(path)
 }

@@ -71,24 +71,27 @@ impl std::fmt::Display for Interrupt {
     }
 }
 
+/// What `signal` gives, once it comes; never, for a signal whose handler could not be
+/// installed (`None`).
+#[cfg(any(unix, windows))]
+async fn or_never<F: Future>(signal: Option<F>) -> F::Output {
+    match signal {
+        Some(signal) => signal.await,
+        None => std::future::pending().await,
+    }
+}
+
 /// SIGTERM or SIGHUP, listened to from this call on.
 #[cfg(unix)]
 fn other_signals() -> impl Future<Output = Interrupt> + Send + 'static {
     use tokio::signal::unix::{SignalKind, signal};
-    let term = signal(SignalKind::terminate()).ok();
-    let hangup = signal(SignalKind::hangup()).ok();
+    let next = |kind| signal(kind).ok().map(|mut s| async move { s.recv().await });
+    let term = next(SignalKind::terminate());
+    let hangup = next(SignalKind::hangup());
     async move {
-        let wait = |s: Option<tokio::signal::unix::Signal>| async move {
-            match s {
-                Some(mut s) => {
-                    s.recv().await;
-                }
-                None => std::future::pending::<()>().await,
-            }
-        };
         tokio::select! {
-            () = wait(term) => Interrupt::Terminate,
-            () = wait(hangup) => Interrupt::HangUp,
+            _ = or_never(term) => Interrupt::Terminate,
+            _ = or_never(hangup) => Interrupt::HangUp,
         }
     }
 }
@@ -98,33 +101,16 @@ fn other_signals() -> impl Future<Output = Interrupt> + Send + 'static {
 #[cfg(windows)]
 fn other_signals() -> impl Future<Output = Interrupt> + Send + 'static {
     use tokio::signal::windows::{ctrl_break, ctrl_close, ctrl_shutdown};
-    let mut brk = ctrl_break().ok();
-    let mut close = ctrl_close().ok();
-    let mut shutdown = ctrl_shutdown().ok();
+    let brk = ctrl_break().ok().map(|mut s| async move { s.recv().await });
+    let close = ctrl_close().ok().map(|mut s| async move { s.recv().await });
+    let shutdown = ctrl_shutdown()
+        .ok()
+        .map(|mut s| async move { s.recv().await });
     async move {
-        // A handler that could not be installed: never.
-        let brk = async {
-            match &mut brk {
-                Some(s) => s.recv().await,
-                None => std::future::pending().await,
-            }
-        };
-        let close = async {
-            match &mut close {
-                Some(s) => s.recv().await,
-                None => std::future::pending().await,
-            }
-        };
-        let shutdown = async {
-            match &mut shutdown {
-                Some(s) => s.recv().await,
-                None => std::future::pending().await,
-            }
-        };
         tokio::select! {
-            _ = brk => Interrupt::CtrlBreak,
-            _ = close => Interrupt::ConsoleClosed,
-            _ = shutdown => Interrupt::Shutdown,
+            _ = or_never(brk) => Interrupt::CtrlBreak,
+            _ = or_never(close) => Interrupt::ConsoleClosed,
+            _ = or_never(shutdown) => Interrupt::Shutdown,
         }
     }
 }

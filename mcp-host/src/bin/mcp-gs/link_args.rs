@@ -898,23 +898,21 @@ fn link_hint(error: &LinkError, link: &Link, role: Role) -> Option<String> {
                 } else {
                     "another program has the port open, perhaps another mcp-gs"
                 };
-                Some(match role {
+                let then = match role {
                     Role::Client => format!(
-                        "{busy}: one program at a time can use a serial port: stop the other \
-                         (a hub, say: setup and probe need the port itself); to share the \
+                        " (a hub, say: setup and probe need the port itself); to share the \
                          radio among monitor, send, status and the like, let `mcp-gs hub \
                          --link {link}` hold it and give them --link tcp:127.0.0.1:9750"
                     ),
-                    Role::Hub => format!(
-                        "{busy}: one program at a time can use a serial port: stop the other \
-                         first (a hub that holds it already shares it: give monitor, send and \
-                         the like its --link tcp:ADDR:PORT rather than start another)"
-                    ),
-                    Role::Network => format!(
-                        "{busy}: one program at a time can use a serial port: stop the other \
-                         first"
-                    ),
-                })
+                    Role::Hub => " first (a hub that holds it already shares it: give \
+                                  monitor, send and the like its --link tcp:ADDR:PORT rather \
+                                  than start another)"
+                        .to_owned(),
+                    Role::Network => " first".to_owned(),
+                };
+                Some(format!(
+                    "{busy}: one program at a time can use a serial port: stop the other{then}"
+                ))
             }
             _ => not_a_serial_port(&error.description, link),
         },
