@@ -16,6 +16,9 @@
 //! - [`EncodeFrame`]: encodes any frame into a caller buffer in either mode.
 //! - [`InPlaceFrame`]: builds a frame in the buffer it goes out from, the payload
 //!   written after the header by the caller, then framed and escaped where it lies.
+//! - [`Inbox`]: a firmware's receive path: the decoder and a fixed queue of the
+//!   payloads received, fed from the UART's interrupt, emptied by the main loop, that
+//!   loses no frame when the queue is full and gives up a frame a quiet line left.
 //!
 //! ```
 //! use xbee_api::{Address16, Address64, ApiMode, Decoder, EncodeFrame, Frame};
@@ -125,6 +128,7 @@ mod decoder_mode;
 mod encode;
 mod error;
 mod in_place;
+mod inbox;
 #[macro_use]
 mod status;
 // After `status`, whose `code_enum!` they use.
@@ -166,6 +170,7 @@ pub use frame::transmit_request::{
 };
 pub use frame::transmit_status::{TransmitStatus, TransmitStatusRepr};
 pub use in_place::InPlaceFrame;
+pub use inbox::{Inbox, InboxFull, InboxStats, Received};
 pub use mode::{ApiMode, InvalidApiMode};
 pub use node::{DeviceType, NodeInfo, NodeInfoError};
 pub use raw::RawFrame;

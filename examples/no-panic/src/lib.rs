@@ -17,8 +17,8 @@ use mcp_core::{
 };
 use xbee_api::io::{self, FrameReader};
 use xbee_api::{
-    Address16, Address64, ApiMode, Decoder, EncodeFrame, Event, Frame, InPlaceFrame, Mode1, Mode2,
-    ReceivePacket, TransmitRequestRepr,
+    Address16, Address64, AnyMode, ApiMode, Decoder, EncodeFrame, Event, Frame, InPlaceFrame,
+    Inbox, Mode1, Mode2, ReceivePacket, TransmitRequestRepr,
 };
 
 unsafe extern "C" {
@@ -279,6 +279,36 @@ pub unsafe extern "C" fn mav_rx_frames(state: &mut State, bytes: *const u8, len:
             break;
         }
     }
+}
+
+/// The receive path of a firmware in one value, its mode set at run time (both modes'
+/// code linked).
+pub type RxInbox = Inbox<100, AnyMode, 84, 4>;
+
+/// Creates an empty inbox in `mode` (1 or 2) at `inbox`.
+#[unsafe(no_mangle)]
+pub extern "C" fn mav_inbox_init(inbox: &mut core::mem::MaybeUninit<RxInbox>, mode: u8) {
+    let mode = ApiMode::try_from(mode).unwrap_or(ApiMode::Unescaped);
+    inbox.write(Inbox::with_decoder(Decoder::new(mode)));
+}
+
+/// A UART receive interrupt on an inbox: the FIFO drained a byte at a time while the
+/// queue has room; the main loop's turn: every payload taken; a timer's tick.
+#[unsafe(no_mangle)]
+pub extern "C" fn mav_inbox(inbox: &mut RxInbox) {
+    let full = inbox
+        .read_from(|| {
+            let mut byte = 0u8;
+            // SAFETY: `uart_read` writes at most 1 byte to `byte`.
+            (unsafe { uart_read(&mut byte, 1) } == 1).then_some(byte)
+        })
+        .is_err();
+    while let Some(received) = inbox.pop() {
+        out(received.data());
+        out(&received.src64().to_bytes());
+    }
+    out(&[u8::from(full), inbox.stats().too_long as u8]);
+    inbox.tick();
 }
 
 /// The main loop's tick: unsolicited reports, then the telemetry packet.

@@ -1,0 +1,348 @@
+//! `Inbox`: the payloads a decoder yields, queued in a fixed queue. Whatever the queue's
+//! size and whenever the main loop empties it, the inbox hands over exactly the
+//! payloads that a decoder feeding an unbounded list would, in order; a quiet line
+//! gives up the frame in progress at the second tick, never while the queue is full.
+
+use proptest::prelude::*;
+use xbee_api::{
+    Address16, Address64, AnyMode, ApiMode, Decoder, EncodeFrame, ExplicitRxIndicatorRepr,
+    FixedMode, Inbox, InboxFull, InboxStats, Mode1, Mode2, ModemStatus, ModemStatusRepr,
+    ReceivePacket, ReceivePacketRepr, decoder_buffer_len,
+};
+
+const PAYLOAD: usize = 84;
+const N1: usize = decoder_buffer_len(ReceivePacketRepr::HEADER_LEN + PAYLOAD, ApiMode::Unescaped);
+const N2: usize = decoder_buffer_len(ReceivePacketRepr::HEADER_LEN + PAYLOAD, ApiMode::Escaped);
+
+fn encode(frame: &impl EncodeFrame, mode: ApiMode) -> Vec<u8> {
+    let mut wire = vec![0; frame.encoded_len(mode)];
+    let n = frame.encode(mode, &mut wire).unwrap();
+    wire.truncate(n);
+    wire
+}
+
+fn receive(src: u64, data: &[u8], mode: ApiMode) -> Vec<u8> {
+    encode(
+        &ReceivePacketRepr {
+            src64: Address64(src),
+            src16: Address16(0x1234),
+            options: 0x01,
+            data,
+        },
+        mode,
+    )
+}
+
+/// What a plain decoder fed the whole stream, then given up at its end, yields: the
+/// payloads of the Receive Packets of at most `PAYLOAD` bytes, with their senders.
+fn reference<const N: usize, M: FixedMode>(stream: &[u8]) -> Vec<(u64, Vec<u8>)> {
+    let mut decoder: Decoder<N, M> = Decoder::fixed();
+    let mut out = Vec::new();
+    let mut take = |event: Option<xbee_api::Event<'_>>| {
+        let Some(event) = event else { return false };
+        if let Ok(frame) = event {
+            if let Ok(rx) = ReceivePacket::new_checked(frame.data()) {
+                if rx.data().len() <= PAYLOAD {
+                    out.push((rx.src64().0, rx.data().to_vec()));
+                }
+            }
+        }
+        true
+    };
+    for &byte in stream {
+        let mut more = take(decoder.push(byte));
+        while more {
+            more = take(decoder.poll());
+        }
+    }
+    while take(decoder.finish()) {}
+    out
+}
+
+/// The inbox fed `stream` from a FIFO of `fifo` bytes refilled between main-loop turns,
+/// the main loop popping `pops[i]` payloads on turn `i` (cycled); at the end of the
+/// stream, ticks until the decoder is idle.
+fn through_inbox<const N: usize, M: FixedMode, const Q: usize>(
+    stream: &[u8],
+    pops: &[usize],
+) -> (Vec<(u64, Vec<u8>)>, Inbox<N, M, PAYLOAD, Q>) {
+    let mut inbox: Inbox<N, M, PAYLOAD, Q> = Inbox::new();
+    let mut out = Vec::new();
+    let mut bytes = stream.iter().copied().peekable();
+    let mut turn = 0;
+    let mut pop = |inbox: &mut Inbox<N, M, PAYLOAD, Q>, n: usize| {
+        for _ in 0..n {
+            if let Some(received) = inbox.pop() {
+                out.push((received.src64().0, received.data().to_vec()));
+            }
+        }
+    };
+    while bytes.peek().is_some() {
+        let full = inbox.read_from(|| bytes.next()).is_err();
+        assert_eq!(full, inbox.is_full());
+        // The main loop's turn; it must make progress when the queue is full.
+        let n = pops[turn % pops.len()];
+        turn += 1;
+        pop(&mut inbox, if full { n.max(1) } else { n });
+    }
+    // The line goes quiet: ticks give up what is left, the main loop taking it all.
+    for _ in 0..1000 {
+        if inbox.decoder().is_idle() && inbox.is_empty() && inbox.ready() {
+            break;
+        }
+        inbox.tick();
+        pop(&mut inbox, Q);
+    }
+    assert!(inbox.decoder().is_idle() && inbox.is_empty());
+    (out, inbox)
+}
+
+/// A stream of Receive Packets (payloads of 0..=PAYLOAD+4 bytes, escapable bytes
+/// likely) and noise (stray delimiters, cut frames, bad checksums).
+fn stream(mode: ApiMode) -> impl Strategy<Value = Vec<u8>> {
+    let byte = prop_oneof![any::<u8>(), Just(0x7E), Just(0x7D), Just(0x11), Just(0x13)];
+    let payload = prop::collection::vec(byte.clone(), 0..=PAYLOAD + 4);
+    let piece = prop_oneof![
+        6 => (any::<u64>(), payload.clone()).prop_map(move |(src, data)| receive(src, &data, mode)),
+        1 => prop::collection::vec(byte, 1..6),
+        1 => (any::<u64>(), payload.clone(), any::<prop::sample::Index>()).prop_map(
+            move |(src, data, cut)| {
+                let wire = receive(src, &data, mode);
+                wire[..cut.index(wire.len())].to_vec()
+            }
+        ),
+        1 => (any::<u64>(), payload).prop_map(move |(src, data)| {
+            let mut wire = receive(src, &data, mode);
+            *wire.last_mut().unwrap() ^= 0x01;
+            wire
+        }),
+    ];
+    prop::collection::vec(piece, 0..24).prop_map(|pieces| pieces.concat())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    /// Mode 1, a queue of 1, 2 or 4: the inbox gives exactly the reference's payloads.
+    #[test]
+    fn mode1_loses_nothing_whatever_the_queue(
+        stream in stream(ApiMode::Unescaped),
+        pops in prop::collection::vec(0usize..4, 1..8),
+    ) {
+        let expected = reference::<N1, Mode1>(&stream);
+        prop_assert_eq!(&through_inbox::<N1, Mode1, 1>(&stream, &pops).0, &expected);
+        prop_assert_eq!(&through_inbox::<N1, Mode1, 2>(&stream, &pops).0, &expected);
+        let (got, inbox) = through_inbox::<N1, Mode1, 4>(&stream, &pops);
+        prop_assert_eq!(&got, &expected);
+        prop_assert_eq!(inbox.stats().packets as usize, expected.len());
+    }
+
+    /// Mode 2, the same.
+    #[test]
+    fn mode2_loses_nothing_whatever_the_queue(
+        stream in stream(ApiMode::Escaped),
+        pops in prop::collection::vec(0usize..4, 1..8),
+    ) {
+        let expected = reference::<N2, Mode2>(&stream);
+        prop_assert_eq!(&through_inbox::<N2, Mode2, 1>(&stream, &pops).0, &expected);
+        let (got, inbox) = through_inbox::<N2, Mode2, 3>(&stream, &pops);
+        prop_assert_eq!(&got, &expected);
+        prop_assert_eq!(inbox.stats().packets as usize, expected.len());
+    }
+}
+
+/// The frame `c 02 FF` from 0013A20040522BAA, mode 1.
+fn status_request() -> Vec<u8> {
+    receive(0x0013A20040522BAA, b"c\x02\xff", ApiMode::Unescaped)
+}
+
+type Rx = Inbox<N1, Mode1, PAYLOAD, 2>;
+
+#[test]
+fn a_stray_delimiter_holds_frames_until_the_second_quiet_tick() {
+    let mut inbox = Rx::new();
+    // Noise reading as a delimiter and a length of 64, then a whole frame.
+    let mut line = vec![0x7E, 0x00, 0x40];
+    line.extend(status_request());
+    let mut fifo = line.into_iter();
+    inbox.read_from(|| fifo.next()).unwrap();
+    assert!(inbox.is_empty());
+    inbox.tick();
+    assert!(inbox.is_empty(), "given up at the first tick");
+    // A byte between the ticks: the line is not quiet.
+    inbox.push(0x00).unwrap();
+    inbox.tick();
+    assert!(inbox.is_empty(), "given up with a byte between the ticks");
+    inbox.tick();
+    assert_eq!(inbox.len(), 1);
+    assert_eq!(inbox.pop().unwrap().data(), b"c\x02\xff");
+    assert_eq!(inbox.decoder().stats().truncated, 1);
+}
+
+#[test]
+fn a_full_queue_takes_no_byte_and_gives_nothing_up() {
+    let mut inbox = Rx::new();
+    let frame = status_request();
+    let mut line = [frame.as_slice(), &frame, &frame].concat();
+    let third = line.split_off(2 * frame.len());
+    let mut fifo = line.into_iter().chain(third[..5].iter().copied());
+    assert_eq!(inbox.read_from(|| fifo.next()), Err(InboxFull));
+    assert!(inbox.is_full());
+    assert_eq!(inbox.push(0x7E), Err(InboxFull));
+    assert_eq!(fifo.clone().count(), 5, "bytes taken while full");
+    // The bytes wait in the UART: however long, the frame in progress stays.
+    for _ in 0..5 {
+        inbox.tick();
+    }
+    assert!(inbox.decoder().is_idle(), "a frame begun while full");
+    inbox.pop().unwrap();
+    assert_eq!(inbox.read_from(|| fifo.next()), Ok(()));
+    assert!(!inbox.decoder().is_idle());
+}
+
+#[test]
+fn popping_a_full_queue_resets_the_quiet_count() {
+    let mut inbox = Rx::new();
+    let frame = status_request();
+    let mut fifo = [frame.as_slice(), &frame, &frame[..7]].concat().into_iter();
+    // Two frames fill the queue; the third's first bytes wait in the FIFO.
+    assert_eq!(inbox.read_from(|| fifo.next()), Err(InboxFull));
+    inbox.tick();
+    inbox.tick();
+    inbox.pop().unwrap();
+    // A tick comes before the interrupt reads the waiting bytes: nothing is given up.
+    inbox.tick();
+    inbox.read_from(|| fifo.next()).unwrap();
+    assert!(!inbox.decoder().is_idle());
+    inbox.tick();
+    assert!(
+        !inbox.decoder().is_idle(),
+        "given up one tick after its bytes"
+    );
+    inbox.tick();
+    assert!(inbox.decoder().is_idle());
+}
+
+#[test]
+fn events_released_by_a_byte_wait_in_the_decoder_for_room() {
+    // Mode 1: a stray delimiter whose length covers three frames; giving it up releases
+    // them together, into a queue of one.
+    let mut inbox: Inbox<N1, Mode1, PAYLOAD, 1> = Inbox::new();
+    let frame = status_request();
+    let mut line = vec![0x7E, 0x00, 0x50];
+    for _ in 0..3 {
+        line.extend(&frame);
+    }
+    let mut fifo = line.into_iter();
+    inbox.read_from(|| fifo.next()).unwrap();
+    inbox.tick();
+    inbox.tick();
+    let mut got = 0;
+    while let Some(received) = inbox.pop() {
+        assert_eq!(received.data(), b"c\x02\xff");
+        got += 1;
+        // Room: the next frame comes out of the decoder.
+        assert_eq!(inbox.ready(), got == 3);
+    }
+    assert_eq!(got, 3);
+    assert_eq!(inbox.stats().packets, 3);
+}
+
+#[test]
+fn explicit_rx_indicators_other_frames_and_long_payloads() {
+    let mode = ApiMode::Escaped;
+    let explicit = encode(
+        &ExplicitRxIndicatorRepr {
+            src64: Address64(0x0013A200400A0127),
+            src16: Address16(0xFFFE),
+            src_endpoint: 0xE8,
+            dst_endpoint: 0xE8,
+            cluster_id: 0x0011,
+            profile_id: 0xC105,
+            options: 0x02,
+            data: b"t\x01",
+        },
+        mode,
+    );
+    let modem = encode(
+        &ModemStatusRepr {
+            status: ModemStatus::from(0x06),
+        },
+        mode,
+    );
+    let long = receive(7, &[0x55; 9], mode);
+    let short = receive(8, &[0x55; 8], mode);
+    let mut inbox: Inbox<64, Mode2, 8, 4> = Inbox::new();
+    let mut fifo = [explicit, modem, long, short].concat().into_iter();
+    inbox.read_from(|| fifo.next()).unwrap();
+    assert_eq!(
+        inbox.stats(),
+        InboxStats {
+            packets: 2,
+            other_frames: 1,
+            too_long: 1,
+        }
+    );
+    let first = inbox.pop().unwrap();
+    assert_eq!(
+        (first.src64(), first.src16(), first.options(), first.data()),
+        (
+            Address64(0x0013A200400A0127),
+            Address16(0xFFFE),
+            0x02,
+            &b"t\x01"[..]
+        )
+    );
+    let second = inbox.pop().unwrap();
+    assert_eq!(
+        (second.src64(), second.data()),
+        (Address64(8), &[0x55; 8][..])
+    );
+    assert_eq!(second.src16(), Address16(0x1234));
+    assert_eq!(second.options(), 0x01);
+}
+
+#[test]
+fn an_inbox_with_its_mode_set_at_run_time() {
+    let mut inbox: Inbox<N1, AnyMode, PAYLOAD, 2> =
+        Inbox::with_decoder(Decoder::new(ApiMode::Escaped));
+    assert_eq!(inbox.mode(), ApiMode::Escaped);
+    let mut fifo = receive(1, b"t", ApiMode::Escaped).into_iter();
+    inbox.read_from(|| fifo.next()).unwrap();
+    assert_eq!(inbox.pop().unwrap().data(), b"t");
+}
+
+#[test]
+fn full_says_what_to_do() {
+    assert_eq!(
+        InboxFull.to_string(),
+        "the inbox is full: pop a payload before taking another byte"
+    );
+    let inbox = Rx::new();
+    let debug = format!("{inbox:?}");
+    assert!(
+        debug.starts_with("Inbox { decoder: Decoder { mode: Unescaped, capacity: 96")
+            && debug.ends_with("queued: 0, pending: false, stats: InboxStats { packets: 0, other_frames: 0, too_long: 0 }, .. }"),
+        "{debug}"
+    );
+}
+
+#[test]
+fn a_tick_takes_the_pending_events_before_it_gives_up() {
+    // Mode 1, a queue of one: a stray delimiter holds two frames and a lone delimiter;
+    // the main loop only pops and the timer only ticks (no byte comes to take the
+    // events pending).
+    let mut inbox: Inbox<N1, Mode1, PAYLOAD, 1> = Inbox::new();
+    let frame = status_request();
+    let line = [&[0x7E, 0x00, 0x42][..], &frame, &frame, &[0x7E]].concat();
+    let mut fifo = line.into_iter();
+    inbox.read_from(|| fifo.next()).unwrap();
+    let mut got = 0;
+    for _ in 0..8 {
+        inbox.tick();
+        got += usize::from(inbox.pop().is_some());
+    }
+    assert_eq!(got, 2);
+    assert!(inbox.decoder().is_idle(), "{inbox:?}");
+    assert_eq!(inbox.decoder().stats().truncated, 2);
+}
