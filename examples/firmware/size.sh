@@ -56,7 +56,6 @@ mem_re='compiler_builtins::mem::|__aeabi_mem(cpy|move|set|clr)'
 rx_flash=$(($(flash rx_path) - $(flash baseline)))
 rx_mem=$(($(symbols rx_path "$mem_re") - $(symbols baseline "$mem_re")))
 rx_ram=$(($(ram rx_path) - $(ram baseline)))
-decoder=$(symbols rx_path 'mav_firmware::rx::DECODER')
 inbox=$(symbols rx_path 'mav_firmware::rx::INBOX')
 echo
 echo "receive path (rx_path - baseline):"
@@ -64,11 +63,7 @@ echo "  flash                           $rx_flash bytes"
 echo "    of which memcpy/memmove       $rx_mem bytes (compiler-builtins; every firmware that copies links them)"
 echo "    receive path's own code       $((rx_flash - rx_mem)) bytes"
 echo "  static RAM                      $rx_ram bytes"
-echo "    decoder state (RefCell<Decoder<100, Mode1>>)  $decoder bytes"
-echo "    payload queue and counters    $inbox bytes"
-echo
-echo "receive path on the slice decoder, decode_each per FIFO's worth (rx_slice - baseline):"
-echo "  flash                           $(($(flash rx_slice) - $(flash baseline))) bytes"
+echo "    inbox (RefCell<Inbox<100, Mode1, 84, 4>>: the decoder, 4 payloads, counters)  $inbox bytes"
 
 budget=${RX_FLASH_BUDGET:-4096}
 if ((rx_flash > budget)); then
@@ -76,6 +71,9 @@ if ((rx_flash > budget)); then
     exit 1
 fi
 echo "  within the flash budget of $budget bytes ($((budget - rx_flash)) to spare)"
+echo
+echo "receive path on the slice decoder, decode_each per FIFO's worth (rx_slice - baseline):"
+echo "  flash                           $(($(flash rx_slice) - $(flash baseline))) bytes"
 
 # No panic path: a reachable panic links core::panicking (a `RefCell::borrow_mut` or a
 # `&buf[..len]` the compiler cannot prove in bounds is enough).

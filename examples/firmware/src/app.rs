@@ -120,11 +120,10 @@ pub fn run() -> ! {
     let mut seen = clock::ticks();
     loop {
         while let Some(payload) = rx::take() {
-            app.on_payload(&payload, &mut send);
+            app.on_payload(payload.data(), &mut send);
         }
         while seen != clock::ticks() {
             seen = seen.wrapping_add(1);
-            rx::on_tick();
             app.on_tick(&mut send);
         }
         wait_for(|cs| !rx::is_pending(cs) && clock::ticks() == seen);

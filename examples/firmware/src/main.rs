@@ -19,4 +19,7 @@ fn UART0() {
 #[exception]
 fn SysTick() {
     mav_firmware::clock::on_systick();
+    // Here, not in the main loop: ticks the main loop catches up on come back to back,
+    // and would give up a frame whose next byte is on its way.
+    mav_firmware::rx::on_tick();
 }

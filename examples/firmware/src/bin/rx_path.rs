@@ -19,7 +19,7 @@ fn main() -> ! {
     let mut counts = [0u32; 2];
     loop {
         while let Some(payload) = rx::take() {
-            let valid = mcp_core::parse(&payload).is_ok();
+            let valid = mcp_core::parse(payload.data()).is_ok();
             counts[usize::from(valid)] += 1;
             black_box(&counts);
         }
