@@ -51,7 +51,9 @@
 //! timer calls [`Decoder::finish`] once, then `poll`, when the line goes quiet part way
 //! through a frame (see `finish`). The reply goes to the coordinator in a Transmit
 //! Request ([`TransmitRequestRepr::unicast`]), encoded with [`EncodeFrame::encode`] or
-//! built where it goes out from with [`InPlaceFrame`].
+//! built where it goes out from with [`InPlaceFrame`]. [`Inbox`] does the receiving in
+//! one value: the decoder, a fixed queue of payloads that a full queue loses none of,
+//! and the quiet-line timer.
 //!
 //! ```
 //! use xbee_api::{
