@@ -2,7 +2,8 @@
 //! same whether it is fed whole, in chunks of any sizes, or a byte at a time, and are
 //! those of the plain reference decoder over the whole input; the decoder takes new
 //! input after `finish` as if new; every frame it yields encodes and decodes to itself,
-//! and so does a node discovery answer in it.
+//! and so does a node discovery answer in it; an `Inbox` over the same stream hands
+//! over the payloads among its events.
 
 use xbee_api::{
     ApiMode, Decoder, DecoderMode, EncodeFrame, Frame, Mode1, Mode2, NodeInfo, RawFrame,
@@ -143,6 +144,10 @@ pub fn check_stream_with<const N: usize, M: DecoderMode>(
         stats,
         "decode_each counters differ from whole decode"
     );
+
+    // An inbox, its queue emptied on a schedule of the chunk sizes, hands over the
+    // payloads among those events.
+    crate::inbox::check_inbox(new(), sizes, stream, &expected);
 
     // After `finish` the decoder reads a new stream as a new decoder would.
     let mut again = Vec::new();
