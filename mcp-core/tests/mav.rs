@@ -449,3 +449,49 @@ fn the_vehicle_trait_is_object_safe() {
     assert_eq!(mav.handle(vehicle, &command, &mut buf), Ok(None));
     assert_eq!(mav.poll_changes(vehicle, &mut buf), Ok(Some(3)));
 }
+
+/// A vehicle with no position control and no trajectory: the required methods alone.
+struct Hover;
+
+impl Vehicle for Hover {
+    fn landing_state(&self) -> LandingState {
+        LandingState::Flight
+    }
+    fn set_landing(&mut self, _on: bool) {}
+    fn controller(&self) -> Controller {
+        Controller::Manual
+    }
+    fn set_controller(&mut self, _controller: Controller) {}
+    fn time(&self) -> u32 {
+        0
+    }
+    fn set_time(&mut self, _time: u32) {}
+    fn telemetry(&self, _id: TelemetryId) -> f32 {
+        0.0
+    }
+}
+
+#[test]
+fn a_vehicle_without_trajectories_reports_an_empty_one() {
+    let mut hover = Hover;
+    let mut mav = Mav::new(&hover);
+    let mut reply = |bytes: &[u8]| {
+        let Ok(Packet::Command(command)) = parse(bytes) else {
+            panic!("not a command: {bytes:02x?}");
+        };
+        let mut buf = [0u8; 255];
+        mav.handle(&mut hover, &command, &mut buf)
+            .unwrap()
+            .map(|len| buf[..len].to_vec())
+    };
+    // A trajectory of one waypoint: none was kept, and the report says so.
+    let mut set = vec![b'c', 0x04, 0x01];
+    set.extend(Waypoint::default().to_bytes());
+    assert_eq!(reply(&set).unwrap(), b"r\x04\x00");
+    assert_eq!(reply(b"c\x04\xff").unwrap(), b"r\x04\x00");
+    // Position set: no reply, nothing to do.
+    let mut position = vec![b'c', 0x07];
+    position.extend(1.5f32.to_le_bytes());
+    position.extend(2.5f32.to_le_bytes());
+    assert_eq!(reply(&position), None);
+}

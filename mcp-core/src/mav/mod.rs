@@ -39,10 +39,11 @@
 //!
 //! ```
 //! use mcp_core::mav::{Mav, Vehicle};
-//! use mcp_core::{parse, Packet, Controller, LandingState, TelemetryId, Waypoint, Waypoints};
+//! use mcp_core::{parse, Packet, Controller, LandingState, TelemetryId};
 //!
 //! struct Sim { landing: LandingState, controller: Controller, time: u32 }
 //!
+//! // No position control and no trajectory: the methods for those keep their defaults.
 //! impl Vehicle for Sim {
 //!     fn landing_state(&self) -> LandingState { self.landing }
 //!     fn set_landing(&mut self, on: bool) {
@@ -52,10 +53,7 @@
 //!     fn set_controller(&mut self, c: Controller) { self.controller = c }
 //!     fn time(&self) -> u32 { self.time }
 //!     fn set_time(&mut self, t: u32) { self.time = t }
-//!     fn set_position(&mut self, _elevator: f32, _aileron: f32) {}
 //!     fn telemetry(&self, _id: TelemetryId) -> f32 { 0.0 }
-//!     fn set_trajectory(&mut self, _waypoints: Waypoints<&[u8]>) {}
-//!     fn waypoint(&self, _index: usize) -> Option<Waypoint> { None }
 //! }
 //!
 //! let mut sim = Sim { landing: LandingState::Flight, controller: Controller::Manual, time: 0 };
@@ -165,7 +163,7 @@ impl Mav {
     /// ```
     /// use mcp_core::mav::Mav;
     /// use mcp_core::{Command, Controller, LandingState, StatusRequest};
-    /// # use mcp_core::{TelemetryId, Waypoint, Waypoints, mav::Vehicle};
+    /// # use mcp_core::{TelemetryId, mav::Vehicle};
     /// # struct Sim;
     /// # impl Vehicle for Sim {
     /// #     fn landing_state(&self) -> LandingState { LandingState::OnGround }
@@ -174,10 +172,7 @@ impl Mav {
     /// #     fn set_controller(&mut self, _c: Controller) {}
     /// #     fn time(&self) -> u32 { 0 }
     /// #     fn set_time(&mut self, _t: u32) {}
-    /// #     fn set_position(&mut self, _elevator: f32, _aileron: f32) {}
     /// #     fn telemetry(&self, _id: TelemetryId) -> f32 { 0.0 }
-    /// #     fn set_trajectory(&mut self, _waypoints: Waypoints<&[u8]>) {}
-    /// #     fn waypoint(&self, _index: usize) -> Option<Waypoint> { None }
     /// # }
     /// # let mut sim = Sim;
     /// let mut mav = Mav::with_state(LandingState::OnGround, Controller::Manual)
@@ -376,7 +371,7 @@ impl Mav {
     ///
     /// ```
     /// # use mcp_core::mav::{Mav, Vehicle};
-    /// # use mcp_core::{Controller, LandingState, TelemetryId, Waypoint, Waypoints};
+    /// # use mcp_core::{Controller, LandingState, TelemetryId};
     /// # struct Sim;
     /// # impl Vehicle for Sim {
     /// #     fn landing_state(&self) -> LandingState { LandingState::Flight }
@@ -385,10 +380,7 @@ impl Mav {
     /// #     fn set_controller(&mut self, _c: Controller) {}
     /// #     fn time(&self) -> u32 { 0 }
     /// #     fn set_time(&mut self, _t: u32) {}
-    /// #     fn set_position(&mut self, _elevator: f32, _aileron: f32) {}
     /// #     fn telemetry(&self, _id: TelemetryId) -> f32 { 1.5 }
-    /// #     fn set_trajectory(&mut self, _waypoints: Waypoints<&[u8]>) {}
-    /// #     fn waypoint(&self, _index: usize) -> Option<Waypoint> { None }
     /// # }
     /// let mut mav = Mav::with_state(LandingState::Flight, Controller::Manual);
     /// for id in 1..=20 {

@@ -11,6 +11,11 @@ use crate::{
 /// The trajectory is stored by the implementor (the firmware has no heap): the MAV
 /// hands it the waypoints of a trajectory set command, and reads them back one by one
 /// with [`Vehicle::waypoint`] to build the trajectory report.
+///
+/// A vehicle without position control or trajectories implements the six required
+/// methods alone: [`set_position`](Self::set_position),
+/// [`set_trajectory`](Self::set_trajectory) and [`set_slave`](Self::set_slave) do
+/// nothing by default, and [`waypoint`](Self::waypoint) has none.
 pub trait Vehicle {
     /// The current landing state.
     fn landing_state(&self) -> LandingState;
@@ -26,15 +31,28 @@ pub trait Vehicle {
     fn time(&self) -> u32;
     /// Sets the MAV time, POSIX seconds.
     fn set_time(&mut self, time: u32);
-    /// Sets the MAV position in a new coordinate system.
-    fn set_position(&mut self, elevator: f32, aileron: f32);
+    /// Sets the MAV position in a new coordinate system. Does nothing by default, for a
+    /// vehicle without position control.
+    fn set_position(&mut self, elevator: f32, aileron: f32) {
+        let _ = (elevator, aileron);
+    }
     /// The current value of a telemetry quantity (any id 0-255 may be asked for).
     fn telemetry(&self, id: TelemetryId) -> f32;
     /// Replaces the trajectory with these waypoints (at most 254; the vehicle may
-    /// keep fewer if its storage is smaller).
-    fn set_trajectory(&mut self, waypoints: Waypoints<&[u8]>);
-    /// The trajectory waypoint at `index`, `None` past the last one.
-    fn waypoint(&self, index: usize) -> Option<Waypoint>;
+    /// keep fewer if its storage is smaller). Keeps none by default, for a vehicle
+    /// that flies no trajectory: its trajectory report, in answer to the set command
+    /// and to the status request, is then empty, which tells the ground station that
+    /// none was taken.
+    fn set_trajectory(&mut self, waypoints: Waypoints<&[u8]>) {
+        let _ = waypoints;
+    }
+    /// The trajectory waypoint at `index`, `None` past the last one. `None` by default
+    /// (no trajectory kept): implement it together with
+    /// [`set_trajectory`](Self::set_trajectory).
+    fn waypoint(&self, index: usize) -> Option<Waypoint> {
+        let _ = index;
+        None
+    }
     /// Sets the slave MAV address of a slot, for coordinate system distribution. The
     /// MAV keeps the four addresses itself; this is for the effect. Does nothing by
     /// default.
