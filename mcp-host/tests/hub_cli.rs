@@ -87,6 +87,22 @@ fn line_with(lines: &mpsc::Receiver<String>, text: &str) -> String {
     }
 }
 
+/// Sends Ctrl-C (SIGINT) to the hub.
+#[cfg(unix)]
+fn sigint(hub: &Running) {
+    let pid = i32::try_from(hub.0.id()).expect("pid");
+    // SAFETY: kill(2) with the pid of a child of this process and a valid signal.
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
+}
+
+/// Ctrl-C to the hub: it exits with status 0; its `stopped:` summary line, from `out`.
+#[cfg(unix)]
+fn stop_hub(hub: &mut Running, out: &mpsc::Receiver<String>) -> String {
+    sigint(hub);
+    assert_eq!(hub.0.wait().unwrap().code(), Some(0));
+    line_with(out, "stopped:")
+}
+
 /// A hub on `radio`, listening on a free port of 127.0.0.1: the process, and its
 /// standard output and error line by line.
 fn start_hub(radio: &str) -> (Running, mpsc::Receiver<String>, mpsc::Receiver<String>) {
@@ -416,9 +432,7 @@ fn a_hub_records_what_its_radio_heard_and_said_for_every_client() {
     assert!(at.status.success(), "{at:?}");
 
     // Ctrl-C: the hub stops, and says what it recorded.
-    let pid = i32::try_from(hub.0.id()).expect("pid");
-    // SAFETY: kill(2) with the pid of a child of this process and a valid signal.
-    assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
+    sigint(&hub);
     let recorded = line_with(&out, "recorded ");
     assert_eq!(recorded, format!("recorded 5 frames to {path}"));
     assert_eq!(hub.0.wait().unwrap().code(), Some(0));
@@ -513,9 +527,7 @@ fn a_recording_that_cannot_be_written_stops_and_the_hub_goes_on_serving() {
             && warning.ends_with(": the recording stops here, the hub goes on serving"),
         "{warning}"
     );
-    let pid = i32::try_from(hub.0.id()).expect("pid");
-    // SAFETY: kill(2) with the pid of a child of this process and a valid signal.
-    assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
+    sigint(&hub);
     // Said again at the end, and the exit status says it.
     let said = line_with(&err, "cannot write to /dev/full");
     assert!(
@@ -565,11 +577,7 @@ fn frames_a_radio_sends_replayed_onto_the_hub_are_refused_and_said() {
         &err,
         "hub: 2 more frames of clients refused since the last such warning",
     );
-    let pid = i32::try_from(hub.0.id()).expect("pid");
-    // SAFETY: kill(2) with the pid of a child of this process and a valid signal.
-    assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
-    assert_eq!(hub.0.wait().unwrap().code(), Some(0));
-    let stopped = line_with(&out, "stopped:");
+    let stopped = stop_hub(&mut hub, &out);
     assert!(
         stopped.ends_with(" 3 frames from clients refused"),
         "{stopped}"
@@ -596,11 +604,7 @@ fn a_client_turned_away_is_said_at_once_and_counted_when_the_hub_stops() {
     ));
     let turned = line_with(&err, "turned away");
     assert_timed(&turned, " warning: hub: ");
-    let pid = i32::try_from(hub.0.id()).expect("pid");
-    // SAFETY: kill(2) with the pid of a child of this process and a valid signal.
-    assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
-    assert_eq!(hub.0.wait().unwrap().code(), Some(0));
-    let stopped = line_with(&out, "stopped:");
+    let stopped = stop_hub(&mut hub, &out);
     assert!(stopped.contains(": 64 clients, "), "{stopped}");
     let summary = line_with(&out, "clients: ");
     assert_eq!(summary, "clients: 1 client turned away (64 connected)");
@@ -628,11 +632,7 @@ fn a_clients_frame_that_fails_its_checksum_is_refused_and_said_with_the_hubs_mod
             && refused.contains("(the hub speaks API mode 1: is the client in the other?)"),
         "{refused}"
     );
-    let pid = i32::try_from(hub.0.id()).expect("pid");
-    // SAFETY: kill(2) with the pid of a child of this process and a valid signal.
-    assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
-    assert_eq!(hub.0.wait().unwrap().code(), Some(0));
-    let stopped = line_with(&out, "stopped:");
+    let stopped = stop_hub(&mut hub, &out);
     assert!(
         stopped.ends_with(" 1 frame from clients refused"),
         "{stopped}"
