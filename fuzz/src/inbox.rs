@@ -92,6 +92,6 @@ pub fn check_inbox<const N: usize, M: DecoderMode>(
     let (want, too_long) = payloads(expected);
     assert_eq!(got, want, "inbox payloads differ from the decoder's");
     let stats = inbox.stats();
-    assert_eq!(stats.packets as usize, want.len(), "inbox packets counted");
+    assert_eq!(stats.queued as usize, want.len(), "inbox payloads counted");
     assert_eq!(stats.too_long, too_long, "inbox payloads counted too long");
 }

@@ -21,30 +21,84 @@ const QUIET_TICKS: u8 = 2;
 /// `N` and `M` are the decoder's buffer and mode ([`Decoder<N, M>`]): size `N` with
 /// [`decoder_buffer_len`](crate::decoder_buffer_len) for the longest frame taken.
 ///
-/// - **A full queue loses nothing.** Events are taken from the decoder only while the
+/// - **A full queue drops no frame.** Events are taken from the decoder only while the
 ///   queue has room: when it is full, [`ready`](Self::ready) is `false`, the events the
 ///   decoder still holds wait there (in API mode 1 one byte can release several frames)
-///   and no byte should be taken off the UART, whose FIFO and flow control hold the
-///   sender back. [`read_from`](Self::read_from) follows these rules; so does a loop of
-///   `ready` and [`push`](Self::push). An interrupt handler masks the receive interrupt
-///   when the queue is full and, once [`pop`](Self::pop) made room, unmasks it and
-///   raises it (the decoder may hold frames for the slot freed, and no byte may come to
-///   raise it).
+///   and no byte is to be taken off the UART. [`read_from`](Self::read_from) follows
+///   these rules; so does a loop of `ready` and [`push`](Self::push). The receive
+///   interrupt masks itself when `read_from` says the queue is full; the main loop,
+///   once [`pop`](Self::pop) made room, unmasks it and raises it (the decoder may hold
+///   frames for the slot freed, and no byte may come to raise it). Meanwhile the bytes
+///   wait in the UART's FIFO: with hardware flow control (the radio's `D6=1`, its RTS
+///   wired) the radio then holds back; without it, a main loop slower to pop than the
+///   FIFO takes to fill (16 bytes: 1.4 ms at 115200 baud) loses bytes in the UART.
 /// - **A quiet line gives up the frame in progress.** In API mode 1 a stray 0x7E
 ///   (noise, a frame cut off) starts a candidate whose length field may reach past the
 ///   real frames behind it; they would wait until that many more bytes came. Call
 ///   [`tick`](Self::tick) from a periodic timer: a frame in progress at the second tick
-///   with no byte between is given up, its bytes scanned again
+///   with no byte pushed between is given up, its bytes scanned again
 ///   ([`Decoder::finish`]). Never while the queue is full: bytes wait in the UART
-///   then. Harmless in mode 2, where the next start delimiter ends a cut-off frame.
+///   then. Only bytes pushed count, so the timer reads the FIFO first (`read_from`,
+///   then `tick`), lest bytes that came while the receive interrupt was held off (by a
+///   critical section, or by the timer's own interrupt at the same priority) be taken
+///   for a quiet line. Harmless in mode 2, where the next start delimiter ends a
+///   cut-off frame.
 /// - **What is queued.** The RF data of each Receive Packet (0x90) and, for radios
 ///   set to `AO=1`, Explicit Rx Indicator (0x91), with its source addresses and
 ///   receive options ([`Received`]). Other valid frames (modem status, AT command
-///   responses...) are counted in [`InboxStats::other_frames`], payloads longer than `P`
-///   in [`InboxStats::too_long`], bad frames in the decoder's [`stats`](Decoder::stats).
+///   responses, and a 0x90 or 0x91 too short for its header) are counted in
+///   [`InboxStats::other_frames`], payloads longer than `P` in
+///   [`InboxStats::too_long`], bad frames in the decoder's [`stats`](Decoder::stats).
 ///
 /// Its RAM is the decoder's plus `Q` times about `P + 16` bytes. `const` to build, so it
-/// can live in a `static` (a `Mutex<RefCell<_>>` shared with the interrupt handler).
+/// can live in a `static` shared by the interrupt handlers and the main loop:
+///
+/// ```no_run
+/// use core::cell::RefCell;
+/// use critical_section::Mutex;
+/// use xbee_api::{ApiMode, Inbox, Mode2, ReceivePacketRepr, Received, decoder_buffer_len};
+///
+/// const PAYLOAD: usize = 84;
+/// const N: usize = decoder_buffer_len(ReceivePacketRepr::HEADER_LEN + PAYLOAD, ApiMode::Escaped);
+/// static INBOX: Mutex<RefCell<Inbox<N, Mode2, PAYLOAD, 4>>> = Mutex::new(RefCell::new(Inbox::new()));
+///
+/// # fn uart_read() -> Option<u8> { None }
+/// # fn uart_rx_interrupt(_on: bool) {}
+/// # fn uart_rx_pend() {}
+/// /// The UART's receive interrupt: its FIFO while the queue has room.
+/// fn on_uart_rx() {
+///     critical_section::with(|cs| {
+///         let Ok(mut inbox) = INBOX.borrow(cs).try_borrow_mut() else { return };
+///         if inbox.read_from(uart_read).is_err() {
+///             uart_rx_interrupt(false); // full: the bytes wait in the FIFO
+///         }
+///     });
+/// }
+///
+/// /// A periodic timer (every 50 ms, say): the FIFO first, then the tick.
+/// fn on_timer() {
+///     critical_section::with(|cs| {
+///         let Ok(mut inbox) = INBOX.borrow(cs).try_borrow_mut() else { return };
+///         if inbox.read_from(uart_read).is_err() {
+///             uart_rx_interrupt(false);
+///         }
+///         inbox.tick();
+///     });
+/// }
+///
+/// /// The main loop's next payload (an MCP packet in `data()`).
+/// fn take() -> Option<Received<PAYLOAD>> {
+///     critical_section::with(|cs| {
+///         let received = INBOX.borrow(cs).try_borrow_mut().ok()?.pop()?;
+///         // Room: the interrupt takes the events the decoder holds and the bytes waiting.
+///         uart_rx_interrupt(true);
+///         uart_rx_pend();
+///         Some(received)
+///     })
+/// }
+/// ```
+///
+/// The same steps, with the UART's FIFO an iterator:
 ///
 /// ```
 /// use xbee_api::{Address64, ApiMode, Inbox, Mode1, ReceivePacketRepr, decoder_buffer_len};
@@ -76,7 +130,7 @@ const QUIET_TICKS: u8 = 2;
 /// // Room again: unmask and raise the receive interrupt, which reads the rest.
 /// assert_eq!(inbox.read_from(|| fifo.next()), Ok(()));
 /// assert_eq!(inbox.len(), 1);
-/// assert_eq!(inbox.stats().packets, 3);
+/// assert_eq!(inbox.stats().queued, 3);
 ///
 /// // A frame cut off, then two timer ticks with no byte between: it is given up.
 /// let mut cut = frame[..6].iter().copied();
@@ -87,6 +141,7 @@ const QUIET_TICKS: u8 = 2;
 /// assert!(inbox.decoder().is_idle());
 /// assert_eq!(inbox.decoder().stats().truncated, 1);
 /// ```
+#[derive(Clone)]
 pub struct Inbox<const N: usize, M: DecoderMode, const P: usize, const Q: usize> {
     decoder: Decoder<N, M>,
     queue: Deque<Received<P>, Q>,
@@ -99,8 +154,9 @@ pub struct Inbox<const N: usize, M: DecoderMode, const P: usize, const Q: usize>
 
 /// One payload an [`Inbox`] received: the RF data of a Receive Packet (0x90) or an
 /// Explicit Rx Indicator (0x91), and who sent it.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
 pub struct Received<const P: usize> {
+    frame_type: u8,
     // The addresses as their bytes: an `Address64` would align the payloads queued to 8
     // bytes, and moving them would link a second `memcpy` into a firmware (156 bytes on
     // a Cortex-M3).
@@ -111,6 +167,12 @@ pub struct Received<const P: usize> {
 }
 
 impl<const P: usize> Received<P> {
+    /// The type of the frame it came in: 0x90 (Receive Packet) or 0x91 (Explicit Rx
+    /// Indicator, from a radio set to `AO=1`; its endpoints and cluster are not kept).
+    pub const fn frame_type(&self) -> u8 {
+        self.frame_type
+    }
+
     /// The sender's 64-bit address.
     pub const fn src64(&self) -> Address64 {
         Address64::from_bytes(self.src64)
@@ -122,7 +184,7 @@ impl<const P: usize> Received<P> {
     }
 
     /// The receive options bit field (0x01 acknowledged, 0x02 broadcast...:
-    /// [`receive_options`](crate::frame::receive_packet::options)).
+    /// [`receive_options`](crate::receive_options)).
     pub const fn options(&self) -> u8 {
         self.options
     }
@@ -133,14 +195,30 @@ impl<const P: usize> Received<P> {
     }
 }
 
+#[cfg(feature = "defmt")]
+impl<const P: usize> defmt::Format for Received<P> {
+    fn format(&self, f: defmt::Formatter<'_>) {
+        defmt::write!(
+            f,
+            "Received {{ frame_type: {=u8:#x}, src64: {}, src16: {}, options: {=u8:#x}, data: {=[u8]:x} }}",
+            self.frame_type,
+            self.src64(),
+            self.src16(),
+            self.options,
+            self.data()
+        )
+    }
+}
+
 /// What an [`Inbox`] did with the frames its decoder yielded. Counters wrap at
 /// `u32::MAX`; the decoder keeps its own ([`Inbox::decoder`]).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct InboxStats {
     /// Payloads queued.
-    pub packets: u32,
-    /// Valid frames of other types (modem status, AT command responses...), dropped.
+    pub queued: u32,
+    /// Valid frames of other types (modem status, AT command responses...), and Receive
+    /// Packets or Explicit Rx Indicators too short for their header, dropped.
     pub other_frames: u32,
     /// Receive Packets and Explicit Rx Indicators whose payload is longer than the
     /// inbox's `P`, dropped.
@@ -184,7 +262,7 @@ impl<const N: usize, M: DecoderMode, const P: usize, const Q: usize> Inbox<N, M,
             pending: false,
             quiet: 0,
             stats: InboxStats {
-                packets: 0,
+                queued: 0,
                 other_frames: 0,
                 too_long: 0,
             },
@@ -249,14 +327,22 @@ impl<const N: usize, M: DecoderMode, const P: usize, const Q: usize> Inbox<N, M,
     }
 
     /// One tick of a periodic timer: gives up the frame in progress at the second tick
-    /// with no byte pushed between ([`give_up`](Self::give_up)). The period must be
-    /// longer than the radio's longest pause inside a frame (it writes a frame's bytes
-    /// back to back: a few milliseconds leave room) and short enough for the frames a
-    /// stray 0x7E holds in API mode 1 to come out in time (50 ms in
-    /// `examples/firmware`).
+    /// with no byte pushed between ([`give_up`](Self::give_up)), and, once the line
+    /// has been quiet that long, at every tick after (a frame begun among the bytes a
+    /// give-up scanned again goes at the next). A byte pushed, or a [`pop`](Self::pop)
+    /// that frees a slot in a full queue, starts the count again.
     ///
-    /// Ticks that come back to back (an executor catching up) shorten the quiet time
-    /// they measure: call it from a timer interrupt, or count time yourself and call
+    /// The period must be longer than the radio's longest pause inside a frame (it
+    /// writes a frame's bytes back to back: a few milliseconds leave room) and short
+    /// enough for the frames a stray 0x7E holds in API mode 1 to come out in time
+    /// (50 ms in `examples/firmware`).
+    ///
+    /// Only bytes pushed count: read the UART's FIFO into the inbox
+    /// ([`read_from`](Self::read_from)) before each tick, or bytes that came while the
+    /// receive interrupt was held off (a critical section, the timer's interrupt
+    /// itself) would be taken for a quiet line and their frame given up. Ticks that
+    /// come back to back (an executor catching up) shorten the quiet time they
+    /// measure: call it from a timer interrupt, or count time yourself and call
     /// `give_up`.
     pub fn tick(&mut self) {
         self.quiet = self.quiet.saturating_add(1);
@@ -297,18 +383,30 @@ impl<const N: usize, M: DecoderMode, const P: usize, const Q: usize> Inbox<N, M,
     }
 
     /// Payloads queued.
-    pub fn len(&self) -> usize {
+    pub const fn len(&self) -> usize {
         self.queue.len()
     }
 
-    /// `true` if no payload is queued (a main loop's check before it sleeps).
-    pub fn is_empty(&self) -> bool {
-        self.queue.is_empty()
+    /// `true` if no payload is queued: a main loop's check before it sleeps, when each
+    /// `pop` from a full queue raises the receive interrupt (frames may wait in the
+    /// decoder, which the interrupt then takes).
+    pub const fn is_empty(&self) -> bool {
+        self.queue.len() == 0
     }
 
-    /// `true` if the queue is full: no byte may be taken until a [`pop`](Self::pop).
-    pub fn is_full(&self) -> bool {
-        self.queue.is_full()
+    /// `true` if the queue is full. Not `false` for "a byte may be taken": frames the
+    /// decoder holds may fill a slot freed; ask [`ready`](Self::ready).
+    pub const fn is_full(&self) -> bool {
+        self.queue.len() == Q
+    }
+
+    /// Empties the queue and drops the frame in progress and any events pending (after
+    /// a UART break, or the radio reset); keeps the counters.
+    pub fn reset(&mut self) {
+        self.queue.clear();
+        self.decoder.reset();
+        self.pending = false;
+        self.quiet = 0;
     }
 
     /// What was done with the frames received.
@@ -323,7 +421,8 @@ impl<const N: usize, M: DecoderMode, const P: usize, const Q: usize> Inbox<N, M,
     }
 }
 
-/// The queue, the counters and the payloads queued; not their bytes.
+/// The decoder, how many payloads are queued (not their bytes), whether events wait in
+/// the decoder, the quiet ticks counted and the counters.
 impl<const N: usize, M: DecoderMode, const P: usize, const Q: usize> fmt::Debug
     for Inbox<N, M, P, Q>
 {
@@ -332,6 +431,7 @@ impl<const N: usize, M: DecoderMode, const P: usize, const Q: usize> fmt::Debug
             .field("decoder", &self.decoder)
             .field("queued", &self.queue.len())
             .field("pending", &self.pending)
+            .field("quiet_ticks", &self.quiet)
             .field("stats", &self.stats)
             .finish_non_exhaustive()
     }
@@ -345,12 +445,13 @@ fn accept<const P: usize, const Q: usize>(
     frame: RawFrame<'_>,
 ) {
     let data = frame.data();
-    let (src64, src16, options, payload) = match data.first().copied() {
-        Some(frame_type::RECEIVE_PACKET) => match ReceivePacket::new_checked(data) {
+    let frame_type = data.first().copied().unwrap_or_default();
+    let (src64, src16, options, payload) = match frame_type {
+        frame_type::RECEIVE_PACKET => match ReceivePacket::new_checked(data) {
             Ok(rx) => (rx.src64(), rx.src16(), rx.options(), rx.data()),
             Err(_) => return count(&mut stats.other_frames),
         },
-        Some(frame_type::EXPLICIT_RX_INDICATOR) => match ExplicitRxIndicator::new_checked(data) {
+        frame_type::EXPLICIT_RX_INDICATOR => match ExplicitRxIndicator::new_checked(data) {
             Ok(rx) => (rx.src64(), rx.src16(), rx.options(), rx.data()),
             Err(_) => return count(&mut stats.other_frames),
         },
@@ -360,6 +461,7 @@ fn accept<const P: usize, const Q: usize>(
         return count(&mut stats.too_long);
     };
     let received = Received {
+        frame_type,
         src64: src64.to_bytes(),
         src16: src16.to_bytes(),
         options,
@@ -367,7 +469,7 @@ fn accept<const P: usize, const Q: usize>(
     };
     // The caller checked for room before it took the event.
     if queue.push_back(received).is_ok() {
-        count(&mut stats.packets);
+        count(&mut stats.queued);
     }
 }
 

@@ -164,7 +164,7 @@ pub use frame::modem_status::{ModemStatusFrame, ModemStatusRepr};
 pub use frame::node_identification_indicator::{
     NodeIdentificationIndicator, NodeIdentificationIndicatorRepr, SourceEvent,
 };
-pub use frame::receive_packet::{ReceivePacket, ReceivePacketRepr};
+pub use frame::receive_packet::{ReceivePacket, ReceivePacketRepr, options as receive_options};
 pub use frame::remote_at_command::{RemoteAtCommand, RemoteAtCommandRepr};
 pub use frame::remote_at_response::{RemoteAtResponse, RemoteAtResponseRepr};
 pub use frame::transmit_request::{

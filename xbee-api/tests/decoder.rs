@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{Owned, decode_bytes, decode_slices, frames, hex};
+use common::{Owned, decode_bytes, decode_slices, encode, frames, hex};
 use xbee_api::{
     Address16, Address64, ApiMode, DecodeError, Decoder, EncodeFrame, ExplicitRxIndicatorRepr,
     Frame, RawFrame, ReceivePacketRepr, TransmitRequestRepr, decoder_buffer_len,
@@ -18,13 +18,6 @@ fn both<const N: usize>(mode: ApiMode, stream: &[u8]) -> (Vec<Owned>, xbee_api::
     assert_eq!(slices, ones);
     assert_eq!(slices, bytes);
     slices
-}
-
-fn encode(frame: &impl EncodeFrame, mode: ApiMode) -> Vec<u8> {
-    let mut buf = vec![0u8; frame.encoded_len(mode)];
-    let n = frame.encode(mode, &mut buf).unwrap();
-    assert_eq!(n, buf.len());
-    buf
 }
 
 #[test]

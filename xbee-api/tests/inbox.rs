@@ -3,23 +3,19 @@
 //! payloads that a decoder feeding an unbounded list would, in order; a quiet line
 //! gives up the frame in progress at the second tick, never while the queue is full.
 
+mod common;
+
+use common::encode;
 use proptest::prelude::*;
 use xbee_api::{
-    Address16, Address64, AnyMode, ApiMode, Decoder, EncodeFrame, ExplicitRxIndicatorRepr,
-    FixedMode, Inbox, InboxFull, InboxStats, Mode1, Mode2, ModemStatus, ModemStatusRepr,
-    ReceivePacket, ReceivePacketRepr, decoder_buffer_len,
+    Address16, Address64, AnyMode, ApiMode, Decoder, ExplicitRxIndicatorRepr, FixedMode, Inbox,
+    InboxFull, InboxStats, Mode1, Mode2, ModemStatus, ModemStatusRepr, ReceivePacket,
+    ReceivePacketRepr, decoder_buffer_len,
 };
 
 const PAYLOAD: usize = 84;
 const N1: usize = decoder_buffer_len(ReceivePacketRepr::HEADER_LEN + PAYLOAD, ApiMode::Unescaped);
 const N2: usize = decoder_buffer_len(ReceivePacketRepr::HEADER_LEN + PAYLOAD, ApiMode::Escaped);
-
-fn encode(frame: &impl EncodeFrame, mode: ApiMode) -> Vec<u8> {
-    let mut wire = vec![0; frame.encoded_len(mode)];
-    let n = frame.encode(mode, &mut wire).unwrap();
-    wire.truncate(n);
-    wire
-}
 
 fn receive(src: u64, data: &[u8], mode: ApiMode) -> Vec<u8> {
     encode(
@@ -134,7 +130,7 @@ proptest! {
         prop_assert_eq!(&through_inbox::<N1, Mode1, 2>(&stream, &pops).0, &expected);
         let (got, inbox) = through_inbox::<N1, Mode1, 4>(&stream, &pops);
         prop_assert_eq!(&got, &expected);
-        prop_assert_eq!(inbox.stats().packets as usize, expected.len());
+        prop_assert_eq!(inbox.stats().queued as usize, expected.len());
     }
 
     /// Mode 2, the same.
@@ -147,7 +143,7 @@ proptest! {
         prop_assert_eq!(&through_inbox::<N2, Mode2, 1>(&stream, &pops).0, &expected);
         let (got, inbox) = through_inbox::<N2, Mode2, 3>(&stream, &pops);
         prop_assert_eq!(&got, &expected);
-        prop_assert_eq!(inbox.stats().packets as usize, expected.len());
+        prop_assert_eq!(inbox.stats().queued as usize, expected.len());
     }
 }
 
@@ -245,7 +241,7 @@ fn events_released_by_a_byte_wait_in_the_decoder_for_room() {
         assert_eq!(inbox.ready(), got == 3);
     }
     assert_eq!(got, 3);
-    assert_eq!(inbox.stats().packets, 3);
+    assert_eq!(inbox.stats().queued, 3);
 }
 
 #[test]
@@ -278,7 +274,7 @@ fn explicit_rx_indicators_other_frames_and_long_payloads() {
     assert_eq!(
         inbox.stats(),
         InboxStats {
-            packets: 2,
+            queued: 2,
             other_frames: 1,
             too_long: 1,
         }
@@ -293,7 +289,9 @@ fn explicit_rx_indicators_other_frames_and_long_payloads() {
             &b"t\x01"[..]
         )
     );
+    assert_eq!(first.frame_type(), 0x91);
     let second = inbox.pop().unwrap();
+    assert_eq!(second.frame_type(), 0x90);
     assert_eq!(
         (second.src64(), second.data()),
         (Address64(8), &[0x55; 8][..])
@@ -322,7 +320,7 @@ fn full_says_what_to_do() {
     let debug = format!("{inbox:?}");
     assert!(
         debug.starts_with("Inbox { decoder: Decoder { mode: Unescaped, capacity: 96")
-            && debug.ends_with("queued: 0, pending: false, stats: InboxStats { packets: 0, other_frames: 0, too_long: 0 }, .. }"),
+            && debug.ends_with("queued: 0, pending: false, quiet_ticks: 0, stats: InboxStats { queued: 0, other_frames: 0, too_long: 0 }, .. }"),
         "{debug}"
     );
 }
@@ -345,4 +343,26 @@ fn a_tick_takes_the_pending_events_before_it_gives_up() {
     assert_eq!(got, 2);
     assert!(inbox.decoder().is_idle(), "{inbox:?}");
     assert_eq!(inbox.decoder().stats().truncated, 2);
+}
+
+#[test]
+fn reset_drops_the_queue_the_frame_in_progress_and_the_pending_events() {
+    let mut inbox: Inbox<N1, Mode1, PAYLOAD, 1> = Inbox::new();
+    let frame = status_request();
+    // A stray delimiter holding two frames, given up: one queued, one pending; then
+    // the start of a third.
+    let line = [&[0x7E, 0x00, 0x42][..], &frame, &frame].concat();
+    let mut fifo = line.into_iter();
+    inbox.read_from(|| fifo.next()).unwrap();
+    inbox.tick();
+    inbox.tick();
+    assert!(inbox.is_full() && !inbox.ready());
+    inbox.reset();
+    assert!(inbox.is_empty() && inbox.ready() && inbox.decoder().is_idle());
+    assert_eq!(inbox.stats().queued, 1, "the counters are kept");
+    // A new frame comes out alone.
+    let mut fifo = frame.into_iter();
+    assert_eq!(inbox.read_from(|| fifo.next()), Err(InboxFull)); // a queue of one
+    assert_eq!(inbox.pop().unwrap().data(), b"c\x02\xff");
+    assert!(inbox.ready() && inbox.pop().is_none());
 }

@@ -1,7 +1,15 @@
 //! Helpers shared by the integration tests (included with `mod common;`).
 #![allow(dead_code)]
 
-use xbee_api::{ApiMode, DecodeError, Decoder, DecoderMode, Stats};
+use xbee_api::{ApiMode, DecodeError, Decoder, DecoderMode, EncodeFrame, Stats};
+
+/// `frame` encoded in `mode`, exactly its `encoded_len` bytes.
+pub(crate) fn encode(frame: &impl EncodeFrame, mode: ApiMode) -> Vec<u8> {
+    let mut buf = vec![0u8; frame.encoded_len(mode)];
+    let n = frame.encode(mode, &mut buf).unwrap();
+    assert_eq!(n, buf.len());
+    buf
+}
 
 /// Reads a file of the repository's `testdata` folder.
 pub(crate) fn testdata(name: &str) -> Vec<u8> {
