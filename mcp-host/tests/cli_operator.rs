@@ -6,7 +6,7 @@ use std::sync::mpsc::Receiver;
 
 mod common;
 
-use common::{GUARD, Running, spawn_lines, stderr_lines, stdout_lines, talking_peer};
+use common::{GUARD, Running, exit_code, spawn_lines, stderr_lines, stdout_lines, talking_peer};
 
 /// The demo MAV's address.
 const M: &str = "0013a20040b599b9";
@@ -63,18 +63,6 @@ fn send_signal(child: &std::process::Child, signal: libc::c_int) {
     // SAFETY: kill(2) with a pid of a child of this process and a valid signal.
     let r = unsafe { libc::kill(pid, signal) };
     assert_eq!(r, 0, "kill -{signal} {pid}");
-}
-
-/// The exit code of `child` (failure guard: [`GUARD`]).
-fn exit_code(child: &mut std::process::Child) -> Option<i32> {
-    let deadline = std::time::Instant::now() + GUARD;
-    loop {
-        if let Some(status) = child.try_wait().expect("wait") {
-            return status.code();
-        }
-        assert!(std::time::Instant::now() < deadline, "still running");
-        std::thread::yield_now();
-    }
 }
 
 /// The `tcp:` link a line describes (`listening on ADDR (connect with tcp:ADDR)`).

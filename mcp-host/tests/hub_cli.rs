@@ -537,6 +537,53 @@ fn a_recording_that_cannot_be_written_stops_and_the_hub_goes_on_serving() {
     assert_eq!(hub.0.wait().unwrap().code(), Some(1));
 }
 
+/// A recording into a pipe whose reader stopped taking: the file falls behind, never
+/// the hub, which takes Ctrl-C, stops, and says what the recording holds and misses.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_hub_recording_into_a_stuck_pipe_still_stops_on_ctrl_c() {
+    use std::os::fd::AsRawFd;
+    let dir = tempfile::tempdir().unwrap();
+    let (fifo, reader) = common::stuck_fifo(dir.path());
+    let path = fifo.to_str().unwrap();
+    let radio = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let link = format!("tcp:{}", radio.local_addr().unwrap());
+    let (mut hub, out, _err) = start_hub_with(&link, &["--api-mode", "1", "--record", path]);
+    let (mut socket, _) = radio.accept().unwrap();
+    // 2000 records of 13 bytes: 26 KB, for a pipe that takes 4 KiB.
+    let modem_status = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F];
+    std::io::Write::write_all(&mut socket, &modem_status.repeat(2000)).unwrap();
+    // The pipe full: its writer waits.
+    let deadline = std::time::Instant::now() + GUARD;
+    loop {
+        let mut queued: libc::c_int = 0;
+        // SAFETY: ioctl(2) FIONREAD on the pipe's read end, into a c_int.
+        assert_eq!(
+            unsafe { libc::ioctl(reader.as_raw_fd(), libc::FIONREAD, &mut queued) },
+            0
+        );
+        if queued > 4096 - 13 {
+            break;
+        }
+        assert!(
+            std::time::Instant::now() < deadline,
+            "the pipe never filled"
+        );
+        std::thread::yield_now();
+    }
+    sigint(&hub);
+    assert_eq!(common::exit_code(&mut hub.0), Some(0));
+    let recorded = line_with(&out, "recorded ");
+    let lost = recorded
+        .strip_prefix("recorded ")
+        .and_then(|rest| rest.split_once(&format!(" frames to {path} (")))
+        .and_then(|(_, lost)| lost.strip_suffix(" frames lost while writing the file fell behind)"))
+        .and_then(|n| n.parse::<u64>().ok())
+        .unwrap_or_else(|| panic!("{recorded}"));
+    assert!(lost > 1000, "{recorded}");
+    drop(reader);
+}
+
 #[cfg(unix)]
 #[test]
 fn frames_a_radio_sends_replayed_onto_the_hub_are_refused_and_said() {

@@ -474,3 +474,44 @@ pub fn error_chain(error: &dyn std::error::Error) -> Vec<String> {
         .map(ToString::to_string)
         .collect()
 }
+
+/// A FIFO made in `dir` whose read end is open, with room for 4 KiB, and never read:
+/// a recording's reader that has stopped taking (a `gzip` paused, say). Its path, and
+/// the read end, to keep open.
+#[cfg(target_os = "linux")]
+pub fn stuck_fifo(dir: &std::path::Path) -> (std::path::PathBuf, std::fs::File) {
+    use std::os::fd::AsRawFd;
+    use std::os::unix::fs::OpenOptionsExt;
+    let fifo = dir.join("stuck.fifo");
+    assert!(
+        std::process::Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .unwrap()
+            .success()
+    );
+    // Opened without waiting for a writer.
+    let reader = std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(libc::O_NONBLOCK)
+        .open(&fifo)
+        .unwrap();
+    // SAFETY: fcntl(2) on the pipe's read end, which `reader` owns.
+    assert_eq!(
+        unsafe { libc::fcntl(reader.as_raw_fd(), libc::F_SETPIPE_SZ, 4096) },
+        4096
+    );
+    (fifo, reader)
+}
+
+/// The exit code of `child`, once it ends (failure guard: [`GUARD`]).
+pub fn exit_code(child: &mut std::process::Child) -> Option<i32> {
+    let deadline = std::time::Instant::now() + GUARD;
+    loop {
+        if let Some(status) = child.try_wait().expect("wait") {
+            return status.code();
+        }
+        assert!(std::time::Instant::now() < deadline, "still running");
+        std::thread::yield_now();
+    }
+}

@@ -151,9 +151,12 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
                 let _ = Recorder::end(recorder).await;
                 return Err(closed);
             }
-            Some(frame) = next_frame(&mut recorder) => {
+            step = recorder_step(&mut recorder) => {
                 if let Some(recorder) = &mut recorder {
-                    recorder.take(&frame);
+                    match step {
+                        Ok(frame) => recorder.take(&frame),
+                        Err(failure) => recorder.stop(failure),
+                    }
                 }
             }
             _ = look.tick(), if fixed.is_some() => {
@@ -221,11 +224,21 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
     Recorder::end(recorder).await
 }
 
-/// The next frame for the recording, while it goes on; never, without one.
-async fn next_frame(recorder: &mut Option<Recorder>) -> Option<Record> {
-    match recorder {
-        Some(recorder) if recorder.going() => recorder.frames.next().await,
-        _ => std::future::pending().await,
+/// What the recording has next, while it goes on: a frame to take, or the failure of a
+/// write to its file as it fails; never, without one.
+async fn recorder_step(recorder: &mut Option<Recorder>) -> Result<Record, Failure> {
+    let Some(recorder) = recorder.as_mut().filter(|r| r.going()) else {
+        return std::future::pending().await;
+    };
+    let failed = async {
+        match &mut recorder.recording {
+            Some(recording) => recording.failed().await,
+            None => std::future::pending().await,
+        }
+    };
+    tokio::select! {
+        Some(frame) = recorder.frames.next() => Ok(frame),
+        failure = failed => Err(failure),
     }
 }
 
@@ -299,8 +312,9 @@ impl Recorder {
             }
         });
         let _ = drained.await;
-        if let Some(file) = &recorder.recording {
-            let missed = recorder.frames.missed();
+        if let Some(recording) = recorder.recording.take() {
+            let recorded = recording.end().await;
+            let missed = recorder.frames.missed() + recorded.missed;
             let missed = if missed > 0 {
                 format!(
                     " ({} lost while writing the file fell behind)",
@@ -311,9 +325,13 @@ impl Recorder {
             };
             out!(
                 "recorded {} to {}{missed}",
-                crate::counted(file.frames, "frame"),
-                file.path().display()
+                crate::counted(recorded.frames, "frame"),
+                recorded.path.display()
             );
+            // A write that failed as the hub stopped: the exit status says it.
+            if recorder.failure.is_none() {
+                recorder.failure = recorded.failure;
+            }
         } else if recorder.failure.is_none() {
             out!("recorded nothing: no frame came (the file was not made)");
         }

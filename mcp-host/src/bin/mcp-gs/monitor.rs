@@ -12,7 +12,7 @@ use mcp_host::{Diagnoser, Event, LinkEvent};
 
 use crate::link_args::{ApiModeChoice, LinkArgs, check_mode, hint};
 use crate::output::Output;
-use crate::recording::RecordingFile;
+use crate::recording::{Recording, RecordingFile};
 use crate::{Failure, Format};
 
 /// Arguments of `monitor`.
@@ -131,6 +131,7 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
                 interrupted = true;
                 None
             }
+            failure = write_failed(&mut recorder) => break Err(failure),
             _ = look.tick() => {
                 lost.tell(&stream.stats(), recorder.is_some(), false);
                 let found = diagnoser.as_mut().and_then(|d| d.look(stream.stats()));
@@ -276,9 +277,22 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
         },
     };
     lost.tell(&stream.stats(), recorder.is_some(), true);
+    // The frames still queued for the file, and what it could not take.
+    let recorded = match recorder {
+        Some(recording) => recording.end().await.said(),
+        None => Ok(()),
+    };
     // A failure of the monitor itself (a recording that could not be written) is said
     // before one of its output, and not hidden by a reader gone.
-    ended.and_then(|()| written(finished))
+    ended.and(recorded).and_then(|()| written(finished))
+}
+
+/// The failure of the recording's file, as the write fails; never, without one.
+async fn write_failed(recorder: &mut Option<Recording>) -> Failure {
+    match recorder {
+        Some(recording) => recording.failed().await,
+        None => std::future::pending().await,
+    }
 }
 
 /// How long the lines not yet written may take after Ctrl-C.
