@@ -29,7 +29,8 @@ fn link() -> impl Strategy<Value = Link> {
             };
             Link::serial_with(path, baud, flow_control)
         }),
-        (host.clone(), any::<u16>()).prop_map(|(host, port)| Link::tcp(host, port)),
+        // Port 0 is refused for a peer (`PortZero`); it means any port to listen on.
+        (host.clone(), 1u16..).prop_map(|(host, port)| Link::tcp(host, port)),
         (host, any::<u16>()).prop_map(|(addr, port)| Link::tcp_listen(addr, port)),
         Just(Link::Pty),
         "\\PC{1,20}".prop_map(Link::io),
