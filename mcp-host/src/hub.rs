@@ -86,8 +86,9 @@
 //!   nothing.
 //! - **Clients:** [`MAX_CLIENTS`] at once. A client that comes while as many are
 //!   connected takes the place of the one that closed its connection first (the hub
-//!   read its end: it sends nothing more), else of the one that has fallen behind the
-//!   radio's frames the longest, or is turned away if none has (counted in
+//!   read its end: it sends nothing more), else of the one that has taken none of the
+//!   radio's frames the longest while frames were dropped for it, [`STALLED`] at least,
+//!   or is turned away if none has (counted in
 //!   [`HubStats::clients_turned_away`]; the first is logged as a warning, the next ones
 //!   together at most once a second). A client that closed
 //!   its connection is still served until its place is taken: the hub cannot tell a
@@ -105,7 +106,9 @@
 //!   falling behind while the hub has room. A connection whose peer is gone without a
 //!   word (a laptop asleep, a cable pulled) is found out by TCP keepalive probes, from a
 //!   minute quiet on, every 10 s until the system gives up (9 probes on Linux: two and
-//!   a half minutes in all), and the client let go.
+//!   a half minutes in all), and the client let go; one gone while the radio's frames to
+//!   it wait unacknowledged, once the system stops sending them again (about a quarter
+//!   of an hour on Linux), or when its place is needed.
 //! - **Reading clients:** a client's frames are read as the radio's, with the hub's
 //!   [`LinkOptions`]: a frame longer than [`LinkOptions::max_frame_len`] is refused
 //!   (counted in [`HubStats::frames_refused`]) as soon as its length is read, and in
@@ -892,7 +895,8 @@ struct Connected {
     queue: mpsc::Sender<Bytes>,
     /// Ends its tasks.
     end: CancellationToken,
-    /// Since when its queue has been full (frames dropped for it) without being drained.
+    /// Since when frames have been dropped for it (its queue full) with none of its
+    /// queue taken: the first frame dropped since it last took one.
     behind: Arc<Mutex<Option<Instant>>>,
     /// Since when it has sent nothing more: its connection closed (or its sending side
     /// shut), or failed.
@@ -986,8 +990,9 @@ impl Serve {
                     lock(&self.routes).expire(Instant::now());
                     // The clients turned away since the last warning, once they stop.
                     if let Some(more) = self.turned_away.take_due(Instant::now()) {
+                        let clients = if more == 1 { "client" } else { "clients" };
                         tracing::warn!(
-                            "hub: {more} more clients turned away ({MAX_CLIENTS} connected)"
+                            "hub: {more} more {clients} turned away ({MAX_CLIENTS} connected)"
                         );
                     }
                     // Likewise the clients' frames refused since the last warning.
@@ -1038,8 +1043,13 @@ impl Serve {
                         }
                         self.broadcast(&event);
                         if self.radio_up && !was_up && listener.is_none() {
-                            check_radio_mode(&self.sender, self.mode, &self.routes, &self.ids)
-                                .await;
+                            // Ctrl-C does not wait for a radio slow to answer.
+                            let check =
+                                check_radio_mode(&self.sender, self.mode, &self.routes, &self.ids);
+                            tokio::select! {
+                                () = check => {}
+                                () = self.stop.cancelled() => {}
+                            }
                             // Unless the radio went away again, or the hub was stopped,
                             // while it was asked.
                             let still_up =
@@ -1123,27 +1133,29 @@ impl Serve {
     }
 
     /// Ends, for `peer`, a new one, the client that closed its connection first, or
-    /// without one the client that has fallen behind the radio's frames the longest;
-    /// whether there was one.
+    /// without one the client that has taken none of the radio's frames the longest,
+    /// [`STALLED`] at least; whether there was one.
     fn make_room(&mut self, peer: SocketAddr) -> bool {
-        let longest = |state: fn(&Connected) -> &Mutex<Option<Instant>>| {
+        let longest = |state: fn(&Connected) -> &Mutex<Option<Instant>>, least: Duration| {
             self.clients
                 .iter()
                 .enumerate()
                 .filter_map(|(index, client)| Some(((*lock(state(client)))?, index)))
+                .filter(|(since, _)| since.elapsed() >= least)
                 .min()
         };
-        let (why, since, index) = if let Some((since, index)) = longest(|c| &c.closed) {
-            (
-                "it has sent nothing since it closed its connection",
-                since,
-                index,
-            )
-        } else if let Some((since, index)) = longest(|c| &c.behind) {
-            ("it has taken none of the radio's frames", since, index)
-        } else {
-            return false;
-        };
+        let (why, since, index) =
+            if let Some((since, index)) = longest(|c| &c.closed, Duration::ZERO) {
+                (
+                    "it has sent nothing since it closed its connection",
+                    since,
+                    index,
+                )
+            } else if let Some((since, index)) = longest(|c| &c.behind, STALLED) {
+                ("it has taken none of the radio's frames", since, index)
+            } else {
+                return false;
+            };
         let gone = self.clients.swap_remove(index);
         gone.end.cancel();
         let client = gone.peer;
@@ -1232,20 +1244,32 @@ impl Serve {
     }
 }
 
+/// How long a client must have taken none of the radio's frames, while frames were
+/// dropped for it, before its place may go to a new client. The hub hands frames to the
+/// system in bursts, as a client's reads free about a third of the buffers of its
+/// connection (some 40 KB): a client that reads 4 KB/s or more, under half of what an
+/// XBee's UART carries at 115200 baud, takes some within this time, and keeps its
+/// place.
+pub const STALLED: Duration = Duration::from_secs(10);
+
 /// The send buffer the hub asks the system for on each client's connection (Linux
 /// doubles it): with [`CLIENT_QUEUE`], how far a client that reads nothing can be
 /// behind before frames are dropped for it.
 const CLIENT_SEND_BUFFER: usize = 64 * 1024;
 
 /// A client's connection quiet for a minute is probed every 10 s, and given up after 9
-/// probes unanswered (two and a half minutes in all), or once data written has gone
-/// unacknowledged as long: a client is let go later than a radio's link gives its
-/// peer up, as a laptop on a weak network may be slow to answer.
+/// probes unanswered (two and a half minutes in all): a client is let go later than a
+/// radio's link gives its peer up, as a laptop on a weak network may be slow to answer.
+/// No limit on data unacknowledged: Linux would count a client that stopped reading (a
+/// monitor suspended, a pager paused) as gone once it held that long, where the hub
+/// keeps it until its place is needed; one that is gone with data unacknowledged is
+/// let go once the system stops sending it again (about a quarter of an hour on
+/// Linux), or its place taken first.
 const CLIENT_KEEPALIVE: crate::transport::KeepAlive = crate::transport::KeepAlive {
     idle: Duration::from_secs(60),
     interval: Duration::from_secs(10),
     probes: 9,
-    unacknowledged: Duration::from_secs(150),
+    unacknowledged: None,
 };
 
 /// How long the hub waits to accept clients again after accepting one failed (out of
@@ -1334,8 +1358,9 @@ async fn check_radio_mode(
             tracing::warn!(
                 "hub: the radio did not answer AT AP (asked twice, {} \
                  each) in API mode {hub}: it may be in transparent mode (AP=0), or its baud \
-                 rate may differ from the link's{busy}; clients will hear nothing until \
-                 that is fixed",
+                 rate may differ from the link's{busy}, and clients would then hear \
+                 nothing until that is fixed (or it is slow to answer, behind a bridge: \
+                 then all is well)",
                 crate::render::Seconds(MODE_CHECK_TIMEOUT)
             )
         }
@@ -1579,9 +1604,11 @@ impl Client {
                 if let Err(error) = wr.write_all(&bytes).await {
                     return error.to_string();
                 }
-                if frames.is_empty() {
-                    // Caught up.
-                    *lock(&self.behind) = None;
+                // A frame taken: a client that reads, however slowly, is not one that
+                // stopped.
+                let mut behind = lock(&self.behind);
+                if behind.is_some() {
+                    *behind = None;
                 }
             }
             "the hub stopped".to_owned()

@@ -62,6 +62,9 @@ pub const MAGIC: &[u8; 6] = b"MCPREC";
 pub const VERSION: u16 = 1;
 /// Header length: magic and version.
 pub const HEADER_LEN: usize = 8;
+/// The length of each record's head: time (8 bytes), direction (1) and the frame data's
+/// length (2); the frame data follows.
+pub const RECORD_HEAD_LEN: usize = 11;
 
 /// Whether a frame came from the radio or went to it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -171,7 +174,7 @@ impl<W: Write> RecordWriter<W> {
             .unwrap_or_default()
             .as_micros();
         let micros = u64::try_from(micros).unwrap_or(u64::MAX);
-        let mut head = [0u8; 11];
+        let mut head = [0u8; RECORD_HEAD_LEN];
         head[..8].copy_from_slice(&micros.to_le_bytes());
         head[8] = match direction {
             Direction::Received => 0,
@@ -358,7 +361,7 @@ impl<R: Read> RecordReader<R> {
     }
 
     fn read_record(&mut self) -> Result<Option<Record>, RecordError> {
-        let mut head = [0u8; 11];
+        let mut head = [0u8; RECORD_HEAD_LEN];
         let mut got = read_full(&mut self.input, &mut head)?;
         // Another recording's header, joined on: passed over.
         while got >= HEADER_LEN && head[..6] == *MAGIC && head[6..8] == VERSION.to_le_bytes() {

@@ -1074,8 +1074,10 @@ impl Connector {
 /// `idle`, every `interval`, given up after `probes` unanswered (where the system lets
 /// the number be set: Linux, Android, macOS, iOS, FreeBSD, NetBSD, Windows 10 and
 /// later; else its own); and, on Linux, given up as well once data written has gone
-/// unacknowledged for `unacknowledged`, as keepalive probes only go out while nothing
-/// written waits.
+/// unacknowledged for `unacknowledged`, if given, as keepalive probes only go out while
+/// nothing written waits. (Linux counts a peer that takes nothing, its receive window
+/// closed, as unacknowledged too: a connection to a program that stopped reading is
+/// given up then.)
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct KeepAlive {
     pub(crate) idle: Duration,
@@ -1085,7 +1087,7 @@ pub(crate) struct KeepAlive {
     pub(crate) probes: u32,
     /// Linux alone takes it.
     #[cfg_attr(not(target_os = "linux"), allow(dead_code))]
-    pub(crate) unacknowledged: Duration,
+    pub(crate) unacknowledged: Option<Duration>,
 }
 
 /// A `tcp:` or `tcp-listen:` link's connection: a peer gone is found out within about
@@ -1095,7 +1097,7 @@ pub(crate) const LINK_KEEPALIVE: KeepAlive = KeepAlive {
     idle: Duration::from_secs(10),
     interval: Duration::from_secs(5),
     probes: 4,
-    unacknowledged: Duration::from_secs(30),
+    unacknowledged: Some(Duration::from_secs(30)),
 };
 
 /// Sets `socket` to find out a peer gone as `keep` says. A setting the system refuses
@@ -1121,7 +1123,7 @@ pub(crate) fn keep_alive(socket: &TcpStream, keep: &KeepAlive) {
         let _ = sock.set_tcp_keepalive(&keepalive);
     }
     #[cfg(target_os = "linux")]
-    let _ = sock.set_tcp_user_timeout(Some(keep.unacknowledged));
+    let _ = sock.set_tcp_user_timeout(keep.unacknowledged);
 }
 
 /// A Windows serial port's name without the device namespace it may be written with:
@@ -1139,7 +1141,7 @@ pub(crate) fn assert_kept_alive(stream: &TcpStream, keep: &KeepAlive) {
     assert_eq!(sock.tcp_keepalive_interval().unwrap(), keep.interval);
     assert_eq!(sock.tcp_keepalive_retries().unwrap(), keep.probes);
     #[cfg(target_os = "linux")]
-    assert_eq!(sock.tcp_user_timeout().unwrap(), Some(keep.unacknowledged));
+    assert_eq!(sock.tcp_user_timeout().unwrap(), keep.unacknowledged);
 }
 
 #[cfg(test)]

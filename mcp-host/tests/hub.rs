@@ -378,6 +378,24 @@ async fn hub_in_an_outage(
     (hub, client_stream, client)
 }
 
+/// A radio back after an outage that is slow to answer the hub's `AT AP` (up to
+/// `MODE_CHECK_TIMEOUT` twice): the hub stops at once all the same.
+#[tokio::test]
+async fn a_hub_stops_while_it_asks_a_radio_back_for_its_mode() {
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let (hub, _client_stream, _client) = hub_in_an_outage(&listener).await;
+    let (socket, _) = listener.accept().await.unwrap();
+    let mut radio =
+        tokio_util::codec::Framed::new(socket, mcp_host::codec::XBeeCodec::new(ApiMode::Unescaped));
+    let asked = next(&mut radio).await;
+    assert_eq!((asked[0], &asked[2..]), (0x08, &b"AP"[..]), "{asked:02X?}");
+    // Unanswered: stopped well before the hub would give the radio up.
+    let check = mcp_host::hub::MODE_CHECK_TIMEOUT;
+    tokio::time::timeout(check / 2, hub.stop())
+        .await
+        .expect("the hub stops without waiting for the radio's answer");
+}
+
 #[tokio::test]
 async fn clients_see_the_radios_outage_and_come_back_with_it() {
     let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();

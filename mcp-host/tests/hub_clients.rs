@@ -1,7 +1,7 @@
 //! Connections that take nothing from the hub cannot lock the others out: with
-//! `MAX_CLIENTS` connected, a new client takes the place of one that has fallen behind
-//! the radio's frames, never of one that keeps up; and one falls behind after a bounded
-//! number of frames. Over real TCP sockets.
+//! `MAX_CLIENTS` connected, a new client takes the place of one that has taken none of
+//! the radio's frames for `STALLED`, never of one that keeps up or reads, however
+//! slowly; and one falls behind after a bounded number of frames. Over real TCP sockets.
 
 mod common;
 
@@ -10,7 +10,7 @@ use std::time::Duration;
 use common::hub_wire::*;
 use futures::{SinkExt, StreamExt};
 use mcp_host::codec::{CodecItem, XBeeCodec};
-use mcp_host::hub::{Hub, MAX_CLIENTS};
+use mcp_host::hub::{Hub, MAX_CLIENTS, STALLED};
 use tokio::io::AsyncReadExt;
 use tokio::net::TcpStream;
 use tokio_util::codec::Framed;
@@ -111,6 +111,11 @@ async fn connections_that_take_nothing_give_their_place_to_new_clients_but_reade
             break;
         }
     }
+    // Behind, but not for long yet: the next is turned away.
+    let mut late = TcpStream::connect(hub.local_addr()).await.unwrap();
+    assert!(turned_away(&mut late).await);
+    // The time the hub gives a client that takes nothing.
+    tokio::time::sleep(STALLED).await;
 
     // New clients take the idle connections' places, one each.
     let mut new = Vec::new();
@@ -123,6 +128,72 @@ async fn connections_that_take_nothing_give_their_place_to_new_clients_but_reade
     radio_batch(&mut radio, &mut number, 1, &mut seen_rx).await;
     assert!(!reading.is_finished());
     drop(idle);
+    hub.stop().await;
+}
+
+/// A client that reads, but slower than the radio sends (a monitor on a slow network):
+/// frames are dropped for it, yet it keeps its place when the hub is full; those that
+/// read nothing lose theirs.
+#[tokio::test(flavor = "multi_thread")]
+async fn a_client_that_reads_slowly_keeps_its_place() {
+    const BATCH: u32 = 600; // 150 KB
+    const READ: usize = 64 * 1024; // a third of what it is sent
+    let (hub, mut radio) = hub_and_radio().await;
+    let (_reading, mut seen_rx) = numbered_monitor(&hub).await;
+    // The slow reader takes READ bytes whenever told to.
+    let slow = TcpStream::connect(hub.local_addr()).await.unwrap();
+    let (take, mut told) = tokio::sync::mpsc::unbounded_channel::<()>();
+    let (took, mut taken) = tokio::sync::mpsc::unbounded_channel::<usize>();
+    let slow_reader = tokio::spawn(async move {
+        let mut slow = slow;
+        let mut buf = vec![0u8; READ];
+        while told.recv().await.is_some() {
+            if slow.read_exact(&mut buf).await.is_err() {
+                return;
+            }
+            let _ = took.send(READ);
+        }
+    });
+    let mut slowly = async || {
+        take.send(()).unwrap();
+        taken.recv().await
+    };
+    let mut idle = Vec::new();
+    for _ in 2..MAX_CLIENTS {
+        idle.push(TcpStream::connect(hub.local_addr()).await.unwrap());
+    }
+    // Batches until every batch is dropped whole for the idle connections and in part
+    // for the slow reader, which reads a third of each.
+    let mut number = 0u32;
+    let mut rounds = 0;
+    loop {
+        let dropped = hub.stats().frames_dropped;
+        radio_batch(&mut radio, &mut number, BATCH, &mut seen_rx).await;
+        assert_eq!(slowly().await, Some(READ), "the slow reader reads");
+        rounds += 1;
+        let idle_behind = (MAX_CLIENTS - 2) as u64 * u64::from(BATCH);
+        if hub.stats().frames_dropped - dropped > idle_behind {
+            break;
+        }
+        assert!(rounds < 100, "never behind: {:?}", hub.stats());
+    }
+    // The time the hub gives a client that takes nothing; then one more batch, of which
+    // the slow reader takes a third as before.
+    tokio::time::sleep(STALLED).await;
+    radio_batch(&mut radio, &mut number, BATCH, &mut seen_rx).await;
+    assert_eq!(slowly().await, Some(READ), "the slow reader reads");
+    // The idle connections' places go to new clients; the slow reader keeps its own.
+    let mut new = Vec::new();
+    for _ in 2..MAX_CLIENTS {
+        new.push(served(&hub, &mut radio).await);
+    }
+    let mut late = TcpStream::connect(hub.local_addr()).await.unwrap();
+    assert!(
+        turned_away(&mut late).await,
+        "the slow reader lost its place"
+    );
+    drop((idle, new));
+    slow_reader.abort();
     hub.stop().await;
 }
 

@@ -496,11 +496,9 @@ pub fn stuck_fifo(dir: &std::path::Path) -> (std::path::PathBuf, std::fs::File) 
         .custom_flags(libc::O_NONBLOCK)
         .open(&fifo)
         .unwrap();
-    // SAFETY: fcntl(2) on the pipe's read end, which `reader` owns.
-    assert_eq!(
-        unsafe { libc::fcntl(reader.as_raw_fd(), libc::F_SETPIPE_SZ, 4096) },
-        4096
-    );
+    // SAFETY: fcntl(2) on the pipe's read end, which `reader` owns. (A page at least:
+    // more where pages are larger.)
+    assert!(unsafe { libc::fcntl(reader.as_raw_fd(), libc::F_SETPIPE_SZ, 4096) } >= 4096);
     (fifo, reader)
 }
 
@@ -513,5 +511,34 @@ pub fn exit_code(child: &mut std::process::Child) -> Option<i32> {
         }
         assert!(std::time::Instant::now() < deadline, "still running");
         std::thread::yield_now();
+    }
+}
+
+/// Writes modem statuses (associated) to `radio`, a hundred at a time, until the pipe
+/// read by `reader` (a [`stuck_fifo`]) takes no more: what it holds has not changed for
+/// 20 looks in a row (100 ms), frames still coming. The recording's writer then waits.
+/// (How much a pipe holds when full depends on the sizes of the writes.)
+#[cfg(target_os = "linux")]
+pub fn fill_the_pipe(radio: &mut std::net::TcpStream, reader: &std::fs::File) {
+    use std::os::fd::AsRawFd;
+    let modem_status = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F];
+    let deadline = std::time::Instant::now() + GUARD;
+    let (mut held, mut same) = (0, 0);
+    while held == 0 || same < 20 {
+        assert!(
+            std::time::Instant::now() < deadline,
+            "the pipe never filled"
+        );
+        std::io::Write::write_all(radio, &modem_status.repeat(100)).unwrap();
+        // Polled, not spun on.
+        std::thread::sleep(Duration::from_millis(5));
+        let mut queued: libc::c_int = 0;
+        // SAFETY: ioctl(2) FIONREAD on the pipe's read end, into a c_int.
+        assert_eq!(
+            unsafe { libc::ioctl(reader.as_raw_fd(), libc::FIONREAD, &mut queued) },
+            0
+        );
+        same = if queued == held { same + 1 } else { 0 };
+        held = queued;
     }
 }

@@ -90,22 +90,33 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
         ..args.link.options(true, Role::Hub).await?
     };
     let radio = &args.link.link;
+    // Heard from here on: Ctrl-C while the radio is asked for its mode stops the hub.
+    let ctrl_c = crate::interrupt::ctrl_c();
+    tokio::pin!(ctrl_c);
     // With a recording, the frames from the link's very first: the radio's first ones
     // and the hub's own AT AP too.
-    let started = match record {
-        Some(_) => Hub::start_tapped(radio, options, &args.listen)
-            .await
-            .map(|(hub, tap)| (hub, Some(tap))),
-        None => Hub::start(radio, options, &args.listen)
-            .await
-            .map(|hub| (hub, None)),
+    let start = async {
+        match record {
+            Some(_) => Hub::start_tapped(radio, options, &args.listen)
+                .await
+                .map(|(hub, tap)| (hub, Some(tap))),
+            None => Hub::start(radio, options, &args.listen)
+                .await
+                .map(|hub| (hub, None)),
+        }
+    };
+    let started = tokio::select! {
+        started = start => started,
+        interrupt = &mut ctrl_c => {
+            out!("stopped: {interrupt} before the hub served");
+            return Ok(());
+        }
     };
     let (hub, tap) = started.map_err(|e| match e {
         HubError::Connect(e) => connect_failure_as(radio, e, Role::Hub),
         HubError::Listen { addr, error, .. } => listen_failure(&addr, &error),
         other => Failure::link(other.to_string()),
     })?;
-    let ctrl_c = crate::interrupt::ctrl_c();
     let mut recorder = record.zip(tap).map(|(file, tap)| Recorder::new(file, tap));
     crate::link_args::announce_radio_side(hub.radio_link());
     let addr = hub.local_addr();
@@ -139,16 +150,18 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
     let mut diagnoser = fixed.map(|mode| Diagnoser::new(mode, mcp_host::Stats::default()));
     let mut hinted = false;
     let mut look = tokio::time::interval(Duration::from_secs(1));
-    tokio::pin!(ctrl_c);
     loop {
         tokio::select! {
             _ = &mut ctrl_c => break,
             () = hub.finished() => {
                 hub.stop().await;
                 let closed = Failure::link(format!("the link to {radio} closed"));
-                // The link's end is what the exit status says; the recording's failure
-                // was said when it came.
-                let _ = Recorder::end(recorder).await;
+                // The link's end is what the exit status says; a failure of the
+                // recording's as the hub stopped is said here (one before, as it came).
+                let said = recorder.as_ref().is_some_and(|r| r.failure.is_some());
+                if let (Err(failure), false) = (Recorder::end(recorder).await, said) {
+                    err!("mcp-gs: warning: {}", failure.message);
+                }
                 return Err(closed);
             }
             step = recorder_step(&mut recorder) => {
@@ -253,6 +266,9 @@ struct Recorder {
     /// Why the recording stopped, if it did: the hub goes on serving (a full disk does
     /// not cut the ground station off its MAV), and says it at the end.
     failure: Option<Failure>,
+    /// Whether the hub has stopped: a failure is then the end's alone, not said as one
+    /// the hub serves on after.
+    ending: bool,
 }
 
 impl Recorder {
@@ -262,6 +278,7 @@ impl Recorder {
             file: Some(file),
             recording: None,
             failure: None,
+            ending: false,
         }
     }
 
@@ -289,10 +306,12 @@ impl Recorder {
     }
 
     fn stop(&mut self, failure: Failure) {
-        err!(
-            "mcp-gs: warning: {}: the recording stops here, the hub goes on serving",
-            failure.message
-        );
+        if !self.ending {
+            err!(
+                "mcp-gs: warning: {}: the recording stops here, the hub goes on serving",
+                failure.message
+            );
+        }
         self.failure = Some(failure);
     }
 
@@ -302,6 +321,7 @@ impl Recorder {
         let Some(mut recorder) = recorder else {
             return Ok(());
         };
+        recorder.ending = true;
         // Bounded all the same: the link ended with the hub.
         let drained = tokio::time::timeout(Duration::from_secs(5), async {
             while recorder.going() {
@@ -314,17 +334,23 @@ impl Recorder {
         let _ = drained.await;
         if let Some(recording) = recorder.recording.take() {
             let recorded = recording.end().await;
-            let missed = recorder.frames.missed() + recorded.missed;
-            let missed = if missed > 0 {
-                format!(
-                    " ({} lost while writing the file fell behind)",
-                    crate::counted(missed, "frame")
-                )
-            } else {
-                String::new()
+            // Frames the hub's loop did not take from the link in time (the machine
+            // busy), and frames the file did not take in time.
+            let behind = recorder.frames.missed();
+            let lost: Vec<String> = [
+                (behind, "while the recording fell behind the link"),
+                (recorded.missed, "while writing the file fell behind"),
+            ]
+            .into_iter()
+            .filter(|(n, _)| *n > 0)
+            .map(|(n, why)| format!("{} lost {why}", crate::counted(n, "frame")))
+            .collect();
+            let lost = match lost.is_empty() {
+                true => String::new(),
+                false => format!(" ({})", lost.join(", ")),
             };
             out!(
-                "recorded {} to {}{missed}",
+                "recorded {} to {}{lost}",
                 crate::counted(recorded.frames, "frame"),
                 recorded.path.display()
             );

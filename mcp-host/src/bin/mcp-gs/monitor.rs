@@ -256,7 +256,8 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
         }
     };
     if output_failed {
-        return written(output.finish([]).await);
+        let failed = written(output.finish([]).await);
+        return end_recording(recorder, failed).await;
     }
     // What was not shown is counted, however the monitor ends.
     pending.extend(quiet.as_mut().and_then(|shown| shown.tell_if_due(true)));
@@ -278,13 +279,29 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
     };
     lost.tell(&stream.stats(), recorder.is_some(), true);
     // The frames still queued for the file, and what it could not take.
-    let recorded = match recorder {
-        Some(recording) => recording.end().await.said(),
-        None => Ok(()),
-    };
     // A failure of the monitor itself (a recording that could not be written) is said
     // before one of its output, and not hidden by a reader gone.
-    ended.and(recorded).and_then(|()| written(finished))
+    let ended = end_recording(recorder, ended).await;
+    ended.and_then(|()| written(finished))
+}
+
+/// Ends the recording, if there is one, after the monitor ended with `ended`: the
+/// frames queued written (or said missing), and its failure the monitor's if it had
+/// none, else said as a warning.
+async fn end_recording(
+    recorder: Option<Recording>,
+    ended: Result<(), Failure>,
+) -> Result<(), Failure> {
+    let Some(recording) = recorder else {
+        return ended;
+    };
+    match (ended, recording.end().await.said()) {
+        (Err(failure), Err(also)) => {
+            err!("mcp-gs: warning: {}", also.message);
+            Err(failure)
+        }
+        (ended, recorded) => ended.and(recorded),
+    }
 }
 
 /// The failure of the recording's file, as the write fails; never, without one.

@@ -5,6 +5,8 @@
 use std::fs::File;
 use std::io::{self, BufWriter};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, SystemTime};
 
 use mcp_host::record::{Direction, RecordWriter};
@@ -17,8 +19,17 @@ use crate::Failure;
 /// missed, not queued without bound.
 const QUEUE: usize = 4096;
 
-/// How long the frames still queued may take to be written once the command ends.
-const DRAIN: Duration = Duration::from_secs(5);
+/// How long the frames still queued may take to be written once the command ends (less
+/// than the few seconds Windows leaves a program once its console is closed).
+const DRAIN: Duration = Duration::from_secs(3);
+
+/// The most bytes written to the file at once: whole records of at most this many
+/// bytes, which a pipe takes whole or not at all (`PIPE_BUF` on Linux), so that a
+/// program ended while its reader waits leaves no record cut off in it.
+const CHUNK: usize = 4096;
+
+/// How long the last frames are written before the wait is said.
+const SAID_AFTER: Duration = Duration::from_secs(1);
 
 /// A recording's file, checked and not yet created: a recording is never lost to a
 /// mistyped link, as the file is refused before the link is opened and made only once
@@ -97,7 +108,7 @@ impl RecordingFile {
             io::ErrorKind::AlreadyExists => exists(path),
             _ => Failure::input(format!("cannot create {}: {e}", path.display())),
         })?;
-        let writer = RecordWriter::new(BufWriter::new(file))
+        let writer = RecordWriter::new(BufWriter::with_capacity(CHUNK, file))
             .map_err(|e| Failure::input(format!("cannot write {}: {e}", path.display())))?;
         Recording::start(writer, path.clone())
     }
@@ -106,25 +117,22 @@ impl RecordingFile {
 /// A frame for the recording.
 type Frame = (SystemTime, Direction, Vec<u8>);
 
-/// What the thread writing a recording ended with.
-struct Written {
-    /// Frames written to the file.
-    frames: u64,
-    /// The write that failed, if one did (the thread stops there).
-    failure: Option<Failure>,
-}
-
 /// A recording being made, written by a thread of its own: slow storage (a pipe whose
 /// reader pauses, a network file system) holds up that thread, never the command's
 /// loop, which goes on hearing Ctrl-C and serving its link.
 pub(crate) struct Recording {
     frames: mpsc::Sender<Frame>,
-    /// What the thread ended with. Sent before the thread lets go of its queue, so it
-    /// is there once the queue is seen closed.
-    ended: oneshot::Receiver<Written>,
-    /// The thread's end, once [`write`](Self::write) found it (its failure taken).
-    written: Option<Written>,
+    /// Frames the thread has written to the file and flushed.
+    flushed: Arc<AtomicU64>,
+    /// The thread's failed write, as it ends on one; nothing when it ends otherwise.
+    /// Sent before the thread lets go of its queue, so it is there once the queue is
+    /// seen closed.
+    ended: oneshot::Receiver<Option<Failure>>,
+    /// Whether the thread's end was seen, its failure taken.
+    over: bool,
     path: PathBuf,
+    /// Frames given to the thread.
+    sent: u64,
     /// Frames that came while [`QUEUE`] frames waited for the file, not recorded.
     missed: u64,
 }
@@ -134,11 +142,12 @@ pub(crate) struct Recorded {
     /// Frames written to the file.
     pub(crate) frames: u64,
     /// Frames not recorded: they came while the file was [`QUEUE`] frames behind, or
-    /// were still queued when it took no more in time at the end.
+    /// were still to be written when it took no more in time at the end.
     pub(crate) missed: u64,
     /// The file's path.
     pub(crate) path: PathBuf,
-    /// The write that failed, unless [`Recording::write`] gave it already.
+    /// The write that failed, unless [`Recording::write`] or [`Recording::failed`] gave
+    /// it already.
     pub(crate) failure: Option<Failure>,
 }
 
@@ -147,11 +156,18 @@ impl Recording {
     fn start(writer: RecordWriter<BufWriter<File>>, path: PathBuf) -> Result<Self, Failure> {
         let (frames, mut queued) = mpsc::channel(QUEUE);
         let (done, ended) = oneshot::channel();
-        let named = path.clone();
+        let flushed = Arc::new(AtomicU64::new(0));
+        let (counted, named) = (flushed.clone(), path.clone());
         std::thread::Builder::new()
             .name("mcp-gs recording".into())
             .spawn(move || {
-                let _ = done.send(write_all(writer, &mut queued, &named));
+                let failure = write_all(writer, &mut queued, &counted).err().map(|e| {
+                    Failure::new(
+                        Failure::OTHER,
+                        format!("cannot write to {}: {e}", named.display()),
+                    )
+                });
+                let _ = done.send(failure);
                 drop(queued);
             })
             .map_err(|e| {
@@ -162,9 +178,11 @@ impl Recording {
             })?;
         Ok(Recording {
             frames,
+            flushed,
             ended,
-            written: None,
+            over: false,
             path,
+            sent: 0,
             missed: 0,
         })
     }
@@ -179,20 +197,21 @@ impl Recording {
         frame: &[u8],
     ) -> Result<(), Failure> {
         match self.frames.try_send((time, direction, frame.to_vec())) {
-            Ok(()) => Ok(()),
+            Ok(()) => {
+                self.sent += 1;
+                Ok(())
+            }
             Err(mpsc::error::TrySendError::Full(_)) => {
                 self.missed += 1;
                 Ok(())
             }
+            Err(mpsc::error::TrySendError::Closed(_)) if self.over => Ok(()),
             Err(mpsc::error::TrySendError::Closed(_)) => {
-                if self.written.is_none() {
-                    self.written = Some(self.ended.try_recv().unwrap_or_else(|_| Written {
-                        frames: 0,
-                        failure: Some(failed_thread(&self.path)),
-                    }));
+                self.over = true;
+                match self.ended.try_recv() {
+                    Ok(failure) => failure.map_or(Ok(()), Err),
+                    Err(_) => Err(failed_thread(&self.path)),
                 }
-                let failure = self.written.as_mut().and_then(|w| w.failure.take());
-                failure.map_or(Ok(()), Err)
             }
         }
     }
@@ -200,55 +219,77 @@ impl Recording {
     /// A write's failure, as soon as the thread stopped on it (once); never otherwise.
     /// Cancel-safe: a `select!` branch.
     pub(crate) async fn failed(&mut self) -> Failure {
-        if self.written.is_none() {
+        if !self.over {
             // The thread ends before `end` only on a failed write.
-            let written = (&mut self.ended).await.unwrap_or_else(|_| Written {
-                frames: 0,
-                failure: Some(failed_thread(&self.path)),
-            });
-            self.written = Some(written);
+            let failure = (&mut self.ended)
+                .await
+                .unwrap_or_else(|_| Some(failed_thread(&self.path)));
+            self.over = true;
+            if let Some(failure) = failure {
+                return failure;
+            }
         }
-        match self.written.as_mut().and_then(|w| w.failure.take()) {
-            Some(failure) => failure,
-            None => std::future::pending().await,
-        }
+        std::future::pending().await
     }
 
     /// Ends the recording: the frames queued are written, for [`DRAIN`] at most (a
-    /// pipe's reader that takes nothing more does not keep the command).
+    /// pipe's reader that takes nothing more does not keep the command), or until
+    /// Ctrl-C; said if it takes longer than a second.
     pub(crate) async fn end(self) -> Recorded {
         let Recording {
             frames,
+            flushed,
             ended,
-            written,
+            over,
             path,
-            mut missed,
+            sent,
+            missed,
         } = self;
-        let queued = QUEUE - frames.capacity();
         drop(frames);
-        let written = match written {
-            Some(written) => written,
-            None => match tokio::time::timeout(DRAIN, ended).await {
-                Ok(Ok(written)) => written,
-                Ok(Err(_)) => Written {
-                    frames: 0,
-                    failure: Some(failed_thread(&path)),
-                },
+        let failure = match over {
+            true => None,
+            false => match Self::written(ended, &path).await {
+                Some(Ok(failure)) => failure,
+                Some(Err(_)) => Some(failed_thread(&path)),
                 // Still writing: what it wrote is in the file, the rest is not.
-                Err(_) => {
-                    missed += queued as u64;
-                    Written {
-                        frames: 0,
-                        failure: None,
-                    }
-                }
+                None => None,
             },
         };
+        let frames = flushed.load(Ordering::Acquire);
         Recorded {
-            frames: written.frames,
-            missed,
+            frames,
+            // What the thread was given and did not write, unless it stopped on a
+            // failure (said as such).
+            missed: match (&failure, over) {
+                (None, false) => missed + sent.saturating_sub(frames),
+                _ => missed,
+            },
             path,
-            failure: written.failure,
+            failure,
+        }
+    }
+}
+
+impl Recording {
+    /// The thread's end, once it has written the frames queued: in [`DRAIN`] at most,
+    /// said after [`SAID_AFTER`]; `None` if it had not by then, or Ctrl-C came.
+    async fn written(
+        ended: oneshot::Receiver<Option<Failure>>,
+        path: &Path,
+    ) -> Option<Result<Option<Failure>, oneshot::error::RecvError>> {
+        let mut ended = std::pin::pin!(ended);
+        if let Ok(ended) = tokio::time::timeout(SAID_AFTER, &mut ended).await {
+            return Some(ended);
+        }
+        err!(
+            "mcp-gs: writing the last frames to {} ({} at most; Ctrl-C stops now)",
+            path.display(),
+            mcp_host::render::Seconds(DRAIN)
+        );
+        let rest = DRAIN.saturating_sub(SAID_AFTER);
+        tokio::select! {
+            ended = tokio::time::timeout(rest, ended) => ended.ok(),
+            _ = crate::interrupt::ctrl_c() => None,
         }
     }
 }
@@ -276,44 +317,34 @@ fn failed_thread(path: &Path) -> Failure {
     )
 }
 
-/// The thread: writes each frame, and flushes it to the file as soon as no other is
-/// queued, so that what was recorded survives the program's end however it comes.
+/// The thread: writes each frame, in writes of whole records of at most [`CHUNK`]
+/// bytes, and flushes them to the file as soon as no other is queued, so that what was
+/// recorded survives the program's end however it comes; counts the frames flushed in
+/// `flushed`.
 fn write_all(
     mut writer: RecordWriter<BufWriter<File>>,
     queued: &mut mpsc::Receiver<Frame>,
-    path: &Path,
-) -> Written {
-    // Frames in the file, and those written since the last flush.
-    let (mut frames, mut unflushed) = (0u64, 0u64);
-    let mut flush = |writer: &mut RecordWriter<_>, unflushed: &mut u64| {
+    flushed: &AtomicU64,
+) -> io::Result<()> {
+    // Frames written since the last flush.
+    let mut unflushed = 0u64;
+    let flush = |writer: &mut RecordWriter<BufWriter<File>>, unflushed: &mut u64| {
         writer.flush()?;
-        frames += std::mem::take(unflushed);
+        flushed.fetch_add(std::mem::take(unflushed), Ordering::Release);
         io::Result::Ok(())
     };
-    let mut result = Ok(());
     while let Some((time, direction, frame)) = queued.blocking_recv() {
-        result = writer.write(time, direction, &frame);
-        if result.is_err() {
-            break;
+        let record = mcp_host::record::RECORD_HEAD_LEN + frame.len();
+        if writer.get_ref().buffer().len() + record > CHUNK {
+            flush(&mut writer, &mut unflushed)?;
         }
+        writer.write(time, direction, &frame)?;
         unflushed += 1;
         if queued.is_empty() {
-            result = flush(&mut writer, &mut unflushed);
-            if result.is_err() {
-                break;
-            }
+            flush(&mut writer, &mut unflushed)?;
         }
     }
-    let result = result.and_then(|()| flush(&mut writer, &mut unflushed));
-    Written {
-        frames,
-        failure: result.err().map(|e| {
-            Failure::new(
-                Failure::OTHER,
-                format!("cannot write to {}: {e}", path.display()),
-            )
-        }),
-    }
+    flush(&mut writer, &mut unflushed)
 }
 
 /// The failure of a `--record` file that exists.
