@@ -1335,14 +1335,7 @@ fn monitor_keeps_an_existing_recording() {
 fn monitor_records_into_a_pipe_that_is_read_and_refuses_one_that_is_not() {
     use std::os::unix::fs::OpenOptionsExt;
     let dir = tempfile::tempdir().unwrap();
-    let fifo = dir.path().join("flight.fifo");
-    assert!(
-        std::process::Command::new("mkfifo")
-            .arg(&fifo)
-            .status()
-            .unwrap()
-            .success()
-    );
+    let fifo = common::fifo(dir.path(), "flight.fifo");
     let path = fifo.to_str().unwrap();
     // Nothing reads it: refused once a frame is to be recorded, where the open would
     // wait for a reader, deaf to Ctrl-C.

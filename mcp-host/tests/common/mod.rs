@@ -475,14 +475,10 @@ pub fn error_chain(error: &dyn std::error::Error) -> Vec<String> {
         .collect()
 }
 
-/// A FIFO made in `dir` whose read end is open, with room for 4 KiB, and never read:
-/// a recording's reader that has stopped taking (a `gzip` paused, say). Its path, and
-/// the read end, to keep open.
-#[cfg(target_os = "linux")]
-pub fn stuck_fifo(dir: &std::path::Path) -> (std::path::PathBuf, std::fs::File) {
-    use std::os::fd::AsRawFd;
-    use std::os::unix::fs::OpenOptionsExt;
-    let fifo = dir.join("stuck.fifo");
+/// A FIFO (named pipe) made in `dir` under `name`: its path.
+#[cfg(unix)]
+pub fn fifo(dir: &std::path::Path, name: &str) -> std::path::PathBuf {
+    let fifo = dir.join(name);
     assert!(
         std::process::Command::new("mkfifo")
             .arg(&fifo)
@@ -490,6 +486,17 @@ pub fn stuck_fifo(dir: &std::path::Path) -> (std::path::PathBuf, std::fs::File) 
             .unwrap()
             .success()
     );
+    fifo
+}
+
+/// A FIFO made in `dir` whose read end is open, with room for 4 KiB, and never read:
+/// a recording's reader that has stopped taking (a `gzip` paused, say). Its path, and
+/// the read end, to keep open.
+#[cfg(target_os = "linux")]
+pub fn stuck_fifo(dir: &std::path::Path) -> (std::path::PathBuf, std::fs::File) {
+    use std::os::fd::AsRawFd;
+    use std::os::unix::fs::OpenOptionsExt;
+    let fifo = fifo(dir, "stuck.fifo");
     // Opened without waiting for a writer.
     let reader = std::fs::OpenOptions::new()
         .read(true)
