@@ -100,8 +100,9 @@
 //!   system's buffers of its connection (the hub asks for 64 KiB on its side; Linux
 //!   doubles that) and its queue of [`CLIENT_QUEUE`] frames hold (1 500 frames of 250
 //!   bytes on Linux): connections that read nothing (a script that forgot its sockets)
-//!   give their places up only then, while a monitor that reads, even one that sends
-//!   nothing for hours, never loses its place; no client is dropped for being quiet, as
+//!   give their places up only once they have fallen behind and taken nothing for
+//!   [`STALLED`], while a monitor that reads, even slowly, even one that sends nothing
+//!   for hours, never loses its place; no client is dropped for being quiet, as
 //!   quiet is what a monitor is on a quiet network. A client is not dropped either for
 //!   falling behind while the hub has room. A connection whose peer is gone without a
 //!   word (a laptop asleep, a cable pulled) is found out by TCP keepalive probes, from a
@@ -191,9 +192,9 @@ use crate::{
 pub const CLIENT_QUEUE: usize = 1024;
 
 /// Clients served at once, at most. A client that comes while as many are connected
-/// takes the place of one that closed its connection, or of the one that has fallen
-/// behind the radio's frames the longest (see the [module](self) docs); without one,
-/// it is turned away.
+/// takes the place of one that closed its connection, or of the one that has taken none
+/// of the radio's frames the longest, [`STALLED`] at least, while frames were dropped
+/// for it (see the [module](self) docs); without one, it is turned away.
 pub const MAX_CLIENTS: usize = 64;
 
 /// Requests of one client waiting for answers at once, at most (each holds one of the
@@ -1168,7 +1169,7 @@ impl Serve {
         } else {
             tracing::warn!(
                 "hub: client {client} dropped for {peer} ({MAX_CLIENTS} connected): {why} for \
-                 {since}"
+                 at least {since}"
             );
         }
         true
@@ -1247,10 +1248,10 @@ impl Serve {
 /// How long a client must have taken none of the radio's frames, while frames were
 /// dropped for it, before its place may go to a new client. The hub hands frames to the
 /// system in bursts, as a client's reads free about a third of the buffers of its
-/// connection (some 40 KB): a client that reads 4 KB/s or more, under half of what an
+/// connection (some 40 KB): a client that reads 4 KB/s or more, a third of what an
 /// XBee's UART carries at 115200 baud, takes some within this time, and keeps its
 /// place.
-pub const STALLED: Duration = Duration::from_secs(10);
+pub const STALLED: Duration = Duration::from_secs(20);
 
 /// The send buffer the hub asks the system for on each client's connection (Linux
 /// doubles it): with [`CLIENT_QUEUE`], how far a client that reads nothing can be

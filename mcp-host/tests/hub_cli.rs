@@ -542,16 +542,19 @@ fn a_recording_that_cannot_be_written_stops_and_the_hub_goes_on_serving() {
 #[cfg(unix)]
 #[test]
 fn ctrl_c_stops_a_hub_still_asking_its_radio() {
-    let radio = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
-    let link = format!("tcp:{}", radio.local_addr().unwrap());
-    let (mut hub, out, _err) = start_hub(&link);
-    let (_socket, _) = radio.accept().unwrap();
-    sigint(&hub);
-    assert_eq!(common::exit_code(&mut hub.0), Some(0));
-    assert_eq!(
-        line_with(&out, "stopped"),
-        "stopped: Ctrl-C before the hub served"
-    );
+    // The hub's own check, and `--api-mode auto` finding the mode out first.
+    for mode in ["1", "auto"] {
+        let radio = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+        let link = format!("tcp:{}", radio.local_addr().unwrap());
+        let (mut hub, out, _err) = start_hub_with(&link, &["--api-mode", mode]);
+        let (_socket, _) = radio.accept().unwrap();
+        sigint(&hub);
+        assert_eq!(common::exit_code(&mut hub.0), Some(0), "{mode}");
+        assert_eq!(
+            line_with(&out, "stopped"),
+            "stopped: Ctrl-C before the hub served"
+        );
+    }
 }
 
 /// A recording into a pipe whose reader stopped taking: the file falls behind, never

@@ -82,17 +82,25 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
         .as_deref()
         .map(|path| RecordingFile::check(path, args.force))
         .transpose()?;
+    // Heard from here on: Ctrl-C while the radio is asked for its mode (`--api-mode
+    // auto`, and the hub's own check) stops the hub.
+    let ctrl_c = crate::interrupt::ctrl_c();
+    tokio::pin!(ctrl_c);
+    let options = tokio::select! {
+        options = args.link.options(true, Role::Hub) => options?,
+        interrupt = &mut ctrl_c => {
+            out!("stopped: {interrupt} before the hub served");
+            return Ok(());
+        }
+    };
     let options = mcp_host::LinkOptions {
         wait_for_link: args.wait,
         // Its clients may be anyone who reaches its port: no frame longer than a request
         // is (every frame of the radio's fits too).
         max_frame_len: mcp_host::codec::MAX_REQUEST_DATA,
-        ..args.link.options(true, Role::Hub).await?
+        ..options
     };
     let radio = &args.link.link;
-    // Heard from here on: Ctrl-C while the radio is asked for its mode stops the hub.
-    let ctrl_c = crate::interrupt::ctrl_c();
-    tokio::pin!(ctrl_c);
     // With a recording, the frames from the link's very first: the radio's first ones
     // and the hub's own AT AP too.
     let start = async {

@@ -139,7 +139,8 @@ pub(crate) struct Recording {
 
 /// How a recording ended.
 pub(crate) struct Recorded {
-    /// Frames written to the file.
+    /// Frames written to the file (at least: the thread may be finishing a write as the
+    /// wait for it ends).
     pub(crate) frames: u64,
     /// Frames not recorded: they came while the file was [`QUEUE`] frames behind, or
     /// were still to be written when it took no more in time at the end.
@@ -277,19 +278,21 @@ impl Recording {
         ended: oneshot::Receiver<Option<Failure>>,
         path: &Path,
     ) -> Option<Result<Option<Failure>, oneshot::error::RecvError>> {
-        let mut ended = std::pin::pin!(ended);
-        if let Ok(ended) = tokio::time::timeout(SAID_AFTER, &mut ended).await {
-            return Some(ended);
-        }
-        err!(
-            "mcp-gs: writing the last frames to {} ({} at most; Ctrl-C stops now)",
-            path.display(),
-            mcp_host::render::Seconds(DRAIN)
-        );
-        let rest = DRAIN.saturating_sub(SAID_AFTER);
+        // Listening at once: a Ctrl-C before the wait is said stops it too.
+        let ctrl_c = crate::interrupt::ctrl_c();
+        let said = async {
+            tokio::time::sleep(SAID_AFTER).await;
+            err!(
+                "mcp-gs: writing the last frames to {} ({} at most; Ctrl-C stops now)",
+                path.display(),
+                mcp_host::render::Seconds(DRAIN)
+            );
+            std::future::pending::<()>().await;
+        };
         tokio::select! {
-            ended = tokio::time::timeout(rest, ended) => ended.ok(),
-            _ = crate::interrupt::ctrl_c() => None,
+            ended = tokio::time::timeout(DRAIN, ended) => ended.ok(),
+            _ = ctrl_c => None,
+            () = said => None,
         }
     }
 }
