@@ -1607,10 +1607,7 @@ impl Client {
                 }
                 // A frame taken: a client that reads, however slowly, is not one that
                 // stopped.
-                let mut behind = lock(&self.behind);
-                if behind.is_some() {
-                    *behind = None;
-                }
+                *lock(&self.behind) = None;
             }
             "the hub stopped".to_owned()
         };

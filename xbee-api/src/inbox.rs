@@ -299,6 +299,12 @@ impl<const N: usize, M: DecoderMode, const P: usize, const Q: usize> Inbox<N, M,
         if !self.ready() {
             return Err(InboxFull);
         }
+        self.feed(byte);
+        Ok(())
+    }
+
+    /// [`push`](Self::push) once [`ready`](Self::ready) said yes.
+    fn feed(&mut self, byte: u8) {
         self.quiet = 0;
         let event = self.decoder.push(byte);
         self.pending = event.is_some();
@@ -306,7 +312,6 @@ impl<const N: usize, M: DecoderMode, const P: usize, const Q: usize> Inbox<N, M,
         if let Some(Ok(frame)) = event {
             accept(&mut self.queue, &mut self.stats, frame);
         }
-        Ok(())
     }
 
     /// Feeds the bytes `read` gives (the UART's receive FIFO, a byte a call) while the
@@ -321,7 +326,7 @@ impl<const N: usize, M: DecoderMode, const P: usize, const Q: usize> Inbox<N, M,
             let Some(byte) = read() else {
                 return Ok(());
             };
-            self.push(byte)?;
+            self.feed(byte);
         }
         Err(InboxFull)
     }

@@ -14,7 +14,7 @@ use mcp_host::{Diagnoser, Subscription};
 
 use crate::Failure;
 use crate::link_args::{ApiModeChoice, LinkArgs, Role, connect_failure_as, hint};
-use crate::recording::{Recording, RecordingFile};
+use crate::recording::{self, Recording, RecordingFile};
 
 /// Arguments of `hub`.
 #[derive(Debug, Args)]
@@ -86,45 +86,38 @@ pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
     // auto`, and the hub's own check) stops the hub.
     let ctrl_c = crate::interrupt::ctrl_c();
     tokio::pin!(ctrl_c);
-    let options = tokio::select! {
-        options = args.link.options(true, Role::Hub) => options?,
-        interrupt = &mut ctrl_c => {
-            out!("stopped: {interrupt} before the hub served");
-            return Ok(());
-        }
-    };
-    let options = mcp_host::LinkOptions {
-        wait_for_link: args.wait,
-        // Its clients may be anyone who reaches its port: no frame longer than a request
-        // is (every frame of the radio's fits too).
-        max_frame_len: mcp_host::codec::MAX_REQUEST_DATA,
-        ..options
-    };
     let radio = &args.link.link;
-    // With a recording, the frames from the link's very first: the radio's first ones
-    // and the hub's own AT AP too.
     let start = async {
-        match record {
+        let options = mcp_host::LinkOptions {
+            wait_for_link: args.wait,
+            // Its clients may be anyone who reaches its port: no frame longer than a
+            // request is (every frame of the radio's fits too).
+            max_frame_len: mcp_host::codec::MAX_REQUEST_DATA,
+            ..args.link.options(true, Role::Hub).await?
+        };
+        // With a recording, the frames from the link's very first: the radio's first
+        // ones and the hub's own AT AP too.
+        let started = match record {
             Some(_) => Hub::start_tapped(radio, options, &args.listen)
                 .await
                 .map(|(hub, tap)| (hub, Some(tap))),
             None => Hub::start(radio, options, &args.listen)
                 .await
                 .map(|hub| (hub, None)),
-        }
+        };
+        started.map_err(|e| match e {
+            HubError::Connect(e) => connect_failure_as(radio, e, Role::Hub),
+            HubError::Listen { addr, error, .. } => listen_failure(&addr, &error),
+            other => Failure::link(other.to_string()),
+        })
     };
-    let started = tokio::select! {
-        started = start => started,
+    let (hub, tap) = tokio::select! {
+        started = start => started?,
         interrupt = &mut ctrl_c => {
             out!("stopped: {interrupt} before the hub served");
             return Ok(());
         }
     };
-    let (hub, tap) = started.map_err(|e| match e {
-        HubError::Connect(e) => connect_failure_as(radio, e, Role::Hub),
-        HubError::Listen { addr, error, .. } => listen_failure(&addr, &error),
-        other => Failure::link(other.to_string()),
-    })?;
     let mut recorder = record.zip(tap).map(|(file, tap)| Recorder::new(file, tap));
     crate::link_args::announce_radio_side(hub.radio_link());
     let addr = hub.local_addr();
@@ -251,15 +244,9 @@ async fn recorder_step(recorder: &mut Option<Recorder>) -> Result<Record, Failur
     let Some(recorder) = recorder.as_mut().filter(|r| r.going()) else {
         return std::future::pending().await;
     };
-    let failed = async {
-        match &mut recorder.recording {
-            Some(recording) => recording.failed().await,
-            None => std::future::pending().await,
-        }
-    };
     tokio::select! {
         Some(frame) = recorder.frames.next() => Ok(frame),
-        failure = failed => Err(failure),
+        failure = recording::write_failed(&mut recorder.recording) => Err(failure),
     }
 }
 

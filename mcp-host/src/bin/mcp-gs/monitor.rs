@@ -12,7 +12,7 @@ use mcp_host::{Diagnoser, Event, LinkEvent};
 
 use crate::link_args::{ApiModeChoice, LinkArgs, check_mode, hint};
 use crate::output::Output;
-use crate::recording::{Recording, RecordingFile};
+use crate::recording::{self, Recording, RecordingFile};
 use crate::{Failure, Format};
 
 /// Arguments of `monitor`.
@@ -131,7 +131,7 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
                 interrupted = true;
                 None
             }
-            failure = write_failed(&mut recorder) => break Err(failure),
+            failure = recording::write_failed(&mut recorder) => break Err(failure),
             _ = look.tick() => {
                 lost.tell(&stream.stats(), recorder.is_some(), false);
                 let found = diagnoser.as_mut().and_then(|d| d.look(stream.stats()));
@@ -278,9 +278,9 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
         },
     };
     lost.tell(&stream.stats(), recorder.is_some(), true);
-    // The frames still queued for the file, and what it could not take.
-    // A failure of the monitor itself (a recording that could not be written) is said
-    // before one of its output, and not hidden by a reader gone.
+    // The frames still queued for the file, and what it could not take. A failure of
+    // the monitor itself (a recording that could not be written) is said before one of
+    // its output, and not hidden by a reader gone.
     let ended = end_recording(recorder, ended).await;
     ended.and_then(|()| written(finished))
 }
@@ -301,14 +301,6 @@ async fn end_recording(
             Err(failure)
         }
         (ended, recorded) => ended.and(recorded),
-    }
-}
-
-/// The failure of the recording's file, as the write fails; never, without one.
-async fn write_failed(recorder: &mut Option<Recording>) -> Failure {
-    match recorder {
-        Some(recording) => recording.failed().await,
-        None => std::future::pending().await,
     }
 }
 

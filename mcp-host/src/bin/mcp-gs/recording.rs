@@ -269,9 +269,7 @@ impl Recording {
             failure,
         }
     }
-}
 
-impl Recording {
     /// The thread's end, once it has written the frames queued: in [`DRAIN`] at most,
     /// said after [`SAID_AFTER`]; `None` if it had not by then, or Ctrl-C came.
     async fn written(
@@ -309,6 +307,15 @@ impl Recorded {
             );
         }
         self.failure.map_or(Ok(()), Err)
+    }
+}
+
+/// The failure of `recording`'s file, as a write fails; never, without one. Cancel-safe:
+/// a `select!` branch.
+pub(crate) async fn write_failed(recording: &mut Option<Recording>) -> Failure {
+    match recording {
+        Some(recording) => recording.failed().await,
+        None => std::future::pending().await,
     }
 }
 
