@@ -387,6 +387,31 @@ impl<const N: usize, M: DecoderMode, const P: usize, const Q: usize> Inbox<N, M,
         Some(received)
     }
 
+    /// The oldest payload queued, left in the queue: to handle it in place (inside the
+    /// critical section that holds the inbox) and [`pop`](Self::pop) it after, rather
+    /// than copy it out.
+    ///
+    /// ```
+    /// # use xbee_api::{Inbox, Mode1};
+    /// # let frame = [0x7E, 0x00, 0x0F, 0x90, 0x00, 0x13, 0xA2, 0x00, 0x40, 0x52, 0x2B, 0xAA,
+    /// #     0xFF, 0xFE, 0x01, 0x63, 0x02, 0xFF, 0xF1];
+    /// let mut inbox = Inbox::<32, Mode1, 16, 2>::new();
+    /// inbox.read_from({ let mut fifo = frame.iter().copied(); move || fifo.next() })?;
+    /// if let Some(received) = inbox.peek() {
+    ///     assert_eq!(received.data(), b"c\x02\xff");
+    /// }
+    /// assert_eq!(inbox.len(), 1);
+    /// # Ok::<(), xbee_api::InboxFull>(())
+    /// ```
+    pub fn peek(&self) -> Option<&Received<P>> {
+        self.queue.front()
+    }
+
+    /// The payloads queued, oldest first, left in the queue.
+    pub fn iter(&self) -> impl DoubleEndedIterator<Item = &Received<P>> + ExactSizeIterator {
+        self.queue.iter()
+    }
+
     /// Payloads queued.
     pub const fn len(&self) -> usize {
         self.queue.len()

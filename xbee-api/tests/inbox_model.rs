@@ -160,7 +160,16 @@ fn run<const N: usize, M: DecoderMode, const Q: usize>(
     };
     let pop = |inbox: &mut Inbox<N, M, P, Q>, got: &mut Vec<Item>, quiet: &mut u32| {
         let was_full = inbox.is_full();
-        if let Some(r) = inbox.pop() {
+        // What `peek` and `iter` show is what `pop` then takes, in its order.
+        let peeked = inbox.peek().cloned();
+        let queued: Vec<_> = inbox.iter().cloned().collect();
+        assert_eq!(queued.len(), inbox.len());
+        assert_eq!(queued.first(), peeked.as_ref());
+        assert_eq!(inbox.iter().next_back(), queued.last());
+        let popped = inbox.pop();
+        assert_eq!(popped, peeked);
+        assert!(inbox.iter().eq(&queued[queued.len().min(1)..]));
+        if let Some(r) = popped {
             if was_full {
                 *quiet = 0
             }
