@@ -38,7 +38,12 @@
 //!   buffers, a serial-to-TCP bridge's) could otherwise hold seconds of one client's
 //!   frames before another's. A client's frames wait their turn [`CLIENT_FRAMES_TO_RADIO`]
 //!   at most; the hub reads no more of them meanwhile, so a client that writes nonstop
-//!   slows itself alone.
+//!   slows itself alone. What it wrote ahead waits in the operating system's buffers of
+//!   its connection (on both machines: megabytes, minutes of a radio's time at 115200
+//!   baud), which the hub cannot date: frames with frame id 0 have no age limit, and go
+//!   to the radio even after their client has left. A client that must not have its
+//!   frames sent late waits for each one's answer (gives it a frame id: requests not
+//!   sent in [`REQUEST_WAIT`] are refused) rather than writing ahead of the radio.
 //! - **Frame ids:** the radio's link has 255. A client has at most
 //!   [`ROUTES_PER_CLIENT`] requests waiting for answers at once; its next request
 //!   waits (and the hub reads no more of its frames meanwhile) until one is answered,
