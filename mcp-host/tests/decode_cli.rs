@@ -248,6 +248,32 @@ fn a_noisy_capture_in_the_right_mode_is_not_told_to_try_the_other() {
 }
 
 #[test]
+fn frames_too_long_for_mode_1_alone_are_no_sign_of_mode_2() {
+    // Receive Packets of 509 to 512 bytes of frame data, with no byte mode 2 escapes:
+    // too long for the decoder in mode 1 (508), not in mode 2 (512), and no more a
+    // mode 2 capture for that. Between them, short ones.
+    let frame = |len: usize| {
+        let mut data = vec![
+            0x90, 0, 0x13, 0xA2, 0, 0x40, 0xB5, 0x99, 0xB9, 0xFF, 0xFE, 0x01,
+        ];
+        data.resize(len, b'a');
+        let sum = data.iter().fold(0u8, |s, b| s.wrapping_add(*b));
+        let len = u16::try_from(len).unwrap().to_be_bytes();
+        [&[0x7E, len[0], len[1]][..], &data, &[0xFF - sum]].concat()
+    };
+    let capture: Vec<u8> = (0..12)
+        .flat_map(|i| [frame(509 + i % 4), frame(20)].concat())
+        .collect();
+    let file = TempFile::new("long.bin", &capture);
+    let output = decode(&["--summary", file.path()]);
+    let err = text(&output.stderr);
+    let out = text(&output.stdout);
+    assert!(out.contains("frames: 12\n"), "{out}");
+    assert!(out.contains("oversize: 12\n"), "{out}");
+    assert!(!err.contains("--api-mode 2"), "{err}");
+}
+
+#[test]
 fn recordings_joined_one_after_the_other_decode_whole() {
     let one = common::modem_status_recording(3);
     let joined = TempFile::new("joined.mcprec", &[&one[..], &one].concat());
