@@ -650,8 +650,58 @@ fn floats_and_text_print_unambiguously() {
     assert!(text.contains("telemetry altitude=1e-45"), "{text}");
 
     // A quote inside a message is escaped, as a backslash is.
-    let text = encode_then_decode(&["message", r#"a"b\c"#], "text");
+    let text = encode_then_decode(&["message", r#"a"b\\c"#], "text");
     assert!(text.contains(r#"message "a\"b\\c""#), "{text}");
+}
+
+#[test]
+fn a_message_as_decode_prints_it_is_sent_back_byte_for_byte() {
+    // Every byte, in two messages: the text `decode` prints (text and JSON), given to
+    // `message`, makes the same frame as the bytes given raw.
+    for bytes in [0..=127u8, 128..=255] {
+        let payload: String = std::iter::once(b'm')
+            .chain(bytes)
+            .map(|b| format!("{b:02x}"))
+            .collect();
+        let raw = stdout(&run(&["encode", "--to", M, "raw", &payload]));
+        let text = encode_then_decode(&["raw", &payload], "text");
+        let (_, quoted) = text.split_once("message \"").expect(&text);
+        let printed = quoted.trim_end().strip_suffix('"').expect(&text);
+        let json = encode_then_decode(&["raw", &payload], "json");
+        let json: serde_json::Value = serde_json::from_str(json.trim()).unwrap();
+        let in_json = json["mcp"]["text"].as_str().unwrap();
+        for given in [printed, in_json] {
+            let output = run(&["encode", "--to", M, "message", given]);
+            assert_eq!(stdout(&output), raw, "{given}: {}", stderr(&output));
+        }
+    }
+}
+
+#[test]
+fn a_message_is_8_bit_ascii_and_a_character_that_is_not_is_refused() {
+    for (given, says) in [
+        (
+            "café",
+            "`é` is not ASCII: the protocol's messages are 8-bit ASCII; give a byte above \
+          0x7F as `\\xNN` (for example `\\xe9`",
+        ),
+        (r"C:\path", "a backslash (at byte 2) starts `\\xNN`"),
+        (r"x\x4", "`\\x` takes two hex digits"),
+        (r"x\x+1", "`\\x` takes two hex digits"),
+    ] {
+        let output = run(&["encode", "--to", M, "message", given]);
+        assert_eq!(output.status.code(), Some(2), "{given}: {output:?}");
+        assert!(
+            stderr(&output).contains(says),
+            "{given}: {}",
+            stderr(&output)
+        );
+    }
+    let output = run(&["encode", "--to", M, "message", r#"caf\xe9 \\ \"q\""#]);
+    assert!(
+        stdout(&output).contains(" 6D 63 61 66 E9 20 5C 20 22 71 22 "),
+        "{output:?}"
+    );
 }
 
 fn posix_now() -> u64 {

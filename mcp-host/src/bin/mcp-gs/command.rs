@@ -294,8 +294,11 @@ pub(crate) enum CommandArgs {
     },
     /// A text message (category `m`).
     Message {
-        /// The text (at most 254 bytes).
-        text: String,
+        /// The text, at most 254 bytes of 8-bit ASCII, as `monitor` prints it: a byte
+        /// that is not ASCII as `\xNN` (`\xe9`), a backslash as `\\`, a quote as `\"`
+        /// or as it is.
+        #[arg(value_parser = parse_message_text)]
+        text: MessageText,
     },
     /// Any payload, as hex (not checked: for testing radios and MAV firmware).
     Raw {
@@ -334,6 +337,59 @@ fn parse_hex_payload(s: &str) -> Result<HexPayload, String> {
         ));
     }
     Ok(HexPayload(bytes))
+}
+
+/// A message's bytes given on the command line.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct MessageText(pub(crate) Vec<u8>);
+
+/// A message's text as `monitor` and `decode` print it, back to its bytes: ASCII as it
+/// is, `\xNN` for any byte, `\\` and `\"` for a backslash and a quote. The protocol's
+/// messages are 8-bit ASCII, so a character that is not ASCII is refused rather than
+/// sent as its UTF-8 bytes, which a MAV would show as two or three others.
+fn parse_message_text(s: &str) -> Result<MessageText, String> {
+    let mut bytes = Vec::with_capacity(s.len());
+    let mut chars = s.char_indices();
+    while let Some((at, c)) = chars.next() {
+        match c {
+            '\\' => match chars.next().map(|(_, c)| c) {
+                Some('\\') => bytes.push(b'\\'),
+                Some('"') => bytes.push(b'"'),
+                Some('x') => {
+                    let digits = s
+                        .get(at + 2..at + 4)
+                        .filter(|d| d.bytes().all(|b| b.is_ascii_hexdigit()));
+                    let Some(byte) = digits.and_then(|d| u8::from_str_radix(d, 16).ok()) else {
+                        return Err(format!(
+                            "`{}` at byte {at}: `\\x` takes two hex digits (`\\x41` is `A`)",
+                            s.get(at..)
+                                .unwrap_or_default()
+                                .chars()
+                                .take(4)
+                                .collect::<String>()
+                        ));
+                    };
+                    bytes.push(byte);
+                    chars.nth(1);
+                }
+                _ => {
+                    return Err(format!(
+                        "a backslash (at byte {at}) starts `\\xNN` (a byte in hex), `\\\\` (a \
+                         backslash) or `\\\"` (a quote)"
+                    ));
+                }
+            },
+            c if c.is_ascii() => bytes.push(c as u8),
+            c => {
+                return Err(format!(
+                    "`{c}` is not ASCII: the protocol's messages are 8-bit ASCII; give a byte \
+                     above 0x7F as `\\xNN` (for example `\\xe9`, `é` in Latin-1), as `monitor` \
+                     prints it"
+                ));
+            }
+        }
+    }
+    Ok(MessageText(bytes))
 }
 
 /// Builds the status request for `kind` (and `id` for telemetry-to-coordinator).
@@ -404,7 +460,7 @@ impl CommandArgs {
                         Command::StatusRequest(status_request(*kind, id.as_deref())?).into()
                     }
                     Self::Message { text: t } => {
-                        text = t.as_bytes();
+                        text = t.0.as_slice();
                         Packet::Message(Text::new(text))
                     }
                     Self::Trajectory { .. } | Self::Raw { .. } => unreachable!("handled above"),
