@@ -108,7 +108,8 @@ impl LinkError {
     /// Whether trying again later may succeed (a device may come back, a peer may start
     /// listening); false for errors that no retry can fix: settings a serial port
     /// refuses, a serial path that is there but is no device (a regular file, a
-    /// directory: on Unix, anything but a character device), an address nobody can
+    /// directory: on Unix, anything but a character device) or a device that is no
+    /// terminal (`/dev/null`), an address nobody can
     /// connect to (port 0, an address of no interface), an `io:` link's opener that
     /// failed with `InvalidInput` or `Unsupported`, and the listening and
     /// pseudo-terminal errors.
@@ -121,7 +122,9 @@ impl LinkError {
         use std::io::ErrorKind as Io;
         match self {
             LinkError::Serial { path, error, .. } => {
-                error.kind() != tokio_serial::ErrorKind::InvalidInput && !is_no_device(path)
+                error.kind() != tokio_serial::ErrorKind::InvalidInput
+                    && !is_no_device(path)
+                    && !is_no_terminal(&error.description)
             }
             LinkError::Connect { error, .. } => {
                 !matches!(error.kind(), Io::InvalidInput | Io::AddrNotAvailable)
@@ -152,6 +155,15 @@ fn is_no_device(path: &str) -> bool {
         let _ = path;
         false
     }
+}
+
+/// Whether a serial port's open failed with ENOTTY: the device is there and is no
+/// terminal (`/dev/null`), which it never becomes. The error's text is all there is to
+/// go by (its kind is `Unknown`), and it depends on the C library.
+fn is_no_terminal(description: &str) -> bool {
+    ["Not a typewriter", "Inappropriate ioctl", "Not a tty"]
+        .iter()
+        .any(|text| description.contains(text))
 }
 
 enum Inner {

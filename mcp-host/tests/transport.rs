@@ -564,6 +564,12 @@ async fn open_errors_are_clear() {
             "{err}"
         );
     }
+    // Nor does a device that is no terminal.
+    #[cfg(unix)]
+    {
+        let err = refused_at_once(&Link::serial("/dev/null", 9600)).await;
+        assert!(err.to_string().contains("/dev/null"), "{err}");
+    }
 }
 
 // A pseudo-terminal's master side reads the far end's settings (Linux).
