@@ -168,6 +168,16 @@ pub enum LinkEvent {
     /// The transport is up for the first time (for `tcp-listen`: the first peer arrived).
     /// Over `tcp:`, the peer may still let the connection wait its turn: see
     /// [`LinkState::Connected`].
+    ///
+    /// It comes first on the stream of every link, also of one that
+    /// [`connect`](crate::connect) opened before it returned (a `serial:` or `tcp:` link
+    /// without [`wait_for_link`](crate::LinkOptions::wait_for_link)), where it waits to
+    /// be read: a program that sends right after `connect` reads it after those sends
+    /// were answered. A program that sets its MAV up once a connection (turns its
+    /// telemetry on) does so either on this event and on [`Reconnected`](Self::Reconnected),
+    /// which works whenever the link comes up, or right after `connect` and on
+    /// `Reconnected` (the `telemetry` example), not on both this event and after
+    /// `connect`, which would do it twice.
     #[non_exhaustive]
     Connected {
         /// What is at the other end.
