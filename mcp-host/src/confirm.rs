@@ -25,6 +25,14 @@ pub struct Confirmed {
     pub report: Report<Bytes>,
 }
 
+/// The delivery, then the report: `delivered (16-bit address 7d84, frame id 1, retries
+/// 0, discovery no_discovery_overhead); report: landing landing`.
+impl std::fmt::Display for Confirmed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}; report: {}", self.delivery, self.report)
+    }
+}
+
 /// Why [`CommandSender::send_confirmed`] could not confirm a command.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]

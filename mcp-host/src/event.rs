@@ -112,6 +112,14 @@ pub struct Received {
     pub frame: Bytes,
 }
 
+/// The line [`Event::Packet`] shows: `rx  0013a20040522baa/7d84 opt 01: telemetry
+/// altitude=1.5` ([`render::text::received`](crate::render::text::received)).
+impl fmt::Display for Received {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&crate::render::text::received(self))
+    }
+}
+
 /// A Receive Packet whose payload failed to parse as MCP.
 #[derive(Debug, Clone)]
 pub struct InvalidPacket {

@@ -62,6 +62,31 @@ pub enum DeliveryReport {
     Written,
 }
 
+/// `delivered (16-bit address 7d84, frame id 1, retries 0, discovery
+/// no_discovery_overhead)`, or `written (frame id 0: no status asked for)`.
+///
+/// ```
+/// use mcp_host::DeliveryReport;
+/// assert_eq!(DeliveryReport::Written.to_string(), "written (frame id 0: no status asked for)");
+/// ```
+impl std::fmt::Display for DeliveryReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            DeliveryReport::Delivered {
+                frame_id,
+                dst16,
+                retries,
+                discovery,
+            } => write!(
+                f,
+                "delivered (16-bit address {dst16}, frame id {frame_id}, retries {retries}, \
+                 discovery {discovery})"
+            ),
+            DeliveryReport::Written => f.write_str("written (frame id 0: no status asked for)"),
+        }
+    }
+}
+
 /// Sends MCP packets and XBee frames over a link. Cheap to clone; usable from many tasks
 /// at once.
 ///

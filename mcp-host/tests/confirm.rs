@@ -129,6 +129,21 @@ async fn every_set_command_the_simulated_mav_takes_is_confirmed_by_its_report() 
             Some(confirmed.report.report_type()),
             command.confirming_request().map(|r| r.command_type()),
         );
+        // Printed whole: the delivery, then the report.
+        let DeliveryReport::Delivered {
+            frame_id, dst16, ..
+        } = confirmed.delivery
+        else {
+            unreachable!()
+        };
+        assert_eq!(
+            confirmed.to_string(),
+            format!(
+                "delivered (16-bit address {dst16}, frame id {frame_id}, retries 0, discovery \
+                 no_discovery_overhead); report: {}",
+                confirmed.report
+            )
+        );
     }
 }
 

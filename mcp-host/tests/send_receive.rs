@@ -255,6 +255,14 @@ async fn invalid_mcp_payloads_and_other_frames_are_events() {
         rx.packet.as_borrowed(),
         Packet::Report(Report::Controllers(Controller::Mpc))
     );
+    // Printed as `monitor` prints it, without its time.
+    assert_eq!(
+        rx.to_string(),
+        format!(
+            "rx  {OTHER_MAV}/{} opt 02: report controllers mpc",
+            rx.origin.src16
+        )
+    );
     let stats = stream.stats();
     assert_eq!(stats.invalid_packets, 2);
     assert_eq!(stats.unclaimed_responses, 1);

@@ -180,18 +180,23 @@ pub fn decode_error(error: &DecodeError, offset: Option<u64>) -> String {
     }
 }
 
+/// A valid packet received, as a line of text: `rx  SRC64/SRC16 opt OPTIONS: PACKET`.
+pub fn received(rx: &crate::Received) -> String {
+    format!(
+        "rx  {}/{} opt {:02x}: {}",
+        rx.origin.src64,
+        rx.origin.src16,
+        rx.origin.options,
+        rx.packet.as_borrowed()
+    )
+}
+
 /// An event of a [`crate::PacketStream`] as a line of text (no time stamp: see
 /// [`time()`]).
 pub fn event(event: &crate::Event) -> String {
     use crate::Event;
     match event {
-        Event::Packet(rx) => format!(
-            "rx  {}/{} opt {:02x}: {}",
-            rx.origin.src64,
-            rx.origin.src16,
-            rx.origin.options,
-            rx.packet.as_borrowed()
-        ),
+        Event::Packet(rx) => received(rx),
         Event::InvalidPacket(rx) => format!(
             "rx  {}/{} opt {:02x}: {}",
             rx.origin.src64,
