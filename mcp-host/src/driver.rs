@@ -515,11 +515,19 @@ impl Driver {
         tried: bool,
         last_failure: Option<&str>,
     ) -> Result<Transport, Stop> {
-        // A tcp-listen link on port 0 is named by the port it got.
+        // A tcp-listen link on port 0 is named by the port it got, a pty by the path of
+        // its far end, which nothing has opened yet.
         let link = match (self.connector.link(), self.connector.local_addr()) {
             (crate::Link::TcpListen { .. }, Some(addr)) => {
                 crate::Link::tcp_listen(addr.ip().to_string(), addr.port()).to_string()
             }
+            (crate::Link::Pty, _) => match self.connector.pty_path() {
+                Some(path) => format!(
+                    "pty (its far end {}, which no program has open)",
+                    path.display()
+                ),
+                None => "pty".to_owned(),
+            },
             (link, _) => link.to_string(),
         };
         let down = if ever_connected {

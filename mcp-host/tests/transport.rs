@@ -133,6 +133,32 @@ async fn pty_is_up_while_a_device_has_the_far_end_open_and_nothing_stale_reaches
     }
 }
 
+/// A request on a pty link before anything opened its far end fails saying which path
+/// to open.
+#[cfg(unix)]
+#[tokio::test]
+async fn a_pty_link_not_opened_yet_says_its_far_ends_path() {
+    let (_stream, sender) = mcp_host::connect(&Link::Pty, LinkOptions::default())
+        .await
+        .unwrap();
+    let path = sender.info().pty_path.clone().unwrap();
+    let err = sender
+        .send_payload(
+            xbee_api::Address64(0x0013_A200_40B5_99B9),
+            &b"c\x02\x01"[..],
+            Default::default(),
+        )
+        .await
+        .unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        format!(
+            "link down: not connected yet to pty (its far end {}, which no program has open)",
+            path.display()
+        )
+    );
+}
+
 /// Opens the far end of a pseudo-terminal as a short-lived program does (`echo > PATH`),
 /// writes `bytes` and closes it again at once.
 #[cfg(unix)]
