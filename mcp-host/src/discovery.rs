@@ -63,8 +63,11 @@ impl fmt::Display for Node {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "{} ({}) {} {:?}",
-            self.addr64, self.addr16, self.device_type, self.identifier
+            "{} ({}) {} {}",
+            self.addr64,
+            self.addr16,
+            self.device_type,
+            crate::render::text::quoted(self.identifier.as_bytes())
         )?;
         if let Some(rssi) = self.rssi {
             write!(f, ", -{rssi} dBm")?;

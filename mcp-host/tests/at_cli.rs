@@ -348,11 +348,13 @@ fn nodes_lists_the_radios_that_answer_node_discovery() {
 
     // Text from the radio is written as message text (a backslash doubled, bytes
     // outside printable ASCII as \xNN), the same by `at` and `nodes`. (A radio takes
-    // printable ASCII alone in its NI.)
-    sim.ok(&["--to", MAV, "NI", "M\\1 \"x\""]);
+    // printable ASCII alone in its NI.) It is given as it is printed, too.
+    sim.ok(&["--to", MAV, "NI", r#"M\\1 "x""#]);
     let out = sim.at(&["--format", "json", "--to", MAV, "NI"]);
     let at: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
     assert_eq!(at["value"], r#"M\\1 "x""#, "{at}");
+    let out = sim.at(&["--to", MAV, "NI"]);
+    assert!(stdout(&out).contains(r##"NI = "M\\1 \"x\"""##), "{out:?}");
     let out = nodes(&sim.link, &["--window", "2", "--format", "json"]);
     let node: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(node["identifier"], at["value"], "{node}");

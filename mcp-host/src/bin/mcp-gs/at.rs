@@ -44,7 +44,8 @@ pub(crate) struct AtArgs {
     /// The two-letter AT command, e.g. AP, NP, NI, SH, SL, MY, ID, CH, N?.
     command: String,
     /// The value to set, in hex (e.g. `2` for AP=2), or text for a text parameter (NI)
-    /// or with --text; omit to read.
+    /// or with --text, written as it is printed (ASCII, `\xNN` for any byte, `\\` for a
+    /// backslash); omit to read.
     value: Option<String>,
     /// Output format: `json` prints each answer as the response frame's object (as
     /// `monitor` does), with `value` added: the value read as a number, or as text for a
@@ -142,7 +143,7 @@ fn exit_code(status: AtStatus) -> u8 {
 /// The line that shows a value read (or echoed) by the radio.
 fn value_line(name: &str, command: &[u8; 2], data: &[u8]) -> String {
     if is_text(command) {
-        return format!("{name} = {:?}", String::from_utf8_lossy(data));
+        return format!("{name} = {}", mcp_host::render::text::quoted(data));
     }
     if let (b"BD", Some(rate)) = (command, baud_rate(data)) {
         // As `setup` prints it (the value as the radio's command mode writes it, hex
@@ -392,7 +393,8 @@ fn parse_value(value: &str, text: bool) -> Result<Vec<u8>, String> {
         );
     }
     if text {
-        return Ok(value.as_bytes().to_vec());
+        // As it is printed: a radio's text parameters are ASCII.
+        return crate::command::unescape_text(value, "a radio's text parameters are ASCII");
     }
     let digits = value
         .strip_prefix("0x")
@@ -627,6 +629,21 @@ mod tests {
         assert!(is_text(b"NI") && !is_text(b"ID"));
         assert_eq!(parse_value("20", true).unwrap(), b"20");
         assert_eq!(parse_value("20", false).unwrap(), [0x20]);
+        // Written as it is printed: any value printed is set back byte for byte.
+        let every: Vec<u8> = (1..=255).collect();
+        for value in [&b"MAV \"1\""[..], &every[..127], &every[127..]] {
+            let line = value_line("NI", b"NI", value);
+            let printed = line
+                .strip_prefix("NI = \"")
+                .and_then(|rest| rest.strip_suffix('"'))
+                .unwrap();
+            assert_eq!(parse_value(printed, true).unwrap(), value, "{line}");
+        }
+        let error = parse_value("Drohne Süd", true).unwrap_err();
+        assert!(
+            error.starts_with("`ü` is not ASCII: a radio's text parameters are ASCII; give a byte"),
+            "{error}"
+        );
     }
 
     #[test]

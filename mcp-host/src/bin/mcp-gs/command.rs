@@ -343,11 +343,18 @@ fn parse_hex_payload(s: &str) -> Result<HexPayload, String> {
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(crate) struct MessageText(pub(crate) Vec<u8>);
 
-/// A message's text as `monitor` and `decode` print it, back to its bytes: ASCII as it
-/// is, `\xNN` for any byte, `\\` and `\"` for a backslash and a quote. The protocol's
-/// messages are 8-bit ASCII, so a character that is not ASCII is refused rather than
-/// sent as its UTF-8 bytes, which a MAV would show as two or three others.
+/// A message's text as `monitor` and `decode` print it, back to its bytes
+/// ([`unescape_text`]).
 fn parse_message_text(s: &str) -> Result<MessageText, String> {
+    unescape_text(s, "the protocol's messages are 8-bit ASCII").map(MessageText)
+}
+
+/// Text as this program prints it (a message, a radio's node identifier), back to its
+/// bytes: ASCII as it is, `\xNN` for any byte, `\\` and `\"` for a backslash and a
+/// quote. The text is 8-bit ASCII (`why` says whose), so a character that is not ASCII
+/// is refused rather than sent as its UTF-8 bytes, which the other end would show as
+/// two or three others.
+pub(crate) fn unescape_text(s: &str, why: &str) -> Result<Vec<u8>, String> {
     let mut bytes = Vec::with_capacity(s.len());
     let mut chars = s.char_indices();
     while let Some((at, c)) = chars.next() {
@@ -382,14 +389,13 @@ fn parse_message_text(s: &str) -> Result<MessageText, String> {
             c if c.is_ascii() => bytes.push(c as u8),
             c => {
                 return Err(format!(
-                    "`{c}` is not ASCII: the protocol's messages are 8-bit ASCII; give a byte \
-                     above 0x7F as `\\xNN` (for example `\\xe9`, `é` in Latin-1), as `monitor` \
-                     prints it"
+                    "`{c}` is not ASCII: {why}; give a byte above 0x7F as `\\xNN` (for \
+                     example `\\xe9`, `é` in Latin-1), as it is printed"
                 ));
             }
         }
     }
-    Ok(MessageText(bytes))
+    Ok(bytes)
 }
 
 /// Builds the status request for `kind` (and `id` for telemetry-to-coordinator).
