@@ -228,7 +228,7 @@ fn a_noisy_capture_in_the_right_mode_is_not_told_to_try_the_other() {
         let sum = data.iter().fold(0u8, |s, b| s.wrapping_add(*b));
         let mut bytes = vec![0x7E, 0x00, u8::try_from(data.len()).unwrap()];
         bytes.extend_from_slice(&data);
-        bytes.push(if i % 4 == 0 {
+        bytes.push(if i.is_multiple_of(4) {
             (0xFF - sum) ^ 0x01
         } else {
             0xFF - sum

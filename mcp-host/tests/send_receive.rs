@@ -320,7 +320,7 @@ async fn concurrent_sends_get_their_own_status_and_failures_are_typed() {
     for (i, task) in tasks.into_iter().enumerate() {
         let i = i as u32;
         let result = task.await.unwrap();
-        if i % 3 == 0 {
+        if i.is_multiple_of(3) {
             let err = result.unwrap_err();
             let SendError::Delivery {
                 to,

@@ -318,7 +318,7 @@ fn parse_hex_payload(s: &str) -> Result<HexPayload, String> {
         .filter(|c| !c.is_whitespace() && *c != ':')
         .collect();
     let digits = digits.strip_prefix("0x").unwrap_or(&digits);
-    if digits.len() % 2 != 0 {
+    if !digits.len().is_multiple_of(2) {
         return Err("hex payload needs an even number of digits".into());
     }
     let bytes = (0..digits.len())

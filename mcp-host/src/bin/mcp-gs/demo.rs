@@ -125,7 +125,7 @@ async fn print_events(
                 match &rx.packet {
                     Packet::Telemetry(_) => {
                         seen.telemetry += 1;
-                        if (seen.telemetry - 1) % every == 0 {
+                        if (seen.telemetry - 1).is_multiple_of(every) {
                             seen.shown += 1;
                             stamped!(
                                 rx.origin.received_at,
