@@ -505,17 +505,38 @@ pub(crate) fn event_line(event: &NetEvent, verbose: bool, now: SystemTime) -> Op
 /// would otherwise print 20 lines a second.
 const REPEAT_QUIET: Duration = Duration::from_secs(5);
 
+/// The failures [`Repeats`] remembers at most: a device on a node's link that sends to
+/// ever new destinations makes a failure of each, and must not make the map grow
+/// without end.
+const REPEAT_KEYS: usize = 1024;
+
 /// Failed deliveries printed lately, by sender, destination and status, with how many
-/// like each were not printed since.
+/// like each were not printed since; [`REPEAT_KEYS`] at most.
 #[derive(Default)]
 struct Repeats {
     seen: HashMap<(Address64, Address64, DeliveryStatus), (Instant, u64)>,
+    /// When those printed [`REPEAT_QUIET`] ago or more were last forgotten.
+    pruned: Option<Instant>,
 }
 
 impl Repeats {
     /// Whether to print a failure with `key` at `now`: `Some(n)` with the number of
-    /// failures like it not printed since the last one, or `None` to stay quiet.
+    /// failures like it not printed since the last one, or `None` to stay quiet. When
+    /// [`REPEAT_KEYS`] are remembered, those printed [`REPEAT_QUIET`] ago or more are
+    /// forgotten (once a [`REPEAT_QUIET`] at most: each look goes through them all),
+    /// with the failures like them not printed; while as many were printed lately, a
+    /// new one is printed and not remembered.
     fn admit(&mut self, key: (Address64, Address64, DeliveryStatus), now: Instant) -> Option<u64> {
+        if self.seen.len() >= REPEAT_KEYS
+            && !self.seen.contains_key(&key)
+            && self
+                .pruned
+                .is_none_or(|pruned| now.duration_since(pruned) >= REPEAT_QUIET)
+        {
+            self.pruned = Some(now);
+            self.seen
+                .retain(|_, (printed, _)| now.duration_since(*printed) < REPEAT_QUIET);
+        }
         match self.seen.get_mut(&key) {
             Some((printed, quiet)) if now.duration_since(*printed) < REPEAT_QUIET => {
                 *quiet += 1;
@@ -526,7 +547,9 @@ impl Repeats {
                 Some(std::mem::take(quiet))
             }
             None => {
-                self.seen.insert(key, (now, 0));
+                if self.seen.len() < REPEAT_KEYS {
+                    self.seen.insert(key, (now, 0));
+                }
                 Some(0)
             }
         }
@@ -806,5 +829,28 @@ mod tests {
         assert_eq!(repeats.admit(other, start), Some(0));
         assert_eq!(repeats.admit(key, start + REPEAT_QUIET), Some(99));
         assert_eq!(repeats.admit(key, start + REPEAT_QUIET), None);
+    }
+
+    #[test]
+    fn failures_to_ever_new_destinations_are_remembered_a_bounded_number_at_a_time() {
+        let from = Address64::COORDINATOR;
+        let key = |n: u64| (from, Address64(n), DeliveryStatus::AddressNotFound);
+        let start = Instant::now();
+        let mut repeats = Repeats::default();
+        // Each new destination is news, printed; the map stops growing at its bound.
+        for n in 0..5 * REPEAT_KEYS as u64 {
+            assert_eq!(repeats.admit(key(n), start), Some(0));
+        }
+        assert_eq!(repeats.seen.len(), REPEAT_KEYS);
+        // Those remembered are still counted while quiet.
+        assert_eq!(repeats.admit(key(7), start), None);
+        // Once they have been quiet long enough, new ones take their places.
+        let later = start + REPEAT_QUIET;
+        for n in 0..3 * REPEAT_KEYS as u64 {
+            assert_eq!(repeats.admit(key(1 << 32 | n), later), Some(0));
+        }
+        assert_eq!(repeats.seen.len(), REPEAT_KEYS);
+        assert_eq!(repeats.admit(key(1 << 32 | 5), later), None);
+        assert_eq!(repeats.admit(key(7), later), Some(0));
     }
 }
