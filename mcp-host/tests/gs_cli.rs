@@ -1105,14 +1105,16 @@ fn a_recording_piped_in_is_replayed_whole() {
     assert_eq!(reader.join().unwrap(), modem_status.repeat(3));
 }
 
+/// A pager paused: monitor's output is not read at all. The link's frames are still
+/// taken as they come, and recorded, every one; the lines of those beyond what waits
+/// for the reader are dropped, and said.
+#[cfg(unix)]
 #[test]
-fn monitor_says_what_it_lost_for_falling_behind() {
-    // A radio (a bridge that buffered during a stall) sends a burst while monitor's
-    // output is not read: the link drops what monitor cannot take, and monitor says so.
+fn monitor_records_every_frame_while_its_output_is_not_read() {
     let radio = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
     let link = format!("tcp:{}", radio.local_addr().unwrap());
     let dir = tempfile::tempdir().unwrap();
-    let record = dir.path().join("burst.mcprec");
+    let record = dir.path().join("paused.mcprec");
     let monitor = gs()
         .args(["monitor", "--link", &link, "--record"])
         .arg(&record)
@@ -1121,35 +1123,56 @@ fn monitor_says_what_it_lost_for_falling_behind() {
         .spawn()
         .unwrap();
     let mut child = common::Running(monitor);
+    // Held, never read.
+    let stdout = child.0.stdout.take().unwrap();
     let errors = common::stderr_lines(&mut child.0);
     let (mut socket, _) = radio.accept().unwrap();
     let modem_status = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F];
-    socket.write_all(&modem_status.repeat(50_000)).unwrap();
-    // Its output not read: monitor waits on it, the link reads on and drops what does
-    // not fit its queue, and monitor says so meanwhile.
+    // 20 000 lines, far more than the pipe (64 KiB), the output thread's queue and
+    // monitor's own hold; in batches smaller than the link's queue of events (1024),
+    // each once the last is recorded (a record is written, and flushed, as it comes).
+    let (batch, batches) = (500, 40);
+    for n in 1..=batches {
+        socket.write_all(&modem_status.repeat(batch)).unwrap();
+        let all = (mcp_host::record::HEADER_LEN
+            + n * batch * (mcp_host::record::RECORD_HEAD_LEN + 2)) as u64;
+        let deadline = std::time::Instant::now() + common::GUARD;
+        while std::fs::metadata(&record).map_or(0, |m| m.len()) < all {
+            assert!(
+                std::time::Instant::now() < deadline,
+                "batch {n} not recorded while the output was not read"
+            );
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+    }
     let said = loop {
         let line = errors
-            .recv_timeout(std::time::Duration::from_secs(30))
-            .expect("monitor says what it lost");
-        if line.contains(" lost: ") {
+            .recv_timeout(common::GUARD)
+            .expect("monitor says what it did not show");
+        assert!(!line.contains(" lost: "), "{line}");
+        if line.contains(" not shown: ") {
             break line;
         }
     };
     assert!(
         said.starts_with("mcp-gs: warning: ")
-            && said.contains(" received frames lost: monitor fell behind the link")
-            && said.ends_with(", and are missing from the recording"),
+            && said.contains(
+                " received frames not shown: standard output is not read as fast as they \
+                 come (a pager paused?) (the recording has them)"
+            ),
         "{said}"
     );
-    // Its output read from now on: it goes on, and shows what came after, the radio's
-    // link lost (a link event waits for room in the queue, never dropped).
-    drop(socket);
-    let lines = common::stdout_lines(&mut child.0);
-    while !lines
-        .recv_timeout(common::GUARD)
-        .expect("monitor goes on")
-        .contains("link disconnected")
-    {}
+    let pid = i32::try_from(child.0.id()).unwrap();
+    // SAFETY: kill(2) with the pid of a child of this process and a valid signal.
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
+    assert_eq!(common::exit_code(&mut child.0), Some(0));
+    drop(stdout);
+    let output = run(&["decode", "--summary", record.to_str().unwrap()]);
+    let summary = String::from_utf8_lossy(&output.stdout);
+    assert!(
+        summary.contains(&format!("frames: {}\n", batch * batches)),
+        "{summary}"
+    );
 }
 
 /// A reader that took part of monitor's output and no more (a pager paused), the link
@@ -1271,11 +1294,11 @@ fn monitor_ends_on_ctrl_c_while_its_output_is_not_read() {
     let (mut socket, _) = radio.accept().unwrap();
     let modem_status = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F];
     socket.write_all(&modem_status.repeat(50_000)).unwrap();
-    // Stuck on its output (said as frames lost), it still takes Ctrl-C, and ends.
+    // Stuck on its output (said as frames not shown), it still takes Ctrl-C, and ends.
     while !errors
         .recv_timeout(common::GUARD)
-        .expect("monitor says what it lost")
-        .contains(" lost: ")
+        .expect("monitor says what it did not show")
+        .contains(" not shown: ")
     {}
     let pid = i32::try_from(monitor.id()).unwrap();
     // SAFETY: kill(2) with the pid of a child of this process and a valid signal.

@@ -86,8 +86,9 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
         tokio::spawn(async move { check_mode(&sender, mode, timeout).await });
     }
     // Written by a thread of its own: a reader slower than the link (a pipe, a
-    // terminal paused) holds up neither Ctrl-C nor the look at the counters, which
-    // says the events the link drops meanwhile. No event is taken while a line waits.
+    // terminal paused) holds up neither Ctrl-C nor the look at the counters, nor the
+    // link's frames, which are taken (and recorded) as they come: the lines of those
+    // beyond PENDING_LINES waiting are dropped, and counted.
     let output = Output::stdout().map_err(|e| {
         Failure::new(
             Failure::OTHER,
@@ -110,12 +111,13 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
     let mut ended_silent = 0u32;
     let mut dates = render::text::DateLines::new();
     let mut lost = Lost::default();
+    let mut unshown = Unshown::default();
     // Bytes that are no frames at all come as no event: the counters are looked at now
     // and then for them (and for events lost).
     let mut look = tokio::time::interval(std::time::Duration::from_secs(1));
     let ended = loop {
         let event = tokio::select! {
-            event = stream.next(), if pending.is_empty() => event,
+            event = stream.next() => event,
             room = output.room(), if !pending.is_empty() => match (room, pending.pop_front()) {
                 (Some(room), Some(line)) => {
                     room.send(line);
@@ -134,6 +136,7 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
             failure = recording::write_failed(&mut recorder) => break Err(failure),
             _ = look.tick() => {
                 lost.tell(&stream.stats(), recorder.is_some(), false);
+                unshown.tell(recorder.is_some());
                 let found = diagnoser.as_mut().and_then(|d| d.look(stream.stats()));
                 let line = match (&mut quiet, found) {
                     // Still wrong: said with the counts as they are now.
@@ -207,21 +210,13 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
                 }
             }
         }
-        let line = match args.format {
-            Format::Json => render::json::event(&event).to_string(),
-            Format::Text => {
-                let line = format!(
-                    "{} {}",
-                    render::text::time(time),
-                    render::text::event(&event)
-                );
-                match dates.before(time) {
-                    Some(date) => format!("{date}\n{line}"),
-                    None => line,
-                }
-            }
-        };
-        pending.push_back(line);
+        // A reader that takes nothing: the line is dropped and counted, a link event's
+        // (a few a minute at most, which say what the lines around them mean) but kept.
+        if pending.len() >= PENDING_LINES && !matches!(event, Event::Link(_)) {
+            unshown.count += 1;
+        } else {
+            pending.push_back(line(&event, time, args.format, &mut dates));
+        }
         // Text output counts failures again without the hint once it was given; JSON
         // output shows each, and the hint once a connection.
         let looking = quiet.is_none() && !(hinted && args.format == Format::Json);
@@ -278,6 +273,7 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
         },
     };
     lost.tell(&stream.stats(), recorder.is_some(), true);
+    unshown.tell(recorder.is_some());
     // The frames still queued for the file, and what it could not take. A failure of
     // the monitor itself (a recording that could not be written) is said before one of
     // its output, and not hidden by a reader gone.
@@ -304,6 +300,62 @@ async fn end_recording(
     }
 }
 
+/// The line `monitor` prints for `event`, received at `time`.
+fn line(
+    event: &Event,
+    time: SystemTime,
+    format: Format,
+    dates: &mut render::text::DateLines,
+) -> String {
+    match format {
+        Format::Json => render::json::event(event).to_string(),
+        Format::Text => {
+            let line = format!(
+                "{} {}",
+                render::text::time(time),
+                render::text::event(event)
+            );
+            match dates.before(time) {
+                Some(date) => format!("{date}\n{line}"),
+                None => line,
+            }
+        }
+    }
+}
+
+/// Lines waiting for standard output, beyond those its thread holds, past which a
+/// frame's line is dropped (and counted, [`Unshown`]): a reader that takes nothing
+/// (a paused pager) holds up neither the link nor the recording.
+const PENDING_LINES: usize = 1024;
+
+/// Frames whose lines were dropped because standard output was not read as fast as
+/// they came: said as it happens, at most once a look, and at the end.
+#[derive(Debug, Default)]
+struct Unshown {
+    count: u64,
+    /// The count last said.
+    told: u64,
+}
+
+impl Unshown {
+    /// Says the frames not shown since it last said any.
+    fn tell(&mut self, recording: bool) {
+        if self.count > self.told {
+            let kept = if recording {
+                " (the recording has them)"
+            } else {
+                ""
+            };
+            err!(
+                "mcp-gs: warning: {} not shown: standard output is not read as fast as they \
+                 come (a pager paused?){kept}",
+                crate::counted(self.count - self.told, "received frame")
+            );
+            self.told = self.count;
+        }
+    }
+}
+
 /// How long the lines not yet written may take after Ctrl-C.
 const DRAIN_AFTER_CTRL_C: std::time::Duration = std::time::Duration::from_secs(1);
 
@@ -316,8 +368,9 @@ fn written(result: std::io::Result<()>) -> Result<(), Failure> {
     }
 }
 
-/// Events the link dropped because monitor fell behind it (its output slower than the
-/// frames came, in a burst from a TCP peer or a bridge): said as they happen, at most
+/// Events the link dropped because monitor fell behind it (a burst from a TCP peer or a
+/// bridge faster than monitor records and renders them, on a busy machine; not its
+/// output, whose lines are dropped instead, [`Unshown`]): said as they happen, at most
 /// once a look, and in all at the end, not lost in silence.
 #[derive(Debug, Default)]
 struct Lost {
@@ -336,8 +389,8 @@ impl Lost {
         };
         if lost > self.told {
             err!(
-                "mcp-gs: warning: {} lost: monitor fell behind the link (writing its output \
-                 took too long) and they were not shown{also}",
+                "mcp-gs: warning: {} lost: monitor fell behind the link (the machine busy?) \
+                 and they were not shown{also}",
                 crate::counted(lost - self.told, "received frame")
             );
             self.told = lost;
