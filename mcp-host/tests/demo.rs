@@ -48,7 +48,7 @@ fn demo_runs(more: &[&str]) -> String {
     assert!(stdout.contains("<- report time "), "{stdout}");
     assert!(stdout.contains("<- report controllers mpc"), "{stdout}");
     assert!(
-        stdout.contains("<- report trajectory_set 3 waypoints"),
+        stdout.contains("<- report trajectory_set 2 waypoints"),
         "{stdout}"
     );
     assert!(stdout.contains("<- report landing landing"), "{stdout}");

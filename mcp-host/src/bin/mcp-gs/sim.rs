@@ -79,8 +79,10 @@ landing off -> take_off -> stabilization -> flight, the mpc controller follows t
 trajectory by MAV time. The MAVs are XBee nodes in API mode 1 behind a virtual network \
 whose coordinator is --link: the ground station sees Transmit Statuses and Receive \
 Packets as from its own XBee. Unicast payloads go up to 255 bytes (fragmentation, as MCP \
-packets need; --max-unicast 84 emulates radios without it). Faults options as in \
-`mcp-gs radio`.
+packets need; --max-unicast 84 emulates radios without it). Unlike the deployed MAVs, \
+whose 60-byte UART receive buffer drops longer frames (a trajectory of more than 2 \
+waypoints, a message of more than 43 bytes), they take commands of any size unless \
+--rx-buffer 60 says otherwise. Faults options as in `mcp-gs radio`.
 
 Example: mcp-gs sim --link pty --mavs 2   (then connect a ground station to the printed path)";
 
