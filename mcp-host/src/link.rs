@@ -114,6 +114,10 @@ pub enum LinkParseError {
     /// The part before the first `:` is not a known link kind.
     #[error("unknown link kind {0:?} (expected serial, tcp, tcp-listen or pty){hint}", hint = bare_path_hint(.0))]
     UnknownKind(String),
+    /// A host and port with no link kind before them (`127.0.0.1:9750`): `tcp:` was
+    /// meant, most likely.
+    #[error("no link kind in {0:?}: to connect to that TCP port, write tcp:{0}")]
+    BareHostPort(String),
     /// `serial:` without a device path.
     #[error("serial link without a device path (expected serial:PATH[:BAUD][:rtscts])")]
     MissingPath,
@@ -162,6 +166,12 @@ pub enum LinkParseError {
 
 /// For a link string that is a bare device path: the `serial:` link meant; for a kind
 /// in capitals: the kind meant.
+/// Whether `kind` is a host's name or address a link kind was taken for (`localhost`,
+/// `127.0.0.1`).
+fn is_host(kind: &str) -> bool {
+    kind == "localhost" || kind.parse::<std::net::IpAddr>().is_ok()
+}
+
 fn bare_path_hint(kind: &str) -> String {
     let lower = kind.to_ascii_lowercase();
     if lower != kind && matches!(lower.as_str(), "serial" | "tcp" | "tcp-listen" | "pty") {
@@ -176,10 +186,9 @@ fn bare_path_hint(kind: &str) -> String {
             .get(3..)
             .is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()));
     let is_path = kind.starts_with('/') || com_port;
-    let is_host = kind == "localhost" || kind.parse::<std::net::IpAddr>().is_ok();
     if is_path {
         format!("; for a serial port, write serial:{kind}")
-    } else if is_host {
+    } else if is_host(kind) {
         format!("; to connect to a TCP port, write tcp:{kind}:PORT")
     } else {
         String::new()
@@ -223,7 +232,13 @@ impl FromStr for Link {
                 }),
                 _ => Err(LinkParseError::MissingIoName),
             },
-            other => Err(LinkParseError::UnknownKind(other.to_owned())),
+            other => match rest {
+                // `127.0.0.1:9750`, `localhost:9750`.
+                Some(port) if is_host(other) && port.parse::<u16>().is_ok_and(|p| p > 0) => {
+                    Err(LinkParseError::BareHostPort(s.to_owned()))
+                }
+                _ => Err(LinkParseError::UnknownKind(other.to_owned())),
+            },
         }
     }
 }
@@ -520,7 +535,9 @@ mod tests {
             ("pty:/dev/pts/3", TrailingPty("/dev/pts/3".into())),
             ("tcp://127.0.0.1:9750", UrlForm("tcp".into())),
             ("tcp-listen://0.0.0.0:9750", UrlForm("tcp-listen".into())),
-            ("127.0.0.1:9750", UnknownKind("127.0.0.1".into())),
+            ("127.0.0.1:9750", BareHostPort("127.0.0.1:9750".into())),
+            ("localhost:9750", BareHostPort("localhost:9750".into())),
+            ("127.0.0.1:http", UnknownKind("127.0.0.1".into())),
             ("tcp: 127.0.0.1:9750", InvalidHost(" 127.0.0.1".into())),
             ("tcp-listen:0.0.0.0 :9750", InvalidHost("0.0.0.0 ".into())),
             ("TCP:127.0.0.1:9750", UnknownKind("TCP".into())),
@@ -549,8 +566,9 @@ mod tests {
         assert!(!message.contains("write serial:"), "{message}");
         assert!(!message.contains("write tcp:"), "{message}");
         for (text, hint) in [
-            ("127.0.0.1:9750", "write tcp:127.0.0.1:PORT"),
-            ("localhost:9750", "write tcp:localhost:PORT"),
+            ("127.0.0.1:9750", "write tcp:127.0.0.1:9750"),
+            ("localhost:9750", "write tcp:localhost:9750"),
+            ("127.0.0.1:http", "write tcp:127.0.0.1:PORT"),
             ("tcp://127.0.0.1:9750", "write tcp:HOST:PORT, without //"),
             ("TCP:127.0.0.1:9750", "kinds are lower case: tcp"),
             ("Serial:/dev/ttyUSB0", "kinds are lower case: serial"),
