@@ -597,6 +597,16 @@ fn decode_of_input_with_no_frame_is_an_input_error() {
             "{out}"
         );
     }
+    // One frame whose checksum is wrong (a byte mistyped): said so, not taken for a
+    // capture at another baud rate or in the other mode.
+    std::fs::write(&file, [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6E]).unwrap();
+    let output = run(&["decode", file.to_str().unwrap()]);
+    let err = stderr(&output);
+    assert_eq!(output.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("its one candidate frame failed its checksum (a byte of it mistyped?)"),
+        "{err}"
+    );
     // Empty input holds nothing wrong.
     std::fs::write(&file, b"").unwrap();
     assert_eq!(

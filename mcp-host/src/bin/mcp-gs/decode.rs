@@ -566,6 +566,10 @@ fn decode_stream(
             "its one candidate frame is cut off (a capture that stops part way through a \
              frame?)"
                 .to_owned()
+        } else if errors == 1 && stats.bad_checksum == 1 && !other_finds_more {
+            // One whole candidate, its checksum wrong: a byte of it mistyped (hex
+            // typed in, a frame copied from a manual) more likely than another mode.
+            "its one candidate frame failed its checksum (a byte of it mistyped?)".to_owned()
         } else if errors > 0 && other_finds_more {
             format!("if it is in API mode {other}, decode it with --api-mode {other}")
         } else if errors > 0 {
