@@ -1105,6 +1105,36 @@ fn a_recording_piped_in_is_replayed_whole() {
     assert_eq!(reader.join().unwrap(), modem_status.repeat(3));
 }
 
+/// A link that goes away: monitor says it is reconnecting, as nothing is printed until
+/// it is back.
+#[cfg(unix)]
+#[test]
+fn monitor_says_it_reconnects_when_the_link_goes_away() {
+    let radio = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let link = format!("tcp:{}", radio.local_addr().unwrap());
+    let mut child = common::Running(
+        gs().args(["monitor", "--link", &link])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap(),
+    );
+    let lines = common::stdout_lines(&mut child.0);
+    let (socket, _) = radio.accept().unwrap();
+    drop(socket);
+    let said = loop {
+        let line = lines.recv_timeout(common::GUARD).expect("monitor goes on");
+        if line.contains("link disconnected") {
+            break line;
+        }
+    };
+    assert!(said.ends_with("; reconnecting (Ctrl-C stops)"), "{said}");
+    // And it does.
+    let (_socket, _) = radio.accept().unwrap();
+    let back = lines.recv_timeout(common::GUARD).expect("monitor goes on");
+    assert!(back.contains("link reconnected"), "{back}");
+}
+
 /// A pager paused: monitor's output is not read at all. The link's frames are still
 /// taken as they come, and recorded, every one; the lines of those beyond what waits
 /// for the reader are dropped, and said.

@@ -44,8 +44,9 @@ pub(crate) struct MonitorArgs {
     wait: bool,
     /// Stop after this many received items, 1 or more: packets, other frames and frames
     /// that failed to decode. Link events (connected, disconnected, reconnected,
-    /// closed) are printed but not counted. Default: run until the link closes or
-    /// Ctrl-C.
+    /// closed) are printed but not counted. Default: run until Ctrl-C (a link that
+    /// goes away is reconnected, as often as it takes: a radio unplugged, a simulator or
+    /// hub restarted) or until the link ends for good.
     #[arg(long, value_name = "N", value_parser = parse_count)]
     count: Option<u64>,
 }
@@ -310,8 +311,13 @@ fn line(
     match format {
         Format::Json => render::json::event(event).to_string(),
         Format::Text => {
+            // What comes next, which may take a while: nothing is printed meanwhile.
+            let next = match event {
+                Event::Link(LinkEvent::Disconnected { .. }) => "; reconnecting (Ctrl-C stops)",
+                _ => "",
+            };
             let line = format!(
-                "{} {}",
+                "{} {}{next}",
                 render::text::time(time),
                 render::text::event(event)
             );
