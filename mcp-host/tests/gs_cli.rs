@@ -829,6 +829,19 @@ fn every_subcommand_has_help() {
         let out = stdout(&run(&[sub, "--help"]));
         assert!(out.contains("Usage: mcp-gs"), "{sub}: {out}");
     }
+    // Where a telemetry id is given, its help lists them all, with their numbers.
+    for args in [
+        &["send", "telemetry", "--help"][..],
+        &["encode", "telemetry", "--help"],
+        &["status", "--help"],
+    ] {
+        let out = stdout(&run(args));
+        assert!(
+            out.contains("estimated_altitude (0), altitude (1),")
+                && out.contains("aileron_acceleration_error (32)"),
+            "{args:?}: {out}"
+        );
+    }
 }
 
 #[test]

@@ -146,6 +146,18 @@ where
     s.to_ascii_lowercase().parse()
 }
 
+/// The long help of a telemetry id argument: every name, with its number.
+pub(crate) fn telemetry_id_help() -> String {
+    let names: Vec<String> = TelemetryId::iter()
+        .filter_map(|id| Some(format!("{} ({})", id.name()?, u8::from(id))))
+        .collect();
+    format!(
+        "Telemetry id: a name, in any case, or a number from 0 to 255 (decimal or 0x-hex). \
+         The names and numbers: {}",
+        names.join(", ")
+    )
+}
+
 /// A telemetry id: a name in any case, or a number.
 pub(crate) fn parse_telemetry_id(s: &str) -> Result<TelemetryId, String> {
     parse_id(s).map_err(|e| e.to_string())
@@ -231,7 +243,7 @@ pub(crate) enum CommandArgs {
         #[arg(ignore_case = true, value_name = "on|off")]
         state: OnOff,
         /// Telemetry id: a name (e.g. `estimated_altitude`) or a number (0-255).
-        #[arg(value_parser = parse_telemetry_id)]
+        #[arg(value_parser = parse_telemetry_id, long_help = telemetry_id_help())]
         id: TelemetryId,
     },
     /// Landing: turn autonomous landing on or off.
@@ -260,7 +272,9 @@ pub(crate) enum CommandArgs {
         /// The slave's 64-bit address (16 hex digits).
         #[arg(value_parser = parse_slave_address)]
         address: Address,
-        /// Use the deployed firmware's form, with this slot (0-3).
+        /// Use the deployed firmware's form, with this slot (0-3). Without it, the
+        /// specification's form, which names one slave: a MAV that keeps four (the
+        /// deployed firmware, the simulator) takes it as slot 0's.
         #[arg(long, value_parser = parse_slot)]
         slot: Option<Slot>,
     },
@@ -290,6 +304,7 @@ pub(crate) enum CommandArgs {
         /// For `telemetry_to_coordinator`: the telemetry id (a name or a number).
         // Parsed once the kind is known: another kind takes no id at all, which is what a
         // wrong one should hear.
+        #[arg(long_help = telemetry_id_help())]
         id: Option<String>,
     },
     /// A text message (category `m`).

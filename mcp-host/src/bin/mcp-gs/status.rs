@@ -37,6 +37,7 @@ pub(crate) struct StatusArgs {
     /// For telemetry_to_coordinator: the telemetry id (a name or a number).
     // Parsed once the kind is known: another kind takes no id at all, which is what a
     // wrong one should hear.
+    #[arg(long_help = crate::command::telemetry_id_help())]
     id: Option<String>,
 }
 
