@@ -273,8 +273,8 @@ pub(crate) enum CommandArgs {
         #[arg(value_parser = parse_slave_address)]
         address: Address,
         /// Use the deployed firmware's form, with this slot (0-3). Without it, the
-        /// specification's form, which names one slave: a MAV that keeps four (the
-        /// deployed firmware, the simulator) takes it as slot 0's.
+        /// specification's form, which names one slave: the simulator's MAVs, which
+        /// keep four as the deployed firmware does, take it as slot 0's.
         #[arg(long, value_parser = parse_slot)]
         slot: Option<Slot>,
     },
