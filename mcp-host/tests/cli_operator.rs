@@ -707,6 +707,11 @@ fn a_message_is_8_bit_ascii_and_a_character_that_is_not_is_refused() {
             stderr(&output)
         );
     }
+    // Words given apart are one text, with a space between them.
+    assert_eq!(
+        stdout(&run(&["encode", "--to", M, "message", "hello", "world"])),
+        stdout(&run(&["encode", "--to", M, "message", "hello world"]))
+    );
     let output = run(&["encode", "--to", M, "message", r#"caf\xe9 \\ \"q\""#]);
     assert!(
         stdout(&output).contains(" 6D 63 61 66 E9 20 5C 20 22 71 22 "),

@@ -312,8 +312,9 @@ pub(crate) enum CommandArgs {
         /// The text, at most 254 bytes of 8-bit ASCII, as `monitor` prints it: a byte
         /// that is not ASCII as `\xNN` (`\xe9`), a backslash as `\\`, a quote as `\"`
         /// or as it is.
-        #[arg(value_parser = parse_message_text)]
-        text: MessageText,
+        /// Several words are joined with one space between them, as `echo` does.
+        #[arg(value_parser = parse_message_text, num_args = 1.., required = true)]
+        text: Vec<MessageText>,
     },
     /// Any payload, as hex (not checked: for testing radios and MAV firmware).
     Raw {
@@ -480,9 +481,10 @@ impl CommandArgs {
                     Self::Status { kind, id } => {
                         Command::StatusRequest(status_request(*kind, id.as_deref())?).into()
                     }
-                    Self::Message { text: t } => {
-                        text = t.0.as_slice();
-                        Packet::Message(Text::new(text))
+                    Self::Message { text: words } => {
+                        let words: Vec<&[u8]> = words.iter().map(|w| w.0.as_slice()).collect();
+                        text = words.join(&b' ');
+                        Packet::Message(Text::new(text.as_slice()))
                     }
                     Self::Trajectory { .. } | Self::Raw { .. } => unreachable!("handled above"),
                 };
