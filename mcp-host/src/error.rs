@@ -115,7 +115,7 @@ pub enum SendError {
     /// for another request's.
     #[error(
         "no answer to frame id {frame_id} within {secs}{}",
-        if *heard { "" } else { " (no frame has come from the radio since the link came up)" },
+        if *heard { "" } else { " (no valid frame has come from the radio since the link came up)" },
         secs = Seconds(*.timeout)
     )]
     #[non_exhaustive]
@@ -338,8 +338,8 @@ fn timeout_cause(delivered: bool, heard: bool, undecodable: u64) -> String {
         (true, Some(lost)) => {
             format!("the radio delivered the request, but {lost}: the report may have been one")
         }
-        (false, None) if !heard => "the radio did not confirm delivery; no frame has come from \
-                                    the radio since the link came up"
+        (false, None) if !heard => "the radio did not confirm delivery; no valid frame has come \
+                                    from the radio since the link came up"
             .to_owned(),
         (false, None) => "the radio did not confirm delivery".to_owned(),
         (false, Some(lost)) => format!("the radio did not confirm delivery, and {lost}"),

@@ -571,7 +571,7 @@ async fn a_request_the_radio_never_confirms_says_so_when_it_times_out() {
     );
     assert!(
         err.to_string().contains(
-            "the radio did not confirm delivery; no frame has come from the radio since the \
+            "the radio did not confirm delivery; no valid frame has come from the radio since the \
              link came up"
         ),
         "{err}"
@@ -1094,7 +1094,7 @@ async fn a_timeout_says_when_nothing_at_all_came_from_the_radio() {
     assert!(
         error
             .to_string()
-            .ends_with(" (no frame has come from the radio since the link came up)"),
+            .ends_with(" (no valid frame has come from the radio since the link came up)"),
         "{error}"
     );
     let _ = fake.next_tx().await;
