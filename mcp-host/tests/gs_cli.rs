@@ -829,6 +829,14 @@ fn every_subcommand_has_help() {
         let out = stdout(&run(&[sub, "--help"]));
         assert!(out.contains("Usage: mcp-gs"), "{sub}: {out}");
     }
+    // The subcommands that need a radio that is there do not offer pty.
+    for sub in ["send", "status", "at", "nodes"] {
+        let out = stdout(&run(&[sub, "--help"]));
+        assert!(
+            out.contains("tcp:HOST:PORT or tcp-listen:ADDR:PORT (a radio that is there: not pty"),
+            "{sub}: {out}"
+        );
+    }
     // Where a telemetry id is given, its help lists them all, with their numbers.
     for args in [
         &["send", "telemetry", "--help"][..],

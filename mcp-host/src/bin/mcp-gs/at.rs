@@ -20,6 +20,7 @@ use mcp_host::render::json::hex;
 parameter of the local radio, which answers at once; 12 for a change, an \
 action, ND, DN, AS, ED, FN or a remote radio]"
 )))]
+#[command(mut_arg("link", |arg| arg.help(crate::link_args::ONE_SHOT_LINK_HELP)))]
 pub(crate) struct AtArgs {
     #[command(flatten)]
     link: LinkArgs,

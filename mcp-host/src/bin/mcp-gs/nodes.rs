@@ -14,6 +14,7 @@ use crate::{Failure, Format};
     "Seconds to wait to connect, and for the radio's discovery time (N? or NT) \
 asked first [default: 12]; the answers are gathered for --window"
 )))]
+#[command(mut_arg("link", |arg| arg.help(crate::link_args::ONE_SHOT_LINK_HELP)))]
 pub(crate) struct NodesArgs {
     #[command(flatten)]
     link: LinkArgs,

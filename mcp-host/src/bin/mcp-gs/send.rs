@@ -21,6 +21,7 @@ use crate::{Failure, Format};
     "Seconds to wait to connect, for the radio's transmit status, and, for a \
 trajectory to one MAV or with --confirm, for each of the MAV's reports [default: 12]"
 )))]
+#[command(mut_arg("link", |arg| arg.help(crate::link_args::ONE_SHOT_LINK_HELP)))]
 pub(crate) struct SendArgs {
     #[command(flatten)]
     link: LinkArgs,

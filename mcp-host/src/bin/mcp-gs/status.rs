@@ -15,6 +15,7 @@ use crate::{Failure, Format};
 #[command(mut_arg("timeout", |arg| arg.help(
     "Seconds to wait to connect, and for the MAV's report [default: 12]"
 )))]
+#[command(mut_arg("link", |arg| arg.help(crate::link_args::ONE_SHOT_LINK_HELP)))]
 pub(crate) struct StatusArgs {
     #[command(flatten)]
     link: LinkArgs,
