@@ -210,7 +210,7 @@ impl NetArgs {
             out!("seed {} (replay with --seed {})", config.seed, config.seed);
         }
         out!(
-            "unicast payloads up to {} bytes, broadcast up to {}",
+            "virtual XBee network: unicast payloads up to {} bytes, broadcast up to {}",
             config.max_unicast,
             config.max_broadcast
         );
