@@ -833,7 +833,7 @@ fn every_subcommand_has_help() {
     for sub in ["send", "status", "at", "nodes"] {
         let out = stdout(&run(&[sub, "--help"]));
         assert!(
-            out.contains("tcp:HOST:PORT or tcp-listen:ADDR:PORT (a radio that is there: not pty"),
+            out.contains("tcp:HOST:PORT or tcp-listen:ADDR:PORT. Not pty, which makes a new"),
             "{sub}: {out}"
         );
     }
@@ -1150,8 +1150,22 @@ fn monitor_says_it_reconnects_when_the_link_goes_away() {
         }
     };
     assert!(said.ends_with("; reconnecting (Ctrl-C stops)"), "{said}");
-    // And it does.
-    let (_socket, _) = radio.accept().unwrap();
+    // And it does (looked for until the guard's deadline, not waited on for ever).
+    radio.set_nonblocking(true).unwrap();
+    let deadline = std::time::Instant::now() + common::GUARD;
+    let _socket = loop {
+        match radio.accept() {
+            Ok((socket, _)) => break socket,
+            Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
+                assert!(
+                    std::time::Instant::now() < deadline,
+                    "monitor never came back"
+                );
+                std::thread::sleep(std::time::Duration::from_millis(10));
+            }
+            Err(e) => panic!("{e}"),
+        }
+    };
     let back = lines.recv_timeout(common::GUARD).expect("monitor goes on");
     assert!(back.contains("link reconnected"), "{back}");
 }
@@ -1217,6 +1231,21 @@ fn monitor_records_every_frame_while_its_output_is_not_read() {
     // SAFETY: kill(2) with the pid of a child of this process and a valid signal.
     assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
     assert_eq!(common::exit_code(&mut child.0), Some(0));
+    // The lines still waiting then, which the reader never took, are said too.
+    let unwritten = loop {
+        let line = errors
+            .recv_timeout(common::GUARD)
+            .expect("monitor says what it did not write");
+        if line.contains(" not written: ") {
+            break line;
+        }
+    };
+    assert!(
+        unwritten.starts_with("mcp-gs: warning: ")
+            && unwritten
+                .ends_with(" lines not written: standard output took nothing more after Ctrl-C"),
+        "{unwritten}"
+    );
     drop(stdout);
     let output = run(&["decode", "--summary", record.to_str().unwrap()]);
     let summary = String::from_utf8_lossy(&output.stdout);

@@ -397,10 +397,9 @@ impl<const N: usize, M: DecoderMode, const P: usize, const Q: usize> Inbox<N, M,
     /// #     0xFF, 0xFE, 0x01, 0x63, 0x02, 0xFF, 0xF1];
     /// let mut inbox = Inbox::<32, Mode1, 16, 2>::new();
     /// inbox.read_from({ let mut fifo = frame.iter().copied(); move || fifo.next() })?;
-    /// if let Some(received) = inbox.peek() {
-    ///     assert_eq!(received.data(), b"c\x02\xff");
-    /// }
-    /// assert_eq!(inbox.len(), 1);
+    /// let received = inbox.peek().expect("a payload queued");
+    /// assert_eq!(received.data(), b"c\x02\xff");
+    /// assert_eq!(inbox.len(), 1); // still queued
     /// # Ok::<(), xbee_api::InboxFull>(())
     /// ```
     pub fn peek(&self) -> Option<&Received<P>> {

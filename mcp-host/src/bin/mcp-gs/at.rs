@@ -46,7 +46,7 @@ pub(crate) struct AtArgs {
     command: String,
     /// The value to set, in hex (e.g. `2` for AP=2), or text for a text parameter (NI)
     /// or with --text, written as it is printed (ASCII, `\xNN` for any byte, `\\` for a
-    /// backslash); omit to read.
+    /// backslash, `\"` or `"` for a quote); omit to read.
     value: Option<String>,
     /// Output format: `json` prints each answer as the response frame's object (as
     /// `monitor` does), with `value` added: the value read as a number, or as text for a

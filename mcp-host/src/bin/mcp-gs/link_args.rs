@@ -57,10 +57,10 @@ pub(crate) struct LinkArgs {
 
 /// `--link` of the subcommands that do one thing and end (`send`, `status`, `at`,
 /// `nodes`): a radio that is there, so not `pty`, which makes a new pseudo-terminal.
-pub(crate) const ONE_SHOT_LINK_HELP: &str = "The local radio: serial:PATH[:BAUD][:rtscts] \
-     (default 115200 8N1), tcp:HOST:PORT or tcp-listen:ADDR:PORT (a radio that is there: not \
-     pty, which makes a new pseudo-terminal; give the one `mcp-gs sim --link pty` printed as \
-     serial:PATH)";
+pub(crate) const ONE_SHOT_LINK_HELP: &str = "The local radio, one that is there: \
+     serial:PATH[:BAUD][:rtscts] (default 115200 8N1), tcp:HOST:PORT or tcp-listen:ADDR:PORT. \
+     Not pty, which makes a new pseudo-terminal: give the one `mcp-gs sim --link pty` \
+     printed as serial:PATH";
 
 /// The `--timeout` when none is given.
 const DEFAULT_TIMEOUT: Duration = Duration::from_secs(12);

@@ -2,6 +2,7 @@
 
 use std::collections::VecDeque;
 use std::path::PathBuf;
+use std::sync::atomic::Ordering;
 use std::time::SystemTime;
 
 use clap::Args;
@@ -113,6 +114,8 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
     let mut dates = render::text::DateLines::new();
     let mut lost = Lost::default();
     let mut unshown = Unshown::default();
+    // Lines handed to the output's thread, to tell those it did not write at the end.
+    let mut handed = 0u64;
     // Bytes that are no frames at all come as no event: the counters are looked at now
     // and then for them (and for events lost).
     let mut look = tokio::time::interval(std::time::Duration::from_secs(1));
@@ -122,6 +125,7 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
             room = output.room(), if !pending.is_empty() => match (room, pending.pop_front()) {
                 (Some(room), Some(line)) => {
                     room.send(line);
+                    handed += 1;
                     continue;
                 }
                 // Standard output failed: the thread's error ends the monitor.
@@ -257,6 +261,8 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
     }
     // What was not shown is counted, however the monitor ends.
     pending.extend(quiet.as_mut().and_then(|shown| shown.tell_if_due(true)));
+    handed += pending.len() as u64;
+    let written_so_far = output.written();
     let finished = output.finish(pending);
     tokio::pin!(finished);
     // After Ctrl-C (before, or while the last lines are written), a reader that takes
@@ -275,6 +281,15 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
     };
     lost.tell(&stream.stats(), recorder.is_some(), true);
     unshown.tell(recorder.is_some());
+    // Lines a reader that took nothing more after Ctrl-C left unwritten (not a reader
+    // gone, whose end is no news).
+    let unwritten = handed.saturating_sub(written_so_far.load(Ordering::Relaxed));
+    if finished.is_ok() && unwritten > 0 {
+        err!(
+            "mcp-gs: warning: {} not written: standard output took nothing more after Ctrl-C",
+            crate::counted(unwritten, "line")
+        );
+    }
     // The frames still queued for the file, and what it could not take. A failure of
     // the monitor itself (a recording that could not be written) is said before one of
     // its output, and not hidden by a reader gone.

@@ -5,6 +5,8 @@
 //! behind on rather than stalling with it.
 
 use std::io::{self, Write};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use tokio::sync::{mpsc, oneshot};
 
@@ -18,6 +20,8 @@ pub(crate) struct Output {
     /// a wait given up (on a reader that takes nothing more) leaves nothing behind that
     /// the runtime would wait for as it shuts down.
     ended: oneshot::Receiver<io::Result<()>>,
+    /// Lines the thread has written whole.
+    written: Arc<AtomicU64>,
 }
 
 impl Output {
@@ -25,12 +29,24 @@ impl Output {
     pub(crate) fn stdout() -> io::Result<Self> {
         let (lines, queued) = mpsc::channel(QUEUE);
         let (done, ended) = oneshot::channel();
+        let written = Arc::new(AtomicU64::new(0));
+        let counted = Arc::clone(&written);
         std::thread::Builder::new()
             .name("mcp-gs stdout".into())
             .spawn(move || {
-                let _ = done.send(write_all(queued));
+                let _ = done.send(write_all(queued, &counted));
             })?;
-        Ok(Output { lines, ended })
+        Ok(Output {
+            lines,
+            ended,
+            written,
+        })
+    }
+
+    /// How many lines the thread has written whole, as it goes on: a handle that
+    /// outlives [`Output::finish`], to count those a wait for it given up left unwritten.
+    pub(crate) fn written(&self) -> Arc<AtomicU64> {
+        Arc::clone(&self.written)
     }
 
     /// Room for a line (given without its line end), once fewer than [`QUEUE`] are
@@ -49,7 +65,7 @@ impl Output {
                 None => break,
             }
         }
-        let Output { lines, ended } = self;
+        let Output { lines, ended, .. } = self;
         drop(lines);
         // The thread panicked (it does not: a bug) if it sent nothing.
         ended.await.unwrap_or_else(|_| {
@@ -61,21 +77,24 @@ impl Output {
 }
 
 /// The thread: each line as it comes, with those queued meanwhile in one write.
-fn write_all(mut queued: mpsc::Receiver<String>) -> io::Result<()> {
+fn write_all(mut queued: mpsc::Receiver<String>, written: &AtomicU64) -> io::Result<()> {
     let mut batch = Vec::new();
     while let Some(line) = queued.blocking_recv() {
         batch.clear();
         batch.extend_from_slice(line.as_bytes());
         batch.push(b'\n');
+        let mut lines = 1;
         while let Ok(line) = queued.try_recv() {
             batch.extend_from_slice(line.as_bytes());
             batch.push(b'\n');
+            lines += 1;
         }
         // Locked for the batch alone: another line of the program (a summary) is not
         // held up for the life of the thread.
         let mut out = io::stdout().lock();
         out.write_all(&batch)?;
         out.flush()?;
+        written.fetch_add(lines, Ordering::Relaxed);
     }
     Ok(())
 }
