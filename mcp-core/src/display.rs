@@ -8,6 +8,7 @@ use crate::{
     packet::Packet,
     report::{Report, SlaveAddresses},
     telemetry::Telemetry,
+    text::Quoted,
     trajectory::{Waypoint, Waypoints},
 };
 
@@ -57,6 +58,14 @@ impl fmt::Write for EscapeQuotes<'_, '_> {
             self.0.write_str(part)?;
         }
         Ok(())
+    }
+}
+
+impl<B: AsRef<[u8]>> fmt::Display for Quoted<'_, B> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("\"")?;
+        fmt::Write::write_fmt(&mut EscapeQuotes(f), format_args!("{}", self.0))?;
+        f.write_str("\"")
     }
 }
 
@@ -163,11 +172,7 @@ impl<B: AsRef<[u8]>> fmt::Display for Packet<B> {
             Packet::Report(r) => write!(f, " {r}"),
             Packet::Telemetry(t) if t.is_empty() => Ok(()),
             Packet::Telemetry(t) => write!(f, " {t}"),
-            Packet::Message(t) | Packet::Warning(t) => {
-                f.write_str(" \"")?;
-                fmt::Write::write_fmt(&mut EscapeQuotes(f), format_args!("{t}"))?;
-                f.write_str("\"")
-            }
+            Packet::Message(t) | Packet::Warning(t) => write!(f, " {}", t.quoted()),
         }
     }
 }

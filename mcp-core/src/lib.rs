@@ -132,7 +132,7 @@ pub use mav::{TelemetrySet, TelemetrySetIter};
 pub use packet::{Packet, parse};
 pub use report::{Report, SlaveAddresses};
 pub use telemetry::{Telemetry, TelemetryBuilder, TelemetryIter, TelemetryRecord};
-pub use text::Text;
+pub use text::{Quoted, Text};
 pub use trajectory::{MAX_WAYPOINTS, TrajectoryBuilder, Waypoint, WaypointIter, Waypoints};
 
 /// The largest MCP packet: the XBee RF payload limit (unicast, API mode, fragmented).

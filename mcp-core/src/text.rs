@@ -55,6 +55,18 @@ impl<B: AsRef<[u8]>> Text<B> {
         self.as_bytes().is_empty()
     }
 
+    /// The text between double quotes, as a message packet shows it: escaped as by
+    /// `Display`, and each `"` as `\"`, so that it reads back unambiguously.
+    ///
+    /// ```
+    /// use mcp_core::Text;
+    /// let t = Text::new(&b"say \"hi\" \\ \xe9"[..]);
+    /// assert_eq!(t.quoted().to_string(), r#""say \"hi\" \\ \xe9""#);
+    /// ```
+    pub fn quoted(&self) -> Quoted<'_, B> {
+        Quoted(self)
+    }
+
     /// The length of a message or warning packet carrying this text.
     pub fn encoded_len(&self) -> usize {
         1 + self.len()
@@ -84,6 +96,10 @@ impl<'a> Text<&'a [u8]> {
         Text::new(f(self.bytes))
     }
 }
+
+/// A [`Text`] between double quotes, from [`Text::quoted`].
+#[derive(Debug, Clone, Copy)]
+pub struct Quoted<'a, B>(pub(crate) &'a Text<B>);
 
 impl<B: AsRef<[u8]>> fmt::Display for Text<B> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {

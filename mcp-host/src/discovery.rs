@@ -67,7 +67,7 @@ impl fmt::Display for Node {
             self.addr64,
             self.addr16,
             self.device_type,
-            crate::render::text::quoted(self.identifier.as_bytes())
+            mcp_core::Text::new(self.identifier.as_bytes()).quoted()
         )?;
         if let Some(rssi) = self.rssi {
             write!(f, ", -{rssi} dBm")?;

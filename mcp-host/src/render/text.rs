@@ -129,7 +129,7 @@ pub fn frame(frame: &Frame<'_>) -> String {
             ni.node.addr64,
             ni.node.addr16,
             ni.node.device_type,
-            quoted(ni.node.identifier),
+            mcp_core::Text::new(ni.node.identifier).quoted(),
             ni.node.parent,
             ni.source_event(),
             u8::from(ni.source_event()),
@@ -144,21 +144,6 @@ pub fn frame(frame: &Frame<'_>) -> String {
         other => write!(s, "frame type 0x{:02x}", other.frame_type()),
     };
     s
-}
-
-/// Text from the air (a message, a node identifier) in quotes, as a message prints:
-/// printable ASCII as it is, a quote as `\"`, a backslash as `\\`, any other byte as
-/// `\xNN`, so that the bytes can always be told back (`mcp-gs send ... message`, `mcp-gs
-/// at NI` take it so) and no byte reaches the terminal raw.
-///
-/// ```
-/// use mcp_host::render::text::quoted;
-/// assert_eq!(quoted(b"MAV \"1\"\xe9\\"), r#""MAV \"1\"\xe9\\""#);
-/// ```
-pub fn quoted(bytes: &[u8]) -> String {
-    // `Text` writes a quote as it is, and no other byte as one.
-    let text = mcp_core::Text::new(bytes).to_string();
-    format!("\"{}\"", text.replace('"', "\\\""))
 }
 
 /// An AT command name as it may be shown: its two characters, or their hex when either

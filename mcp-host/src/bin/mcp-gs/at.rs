@@ -144,7 +144,7 @@ fn exit_code(status: AtStatus) -> u8 {
 /// The line that shows a value read (or echoed) by the radio.
 fn value_line(name: &str, command: &[u8; 2], data: &[u8]) -> String {
     if is_text(command) {
-        return format!("{name} = {}", mcp_host::render::text::quoted(data));
+        return format!("{name} = {}", mcp_core::Text::new(data).quoted());
     }
     if let (b"BD", Some(rate)) = (command, baud_rate(data)) {
         // As `setup` prints it (the value as the radio's command mode writes it, hex
