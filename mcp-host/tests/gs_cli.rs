@@ -1126,6 +1126,17 @@ fn a_recording_piped_in_is_replayed_whole() {
     assert_eq!(reader.join().unwrap(), modem_status.repeat(3));
 }
 
+/// Waits until the recording at `path` holds `bytes` (its records are flushed as they
+/// come), polled until the guard's deadline; `what` says what was waited for.
+#[cfg(unix)]
+fn recorded(path: &std::path::Path, bytes: u64, what: &str) {
+    let deadline = std::time::Instant::now() + common::GUARD;
+    while std::fs::metadata(path).map_or(0, |m| m.len()) < bytes {
+        assert!(std::time::Instant::now() < deadline, "{what}: not recorded");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+}
+
 /// A link that goes away: monitor says it is reconnecting, as nothing is printed until
 /// it is back.
 #[cfg(unix)]
@@ -1201,14 +1212,11 @@ fn monitor_records_every_frame_while_its_output_is_not_read() {
         socket.write_all(&modem_status.repeat(batch)).unwrap();
         let all = (mcp_host::record::HEADER_LEN
             + n * batch * (mcp_host::record::RECORD_HEAD_LEN + 2)) as u64;
-        let deadline = std::time::Instant::now() + common::GUARD;
-        while std::fs::metadata(&record).map_or(0, |m| m.len()) < all {
-            assert!(
-                std::time::Instant::now() < deadline,
-                "batch {n} not recorded while the output was not read"
-            );
-            std::thread::sleep(std::time::Duration::from_millis(5));
-        }
+        recorded(
+            &record,
+            all,
+            &format!("batch {n} while the output was not read"),
+        );
     }
     let said = loop {
         let line = errors
@@ -1289,14 +1297,7 @@ fn monitor_ends_on_ctrl_c_with_its_last_lines_not_read() {
         // is written, and flushed, before its line): their lines fill the pipe, the
         // rest wait, and the link says nothing more.
         let all = (8 + 100 * 13) as u64;
-        let deadline = std::time::Instant::now() + common::GUARD;
-        while std::fs::metadata(&record).map_or(0, |m| m.len()) < all {
-            assert!(
-                std::time::Instant::now() < deadline,
-                "{args:?}: not recorded"
-            );
-            std::thread::sleep(std::time::Duration::from_millis(5));
-        }
+        recorded(&record, all, &format!("{args:?}"));
         let pid = i32::try_from(monitor.id()).unwrap();
         // SAFETY: kill(2) with the pid of a child of this process and a valid signal.
         assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
