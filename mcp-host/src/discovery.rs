@@ -34,8 +34,11 @@ pub struct Node {
     pub addr64: Address64,
     /// Its 16-bit network address.
     pub addr16: Address16,
-    /// Its node identifier (`NI`), bytes outside UTF-8 replaced.
-    pub identifier: String,
+    /// Its node identifier (`NI`), its bytes as the radio sent them: 1 to 20 printable
+    /// ASCII characters from a real radio, but any bytes from a peer that breaks the
+    /// rule. [`Node`]'s `Display` quotes it as message text prints, any byte that is
+    /// not printable ASCII as `\xNN`; `String::from_utf8_lossy` gives a `str`.
+    pub identifier: Vec<u8>,
     /// Its role in the network.
     pub device_type: DeviceType,
     /// Its parent's 16-bit address (`FFFE`: none).
@@ -50,7 +53,7 @@ impl From<&NodeInfo<'_>> for Node {
         Node {
             addr64: info.addr64,
             addr16: info.addr16,
-            identifier: String::from_utf8_lossy(info.identifier).into_owned(),
+            identifier: info.identifier.to_vec(),
             device_type: info.device_type,
             parent: info.parent,
             rssi: info.rssi,
@@ -67,7 +70,7 @@ impl fmt::Display for Node {
             self.addr64,
             self.addr16,
             self.device_type,
-            mcp_core::Text::new(self.identifier.as_bytes()).quoted()
+            mcp_core::Text::new(&self.identifier[..]).quoted()
         )?;
         if let Some(rssi) = self.rssi {
             write!(f, ", -{rssi} dBm")?;
@@ -222,7 +225,7 @@ mod tests {
         Node {
             addr64: Address64(addr),
             addr16: Address16(0x1234),
-            identifier: name.to_owned(),
+            identifier: name.as_bytes().to_vec(),
             device_type: DeviceType::Router,
             parent: Address16(0xFFFE),
             rssi: None,
@@ -238,8 +241,8 @@ mod tests {
         found.add(&mut index, node(1, "a again"), 2);
         found.add(&mut index, node(3, "c"), 2);
         found.add(&mut index, node(4, "d"), 2);
-        let names: Vec<&str> = found.nodes.iter().map(|n| n.identifier.as_str()).collect();
-        assert_eq!(names, ["a again", "b"]);
+        let names: Vec<&[u8]> = found.nodes.iter().map(|n| &n.identifier[..]).collect();
+        assert_eq!(names, [&b"a again"[..], b"b"]);
         assert_eq!(found.left_out, 2);
     }
 }

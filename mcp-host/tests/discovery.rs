@@ -114,7 +114,9 @@ async fn discovery_reads_each_radio_once_and_stops_at_an_empty_answer() {
     respond(&mut fake, id, AtStatus::Ok, &answer(MAV_A, b"MAV 1")).await;
     // An answer that cannot be read is left out.
     respond(&mut fake, id, AtStatus::Ok, &[1, 2, 3]).await;
-    respond(&mut fake, id, AtStatus::Ok, &answer(MAV_B, b"MAV 2")).await;
+    // A name that is no printable ASCII (a peer that breaks the rule) is kept byte for
+    // byte.
+    respond(&mut fake, id, AtStatus::Ok, &answer(MAV_B, b"MAV \xe9")).await;
     // The same radio again (it heard the request twice): once in the list, as last seen.
     respond(&mut fake, id, AtStatus::Ok, &answer(MAV_A, b"MAV 1b")).await;
     respond(&mut fake, id, AtStatus::Ok, &[]).await;
@@ -125,15 +127,19 @@ async fn discovery_reads_each_radio_once_and_stops_at_an_empty_answer() {
         .unwrap();
     assert_eq!(found.unreadable, 1);
     let nodes = found.nodes;
-    let names: Vec<(Address64, &str)> = nodes
+    let names: Vec<(Address64, &[u8])> = nodes
         .iter()
-        .map(|n| (n.addr64, n.identifier.as_str()))
+        .map(|n| (n.addr64, &n.identifier[..]))
         .collect();
-    assert_eq!(names, [(MAV_A, "MAV 1b"), (MAV_B, "MAV 2")]);
+    assert_eq!(names, [(MAV_A, &b"MAV 1b"[..]), (MAV_B, b"MAV \xe9")]);
     assert_eq!(nodes[1].rssi, Some(0x28));
     assert_eq!(
         nodes[1].to_string(),
-        "0013a20040b599bf (7d84) router \"MAV 2\", -40 dBm"
+        r#"0013a20040b599bf (7d84) router "MAV \xe9", -40 dBm"#
+    );
+    assert_eq!(
+        mcp_host::render::json::node(&nodes[1])["identifier"],
+        r"MAV \xe9"
     );
 }
 
@@ -266,10 +272,13 @@ async fn the_emulated_network_answers_with_every_radio_it_can_reach() {
         .await
         .unwrap()
         .nodes;
-    let expected = [(a.address, a.addr16, "MAV 1"), (b.address, b.addr16, " ")];
-    let found: Vec<(Address64, Address16, &str)> = nodes
+    let expected = [
+        (a.address, a.addr16, &b"MAV 1"[..]),
+        (b.address, b.addr16, b" "),
+    ];
+    let found: Vec<(Address64, Address16, &[u8])> = nodes
         .iter()
-        .map(|n: &Node| (n.addr64, n.addr16, n.identifier.as_str()))
+        .map(|n: &Node| (n.addr64, n.addr16, &n.identifier[..]))
         .collect();
     assert_eq!(found, expected);
     assert!(

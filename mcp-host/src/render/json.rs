@@ -325,7 +325,7 @@ pub fn node(node: &crate::discovery::Node) -> Value {
     node_fields(
         &mut m,
         (node.addr64, node.addr16, node.parent),
-        node.identifier.as_bytes(),
+        &node.identifier,
         node.device_type,
     );
     if let Some(rssi) = node.rssi {
