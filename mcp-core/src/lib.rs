@@ -16,7 +16,8 @@
 //!   [`Packet::map_bytes`] moves a parsed packet to owned storage.
 //! - Encoding: `encoded_len` and `encode` on [`Packet`], [`Command`], [`Report`] and
 //!   [`Telemetry`]; [`TelemetryBuilder`] and [`TrajectoryBuilder`] build packets item
-//!   by item and stop cleanly at the buffer or the [`MAX_PAYLOAD`] limit.
+//!   by item and stop cleanly at the buffer or the [`MAX_PAYLOAD`] limit, and
+//!   [`TextBuilder`] builds a message or warning from formatted text.
 //! - `Display` on [`Packet`], [`Command`], [`Report`], [`Telemetry`] and [`Waypoints`]
 //!   gives one readable line, e.g. `report landing flight`.
 //! - [`mav`]: the MAV side, a state machine that answers commands the way the deployed
@@ -132,7 +133,7 @@ pub use mav::{TelemetrySet, TelemetrySetIter};
 pub use packet::{Packet, parse};
 pub use report::{Report, SlaveAddresses};
 pub use telemetry::{Telemetry, TelemetryBuilder, TelemetryIter, TelemetryRecord};
-pub use text::{Quoted, Text};
+pub use text::{Quoted, Text, TextBuilder};
 pub use trajectory::{MAX_WAYPOINTS, TrajectoryBuilder, Waypoint, WaypointIter, Waypoints};
 
 /// The largest MCP packet: the XBee RF payload limit (unicast, API mode, fragmented).

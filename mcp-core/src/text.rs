@@ -2,7 +2,12 @@
 
 use core::fmt;
 
-use crate::{error::BufferTooSmall, id::Category, write::Writer};
+use crate::{
+    MAX_PAYLOAD,
+    error::{BufferTooSmall, Full},
+    id::Category,
+    write::Writer,
+};
 
 /// The text of a message or warning packet: the bytes after the category, 8-bit
 /// characters with no terminator. Any bytes are valid, including none and bytes
@@ -94,6 +99,107 @@ impl<'a> Text<&'a [u8]> {
     /// Moves the bytes to another storage, e.g. `|s| bytes.slice_ref(s)`.
     pub fn map_bytes<U>(self, f: impl FnOnce(&'a [u8]) -> U) -> Text<U> {
         Text::new(f(self.bytes))
+    }
+}
+
+/// Builds a message (`m`) or warning (`w`) packet in a caller buffer, from bytes or
+/// from formatted text (`write!`, as it implements [`fmt::Write`]), cut at the end of the
+/// buffer or at the 255-byte XBee payload limit ([`MAX_PAYLOAD`]). A firmware says
+/// what it could not take without a buffer of its own for the text:
+///
+/// ```
+/// use core::fmt::Write as _;
+/// use mcp_core::{Packet, TextBuilder, parse};
+///
+/// let mut buf = [0u8; 84];
+/// let error = parse(b"c\x02").unwrap_err();
+/// let mut text = TextBuilder::warning(&mut buf).unwrap();
+/// let _ = write!(text, "{error}"); // `Err` if the text was cut: what fits is written
+/// let len = text.finish();
+/// let Some(packet) = buf.get(..len) else { return };
+/// assert_eq!(packet, b"wwrong length for landing command: expected 3 bytes, got 2 (at offset 2)");
+/// assert!(matches!(parse(packet), Ok(Packet::Warning(_))));
+/// ```
+///
+/// Formatting links `core::fmt` and, for an error's message, the texts of every error
+/// it can be: several kilobytes of flash on a microcontroller. Where that is too much,
+/// [`push`](Self::push) bytes of your own, such as an error's
+/// [`code`](crate::Error::code) and [`offset`](crate::Error::offset).
+#[derive(Debug)]
+pub struct TextBuilder<'a> {
+    buf: &'a mut [u8],
+    len: usize,
+}
+
+impl<'a> TextBuilder<'a> {
+    /// Starts a message packet in `buf` (writes the `m`). Fails if `buf` is empty.
+    pub fn message(buf: &'a mut [u8]) -> Result<Self, BufferTooSmall> {
+        Self::new(buf, Category::Message)
+    }
+
+    /// Starts a warning packet in `buf` (writes the `w`). Fails if `buf` is empty.
+    pub fn warning(buf: &'a mut [u8]) -> Result<Self, BufferTooSmall> {
+        Self::new(buf, Category::Warning)
+    }
+
+    fn new(buf: &'a mut [u8], category: Category) -> Result<Self, BufferTooSmall> {
+        let available = buf.len();
+        let first = buf.first_mut().ok_or(BufferTooSmall {
+            needed: 1,
+            available,
+        })?;
+        *first = category.into();
+        let cap = available.min(MAX_PAYLOAD);
+        Ok(TextBuilder {
+            buf: buf.get_mut(..cap).unwrap_or_default(),
+            len: 1,
+        })
+    }
+
+    /// Appends `bytes`, as many as fit: [`Full`] if some did not (the packet then holds
+    /// those that did, and is whole).
+    ///
+    /// ```
+    /// use mcp_core::{Full, TextBuilder};
+    /// let mut buf = [0u8; 6];
+    /// let mut text = TextBuilder::message(&mut buf).unwrap();
+    /// assert_eq!(text.push(b"abc"), Ok(()));
+    /// assert_eq!(text.push(b"defg"), Err(Full));
+    /// assert_eq!(text.as_bytes(), b"mabcde");
+    /// ```
+    pub fn push(&mut self, bytes: &[u8]) -> Result<(), Full> {
+        let room = self.buf.get_mut(self.len..).unwrap_or_default();
+        let n = bytes.len().min(room.len());
+        if let (Some(dst), Some(src)) = (room.get_mut(..n), bytes.get(..n)) {
+            dst.copy_from_slice(src);
+        }
+        self.len += n;
+        if n < bytes.len() { Err(Full) } else { Ok(()) }
+    }
+
+    /// The number of text bytes written (the packet's length less its category byte).
+    pub fn text_len(&self) -> usize {
+        self.len - 1
+    }
+
+    /// The packet written so far.
+    pub fn as_bytes(&self) -> &[u8] {
+        self.buf.get(..self.len).unwrap_or_default()
+    }
+
+    /// Ends the packet, returning its length: the packet is `buf.get(..len)` (rather
+    /// than `&buf[..len]`, whose bounds check the compiler cannot always drop, and so a
+    /// panic path in firmware).
+    pub fn finish(self) -> usize {
+        self.len
+    }
+}
+
+/// Appends the text as [`push`](TextBuilder::push) does, failing with [`fmt::Error`]
+/// (which stops a `write!`) once it was cut.
+impl fmt::Write for TextBuilder<'_> {
+    fn write_str(&mut self, s: &str) -> fmt::Result {
+        self.push(s.as_bytes()).map_err(|Full| fmt::Error)
     }
 }
 
