@@ -8,7 +8,7 @@ use std::pin::Pin;
 use std::task::{Context, Poll};
 
 use bytes::Bytes;
-use futures::{Sink, Stream};
+use futures::{Sink, Stream, StreamExt};
 use tokio::sync::{mpsc, oneshot, watch};
 use tokio_util::sync::PollSender;
 use xbee_api::{Address64, EncodeFrame, TransmitRequestRepr};
@@ -100,7 +100,8 @@ impl<B> PacketSink<B> {
             state.changed().await.ok()?;
             let now = *state.borrow_and_update();
             Some((now, state))
-        });
+        })
+        .fuse();
         Self {
             writes: PollSender::new(writes),
             _alive: alive,
@@ -125,15 +126,13 @@ impl<B: AsRef<[u8]>> Sink<(Address64, mcp_core::Packet<B>)> for PacketSink<B> {
 
     fn poll_ready(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<Result<(), SendError>> {
         let this = self.get_mut();
-        // The newest state, and a wake-up at the next change.
-        loop {
+        // The newest state, and a wake-up at the next change. A link that has closed
+        // stays closed: its changes, ended, are not polled again.
+        while this.state != LinkState::Closed {
             match this.changes.as_mut().poll_next(cx) {
                 Poll::Ready(Some(state)) => this.state = state,
                 Poll::Ready(None) => this.state = LinkState::Closed,
                 Poll::Pending => break,
-            }
-            if this.state == LinkState::Closed {
-                break;
             }
         }
         match this.state {
