@@ -6,6 +6,10 @@ use crate::id::{Category, CommandType};
 
 /// Why a packet failed to parse, and at which byte offset.
 ///
+/// Its `Display` says both in words, and costs a firmware that formats it several
+/// kilobytes of flash ([`TextBuilder`](crate::TextBuilder) has a measure); the one-byte
+/// [`code`](Self::code) and the [`offset`](Self::offset) say the same in two bytes.
+///
 /// ```
 /// use mcp_core::{parse, ErrorKind};
 /// let err = parse(b"c\x02\x01\x00").unwrap_err();

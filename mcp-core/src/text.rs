@@ -121,10 +121,11 @@ impl<'a> Text<&'a [u8]> {
 /// assert!(matches!(parse(packet), Ok(Packet::Warning(_))));
 /// ```
 ///
-/// Formatting links `core::fmt` and, for an error's message, the texts of every error
-/// it can be: several kilobytes of flash on a microcontroller. Where that is too much,
-/// [`push`](Self::push) bytes of your own, such as an error's
-/// [`code`](crate::Error::code) and [`offset`](crate::Error::offset).
+/// Formatting costs flash: `core::fmt`, and for an error's message the texts of every
+/// error it can be. In a small Cortex-M3 MAV firmware (`opt-level = "s"`, LTO), a
+/// warning written as `write!(text, "{error}")` took 5.4 KB more than one of two bytes
+/// pushed, the error's [`code`](crate::Error::code) and
+/// [`offset`](crate::Error::offset); 3.8 KB more where `core::fmt` was linked already.
 #[derive(Debug)]
 pub struct TextBuilder<'a> {
     buf: &'a mut [u8],

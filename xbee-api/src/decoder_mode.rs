@@ -56,12 +56,16 @@ pub trait FixedMode: DecoderMode {
 pub struct AnyMode;
 
 /// API mode 1 (`AP=1`, unescaped), fixed at compile time: the decoder carries no mode 2
-/// code. Made with [`Decoder::fixed`](crate::Decoder::fixed).
+/// code. Made with [`Decoder::fixed`](crate::Decoder::fixed). Its mode as a value,
+/// for buffer sizes and encoders, is `Mode1::MODE` (`ApiMode::Unescaped`), with
+/// [`FixedMode`] in scope.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
 pub struct Mode1;
 
 /// API mode 2 (`AP=2`, escaped), fixed at compile time: the decoder carries no mode 1
-/// code. Made with [`Decoder::fixed`](crate::Decoder::fixed).
+/// code. Made with [`Decoder::fixed`](crate::Decoder::fixed). Its mode as a value,
+/// for buffer sizes and encoders, is `Mode2::MODE` (`ApiMode::Escaped`), with
+/// [`FixedMode`] in scope.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
 pub struct Mode2;
 

@@ -65,6 +65,7 @@ const QUIET_TICKS: u8 = 2;
 /// # fn uart_read() -> Option<u8> { None }
 /// # fn uart_rx_interrupt(_on: bool) {}
 /// # fn uart_rx_pend() {}
+/// # fn wfi() {}
 /// /// The UART's receive interrupt: its FIFO while the queue has room.
 /// fn on_uart_rx() {
 ///     critical_section::with(|cs| {
@@ -95,6 +96,20 @@ const QUIET_TICKS: u8 = 2;
 ///         uart_rx_pend();
 ///         Some(received)
 ///     })
+/// }
+///
+/// /// The main loop's sleep once it has taken every payload: the queue is looked at
+/// /// with interrupts masked, so that a frame queued after the look still wakes the
+/// /// core (`wfi`, `cortex_m::asm::wfi` on a Cortex-M, wakes on an interrupt pending
+/// /// while masked, which runs when the critical section ends). Looked at before the
+/// /// critical section instead, a frame queued between the look and `wfi` would wait
+/// /// for the next interrupt: the timer's, or none.
+/// fn sleep_if_idle() {
+///     critical_section::with(|cs| {
+///         if INBOX.borrow(cs).try_borrow().is_ok_and(|inbox| inbox.is_empty()) {
+///             wfi();
+///         }
+///     });
 /// }
 /// ```
 ///
@@ -416,9 +431,10 @@ impl<const N: usize, M: DecoderMode, const P: usize, const Q: usize> Inbox<N, M,
         self.queue.len()
     }
 
-    /// `true` if no payload is queued: a main loop's check before it sleeps, when each
-    /// `pop` from a full queue raises the receive interrupt (frames may wait in the
-    /// decoder, which the interrupt then takes).
+    /// `true` if no payload is queued: a main loop's check before it sleeps, made in
+    /// the critical section that sleeps ([`Inbox`]'s example, `sleep_if_idle`), when
+    /// each `pop` from a full queue raises the receive interrupt (frames may wait in
+    /// the decoder, which the interrupt then takes).
     pub const fn is_empty(&self) -> bool {
         self.queue.len() == 0
     }

@@ -50,10 +50,13 @@
 //! ([`ReceivePacket::new_checked`]) hands over the MCP payload in place. In API mode 1 a
 //! timer calls [`Decoder::finish`] once, then `poll`, when the line goes quiet part way
 //! through a frame (see `finish`). The reply goes to the coordinator in a Transmit
-//! Request ([`TransmitRequestRepr::unicast`]), encoded with [`EncodeFrame::encode`] or
-//! built where it goes out from with [`InPlaceFrame`]. [`Inbox`] does the receiving in
-//! one value: the decoder, a fixed queue of payloads that a full queue loses none of,
-//! and the quiet-line timer.
+//! Request ([`TransmitRequestRepr::unicast`]): with a UART written a byte at a time,
+//! [`EncodeFrame::write_to`]`(mode, |byte| uart_write(byte))` needs no frame buffer at
+//! all; [`EncodeFrame::encode`] writes it into a buffer, and [`InPlaceFrame`] builds it
+//! in the buffer it goes out from (for DMA), with the payload written in place.
+//! Most firmware wants [`Inbox`] for the receiving, in one value: the decoder, a fixed
+//! queue of payloads that a full queue loses none of, and the quiet-line timer (its
+//! docs have the interrupt handlers and the main loop's sleep).
 //!
 //! ```
 //! use xbee_api::{

@@ -4,7 +4,8 @@
 //! addresses, the last landing state and controller it reported); everything else goes
 //! through the [`Vehicle`] trait, which the firmware or a simulator implements. Answers
 //! are written into caller buffers; nothing allocates. Each answer goes back as the RF
-//! data of a Transmit Request to the coordinator, frame id 0 and transmit options 0x01,
+//! data of a Transmit Request to the coordinator (the ground station's radio), whichever
+//! node the command came from, frame id 0 and transmit options 0x01,
 //! as the deployed MAV sends them (with `xbee-api`: `TransmitRequestRepr { options:
 //! transmit_options::DISABLE_RETRIES,
 //! ..TransmitRequestRepr::unicast(Address64::COORDINATOR, reply) }`, encoded or built in
