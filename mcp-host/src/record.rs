@@ -3,10 +3,10 @@
 //! [`CommandSender::tap_frames`](crate::CommandSender::tap_frames)) and `mcp-gs decode`
 //! and `mcp-gs replay` read them.
 //!
-//! # Format, version 1
+//! # Format, version 2
 //!
 //! A file starts with an 8-byte header: the magic `MCPREC` (6 ASCII bytes) and the
-//! format version as a little-endian `u16` (1). Records follow, back to back, until the
+//! format version as a little-endian `u16` (2). Records follow, back to back, until the
 //! end of the file:
 //!
 //! | bytes | field |
@@ -15,13 +15,22 @@
 //! | 1 | direction: 0 received from the radio, 1 sent to the radio |
 //! | 2 | length N of the frame data, `u16` little-endian (1 or more) |
 //! | N | the API frame's data: frame type byte first, unescaped, without start delimiter, length or checksum |
+//! | 4 | CRC-32 (IEEE 802.3, as zlib's `crc32`) of the 11 + N bytes before it, `u32` little-endian |
 //!
 //! Frames are stored without their API-mode framing so that a recording replays onto a
-//! link in either mode. A reader stops with an error at a truncated or damaged record,
-//! after handing out every whole record before it, and gives no record after it (the
-//! bytes after a damaged record cannot be trusted to start one). Recordings joined one
-//! after the other (`cat a.mcprec b.mcprec`) read as one: a header of this version where
-//! a record would start is passed over.
+//! link in either mode, and so without the XBee checksum: the CRC stands in for it, so
+//! that a damaged record (a bit flipped on a disk, a length that reaches into the next
+//! record) is found rather than read as another frame, such as another command. Records
+//! are in the order they were written, which is the order of their times for one
+//! writer, but not always (the system clock set back).
+//!
+//! A reader stops with an error at a truncated or damaged record, after handing out
+//! every whole record before it, and gives no record after it (the bytes after a
+//! damaged record cannot be trusted to start one). Recordings joined one after the other
+//! (`cat a.mcprec b.mcprec`) read as one: a header where a record would start is passed
+//! over, and the records after it are read in its version.
+//!
+//! Version 1, which this module reads too, is the same without the CRC.
 //!
 //! # Writing and reading one
 //!
@@ -58,13 +67,22 @@ use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
 /// The first 6 bytes of a recording.
 pub const MAGIC: &[u8; 6] = b"MCPREC";
-/// The format version this module writes and reads.
-pub const VERSION: u16 = 1;
+/// The format version this module writes; it reads this one and version 1 (records
+/// without their CRC).
+pub const VERSION: u16 = 2;
 /// Header length: magic and version.
 pub const HEADER_LEN: usize = 8;
 /// The length of each record's head: time (8 bytes), direction (1) and the frame data's
 /// length (2); the frame data follows.
 pub const RECORD_HEAD_LEN: usize = 11;
+/// The length of each record's CRC, after its frame data.
+pub const RECORD_CRC_LEN: usize = 4;
+
+/// The length of a record holding `frame_len` bytes of frame data, as [`RecordWriter`]
+/// writes it: its head, the frame data and the CRC.
+pub const fn record_len(frame_len: usize) -> usize {
+    RECORD_HEAD_LEN + frame_len + RECORD_CRC_LEN
+}
 
 /// Whether a frame came from the radio or went to it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -181,8 +199,12 @@ impl<W: Write> RecordWriter<W> {
             Direction::Sent => 1,
         };
         head[9..].copy_from_slice(&len.to_le_bytes());
+        let mut crc = crc32fast::Hasher::new();
+        crc.update(&head);
+        crc.update(frame);
         self.out.write_all(&head)?;
-        self.out.write_all(frame)
+        self.out.write_all(frame)?;
+        self.out.write_all(&crc.finalize().to_le_bytes())
     }
 
     /// Flushes the underlying writer.
@@ -223,9 +245,10 @@ pub enum RecordError {
     /// The input does not start with `MCPREC`.
     #[error("not a recording: no MCPREC header")]
     NoHeader,
-    /// The recording's format version is not the one this program reads ([`VERSION`]).
+    /// The recording's format version is not one this program reads (1 or
+    /// [`VERSION`]).
     #[error(
-        "recording format version {version} is not supported (this program reads version {VERSION})"
+        "recording format version {version} is not supported (this program reads versions 1 to {VERSION})"
     )]
     #[non_exhaustive]
     UnsupportedVersion {
@@ -245,19 +268,39 @@ pub enum RecordError {
         /// The bytes of its head there are.
         got: usize,
     },
-    /// The input ends part way through a record's frame.
+    /// The input ends part way through a record's frame, or its CRC: the recording was
+    /// cut off there (a writer stopped, a disk full), or the record's length is damaged
+    /// and reaches past the end.
     #[error(
         "recording cut off part way through the record at offset {offset}: {got} of its \
-         {len} frame bytes are there"
+         {len} bytes of frame{} are there",
+        if *.crc { " and CRC" } else { "" }
     )]
     #[non_exhaustive]
     CutOffFrame {
         /// Where the record starts in the input.
         offset: u64,
-        /// The frame bytes there are.
+        /// The bytes of frame data (and CRC, in version 2) there are.
         got: usize,
-        /// The frame's length, as the record says.
+        /// The frame's length, as the record says, and its CRC's in version 2.
         len: usize,
+        /// Whether `got` and `len` count the record's CRC (version 2) with its frame.
+        crc: bool,
+    },
+    /// A record's CRC does not match its bytes: the record is damaged (its time,
+    /// direction, length or frame).
+    #[error(
+        "record at offset {offset} is damaged: its CRC is {found:08x}, its bytes' \
+         {computed:08x}"
+    )]
+    #[non_exhaustive]
+    Crc {
+        /// Where the record starts in the input.
+        offset: u64,
+        /// The CRC the record holds.
+        found: u32,
+        /// The CRC of its bytes.
+        computed: u32,
     },
     /// A record's direction byte is neither 0 (received) nor 1 (sent).
     #[error("record at offset {offset}: direction byte {byte} is neither 0 nor 1")]
@@ -297,6 +340,7 @@ impl RecordError {
             | RecordError::CutOffFrame { offset, .. }
             | RecordError::Direction { offset, .. }
             | RecordError::EmptyFrame { offset }
+            | RecordError::Crc { offset, .. }
             | RecordError::TimeOutOfRange { offset, .. } => Some(offset),
             _ => None,
         }
@@ -318,6 +362,8 @@ impl From<RecordError> for io::Error {
 pub struct RecordReader<R: Read> {
     input: R,
     offset: u64,
+    /// The format version of the records read now: the header's last seen.
+    version: u16,
     /// A record failed: no more are read.
     failed: bool,
 }
@@ -334,14 +380,21 @@ impl<R: Read> RecordReader<R> {
             return Err(RecordError::NoHeader);
         }
         let version = u16::from_le_bytes([header[6], header[7]]);
-        if version != VERSION {
+        if !is_read_version(version) {
             return Err(RecordError::UnsupportedVersion { version });
         }
         Ok(Self {
             input,
             offset: HEADER_LEN as u64,
+            version,
             failed: false,
         })
+    }
+
+    /// The format version of the records being read: the first header's, or the last
+    /// one's passed over in recordings joined one after the other.
+    pub fn version(&self) -> u16 {
+        self.version
     }
 
     /// Byte offset of the next record in the file.
@@ -364,7 +417,11 @@ impl<R: Read> RecordReader<R> {
         let mut head = [0u8; RECORD_HEAD_LEN];
         let mut got = read_full(&mut self.input, &mut head)?;
         // Another recording's header, joined on: passed over.
-        while got >= HEADER_LEN && head[..6] == *MAGIC && head[6..8] == VERSION.to_le_bytes() {
+        while got >= HEADER_LEN
+            && head[..6] == *MAGIC
+            && is_read_version(u16::from_le_bytes([head[6], head[7]]))
+        {
+            self.version = u16::from_le_bytes([head[6], head[7]]);
             head.copy_within(HEADER_LEN..got, 0);
             let kept = got - HEADER_LEN;
             got = kept + read_full(&mut self.input, &mut head[kept..])?;
@@ -387,16 +444,41 @@ impl<R: Read> RecordReader<R> {
         if len == 0 {
             return Err(RecordError::EmptyFrame { offset });
         }
-        let mut frame = vec![0u8; len];
+        // The frame data, and its CRC in version 2.
+        let crc_len = match self.version {
+            1 => 0,
+            _ => RECORD_CRC_LEN,
+        };
+        let mut frame = vec![0u8; len + crc_len];
         let got = read_full(&mut self.input, &mut frame)?;
-        if got < len {
-            return Err(RecordError::CutOffFrame { offset, got, len });
+        if got < frame.len() {
+            return Err(RecordError::CutOffFrame {
+                offset,
+                got,
+                len: frame.len(),
+                crc: crc_len > 0,
+            });
+        }
+        if crc_len > 0 {
+            let stored = frame.split_off(len);
+            let found = u32::from_le_bytes(stored.try_into().expect("4 bytes"));
+            let mut hasher = crc32fast::Hasher::new();
+            hasher.update(&head);
+            hasher.update(&frame);
+            let computed = hasher.finalize();
+            if computed != found {
+                return Err(RecordError::Crc {
+                    offset,
+                    found,
+                    computed,
+                });
+            }
         }
         // Every time a record holds is a `SystemTime` on Unix; Windows' ends in 30828.
         let time = UNIX_EPOCH
             .checked_add(Duration::from_micros(micros))
             .ok_or(RecordError::TimeOutOfRange { offset, micros })?;
-        self.offset += (head.len() + len) as u64;
+        self.offset += (head.len() + len + crc_len) as u64;
         Ok(Some(Record {
             time,
             direction,
@@ -410,6 +492,11 @@ impl<R: Read> Iterator for RecordReader<R> {
     fn next(&mut self) -> Option<Self::Item> {
         self.next_record().transpose()
     }
+}
+
+/// Whether this module reads recordings of format `version`.
+fn is_read_version(version: u16) -> bool {
+    (1..=VERSION).contains(&version)
 }
 
 /// Reads until `buf` is full or the input ends; returns the bytes read.
@@ -502,31 +589,103 @@ mod tests {
         w.write(UNIX_EPOCH, Direction::Received, &[0x8A, 0x02])
             .unwrap();
         let mut bytes = w.into_inner();
-        bytes.truncate(bytes.len() - 1);
+        assert_eq!(bytes.len(), HEADER_LEN + 2 * record_len(2));
+        bytes.truncate(bytes.len() - 5);
         let mut r = RecordReader::new(&bytes[..]).unwrap();
         assert!(r.next_record().unwrap().is_some());
         let err = r.next_record().unwrap_err();
         assert!(
-            matches!(err, RecordError::CutOffFrame { offset, got: 1, len: 2 }
-                if offset == (HEADER_LEN + 13) as u64),
+            matches!(
+                err,
+                RecordError::CutOffFrame {
+                    offset: 25,
+                    got: 1,
+                    len: 6,
+                    crc: true
+                }
+            ),
             "{err:?}"
         );
         assert_eq!(
             err.to_string(),
-            "recording cut off part way through the record at offset 21: 1 of its 2 frame \
-             bytes are there"
+            "recording cut off part way through the record at offset 25: 1 of its 6 bytes \
+             of frame and CRC are there"
         );
         assert_eq!(io::Error::from(err).kind(), io::ErrorKind::InvalidData);
         // Cut in a record's head.
-        bytes.truncate(HEADER_LEN + 13 + 5);
+        bytes.truncate(HEADER_LEN + record_len(2) + 5);
         let mut r = RecordReader::new(&bytes[..]).unwrap();
         assert!(r.next_record().unwrap().is_some());
         let err = r.next_record().unwrap_err();
         assert!(
-            matches!(err, RecordError::CutOffHead { offset: 21, got: 5 }),
+            matches!(err, RecordError::CutOffHead { offset: 25, got: 5 }),
             "{err:?}"
         );
-        assert_eq!(err.offset(), Some(21));
+        assert_eq!(err.offset(), Some(25));
+    }
+
+    #[test]
+    fn version_1_reads_without_a_crc() {
+        let record = [&0u64.to_le_bytes()[..], &[0, 2, 0, 0x8A, 0x06]].concat();
+        let bytes = [&b"MCPREC\x01\x00"[..], &record, &record].concat();
+        let mut r = RecordReader::new(&bytes[..]).unwrap();
+        assert_eq!(r.version(), 1);
+        assert_eq!(r.next_record().unwrap().unwrap().frame, [0x8A, 0x06]);
+        assert_eq!(r.next_record().unwrap().unwrap().frame, [0x8A, 0x06]);
+        assert!(r.next_record().unwrap().is_none());
+        // Cut off: the message counts the frame alone.
+        let err = RecordReader::new(&bytes[..bytes.len() - 1])
+            .unwrap()
+            .nth(1)
+            .unwrap()
+            .unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "recording cut off part way through the record at offset 21: 1 of its 2 bytes \
+             of frame are there"
+        );
+    }
+
+    #[test]
+    fn every_bit_flipped_in_a_record_is_found() {
+        let mut w = RecordWriter::new(Vec::new()).unwrap();
+        let time = UNIX_EPOCH + Duration::from_micros(1_790_000_000_123_456);
+        // A landing command to a MAV, then a Modem Status.
+        let landing = [
+            0x10, 0x01, 0x00, 0x13, 0xA2, 0x00, 0x40, 0xB5, 0x99, 0xB9, 0xFF, 0xFE, 0x00, 0x00,
+            b'c', 0x02, 0x01,
+        ];
+        w.write(time, Direction::Sent, &landing).unwrap();
+        w.write(time, Direction::Received, &[0x8A, 0x06]).unwrap();
+        let bytes = w.into_inner();
+        let first = HEADER_LEN..HEADER_LEN + record_len(landing.len());
+        for at in first.clone() {
+            for bit in 0..8 {
+                let mut damaged = bytes.clone();
+                damaged[at] ^= 1 << bit;
+                let results: Vec<_> = RecordReader::new(&damaged[..]).unwrap().collect();
+                // No record is read: the damaged one is an error, and none follows it.
+                assert_eq!(results.len(), 1, "byte {at} bit {bit}: {results:?}");
+                let err = results.into_iter().next().unwrap().unwrap_err();
+                assert_eq!(err.offset(), Some(HEADER_LEN as u64), "{err:?}");
+            }
+        }
+        // Undamaged, both read.
+        let records: Vec<_> = RecordReader::new(&bytes[..]).unwrap().collect();
+        assert!(records.iter().all(Result::is_ok) && records.len() == 2);
+        assert_eq!(records[0].as_ref().unwrap().frame, landing);
+        let mut damaged = bytes.clone();
+        damaged[first.end - 1] ^= 0x10;
+        let err = RecordReader::new(&damaged[..])
+            .unwrap()
+            .next()
+            .unwrap()
+            .unwrap_err();
+        assert!(
+            err.to_string()
+                .starts_with("record at offset 8 is damaged: its CRC is "),
+            "{err}"
+        );
     }
 
     #[test]
@@ -590,13 +749,13 @@ mod tests {
         let mut bytes = w.into_inner();
         // The second record's direction byte damaged: what follows is not read as
         // records (its bytes, read from there, would make some up).
-        bytes[HEADER_LEN + 13 + 8] = 0x80;
+        bytes[HEADER_LEN + record_len(2) + 8] = 0x80;
         let mut r = RecordReader::new(&bytes[..]).unwrap();
         assert!(r.next_record().unwrap().is_some());
         let err = r.next_record().unwrap_err();
         assert!(err.to_string().contains("direction byte 128"), "{err}");
         assert!(r.next_record().unwrap().is_none());
-        assert_eq!(r.offset(), (HEADER_LEN + 13) as u64);
+        assert_eq!(r.offset(), (HEADER_LEN + record_len(2)) as u64);
         let r = RecordReader::new(&bytes[..]).unwrap();
         let results: Vec<_> = r.collect();
         assert_eq!(results.len(), 2, "{results:?}");
@@ -622,9 +781,23 @@ mod tests {
             frames,
             [vec![0x8A, 0x01], vec![0x8A, 0x02], vec![0x8A, 0x03]]
         );
-        // A header of another version is no record.
+        // A recording of version 1 joined on reads in its version.
+        let v1 = [
+            &b"MCPREC\x01\x00"[..],
+            &0u64.to_le_bytes(),
+            &[0, 2, 0, 0x8A, 0x04],
+        ]
+        .concat();
+        let joined = [&a[..], &v1, &b].concat();
+        let frames: Vec<Vec<u8>> = RecordReader::new(&joined[..])
+            .unwrap()
+            .map(|r| r.unwrap().frame)
+            .collect();
+        assert_eq!(frames.len(), 4);
+        assert_eq!(frames[2..], [vec![0x8A, 0x04], vec![0x8A, 0x03]]);
+        // A header of a version this module does not read is no record.
         let mut other = b.clone();
-        other[6] = 2;
+        other[6] = 3;
         let joined = [&a[..], &other].concat();
         let mut r = RecordReader::new(&joined[..]).unwrap();
         assert!(r.next_record().unwrap().is_some());
@@ -642,11 +815,12 @@ mod tests {
             RecordReader::new(&b"MCPREC"[..]),
             Err(RecordError::TooShort)
         ));
-        let err = RecordReader::new(&b"MCPREC\x02\x00"[..]).unwrap_err();
+        let err = RecordReader::new(&b"MCPREC\x03\x00"[..]).unwrap_err();
         assert!(
-            matches!(err, RecordError::UnsupportedVersion { version: 2 }),
+            matches!(err, RecordError::UnsupportedVersion { version: 3 }),
             "{err:?}"
         );
-        assert!(err.to_string().contains("version 2"), "{err}");
+        assert!(err.to_string().contains("version 3"), "{err}");
+        assert!(RecordReader::new(&b"MCPREC\x00\x00"[..]).is_err());
     }
 }

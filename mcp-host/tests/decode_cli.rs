@@ -179,12 +179,13 @@ fn a_recording_cut_off_names_the_file_and_the_frames_decoded_before_it() {
     assert_eq!(output.status.code(), Some(2), "{err}");
     let frames = out.lines().filter(|l| !l.starts_with("-- ")).count();
     assert_eq!(frames, 2, "{out}");
-    let offset = 8 + 2 * 13;
+    let offset = 8 + 2 * mcp_host::record::record_len(2);
     assert_eq!(
         err.trim_end(),
         format!(
             "mcp-gs: {}: recording cut off part way through the record at offset \
-             {offset}: 1 of its 2 frame bytes are there; the 2 frames before it were decoded",
+             {offset}: 5 of its 6 bytes of frame and CRC are there; the 2 frames before it \
+             were decoded",
             cut.path()
         )
     );

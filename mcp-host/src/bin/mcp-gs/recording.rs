@@ -344,7 +344,7 @@ fn write_all(
         io::Result::Ok(())
     };
     while let Some((time, direction, frame)) = queued.blocking_recv() {
-        let record = mcp_host::record::RECORD_HEAD_LEN + frame.len();
+        let record = mcp_host::record::record_len(frame.len());
         if writer.get_ref().buffer().len() + record > CHUNK {
             flush(&mut writer, &mut unflushed)?;
         }
