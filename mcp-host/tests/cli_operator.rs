@@ -970,6 +970,14 @@ fn replay_of_sent_frames_leaves_the_at_commands_out_unless_asked() {
         "{said}"
     );
     assert!(said.contains("replayed 1 frame"), "{said}");
+    // What the commands are, and that they act again, before they are played.
+    assert!(
+        said.contains(
+            "warning: the sent frames hold commands that act on MAVs, landing 1, to 1 MAV \
+             (0013a20040b599b9): played, they act again as they did when recorded\n"
+        ),
+        "{said}"
+    );
     // Asked for: every sent frame, in order.
     let (link, peer) = common::recording_peer();
     let output = run(&[
@@ -1004,6 +1012,125 @@ fn replay_of_sent_frames_leaves_the_at_commands_out_unless_asked() {
     assert_eq!(output.status.code(), Some(2), "{said}");
     assert!(
         said.contains("nothing to replay: 2 AT commands to radios in the recording"),
+        "{said}"
+    );
+}
+
+#[test]
+fn a_damaged_recording_plays_nothing_and_a_cut_off_one_its_whole_records() {
+    let dir = tempfile::tempdir().unwrap();
+    let landing = |on: u8| -> Vec<u8> {
+        vec![
+            0x10, 0, 0, 0x13, 0xA2, 0, 0x40, 0xB5, 0x99, 0xB9, 0xFF, 0xFE, 0, 0, b'c', 2, on,
+        ]
+    };
+    let time = |s: u64| std::time::UNIX_EPOCH + std::time::Duration::from_secs(1_790_000_000 + s);
+    let mut writer = mcp_host::record::RecordWriter::new(Vec::new()).unwrap();
+    let sent = mcp_host::record::Direction::Sent;
+    writer.write(time(0), sent, &landing(1)).unwrap();
+    writer
+        .write(
+            time(1),
+            sent,
+            &b"\x10\x00\x00\x13\xa2\x00\x40\xb5\x99\xb9\xff\xfe\x00\x00c\x06\x00\x00\x00\x00"[..],
+        )
+        .unwrap();
+    writer.write(time(2), sent, &landing(0)).unwrap();
+    let bytes = writer.into_inner();
+    let second = 8 + mcp_host::record::record_len(landing(1).len());
+    // A bit flipped in the last record: its `landing off` would read `landing on`.
+    let mut damaged = bytes.clone();
+    let last = damaged.len() - 5;
+    damaged[last] ^= 1;
+    let file = dir.path().join("damaged.mcprec");
+    std::fs::write(&file, &damaged).unwrap();
+    let path = file.to_str().unwrap();
+    // Nobody listens there: the replay must stop before it opens the link.
+    let output = run(&[
+        "replay",
+        path,
+        "--link",
+        "tcp:127.0.0.1:9",
+        "--frames",
+        "tx",
+    ]);
+    let said = stderr(&output);
+    assert_eq!(output.status.code(), Some(2), "{said}");
+    let third = second + mcp_host::record::record_len(20);
+    assert!(
+        said.contains(&format!(
+            "{path}: record at offset {third} is damaged: its CRC is "
+        )),
+        "{said}"
+    );
+    assert!(
+        said.contains(&format!(
+            ": nothing replayed, as a damaged recording is not played in part; the 2 records \
+             before it are whole (`head -c {third} {path}` keeps them)"
+        )),
+        "{said}"
+    );
+    assert!(!said.contains("connect"), "{said}");
+    // Cut off in its last record: the whole ones are played, and the end is said.
+    let cut = dir.path().join("cut.mcprec");
+    std::fs::write(&cut, &bytes[..bytes.len() - 3]).unwrap();
+    let (link, peer) = common::recording_peer();
+    let output = run(&[
+        "replay",
+        cut.to_str().unwrap(),
+        "--link",
+        &link,
+        "--frames",
+        "tx",
+        "--speed",
+        "0",
+    ]);
+    let said = stderr(&output);
+    assert_eq!(output.status.code(), Some(2), "{said}");
+    assert!(said.contains("replayed 2 frames before it"), "{said}");
+    assert!(said.contains("time 1"), "the time command is named: {said}");
+    assert!(
+        said.contains("sets the MAV's clock to the recorded time"),
+        "{said}"
+    );
+    let played = peer.join().unwrap();
+    assert!(played.starts_with(&wire(&landing(1))), "{played:02x?}");
+    // From standard input, read once: played up to the damage, then stopped.
+    let (link, peer) = common::recording_peer();
+    let output = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args([
+            "replay", "-", "--link", &link, "--frames", "tx", "--speed", "0",
+        ])
+        .stdin(std::fs::File::open(&file).unwrap())
+        .output()
+        .unwrap();
+    let said = stderr(&output);
+    assert_eq!(output.status.code(), Some(2), "{said}");
+    assert!(said.contains("-: record at offset"), "{said}");
+    assert!(said.contains("replayed 2 frames before it"), "{said}");
+    assert!(
+        said.contains("the recorded commands among the sent frames act on the MAVs again"),
+        "{said}"
+    );
+    // The first landing and the time command: 17 and 20 bytes of frame data, framed.
+    assert_eq!(peer.join().unwrap().len(), (3 + 17 + 1) + (3 + 20 + 1));
+}
+
+#[test]
+fn a_raw_capture_given_to_replay_is_pointed_to_decode() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("capture.bin");
+    std::fs::write(&file, [wire(&[0x8A, 0x06]), wire(&[0x8A, 0x02])].concat()).unwrap();
+    let output = run(&[
+        "replay",
+        file.to_str().unwrap(),
+        "--link",
+        "tcp:127.0.0.1:9",
+    ]);
+    let said = stderr(&output);
+    assert_eq!(output.status.code(), Some(2), "{said}");
+    assert!(
+        said.contains("not a recording: no MCPREC header (replay plays recordings, made with --record; `mcp-gs decode` reads a raw capture too)"),
         "{said}"
     );
 }

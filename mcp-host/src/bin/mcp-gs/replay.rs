@@ -1,12 +1,15 @@
 //! `mcp-gs replay`: play a recording back onto a link.
 
+use std::collections::{BTreeMap, BTreeSet};
 use std::fs::File;
-use std::io::BufReader;
-use std::path::PathBuf;
+use std::io::{self, BufReader, Read};
+use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use clap::{Args, ValueEnum};
+use mcp_host::mcp_core::{Command, Packet};
 use mcp_host::record::{Direction, Record, RecordError, RecordReader};
+use mcp_host::xbee_api::Address64;
 use mcp_host::{CommandSender, Link, SendError};
 
 use crate::Failure;
@@ -38,14 +41,19 @@ and for the link to take each frame [default: 12]"
 )))]
 pub(crate) struct ReplayArgs {
     /// A recording made by `monitor --record` or `hub --record` (or by a program with
-    /// `mcp_host::record::RecordWriter`).
+    /// `mcp_host::record::RecordWriter`); `-` reads standard input. A file is read
+    /// through before anything is played: a damaged one plays nothing. `mcp-gs decode
+    /// FILE` shows what it holds.
     file: PathBuf,
     #[command(flatten)]
     link: LinkArgs,
     /// Playback speed: 1 is real time, 2 twice as fast, 0 as fast as possible.
     #[arg(long, default_value_t = 1.0, value_parser = parse_speed)]
     speed: f64,
-    /// Which frames to play.
+    /// Which frames to play. Sent frames (tx) carry the recorded commands: played to a
+    /// radio, they act on the MAVs again as they did then (a landing, a trajectory, a
+    /// time command that sets a MAV's clock to the recorded time); what they are is said
+    /// before the first is played.
     #[arg(long, value_enum, default_value_t = Which::Rx)]
     frames: Which,
     /// Also play the AT commands sent to radios (0x08, 0x09 to the local radio, 0x17
@@ -81,12 +89,36 @@ fn parse_speed(s: &str) -> Result<f64, String> {
 
 /// Runs `replay`.
 pub(crate) async fn run(args: ReplayArgs) -> Result<(), Failure> {
-    let file = File::open(&args.file)
-        .map_err(|e| Failure::input(format!("cannot open {}: {e}", args.file.display())))?;
-    let mut reader = RecordReader::new(BufReader::new(file))
-        .map_err(|e| Failure::input(format!("{}: {e}", args.file.display())))?;
+    let stdin = args.file.as_os_str() == "-";
+    let input: Box<dyn Read + Send> = if stdin {
+        Box::new(io::stdin())
+    } else {
+        Box::new(
+            File::open(&args.file)
+                .map_err(|e| Failure::input(format!("cannot open {}: {e}", args.file.display())))?,
+        )
+    };
+    let mut reader = RecordReader::new(BufReader::new(input)).map_err(|e| {
+        let hint = match e {
+            RecordError::NoHeader | RecordError::TooShort => {
+                " (replay plays recordings, made with --record; `mcp-gs decode` reads a raw \
+                 capture too)"
+            }
+            _ => "",
+        };
+        Failure::input(format!("{}: {e}{hint}", args.file.display()))
+    })?;
+    // A file is read through first: nothing of a damaged one is played, and the
+    // commands it would play are said. Standard input, a pipe or a FIFO is read once.
+    let survey = match stdin {
+        false if is_regular_file(&args.file) => Some(survey(&args)?),
+        _ => None,
+    };
     let (first, mut at_left_out) = first_wanted(&args, &mut reader)?;
     if let Some(warning) = radio_side_warning(&args.link.link, args.frames) {
+        err!("mcp-gs: warning: {warning}");
+    }
+    if let Some(warning) = commands_warning(args.frames, survey.as_ref()) {
         err!("mcp-gs: warning: {warning}");
     }
     let (stream, sender) = args.link.open(false).await?;
@@ -196,7 +228,7 @@ const LONG_QUIET: Duration = Duration::from_secs(10);
 /// or a FIFO plays as a file does.
 fn first_wanted(
     args: &ReplayArgs,
-    reader: &mut RecordReader<BufReader<File>>,
+    reader: &mut RecordReader<impl Read>,
 ) -> Result<(Record, u64), Failure> {
     let (mut received, mut sent, mut at) = (0u64, 0u64, 0u64);
     for record in reader {
@@ -234,6 +266,114 @@ fn first_wanted(
              replay those with --frames tx"
         ),
     }))
+}
+
+/// Whether `path` is a regular file (not a FIFO, a device or a directory), which can be
+/// read through twice.
+fn is_regular_file(path: &Path) -> bool {
+    std::fs::metadata(path).is_ok_and(|meta| meta.is_file())
+}
+
+/// The commands among the frames a replay plays, found by reading the whole recording
+/// before anything is played.
+#[derive(Debug, Default)]
+struct Survey {
+    /// Commands that act on a MAV, by their type's name.
+    commands: BTreeMap<String, u64>,
+    /// Status requests, which only ask.
+    requests: u64,
+    /// The MAVs the commands and requests go to.
+    mavs: BTreeSet<Address64>,
+}
+
+/// Reads the whole recording `args` names (a regular file) and finds the commands among
+/// the frames the replay plays. A damaged record is a failure, so that nothing of a
+/// damaged recording is played (the replay would stop there, part way through what was
+/// recorded); one cut off at the end is not, as the replay plays every whole record
+/// before it and then says so.
+fn survey(args: &ReplayArgs) -> Result<Survey, Failure> {
+    let name = args.file.display();
+    let file =
+        File::open(&args.file).map_err(|e| Failure::input(format!("cannot open {name}: {e}")))?;
+    let reader = RecordReader::new(BufReader::new(file))
+        .map_err(|e| Failure::input(format!("{name}: {e}")))?;
+    let mut survey = Survey::default();
+    for (whole, record) in (0u64..).zip(reader) {
+        let record = match record {
+            Ok(record) => record,
+            Err(RecordError::CutOffHead { .. } | RecordError::CutOffFrame { .. }) => break,
+            Err(e) => {
+                let keep = match e.offset() {
+                    Some(offset) => format!(
+                        "; the {} before it are whole (`head -c {offset} {name}` keeps them)",
+                        crate::counted(whole, "record")
+                    ),
+                    None => String::new(),
+                };
+                return Err(Failure::input(format!(
+                    "{name}: {e}: nothing replayed, as a damaged recording is not played \
+                     in part{keep}"
+                )));
+            }
+        };
+        if record.direction != Direction::Sent || !plays(args, &record) {
+            continue;
+        }
+        if let Some((to, Ok(Packet::Command(command)))) = record.mcp() {
+            match command {
+                Command::StatusRequest(_) => survey.requests += 1,
+                command => {
+                    *survey
+                        .commands
+                        .entry(command.command_type().to_string())
+                        .or_default() += 1;
+                }
+            }
+            survey.mavs.insert(to);
+        }
+    }
+    Ok(survey)
+}
+
+/// What to say before sent frames are played: the commands in them act on the MAVs
+/// again. `survey` is `None` where the recording could not be read through first
+/// (standard input, a pipe).
+fn commands_warning(frames: Which, survey: Option<&Survey>) -> Option<String> {
+    if frames == Which::Rx {
+        return None;
+    }
+    let Some(survey) = survey else {
+        return Some(
+            "the recorded commands among the sent frames act on the MAVs again as they \
+             did then (a time command sets a MAV's clock to the recorded time); `mcp-gs \
+             decode FILE` shows them"
+                .to_owned(),
+        );
+    };
+    if survey.commands.is_empty() {
+        return None;
+    }
+    let kinds: Vec<String> = survey
+        .commands
+        .iter()
+        .map(|(kind, n)| format!("{kind} {n}"))
+        .collect();
+    let mavs: Vec<String> = survey.mavs.iter().map(Address64::to_string).collect();
+    let requests = match survey.requests {
+        0 => String::new(),
+        n => format!(" (and {})", crate::counted(n, "status request")),
+    };
+    let time = match survey.commands.contains_key("time") {
+        true => "; a time command sets the MAV's clock to the recorded time",
+        false => "",
+    };
+    Some(format!(
+        "the sent frames hold commands that act on MAVs, {}{requests}, to {} ({}): \
+         played, they act again as they did when recorded{time}",
+        kinds.join(", "),
+        crate::counted(u64::try_from(mavs.len()).unwrap_or(u64::MAX), "MAV"),
+        mavs.join(", ")
+    ))
 }
 
 /// The failure of a frame that could not be written, after `played` were.
