@@ -1210,8 +1210,8 @@ fn monitor_records_every_frame_while_its_output_is_not_read() {
     let (batch, batches) = (500, 40);
     for n in 1..=batches {
         socket.write_all(&modem_status.repeat(batch)).unwrap();
-        let all = (mcp_host::record::HEADER_LEN
-            + n * batch * (mcp_host::record::RECORD_HEAD_LEN + 2)) as u64;
+        let all =
+            (mcp_host::record::HEADER_LEN + n * batch * mcp_host::record::record_len(2)) as u64;
         recorded(
             &record,
             all,
@@ -1296,7 +1296,7 @@ fn monitor_ends_on_ctrl_c_with_its_last_lines_not_read() {
         // Monitor has taken every frame once its recording holds them all (a record
         // is written, and flushed, before its line): their lines fill the pipe, the
         // rest wait, and the link says nothing more.
-        let all = (8 + 100 * 13) as u64;
+        let all = (8 + 100 * mcp_host::record::record_len(2)) as u64;
         recorded(&record, all, &format!("{args:?}"));
         let pid = i32::try_from(monitor.id()).unwrap();
         // SAFETY: kill(2) with the pid of a child of this process and a valid signal.
@@ -1605,6 +1605,54 @@ fn a_recording_that_cannot_be_written_is_named() {
         stderr.starts_with("mcp-gs: cannot write to /dev/full: "),
         "{stderr}"
     );
+    peer.join().unwrap();
+}
+
+/// A disk that fills part way through a record (here a file size limit, RLIMIT_FSIZE):
+/// the recording is cut back to its last whole record, which reads to its end.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_recording_that_fills_its_disk_ends_at_its_last_whole_record() {
+    use std::os::unix::process::CommandExt;
+    let modem_status = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F];
+    let (link, peer) = common::talking_peer(modem_status.repeat(300));
+    let dir = tempfile::tempdir().unwrap();
+    let record = dir.path().join("full.mcprec");
+    // Room for the header and 58.6 records of 17 bytes.
+    let limit: u64 = 1000;
+    let mut monitor = gs();
+    monitor
+        .args(["monitor", "--link", &link, "--record"])
+        .arg(&record);
+    // SAFETY: between fork and exec, setrlimit(2) and signal(2) only, which are
+    // async-signal-safe; a write past the limit then fails with EFBIG, not SIGXFSZ.
+    unsafe {
+        monitor.pre_exec(move || {
+            let size = libc::rlimit {
+                rlim_cur: limit,
+                rlim_max: limit,
+            };
+            if libc::setrlimit(libc::RLIMIT_FSIZE, &size) != 0 {
+                return Err(std::io::Error::last_os_error());
+            }
+            libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+            Ok(())
+        });
+    }
+    let output = monitor.output().unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("cannot write to "), "{stderr}");
+    let bytes = std::fs::read(&record).unwrap();
+    let records = mcp_host::record::RecordReader::new(&bytes[..])
+        .unwrap()
+        .collect::<Result<Vec<_>, _>>()
+        .unwrap_or_else(|e| panic!("{} bytes: {e}", bytes.len()));
+    assert_eq!(
+        bytes.len(),
+        8 + records.len() * mcp_host::record::record_len(2)
+    );
+    assert_eq!(records.len(), 58, "every whole record that fits is kept");
     peer.join().unwrap();
 }
 

@@ -300,7 +300,8 @@ fn a_hub_recording_whose_radio_ends_for_good_says_what_it_recorded() {
     // The adapter pulled out once the three frames are in the file (until then the hub
     // is given time: its reads are not seen): the link ends for good.
     let wait = std::time::Instant::now();
-    while std::fs::metadata(&record).map_or(0, |m| m.len()) < 8 + 2 * (11 + 4) + 11 + 2 {
+    let all = 8 + 2 * mcp_host::record::record_len(4) + mcp_host::record::record_len(2);
+    while std::fs::metadata(&record).map_or(0, |m| m.len()) < all as u64 {
         assert!(wait.elapsed() < GUARD, "the frame is not recorded");
         // Looked at again shortly: the file says nothing when it grows.
         std::thread::sleep(std::time::Duration::from_millis(10));

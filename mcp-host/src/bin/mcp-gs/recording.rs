@@ -330,31 +330,79 @@ fn failed_thread(path: &Path) -> Failure {
 /// The thread: writes each frame, in writes of whole records of at most [`CHUNK`]
 /// bytes, and flushes them to the file as soon as no other is queued, so that what was
 /// recorded survives the program's end however it comes; counts the frames flushed in
-/// `flushed`.
+/// `flushed`. A write that fails part way (a full disk) leaves a file cut back to the
+/// last whole record that reached it, which reads to its end without an error.
 fn write_all(
     mut writer: RecordWriter<BufWriter<File>>,
     queued: &mut mpsc::Receiver<Frame>,
     flushed: &AtomicU64,
 ) -> io::Result<()> {
-    // Frames written since the last flush.
-    let mut unflushed = 0u64;
-    let flush = |writer: &mut RecordWriter<BufWriter<File>>, unflushed: &mut u64| {
+    let mut written = Written {
+        whole: mcp_host::record::HEADER_LEN as u64,
+        unflushed: Vec::new(),
+    };
+    let result = write_records(&mut writer, queued, flushed, &mut written);
+    if result.is_err() {
+        // What the buffer still holds is dropped, not written on the way out (once the
+        // file is cut back, a write at its old end would leave a hole).
+        let (file, _unwritten) = writer.into_inner().into_parts();
+        // A pipe's or a device's length is none to cut back to.
+        let len = file
+            .metadata()
+            .ok()
+            .filter(|m| m.is_file())
+            .map(|m| m.len());
+        if let Some(len) = len {
+            // The records of the failed write that reached the file whole are kept.
+            let mut end = written.whole;
+            for &record in &written.unflushed {
+                if end + record > len {
+                    break;
+                }
+                end += record;
+                flushed.fetch_add(1, Ordering::Release);
+            }
+            if len > end {
+                let _ = file.set_len(end);
+            }
+        }
+    }
+    result
+}
+
+/// What the file holds: its length up to the last record flushed, and the lengths of
+/// the records written since (in the buffer, or part way to the file).
+struct Written {
+    whole: u64,
+    unflushed: Vec<u64>,
+}
+
+/// [`write_all`]'s loop.
+fn write_records(
+    writer: &mut RecordWriter<BufWriter<File>>,
+    queued: &mut mpsc::Receiver<Frame>,
+    flushed: &AtomicU64,
+    written: &mut Written,
+) -> io::Result<()> {
+    let flush = |writer: &mut RecordWriter<BufWriter<File>>, written: &mut Written| {
         writer.flush()?;
-        flushed.fetch_add(std::mem::take(unflushed), Ordering::Release);
+        let records = std::mem::take(&mut written.unflushed);
+        flushed.fetch_add(records.len() as u64, Ordering::Release);
+        written.whole += records.iter().sum::<u64>();
         io::Result::Ok(())
     };
     while let Some((time, direction, frame)) = queued.blocking_recv() {
         let record = mcp_host::record::record_len(frame.len());
         if writer.get_ref().buffer().len() + record > CHUNK {
-            flush(&mut writer, &mut unflushed)?;
+            flush(writer, written)?;
         }
         writer.write(time, direction, &frame)?;
-        unflushed += 1;
+        written.unflushed.push(record as u64);
         if queued.is_empty() {
-            flush(&mut writer, &mut unflushed)?;
+            flush(writer, written)?;
         }
     }
-    flush(&mut writer, &mut unflushed)
+    flush(writer, written)
 }
 
 /// The failure of a `--record` file that exists.
