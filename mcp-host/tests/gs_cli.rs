@@ -1263,6 +1263,89 @@ fn monitor_records_every_frame_while_its_output_is_not_read() {
     );
 }
 
+/// A reader that paused (a program busy elsewhere, a pager): where monitor dropped
+/// lines for it, a line says how many, in the JSON stream itself, before the next line
+/// kept; with every frame accounted for.
+#[cfg(unix)]
+#[test]
+fn monitor_marks_the_lines_it_dropped_for_a_paused_reader_in_its_output() {
+    let radio = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let link = format!("tcp:{}", radio.local_addr().unwrap());
+    let dir = tempfile::tempdir().unwrap();
+    let record = dir.path().join("paused.mcprec");
+    let monitor = gs()
+        .args(["monitor", "--format", "json", "--link", &link, "--record"])
+        .arg(&record)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut child = common::Running(monitor);
+    let stdout = child.0.stdout.take().unwrap();
+    let (mut socket, _) = radio.accept().unwrap();
+    let modem_status = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F];
+    // Far more lines than the pipe, the output thread and monitor hold, none read; in
+    // batches smaller than the link's queue of events, each once the last is recorded.
+    let (batch, batches) = (500, 10);
+    for n in 1..=batches {
+        socket.write_all(&modem_status.repeat(batch)).unwrap();
+        let all = mcp_host::record::HEADER_LEN + n * batch * mcp_host::record::record_len(2);
+        recorded(&record, all as u64, &format!("batch {n}"));
+    }
+    // The reader back: the lines held come, then those of frames after the gap (sent
+    // until one is shown, as the first may come while the lines held fill monitor's
+    // queue still).
+    let (lines, got_lines) = std::sync::mpsc::channel();
+    let reader = std::thread::spawn(move || {
+        for line in std::io::BufRead::lines(std::io::BufReader::new(stdout)) {
+            let Ok(line) = line else { break };
+            let value: Value = serde_json::from_str(&line).unwrap();
+            let _ = lines.send(value);
+        }
+    });
+    let realigned = [0x7E, 0x00, 0x02, 0x8A, 0x0B, 0x6A];
+    let is_realigned = |l: &Value| l["frame"] == "modem_status" && l["status"] == 0x0B;
+    let deadline = std::time::Instant::now() + common::GUARD;
+    let mut got: Vec<Value> = Vec::new();
+    let mut sent = batch * batches;
+    while !got.iter().any(is_realigned) {
+        assert!(
+            std::time::Instant::now() < deadline,
+            "no frame shown after the gap"
+        );
+        socket.write_all(&realigned).unwrap();
+        sent += 1;
+        while let Ok(line) = got_lines.recv_timeout(std::time::Duration::from_millis(100)) {
+            got.push(line);
+        }
+    }
+    let pid = i32::try_from(child.0.id()).unwrap();
+    // SAFETY: kill(2) with the pid of a child of this process and a valid signal.
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
+    assert_eq!(common::exit_code(&mut child.0), Some(0));
+    reader.join().unwrap();
+    got.extend(got_lines.try_iter());
+    let frames = got.iter().filter(|l| l["frame"] == "modem_status").count();
+    let gaps: Vec<&Value> = got.iter().filter(|l| l.get("gap").is_some()).collect();
+    assert!(!gaps.is_empty());
+    assert!(
+        gaps.iter()
+            .all(|gap| gap["gap"] == "output" && gap["time"].is_f64()),
+        "{gaps:?}"
+    );
+    let dropped: u64 = gaps.iter().map(|gap| gap["frames"].as_u64().unwrap()).sum();
+    // Every frame is shown or counted in a gap.
+    assert_eq!(frames as u64 + dropped, sent as u64, "{gaps:?}");
+    // The gap stands where the lines were dropped: before the first line kept after
+    // them, the first of a frame sent after the reader paused.
+    let first_after = got.iter().position(is_realigned).unwrap();
+    assert!(
+        got[first_after - 1].get("gap").is_some(),
+        "{:?}",
+        &got[first_after - 1]
+    );
+}
+
 /// A reader that took part of monitor's output and no more (a pager paused), the link
 /// quiet since: Ctrl-C still ends monitor, whether it was still taking frames or had
 /// taken its `--count` and was writing its last lines.

@@ -140,7 +140,8 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
             }
             failure = recording::write_failed(&mut recorder) => break Err(failure),
             _ = look.tick() => {
-                lost.tell(&stream.stats(), recorder.is_some(), false);
+                let behind = lost.tell(&stream.stats(), recorder.is_some(), false);
+                pending.extend(behind.map(|frames| gap_line(Gap::Behind, frames, args.format)));
                 unshown.tell(recorder.is_some());
                 let found = diagnoser.as_mut().and_then(|d| d.look(stream.stats()));
                 let line = match (&mut quiet, found) {
@@ -217,9 +218,15 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
         }
         // A reader that takes nothing: the line is dropped and counted, a link event's
         // (a few a minute at most, which say what the lines around them mean) but kept.
+        // Where lines were dropped, a line says how many, before the next one kept.
         if pending.len() >= PENDING_LINES && !matches!(event, Event::Link(_)) {
             unshown.count += 1;
+            unshown.run += 1;
         } else {
+            let run = std::mem::take(&mut unshown.run);
+            if run > 0 {
+                pending.push_back(gap_line(Gap::Output, run, args.format));
+            }
             pending.push_back(line(&event, time, args.format, &mut dates));
         }
         // Text output counts failures again without the hint once it was given; JSON
@@ -261,6 +268,10 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
     }
     // What was not shown is counted, however the monitor ends.
     pending.extend(quiet.as_mut().and_then(|shown| shown.tell_if_due(true)));
+    let run = std::mem::take(&mut unshown.run);
+    if run > 0 {
+        pending.push_back(gap_line(Gap::Output, run, args.format));
+    }
     handed += pending.len() as u64;
     let written_so_far = output.written();
     let finished = output.finish(pending);
@@ -279,6 +290,7 @@ pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
             _ = &mut ctrl_c => drain_after_ctrl_c(&mut finished).await,
         },
     };
+    // Too late for standard output: said on standard error alone.
     lost.tell(&stream.stats(), recorder.is_some(), true);
     unshown.tell(recorder.is_some());
     // Lines a reader that took nothing more after Ctrl-C left unwritten (not a reader
@@ -344,6 +356,44 @@ fn line(
     }
 }
 
+/// Why received frames were not shown: standard output was not read as fast as they
+/// came ([`Unshown`]), or the monitor fell behind the link ([`Lost`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Gap {
+    Output,
+    Behind,
+}
+
+/// The line that stands where `frames` received frames were not shown, for a reader of
+/// standard output (a program reading JSON, a pager) to see the gap where it is:
+/// `{"gap":"output","frames":N,"time":...}` (`"behind"` for frames the monitor fell
+/// behind the link on, which the recording misses too).
+fn gap_line(gap: Gap, frames: u64, format: Format) -> String {
+    let time = SystemTime::now();
+    match format {
+        Format::Json => serde_json::json!({
+            "gap": match gap {
+                Gap::Output => "output",
+                Gap::Behind => "behind",
+            },
+            "frames": frames,
+            "time": render::json::seconds(time),
+        })
+        .to_string(),
+        Format::Text => {
+            let why = match gap {
+                Gap::Output => "standard output was not read as fast as they came",
+                Gap::Behind => "monitor fell behind the link",
+            };
+            format!(
+                "{} -- {} not shown here: {why} --",
+                render::text::time(time),
+                crate::counted(frames, "received frame")
+            )
+        }
+    }
+}
+
 /// Lines waiting for standard output, beyond those its thread holds, past which a
 /// frame's line is dropped (and counted, [`Unshown`]): a reader that takes nothing
 /// (a paused pager) holds up neither the link nor the recording.
@@ -356,6 +406,9 @@ struct Unshown {
     count: u64,
     /// The count last said.
     told: u64,
+    /// Frames not shown since the last line kept: the next line kept is preceded by a
+    /// [`gap_line`] of them.
+    run: u64,
 }
 
 impl Unshown {
@@ -400,19 +453,21 @@ struct Lost {
 }
 
 impl Lost {
-    /// Says the events lost since it last said any (`end`: in all, if any were).
-    fn tell(&mut self, stats: &mcp_host::Stats, recording: bool, end: bool) {
+    /// Says the events lost since it last said any (`end`: in all, if any were), and
+    /// returns how many there are, if any.
+    fn tell(&mut self, stats: &mcp_host::Stats, recording: bool, end: bool) -> Option<u64> {
         let lost = stats.events_dropped;
         let also = if recording {
             ", and are missing from the recording"
         } else {
             ""
         };
-        if lost > self.told {
+        let new = lost.checked_sub(self.told).filter(|&new| new > 0);
+        if let Some(new) = new {
             err!(
                 "mcp-gs: warning: {} lost: monitor fell behind the link (the machine busy?) \
                  and they were not shown{also}",
-                crate::counted(lost - self.told, "received frame")
+                crate::counted(new, "received frame")
             );
             self.told = lost;
         }
@@ -423,6 +478,7 @@ impl Lost {
                 crate::counted(lost, "received frame")
             );
         }
+        new
     }
 }
 
