@@ -225,8 +225,18 @@ fn json_prints_each_answer_as_its_frame_with_the_value_read() {
     // A number, locally.
     let ch = json(&["CH"], 0);
     assert_eq!(
-        (&ch["frame"], &ch["command"], &ch["status_name"]),
-        (&"at_response".into(), &"CH".into(), &"ok".into()),
+        (
+            &ch["result"],
+            &ch["frame"],
+            &ch["command"],
+            &ch["status_name"]
+        ),
+        (
+            &"answered".into(),
+            &"at_response".into(),
+            &"CH".into(),
+            &"ok".into()
+        ),
         "{ch}"
     );
     let data = u64::from_str_radix(ch["data"].as_str().unwrap(), 16).unwrap();
@@ -254,7 +264,11 @@ fn json_prints_each_answer_as_its_frame_with_the_value_read() {
     );
     // A refusal prints its answer too, and fails as in text.
     let refused = json(&["NI", "twenty-one characters"], 2);
-    assert_eq!(refused["status_name"], "invalid_parameter", "{refused}");
+    assert_eq!(
+        (&refused["result"], &refused["status_name"]),
+        (&"answered".into(), &"invalid_parameter".into()),
+        "{refused}"
+    );
     // Every answer to a broadcast.
     let all = json(&["--to", "000000000000ffff", "--window", "1", "NI"], 0);
     assert_eq!(

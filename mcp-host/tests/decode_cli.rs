@@ -189,6 +189,25 @@ fn a_recording_cut_off_names_the_file_and_the_frames_decoded_before_it() {
             cut.path()
         )
     );
+    // In JSON, the stream ends with the error, for a program reading it.
+    let output = decode(&["--format", "json", cut.path()]);
+    assert_eq!(output.status.code(), Some(2));
+    let lines: Vec<serde_json::Value> = text(&output.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines.len(), 3);
+    assert_eq!(
+        lines[2],
+        serde_json::json!({
+            "error": "recording",
+            "offset": offset,
+            "message": format!(
+                "recording cut off part way through the record at offset {offset}: 5 of its \
+                 6 bytes of frame and CRC are there"
+            ),
+        })
+    );
     // From standard input, no file is named.
     let file = std::fs::File::open(cut.path()).unwrap();
     let output = gs().arg("decode").stdin(file).output().unwrap();

@@ -49,8 +49,9 @@ pub(crate) struct AtArgs {
     /// backslash, `\"` or `"` for a quote); omit to read.
     value: Option<String>,
     /// Output format: `json` prints each answer as the response frame's object (as
-    /// `monitor` does), with `value` added: the value read as a number, or as text for a
-    /// text parameter; no answer in time as `{"result":"timeout","command":...}`, a link
+    /// `monitor` does), with `"result":"answered"` and `value` added: the value read as
+    /// a number, or as text for a text parameter (a refusal is answered too: its
+    /// `status` says so); no answer in time as `{"result":"timeout","command":...}`, a link
     /// lost meanwhile as `{"result":"disconnected",...}`, one that could not be opened
     /// as `{"result":"not_sent",...}`.
     #[arg(long, value_enum, default_value_t = Format::Text)]
@@ -254,11 +255,15 @@ fn answer_line(name: &str, command: &[u8; 2], data: &[u8], set: bool) -> String 
     }
 }
 
-/// An answer as a JSON object: the response frame's, with `value` added when the
-/// answer holds one (text for a text parameter, else a number of up to 6 bytes, which
-/// every JSON reader takes exactly; a longer one is in `data` alone).
+/// An answer as a JSON object: the response frame's, with `"result":"answered"` (as
+/// the other outcomes have a `result`) and `value` added when the answer holds one
+/// (text for a text parameter, else a number of up to 6 bytes, which every JSON reader
+/// takes exactly; a longer one is in `data` alone).
 fn answer_json(frame: &Frame<'_>, command: &[u8; 2], data: &[u8]) -> serde_json::Value {
     let mut json = mcp_host::render::json::frame(frame);
+    if let serde_json::Value::Object(map) = &mut json {
+        map.insert("result".into(), "answered".into());
+    }
     let value = if data.is_empty() {
         None
     } else if is_text(command) {

@@ -682,8 +682,19 @@ fn decode_recording(
                             skipped.add(bad);
                         }
                     }
-                    // A damaged or cut-off record, not a failed read.
-                    _ => damaged = 1,
+                    // A damaged or cut-off record, not a failed read: in JSON, said in
+                    // the stream too, where it ends (as a line of hex that is not).
+                    _ => {
+                        damaged = 1;
+                        if printer.format == Format::Json && printer.summary.is_none() {
+                            let value = serde_json::json!({
+                                "error": "recording",
+                                "offset": e.offset(),
+                                "message": e.to_string(),
+                            });
+                            writeln!(printer.out, "{value}")?;
+                        }
+                    }
                 }
                 let message = format!("{e}; {}", decoded_before(decoded));
                 let kind = io::Error::from(e).kind();
