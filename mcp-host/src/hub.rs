@@ -61,7 +61,9 @@
 //!   that has not gone to the radio [`REQUEST_WAIT`] after the hub could first have
 //!   read it (it waited for its client's places, for an id, or its turn; while a
 //!   request waits, the hub reads none of the client's bytes, so the frames behind it
-//!   that the hub had already read count as waiting since then) is not sent: it is refused, and answered at
+//!   that the hub had already read count as waiting since then; so does a request
+//!   read just after the hub itself could read nothing for a while, its process
+//!   stopped or its machine suspended, from when that began) is not sent: it is refused, and answered at
 //!   once as the radio answers a request it could not carry out (an AT command
 //!   `ERROR`, a transmission's delivery status 0x32, resource error, in its Transmit
 //!   Status or TX Status, a remote AT command's transmission failure; a Register
@@ -164,6 +166,7 @@
 //! ```
 
 mod port;
+mod stall;
 
 use std::cell::Cell;
 use std::net::SocketAddr;
@@ -185,6 +188,7 @@ use tokio_util::task::TaskTracker;
 use xbee_api::{ApiMode, RawFrame};
 
 use self::port::Port;
+use self::stall::Stalls;
 use crate::codec::{CodecItem, XBeeCodec, encode_frame};
 use crate::event::{answer_type, is_response};
 use crate::ids::IdTable;
@@ -447,7 +451,10 @@ impl Hub {
             bytes_per_second: f64::from(bytes_per_second.max(1)),
         };
         hub.tasks.spawn(writer.run(hub.stop.clone()));
+        let stalls = Arc::new(Stalls::new());
+        hub.tasks.spawn(beat(stalls.clone(), hub.stop.clone()));
         let serve = Serve {
+            stalls,
             to_radio,
             mode,
             sender,
@@ -741,6 +748,21 @@ fn is_whole_request(data: &[u8]) -> bool {
     }
 }
 
+/// Notes every [`stall::BEAT`] that the hub runs, so that its stalls are seen (see
+/// [`Stalls`]), until the hub stops.
+async fn beat(stalls: Arc<Stalls>, stop: CancellationToken) {
+    let mut beat = tokio::time::interval(stall::BEAT);
+    beat.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+    loop {
+        tokio::select! {
+            () = stop.cancelled() => return,
+            _ = beat.tick() => {
+                stalls.beat();
+            }
+        }
+    }
+}
+
 /// A client's queue of frames to the radio, and the client (kept until the queue is
 /// drained, so that the routes of its last frames stay until these are written).
 type ClientFrames = (mpsc::Receiver<Queued>, Arc<Client>);
@@ -911,6 +933,8 @@ struct Connected {
 
 /// The hub's main task: frames from the radio to the clients, new clients accepted.
 struct Serve {
+    /// The hub's stalls, which the requests read after one count from.
+    stalls: Arc<Stalls>,
     /// New clients' queues of frames to the radio, for the [`RadioWriter`].
     to_radio: Arc<ToRadio>,
     mode: ApiMode,
@@ -1114,6 +1138,7 @@ impl Serve {
         let number = self.next_client;
         self.next_client += 1;
         let client = Arc::new(Client {
+            stalls: self.stalls.clone(),
             number,
             peer,
             mode: self.mode,
@@ -1405,6 +1430,8 @@ fn lock<T>(shared: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
 /// to the radio, the other writes the radio's frames to it. The client is gone when
 /// both have ended; its requests' routes then end too.
 struct Client {
+    /// The hub's stalls: a request read just after one counts from its beginning.
+    stalls: Arc<Stalls>,
     /// Its number, in its routes.
     number: u64,
     peer: SocketAddr,
@@ -1502,6 +1529,11 @@ impl Client {
                         old = None;
                         None
                     }
+                };
+                // Just after a stall of the hub, the request may have come as it began.
+                let since = match (self.stalls.beat(), since) {
+                    (Some(began), Some(since)) => Some(since.min(began)),
+                    (began, since) => since.or(began),
                 };
                 match item {
                     Some(Ok(item)) => match self.pass(item, &to_radio, since).await {

@@ -208,6 +208,40 @@ async fn a_request_that_waited_its_turn_too_long_is_answered_as_failed_not_sent(
     hub.stop().await;
 }
 
+/// A hub that could read nothing for longer than `REQUEST_WAIT` (its process stopped, a
+/// machine suspended) sends none of the requests that came meanwhile: their clients may
+/// have given up on them and left (a `send` that timed out), and newer commands of
+/// others may have gone since. They are answered as failed, as a request that waited
+/// its turn too long. In real time: the test holds the hub's runtime (its one thread)
+/// for the stall, while a client connects and writes its request.
+#[tokio::test(flavor = "current_thread")]
+async fn a_request_that_came_while_the_hub_stalled_too_long_is_not_sent() {
+    let (hub, mut radio) = hub_and_radio().await;
+    let addr = hub.local_addr();
+    let request = [0x08, 0x01, b'N', b'I'];
+    let client = std::thread::spawn(move || {
+        let mut socket = std::net::TcpStream::connect(addr).unwrap();
+        let sum = request.iter().fold(0u8, |sum, b| sum.wrapping_add(*b));
+        let wire = [&[0x7E, 0x00, 0x04][..], &request, &[0xFF - sum]].concat();
+        std::io::Write::write_all(&mut socket, &wire).unwrap();
+        socket
+    });
+    // The stall: nothing of the hub runs.
+    std::thread::sleep(REQUEST_WAIT + Duration::from_secs(1));
+    let socket = client.join().unwrap();
+    socket.set_nonblocking(true).unwrap();
+    let mut client = tokio_util::codec::Framed::new(
+        tokio::net::TcpStream::from_std(socket).unwrap(),
+        mcp_host::codec::XBeeCodec::new(ApiMode::Unescaped),
+    );
+    assert_eq!(next(&mut client).await, [0x88, 0x01, b'N', b'I', 0x01]);
+    // The radio gets the client's next frame, never the request.
+    send(&mut client, &[0x08, 0x00, b'V', b'R']).await;
+    assert_eq!(next(&mut radio).await, [0x08, 0x00, b'V', b'R']);
+    assert_eq!(hub.stats().frames_refused, 1);
+    hub.stop().await;
+}
+
 /// A hub on a radio that left both of the hub's `AT AP` unanswered, with the ids they
 /// went out under.
 async fn hub_whose_radio_did_not_answer_ap() -> (mcp_host::hub::Hub, Wire, [u8; 2]) {
