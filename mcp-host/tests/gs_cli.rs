@@ -1346,6 +1346,64 @@ fn monitor_marks_the_lines_it_dropped_for_a_paused_reader_in_its_output() {
     );
 }
 
+/// Monitor stopped a while (Ctrl-Z, SIGSTOP) while frames come: once it goes on, the
+/// burst that waited in the connection is recorded whole, not dropped for monitor being
+/// behind.
+#[cfg(unix)]
+#[test]
+fn monitor_records_the_burst_that_waited_while_it_was_stopped() {
+    let radio = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let link = format!("tcp:{}", radio.local_addr().unwrap());
+    let dir = tempfile::tempdir().unwrap();
+    let record = dir.path().join("stopped.mcprec");
+    // JSON lines of telemetry, read: each frame takes monitor longer than the link.
+    let monitor = gs()
+        .args(["monitor", "--format", "json", "--link", &link, "--record"])
+        .arg(&record)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut child = common::Running(monitor);
+    let errors = common::stderr_lines(&mut child.0);
+    let lines = common::stdout_lines(&mut child.0);
+    let (mut socket, _) = radio.accept().unwrap();
+    // A Receive Packet from a MAV holding 8 telemetry values, as a MAV sends 20 a second.
+    let mut data = vec![
+        0x90, 0x00, 0x13, 0xA2, 0x00, 0x40, 0xB5, 0x99, 0xB9, 0x7D, 0x84, 0x01,
+    ];
+    data.push(b't');
+    for id in 1..=8u8 {
+        data.push(id);
+        data.extend_from_slice(&(f32::from(id) * 0.5).to_le_bytes());
+    }
+    let sum = data.iter().fold(0u8, |sum, b| sum.wrapping_add(*b));
+    let length = u8::try_from(data.len()).unwrap();
+    let frame = [&[0x7E, 0x00, length][..], &data, &[0xFF - sum]].concat();
+    let record_len = mcp_host::record::record_len(data.len()) as u64;
+    socket.write_all(&frame).unwrap();
+    let header = mcp_host::record::HEADER_LEN as u64;
+    recorded(&record, header + record_len, "the first frame");
+    let pid = i32::try_from(child.0.id()).unwrap();
+    // SAFETY: kill(2) with the pid of a child of this process and a valid signal.
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGSTOP) }, 0);
+    // Far more than the link's default queue of events, all in the connection's buffers.
+    // (233 KB: the sender's buffer grows to hold it, on Linux up to 4 MB.)
+    let burst = 4096;
+    socket.set_write_timeout(Some(common::GUARD)).unwrap();
+    socket.write_all(&frame.repeat(burst)).unwrap();
+    // SAFETY: as above.
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGCONT) }, 0);
+    let all = header + (burst as u64 + 1) * record_len;
+    recorded(&record, all, "the burst");
+    // SAFETY: as above.
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
+    assert_eq!(common::exit_code(&mut child.0), Some(0));
+    let said: Vec<String> = errors.try_iter().collect();
+    assert!(!said.iter().any(|l| l.contains(" lost: ")), "{said:?}");
+    drop(lines);
+}
+
 /// A reader that took part of monitor's output and no more (a pager paused), the link
 /// quiet since: Ctrl-C still ends monitor, whether it was still taking frames or had
 /// taken its `--count` and was writing its last lines.

@@ -53,6 +53,10 @@ pub(crate) struct LinkArgs {
     // Each subcommand says in its help what it waits for (`mut_arg("timeout", ...)`).
     #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
     pub(crate) timeout: Option<f64>,
+    /// The events the link holds for the subcommand while it falls behind
+    /// ([`LinkOptions::event_capacity`]); the library's default if `None`.
+    #[arg(skip)]
+    pub(crate) event_capacity: Option<usize>,
 }
 
 /// `--link` of the subcommands that do one thing and end (`send`, `status`, `at`,
@@ -244,6 +248,9 @@ impl LinkArgs {
             } else {
                 ReconnectPolicy::disabled()
             },
+            event_capacity: self
+                .event_capacity
+                .unwrap_or(LinkOptions::default().event_capacity),
             ..LinkOptions::default()
         }
     }

@@ -61,7 +61,10 @@ fn parse_count(s: &str) -> Result<u64, String> {
 }
 
 /// Runs `monitor`.
-pub(crate) async fn run(args: MonitorArgs) -> Result<(), Failure> {
+pub(crate) async fn run(mut args: MonitorArgs) -> Result<(), Failure> {
+    // A burst (what waited in the socket while monitor was stopped or starved a while)
+    // is held for it, for its recording, rather than dropped.
+    args.link.event_capacity = Some(EVENTS_HELD);
     // A recording is never lost to a mistyped link: refuse to overwrite it before the
     // link is opened, and create the file only once the link is up.
     let record = args
@@ -394,6 +397,11 @@ fn gap_line(gap: Gap, frames: u64, format: Format) -> String {
     }
 }
 
+/// The link's events held for monitor while it falls behind ([`Lost`] beyond): the
+/// frames a TCP connection's buffers hold, as they come at once when monitor goes on
+/// after it was stopped (Ctrl-Z, `SIGSTOP`) or starved a while.
+const EVENTS_HELD: usize = 1 << 16;
+
 /// Lines waiting for standard output, beyond those its thread holds, past which a
 /// frame's line is dropped (and counted, [`Unshown`]): a reader that takes nothing
 /// (a paused pager) holds up neither the link nor the recording.
@@ -465,8 +473,8 @@ impl Lost {
         let new = lost.checked_sub(self.told).filter(|&new| new > 0);
         if let Some(new) = new {
             err!(
-                "mcp-gs: warning: {} lost: monitor fell behind the link (the machine busy?) \
-                 and they were not shown{also}",
+                "mcp-gs: warning: {} lost: monitor fell behind the link (the machine busy, \
+                 or monitor stopped a while?) and they were not shown{also}",
                 crate::counted(new, "received frame")
             );
             self.told = lost;
