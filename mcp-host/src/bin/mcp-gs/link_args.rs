@@ -595,7 +595,8 @@ fn silence_hint(link: &Link, stats: &Stats, lead: &str) -> Option<String> {
             "hint: {lead} (--api-mode, or auto to ask it), and whether the peer serves \
              another connection (mcp-gs sim and radio serve one at a time and let the next \
              wait; to share one, use mcp-gs hub); if the peer is mcp-gs hub, its own lines \
-             say whether it hears its radio"
+             say whether it hears its radio, and one stopped (Ctrl-Z) still takes \
+             connections but answers nothing"
         ),
         _ => format!(
             "hint: {lead} (--api-mode, or auto to ask it), the baud rate (serial:PATH:BAUD), \
