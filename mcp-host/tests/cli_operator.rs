@@ -958,10 +958,28 @@ fn replay_of_sent_frames_leaves_the_at_commands_out_unless_asked() {
     std::fs::write(&file, recording_of(&records)).unwrap();
     let (link, peer) = common::recording_peer();
     let path = file.to_str().unwrap();
-    let output = run(&["replay", path, "--link", &link, "--frames", "tx"]);
+    // The peer records, and answers nothing: the landing's transmit status is waited
+    // for --timeout.
+    let output = run(&[
+        "replay",
+        path,
+        "--link",
+        &link,
+        "--frames",
+        "tx",
+        "--timeout",
+        "1",
+    ]);
     let said = stderr(&output);
     assert_eq!(output.status.code(), Some(0), "{said}");
     assert_eq!(peer.join().unwrap(), wire(landing));
+    assert!(
+        said.contains(
+            "replayed 1 frame; of the 1 that asked for a transmit status: 0 delivered, 1 \
+             without a transmit status in 1 s\n"
+        ),
+        "{said}"
+    );
     assert!(
         said.contains(
             "3 AT commands to radios in the recording not replayed: they would set the \
@@ -988,6 +1006,8 @@ fn replay_of_sent_frames_leaves_the_at_commands_out_unless_asked() {
         "--frames",
         "tx",
         "--with-at",
+        "--timeout",
+        "1",
     ]);
     let said = stderr(&output);
     assert_eq!(output.status.code(), Some(0), "{said}");
@@ -1114,6 +1134,45 @@ fn a_damaged_recording_plays_nothing_and_a_cut_off_one_its_whole_records() {
     );
     // The first landing and the time command: 17 and 20 bytes of frame data, framed.
     assert_eq!(peer.join().unwrap().len(), (3 + 17 + 1) + (3 + 20 + 1));
+}
+
+#[test]
+fn replay_of_sent_frames_says_whether_the_radio_delivered_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("commands.mcprec");
+    let landing = |id: u8| -> Vec<u8> {
+        vec![
+            0x10, id, 0, 0x13, 0xA2, 0, 0x40, 0xB5, 0x99, 0xB9, 0xFF, 0xFE, 0, 0, b'c', 2, 1,
+        ]
+    };
+    // Two that ask for a transmit status, one that does not (frame id 0).
+    let (one, two, none) = (landing(1), landing(2), landing(0));
+    let records = [(1, 0, &one[..]), (1, 1, &none[..]), (1, 2, &two[..])];
+    std::fs::write(&file, recording_of(&records)).unwrap();
+    let path = file.to_str().unwrap();
+    for (delivery, says) in [
+        (
+            0x00,
+            "of the 2 that asked for a transmit status: 2 delivered\n",
+        ),
+        (
+            0x21,
+            "of the 2 that asked for a transmit status: 0 delivered, 2 not delivered \
+             (network_ack_failure 2)\n",
+        ),
+    ] {
+        let (link, radio) = common::refusing_radio(delivery);
+        let output = run(&[
+            "replay", path, "--link", &link, "--frames", "tx", "--speed", "0",
+        ]);
+        let said = stderr(&output);
+        assert_eq!(output.status.code(), Some(0), "{said}");
+        assert!(
+            said.contains(&format!("replayed 3 frames; {says}")),
+            "{said}"
+        );
+        radio.join().unwrap();
+    }
 }
 
 #[test]

@@ -343,7 +343,8 @@ pub fn refusing_radio(delivery: u8) -> (String, std::thread::JoinHandle<()>) {
             let mut ids = Vec::new();
             decoder.decode_each(&buf[..n], |event| {
                 if let Ok(frame) = event {
-                    if let [0x10, id, ..] = frame.data() {
+                    // As a radio: no status for frame id 0.
+                    if let [0x10, id @ 1..=255, ..] = frame.data() {
                         ids.push(*id);
                     }
                 }

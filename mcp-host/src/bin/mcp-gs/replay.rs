@@ -53,7 +53,8 @@ pub(crate) struct ReplayArgs {
     /// Which frames to play. Sent frames (tx) carry the recorded commands: played to a
     /// radio, they act on the MAVs again as they did then (a landing, a trajectory, a
     /// time command that sets a MAV's clock to the recorded time); what they are is said
-    /// before the first is played.
+    /// before the first is played, and at the end how many the radio delivered, by its
+    /// transmit statuses (waited for --timeout).
     #[arg(long, value_enum, default_value_t = Which::Rx)]
     frames: Which,
     /// Also play the AT commands sent to radios (0x08, 0x09 to the local radio, 0x17
@@ -125,8 +126,12 @@ pub(crate) async fn run(args: ReplayArgs) -> Result<(), Failure> {
     if let Some(path) = &stream.info().pty_path {
         err!("mcp-gs: pseudo-terminal: {}", path.display());
     }
+    // Sent frames that ask for a transmit status get one from the radio: counted, to
+    // say whether they were delivered. (Otherwise the stream is dropped: its queue,
+    // full of what nobody read, would hold up the last event of the link.)
+    let statuses = (args.frames != Which::Rx).then(|| gather_statuses(stream));
     let start = tokio::time::Instant::now();
-    let mut played = 0u64;
+    let mut played = Played::default();
     let records = std::iter::once(Ok(first)).chain(reader);
     let result = play(
         &args,
@@ -137,18 +142,112 @@ pub(crate) async fn run(args: ReplayArgs) -> Result<(), Failure> {
         &mut at_left_out,
     )
     .await;
-    // What was written goes out before the process ends, also after an error. (The
-    // stream is dropped first: its queue, full of what nobody read, would hold up the
-    // last event of the link.)
-    drop(stream);
+    let statuses = match (statuses, &result) {
+        (Some(mut statuses), Ok(())) => {
+            let wait = args.link.timeout();
+            let awaited = played.awaiting_status;
+            let answered = statuses.wait_for(|got| got.count() >= awaited);
+            let _ = tokio::time::timeout(wait, answered).await;
+            let got = statuses.borrow().clone();
+            Some((got, awaited, wait))
+        }
+        _ => None,
+    };
+    // What was written goes out before the process ends, also after an error.
     sender.close();
     sender.closed().await;
     if at_left_out > 0 {
         err!("mcp-gs: {}", at_left_out_note(at_left_out));
     }
     result?;
-    err!("mcp-gs: replayed {}", crate::counted(played, "frame"));
+    let delivery = match statuses {
+        Some((got, awaited, wait)) if awaited > 0 => format!("; {}", got.said(awaited, wait)),
+        _ => String::new(),
+    };
+    err!(
+        "mcp-gs: replayed {}{delivery}",
+        crate::counted(played.frames, "frame")
+    );
     Ok(())
+}
+
+/// The frames a replay wrote, and those of them that ask for a transmit status (a
+/// Transmit Request or Explicit Addressing Command with a frame id).
+#[derive(Debug, Default)]
+struct Played {
+    frames: u64,
+    awaiting_status: u64,
+}
+
+/// The transmit statuses the radio sent back while a replay ran.
+#[derive(Debug, Clone, Default)]
+struct Statuses {
+    delivered: u64,
+    /// Those not delivered, by their delivery status's name.
+    failed: BTreeMap<String, u64>,
+}
+
+impl Statuses {
+    fn count(&self) -> u64 {
+        self.delivered + self.failed.values().sum::<u64>()
+    }
+
+    /// What to say of them, `awaited` having asked for one, waited for `wait` at most.
+    fn said(&self, awaited: u64, wait: Duration) -> String {
+        let mut parts = vec![format!("{} delivered", self.delivered)];
+        if !self.failed.is_empty() {
+            let failed: Vec<String> = self
+                .failed
+                .iter()
+                .map(|(name, n)| format!("{name} {n}"))
+                .collect();
+            parts.push(format!(
+                "{} not delivered ({})",
+                self.failed.values().sum::<u64>(),
+                failed.join(", ")
+            ));
+        }
+        let missing = awaited.saturating_sub(self.count());
+        if missing > 0 {
+            parts.push(format!(
+                "{missing} without a transmit status in {}",
+                Seconds(wait)
+            ));
+        }
+        format!(
+            "of the {} that asked for a transmit status: {}",
+            awaited,
+            parts.join(", ")
+        )
+    }
+}
+
+/// Counts the transmit statuses among the link's events, as they come, until the link
+/// ends.
+fn gather_statuses(mut stream: mcp_host::PacketStream) -> tokio::sync::watch::Receiver<Statuses> {
+    let (tell, told) = tokio::sync::watch::channel(Statuses::default());
+    tokio::spawn(async move {
+        let mut got = Statuses::default();
+        while let Some(event) = futures::StreamExt::next(&mut stream).await {
+            let mcp_host::Event::Frame(frame) = event else {
+                continue;
+            };
+            let Ok(mcp_host::xbee_api::Frame::TransmitStatus(status)) = frame.parse() else {
+                continue;
+            };
+            if status.delivery.is_success() {
+                got.delivered += 1;
+            } else {
+                let name = status.delivery.name().map_or_else(
+                    || format!("0x{:02x}", u8::from(status.delivery)),
+                    str::to_owned,
+                );
+                *got.failed.entry(name).or_default() += 1;
+            }
+            tell.send_replace(got.clone());
+        }
+    });
+    told
 }
 
 /// Whether a recorded frame is an AT command to a radio: a local one (AT Command 0x08,
@@ -396,7 +495,7 @@ async fn play(
     records: impl Iterator<Item = Result<Record, RecordError>>,
     sender: &CommandSender,
     start: tokio::time::Instant,
-    played: &mut u64,
+    played: &mut Played,
     at_left_out: &mut u64,
 ) -> Result<(), Failure> {
     let mut previous = None;
@@ -407,7 +506,7 @@ async fn play(
             Failure::input(format!(
                 "{}: {e} (replayed {} before it)",
                 args.file.display(),
-                crate::counted(*played, "frame")
+                crate::counted(played.frames, "frame")
             ))
         })?;
         if !plays(args, &record) {
@@ -429,7 +528,7 @@ async fn play(
                          frame {}: played at once, and the frames after it at their pace \
                          from there",
                         Seconds(rounded(back.duration())),
-                        *played + 1
+                        played.frames + 1
                     );
                 }
                 Duration::ZERO
@@ -452,7 +551,7 @@ async fn play(
                     args.file.display(),
                     gap.as_secs(),
                     args.speed,
-                    crate::counted(*played, "frame")
+                    crate::counted(played.frames, "frame")
                 ))
             })?;
             if let Some(wait) = wait.filter(|wait| *wait >= LONG_QUIET) {
@@ -465,21 +564,24 @@ async fn play(
                      {}{shorten}",
                     Seconds(rounded(wait)),
                     Seconds(rounded(recorded_gap)),
-                    *played
+                    played.frames
                 );
             }
             // A link that ends while the replay waits for a record's time is said at
             // once, not at the record.
             tokio::select! {
                 () = tokio::time::sleep_until(at) => {}
-                () = sender.closed() => return Err(lost(SendError::Closed, *played)),
+                () = sender.closed() => return Err(lost(SendError::Closed, played.frames)),
             }
         }
         sender
             .write_frame(&record.frame)
             .await
-            .map_err(|e| lost(e, *played))?;
-        *played += 1;
+            .map_err(|e| lost(e, played.frames))?;
+        played.frames += 1;
+        if matches!(record.frame[..], [0x10 | 0x11, id, ..] if id != 0) {
+            played.awaiting_status += 1;
+        }
     }
     Ok(())
 }
