@@ -1037,7 +1037,7 @@ fn replay_of_sent_frames_leaves_the_at_commands_out_unless_asked() {
 }
 
 #[test]
-fn a_damaged_recording_plays_nothing_and_a_cut_off_one_its_whole_records() {
+fn a_damaged_or_cut_off_recording_plays_nothing() {
     let dir = tempfile::tempdir().unwrap();
     let landing = |on: u8| -> Vec<u8> {
         vec![
@@ -1085,36 +1085,56 @@ fn a_damaged_recording_plays_nothing_and_a_cut_off_one_its_whole_records() {
     );
     assert!(
         said.contains(&format!(
-            ": nothing replayed, as a damaged recording is not played in part; the 2 records \
-             before it are whole (`head -c {third} {path}` keeps them)"
+            ": nothing replayed, as a damaged or cut-off recording is not played in part; the \
+             2 records before it are whole (`head -c {third} {path}` keeps them)"
         )),
         "{said}"
     );
     assert!(!said.contains("connect"), "{said}");
-    // Cut off in its last record: the whole ones are played, and the end is said.
+    // Cut off in its last record: nothing played either (a damaged length reads as cut
+    // off, with whole records after it).
     let cut = dir.path().join("cut.mcprec");
     std::fs::write(&cut, &bytes[..bytes.len() - 3]).unwrap();
+    let cut = cut.to_str().unwrap();
+    let output = run(&["replay", cut, "--link", "tcp:127.0.0.1:9", "--frames", "tx"]);
+    let said = stderr(&output);
+    assert_eq!(output.status.code(), Some(2), "{said}");
+    assert!(
+        said.contains(&format!(
+            "{cut}: recording cut off part way through the record at offset {third}"
+        )) && said.contains(&format!(
+            "nothing replayed, as a damaged or cut-off recording is not played in part; \
+             the 2 records before it are whole (`head -c {third} {cut}` keeps them)"
+        )),
+        "{said}"
+    );
+    // Whole: played, the time command named among those that act again.
+    let whole = dir.path().join("whole.mcprec");
+    std::fs::write(&whole, &bytes).unwrap();
     let (link, peer) = common::recording_peer();
     let output = run(&[
         "replay",
-        cut.to_str().unwrap(),
+        whole.to_str().unwrap(),
         "--link",
         &link,
         "--frames",
         "tx",
         "--speed",
         "0",
+        "--timeout",
+        "1",
     ]);
     let said = stderr(&output);
-    assert_eq!(output.status.code(), Some(2), "{said}");
-    assert!(said.contains("replayed 2 frames before it"), "{said}");
-    assert!(said.contains("time 1"), "the time command is named: {said}");
+    assert_eq!(output.status.code(), Some(0), "{said}");
     assert!(
-        said.contains("sets the MAV's clock to the recorded time"),
+        said.contains(
+            "the sent frames hold commands that act on MAVs, landing 2, time 1, to 1 MAV \
+             (0013a20040b599b9): played, they act again as they did when recorded; a time \
+             command sets the MAV's clock to the recorded time"
+        ),
         "{said}"
     );
-    let played = peer.join().unwrap();
-    assert!(played.starts_with(&wire(&landing(1))), "{played:02x?}");
+    assert_eq!(peer.join().unwrap().len(), 2 * (3 + 17 + 1) + (3 + 20 + 1));
     // From standard input, read once: played up to the damage, then stopped.
     let (link, peer) = common::recording_peer();
     let output = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))

@@ -42,7 +42,7 @@ and for the link to take each frame [default: 12]"
 pub(crate) struct ReplayArgs {
     /// A recording made by `monitor --record` or `hub --record` (or by a program with
     /// `mcp_host::record::RecordWriter`); `-` reads standard input. A file is read
-    /// through before anything is played: a damaged one plays nothing. `mcp-gs decode
+    /// through before anything is played: a damaged or cut-off one plays nothing. `mcp-gs decode
     /// FILE` shows what it holds.
     file: PathBuf,
     #[command(flatten)]
@@ -386,10 +386,10 @@ struct Survey {
 }
 
 /// Reads the whole recording `args` names (a regular file) and finds the commands among
-/// the frames the replay plays. A damaged record is a failure, so that nothing of a
-/// damaged recording is played (the replay would stop there, part way through what was
-/// recorded); one cut off at the end is not, as the replay plays every whole record
-/// before it and then says so.
+/// the frames the replay plays. A damaged or cut-off record is a failure, so that
+/// nothing of such a recording is played (the replay would stop there, part way
+/// through what was recorded; and a record whose length was damaged reads as one cut
+/// off, with whole records after it).
 fn survey(args: &ReplayArgs) -> Result<Survey, Failure> {
     let name = args.file.display();
     let file =
@@ -400,7 +400,8 @@ fn survey(args: &ReplayArgs) -> Result<Survey, Failure> {
     for (whole, record) in (0u64..).zip(reader) {
         let record = match record {
             Ok(record) => record,
-            Err(RecordError::CutOffHead { .. } | RecordError::CutOffFrame { .. }) => break,
+            // Cut off too: a record whose length was damaged reaches past the end as
+            // one cut off does, with whole records after it.
             Err(e) => {
                 let keep = match e.offset() {
                     Some(offset) => format!(
@@ -410,8 +411,8 @@ fn survey(args: &ReplayArgs) -> Result<Survey, Failure> {
                     None => String::new(),
                 };
                 return Err(Failure::input(format!(
-                    "{name}: {e}: nothing replayed, as a damaged recording is not played \
-                     in part{keep}"
+                    "{name}: {e}: nothing replayed, as a damaged or cut-off recording is \
+                     not played in part{keep}"
                 )));
             }
         };
