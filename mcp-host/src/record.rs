@@ -12,10 +12,14 @@
 //! | bytes | field |
 //! |---|---|
 //! | 8 | timestamp: microseconds since 1970-01-01 00:00:00 UTC, `u64` little-endian |
-//! | 1 | direction: 0 received from the radio, 1 sent to the radio |
-//! | 2 | length N of the frame data, `u16` little-endian (1 or more) |
+//! | 1 | direction: 0 received from the radio, 1 sent to the radio (any other value is an error) |
+//! | 2 | length N of the frame data, `u16` little-endian (1 to 65 535: 0 is an error) |
 //! | N | the API frame's data: frame type byte first, unescaped, without start delimiter, length or checksum |
-//! | 4 | CRC-32 (IEEE 802.3, as zlib's `crc32`) of the 11 + N bytes before it, `u32` little-endian |
+//! | 4 | CRC-32 of the record's 11 + N bytes before it (not the file's header), `u32` little-endian |
+//!
+//! The CRC is IEEE 802.3's, as zlib's `crc32` and Python's `zlib.crc32` compute it
+//! (CRC-32/ISO-HDLC: polynomial 0x04C11DB7, reflected, initial value and final xor
+//! 0xFFFFFFFF; `123456789` gives 0xCBF43926).
 //!
 //! Frames are stored without their API-mode framing so that a recording replays onto a
 //! link in either mode, and so without the XBee checksum: the CRC stands in for it, so
@@ -28,9 +32,13 @@
 //! every whole record before it, and gives no record after it (the bytes after a
 //! damaged record cannot be trusted to start one). Recordings joined one after the other
 //! (`cat a.mcprec b.mcprec`) read as one: a header where a record would start is passed
-//! over, and the records after it are read in its version.
+//! over, and the records after it are read in its version; one of a version this module
+//! does not read is an error there. So that no record is taken for a header, a time
+//! whose first 6 bytes read `MCPREC` is written a microsecond later (one microsecond in
+//! every 8.9 years); a time before 1970 is written as 0.
 //!
-//! Version 1, which this module reads too, is the same without the CRC.
+//! Version 1 (the header's version 1), which this module reads too, is the same
+//! without the CRC.
 //!
 //! # Writing and reading one
 //!
@@ -191,7 +199,11 @@ impl<W: Write> RecordWriter<W> {
             .duration_since(UNIX_EPOCH)
             .unwrap_or_default()
             .as_micros();
-        let micros = u64::try_from(micros).unwrap_or(u64::MAX);
+        let mut micros = u64::try_from(micros).unwrap_or(u64::MAX);
+        // Never read as a header of recordings joined one after the other.
+        if micros.to_le_bytes()[..MAGIC.len()] == *MAGIC {
+            micros += 1;
+        }
         let mut head = [0u8; RECORD_HEAD_LEN];
         head[..8].copy_from_slice(&micros.to_le_bytes());
         head[8] = match direction {
@@ -253,6 +265,19 @@ pub enum RecordError {
     #[non_exhaustive]
     UnsupportedVersion {
         /// The version in its header.
+        version: u16,
+    },
+    /// A header where a record would start (recordings joined one after the other)
+    /// is of a format version this program does not read.
+    #[error(
+        "at offset {offset}, a recording of format version {version} is joined on, which \
+         this program does not read (it reads versions 1 to {VERSION})"
+    )]
+    #[non_exhaustive]
+    JoinedVersion {
+        /// Where the header starts in the input.
+        offset: u64,
+        /// The version in it.
         version: u16,
     },
     /// The input ends part way through a record's 11-byte head (time, direction,
@@ -341,6 +366,7 @@ impl RecordError {
             | RecordError::Direction { offset, .. }
             | RecordError::EmptyFrame { offset }
             | RecordError::Crc { offset, .. }
+            | RecordError::JoinedVersion { offset, .. }
             | RecordError::TimeOutOfRange { offset, .. } => Some(offset),
             _ => None,
         }
@@ -431,6 +457,10 @@ impl<R: Read> RecordReader<R> {
             return Ok(None);
         }
         let offset = self.offset;
+        if got >= HEADER_LEN && head[..6] == *MAGIC {
+            let version = u16::from_le_bytes([head[6], head[7]]);
+            return Err(RecordError::JoinedVersion { offset, version });
+        }
         if got < head.len() {
             return Err(RecordError::CutOffHead { offset, got });
         }
@@ -795,14 +825,34 @@ mod tests {
             .collect();
         assert_eq!(frames.len(), 4);
         assert_eq!(frames[2..], [vec![0x8A, 0x04], vec![0x8A, 0x03]]);
-        // A header of a version this module does not read is no record.
+        // A header of a version this module does not read is an error there, not a
+        // record (in version 1, with no CRC, it would read as one).
         let mut other = b.clone();
         other[6] = 3;
-        let joined = [&a[..], &other].concat();
-        let mut r = RecordReader::new(&joined[..]).unwrap();
-        assert!(r.next_record().unwrap().is_some());
-        assert!(r.next_record().unwrap().is_some());
-        assert!(r.next_record().is_err());
+        for first in [&a[..], &v1[..]] {
+            let joined = [first, &other].concat();
+            let err = RecordReader::new(&joined[..])
+                .unwrap()
+                .find_map(Result::err)
+                .unwrap();
+            assert!(
+                matches!(err, RecordError::JoinedVersion { offset, version: 3 }
+                    if offset == first.len() as u64),
+                "{err:?}"
+            );
+            assert_eq!(err.offset(), Some(first.len() as u64));
+        }
+        // A time whose first bytes read as a header's is written a microsecond later.
+        let magic_time = u64::from_le_bytes(*b"MCPREC\x02\x00");
+        let mut w = RecordWriter::new(Vec::new()).unwrap();
+        let at = UNIX_EPOCH + Duration::from_micros(magic_time);
+        w.write(at, Direction::Received, &[0x8A, 0x06]).unwrap();
+        let record = RecordReader::new(&w.into_inner()[..])
+            .unwrap()
+            .next()
+            .unwrap()
+            .unwrap();
+        assert_eq!(record.time, at + Duration::from_micros(1));
     }
 
     #[test]
