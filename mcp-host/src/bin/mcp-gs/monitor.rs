@@ -144,7 +144,9 @@ pub(crate) async fn run(mut args: MonitorArgs) -> Result<(), Failure> {
             failure = recording::write_failed(&mut recorder) => break Err(failure),
             _ = look.tick() => {
                 let behind = lost.tell(&stream.stats(), recorder.is_some(), false);
-                pending.extend(behind.map(|frames| gap_line(Gap::Behind, frames, args.format)));
+                pending.extend(behind.map(|frames| {
+                    gap_line(Gap::Behind, frames, SystemTime::now(), args.format)
+                }));
                 unshown.tell(recorder.is_some());
                 let found = diagnoser.as_mut().and_then(|d| d.look(stream.stats()));
                 let line = match (&mut quiet, found) {
@@ -221,14 +223,22 @@ pub(crate) async fn run(mut args: MonitorArgs) -> Result<(), Failure> {
         }
         // A reader that takes nothing: the line is dropped and counted, a link event's
         // (a few a minute at most, which say what the lines around them mean) but kept.
-        // Where lines were dropped, a line says how many, before the next one kept.
-        if pending.len() >= PENDING_LINES && !matches!(event, Event::Link(_)) {
+        // Once lines are dropped, they are until half the lines waiting are taken (a
+        // reader a little slow would otherwise get a line, then a gap, in turn). Where
+        // lines were dropped, a line says how many, before the next one kept.
+        if pending.len() >= PENDING_LINES {
+            unshown.dropping = true;
+        } else if pending.len() < PENDING_LINES / 2 {
+            unshown.dropping = false;
+        }
+        if unshown.dropping && !matches!(event, Event::Link(_)) {
             unshown.count += 1;
             unshown.run += 1;
+            unshown.last = time;
         } else {
             let run = std::mem::take(&mut unshown.run);
             if run > 0 {
-                pending.push_back(gap_line(Gap::Output, run, args.format));
+                pending.push_back(gap_line(Gap::Output, run, unshown.last, args.format));
             }
             pending.push_back(line(&event, time, args.format, &mut dates));
         }
@@ -273,7 +283,7 @@ pub(crate) async fn run(mut args: MonitorArgs) -> Result<(), Failure> {
     pending.extend(quiet.as_mut().and_then(|shown| shown.tell_if_due(true)));
     let run = std::mem::take(&mut unshown.run);
     if run > 0 {
-        pending.push_back(gap_line(Gap::Output, run, args.format));
+        pending.push_back(gap_line(Gap::Output, run, unshown.last, args.format));
     }
     handed += pending.len() as u64;
     let written_so_far = output.written();
@@ -367,12 +377,14 @@ enum Gap {
     Behind,
 }
 
-/// The line that stands where `frames` received frames were not shown, for a reader of
-/// standard output (a program reading JSON, a pager) to see the gap where it is:
-/// `{"gap":"output","frames":N,"time":...}` (`"behind"` for frames the monitor fell
-/// behind the link on, which the recording misses too).
-fn gap_line(gap: Gap, frames: u64, format: Format) -> String {
-    let time = SystemTime::now();
+/// The line that says `frames` received frames were not shown, the last at `time`, for
+/// a reader of standard output (a program reading JSON, a pager) to see the gap:
+/// `{"gap":"output","frames":N,"time":...}` where their lines would have been (they
+/// were dropped for a reader that did not keep up), or `"behind"` for frames the
+/// monitor fell behind the link on (missing from the recording too), said when it sees
+/// they are lost, at most once a second, not where they would have been: lines of
+/// frames that came before them may follow it, and `time` is when it was seen.
+fn gap_line(gap: Gap, frames: u64, time: SystemTime, format: Format) -> String {
     match format {
         Format::Json => serde_json::json!({
             "gap": match gap {
@@ -409,7 +421,7 @@ const PENDING_LINES: usize = 1024;
 
 /// Frames whose lines were dropped because standard output was not read as fast as
 /// they came: said as it happens, at most once a look, and at the end.
-#[derive(Debug, Default)]
+#[derive(Debug)]
 struct Unshown {
     count: u64,
     /// The count last said.
@@ -417,6 +429,23 @@ struct Unshown {
     /// Frames not shown since the last line kept: the next line kept is preceded by a
     /// [`gap_line`] of them.
     run: u64,
+    /// When the last frame not shown came.
+    last: SystemTime,
+    /// Whether lines are being dropped: from when [`PENDING_LINES`] wait until half as
+    /// many do.
+    dropping: bool,
+}
+
+impl Default for Unshown {
+    fn default() -> Self {
+        Unshown {
+            count: 0,
+            told: 0,
+            run: 0,
+            last: SystemTime::UNIX_EPOCH,
+            dropping: false,
+        }
+    }
 }
 
 impl Unshown {
