@@ -1,6 +1,8 @@
-//! The hub's own stalls: times it could read nothing (the process stopped, `SIGSTOP` or a
-//! debugger; a machine suspended; a runtime starved), during which clients' requests
-//! may have come and waited unread. A request's [`REQUEST_WAIT`](super::REQUEST_WAIT)
+//! The hub's own stalls: times it could read nothing (the process stopped, by `SIGSTOP`,
+//! Ctrl-Z or a debugger; its runtime starved), during which clients' requests may have
+//! come and waited unread. They are seen on the monotonic clock, which a system clock
+//! set (a time server's step) does not move; a machine suspended stops it too (on
+//! Linux), and the clients on that machine with it. A request's [`REQUEST_WAIT`](super::REQUEST_WAIT)
 //! counts from when the hub could first have read it; after a stall that is any time
 //! since the stall began, as far as the hub can tell, so a request read just after one
 //! counts from its beginning. Without this, the commands of clients that gave up
@@ -8,7 +10,7 @@
 //! went on, after newer commands of other clients.
 
 use std::sync::Mutex;
-use std::time::{Duration, SystemTime};
+use std::time::Duration;
 
 use tokio::time::Instant;
 
@@ -31,9 +33,8 @@ pub(super) struct Stalls {
 
 #[derive(Debug)]
 struct State {
-    /// The last beat, on the monotonic clock and on the system's (a suspended machine's
-    /// monotonic clock may stand still: the system's does not).
-    beat: (Instant, SystemTime),
+    /// The last beat.
+    beat: Instant,
     /// The last stall: when it began, and when it was seen to end.
     last: Option<(Instant, Instant)>,
 }
@@ -42,7 +43,7 @@ impl Stalls {
     pub(super) fn new() -> Self {
         Stalls {
             state: Mutex::new(State {
-                beat: (Instant::now(), SystemTime::now()),
+                beat: Instant::now(),
                 last: None,
             }),
         }
@@ -53,28 +54,24 @@ impl Stalls {
     /// else `None`. Called by the hub's beat, every [`BEAT`], and for each request read,
     /// as the task reading it may run before the beat after a stall.
     pub(super) fn beat(&self) -> Option<Instant> {
-        let now = (Instant::now(), SystemTime::now());
+        let now = Instant::now();
         let mut state = self
             .state
             .lock()
             .unwrap_or_else(std::sync::PoisonError::into_inner);
-        let (then, then_system) = state.beat;
-        let gap = now
-            .0
-            .saturating_duration_since(then)
-            .max(now.1.duration_since(then_system).unwrap_or_default());
+        let then = state.beat;
+        let gap = now.saturating_duration_since(then);
         if gap > STALL {
-            let began = now.0.checked_sub(gap).unwrap_or(then).min(then);
             tracing::warn!(
                 "hub: it could read nothing for {}: requests read as it goes on count from \
                  the start of that, and those that waited too long are refused",
                 crate::render::Seconds(gap)
             );
-            state.last = Some((began, now.0));
+            state.last = Some((then, now));
         }
         state.beat = now;
         let (began, seen) = state.last?;
-        (now.0.saturating_duration_since(seen) <= AFTER_STALL).then_some(began)
+        (now.saturating_duration_since(seen) <= AFTER_STALL).then_some(began)
     }
 }
 
