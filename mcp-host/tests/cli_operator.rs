@@ -1091,6 +1091,16 @@ fn a_damaged_or_cut_off_recording_plays_nothing() {
         "{said}"
     );
     assert!(!said.contains("connect"), "{said}");
+    // The command offered works in a shell, whatever the file's name.
+    let spaced = dir.path().join("flight 2.mcprec");
+    std::fs::write(&spaced, &damaged).unwrap();
+    let spaced = spaced.to_str().unwrap();
+    let output = run(&["replay", spaced, "--link", "tcp:127.0.0.1:9"]);
+    assert!(
+        stderr(&output).contains(&format!("`head -c {third} '{spaced}'` keeps them")),
+        "{}",
+        stderr(&output)
+    );
     // Cut off in its last record: nothing played either (a damaged length reads as cut
     // off, with whole records after it).
     let cut = dir.path().join("cut.mcprec");

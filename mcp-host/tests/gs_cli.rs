@@ -1760,45 +1760,53 @@ fn a_recording_that_cannot_be_written_is_named() {
 fn a_recording_that_fills_its_disk_ends_at_its_last_whole_record() {
     use std::os::unix::process::CommandExt;
     let modem_status = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F];
-    let (link, peer) = common::talking_peer(modem_status.repeat(300));
-    let dir = tempfile::tempdir().unwrap();
-    let record = dir.path().join("full.mcprec");
-    // Room for the header and 58.6 records of 17 bytes.
-    let limit: u64 = 1000;
-    let mut monitor = gs();
-    monitor
-        .args(["monitor", "--link", &link, "--record"])
-        .arg(&record);
-    // SAFETY: between fork and exec, setrlimit(2) and signal(2) only, which are
-    // async-signal-safe; a write past the limit then fails with EFBIG, not SIGXFSZ.
-    unsafe {
-        monitor.pre_exec(move || {
-            let size = libc::rlimit {
-                rlim_cur: limit,
-                rlim_max: limit,
-            };
-            if libc::setrlimit(libc::RLIMIT_FSIZE, &size) != 0 {
-                return Err(std::io::Error::last_os_error());
-            }
-            libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
-            Ok(())
-        });
+    // Room for the header and 58.6 records of 17 bytes; for 5 bytes of the header.
+    for (limit, whole) in [(1000u64, 58usize), (5, 0)] {
+        let (link, peer) = common::talking_peer(modem_status.repeat(300));
+        let dir = tempfile::tempdir().unwrap();
+        let record = dir.path().join("full.mcprec");
+        let mut monitor = gs();
+        monitor
+            .args(["monitor", "--link", &link, "--record"])
+            .arg(&record);
+        // SAFETY: between fork and exec, setrlimit(2) and signal(2) only, which are
+        // async-signal-safe; a write past the limit then fails with EFBIG, not SIGXFSZ.
+        unsafe {
+            monitor.pre_exec(move || {
+                let size = libc::rlimit {
+                    rlim_cur: limit,
+                    rlim_max: limit,
+                };
+                if libc::setrlimit(libc::RLIMIT_FSIZE, &size) != 0 {
+                    return Err(std::io::Error::last_os_error());
+                }
+                libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+                Ok(())
+            });
+        }
+        let output = monitor.output().unwrap();
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(1), "{stderr}");
+        assert!(stderr.contains("cannot write to "), "{stderr}");
+        let bytes = std::fs::read(&record).unwrap();
+        if whole == 0 {
+            assert!(
+                bytes.is_empty(),
+                "a header cut off is cut back: {bytes:02x?}"
+            );
+        } else {
+            let records = mcp_host::record::RecordReader::new(&bytes[..])
+                .unwrap()
+                .collect::<Result<Vec<_>, _>>()
+                .unwrap_or_else(|e| panic!("{} bytes: {e}", bytes.len()));
+            assert_eq!(
+                bytes.len(),
+                8 + records.len() * mcp_host::record::record_len(2)
+            );
+            assert_eq!(records.len(), whole, "every whole record that fits is kept");
+        }
+        peer.join().unwrap();
     }
-    let output = monitor.output().unwrap();
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert_eq!(output.status.code(), Some(1), "{stderr}");
-    assert!(stderr.contains("cannot write to "), "{stderr}");
-    let bytes = std::fs::read(&record).unwrap();
-    let records = mcp_host::record::RecordReader::new(&bytes[..])
-        .unwrap()
-        .collect::<Result<Vec<_>, _>>()
-        .unwrap_or_else(|e| panic!("{} bytes: {e}", bytes.len()));
-    assert_eq!(
-        bytes.len(),
-        8 + records.len() * mcp_host::record::record_len(2)
-    );
-    assert_eq!(records.len(), 58, "every whole record that fits is kept");
-    peer.join().unwrap();
 }
 
 #[test]

@@ -338,7 +338,8 @@ fn write_all(
     flushed: &AtomicU64,
 ) -> io::Result<()> {
     let mut written = Written {
-        whole: mcp_host::record::HEADER_LEN as u64,
+        whole: 0,
+        header: mcp_host::record::HEADER_LEN as u64,
         unflushed: Vec::new(),
     };
     let result = write_records(&mut writer, queued, flushed, &mut written);
@@ -353,14 +354,18 @@ fn write_all(
             .filter(|m| m.is_file())
             .map(|m| m.len());
         if let Some(len) = len {
-            // The records of the failed write that reached the file whole are kept.
+            // The records of the failed write that reached the file whole are kept, after
+            // the header if that was whole (else nothing is: an empty file).
             let mut end = written.whole;
-            for &record in &written.unflushed {
-                if end + record > len {
-                    break;
+            if end + written.header <= len {
+                end += written.header;
+                for &record in &written.unflushed {
+                    if end + record > len {
+                        break;
+                    }
+                    end += record;
+                    flushed.fetch_add(1, Ordering::Release);
                 }
-                end += record;
-                flushed.fetch_add(1, Ordering::Release);
             }
             if len > end {
                 let _ = file.set_len(end);
@@ -371,9 +376,11 @@ fn write_all(
 }
 
 /// What the file holds: its length up to the last record flushed, and the lengths of
-/// the records written since (in the buffer, or part way to the file).
+/// what was written since (in the buffer, or part way to the file): the header until
+/// the first flush, and records.
 struct Written {
     whole: u64,
+    header: u64,
     unflushed: Vec<u64>,
 }
 
@@ -388,7 +395,7 @@ fn write_records(
         writer.flush()?;
         let records = std::mem::take(&mut written.unflushed);
         flushed.fetch_add(records.len() as u64, Ordering::Release);
-        written.whole += records.iter().sum::<u64>();
+        written.whole += std::mem::take(&mut written.header) + records.iter().sum::<u64>();
         io::Result::Ok(())
     };
     while let Some((time, direction, frame)) = queued.blocking_recv() {

@@ -42,7 +42,8 @@ and for the link to take each frame [default: 12]"
 pub(crate) struct ReplayArgs {
     /// A recording made by `monitor --record` or `hub --record` (or by a program with
     /// `mcp_host::record::RecordWriter`); `-` reads standard input. A file is read
-    /// through before anything is played: a damaged or cut-off one plays nothing. `mcp-gs decode
+    /// through before anything is played: a damaged or cut-off one plays nothing.
+    /// Standard input (or a FIFO) is read once, as it plays: it plays up to the damage. `mcp-gs decode
     /// FILE` shows what it holds.
     file: PathBuf,
     #[command(flatten)]
@@ -405,8 +406,10 @@ fn survey(args: &ReplayArgs) -> Result<Survey, Failure> {
             Err(e) => {
                 let keep = match e.offset() {
                     Some(offset) => format!(
-                        "; the {} before it are whole (`head -c {offset} {name}` keeps them)",
-                        crate::counted(whole, "record")
+                        "; the {} before it are whole (`head -c {offset} {}` keeps them)",
+                        crate::counted(whole, "record"),
+                        shlex::try_quote(&name.to_string())
+                            .unwrap_or_else(|_| name.to_string().into())
                     ),
                     None => String::new(),
                 };
