@@ -3,11 +3,10 @@
 use core::iter::FusedIterator;
 
 use crate::{
-    MAX_PAYLOAD,
     error::{BufferTooSmall, Error, ErrorKind, Expected, Full},
     field::{self, record},
     id::{Category, TelemetryId},
-    write::Writer,
+    write::{Writer, packet_room},
 };
 
 /// One telemetry record: an id and its value.
@@ -221,15 +220,8 @@ pub struct TelemetryBuilder<'a> {
 impl<'a> TelemetryBuilder<'a> {
     /// Starts a packet in `buf` (writes the `t`). Fails if `buf` is empty.
     pub fn new(buf: &'a mut [u8]) -> Result<Self, BufferTooSmall> {
-        let available = buf.len();
-        let first = buf.first_mut().ok_or(BufferTooSmall {
-            needed: 1,
-            available,
-        })?;
-        *first = Category::Telemetry.into();
-        let cap = available.min(MAX_PAYLOAD);
         Ok(TelemetryBuilder {
-            buf: buf.get_mut(..cap).unwrap_or_default(),
+            buf: packet_room(buf, Category::Telemetry)?,
             len: field::RECORDS,
         })
     }

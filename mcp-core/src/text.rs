@@ -3,10 +3,9 @@
 use core::fmt;
 
 use crate::{
-    MAX_PAYLOAD,
     error::{BufferTooSmall, Full},
     id::Category,
-    write::Writer,
+    write::{Writer, packet_room},
 };
 
 /// The text of a message or warning packet: the bytes after the category, 8-bit
@@ -104,7 +103,7 @@ impl<'a> Text<&'a [u8]> {
 
 /// Builds a message (`m`) or warning (`w`) packet in a caller buffer, from bytes or
 /// from formatted text (`write!`, as it implements [`fmt::Write`]), cut at the end of the
-/// buffer or at the 255-byte XBee payload limit ([`MAX_PAYLOAD`]). A firmware says
+/// buffer or at the 255-byte XBee payload limit ([`MAX_PAYLOAD`](crate::MAX_PAYLOAD)). A firmware says
 /// what it could not take without a buffer of its own for the text:
 ///
 /// ```
@@ -144,15 +143,8 @@ impl<'a> TextBuilder<'a> {
     }
 
     fn new(buf: &'a mut [u8], category: Category) -> Result<Self, BufferTooSmall> {
-        let available = buf.len();
-        let first = buf.first_mut().ok_or(BufferTooSmall {
-            needed: 1,
-            available,
-        })?;
-        *first = category.into();
-        let cap = available.min(MAX_PAYLOAD);
         Ok(TextBuilder {
-            buf: buf.get_mut(..cap).unwrap_or_default(),
+            buf: packet_room(buf, category)?,
             len: 1,
         })
     }

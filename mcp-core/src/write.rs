@@ -1,6 +1,23 @@
 //! A bounds-checked output cursor for the encoders.
 
+use crate::MAX_PAYLOAD;
 use crate::error::BufferTooSmall;
+use crate::id::Category;
+
+/// `buf` as the room of a packet of `category` built item by item: its category byte
+/// written, and cut at the 255-byte payload limit ([`MAX_PAYLOAD`]). Fails if `buf` is
+/// empty.
+pub(crate) fn packet_room(buf: &mut [u8], category: Category) -> Result<&mut [u8], BufferTooSmall> {
+    let available = buf.len();
+    let first = buf.first_mut().ok_or(BufferTooSmall {
+        needed: 1,
+        available,
+    })?;
+    *first = category.into();
+    Ok(buf
+        .get_mut(..available.min(MAX_PAYLOAD))
+        .unwrap_or_default())
+}
 
 /// Writes a packet of known length into a caller buffer.
 pub(crate) struct Writer<'a> {
