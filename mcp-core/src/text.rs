@@ -102,9 +102,10 @@ impl<'a> Text<&'a [u8]> {
 }
 
 /// Builds a message (`m`) or warning (`w`) packet in a caller buffer, from bytes or
-/// from formatted text (`write!`, as it implements [`fmt::Write`]), cut at the end of the
-/// buffer or at the 255-byte XBee payload limit ([`MAX_PAYLOAD`](crate::MAX_PAYLOAD)). A firmware says
-/// what it could not take without a buffer of its own for the text:
+/// from formatted text (`write!`, as it implements [`fmt::Write`]), cut at the end of
+/// the buffer or at the 255-byte XBee payload limit
+/// ([`MAX_PAYLOAD`](crate::MAX_PAYLOAD)). A firmware says what it could not take
+/// without a buffer of its own for the text:
 ///
 /// ```
 /// use core::fmt::Write as _;

@@ -148,7 +148,10 @@ proptest::proptest! {
     /// text that fits, and parses back as that text; `Full` exactly when a byte was cut.
     #[test]
     fn text_builder_keeps_the_prefix_that_fits(
-        pieces in proptest::collection::vec(proptest::collection::vec(proptest::num::u8::ANY, 0..40), 0..12),
+        pieces in proptest::collection::vec(
+            proptest::collection::vec(proptest::num::u8::ANY, 0..40),
+            0..12,
+        ),
         room in 1usize..300,
         warning in proptest::bool::ANY,
     ) {

@@ -64,7 +64,8 @@
 //!   that the hub had already read count as waiting since then; so does a request
 //!   read in the second after the hub itself could read nothing for over 2 s, its
 //!   process stopped (Ctrl-Z, `SIGSTOP`), from when that began, so that after a stop
-//!   longer than [`REQUEST_WAIT`] the requests of that second are refused) is not sent: it is refused, and answered at
+//!   longer than [`REQUEST_WAIT`] the requests of that second are refused) is not
+//!   sent: it is refused, and answered at
 //!   once as the radio answers a request it could not carry out (an AT command
 //!   `ERROR`, a transmission's delivery status 0x32, resource error, in its Transmit
 //!   Status or TX Status, a remote AT command's transmission failure; a Register

@@ -43,8 +43,8 @@ pub(crate) struct ReplayArgs {
     /// A recording made by `monitor --record` or `hub --record` (or by a program with
     /// `mcp_host::record::RecordWriter`); `-` reads standard input. A file is read
     /// through before anything is played: a damaged or cut-off one plays nothing.
-    /// Standard input (or a FIFO) is read once, as it plays: it plays up to the damage. `mcp-gs decode
-    /// FILE` shows what it holds.
+    /// Standard input (or a FIFO) is read once, as it plays: it plays up to the
+    /// damage. `mcp-gs decode FILE` shows what it holds.
     file: PathBuf,
     #[command(flatten)]
     link: LinkArgs,
