@@ -211,12 +211,9 @@ impl<W: Write> RecordWriter<W> {
             Direction::Sent => 1,
         };
         head[9..].copy_from_slice(&len.to_le_bytes());
-        let mut crc = crc32fast::Hasher::new();
-        crc.update(&head);
-        crc.update(frame);
         self.out.write_all(&head)?;
         self.out.write_all(frame)?;
-        self.out.write_all(&crc.finalize().to_le_bytes())
+        self.out.write_all(&record_crc(&head, frame).to_le_bytes())
     }
 
     /// Flushes the underlying writer.
@@ -492,10 +489,7 @@ impl<R: Read> RecordReader<R> {
         if crc_len > 0 {
             let stored = frame.split_off(len);
             let found = u32::from_le_bytes(stored.try_into().expect("4 bytes"));
-            let mut hasher = crc32fast::Hasher::new();
-            hasher.update(&head);
-            hasher.update(&frame);
-            let computed = hasher.finalize();
+            let computed = record_crc(&head, &frame);
             if computed != found {
                 return Err(RecordError::Crc {
                     offset,
@@ -522,6 +516,14 @@ impl<R: Read> Iterator for RecordReader<R> {
     fn next(&mut self) -> Option<Self::Item> {
         self.next_record().transpose()
     }
+}
+
+/// The CRC a record of version 2 ends with: of its head and its frame data.
+fn record_crc(head: &[u8; RECORD_HEAD_LEN], frame: &[u8]) -> u32 {
+    let mut crc = crc32fast::Hasher::new();
+    crc.update(head);
+    crc.update(frame);
+    crc.finalize()
 }
 
 /// Whether this module reads recordings of format `version`.
