@@ -239,11 +239,9 @@ fn gather_statuses(mut stream: mcp_host::PacketStream) -> tokio::sync::watch::Re
             if status.delivery.is_success() {
                 got.delivered += 1;
             } else {
-                let name = status.delivery.name().map_or_else(
-                    || format!("0x{:02x}", u8::from(status.delivery)),
-                    str::to_owned,
-                );
-                *got.failed.entry(name).or_default() += 1;
+                // Its name, as xbee-api says a status (`unknown(0xNN)` for a code it
+                // does not name).
+                *got.failed.entry(status.delivery.to_string()).or_default() += 1;
             }
             tell.send_replace(got.clone());
         }
