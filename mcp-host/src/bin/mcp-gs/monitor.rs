@@ -236,10 +236,7 @@ pub(crate) async fn run(mut args: MonitorArgs) -> Result<(), Failure> {
             unshown.run += 1;
             unshown.last = time;
         } else {
-            let run = std::mem::take(&mut unshown.run);
-            if run > 0 {
-                pending.push_back(gap_line(Gap::Output, run, unshown.last, args.format));
-            }
+            pending.extend(unshown.gap(args.format));
             pending.push_back(line(&event, time, args.format, &mut dates));
         }
         // Text output counts failures again without the hint once it was given; JSON
@@ -281,10 +278,7 @@ pub(crate) async fn run(mut args: MonitorArgs) -> Result<(), Failure> {
     }
     // What was not shown is counted, however the monitor ends.
     pending.extend(quiet.as_mut().and_then(|shown| shown.tell_if_due(true)));
-    let run = std::mem::take(&mut unshown.run);
-    if run > 0 {
-        pending.push_back(gap_line(Gap::Output, run, unshown.last, args.format));
-    }
+    pending.extend(unshown.gap(args.format));
     handed += pending.len() as u64;
     let written_so_far = output.written();
     let finished = output.finish(pending);
@@ -449,6 +443,13 @@ impl Default for Unshown {
 }
 
 impl Unshown {
+    /// The [`gap_line`] of the frames not shown since the last line kept, if any: it
+    /// goes before the next.
+    fn gap(&mut self, format: Format) -> Option<String> {
+        let run = std::mem::take(&mut self.run);
+        (run > 0).then(|| gap_line(Gap::Output, run, self.last, format))
+    }
+
     /// Says the frames not shown since it last said any.
     fn tell(&mut self, recording: bool) {
         if self.count > self.told {
