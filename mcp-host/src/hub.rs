@@ -454,7 +454,8 @@ impl Hub {
         };
         hub.tasks.spawn(writer.run(hub.stop.clone()));
         let stalls = Arc::new(Stalls::new());
-        hub.tasks.spawn(beat(stalls.clone(), hub.stop.clone()));
+        hub.tasks
+            .spawn(stall::beat(stalls.clone(), hub.stop.clone()));
         let serve = Serve {
             stalls,
             to_radio,
@@ -747,21 +748,6 @@ fn is_whole_request(data: &[u8]) -> bool {
         Some(0x24) => data.len() >= 13,
         // The others `xbee-api` types (0x08, 0x09, 0x10, 0x11, 0x17).
         _ => xbee_api::Frame::parse_bytes(data).is_ok(),
-    }
-}
-
-/// Notes every [`stall::BEAT`] that the hub runs, so that its stalls are seen (see
-/// [`Stalls`]), until the hub stops.
-async fn beat(stalls: Arc<Stalls>, stop: CancellationToken) {
-    let mut beat = tokio::time::interval(stall::BEAT);
-    beat.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
-    loop {
-        tokio::select! {
-            () = stop.cancelled() => return,
-            _ = beat.tick() => {
-                stalls.beat();
-            }
-        }
     }
 }
 

@@ -9,13 +9,14 @@
 //! during a stall (their `send` timed out and exited) reached the MAVs once the hub
 //! went on, after newer commands of other clients.
 
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use tokio::time::Instant;
+use tokio_util::sync::CancellationToken;
 
 /// How often the hub notes that it runs.
-pub(super) const BEAT: Duration = Duration::from_millis(250);
+const BEAT: Duration = Duration::from_millis(250);
 
 /// A time without a beat that is a stall: far longer than [`BEAT`], so that a busy
 /// runtime's late beat is not one.
@@ -72,6 +73,21 @@ impl Stalls {
         state.beat = now;
         let (began, seen) = state.last?;
         (now.saturating_duration_since(seen) <= AFTER_STALL).then_some(began)
+    }
+}
+
+/// Notes every [`BEAT`] that the hub runs, so that its stalls are seen (see
+/// [`Stalls`]), until the hub stops.
+pub(super) async fn beat(stalls: Arc<Stalls>, stop: CancellationToken) {
+    let mut beat = tokio::time::interval(BEAT);
+    beat.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+    loop {
+        tokio::select! {
+            () = stop.cancelled() => return,
+            _ = beat.tick() => {
+                stalls.beat();
+            }
+        }
     }
 }
 
