@@ -1291,6 +1291,11 @@ fn replay_of_a_hostile_recording_is_an_input_error_at_a_slow_speed() {
         assert!(!stderr.contains("panicked"), "{stderr}");
         assert_eq!(output.status.code(), Some(2), "{speed}: {stderr}");
         assert!(stderr.contains("too far ahead"), "{stderr}");
+        // The speed as given, not 1e-300 in 302 digits.
+        assert!(
+            stderr.contains(&format!("at --speed {speed} (")),
+            "{stderr}"
+        );
         assert!(stderr.contains("replayed 1 frame before it"), "{stderr}");
         // The first frame went out.
         assert_eq!(reader.join().unwrap(), [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F]);

@@ -89,6 +89,17 @@ fn parse_speed(s: &str) -> Result<f64, String> {
         })
 }
 
+/// A `--speed` as an error message says it: in full up to 12 characters, beyond in
+/// scientific notation (`1e-300`, which in full is 302 characters).
+fn speed_text(speed: f64) -> String {
+    let full = speed.to_string();
+    if full.len() <= 12 {
+        full
+    } else {
+        format!("{speed:e}")
+    }
+}
+
 /// Runs `replay`.
 pub(crate) async fn run(args: ReplayArgs) -> Result<(), Failure> {
     let stdin = args.file.as_os_str() == "-";
@@ -552,7 +563,7 @@ async fn play(
                      frame at once, --max-gap shortens the waits)",
                     args.file.display(),
                     gap.as_secs(),
-                    args.speed,
+                    speed_text(args.speed),
                     crate::counted(played.frames, "frame")
                 ))
             })?;
