@@ -6,6 +6,7 @@ use std::collections::VecDeque;
 use std::fmt;
 use std::ops::Range;
 use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, SystemTime};
 
 use bytes::{Buf, Bytes, BytesMut};
@@ -373,8 +374,8 @@ pub(crate) struct Driver {
     /// The [`Subscription`](crate::Subscription)s: every event goes there too.
     subscribers: EndSubscriptions,
     pub(crate) counters: Arc<Counters>,
-    /// Notified by [`CommandSender::close`](crate::CommandSender::close).
-    close_requested: Arc<Notify>,
+    /// Asked by [`CommandSender::close`](crate::CommandSender::close).
+    close_requested: Arc<CloseRequest>,
     /// The link's state, for the handles to read at any time.
     state: watch::Sender<LinkState>,
     ops_open: bool,
@@ -402,6 +403,33 @@ pub(crate) struct Driver {
 /// for this many connects and disconnects loses the oldest ones.
 const PENDING_LINKS_MAX: usize = 64;
 
+/// [`CommandSender::close`](crate::CommandSender::close)'s request, shared by the
+/// link's handles and its task: the handles refuse what comes after it at once (it may
+/// come before the task has seen the request), and the task is woken to close.
+#[derive(Debug, Default)]
+pub(crate) struct CloseRequest {
+    asked: AtomicBool,
+    notify: Notify,
+}
+
+impl CloseRequest {
+    /// Asks the link to close.
+    pub(crate) fn ask(&self) {
+        self.asked.store(true, Ordering::Release);
+        self.notify.notify_one();
+    }
+
+    /// Whether the link was asked to close.
+    pub(crate) fn asked(&self) -> bool {
+        self.asked.load(Ordering::Acquire)
+    }
+
+    /// Resolves once the link was asked to close (at once if it was before).
+    fn notified(&self) -> tokio::sync::futures::Notified<'_> {
+        self.notify.notified()
+    }
+}
+
 /// How long closing a link may take to write out the frames already queued.
 const CLOSE_FLUSH: Duration = Duration::from_secs(1);
 
@@ -413,7 +441,7 @@ impl Driver {
         (ops, writes, alive): (mpsc::Receiver<Op>, mpsc::Receiver<Op>, mpsc::Receiver<()>),
         (events, subscribers): (mpsc::Sender<Event>, Arc<Subscribers>),
         counters: Arc<Counters>,
-        close_requested: Arc<Notify>,
+        close_requested: Arc<CloseRequest>,
         state: watch::Sender<LinkState>,
     ) -> Self {
         let api_mode = options.api_mode;

@@ -416,7 +416,7 @@ async fn serve<T>(
     let (alive_tx, alive_rx) = mpsc::channel(1);
     let (events_tx, events_rx) = mpsc::channel(options.event_capacity);
     let subscribers = Arc::new(subscription::Subscribers::new(options.event_capacity));
-    let close_requested = Arc::new(tokio::sync::Notify::new());
+    let close_requested = Arc::new(driver::CloseRequest::default());
     // Connected already when the transport is open: `link_state` right after `connect`
     // says so.
     let (state_tx, state) = tokio::sync::watch::channel(if transport.is_some() {

@@ -4,7 +4,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use bytes::Bytes;
-use tokio::sync::{Notify, mpsc, oneshot, watch};
+use tokio::sync::{mpsc, oneshot, watch};
 use tokio::time::Instant;
 use xbee_api::{Address16, Address64, DiscoveryStatus};
 
@@ -129,7 +129,7 @@ pub struct CommandSender {
     pub(crate) default_timeout: Duration,
     pub(crate) counters: Arc<Counters>,
     pub(crate) info: Arc<LinkInfo>,
-    pub(crate) close_requested: Arc<Notify>,
+    pub(crate) close_requested: Arc<crate::driver::CloseRequest>,
     pub(crate) state: watch::Receiver<LinkState>,
     /// Where [`subscribe`](Self::subscribe) takes its subscriptions.
     pub(crate) subscribers: Arc<crate::subscription::Subscribers>,
@@ -573,6 +573,10 @@ impl CommandSender {
     /// ([`SendError::NotSent`]), and counted with the timeouts, as one the link's task
     /// finds expired is.
     async fn enqueue(&self, op: Op, deadline: Instant, timeout: Duration) -> Result<(), SendError> {
+        // Refused at once after `close`, before the link's task may have seen it.
+        if self.close_requested.asked() {
+            return Err(SendError::Closed);
+        }
         match tokio::time::timeout_at(deadline, self.queue(&op).send(op)).await {
             Ok(Ok(())) => Ok(()),
             Ok(Err(_)) => Err(SendError::Closed),
@@ -587,7 +591,12 @@ impl CommandSender {
     /// sent without a transmit status (frame id 0), in order: for feeding a stream of
     /// packets to the radio (see [`PacketSink`](crate::PacketSink)).
     pub fn packet_sink<B: AsRef<[u8]>>(&self) -> crate::PacketSink<B> {
-        crate::PacketSink::new(self.writes.clone(), self.alive.clone(), self.state.clone())
+        crate::PacketSink::new(
+            self.writes.clone(),
+            self.alive.clone(),
+            self.state.clone(),
+            self.close_requested.clone(),
+        )
     }
 
     /// The link's counters.
@@ -626,7 +635,9 @@ impl CommandSender {
     /// Requests in flight fail as in any disconnection, with
     /// [`SendError::Disconnected`](crate::SendError::Disconnected) (reason `closed by the
     /// application`): they may have gone out. Later ones fail with
-    /// [`SendError::Closed`](crate::SendError::Closed).
+    /// [`SendError::Closed`](crate::SendError::Closed) at once, also before the link's
+    /// task has seen the request, and so do a [`PacketSink`](crate::PacketSink)'s
+    /// packets.
     ///
     /// The transport is closed before that event, so once the stream has yielded it (or
     /// ended) the same device can be opened again at once: a serial port is opened for
@@ -648,7 +659,7 @@ impl CommandSender {
     /// # }
     /// ```
     pub fn close(&self) {
-        self.close_requested.notify_one();
+        self.close_requested.ask();
     }
 
     /// Where the link is now.

@@ -5,6 +5,7 @@ use std::fmt;
 use std::future::Future;
 use std::marker::PhantomData;
 use std::pin::Pin;
+use std::sync::Arc;
 use std::task::{Context, Poll};
 
 use bytes::Bytes;
@@ -13,7 +14,7 @@ use tokio::sync::{mpsc, oneshot, watch};
 use tokio_util::sync::PollSender;
 use xbee_api::{Address64, EncodeFrame, TransmitRequestRepr};
 
-use crate::driver::Op;
+use crate::driver::{CloseRequest, Op};
 use crate::{LinkState, SendError};
 
 /// A [`Sink`] of MCP packets, each item `(to, packet)` sent to the MAV `to` (or
@@ -36,7 +37,8 @@ use crate::{LinkState, SendError};
 /// transport failed, before the link saw it, are lost with it, as a radio loses a frame
 /// it sent without a status. A packet handed over before
 /// [`CommandSender::close`](crate::CommandSender::close) is written out before the link
-/// ends (within a second).
+/// ends (within a second); one handed over after it is refused with
+/// [`SendError::Closed`], as the sender's requests are.
 ///
 /// Errors: [`SendError::TooLarge`] for a packet over the 255-byte payload (from
 /// `start_send`: driving the sink by hand, the next packet goes; `send_all` and
@@ -84,7 +86,10 @@ pub struct PacketSink<B = Bytes> {
     /// The link's state as last seen.
     state: LinkState,
     /// The link's state changes, each as it comes.
-    changes: Pin<Box<dyn Stream<Item = LinkState> + Send>>,
+    changes: Pin<Box<dyn Stream<Item = LinkState> + Send + Sync>>,
+    /// [`CommandSender::close`](crate::CommandSender::close)'s request: packets after
+    /// it are refused, as the sender's requests are.
+    close: Arc<CloseRequest>,
     /// The packets' bytes: `Bytes`, `&[u8]`, `Vec<u8>`...
     packets: PhantomData<fn(B)>,
 }
@@ -94,6 +99,7 @@ impl<B> PacketSink<B> {
         writes: mpsc::Sender<Op>,
         alive: mpsc::Sender<()>,
         state: watch::Receiver<LinkState>,
+        close: Arc<CloseRequest>,
     ) -> Self {
         let now = *state.borrow();
         let changes = futures::stream::unfold(state, |mut state| async move {
@@ -108,6 +114,7 @@ impl<B> PacketSink<B> {
             last: None,
             state: now,
             changes: Box::pin(changes),
+            close,
             packets: PhantomData,
         }
     }
@@ -126,6 +133,9 @@ impl<B: AsRef<[u8]>> Sink<(Address64, mcp_core::Packet<B>)> for PacketSink<B> {
 
     fn poll_ready(self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<Result<(), SendError>> {
         let this = self.get_mut();
+        if this.close.asked() {
+            return Poll::Ready(Err(SendError::Closed));
+        }
         // The newest state, and a wake-up at the next change. A link that has closed
         // stays closed: its changes, ended, are not polled again.
         while this.state != LinkState::Closed {

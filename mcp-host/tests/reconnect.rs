@@ -296,6 +296,7 @@ fn handles_are_send_and_sync() {
     check::<mcp_host::CommandSender>();
     check::<mcp_host::PacketStream>();
     check::<mcp_host::Subscription>();
+    check::<mcp_host::PacketSink>();
     check::<mcp_host::Event>();
     check::<mcp_host::SendError>();
     check::<mcp_host::RequestError>();

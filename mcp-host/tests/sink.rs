@@ -88,6 +88,44 @@ async fn a_sink_of_a_link_that_has_ended_says_it_is_closed() {
 }
 
 #[tokio::test]
+async fn packets_after_close_are_refused_at_once_and_never_written() {
+    // Over TCP, whose end says that nothing more was written.
+    let (mut stream, sender, port) = listening().await;
+    let mut radio = tokio::net::TcpStream::connect(("127.0.0.1", port))
+        .await
+        .unwrap();
+    assert!(matches!(
+        common::next_link_event(&mut stream).await,
+        mcp_host::LinkEvent::Connected { .. }
+    ));
+    let mut sink = sender.packet_sink();
+    // Right after `close`, before the link's task may have seen it: refused as the
+    // sender's requests are, not written.
+    sender.close();
+    let sent = sink
+        .send((MAV, Packet::Command(Command::landing(true))))
+        .await;
+    assert!(matches!(sent, Err(SendError::Closed)), "{sent:?}");
+    let sent = sender
+        .send_with(
+            MAV,
+            &Command::landing(true),
+            mcp_host::SendOptions {
+                frame_id: mcp_host::FrameId::None,
+                ..mcp_host::SendOptions::default()
+            },
+        )
+        .await;
+    assert!(matches!(sent, Err(SendError::Closed)), "{sent:?}");
+    sender.closed().await;
+    let mut written = Vec::new();
+    tokio::io::AsyncReadExt::read_to_end(&mut radio, &mut written)
+        .await
+        .unwrap();
+    assert_eq!(written, [0u8; 0], "written after close");
+}
+
+#[tokio::test]
 async fn closing_a_sink_leaves_the_link_to_its_other_senders() {
     let (_stream, sender, mut radio) = pty_link(ApiMode::Unescaped).await;
     let mut sink = sender.packet_sink();
