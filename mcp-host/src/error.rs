@@ -183,13 +183,20 @@ pub enum SendError {
         max: usize,
     },
     /// A frame given to [`crate::CommandSender::send_frame`] is of no request type
-    /// known to carry a frame id (or has no byte for one).
+    /// known to carry a frame id.
     #[error(
         "frame type 0x{0:02X} is no request known to carry a frame id, so no response can \
          be matched (write it with write_frame)"
     )]
     NoFrameId(u8),
-    /// A frame given to [`crate::CommandSender::write_frame`] is empty (no frame type).
+    /// A frame given to [`crate::CommandSender::send_frame`] is of a type that carries a
+    /// frame id, in its second byte, and ends before it: its frame type alone.
+    #[error(
+        "frame type 0x{0:02X} carries a frame id in its second byte, and the frame data ends before it"
+    )]
+    NoFrameIdByte(u8),
+    /// A frame given to [`crate::CommandSender::send_frame`] or
+    /// [`write_frame`](crate::CommandSender::write_frame) is empty (no frame type).
     #[error("empty frame data (no frame type byte)")]
     EmptyFrame,
 }
@@ -412,6 +419,7 @@ mod tests {
             },
             SendError::TooLarge { len: 300, max: 255 },
             SendError::EmptyFrame,
+            SendError::NoFrameIdByte(0x08),
         ];
         assert!(timed_out.iter().all(SendError::is_timeout));
         assert!(!others.iter().any(SendError::is_timeout));

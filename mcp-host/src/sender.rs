@@ -330,15 +330,21 @@ impl CommandSender {
     /// known answer type; for another request type, the first frame under the id is.
     ///
     /// `frame_data` is the frame data, frame type first; its frame id byte (the second
-    /// byte) is replaced by the allocated id.
+    /// byte) is replaced by the allocated id. Refused before anything is sent: empty
+    /// ([`SendError::EmptyFrame`]), of a type not known to carry a frame id
+    /// ([`SendError::NoFrameId`]), or its frame type alone
+    /// ([`SendError::NoFrameIdByte`]).
     pub async fn send_frame(
         &self,
         frame_data: &[u8],
         timeout: Option<Duration>,
     ) -> Result<OwnedFrame, SendError> {
-        let frame_type = frame_data.first().copied().unwrap_or(0);
-        if frame_data.len() < 2 || !carries_frame_id(frame_type) {
+        let frame_type = *frame_data.first().ok_or(SendError::EmptyFrame)?;
+        if !carries_frame_id(frame_type) {
             return Err(SendError::NoFrameId(frame_type));
+        }
+        if frame_data.len() < 2 {
+            return Err(SendError::NoFrameIdByte(frame_type));
         }
         let timeout = timeout.unwrap_or(self.default_timeout);
         let deadline = crate::options::later(Instant::now(), timeout);

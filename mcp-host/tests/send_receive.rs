@@ -690,6 +690,18 @@ async fn at_and_remote_at_commands_get_their_responses() {
         sender.send_frame(&[0x8A, 0x00], None).await,
         Err(SendError::NoFrameId(0x8A))
     );
+    // Nor an empty frame, nor a frame type alone: each says what it lacks.
+    assert_eq!(
+        sender.send_frame(&[], None).await,
+        Err(SendError::EmptyFrame)
+    );
+    let alone = sender.send_frame(&[0x08], None).await;
+    assert_eq!(alone, Err(SendError::NoFrameIdByte(0x08)));
+    assert_eq!(
+        alone.unwrap_err().to_string(),
+        "frame type 0x08 carries a frame id in its second byte, and the frame data ends \
+         before it"
+    );
 }
 
 #[cfg(unix)]

@@ -1074,9 +1074,10 @@ pub(crate) fn send_failure(error: SendError) -> Failure {
         SendError::Delivery { .. } => Failure::DELIVERY,
         e if e.is_timeout() => Failure::TIMEOUT,
         SendError::Disconnected { .. } | SendError::Closed => Failure::LINK,
-        SendError::TooLarge { .. } | SendError::NoFrameId(_) | SendError::EmptyFrame => {
-            Failure::INPUT
-        }
+        SendError::TooLarge { .. }
+        | SendError::NoFrameId(_)
+        | SendError::NoFrameIdByte(_)
+        | SendError::EmptyFrame => Failure::INPUT,
         _ => Failure::OTHER,
     };
     match error {
