@@ -997,7 +997,7 @@ impl Driver {
                         self.malformed(frame, &error);
                         // The id answered, but its status is unreadable.
                         Err(SendError::Timeout {
-                            frame_id: id,
+                            frame_id: Some(id),
                             timeout: pending.timeout,
                             heard: true,
                         })
@@ -1170,11 +1170,8 @@ impl Driver {
                     }
                     Err(pending) => {
                         if let PendingKind::Transmit { reply, .. } = pending.kind {
-                            let _ = reply.send(Err(SendError::Timeout {
-                                frame_id: 0,
-                                timeout,
-                                heard: self.healthy,
-                            }));
+                            // Not sent: taken only while an id is free, so never here.
+                            let _ = reply.send(Err(SendError::NoFreeFrameId { timeout }));
                         }
                     }
                 }
@@ -1300,7 +1297,7 @@ impl Driver {
                     SendError::NotSent { timeout: p.timeout }
                 } else {
                     SendError::Timeout {
-                        frame_id: id,
+                        frame_id: Some(id),
                         timeout: p.timeout,
                         heard,
                     }
@@ -1406,11 +1403,8 @@ impl Driver {
                     }
                 }
             }
-            Err(pending) => pending.kind.fail(SendError::Timeout {
-                frame_id: 0,
-                timeout,
-                heard: self.healthy,
-            }),
+            // Not sent: taken only while an id is free, so never here.
+            Err(pending) => pending.kind.fail(SendError::NoFreeFrameId { timeout }),
         }
     }
 

@@ -109,19 +109,22 @@ pub enum SendError {
         /// Route discovery the radio did.
         discovery: DiscoveryStatus,
     },
-    /// No status or response came before the timeout. The request went out: the
-    /// radio may still carry it out. Its frame id is kept from new requests for a
-    /// while, so that a late answer is passed on as an unclaimed frame, never taken
-    /// for another request's.
+    /// No status or response came before the timeout. The request went out (under
+    /// `frame_id`): the radio may still carry it out. Its frame id is kept from new
+    /// requests for a while, so that a late answer is passed on as an unclaimed frame,
+    /// never taken for another request's.
     #[error(
-        "no answer to frame id {frame_id} within {secs}{}",
+        "no answer{} within {secs}{}",
+        frame_id.map(|id| format!(" to frame id {id}")).unwrap_or_default(),
         if *heard { "" } else { " (no valid frame has come from the radio since the link came up)" },
         secs = Seconds(*.timeout)
     )]
     #[non_exhaustive]
     Timeout {
-        /// The frame id used.
-        frame_id: u8,
+        /// The frame id the request went out under. `None` when the link's task itself
+        /// did not answer in time (a runtime held up past the timeout): whether the
+        /// request went out, and under which id, is not known then.
+        frame_id: Option<u8>,
         /// The timeout that expired.
         timeout: Duration,
         /// Whether a frame came from the radio on this connection before the timeout
@@ -238,9 +241,8 @@ impl SendError {
     /// [`Delivery`](Self::Delivery)); `None` otherwise.
     pub fn frame_id(&self) -> Option<u8> {
         match *self {
-            SendError::Timeout { frame_id, .. } | SendError::Delivery { frame_id, .. } => {
-                Some(frame_id)
-            }
+            SendError::Timeout { frame_id, .. } => frame_id,
+            SendError::Delivery { frame_id, .. } => Some(frame_id),
             _ => None,
         }
     }
@@ -396,12 +398,18 @@ mod tests {
         let timeout = Duration::from_secs(1);
         let timed_out = [
             SendError::Timeout {
-                frame_id: 7,
+                frame_id: Some(7),
                 timeout,
                 heard: true,
             },
             SendError::NoFreeFrameId { timeout },
             SendError::NotSent { timeout },
+            // The link's task ran late: under which id it went, if it went, is unknown.
+            SendError::Timeout {
+                frame_id: None,
+                timeout,
+                heard: true,
+            },
         ];
         let delivery = SendError::Delivery {
             to: Address64::COORDINATOR,
@@ -424,7 +432,9 @@ mod tests {
         assert!(timed_out.iter().all(SendError::is_timeout));
         assert!(!others.iter().any(SendError::is_timeout));
         let ids: Vec<_> = timed_out.iter().map(SendError::frame_id).collect();
-        assert_eq!(ids, [Some(7), None, None]);
+        assert_eq!(ids, [Some(7), None, None, None]);
+        assert_eq!(timed_out[0].to_string(), "no answer to frame id 7 within 1 s");
+        assert_eq!(timed_out[3].to_string(), "no answer within 1 s");
         assert_eq!(delivery.frame_id(), Some(9));
         assert_eq!(SendError::Closed.frame_id(), None);
     }

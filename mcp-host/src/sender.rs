@@ -797,11 +797,11 @@ impl CommandSender {
 
     /// A request the background task did not answer by its deadline and the grace
     /// after it (it ran late, or never took the request), counted as a timeout:
-    /// whether its frame went out is not known.
+    /// whether its frame went out, and under which id, is not known.
     fn unanswered(&self, timeout: Duration) -> SendError {
         crate::stats::bump(&self.counters.timeouts);
         SendError::Timeout {
-            frame_id: 0,
+            frame_id: None,
             timeout,
             heard: self.counters.snapshot().frames > 0,
         }

@@ -399,6 +399,7 @@ async fn frame_ids_are_reused_and_no_send_is_lost_when_statuses_never_come() {
                     // Other statuses came on this link.
                     assert!(heard);
                     assert_eq!(value % 5, 0, "answered send {value} timed out");
+                    let frame_id = frame_id.expect("sent under a frame id");
                     assert!(unanswered.contains(&frame_id), "{frame_id}");
                     timed_out += 1;
                 }
