@@ -433,7 +433,10 @@ mod tests {
         assert!(!others.iter().any(SendError::is_timeout));
         let ids: Vec<_> = timed_out.iter().map(SendError::frame_id).collect();
         assert_eq!(ids, [Some(7), None, None, None]);
-        assert_eq!(timed_out[0].to_string(), "no answer to frame id 7 within 1 s");
+        assert_eq!(
+            timed_out[0].to_string(),
+            "no answer to frame id 7 within 1 s"
+        );
         assert_eq!(timed_out[3].to_string(), "no answer within 1 s");
         assert_eq!(delivery.frame_id(), Some(9));
         assert_eq!(SendError::Closed.frame_id(), None);

@@ -367,7 +367,12 @@ impl Hub {
     /// [`local_addr`](Self::local_addr)). Clients speak the API mode of `options`.
     ///
     /// With the radio there, it is asked its `AP` first (up to twice
-    /// [`MODE_CHECK_TIMEOUT`]: see the module's docs). Without it (a `pty` or
+    /// [`MODE_CHECK_TIMEOUT`]: see the module's docs). The radio's frames meanwhile go
+    /// to no client, and wait in the link's event queue: beyond
+    /// [`event_capacity`](LinkOptions::event_capacity) of them, the rest are counted in
+    /// [`Stats::events_dropped`](crate::Stats::events_dropped) as lost behind
+    /// (`mcp-gs hub` holds 65 536, as many as a radio at 115200 baud can send in the
+    /// time). Without it (a `pty` or
     /// `tcp-listen:` link, or `wait_for_link`), clients are refused from the moment this
     /// returns, the port held on Linux, until the radio is there.
     pub async fn start(link: &Link, options: LinkOptions, listen: &str) -> Result<Hub, HubError> {

@@ -409,6 +409,26 @@ fn a_hub_whose_tcp_peer_says_nothing_names_a_peer_busy_with_another_connection()
 
 #[cfg(unix)]
 #[test]
+fn frames_that_come_while_the_hub_asks_its_radio_for_its_mode_are_not_lost_behind() {
+    // A radio that sends a burst of 3000 frames at once and never answers AT AP: the
+    // hub asks it for its mode (and waits) before it reads the link's events.
+    let modem_status = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F];
+    let (link, _radio) = common::talking_peer(modem_status.repeat(3000));
+    let (mut hub, out, err) = start_hub(&link);
+    line_with(&err, "hub: the radio did not answer AT AP");
+    serving(&out);
+    // Those the link lost, had it no room for them, it counted as they came, before
+    // the hub served: said when it stops.
+    let stopped = stop_hub(&mut hub, &out);
+    let rest: Vec<String> = out.iter().collect();
+    assert!(
+        !rest.iter().any(|line| line.contains("fell behind")),
+        "{stopped}\n{rest:?}"
+    );
+}
+
+#[cfg(unix)]
+#[test]
 fn a_hub_records_what_its_radio_heard_and_said_for_every_client() {
     let (_sim, radio, _sim_out) = sim_on_tcp("1");
     let dir = tempfile::tempdir().unwrap();

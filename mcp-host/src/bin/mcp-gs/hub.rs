@@ -74,7 +74,10 @@ fn listen_failure(addr: &str, error: &std::io::Error) -> Failure {
 }
 
 /// Runs `hub` until Ctrl-C, or until the link to the radio ends.
-pub(crate) async fn run(args: HubArgs) -> Result<(), Failure> {
+pub(crate) async fn run(mut args: HubArgs) -> Result<(), Failure> {
+    // A burst from the radio (as it comes while the hub asks the radio for its mode,
+    // before it reads the link's events) is held rather than lost.
+    args.link.event_capacity = Some(crate::link_args::EVENTS_HELD);
     args.link.check_wait(args.wait)?;
     // Refused before the radio's link is opened; made once a frame is there to record.
     let record = args

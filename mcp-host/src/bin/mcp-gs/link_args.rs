@@ -59,6 +59,13 @@ pub(crate) struct LinkArgs {
     pub(crate) event_capacity: Option<usize>,
 }
 
+/// The link's events held for `monitor` and `hub` while they fall behind (beyond, lost
+/// and counted): the frames a TCP connection's buffers hold, as they come at once when
+/// monitor goes on after it was stopped (Ctrl-Z, `SIGSTOP`) or starved a while, and
+/// what a radio at 115200 baud can send while the hub asks it for its API mode before
+/// it serves (its frames until then go to no client, and are not lost behind).
+pub(crate) const EVENTS_HELD: usize = 1 << 16;
+
 /// `--link` of the subcommands that do one thing and end (`send`, `status`, `at`,
 /// `nodes`): a radio that is there, so not `pty`, which makes a new pseudo-terminal.
 pub(crate) const ONE_SHOT_LINK_HELP: &str = "The local radio, one that is there: \

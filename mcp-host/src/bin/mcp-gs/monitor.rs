@@ -64,7 +64,7 @@ fn parse_count(s: &str) -> Result<u64, String> {
 pub(crate) async fn run(mut args: MonitorArgs) -> Result<(), Failure> {
     // A burst (what waited in the socket while monitor was stopped or starved a while)
     // is held for it, for its recording, rather than dropped.
-    args.link.event_capacity = Some(EVENTS_HELD);
+    args.link.event_capacity = Some(crate::link_args::EVENTS_HELD);
     // A recording is never lost to a mistyped link: refuse to overwrite it before the
     // link is opened, and create the file only once the link is up.
     let record = args
@@ -402,11 +402,6 @@ fn gap_line(gap: Gap, frames: u64, time: SystemTime, format: Format) -> String {
         }
     }
 }
-
-/// The link's events held for monitor while it falls behind ([`Lost`] beyond): the
-/// frames a TCP connection's buffers hold, as they come at once when monitor goes on
-/// after it was stopped (Ctrl-Z, `SIGSTOP`) or starved a while.
-const EVENTS_HELD: usize = 1 << 16;
 
 /// Lines waiting for standard output, beyond those its thread holds, past which a
 /// frame's line is dropped (and counted, [`Unshown`]): a reader that takes nothing
