@@ -922,7 +922,43 @@ struct Connected {
     /// Since when it has sent nothing more: its connection closed (or its sending side
     /// shut), or failed.
     closed: Arc<Mutex<Option<Instant>>>,
+    /// The radio's frames dropped for it, so far.
+    dropped: Arc<AtomicU64>,
+    /// When the frames dropped for it were last said, and how many there were then.
+    said_dropped: Option<(Instant, u64)>,
 }
+
+impl Connected {
+    /// A frame from the radio dropped for it, its queue full: counted, and said at once
+    /// for the first, then at most every [`DROPS_SAID_EVERY`] while frames are dropped,
+    /// so that a client's gaps show in the hub's lines as they happen (the client
+    /// itself cannot tell: its link hears an XBee radio, which says nothing of them).
+    fn dropped_one(&mut self, now: Instant) {
+        let dropped = self.dropped.fetch_add(1, Ordering::Relaxed) + 1;
+        let since = match self.said_dropped {
+            Some((when, _)) if now.duration_since(when) < DROPS_SAID_EVERY => return,
+            Some((when, then)) => Some((now.duration_since(when), dropped - then)),
+            None => None,
+        };
+        self.said_dropped = Some((now, dropped));
+        let peer = self.peer;
+        let lately = since.map_or(String::new(), |(time, count)| {
+            format!(
+                ", {count} in the last {}",
+                crate::render::Seconds(Duration::from_secs(time.as_secs()))
+            )
+        });
+        tracing::warn!(
+            "hub: client {peer} takes the radio's frames more slowly than they come: \
+             {dropped} dropped for it so far{lately} (those that come while {CLIENT_QUEUE} \
+             wait for it)"
+        );
+    }
+}
+
+/// How often, at most, the hub says that frames are dropped for a client: see
+/// [`Connected::dropped_one`].
+const DROPS_SAID_EVERY: Duration = Duration::from_secs(10);
 
 /// The hub's main task: frames from the radio to the clients, new clients accepted.
 struct Serve {
@@ -1121,12 +1157,15 @@ impl Serve {
         let end = self.stop.child_token();
         let behind = Arc::new(Mutex::new(None));
         let closed = Arc::new(Mutex::new(None));
+        let dropped = Arc::new(AtomicU64::new(0));
         self.clients.push(Connected {
             peer,
             queue: queue.clone(),
             end: end.clone(),
             behind: behind.clone(),
             closed: closed.clone(),
+            dropped: dropped.clone(),
+            said_dropped: None,
         });
         let number = self.next_client;
         self.next_client += 1;
@@ -1147,6 +1186,7 @@ impl Serve {
             end,
             behind,
             closed,
+            dropped,
         });
         let (rd, wr) = socket.into_split();
         let (frames_to_radio, queue) = mpsc::channel(CLIENT_FRAMES_TO_RADIO);
@@ -1236,11 +1276,13 @@ impl Serve {
         };
         let counters = &self.counters;
         self.clients
-            .retain(|client| match client.queue.try_send(bytes.clone()) {
+            .retain_mut(|client| match client.queue.try_send(bytes.clone()) {
                 Ok(()) => true,
                 Err(mpsc::error::TrySendError::Full(_)) => {
                     bump(&counters.frames_dropped);
-                    lock(&client.behind).get_or_insert_with(Instant::now);
+                    let now = Instant::now();
+                    lock(&client.behind).get_or_insert(now);
+                    client.dropped_one(now);
                     true
                 }
                 Err(mpsc::error::TrySendError::Closed(_)) => false,
@@ -1455,6 +1497,8 @@ struct Client {
     behind: Arc<Mutex<Option<Instant>>>,
     /// Since when it has sent nothing more (see [`Connected::closed`]).
     closed: Arc<Mutex<Option<Instant>>>,
+    /// The radio's frames dropped for it (see [`Connected::dropped`]).
+    dropped: Arc<AtomicU64>,
 }
 
 impl Drop for Client {
@@ -1650,7 +1694,14 @@ impl Client {
         if lock(&self.closed).is_none() {
             self.end.cancel();
         }
-        tracing::info!(peer = %self.peer, %reason, "hub: client gone");
+        match self.dropped.load(Ordering::Relaxed) {
+            0 => tracing::info!(peer = %self.peer, %reason, "hub: client gone"),
+            dropped => tracing::info!(
+                peer = %self.peer,
+                %reason,
+                "hub: client gone ({dropped} of the radio's frames dropped for it)"
+            ),
+        }
     }
 
     /// Refuses `request` (under the client's own id), which waited [`REQUEST_WAIT`] for

@@ -4,7 +4,7 @@
 
 mod common;
 
-use std::io::{BufRead, BufReader};
+use std::io::{BufRead, BufReader, Write};
 use std::process::{Command, Stdio};
 
 use common::Running;
@@ -425,6 +425,51 @@ fn frames_that_come_while_the_hub_asks_its_radio_for_its_mode_are_not_lost_behin
         !rest.iter().any(|line| line.contains("fell behind")),
         "{stopped}\n{rest:?}"
     );
+}
+
+#[cfg(unix)]
+#[test]
+fn frames_dropped_for_a_client_that_does_not_read_are_said_while_the_hub_runs() {
+    // A radio that sends a burst once told to: more frames than the client's queue at
+    // the hub and its connection's buffers hold.
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let link = format!("tcp:{}", listener.local_addr().unwrap());
+    let (go, burst) = mpsc::channel::<()>();
+    let _radio = std::thread::spawn(move || {
+        let (mut radio, _) = listener.accept().unwrap();
+        if burst.recv().is_ok() {
+            let modem_status = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F];
+            let _ = radio.write_all(&modem_status.repeat(200_000));
+        }
+        let _ = std::io::copy(&mut radio, &mut std::io::sink());
+    });
+    // With the hub's info lines, to know when it has the client.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args(["hub", "--link", &link, "--listen", "127.0.0.1:0"])
+        .env("MCP_LOG", "mcp_host::hub=info")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run mcp-gs");
+    let out = lines(child.stdout.take().unwrap());
+    let err = lines(child.stderr.take().unwrap());
+    let mut hub = Running(child);
+    let (_, addr) = serving(&out);
+    // A client that reads nothing.
+    let _client = std::net::TcpStream::connect(&addr).unwrap();
+    line_with(&err, "hub: client connected");
+    go.send(()).unwrap();
+    let dropped = line_with(&err, "more slowly than they come");
+    assert!(dropped.contains("WARN"), "{dropped}");
+    assert!(
+        dropped.ends_with(
+            "takes the radio's frames more slowly than they come: 1 dropped for it so far \
+             (those that come while 1024 wait for it)"
+        ),
+        "{dropped}"
+    );
+    let stopped = stop_hub(&mut hub, &out);
+    assert!(!stopped.contains(" 0 dropped for slow clients"), "{stopped}");
 }
 
 #[cfg(unix)]
