@@ -1219,15 +1219,12 @@ fn monitor_records_every_frame_while_its_output_is_not_read() {
             &format!("batch {n} while the output was not read"),
         );
     }
-    let said = loop {
-        let line = errors
-            .recv_timeout(common::GUARD)
-            .expect("monitor says what it did not show");
-        assert!(!line.contains(" lost: "), "{line}");
-        if line.contains(" not shown: ") {
-            break line;
-        }
-    };
+    // Lines are dropped once one has waited a while: for the frames that come then.
+    let (said, more) =
+        common::write_until_said(&mut socket, &modem_status, &errors, " not shown: ");
+    let frames = batch * batches + more;
+    let all = (mcp_host::record::HEADER_LEN + frames * mcp_host::record::record_len(2)) as u64;
+    recorded(&record, all, "the frames after the batches");
     assert!(
         said.starts_with("mcp-gs: warning: ")
             && said.contains(
@@ -1259,7 +1256,7 @@ fn monitor_records_every_frame_while_its_output_is_not_read() {
     let output = run(&["decode", "--summary", record.to_str().unwrap()]);
     let summary = String::from_utf8_lossy(&output.stdout);
     assert!(
-        summary.contains(&format!("frames: {}\n", batch * batches)),
+        summary.contains(&format!("frames: {frames}\n")),
         "{summary}"
     );
 }
@@ -1278,11 +1275,12 @@ fn monitor_marks_the_lines_it_dropped_for_a_paused_reader_in_its_output() {
         .args(["monitor", "--format", "json", "--link", &link, "--record"])
         .arg(&record)
         .stdout(Stdio::piped())
-        .stderr(Stdio::null())
+        .stderr(Stdio::piped())
         .spawn()
         .unwrap();
     let mut child = common::Running(monitor);
     let stdout = child.0.stdout.take().unwrap();
+    let errors = common::stderr_lines(&mut child.0);
     let (mut socket, _) = radio.accept().unwrap();
     let modem_status = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F];
     // Far more lines than the pipe, the output thread and monitor hold, none read; in
@@ -1293,6 +1291,8 @@ fn monitor_marks_the_lines_it_dropped_for_a_paused_reader_in_its_output() {
         let all = mcp_host::record::HEADER_LEN + n * batch * mcp_host::record::record_len(2);
         recorded(&record, all as u64, &format!("batch {n}"));
     }
+    // Lines are dropped once one has waited a while: for the frames that come then.
+    let (_, more) = common::write_until_said(&mut socket, &modem_status, &errors, " not shown: ");
     // The reader back: the lines held come, then those of frames after the gap (sent
     // until one is shown, as the first may come while the lines held fill monitor's
     // queue still).
@@ -1308,7 +1308,7 @@ fn monitor_marks_the_lines_it_dropped_for_a_paused_reader_in_its_output() {
     let is_realigned = |l: &Value| l["frame"] == "modem_status" && l["status"] == 0x0B;
     let deadline = std::time::Instant::now() + common::GUARD;
     let mut got: Vec<Value> = Vec::new();
-    let mut sent = batch * batches;
+    let mut sent = batch * batches + more;
     while !got.iter().any(is_realigned) {
         assert!(
             std::time::Instant::now() < deadline,
@@ -1353,7 +1353,7 @@ fn monitor_marks_the_lines_it_dropped_for_a_paused_reader_in_its_output() {
 
 /// Monitor stopped a while (Ctrl-Z, SIGSTOP) while frames come: once it goes on, the
 /// burst that waited in the connection is recorded whole, not dropped for monitor being
-/// behind. (Linux: the connection's buffers hold the burst while monitor is stopped.)
+/// behind, and shown whole to a reader that takes it as it comes. (Linux: the connection's buffers hold the burst while monitor is stopped.)
 #[cfg(target_os = "linux")]
 #[test]
 fn monitor_records_the_burst_that_waited_while_it_was_stopped() {
@@ -1401,11 +1401,25 @@ fn monitor_records_the_burst_that_waited_while_it_was_stopped() {
     assert_eq!(unsafe { libc::kill(pid, libc::SIGCONT) }, 0);
     let all = header + (burst as u64 + 1) * record_len;
     recorded(&record, all, "the burst");
+    // And shown whole, to a reader that takes it: a line per frame, none dropped.
+    let mut shown = 0;
+    while shown < burst + 1 {
+        let line = lines.recv_timeout(common::GUARD).expect("the burst shown");
+        assert!(!line.contains("\"gap\""), "{line}");
+        if line.contains("\"category\":\"telemetry\"") {
+            shown += 1;
+        }
+    }
     // SAFETY: as above.
     assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
     assert_eq!(common::exit_code(&mut child.0), Some(0));
     let said: Vec<String> = errors.try_iter().collect();
-    assert!(!said.iter().any(|l| l.contains(" lost: ")), "{said:?}");
+    assert!(
+        !said
+            .iter()
+            .any(|l| l.contains(" lost: ") || l.contains(" not shown: ")),
+        "{said:?}"
+    );
     drop(lines);
 }
 
@@ -1522,11 +1536,7 @@ fn monitor_ends_on_ctrl_c_while_its_output_is_not_read() {
     let modem_status = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F];
     socket.write_all(&modem_status.repeat(50_000)).unwrap();
     // Stuck on its output (said as frames not shown), it still takes Ctrl-C, and ends.
-    while !errors
-        .recv_timeout(common::GUARD)
-        .expect("monitor says what it did not show")
-        .contains(" not shown: ")
-    {}
+    common::write_until_said(&mut socket, &modem_status, &errors, " not shown: ");
     let pid = i32::try_from(monitor.id()).unwrap();
     // SAFETY: kill(2) with the pid of a child of this process and a valid signal.
     assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);

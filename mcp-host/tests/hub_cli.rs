@@ -469,7 +469,10 @@ fn frames_dropped_for_a_client_that_does_not_read_are_said_while_the_hub_runs() 
         "{dropped}"
     );
     let stopped = stop_hub(&mut hub, &out);
-    assert!(!stopped.contains(" 0 dropped for slow clients"), "{stopped}");
+    assert!(
+        !stopped.contains(" 0 dropped for slow clients"),
+        "{stopped}"
+    );
 }
 
 #[cfg(unix)]

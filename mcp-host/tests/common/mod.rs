@@ -550,3 +550,33 @@ pub fn fill_the_pipe(radio: &mut std::net::TcpStream, reader: &std::fs::File) {
         held = queued;
     }
 }
+
+/// Writes `frame` to `socket` (a radio's side of a monitor's link) every tenth of a
+/// second until a line of `errors` holds `text`: monitor drops the lines of frames that
+/// come once a line has waited for its output for a while, so a reader that takes
+/// nothing is said only as more frames come. The line, and how many frames were
+/// written.
+pub fn write_until_said(
+    socket: &mut std::net::TcpStream,
+    frame: &[u8],
+    errors: &std::sync::mpsc::Receiver<String>,
+    text: &str,
+) -> (String, usize) {
+    use std::io::Write;
+    let deadline = std::time::Instant::now() + GUARD;
+    let mut written = 0;
+    loop {
+        assert!(std::time::Instant::now() < deadline, "never said: {text}");
+        socket.write_all(frame).unwrap();
+        written += 1;
+        while let Ok(line) = errors.recv_timeout(Duration::from_millis(100)) {
+            assert!(
+                !line.contains(" lost: "),
+                "monitor fell behind its link: {line}"
+            );
+            if line.contains(text) {
+                return (line, written);
+            }
+        }
+    }
+}

@@ -93,14 +93,14 @@ pub(crate) async fn run(mut args: MonitorArgs) -> Result<(), Failure> {
     // Written by a thread of its own: a reader slower than the link (a pipe, a
     // terminal paused) holds up neither Ctrl-C nor the look at the counters, nor the
     // link's frames, which are taken (and recorded) as they come: the lines of those
-    // beyond PENDING_LINES waiting are dropped, and counted.
+    // that come while a line has waited OUTPUT_WAIT are dropped, and counted.
     let output = Output::stdout().map_err(|e| {
         Failure::new(
             Failure::OTHER,
             format!("cannot start writing standard output: {e}"),
         )
     })?;
-    let mut pending: VecDeque<String> = VecDeque::new();
+    let mut pending = Waiting::default();
     let mut interrupted = false;
     let mut output_failed = false;
     let mut seen = 0u64;
@@ -223,12 +223,15 @@ pub(crate) async fn run(mut args: MonitorArgs) -> Result<(), Failure> {
         }
         // A reader that takes nothing: the line is dropped and counted, a link event's
         // (a few a minute at most, which say what the lines around them mean) but kept.
-        // Once lines are dropped, they are until half the lines waiting are taken (a
-        // reader a little slow would otherwise get a line, then a gap, in turn). Where
-        // lines were dropped, a line says how many, before the next one kept.
-        if pending.len() >= PENDING_LINES {
+        // A burst a reader takes in time (what waited while monitor was stopped, written
+        // to a file) is shown whole. Once lines are dropped, they are until the lines
+        // waiting are taken to those of the last half wait (a reader a little slow would
+        // otherwise get a line, then a gap, in turn). Where lines were dropped, a line
+        // says how many, before the next one kept.
+        let waited = pending.oldest_waited(std::time::Instant::now());
+        if waited >= OUTPUT_WAIT || pending.len() >= PENDING_LINES {
             unshown.dropping = true;
-        } else if pending.len() < PENDING_LINES / 2 {
+        } else if waited < OUTPUT_WAIT / 2 {
             unshown.dropping = false;
         }
         if unshown.dropping && !matches!(event, Event::Link(_)) {
@@ -281,7 +284,7 @@ pub(crate) async fn run(mut args: MonitorArgs) -> Result<(), Failure> {
     pending.extend(unshown.gap(args.format));
     handed += pending.len() as u64;
     let written_so_far = output.written();
-    let finished = output.finish(pending);
+    let finished = output.finish(pending.into_lines());
     tokio::pin!(finished);
     // After Ctrl-C (before, or while the last lines are written), a reader that takes
     // nothing more does not keep the monitor: what it did not take in time is lost.
@@ -403,10 +406,58 @@ fn gap_line(gap: Gap, frames: u64, time: SystemTime, format: Format) -> String {
     }
 }
 
-/// Lines waiting for standard output, beyond those its thread holds, past which a
-/// frame's line is dropped (and counted, [`Unshown`]): a reader that takes nothing
-/// (a paused pager) holds up neither the link nor the recording.
-const PENDING_LINES: usize = 1024;
+/// How long a line may wait for standard output (beyond those its thread holds)
+/// before the lines of the frames that come are dropped (and counted, [`Unshown`]): a
+/// reader that takes nothing (a paused pager) holds up neither the link nor the
+/// recording, and one that does is not shown lines older than this.
+const OUTPUT_WAIT: std::time::Duration = std::time::Duration::from_secs(2);
+
+/// Lines waiting for standard output past which a frame's line is dropped however long
+/// they waited: the memory they take (some 20 MB of JSON lines), as many as the link's
+/// events held for monitor ([`EVENTS_HELD`](crate::link_args::EVENTS_HELD)).
+const PENDING_LINES: usize = crate::link_args::EVENTS_HELD;
+
+/// The lines waiting for standard output, beyond those its thread holds, each with
+/// when it came.
+#[derive(Debug, Default)]
+struct Waiting(VecDeque<(std::time::Instant, String)>);
+
+impl Waiting {
+    fn len(&self) -> usize {
+        self.0.len()
+    }
+
+    fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+
+    fn push_back(&mut self, line: String) {
+        self.0.push_back((std::time::Instant::now(), line));
+    }
+
+    fn extend(&mut self, lines: impl IntoIterator<Item = String>) {
+        for line in lines {
+            self.push_back(line);
+        }
+    }
+
+    fn pop_front(&mut self) -> Option<String> {
+        self.0.pop_front().map(|(_, line)| line)
+    }
+
+    /// How long the oldest line has waited, at `now`: zero if none waits.
+    fn oldest_waited(&self, now: std::time::Instant) -> std::time::Duration {
+        self.0
+            .front()
+            .map_or(std::time::Duration::ZERO, |(since, _)| {
+                now.saturating_duration_since(*since)
+            })
+    }
+
+    fn into_lines(self) -> impl Iterator<Item = String> {
+        self.0.into_iter().map(|(_, line)| line)
+    }
+}
 
 /// Frames whose lines were dropped because standard output was not read as fast as
 /// they came: said as it happens, at most once a look, and at the end.
@@ -420,8 +471,8 @@ struct Unshown {
     run: u64,
     /// When the last frame not shown came.
     last: SystemTime,
-    /// Whether lines are being dropped: from when [`PENDING_LINES`] wait until half as
-    /// many do.
+    /// Whether lines are being dropped: from when a line has waited [`OUTPUT_WAIT`] (or
+    /// [`PENDING_LINES`] wait) until the oldest waiting has waited less than half that.
     dropping: bool,
 }
 
