@@ -8,8 +8,10 @@
 //!
 //! - **From the radio:** every frame that is not the answer to a client's request
 //!   (received packets, modem status, unclaimed responses) goes to every client. A
-//!   client that falls behind by [`CLIENT_QUEUE`] frames loses the newest ones (counted
-//!   in [`HubStats::frames_dropped`]); the others are not held up.
+//!   client that falls behind by [`CLIENT_QUEUE`] frames, less the [`ANSWER_ROOM`] kept
+//!   for the answers to its own requests, loses the newest ones (counted in
+//!   [`HubStats::frames_dropped`], and said in a warning as it happens); the others are
+//!   not held up.
 //! - **From a client:** frames go to the radio in the order the client sent them. A
 //!   request with a frame id goes under an id the hub allocates, and its answers go
 //!   back to that client alone, under the client's own id, in their place among the
@@ -199,8 +201,15 @@ use crate::{
     CommandSender, ConnectError, Event, Link, LinkEvent, LinkInfo, LinkOptions, PacketStream, Stats,
 };
 
-/// Frames from the radio waiting for one client, at most; more are dropped for it.
+/// Frames from the radio waiting for one client, at most; more are dropped for it. The
+/// last [`ANSWER_ROOM`] places are kept for the answers to its requests.
 pub const CLIENT_QUEUE: usize = 1024;
+
+/// The places of a client's queue ([`CLIENT_QUEUE`]) that only the answers to its own
+/// requests take: a client that takes the radio's frames more slowly than they come
+/// (and loses some) still gets the answers the radio gave it, in their place among the
+/// frames it gets.
+pub const ANSWER_ROOM: usize = 64;
 
 /// Clients served at once, at most. A client that comes while as many are connected
 /// takes the place of one that closed its connection, or of the one that has taken none
@@ -950,8 +959,9 @@ impl Connected {
         });
         tracing::warn!(
             "hub: client {peer} takes the radio's frames more slowly than they come: \
-             {dropped} dropped for it so far{lately} (those that come while {CLIENT_QUEUE} \
-             wait for it)"
+             {dropped} dropped for it so far{lately} (those that come while {} \
+             wait for it)",
+            CLIENT_QUEUE - ANSWER_ROOM
         );
     }
 }
@@ -1275,8 +1285,14 @@ impl Serve {
             return;
         };
         let counters = &self.counters;
-        self.clients
-            .retain_mut(|client| match client.queue.try_send(bytes.clone()) {
+        self.clients.retain_mut(|client| {
+            // The last places are for the client's answers.
+            let sent = match client.queue.capacity() > ANSWER_ROOM {
+                true => client.queue.try_send(bytes.clone()),
+                false if client.queue.is_closed() => return false,
+                false => Err(mpsc::error::TrySendError::Full(Bytes::new())),
+            };
+            match sent {
                 Ok(()) => true,
                 Err(mpsc::error::TrySendError::Full(_)) => {
                     bump(&counters.frames_dropped);
@@ -1286,7 +1302,8 @@ impl Serve {
                     true
                 }
                 Err(mpsc::error::TrySendError::Closed(_)) => false,
-            });
+            }
+        });
     }
 
     /// An answer under hub id `id`: to the client that asked, under its own id; dropped

@@ -464,7 +464,7 @@ fn frames_dropped_for_a_client_that_does_not_read_are_said_while_the_hub_runs() 
     assert!(
         dropped.ends_with(
             "takes the radio's frames more slowly than they come: 1 dropped for it so far \
-             (those that come while 1024 wait for it)"
+             (those that come while 960 wait for it)"
         ),
         "{dropped}"
     );

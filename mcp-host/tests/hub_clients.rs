@@ -213,6 +213,53 @@ async fn clients_that_closed_their_connections_give_their_places_up_on_a_quiet_r
     hub.stop().await;
 }
 
+/// A client that has fallen behind, and lost some of the radio's frames, still gets the
+/// answer to its request, in its place among the frames it gets.
+#[tokio::test(flavor = "multi_thread")]
+async fn a_client_that_fell_behind_still_gets_the_answer_to_its_request() {
+    let (hub, mut radio) = hub_and_radio().await;
+    let (_reading, mut seen_rx) = numbered_monitor(&hub).await;
+    let socket = tokio::net::TcpSocket::new_v4().unwrap();
+    socket.set_recv_buffer_size(4096).unwrap();
+    let socket = socket.connect(hub.local_addr()).await.unwrap();
+    let mut slow = Framed::new(socket, XBeeCodec::new(ApiMode::Unescaped));
+    // Its request, under its own id 7, reaches the radio under the hub's.
+    send(&mut slow, &[0x08, 0x07, b'N', b'I']).await;
+    let request = next(&mut radio).await;
+    assert_eq!(request[2..], *b"NI");
+    let hub_id = request[1];
+    // The radio's frames, until some are dropped for the client, which reads nothing.
+    let mut number = 0u32;
+    while hub.stats().frames_dropped == 0 {
+        radio_batch(&mut radio, &mut number, 100, &mut seen_rx).await;
+        assert!(number < 10_000, "never behind: {:?}", hub.stats());
+    }
+    // Then the radio answers, and sends one more batch.
+    let answer = [0x88, hub_id, b'N', b'I', 0x00, b'M', b'A', b'V'];
+    radio.send(&RawFrame::new(&answer).unwrap()).await.unwrap();
+    radio_batch(&mut radio, &mut number, 100, &mut seen_rx).await;
+    // The client reads again: its answer is among the frames, under its own id.
+    let mut frames = 0;
+    let got = loop {
+        let frame = tokio::time::timeout(GUARD, slow.next())
+            .await
+            .expect("the answer")
+            .expect("the hub goes on")
+            .unwrap();
+        let CodecItem::Frame(frame) = frame else {
+            continue;
+        };
+        frames += 1;
+        if frame.data()[0] == 0x88 {
+            break frame.data().to_vec();
+        }
+    };
+    assert_eq!(got, [0x88, 0x07, b'N', b'I', 0x00, b'M', b'A', b'V']);
+    // After the frames that waited for it when the answer came.
+    assert!(frames > 100, "{frames}");
+    hub.stop().await;
+}
+
 /// A connection that reads nothing falls behind after a bounded number of the radio's
 /// frames: the hub's queue of `CLIENT_QUEUE` and a send buffer of its own size, not the
 /// megabytes the system would let it grow to (where thousands of frames would wait for
