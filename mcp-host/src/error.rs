@@ -57,6 +57,25 @@ pub enum OptionsError {
         /// The largest value taken.
         max: usize,
     },
+    /// [`ReconnectPolicy::max_delay`](crate::ReconnectPolicy::max_delay) of a policy
+    /// that reconnects is less than
+    /// [`MIN_RECONNECT_DELAY`](crate::options::MIN_RECONNECT_DELAY) or than its
+    /// `initial_delay`: a link that cannot connect would try again hundreds of times a
+    /// second.
+    #[error(
+        "reconnect.max_delay is {max}, less than {min} or than reconnect.initial_delay \
+         ({initial}): a link that cannot connect would try again hundreds of times a second",
+        max = Seconds(*.max_delay),
+        min = Seconds(crate::options::MIN_RECONNECT_DELAY),
+        initial = Seconds(*.initial_delay)
+    )]
+    #[non_exhaustive]
+    ReconnectDelay {
+        /// The policy's initial delay.
+        initial_delay: Duration,
+        /// The policy's maximum delay.
+        max_delay: Duration,
+    },
 }
 
 impl ConnectError {

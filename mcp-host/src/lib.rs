@@ -196,7 +196,7 @@ pub use event::{
     Event, InvalidPacket, LinkEvent, LinkState, Origin, OwnedFrame, OwnedPacket, Received,
 };
 pub use link::{Link, LinkParseError};
-pub use options::{LinkOptions, MAX_EVENT_CAPACITY, ReconnectPolicy};
+pub use options::{LinkOptions, MAX_EVENT_CAPACITY, MIN_RECONNECT_DELAY, ReconnectPolicy};
 pub use sender::{CommandSender, DeliveryReport, FrameId, SendOptions};
 pub use sink::PacketSink;
 pub use stats::Stats;

@@ -23,8 +23,17 @@ pub(crate) fn later(start: tokio::time::Instant, d: Duration) -> tokio::time::In
         .unwrap_or(start)
 }
 
+/// The least [`ReconnectPolicy::max_delay`] of a policy that reconnects
+/// ([`LinkOptions::check`]).
+pub const MIN_RECONNECT_DELAY: Duration = Duration::from_millis(10);
+
 /// How a link reconnects after its transport goes away (serial device unplugged, TCP peer
 /// gone).
+///
+/// `max_delay` is at least [`MIN_RECONNECT_DELAY`] and no less than `initial_delay`
+/// (which may be zero, for a first attempt at once), or
+/// [`connect`](crate::connect) refuses the options
+/// ([`OptionsError::ReconnectDelay`](crate::OptionsError::ReconnectDelay)).
 ///
 /// Attempts are spaced by an exponential backoff: the first one waits `initial_delay`,
 /// each failure doubles the delay up to `max_delay`. The delay returns to `initial_delay`
@@ -189,6 +198,17 @@ impl LinkOptions {
                 max: crate::codec::MAX_FRAME_DATA,
             });
         }
+        let ReconnectPolicy {
+            enabled,
+            initial_delay,
+            max_delay,
+        } = self.reconnect;
+        if enabled && (max_delay < MIN_RECONNECT_DELAY || max_delay < initial_delay) {
+            return Err(OptionsError::ReconnectDelay {
+                initial_delay,
+                max_delay,
+            });
+        }
         Ok(())
     }
 }
@@ -215,6 +235,39 @@ impl Default for LinkOptions {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_policy_that_would_spin_is_refused() {
+        let with = |enabled, initial, max| LinkOptions {
+            reconnect: ReconnectPolicy {
+                enabled,
+                initial_delay: Duration::from_millis(initial),
+                max_delay: Duration::from_millis(max),
+            },
+            ..LinkOptions::default()
+        };
+        for (initial, max) in [(0, 0), (0, 9), (50, 1), (100, 99)] {
+            let error = with(true, initial, max).check().unwrap_err();
+            assert_eq!(
+                error,
+                OptionsError::ReconnectDelay {
+                    initial_delay: Duration::from_millis(initial),
+                    max_delay: Duration::from_millis(max),
+                }
+            );
+        }
+        assert_eq!(
+            with(true, 50, 1).check().unwrap_err().to_string(),
+            "reconnect.max_delay is 0.001 s, less than 0.01 s or than \
+             reconnect.initial_delay (0.05 s): a link that cannot connect would try again \
+             hundreds of times a second"
+        );
+        // A first attempt at once is fine; so is anything that does not reconnect.
+        for (enabled, initial, max) in [(true, 0, 10), (true, 100, 100), (false, 50, 0)] {
+            assert_eq!(with(enabled, initial, max).check(), Ok(()));
+        }
+        assert_eq!(LinkOptions::default().check(), Ok(()));
+    }
 
     #[test]
     fn backoff_doubles_up_to_the_cap() {
