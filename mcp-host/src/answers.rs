@@ -45,3 +45,10 @@ impl Stream for Answers {
         self.answers.poll_recv(cx)
     }
 }
+
+/// Read again after its end (in a `select!` loop, say), it ends again.
+impl futures::stream::FusedStream for Answers {
+    fn is_terminated(&self) -> bool {
+        self.answers.is_closed() && self.answers.is_empty()
+    }
+}

@@ -516,6 +516,13 @@ impl futures::Stream for PacketStream {
     }
 }
 
+/// Read again after its end (in a `select!` loop, say), it ends again.
+impl futures::stream::FusedStream for PacketStream {
+    fn is_terminated(&self) -> bool {
+        self.events.is_closed() && self.events.is_empty()
+    }
+}
+
 /// The README's examples, compiled and run as doc tests.
 #[cfg(doctest)]
 #[doc = include_str!("../../README.md")]

@@ -277,6 +277,7 @@ async fn a_closed_serial_link_frees_its_port_at_once() {
         ));
         fake.receive(MAV, &time_report(round)).await;
         expect_time_report(&mut stream, round).await;
+        assert!(!futures::stream::FusedStream::is_terminated(&stream));
 
         sender.close();
         match next_link_event(&mut stream).await {
@@ -285,6 +286,9 @@ async fn a_closed_serial_link_frees_its_port_at_once() {
         }
         let end = tokio::time::timeout(GUARD, futures::StreamExt::next(&mut stream)).await;
         assert!(end.expect("the stream did not end").is_none());
+        // Ended for good, as a `select!` loop asks.
+        assert!(futures::stream::FusedStream::is_terminated(&stream));
+        assert!(futures::StreamExt::next(&mut stream).await.is_none());
         let err = sender.send(MAV, &Command::time(round)).await.unwrap_err();
         assert!(matches!(err, SendError::Closed), "{err}");
     }
