@@ -566,7 +566,7 @@ impl Driver {
         } else {
             format!("not connected yet to {link}")
         };
-        let policy = self.options.reconnect.clone();
+        let policy = self.options.reconnect;
         let connector = &mut self.connector;
         let opening = async move {
             if !ever_connected && !tried {

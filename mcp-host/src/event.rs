@@ -13,7 +13,7 @@ pub type OwnedPacket = mcp_core::Packet<Bytes>;
 ///
 /// Not to be confused with [`xbee_api::Event`], what one decoder call yields (a frame
 /// borrowed from the decoder, or why one was dropped).
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 #[non_exhaustive]
 pub enum Event {
     /// A valid MCP packet arrived.
@@ -99,7 +99,7 @@ pub struct Origin {
 }
 
 /// A valid MCP packet, with where it came from.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Received {
     /// Source and time.
     pub origin: Origin,
@@ -121,7 +121,7 @@ impl fmt::Display for Received {
 }
 
 /// A Receive Packet whose payload failed to parse as MCP.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct InvalidPacket {
     /// Source and time.
     pub origin: Origin,

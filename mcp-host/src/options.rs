@@ -40,7 +40,7 @@ pub const MIN_RECONNECT_DELAY: Duration = Duration::from_millis(10);
 /// once a connection has carried data (and, for `serial` and `tcp` links, stayed up for
 /// `max_delay`), so a port that opens and fails at once keeps backing off instead of
 /// spinning, and so does a TCP peer that sends a frame and hangs up, again and again.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ReconnectPolicy {
     /// Reconnect at all; when false the link ends at the first disconnection.
     pub enabled: bool,

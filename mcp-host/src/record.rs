@@ -93,7 +93,7 @@ pub const fn record_len(frame_len: usize) -> usize {
 }
 
 /// Whether a frame came from the radio or went to it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Direction {
     /// Received from the local radio.
     Received,

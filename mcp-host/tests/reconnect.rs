@@ -306,6 +306,18 @@ fn handles_are_send_and_sync() {
     check::<mcp_host::RequestError>();
 }
 
+#[test]
+fn plain_data_compares_as_tests_and_maps_want() {
+    fn comparable<T: PartialEq + Clone + std::fmt::Debug>() {}
+    fn keyed<T: Eq + std::hash::Hash + Copy>() {}
+    comparable::<mcp_host::Event>();
+    comparable::<mcp_host::Received>();
+    comparable::<mcp_host::InvalidPacket>();
+    keyed::<mcp_host::record::Direction>();
+    fn copied<T: Copy>() {}
+    copied::<mcp_host::ReconnectPolicy>();
+}
+
 /// A round trip through the link (an `AT AP` answered by the fake radio): every frame
 /// the radio wrote before its answer has been taken by the background task when it
 /// returns.

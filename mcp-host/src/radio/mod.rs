@@ -447,7 +447,7 @@ impl Network {
         let local_addr = connector.local_addr();
         let source = Source::Link {
             connector: Box::new(connector),
-            policy: options.reconnect.clone(),
+            policy: options.reconnect,
             opened: false,
         };
         let mut info = self.insert(address, options, source)?;
