@@ -191,6 +191,7 @@ pub use answers::Answers;
 pub use api_mode::{DetectError, detect_api_mode};
 pub use confirm::{ConfirmError, Confirmed};
 pub use diagnosis::{Diagnoser, Diagnosis};
+pub use discovery::{DiscoverError, Discovery};
 pub use error::{ConnectError, OptionsError, RequestError, SendError};
 pub use event::{
     Event, InvalidPacket, LinkEvent, LinkState, Origin, OwnedFrame, OwnedPacket, Received,

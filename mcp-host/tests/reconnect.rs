@@ -304,6 +304,8 @@ fn handles_are_send_and_sync() {
     check::<mcp_host::Event>();
     check::<mcp_host::SendError>();
     check::<mcp_host::RequestError>();
+    check::<mcp_host::DiscoverError>();
+    check::<mcp_host::Discovery>();
 }
 
 #[test]
