@@ -90,9 +90,15 @@ impl std::fmt::Display for DeliveryReport {
 /// Sends MCP packets and XBee frames over a link. Cheap to clone; usable from many tasks
 /// at once.
 ///
-/// Every method waits at most its timeout (and half a second's grace for the background
-/// task's answer) and fails with a clear [`SendError`] when the link goes down while the
-/// request is in flight, or is down when it is made.
+/// Every request waits at most its timeout (and half a second's grace for the background
+/// task's answer) and fails with a clear [`SendError`] (inside the
+/// [`RequestError`](crate::RequestError), [`ConfirmError`](crate::ConfirmError) or
+/// [`DiscoverError`](crate::DiscoverError) of the methods that return those) when the
+/// link goes down while the request is in flight, or is down when it is made. Waits
+/// that are not one request's: [`closed`](Self::closed) waits for the link's end;
+/// [`send_confirmed`](Self::send_confirmed) and the trajectories send and wait in steps,
+/// each within the timeout; a [`PacketSink`](crate::PacketSink) waits while the link is
+/// down, and goes on once it is back.
 ///
 /// Dropping a method's future before it resolves (in a `tokio::time::timeout`, a
 /// `select!`, a task aborted) does not take the request back at once: once queued, its
@@ -110,8 +116,8 @@ impl std::fmt::Display for DeliveryReport {
 ///
 /// A request the link's task has not taken by its deadline (its writes backed up by a
 /// radio that takes no bytes, or requests waiting for an id beyond what it holds) is
-/// never sent: it fails with [`SendError::Timeout`] of frame id 0 (which a task merely
-/// running late gives too: whether the frame went out is then not known), and
+/// never sent: it fails with [`SendError::Timeout`] without a frame id (which a task
+/// merely running late gives too: whether the frame went out is then not known), and
 /// [`write_frame`](Self::write_frame) with [`SendError::NotSent`].
 /// [`Stats::timeouts`](crate::Stats::timeouts) counts the timeouts callers were told
 /// of. The link ends (its transport closed) once its stream and every sender and
