@@ -33,7 +33,7 @@ pub const MIN_RECONNECT_DELAY: Duration = Duration::from_millis(10);
 /// `max_delay` is at least [`MIN_RECONNECT_DELAY`] and no less than `initial_delay`
 /// (which may be zero, for a first attempt at once), or
 /// [`connect`](crate::connect) refuses the options
-/// ([`OptionsError::ReconnectDelay`](crate::OptionsError::ReconnectDelay)).
+/// ([`OptionsError::ReconnectDelay`]).
 ///
 /// Attempts are spaced by an exponential backoff: the first one waits `initial_delay`,
 /// each failure doubles the delay up to `max_delay`. The delay returns to `initial_delay`
