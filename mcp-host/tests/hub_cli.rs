@@ -429,6 +429,33 @@ fn frames_that_come_while_the_hub_asks_its_radio_for_its_mode_are_not_lost_behin
 
 #[cfg(unix)]
 #[test]
+fn a_hub_stopped_a_while_says_for_how_long_to_the_millisecond() {
+    let (link, _radio) = common::silent_peer(1);
+    let (mut hub, out, err) = start_hub(&link);
+    serving(&out);
+    let pid = i32::try_from(hub.0.id()).expect("pid");
+    // SAFETY: kill(2) with the pid of a child of this process and a valid signal.
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGSTOP) }, 0);
+    // The stall itself, not a wait for something: the hub sees it on its clock.
+    std::thread::sleep(Duration::from_millis(2500));
+    // SAFETY: as above.
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGCONT) }, 0);
+    let stalled = line_with(&err, "hub: it could read nothing for ");
+    let seconds = stalled
+        .split("could read nothing for ")
+        .nth(1)
+        .and_then(|rest| rest.split(" s:").next())
+        .unwrap_or_else(|| panic!("{stalled}"));
+    let decimals = seconds.split('.').nth(1).map_or(0, str::len);
+    assert!(
+        seconds.parse::<f64>().is_ok_and(|s| s >= 2.5) && decimals <= 3,
+        "{stalled}"
+    );
+    stop_hub(&mut hub, &out);
+}
+
+#[cfg(unix)]
+#[test]
 fn frames_dropped_for_a_client_that_does_not_read_are_said_while_the_hub_runs() {
     // A radio that sends a burst once told to: more frames than the client's queue at
     // the hub and its connection's buffers hold.
