@@ -8,14 +8,14 @@
 //!
 //! - **From the radio:** every frame that is not the answer to a client's request
 //!   (received packets, modem status, unclaimed responses) goes to every client. A
-//!   client that falls behind by [`CLIENT_QUEUE`] frames, less the [`ANSWER_ROOM`] kept
-//!   for the answers to its own requests, loses the newest ones (counted in
-//!   [`HubStats::frames_dropped`], and said in a warning as it happens); the others are
-//!   not held up.
+//!   client that falls behind by [`CLIENT_QUEUE`] frames loses the newest ones (counted
+//!   in [`HubStats::frames_dropped`], and said in a warning as it happens); the others
+//!   are not held up. The answers to its own requests wait apart, [`ANSWER_QUEUE`] at
+//!   most, and are not lost with them.
 //! - **From a client:** frames go to the radio in the order the client sent them. A
 //!   request with a frame id goes under an id the hub allocates, and its answers go
-//!   back to that client alone, under the client's own id, in their place among the
-//!   radio's other frames: clients that each count their ids from 1 never get each
+//!   back to that client alone, under the client's own id, ahead of the radio's other
+//!   frames waiting for it: clients that each count their ids from 1 never get each
 //!   other's answers. An answer completes a request only if its frame type answers the
 //!   request's type, so a client cannot answer another's request with a frame of its
 //!   own. The requests the hub knows, and their answers:
@@ -201,15 +201,14 @@ use crate::{
     CommandSender, ConnectError, Event, Link, LinkEvent, LinkInfo, LinkOptions, PacketStream, Stats,
 };
 
-/// Frames from the radio waiting for one client, at most; more are dropped for it. The
-/// last [`ANSWER_ROOM`] places are kept for the answers to its requests.
+/// Frames from the radio waiting for one client, at most; more are dropped for it.
 pub const CLIENT_QUEUE: usize = 1024;
 
-/// The places of a client's queue ([`CLIENT_QUEUE`]) that only the answers to its own
-/// requests take: a client that takes the radio's frames more slowly than they come
-/// (and loses some) still gets the answers the radio gave it, in their place among the
-/// frames it gets.
-pub const ANSWER_ROOM: usize = 64;
+/// Answers to a client's own requests waiting for it, at most, apart from the radio's
+/// other frames ([`CLIENT_QUEUE`]): a client that takes the radio's frames more slowly
+/// than they come (and loses some) still gets the answers the radio gave it, each
+/// ahead of the radio's frames waiting for it then.
+pub const ANSWER_QUEUE: usize = 64;
 
 /// Clients served at once, at most. A client that comes while as many are connected
 /// takes the place of one that closed its connection, or of the one that has taken none
@@ -586,7 +585,7 @@ impl Held {
 struct Route {
     /// The client's number (see [`Serve::next_client`]).
     client: u64,
-    /// The client's queue of frames from the radio.
+    /// The client's queue of answers ([`ANSWER_QUEUE`]).
     queue: mpsc::Sender<Bytes>,
     own_id: u8,
     /// The frame type of the answers (see [`answer_type`]): an answer of another type
@@ -959,9 +958,8 @@ impl Connected {
         });
         tracing::warn!(
             "hub: client {peer} takes the radio's frames more slowly than they come: \
-             {dropped} dropped for it so far{lately} (those that come while {} \
-             wait for it)",
-            CLIENT_QUEUE - ANSWER_ROOM
+             {dropped} dropped for it so far{lately} (those that come while {CLIENT_QUEUE} \
+             wait for it)"
         );
     }
 }
@@ -1164,6 +1162,7 @@ impl Serve {
         bump(&self.counters.clients);
         tune_client_socket(&socket);
         let (queue, frames) = mpsc::channel(CLIENT_QUEUE);
+        let (answers_queue, answers) = mpsc::channel(ANSWER_QUEUE);
         let end = self.stop.child_token();
         let behind = Arc::new(Mutex::new(None));
         let closed = Arc::new(Mutex::new(None));
@@ -1185,7 +1184,7 @@ impl Serve {
             peer,
             mode: self.mode,
             to_radio: self.to_radio.clone(),
-            queue,
+            queue: answers_queue,
             routes: self.routes.clone(),
             ids: self.ids.clone(),
             shared: self.shared.clone(),
@@ -1203,7 +1202,7 @@ impl Serve {
         lock(&self.to_radio.new).push((queue, client.clone()));
         self.to_radio.ready.notify_one();
         self.tasks.spawn(client.clone().read(rd, frames_to_radio));
-        self.tasks.spawn(client.write(wr, frames));
+        self.tasks.spawn(client.write(wr, frames, answers));
     }
 
     /// Ends, for `peer`, a new one, the client that closed its connection first, or
@@ -1285,14 +1284,8 @@ impl Serve {
             return;
         };
         let counters = &self.counters;
-        self.clients.retain_mut(|client| {
-            // The last places are for the client's answers.
-            let sent = match client.queue.capacity() > ANSWER_ROOM {
-                true => client.queue.try_send(bytes.clone()),
-                false if client.queue.is_closed() => return false,
-                false => Err(mpsc::error::TrySendError::Full(Bytes::new())),
-            };
-            match sent {
+        self.clients
+            .retain_mut(|client| match client.queue.try_send(bytes.clone()) {
                 Ok(()) => true,
                 Err(mpsc::error::TrySendError::Full(_)) => {
                     bump(&counters.frames_dropped);
@@ -1302,8 +1295,7 @@ impl Serve {
                     true
                 }
                 Err(mpsc::error::TrySendError::Closed(_)) => false,
-            }
-        });
+            });
     }
 
     /// An answer under hub id `id`: to the client that asked, under its own id; dropped
@@ -1490,7 +1482,8 @@ struct Client {
     mode: ApiMode,
     /// Where its queue of frames to the radio is taken from.
     to_radio: Arc<ToRadio>,
-    /// Its own queue, for the answers to its requests.
+    /// Its queue of the answers to its requests ([`ANSWER_QUEUE`]), apart from the
+    /// radio's other frames.
     queue: mpsc::Sender<Bytes>,
     routes: Arc<Mutex<Routes>>,
     /// The permits of the 255 frame ids, shared by all clients.
@@ -1690,9 +1683,22 @@ impl Client {
 
     /// Writes the radio's frames to the client, until its connection fails or it is
     /// ended; a client that reads nothing does not hold the hub up.
-    async fn write(self: Arc<Self>, mut wr: OwnedWriteHalf, mut frames: mpsc::Receiver<Bytes>) {
+    async fn write(
+        self: Arc<Self>,
+        mut wr: OwnedWriteHalf,
+        mut frames: mpsc::Receiver<Bytes>,
+        mut answers: mpsc::Receiver<Bytes>,
+    ) {
         let write = async {
-            while let Some(bytes) = frames.recv().await {
+            loop {
+                // Its answers first, ahead of the radio's frames that wait (the client
+                // itself holds a sender of its answers: they never end first).
+                let next = tokio::select! {
+                    biased;
+                    Some(bytes) = answers.recv() => Some(bytes),
+                    bytes = frames.recv() => bytes,
+                };
+                let Some(bytes) = next else { break };
                 if let Err(error) = wr.write_all(&bytes).await {
                     return error.to_string();
                 }
@@ -1722,8 +1728,8 @@ impl Client {
     }
 
     /// Refuses `request` (under the client's own id), which waited [`REQUEST_WAIT`] for
-    /// `what` in vain: not sent, and answered as failed ([`not_sent_answer`]) in its
-    /// place among the radio's frames to this client.
+    /// `what` in vain: not sent, and answered as failed ([`not_sent_answer`]) as its
+    /// answers are.
     fn not_sent(&self, request: &[u8], what: &str) {
         self.refuse_request(
             request,
@@ -1732,7 +1738,8 @@ impl Client {
     }
 
     /// Refuses `request` (under the client's own id) for `why`, and answers it as failed
-    /// ([`not_sent_answer`]) in its place among the radio's frames to this client.
+    /// ([`not_sent_answer`]) as its answers are, ahead of the radio's frames waiting for
+    /// this client.
     fn refuse_request(&self, request: &[u8], why: std::fmt::Arguments<'_>) {
         // The answer first: once the refusal is counted, it is on its way.
         let answer = not_sent_answer(request).and_then(|answer| encode(&answer, self.mode));

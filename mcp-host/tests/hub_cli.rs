@@ -440,17 +440,21 @@ fn a_hub_stopped_a_while_says_for_how_long_to_the_millisecond() {
     std::thread::sleep(Duration::from_millis(2500));
     // SAFETY: as above.
     assert_eq!(unsafe { libc::kill(pid, libc::SIGCONT) }, 0);
-    let stalled = line_with(&err, "hub: it could read nothing for ");
-    let seconds = stalled
-        .split("could read nothing for ")
-        .nth(1)
-        .and_then(|rest| rest.split(" s:").next())
-        .unwrap_or_else(|| panic!("{stalled}"));
-    let decimals = seconds.split('.').nth(1).map_or(0, str::len);
-    assert!(
-        seconds.parse::<f64>().is_ok_and(|s| s >= 2.5) && decimals <= 3,
-        "{stalled}"
-    );
+    // Its line (after any of a stall of its own on a busy machine), each to the
+    // millisecond.
+    loop {
+        let stalled = line_with(&err, "hub: it could read nothing for ");
+        let seconds = stalled
+            .split("could read nothing for ")
+            .nth(1)
+            .and_then(|rest| rest.split(" s:").next())
+            .unwrap_or_else(|| panic!("{stalled}"));
+        let decimals = seconds.split('.').nth(1).map_or(0, str::len);
+        assert!(decimals <= 3, "{stalled}");
+        if seconds.parse::<f64>().is_ok_and(|s| s >= 2.5) {
+            break;
+        }
+    }
     stop_hub(&mut hub, &out);
 }
 
@@ -491,7 +495,7 @@ fn frames_dropped_for_a_client_that_does_not_read_are_said_while_the_hub_runs() 
     assert!(
         dropped.ends_with(
             "takes the radio's frames more slowly than they come: 1 dropped for it so far \
-             (those that come while 960 wait for it)"
+             (those that come while 1024 wait for it)"
         ),
         "{dropped}"
     );
