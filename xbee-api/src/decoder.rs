@@ -43,10 +43,12 @@ pub const DEFAULT_CAPACITY: usize = 512;
 /// assert_eq!(FirmwareDecoder::fixed().capacity(), 96);
 /// assert_eq!(decoder_buffer_len(DATA, ApiMode::Unescaped), 100);
 /// assert_eq!(decoder_buffer_len(DATA, ApiMode::Escaped), 96);
+/// assert_eq!(decoder_buffer_len(usize::MAX, ApiMode::Unescaped), usize::MAX); // no overflow
 /// ```
 pub const fn decoder_buffer_len(frame_data_len: usize, mode: ApiMode) -> usize {
+    // `usize::MAX` for a length no buffer holds, rather than an overflow.
     match mode {
-        ApiMode::Unescaped => frame_data_len + 4,
+        ApiMode::Unescaped => frame_data_len.saturating_add(4),
         ApiMode::Escaped => frame_data_len,
     }
 }
@@ -113,7 +115,8 @@ enum State {
 /// # Guarantee
 ///
 /// No valid frame is lost because of garbage, a corrupt frame or a cut-off frame before
-/// it, however the input is split:
+/// it, however the input is split (in mode 1, but behind a corrupt candidate whose
+/// checksum matches by chance, below):
 ///
 /// - **Mode 2** (escaped): a raw 0x7E always starts a new frame and aborts a partial one
 ///   (reported as [`DecodeError::Truncated`], or [`DecodeError::BadEscape`] right after
@@ -127,7 +130,8 @@ enum State {
 ///   can find several frames and further failures before any new input is needed, so
 ///   one input byte can produce several events: drain them as shown below. A corrupt
 ///   candidate whose checksum matches by chance (1 in 256) is a frame in mode 1; nothing
-///   can tell it apart.
+///   can tell it apart, and the valid frame it reaches into is lost with it (its start
+///   taken as the false frame's end): the one way mode 1 loses a valid frame.
 ///
 /// # Worst case
 ///

@@ -26,12 +26,18 @@ pub const MAX_FRAME_DATA_LEN: usize = 0xFFFF;
 /// let buffer = [0u8; LEN];
 /// assert_eq!(buffer.len(), 1 + 2 * (2 + 98 + 1));
 /// assert_eq!(max_encoded_len(98, ApiMode::Unescaped), 102);
+/// // A length no buffer holds: no overflow.
+/// assert_eq!(max_encoded_len(usize::MAX / 2, ApiMode::Escaped), usize::MAX);
 /// ```
 pub const fn max_encoded_len(frame_data_len: usize, mode: ApiMode) -> usize {
-    // Delimiter, length (2), frame data, checksum.
+    // Delimiter, length (2), frame data, checksum; `usize::MAX` for a length no buffer
+    // holds, rather than an overflow.
     match mode {
-        ApiMode::Unescaped => 4 + frame_data_len,
-        ApiMode::Escaped => 1 + 2 * (3 + frame_data_len),
+        ApiMode::Unescaped => frame_data_len.saturating_add(4),
+        ApiMode::Escaped => frame_data_len
+            .saturating_add(3)
+            .saturating_mul(2)
+            .saturating_add(1),
     }
 }
 
