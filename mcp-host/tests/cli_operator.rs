@@ -597,6 +597,22 @@ fn decode_of_input_with_no_frame_is_an_input_error() {
             "{out}"
         );
     }
+    // One frame of mode 2 whose length holds an escape (17 bytes: 7D 31), read in mode
+    // 1, is one candidate cut off; mode 2 finds it whole, and is named.
+    let encoded = run(&["encode", "--to", M, "--api-mode", "2", "landing", "on"]);
+    assert!(
+        stdout(&encoded).starts_with("7E 00 7D 31 "),
+        "{}",
+        stdout(&encoded)
+    );
+    std::fs::write(&file, stdout(&encoded)).unwrap();
+    let output = run(&["decode", "--hex", file.to_str().unwrap()]);
+    let err = stderr(&output);
+    assert_eq!(output.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("if it is in API mode 2, decode it with --api-mode 2"),
+        "{err}"
+    );
     // One frame whose checksum is wrong (a byte mistyped): said so, not taken for a
     // capture at another baud rate or in the other mode.
     std::fs::write(&file, [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6E]).unwrap();

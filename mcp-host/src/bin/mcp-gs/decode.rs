@@ -560,9 +560,10 @@ fn decode_stream(
     if offset > 0 && stats.frames == 0 {
         let errors = stats.decode_errors();
         let other = u8::from(mode.other());
-        let advice = if errors == 1 && stats.truncated == 1 {
+        let advice = if errors == 1 && stats.truncated == 1 && !other_finds_more {
             // One candidate, cut off (by the end of the input, or in mode 2 by a start
-            // delimiter): the other mode would not find it whole either.
+            // delimiter), which the other mode does not find whole either (it does a
+            // mode 2 frame whose length holds an escape, read in mode 1).
             "its one candidate frame is cut off (a capture that stops part way through a \
              frame?)"
                 .to_owned()
