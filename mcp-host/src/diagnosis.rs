@@ -241,6 +241,13 @@ pub(crate) fn counted(n: u64, noun: &str) -> String {
 ///     "1 frame failed the checksum and 1 passed: the radio may be in API mode 2 (AP=2), \
 ///      or the line corrupted it"
 /// );
+/// // Read in API mode 2, frames of mode 1 fail on escapes too.
+/// let stats = Stats { frames: 2, bad_escape: 100, ..Stats::default() };
+/// assert_eq!(
+///     stats.diagnose(ApiMode::Escaped).unwrap().to_string(),
+///     "100 frames failed their checksum or escapes and 2 passed: the radio may be in API \
+///      mode 1 (AP=1)"
+/// );
 /// ```
 impl fmt::Display for Diagnosis {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -250,10 +257,15 @@ impl fmt::Display for Diagnosis {
                 passed,
                 radio,
             } => {
+                // Read in mode 2 (the radio in mode 1), a frame fails on an escape too.
+                let failed_on = match radio {
+                    ApiMode::Unescaped => "their checksum or escapes",
+                    ApiMode::Escaped => "the checksum",
+                };
                 let radio = u8::from(radio);
                 write!(
                     f,
-                    "{} failed the checksum and {passed} passed: the radio may be in API \
+                    "{} failed {failed_on} and {passed} passed: the radio may be in API \
                      mode {radio} (AP={radio})",
                     counted(failed, "frame")
                 )?;
