@@ -26,6 +26,8 @@ use crate::event::OwnedFrame;
 #[derive(Debug)]
 pub struct Answers {
     pub(crate) answers: mpsc::Receiver<Result<OwnedFrame, SendError>>,
+    /// It has ended (given `None`): for [`FusedStream`].
+    pub(crate) ended: bool,
 }
 
 impl Answers {
@@ -34,7 +36,7 @@ impl Answers {
 
     /// The next answer; `None` once the window is over.
     pub async fn next(&mut self) -> Option<Result<OwnedFrame, SendError>> {
-        self.answers.recv().await
+        futures::StreamExt::next(self).await
     }
 }
 
@@ -42,13 +44,19 @@ impl Stream for Answers {
     type Item = Result<OwnedFrame, SendError>;
 
     fn poll_next(mut self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<Option<Self::Item>> {
-        self.answers.poll_recv(cx)
+        if self.ended {
+            return Poll::Ready(None);
+        }
+        let answer = std::task::ready!(self.answers.poll_recv(cx));
+        self.ended = answer.is_none();
+        Poll::Ready(answer)
     }
 }
 
-/// Read again after its end (in a `select!` loop, say), it ends again.
+/// Read again after its end (in a `select!` loop, say), it ends again; terminated once
+/// it has given `None`, not with its last answer.
 impl futures::stream::FusedStream for Answers {
     fn is_terminated(&self) -> bool {
-        self.answers.is_closed() && self.answers.is_empty()
+        self.ended
     }
 }

@@ -454,6 +454,7 @@ async fn serve<T>(
     ));
     let stream = PacketStream {
         events: events_rx,
+        ended: false,
         counters,
         info,
         state,
@@ -478,6 +479,8 @@ async fn serve<T>(
 #[derive(Debug)]
 pub struct PacketStream {
     events: mpsc::Receiver<Event>,
+    /// It has ended (given `None`): for [`FusedStream`](futures::stream::FusedStream).
+    ended: bool,
     counters: Arc<stats::Counters>,
     info: Arc<LinkInfo>,
     state: tokio::sync::watch::Receiver<LinkState>,
@@ -513,14 +516,20 @@ impl futures::Stream for PacketStream {
     type Item = Event;
 
     fn poll_next(mut self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<Option<Event>> {
-        self.events.poll_recv(cx)
+        if self.ended {
+            return Poll::Ready(None);
+        }
+        let event = std::task::ready!(self.events.poll_recv(cx));
+        self.ended = event.is_none();
+        Poll::Ready(event)
     }
 }
 
-/// Read again after its end (in a `select!` loop, say), it ends again.
+/// Read again after its end (in a `select!` loop, say), it ends again; terminated once
+/// it has given `None`, not with its last event.
 impl futures::stream::FusedStream for PacketStream {
     fn is_terminated(&self) -> bool {
-        self.events.is_closed() && self.events.is_empty()
+        self.ended
     }
 }
 

@@ -549,7 +549,10 @@ impl CommandSender {
             answers,
         };
         self.enqueue(op, deadline, window).await?;
-        Ok(Answers { answers: receiver })
+        Ok(Answers {
+            answers: receiver,
+            ended: false,
+        })
     }
 
     /// Node discovery: the radios the local one can reach, each once, in the order

@@ -74,12 +74,14 @@ async fn every_answer_comes_until_the_window_is_over() {
     respond(&mut fake, id.wrapping_add(1), AtStatus::Ok, b"x").await;
     fake.status(id, xbee_api::DeliveryStatus::Success).await;
     let mut got = Vec::new();
-    assert!(!futures::stream::FusedStream::is_terminated(&answers));
     while let Some(answer) = tokio::time::timeout(GUARD, answers.next()).await.unwrap() {
         got.push(answer.unwrap().data().to_vec());
+        // Not over until its end is read, as a `select!` loop needs.
+        assert!(!futures::stream::FusedStream::is_terminated(&answers));
     }
     // Over, for good.
     assert!(futures::stream::FusedStream::is_terminated(&answers));
+    assert!(answers.next().await.is_none());
     let header = |d: &[u8]| {
         [0x88, id, b'N', b'D', 0x00]
             .iter()

@@ -4,7 +4,7 @@
 
 mod common;
 
-use std::io::{BufRead, BufReader, Write};
+use std::io::{BufRead, BufReader};
 use std::process::{Command, Stdio};
 
 use common::Running;
@@ -470,7 +470,7 @@ fn frames_dropped_for_a_client_that_does_not_read_are_said_while_the_hub_runs() 
         let (mut radio, _) = listener.accept().unwrap();
         if burst.recv().is_ok() {
             let modem_status = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F];
-            let _ = radio.write_all(&modem_status.repeat(200_000));
+            let _ = std::io::Write::write_all(&mut radio, &modem_status.repeat(200_000));
         }
         let _ = std::io::copy(&mut radio, &mut std::io::sink());
     });

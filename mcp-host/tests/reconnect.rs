@@ -284,6 +284,8 @@ async fn a_closed_serial_link_frees_its_port_at_once() {
             LinkEvent::Closed { reason, .. } => assert_eq!(reason, "closed by the application"),
             other => panic!("round {round}: {other:?}"),
         }
+        // Its last event read, it has not ended yet: a `select!` loop reads its end.
+        assert!(!futures::stream::FusedStream::is_terminated(&stream));
         let end = tokio::time::timeout(GUARD, futures::StreamExt::next(&mut stream)).await;
         assert!(end.expect("the stream did not end").is_none());
         // Ended for good, as a `select!` loop asks.
