@@ -379,7 +379,7 @@ impl Hub {
     /// to no client, and wait in the link's event queue: beyond
     /// [`event_capacity`](LinkOptions::event_capacity) of them, the rest are counted in
     /// [`Stats::events_dropped`](crate::Stats::events_dropped) as lost behind
-    /// (`mcp-gs hub` holds 65 536, as many as a radio at 115200 baud can send in the
+    /// (`mcp-gs hub` holds 65 536, more than a radio at 115200 baud can send in the
     /// time). Without it (a `pty` or
     /// `tcp-listen:` link, or `wait_for_link`), clients are refused from the moment this
     /// returns, the port held on Linux, until the radio is there.

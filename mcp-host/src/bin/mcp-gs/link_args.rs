@@ -62,8 +62,8 @@ pub(crate) struct LinkArgs {
 /// The link's events held for `monitor` and `hub` while they fall behind (beyond, lost
 /// and counted): the frames a TCP connection's buffers hold, as they come at once when
 /// monitor goes on after it was stopped (Ctrl-Z, `SIGSTOP`) or starved a while, and
-/// what a radio at 115200 baud can send while the hub asks it for its API mode before
-/// it serves (its frames until then go to no client, and are not lost behind).
+/// more than a radio at 115200 baud can send while the hub asks it for its API mode
+/// before it serves (its frames until then go to no client, and are not lost behind).
 pub(crate) const EVENTS_HELD: usize = 1 << 16;
 
 /// `--link` of the subcommands that do one thing and end (`send`, `status`, `at`,

@@ -231,7 +231,7 @@ pub(crate) async fn run(mut args: MonitorArgs) -> Result<(), Failure> {
         let waited = pending.oldest_waited(std::time::Instant::now());
         if waited >= OUTPUT_WAIT || pending.len() >= PENDING_LINES {
             unshown.dropping = true;
-        } else if waited < OUTPUT_WAIT / 2 {
+        } else if waited < OUTPUT_WAIT / 2 && pending.len() < PENDING_LINES / 2 {
             unshown.dropping = false;
         }
         if unshown.dropping && !matches!(event, Event::Link(_)) {
@@ -409,7 +409,8 @@ fn gap_line(gap: Gap, frames: u64, time: SystemTime, format: Format) -> String {
 /// How long a line may wait for standard output (beyond those its thread holds)
 /// before the lines of the frames that come are dropped (and counted, [`Unshown`]): a
 /// reader that takes nothing (a paused pager) holds up neither the link nor the
-/// recording, and one that does is not shown lines older than this.
+/// recording, and once it reads again gets the lines that waited (this long's worth at
+/// most), then a gap line, then the lines of frames that come then.
 const OUTPUT_WAIT: std::time::Duration = std::time::Duration::from_secs(2);
 
 /// Lines waiting for standard output past which a frame's line is dropped however long
@@ -472,7 +473,8 @@ struct Unshown {
     /// When the last frame not shown came.
     last: SystemTime,
     /// Whether lines are being dropped: from when a line has waited [`OUTPUT_WAIT`] (or
-    /// [`PENDING_LINES`] wait) until the oldest waiting has waited less than half that.
+    /// [`PENDING_LINES`] wait) until the oldest waiting has waited less than half that
+    /// (and half as many wait).
     dropping: bool,
 }
 
