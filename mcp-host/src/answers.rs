@@ -44,12 +44,8 @@ impl Stream for Answers {
     type Item = Result<OwnedFrame, SendError>;
 
     fn poll_next(mut self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<Option<Self::Item>> {
-        if self.ended {
-            return Poll::Ready(None);
-        }
-        let answer = std::task::ready!(self.answers.poll_recv(cx));
-        self.ended = answer.is_none();
-        Poll::Ready(answer)
+        let this = &mut *self;
+        crate::poll_fused(&mut this.answers, &mut this.ended, cx)
     }
 }
 

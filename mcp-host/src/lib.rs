@@ -516,13 +516,25 @@ impl futures::Stream for PacketStream {
     type Item = Event;
 
     fn poll_next(mut self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<Option<Event>> {
-        if self.ended {
-            return Poll::Ready(None);
-        }
-        let event = std::task::ready!(self.events.poll_recv(cx));
-        self.ended = event.is_none();
-        Poll::Ready(event)
+        let this = &mut *self;
+        poll_fused(&mut this.events, &mut this.ended, cx)
     }
+}
+
+/// The next item of `items`, noting in `ended` when it gives `None` (and giving `None`
+/// from then on): a [`FusedStream`](futures::stream::FusedStream) over a channel,
+/// terminated once its end was read, not merely once nothing more can come.
+pub(crate) fn poll_fused<T>(
+    items: &mut mpsc::Receiver<T>,
+    ended: &mut bool,
+    cx: &mut Context<'_>,
+) -> Poll<Option<T>> {
+    if *ended {
+        return Poll::Ready(None);
+    }
+    let item = std::task::ready!(items.poll_recv(cx));
+    *ended = item.is_none();
+    Poll::Ready(item)
 }
 
 /// Read again after its end (in a `select!` loop, say), it ends again; terminated once

@@ -114,10 +114,23 @@ fn start_hub_with(
     radio: &str,
     more: &[&str],
 ) -> (Running, mpsc::Receiver<String>, mpsc::Receiver<String>) {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
-        .args(["hub", "--link", radio, "--listen", "127.0.0.1:0"])
+    start_hub_logging(radio, more, None)
+}
+
+/// [`start_hub_with`], logging what `MCP_LOG=log` selects.
+fn start_hub_logging(
+    radio: &str,
+    more: &[&str],
+    log: Option<&str>,
+) -> (Running, mpsc::Receiver<String>, mpsc::Receiver<String>) {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_mcp-gs"));
+    command.args(["hub", "--link", radio, "--listen", "127.0.0.1:0"]);
+    match log {
+        Some(log) => command.env("MCP_LOG", log),
+        None => command.env_remove("MCP_LOG"),
+    };
+    let mut child = command
         .args(more)
-        .env_remove("MCP_LOG")
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
@@ -475,16 +488,7 @@ fn frames_dropped_for_a_client_that_does_not_read_are_said_while_the_hub_runs() 
         let _ = std::io::copy(&mut radio, &mut std::io::sink());
     });
     // With the hub's info lines, to know when it has the client.
-    let mut child = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
-        .args(["hub", "--link", &link, "--listen", "127.0.0.1:0"])
-        .env("MCP_LOG", "mcp_host::hub=info")
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("run mcp-gs");
-    let out = lines(child.stdout.take().unwrap());
-    let err = lines(child.stderr.take().unwrap());
-    let mut hub = Running(child);
+    let (mut hub, out, err) = start_hub_logging(&link, &[], Some("mcp_host::hub=info"));
     let (_, addr) = serving(&out);
     // A client that reads nothing.
     let _client = std::net::TcpStream::connect(&addr).unwrap();
