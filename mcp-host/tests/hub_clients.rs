@@ -27,6 +27,14 @@ async fn turned_away(socket: &mut TcpStream) -> bool {
     matches!(read, Ok(Ok(0) | Err(_)))
 }
 
+/// A connection to the hub with a small receive buffer of its own (4 KiB, which fixes
+/// the window it offers): one that reads nothing is full at once, and stays so.
+async fn small_buffered(hub: &Hub) -> TcpStream {
+    let socket = tokio::net::TcpSocket::new_v4().unwrap();
+    socket.set_recv_buffer_size(4096).unwrap();
+    socket.connect(hub.local_addr()).await.unwrap()
+}
+
 /// A client served by the hub: its frame reaches the radio.
 async fn served(hub: &Hub, radio: &mut Wire) -> Wire {
     let socket = TcpStream::connect(hub.local_addr()).await.unwrap();
@@ -164,9 +172,7 @@ async fn a_client_that_reads_slowly_keeps_its_place() {
     // frame to it well after a batch, which the hub takes for reading).
     let mut idle = Vec::new();
     for _ in 2..MAX_CLIENTS {
-        let socket = tokio::net::TcpSocket::new_v4().unwrap();
-        socket.set_recv_buffer_size(4096).unwrap();
-        idle.push(socket.connect(hub.local_addr()).await.unwrap());
+        idle.push(small_buffered(&hub).await);
     }
     // Batches until every batch is dropped whole for the idle connections and in part
     // for the slow reader, which reads a third of each: twice in a row, as a batch may
@@ -230,10 +236,10 @@ async fn clients_that_closed_their_connections_give_their_places_up_on_a_quiet_r
 async fn a_client_that_fell_behind_still_gets_the_answer_to_its_request() {
     let (hub, mut radio) = hub_and_radio().await;
     let (_reading, mut seen_rx) = numbered_monitor(&hub).await;
-    let socket = tokio::net::TcpSocket::new_v4().unwrap();
-    socket.set_recv_buffer_size(4096).unwrap();
-    let socket = socket.connect(hub.local_addr()).await.unwrap();
-    let mut slow = Framed::new(socket, XBeeCodec::new(ApiMode::Unescaped));
+    let mut slow = Framed::new(
+        small_buffered(&hub).await,
+        XBeeCodec::new(ApiMode::Unescaped),
+    );
     // Its request, under its own id 7, reaches the radio under the hub's.
     send(&mut slow, &[0x08, 0x07, b'N', b'I']).await;
     let request = next(&mut radio).await;
@@ -282,10 +288,10 @@ async fn a_connection_that_reads_nothing_falls_behind_after_a_bounded_number_of_
     // A monitor that reads, to know when the hub has passed every frame on.
     let (_reading, mut seen_rx) = numbered_monitor(&hub).await;
     // A connection that reads nothing, with a small receive buffer of its own.
-    let socket = tokio::net::TcpSocket::new_v4().unwrap();
-    socket.set_recv_buffer_size(4096).unwrap();
-    let socket = socket.connect(hub.local_addr()).await.unwrap();
-    let mut idle = Framed::new(socket, XBeeCodec::new(ApiMode::Unescaped));
+    let mut idle = Framed::new(
+        small_buffered(&hub).await,
+        XBeeCodec::new(ApiMode::Unescaped),
+    );
     // Served: its frame reaches the radio.
     send(&mut idle, &[0x08, 0x00, b'S', b'H']).await;
     assert_eq!(next(&mut radio).await, [0x08, 0x00, b'S', b'H']);
