@@ -224,10 +224,10 @@ pub(crate) async fn run(mut args: MonitorArgs) -> Result<(), Failure> {
         // A reader that takes nothing: the line is dropped and counted, a link event's
         // (a few a minute at most, which say what the lines around them mean) but kept.
         // A burst a reader takes in time (what waited while monitor was stopped, written
-        // to a file) is shown whole. Once lines are dropped, they are until the lines
-        // waiting are taken to those of the last half wait (a reader a little slow would
-        // otherwise get a line, then a gap, in turn). Where lines were dropped, a line
-        // says how many, before the next one kept.
+        // to a file) is shown whole. Once lines are dropped, they are until the oldest
+        // line waiting has waited less than half as long, and half as many wait (a reader
+        // a little slow would otherwise get a line, then a gap, in turn). Where lines
+        // were dropped, a line says how many, before the next one kept.
         let waited = pending.oldest_waited(std::time::Instant::now());
         if waited >= OUTPUT_WAIT || pending.len() >= PENDING_LINES {
             unshown.dropping = true;
