@@ -1232,9 +1232,7 @@ impl Serve {
         let gone = self.clients.swap_remove(index);
         gone.end.cancel();
         let client = gone.peer;
-        // Measured: to the millisecond is enough.
-        let millis = u64::try_from(since.elapsed().as_millis()).unwrap_or(u64::MAX);
-        let since = crate::render::Seconds(Duration::from_millis(millis));
+        let since = crate::render::Seconds::measured(since.elapsed());
         if lock(&gone.closed).is_some() {
             // As a client that left.
             tracing::debug!("hub: client {client} let go for {peer}: {why} for {since}");

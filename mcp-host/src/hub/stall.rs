@@ -63,12 +63,10 @@ impl Stalls {
         let then = state.beat;
         let gap = now.saturating_duration_since(then);
         if gap > STALL {
-            // Measured: to the millisecond is enough (7.106 s, not 7.105894811 s).
-            let millis = u64::try_from(gap.as_millis()).unwrap_or(u64::MAX);
             tracing::warn!(
                 "hub: it could read nothing for {}: requests read as it goes on count from \
                  the start of that, and those that waited too long are refused",
-                crate::render::Seconds(Duration::from_millis(millis))
+                crate::render::Seconds::measured(gap)
             );
             state.last = Some((then, now));
         }

@@ -19,6 +19,15 @@ use std::time::Duration;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub struct Seconds(pub Duration);
 
+impl Seconds {
+    /// A duration measured on a clock, shown to the millisecond (`7.105 s`, not
+    /// `7.105894811 s`): finer is noise.
+    pub(crate) fn measured(duration: Duration) -> Self {
+        let millis = u64::try_from(duration.as_millis()).unwrap_or(u64::MAX);
+        Seconds(Duration::from_millis(millis))
+    }
+}
+
 impl fmt::Display for Seconds {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         // From the whole seconds and the nanoseconds, not a float: 1.14 s, not
@@ -38,6 +47,16 @@ impl fmt::Display for Seconds {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_measured_duration_is_shown_to_the_millisecond() {
+        let gap = Duration::from_nanos(7_105_894_811);
+        assert_eq!(Seconds::measured(gap).to_string(), "7.105 s");
+        assert_eq!(
+            Seconds::measured(Duration::from_micros(999)).to_string(),
+            "0 s"
+        );
+    }
 
     #[test]
     fn whole_fractional_and_tiny_durations_print_exactly() {
