@@ -1353,7 +1353,8 @@ fn monitor_marks_the_lines_it_dropped_for_a_paused_reader_in_its_output() {
 
 /// Monitor stopped a while (Ctrl-Z, SIGSTOP) while frames come: once it goes on, the
 /// burst that waited in the connection is recorded whole, not dropped for monitor being
-/// behind, and shown whole to a reader that takes it as it comes. (Linux: the connection's buffers hold the burst while monitor is stopped.)
+/// behind, and shown whole to a reader that takes it as it comes. (Linux: the
+/// connection's buffers hold the burst while monitor is stopped.)
 #[cfg(target_os = "linux")]
 #[test]
 fn monitor_records_the_burst_that_waited_while_it_was_stopped() {

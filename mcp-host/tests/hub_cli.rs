@@ -90,9 +90,15 @@ fn line_with(lines: &mpsc::Receiver<String>, text: &str) -> String {
 /// Sends Ctrl-C (SIGINT) to the hub.
 #[cfg(unix)]
 fn sigint(hub: &Running) {
+    signal(hub, libc::SIGINT);
+}
+
+/// Sends `signal` to the hub.
+#[cfg(unix)]
+fn signal(hub: &Running, signal: libc::c_int) {
     let pid = i32::try_from(hub.0.id()).expect("pid");
     // SAFETY: kill(2) with the pid of a child of this process and a valid signal.
-    assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
+    assert_eq!(unsafe { libc::kill(pid, signal) }, 0);
 }
 
 /// Ctrl-C to the hub: it exits with status 0; its `stopped:` summary line, from `out`.
@@ -446,13 +452,10 @@ fn a_hub_stopped_a_while_says_for_how_long_to_the_millisecond() {
     let (link, _radio) = common::silent_peer(1);
     let (mut hub, out, err) = start_hub(&link);
     serving(&out);
-    let pid = i32::try_from(hub.0.id()).expect("pid");
-    // SAFETY: kill(2) with the pid of a child of this process and a valid signal.
-    assert_eq!(unsafe { libc::kill(pid, libc::SIGSTOP) }, 0);
+    signal(&hub, libc::SIGSTOP);
     // The stall itself, not a wait for something: the hub sees it on its clock.
     std::thread::sleep(Duration::from_millis(2500));
-    // SAFETY: as above.
-    assert_eq!(unsafe { libc::kill(pid, libc::SIGCONT) }, 0);
+    signal(&hub, libc::SIGCONT);
     // Its line (after any of a stall of its own on a busy machine), each to the
     // millisecond.
     loop {

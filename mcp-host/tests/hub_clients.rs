@@ -230,6 +230,20 @@ async fn clients_that_closed_their_connections_give_their_places_up_on_a_quiet_r
     hub.stop().await;
 }
 
+/// Batches of 100 [`radio_batch`] frames until the hub has dropped one for a client
+/// (10 000 frames at most).
+async fn batches_until_one_dropped(
+    hub: &Hub,
+    radio: &mut Wire,
+    number: &mut u32,
+    seen: &mut tokio::sync::mpsc::UnboundedReceiver<u32>,
+) {
+    while hub.stats().frames_dropped == 0 {
+        radio_batch(radio, number, 100, seen).await;
+        assert!(*number < 10_000, "never behind: {:?}", hub.stats());
+    }
+}
+
 /// A client that has fallen behind, and lost some of the radio's frames, still gets the
 /// answer to its request, ahead of the frames waiting for it at the hub.
 #[tokio::test(flavor = "multi_thread")]
@@ -247,10 +261,7 @@ async fn a_client_that_fell_behind_still_gets_the_answer_to_its_request() {
     let hub_id = request[1];
     // The radio's frames, until some are dropped for the client, which reads nothing.
     let mut number = 0u32;
-    while hub.stats().frames_dropped == 0 {
-        radio_batch(&mut radio, &mut number, 100, &mut seen_rx).await;
-        assert!(number < 10_000, "never behind: {:?}", hub.stats());
-    }
+    batches_until_one_dropped(&hub, &mut radio, &mut number, &mut seen_rx).await;
     // Then the radio answers, and sends one more batch.
     let answer = [0x88, hub_id, b'N', b'I', 0x00, b'M', b'A', b'V'];
     radio.send(&RawFrame::new(&answer).unwrap()).await.unwrap();
@@ -298,10 +309,7 @@ async fn a_connection_that_reads_nothing_falls_behind_after_a_bounded_number_of_
 
     // 250-byte frames in batches, until one is dropped for the idle connection.
     let mut number = 0u32;
-    while hub.stats().frames_dropped == 0 {
-        radio_batch(&mut radio, &mut number, 100, &mut seen_rx).await;
-        assert!(number < 10_000, "never behind: {:?}", hub.stats());
-    }
+    batches_until_one_dropped(&hub, &mut radio, &mut number, &mut seen_rx).await;
     // The queue, 1024 frames, and about 128 KiB in the system's buffers on the hub's
     // side (64 KiB asked, doubled by Linux: ~520 of these frames) and a little on the
     // client's; without the bound, more than 10 000.
