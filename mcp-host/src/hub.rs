@@ -130,7 +130,11 @@
 //!   it back. A hub open to untrusted clients in API mode 1 should take no longer
 //!   frames than requests are ([`MAX_REQUEST_DATA`](crate::codec::MAX_REQUEST_DATA),
 //!   which every radio's frame fits too): a longer length field costs a rescan of as
-//!   many bytes (see the `Worst case` of [`xbee_api::Decoder`]).
+//!   many bytes (see the `Worst case` of [`xbee_api::Decoder`]). Bytes outside any
+//!   frame (before a start delimiter: text typed into a connection, a program in
+//!   transparent mode) are skipped, as a radio skips them, and counted in
+//!   [`HubStats::bytes_skipped`]; the first a client sends are said as a warning, as
+//!   the client itself hears nothing back.
 //! - **Clients ended:** when the hub ends a client (its place taken, the radio's link
 //!   lost, the hub stopped) or its connection fails, its frames not yet written are
 //!   dropped (counted in [`HubStats::frames_refused`]): its commands are not carried out
@@ -169,6 +173,7 @@
 //! # }
 //! ```
 
+mod input;
 mod port;
 mod stall;
 
@@ -191,9 +196,10 @@ use tokio_util::sync::CancellationToken;
 use tokio_util::task::TaskTracker;
 use xbee_api::{ApiMode, RawFrame};
 
+use self::input::{ClientCodec, ClientInput, ClientItem};
 use self::port::Port;
 use self::stall::Stalls;
-use crate::codec::{CodecItem, XBeeCodec, encode_frame};
+use crate::codec::{CodecItem, encode_frame};
 use crate::event::{answer_type, is_response};
 use crate::ids::IdTable;
 use crate::repeats::Repeats;
@@ -325,6 +331,11 @@ pub struct HubStats {
     /// place. The first is logged as a warning, the next ones counted in a warning at
     /// most once a second.
     pub clients_turned_away: u64,
+    /// Bytes of clients that began no frame (before a start delimiter: text typed into
+    /// a connection, a program in transparent mode), skipped as a radio skips them.
+    /// The first a client sends is logged as a warning, with what they may be; its
+    /// others are counted in the line that says it has gone.
+    pub bytes_skipped: u64,
     /// The counters of the hub's own link to the radio: frames and framing errors,
     /// disconnects and reconnects, and in [`Stats::events_dropped`] the frames lost
     /// because the hub itself fell behind the radio (before any client saw them). The
@@ -343,6 +354,7 @@ struct Counters {
     frames_refused: AtomicU64,
     requests_held: AtomicU64,
     clients_turned_away: AtomicU64,
+    bytes_skipped: AtomicU64,
     /// Clients' frames refused, for the warning: said as they come, a second apart at
     /// most, since a client that keeps sending what the hub refuses (a recording of
     /// what a radio said, played onto the hub) hears nothing back.
@@ -520,6 +532,7 @@ impl Hub {
             frames_refused: c.frames_refused.load(Ordering::Relaxed),
             requests_held: c.requests_held.load(Ordering::Relaxed),
             clients_turned_away: c.clients_turned_away.load(Ordering::Relaxed),
+            bytes_skipped: c.bytes_skipped.load(Ordering::Relaxed),
             radio: self.radio_counters.snapshot(),
         }
     }
@@ -731,19 +744,6 @@ fn at_command(data: &[u8]) -> Option<[u8; 2]> {
         _ => return None,
     };
     data.get(at..at + 2)?.try_into().ok()
-}
-
-/// How the hub reads its clients' frames: as it reads the radio's, with its
-/// [`LinkOptions`].
-#[derive(Debug, Clone, Copy)]
-struct ClientInput {
-    /// Frames longer than this ([`LinkOptions::max_frame_len`]) are refused as soon as
-    /// their length is read.
-    max_frame_len: usize,
-    /// API mode 1: a partial frame that gets no new byte for this long is given up,
-    /// and the bytes after its start delimiter scanned again
-    /// ([`LinkOptions::partial_frame_timeout`]).
-    partial_frame_timeout: Option<Duration>,
 }
 
 /// Whether `data`, a request of a type the hub routes (see [`answer_type`]), holds the
@@ -1196,6 +1196,7 @@ impl Serve {
             behind,
             closed,
             dropped,
+            skipped: AtomicU64::new(0),
         });
         let (rd, wr) = socket.into_split();
         let (frames_to_radio, queue) = mpsc::channel(CLIENT_FRAMES_TO_RADIO);
@@ -1507,6 +1508,8 @@ struct Client {
     closed: Arc<Mutex<Option<Instant>>>,
     /// The radio's frames dropped for it (see [`Connected::dropped`]).
     dropped: Arc<AtomicU64>,
+    /// Its bytes that began no frame, skipped.
+    skipped: AtomicU64,
 }
 
 impl Drop for Client {
@@ -1526,9 +1529,7 @@ impl Client {
     /// frames, and its frames already read still go to the radio. A connection that
     /// fails ends the client. Its frames are read as the radio's (see [`ClientInput`]).
     async fn read(self: Arc<Self>, rd: OwnedReadHalf, to_radio: mpsc::Sender<Queued>) {
-        let max_frame_len = self.input.max_frame_len;
-        let codec = XBeeCodec::with_counters(self.mode, max_frame_len, Arc::default());
-        let mut reader = FramedRead::new(rd, codec);
+        let mut reader = FramedRead::new(rd, ClientCodec::new(self.mode, self.input));
         let timeout = self.input.partial_frame_timeout;
         // The client's bytes that were in the reader's buffer when one of its frames
         // began to wait (see `admit`), and since when: frames wholly among them were
@@ -1536,7 +1537,7 @@ impl Client {
         let mut old: Option<(Instant, usize)> = None;
         let read = async {
             loop {
-                let check_stale_at = reader.decoder().stale_check_at(timeout);
+                let check_stale_at = reader.decoder().codec().stale_check_at(timeout);
                 let before = reader.read_buffer().len();
                 let ready = reader.next().now_or_never();
                 let item = if let Some(item) = ready {
@@ -1550,9 +1551,9 @@ impl Client {
                             if let Some(item) = reader.next().now_or_never() {
                                 item
                             } else {
-                                if reader.decoder().is_stale(timeout, Instant::now()) {
+                                if reader.decoder().codec().is_stale(timeout, Instant::now()) {
                                     old = None;
-                                    for item in reader.decoder_mut().drop_partial() {
+                                    for item in reader.decoder_mut().codec_mut().drop_partial() {
                                         if self.pass(item, &to_radio, None).await.is_err() {
                                             return;
                                         }
@@ -1581,16 +1582,21 @@ impl Client {
                     (began, since) => since.or(began),
                 };
                 match item {
-                    Some(Ok(item)) => match self.pass(item, &to_radio, since).await {
-                        Err(()) => return, // The hub stops.
-                        // The bytes waiting behind it now were there when it began to
-                        // wait (or, if it was itself old, when the first of its line did).
-                        Ok(Some(waited)) => {
-                            let buffered = reader.read_buffer().len();
-                            old = (buffered > 0).then(|| (since.unwrap_or(waited), buffered));
+                    Some(Ok(ClientItem::Skipped { bytes, after_error })) => {
+                        self.skipped(bytes, after_error);
+                    }
+                    Some(Ok(ClientItem::Codec(item))) => {
+                        match self.pass(item, &to_radio, since).await {
+                            Err(()) => return, // The hub stops.
+                            // The bytes waiting behind it now were there when it began to
+                            // wait (or, if it was itself old, when the first of its line did).
+                            Ok(Some(waited)) => {
+                                let buffered = reader.read_buffer().len();
+                                old = (buffered > 0).then(|| (since.unwrap_or(waited), buffered));
+                            }
+                            Ok(None) => {}
                         }
-                        Ok(None) => {}
-                    },
+                    }
                     Some(Err(error)) => {
                         tracing::debug!(peer = %self.peer, %error, "hub: reading from a client failed");
                         self.end.cancel();
@@ -1612,6 +1618,27 @@ impl Client {
         // once it may.
         drop(to_radio);
         self.to_radio.ready.notify_one();
+    }
+
+    /// Counts `bytes` of this client's skipped, that began no frame; the first it sends
+    /// are said as a warning (the client hears nothing back), unless they came
+    /// `after_error` (the rest of a frame already said as refused, perhaps), the others
+    /// counted when it goes.
+    fn skipped(&self, bytes: u64, after_error: bool) {
+        self.counters
+            .bytes_skipped
+            .fetch_add(bytes, Ordering::Relaxed);
+        if self.skipped.fetch_add(bytes, Ordering::Relaxed) == 0 && !after_error {
+            tracing::warn!(
+                peer = %self.peer,
+                "hub: a client's bytes skipped: {} that began no frame (the hub takes \
+                 XBee API frames in API mode {}, each from a 0x7E: is the client sending \
+                 text, or in transparent mode?); the client's later ones are counted \
+                 when it goes",
+                crate::diagnosis::counted(bytes, "byte"),
+                u8::from(self.mode)
+            );
+        }
     }
 
     /// Counts a frame of this client's refused, and says why as a warning: the first at
@@ -1715,12 +1742,25 @@ impl Client {
         if lock(&self.closed).is_none() {
             self.end.cancel();
         }
-        match self.dropped.load(Ordering::Relaxed) {
-            0 => tracing::info!(peer = %self.peer, %reason, "hub: client gone"),
-            dropped => tracing::info!(
+        let dropped = match self.dropped.load(Ordering::Relaxed) {
+            0 => None,
+            dropped => Some(format!("{dropped} of the radio's frames dropped for it")),
+        };
+        let skipped = match self.skipped.load(Ordering::Relaxed) {
+            0 => None,
+            skipped => Some(format!(
+                "{} from it that began no frame skipped",
+                crate::diagnosis::counted(skipped, "byte")
+            )),
+        };
+        let said: Vec<String> = dropped.into_iter().chain(skipped).collect();
+        match said.is_empty() {
+            true => tracing::info!(peer = %self.peer, %reason, "hub: client gone"),
+            false => tracing::info!(
                 peer = %self.peer,
                 %reason,
-                "hub: client gone ({dropped} of the radio's frames dropped for it)"
+                "hub: client gone ({})",
+                said.join("; ")
             ),
         }
     }

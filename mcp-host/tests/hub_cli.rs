@@ -809,6 +809,36 @@ fn a_clients_frame_that_fails_its_checksum_is_refused_and_said_with_the_hubs_mod
     );
 }
 
+#[cfg(unix)]
+#[test]
+fn a_clients_bytes_that_begin_no_frame_are_said_once_and_counted() {
+    let (_sim, radio, _sim_out) = sim_on_tcp("1");
+    let (mut hub, out, err) = start_hub(&radio);
+    let (_, addr) = serving(&out);
+    // Text typed into a connection, as into `nc`: the hub reads frames, not lines.
+    let mut client = std::net::TcpStream::connect(&addr).unwrap();
+    std::io::Write::write_all(&mut client, b"ATAP\r").unwrap();
+    let skipped = line_with(&err, "bytes skipped");
+    assert_timed(
+        &skipped,
+        " warning: hub: a client's bytes skipped: 5 bytes that began no frame (the hub \
+         takes XBee API frames in API mode 1, each from a 0x7E: is the client sending \
+         text, or in transparent mode?); the client's later ones are counted when it goes",
+    );
+    let peer = client.local_addr().unwrap().to_string();
+    assert!(skipped.ends_with(&format!("(peer {peer})")), "{skipped}");
+    // The client is still served; what it sends later is counted, not said. (Its
+    // answer comes once the hub has read the bytes before the request.)
+    answered_at_ap(&mut client, 1);
+    std::io::Write::write_all(&mut client, b"ATNI\r").unwrap();
+    answered_at_ap(&mut client, 2);
+    stop_hub(&mut hub, &out);
+    let summary = line_with(&out, "clients: ");
+    assert_eq!(summary, "clients: 10 bytes that began no frame skipped");
+    let said: Vec<String> = err.try_iter().filter(|l| l.contains("skipped")).collect();
+    assert!(said.is_empty(), "{said:?}");
+}
+
 /// Sends `AT AP` under `id` (API mode 1) on `client` and reads frames until its answer:
 /// the hub served the client.
 #[cfg(unix)]

@@ -225,7 +225,13 @@ pub(crate) async fn run(mut args: HubArgs) -> Result<(), Failure> {
             crate::counted(stats.requests_held, "request")
         )
     });
-    let clients: Vec<String> = turned_away.into_iter().chain(held).collect();
+    let skipped = (stats.bytes_skipped > 0).then(|| {
+        format!(
+            "{} that began no frame skipped",
+            crate::counted(stats.bytes_skipped, "byte")
+        )
+    });
+    let clients: Vec<String> = turned_away.into_iter().chain(held).chain(skipped).collect();
     if !clients.is_empty() {
         out!("clients: {}", clients.join(", "));
     }
