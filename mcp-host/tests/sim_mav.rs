@@ -3,7 +3,7 @@
 
 use std::time::Duration;
 
-use futures::{SinkExt, StreamExt};
+use futures::{FutureExt, SinkExt, StreamExt};
 use mcp_host::codec::{CodecItem, XBeeCodec};
 use mcp_host::sim::{SimMav, run_mav};
 use tokio::time::Instant;
@@ -43,4 +43,38 @@ async fn telemetry_comes_at_20_hz_as_transmit_requests_to_the_coordinator() {
     for pair in times.windows(2) {
         assert_eq!(pair[1] - pair[0], Duration::from_millis(50));
     }
+}
+
+#[tokio::test(start_paused = true)]
+async fn telemetry_keeps_20_hz_on_a_coarse_clock() {
+    let (radio, mav) = tokio::io::duplex(1 << 16);
+    tokio::spawn(run_mav(mav, SimMav::new(1_000)));
+    let mut radio = Framed::new(radio, XBeeCodec::new(ApiMode::Unescaped));
+    let rx = ReceivePacketRepr {
+        src64: Address64::COORDINATOR,
+        src16: Address16::COORDINATOR,
+        options: 0x01,
+        data: b"c\x01\x01\x1a",
+    };
+    radio.send(&rx).await.unwrap();
+    // Timers that fire up to a tick of 15.625 ms late, as Windows' do by default: 10 s
+    // of such ticks, the MAV's frames taken as they come.
+    let tick = Duration::from_micros(15_625);
+    let mut telemetry = 0;
+    for _ in 0..640 {
+        tokio::time::advance(tick).await;
+        for _ in 0..10 {
+            tokio::task::yield_now().await;
+        }
+        while let Some(Some(Ok(CodecItem::Frame(frame)))) = radio.next().now_or_never() {
+            if let Ok(Frame::TransmitRequest(tx)) = frame.parse() {
+                telemetry += usize::from(tx.data.starts_with(b"t\x1a"));
+            }
+        }
+    }
+    // Late ticks do not push the next ones later: 200 in 10 s, not 160.
+    assert!(
+        (199..=201).contains(&telemetry),
+        "{telemetry} telemetry packets in 10 s"
+    );
 }
