@@ -26,7 +26,10 @@ pub enum FlowControl {
     #[default]
     None,
     /// Hardware flow control on RTS/CTS (`serial:PATH:BAUD:rtscts`): nothing is written
-    /// while the radio drops CTS.
+    /// while the radio drops CTS. On Unix the driver also drops RTS while its own
+    /// receive buffer is full (which holds back a radio with `D6` = 1); on Windows the
+    /// serial driver is set to honour CTS alone and keeps RTS raised, so the radio is
+    /// never held back there.
     RtsCts,
 }
 

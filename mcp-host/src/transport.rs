@@ -914,7 +914,8 @@ impl Connector {
                 // Windows opens a port with DTR and RTS off, where Unix raises both: a
                 // radio that waits for RTS before it sends (D6=1) would say nothing, and
                 // one whose sleep request is wired to DTR would sleep. Raised as on Unix
-                // (RTS only without flow control: with it, the driver holds RTS itself).
+                // (RTS only without flow control: with it, serialport sets the driver to
+                // keep RTS raised itself, honouring CTS alone).
                 #[cfg(windows)]
                 {
                     use tokio_serial::SerialPort;
@@ -1103,7 +1104,7 @@ pub(crate) struct KeepAlive {
 }
 
 /// A `tcp:` or `tcp-listen:` link's connection: a peer gone is found out within about
-/// half a minute (a minute on Windows), and the link reconnects, even on a quiet
+/// half a minute (a minute on Windows before 10), and the link reconnects, even on a quiet
 /// network where nothing is written.
 pub(crate) const LINK_KEEPALIVE: KeepAlive = KeepAlive {
     idle: Duration::from_secs(10),

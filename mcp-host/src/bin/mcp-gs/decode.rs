@@ -67,14 +67,24 @@ impl Default for Summary {
 
 /// What `decode` says when it reads a terminal: that it waits for input, which input,
 /// and how to end it.
-fn terminal_note(hex: bool) -> &'static str {
+fn terminal_note(hex: bool) -> String {
     if hex {
-        "mcp-gs: decoding hex typed on the terminal, a line at a time (end with Ctrl-D)"
+        format!("mcp-gs: decoding hex typed on the terminal, a line at a time ({END_OF_INPUT})")
     } else {
-        "mcp-gs: decoding raw bytes from the terminal: give a capture FILE, or --hex to type \
-         frames in hex (end with Ctrl-D)"
+        format!(
+            "mcp-gs: decoding raw bytes from the terminal: give a capture FILE, or --hex to \
+             type frames in hex ({END_OF_INPUT})"
+        )
     }
 }
+
+/// How input typed on the terminal is ended: Ctrl-D on Unix; on the Windows console,
+/// where Ctrl-D is a character (which `--hex` refuses), Ctrl-Z at the start of a line.
+const END_OF_INPUT: &str = if cfg!(windows) {
+    "end with Ctrl-Z, then Enter"
+} else {
+    "end with Ctrl-D"
+};
 
 /// Runs `decode`.
 pub(crate) fn run(args: DecodeArgs) -> Result<(), Failure> {
@@ -264,7 +274,16 @@ fn stdin_is_a_file() -> bool {
             .and_then(|fd| File::from(fd).metadata())
             .is_ok_and(|meta| meta.is_file())
     }
-    #[cfg(not(unix))]
+    #[cfg(windows)]
+    {
+        use std::os::windows::io::AsHandle;
+        io::stdin()
+            .as_handle()
+            .try_clone_to_owned()
+            .and_then(|handle| File::from(handle).metadata())
+            .is_ok_and(|meta| meta.is_file())
+    }
+    #[cfg(not(any(unix, windows)))]
     {
         false
     }

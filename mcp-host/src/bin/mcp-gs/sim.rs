@@ -84,7 +84,9 @@ whose 60-byte UART receive buffer drops longer frames (a trajectory of more than
 waypoints, a message of more than 43 bytes), they take commands of any size unless \
 --rx-buffer 60 says otherwise. Faults options as in `mcp-gs radio`.
 
-Example: mcp-gs sim --link pty --mavs 2   (then connect a ground station to the printed path)";
+Example: mcp-gs sim --link pty --mavs 2   (then connect a ground station to the printed path;
+on Windows, which has no pseudo-terminals: --link tcp-listen:127.0.0.1:9750, and the
+ground station's --link tcp:127.0.0.1:9750)";
 
 /// How many MAVs' addresses a line of the fleet's list holds (as `0013a20040b599b9/7d84`).
 const MAVS_A_LINE: usize = 4;
