@@ -1261,6 +1261,64 @@ fn monitor_records_every_frame_while_its_output_is_not_read() {
     );
 }
 
+/// `monitor --record FILE 2>&1 | less`, the pager paused: its warnings (lines not shown)
+/// wait with its output for a reader that takes nothing, and the recording still takes
+/// every frame, where a warning written on the command's own thread held it up.
+#[cfg(unix)]
+#[test]
+fn monitor_records_every_frame_while_its_warnings_are_not_read() {
+    let radio = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let link = format!("tcp:{}", radio.local_addr().unwrap());
+    let dir = tempfile::tempdir().unwrap();
+    let record = dir.path().join("paused.mcprec");
+    // Standard output and error on one pipe, held and not read until the end.
+    let (mut pipe, into_pipe) = std::io::pipe().unwrap();
+    let mut monitor = gs();
+    monitor
+        .args(["monitor", "--link", &link, "--record"])
+        .arg(&record)
+        .stdout(into_pipe.try_clone().unwrap())
+        .stderr(into_pipe);
+    let mut child = common::Running(monitor.spawn().unwrap());
+    drop(monitor);
+    let (mut socket, _) = radio.accept().unwrap();
+    let modem_status = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F];
+    // Batches, each once the last is recorded, for long enough that lines not shown
+    // are said (once a line has waited 2 s for the reader) and more come after.
+    let start = std::time::Instant::now();
+    let batch = 200;
+    let mut frames = 0;
+    while frames < 20_000 || start.elapsed() < std::time::Duration::from_secs(4) {
+        socket.write_all(&modem_status.repeat(batch)).unwrap();
+        frames += batch;
+        let all = mcp_host::record::HEADER_LEN + frames * mcp_host::record::record_len(2);
+        recorded(
+            &record,
+            all as u64,
+            &format!("frame {frames}, {:?} in", start.elapsed()),
+        );
+    }
+    let pid = i32::try_from(child.0.id()).unwrap();
+    // SAFETY: kill(2) with the pid of a child of this process and a valid signal.
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
+    assert_eq!(common::exit_code(&mut child.0), Some(0));
+    let mut said = String::new();
+    std::io::Read::read_to_string(&mut pipe, &mut said).unwrap();
+    assert!(
+        said.contains(
+            " received frames not shown: standard output is not read as fast as they come"
+        ),
+        "{}",
+        &said[said.len().saturating_sub(2000)..]
+    );
+    let output = run(&["decode", "--summary", record.to_str().unwrap()]);
+    let summary = String::from_utf8_lossy(&output.stdout);
+    assert!(
+        summary.contains(&format!("frames: {frames}\n")),
+        "{summary}"
+    );
+}
+
 /// A reader that paused (a program busy elsewhere, a pager): where monitor dropped
 /// lines for it, a line says how many, in the JSON stream itself, before the next line
 /// kept; with every frame accounted for.

@@ -18,8 +18,11 @@ use tracing_subscriber::registry::LookupSpan;
 pub(crate) fn init(hub: bool) {
     // Colours for a terminal only, not for a pipe or a log file.
     let ansi = std::io::IsTerminal::is_terminal(&std::io::stderr());
+    // Standard error by its own thread, so that a reader that takes nothing does not
+    // hold the command up.
+    crate::stderr::start();
     let builder = tracing_subscriber::fmt()
-        .with_writer(std::io::stderr)
+        .with_writer(crate::stderr::log_line)
         .with_ansi(ansi);
     match tracing_subscriber::EnvFilter::try_from_env("MCP_LOG") {
         Ok(filter) => builder.with_env_filter(filter).init(),

@@ -39,6 +39,7 @@ mod send;
 mod setup;
 mod sim;
 mod status;
+mod stderr;
 
 use std::process::ExitCode;
 
@@ -196,20 +197,24 @@ pub(crate) fn write_line(line: std::fmt::Arguments<'_>) {
     let mut stdout = std::io::stdout().lock();
     if let Err(e) = writeln!(stdout, "{line}").and_then(|()| stdout.flush()) {
         match output_failure(&e) {
-            None => std::process::exit(0),
+            None => {
+                stderr::finish();
+                std::process::exit(0)
+            }
             Some(failure) => {
                 err!("mcp-gs: {}", failure.message);
+                stderr::finish();
                 std::process::exit(failure.code.into());
             }
         }
     }
 }
 
-/// Writes one line to standard error, losing it if standard error cannot be written:
-/// the command's exit status says what happened.
+/// Writes one line to standard error, by its own thread once the logger is installed
+/// ([`stderr`]), losing it if standard error cannot be written: the command's exit
+/// status says what happened.
 pub(crate) fn write_err(line: std::fmt::Arguments<'_>) {
-    use std::io::Write;
-    let _ = writeln!(std::io::stderr().lock(), "{line}");
+    stderr::write(format!("{line}\n").into_bytes());
 }
 
 /// What an error writing standard output ends the program with: `None` when standard
@@ -358,13 +363,15 @@ async fn main() -> ExitCode {
         Sub::Hub(args) => hub::run(args).await,
         Sub::Demo(args) => demo::run(args).await,
     };
-    match result {
+    let code = match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(failure) => {
             err!("mcp-gs: {}", failure.message);
             ExitCode::from(failure.code)
         }
-    }
+    };
+    stderr::finish();
+    code
 }
 
 #[cfg(test)]
