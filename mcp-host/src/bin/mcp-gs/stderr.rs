@@ -38,7 +38,7 @@ pub(crate) fn start() {
     let spawned = std::thread::Builder::new()
         .name("mcp-gs stderr".into())
         .spawn(move || {
-            write_all(&queued, &counted);
+            write_all(&queued, &counted, &mut io::stderr());
             drop(done);
         });
     if spawned.is_ok() {
@@ -88,7 +88,7 @@ pub(crate) fn finish() {
 
 /// The thread: each line as it comes, with those queued meanwhile in one write, after
 /// the number of those dropped, if any were; at the end, the number dropped since.
-fn write_all(queued: &Receiver<Vec<u8>>, dropped: &AtomicU64) {
+fn write_all(queued: &Receiver<Vec<u8>>, dropped: &AtomicU64, out: &mut impl Write) {
     let mut batch = Vec::new();
     let said_dropped = |batch: &mut Vec<u8>| {
         let n = dropped.swap(0, Ordering::Relaxed);
@@ -108,11 +108,11 @@ fn write_all(queued: &Receiver<Vec<u8>>, dropped: &AtomicU64) {
         while let Ok(line) = queued.try_recv() {
             batch.extend_from_slice(&line);
         }
-        let _ = io::stderr().lock().write_all(&batch);
+        let _ = out.write_all(&batch);
     }
     batch.clear();
     said_dropped(&mut batch);
-    let _ = io::stderr().lock().write_all(&batch);
+    let _ = out.write_all(&batch);
 }
 
 /// A line of the logger, sent to [`write`] as a whole once it is formatted.
@@ -140,4 +140,42 @@ impl Drop for LogLine {
 /// The logger's writer: a [`LogLine`] an event.
 pub(crate) fn log_line() -> LogLine {
     LogLine(Vec::new())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lines_dropped_are_said_before_the_next_line_and_at_the_end() {
+        let (lines, queued) = mpsc::sync_channel(QUEUE);
+        let dropped = AtomicU64::new(2);
+        lines.send(b"one\n".to_vec()).unwrap();
+        lines.send(b"two\n".to_vec()).unwrap();
+        let mut out = Vec::new();
+        let (counted, into) = (&dropped, &mut out);
+        std::thread::scope(|scope| {
+            let writer = scope.spawn(move || write_all(&queued, counted, into));
+            // Dropped after the thread took the first lines, or before: said either
+            // way, once, before the end.
+            dropped.fetch_add(1, Ordering::Relaxed);
+            drop(lines);
+            writer.join().unwrap();
+        });
+        let out = String::from_utf8(out).unwrap();
+        let said: Vec<&str> = out.lines().filter(|l| l.contains("dropped")).collect();
+        let total: u64 = said
+            .iter()
+            .map(|l| l.split(' ').nth(2).unwrap().parse::<u64>().unwrap())
+            .sum();
+        assert_eq!(total, 3, "{out}");
+        assert!(out.starts_with("mcp-gs: warning: "), "{out}");
+        assert!(
+            said.iter()
+                .all(|l| l
+                    .ends_with(" of standard error dropped: it was not read as fast as they came")),
+            "{out}"
+        );
+        assert!(out.contains("one\ntwo\n"), "{out}");
+    }
 }
