@@ -16,8 +16,9 @@ use tracing_subscriber::registry::LookupSpan;
 /// a command that runs for hours, whose outages are read back later, and the hub's
 /// status lines are shown beside the warnings.
 pub(crate) fn init(hub: bool) {
-    // Colours for a terminal only, not for a pipe or a log file.
-    let ansi = std::io::IsTerminal::is_terminal(&std::io::stderr());
+    // Colours for a terminal only, not for a pipe or a log file; not on Windows, whose
+    // console shows the escape codes as they are unless a program turns them on.
+    let ansi = std::io::IsTerminal::is_terminal(&std::io::stderr()) && !cfg!(windows);
     // Standard error by its own thread, so that a reader that takes nothing does not
     // hold the command up.
     crate::stderr::start();
