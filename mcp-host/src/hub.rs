@@ -11,7 +11,8 @@
 //!   client that falls behind by [`CLIENT_QUEUE`] frames loses the newest ones (counted
 //!   in [`HubStats::frames_dropped`], and said in a warning as it happens); the others
 //!   are not held up. The answers to its own requests wait apart, [`ANSWER_QUEUE`] at
-//!   most, and are not lost with them.
+//!   most, and are not lost with them (those beyond are dropped, counted with the
+//!   frames and said in a warning naming the client, at most one a second).
 //! - **From a client:** frames go to the radio in the order the client sent them. A
 //!   request with a frame id goes under an id the hub allocates, and its answers go
 //!   back to that client alone, under the client's own id, ahead of the radio's other
@@ -696,9 +697,14 @@ impl Routes {
             .remove_where(|r| r.client == client && !r.orphan.get(), |_, _| {});
     }
 
-    /// Where `answer` (frame data) under hub id `id` goes, and the client's own id; the
-    /// route ends with it unless more answers are due.
-    fn answer(&mut self, id: u8, answer: &[u8], now: Instant) -> Option<(mpsc::Sender<Bytes>, u8)> {
+    /// Where `answer` (frame data) under hub id `id` goes, the client's own id and the
+    /// client's number; the route ends with it unless more answers are due.
+    fn answer(
+        &mut self,
+        id: u8,
+        answer: &[u8],
+        now: Instant,
+    ) -> Option<(mpsc::Sender<Bytes>, u8, u64)> {
         let route = self.0.get(id)?;
         // Not yet written: not its answer (a late one to an earlier request).
         let until = route.until.get()?;
@@ -711,7 +717,8 @@ impl Routes {
             }
         }
         // An orphan's answer is taken, and goes nowhere.
-        let to = (until > now && !route.orphan.get()).then(|| (route.queue.clone(), route.own_id));
+        let to = (until > now && !route.orphan.get())
+            .then(|| (route.queue.clone(), route.own_id, route.client));
         if until <= now || !route.many {
             self.0.remove(id);
         }
@@ -920,6 +927,8 @@ impl RadioWriter {
 /// A client as the hub's main task knows it.
 struct Connected {
     peer: SocketAddr,
+    /// Its number, in its routes.
+    number: u64,
     /// Its queue of frames from the radio.
     queue: mpsc::Sender<Bytes>,
     /// Ends its tasks.
@@ -934,6 +943,8 @@ struct Connected {
     dropped: Arc<AtomicU64>,
     /// When the frames dropped for it were last said, and how many there were then.
     said_dropped: Option<(Instant, u64)>,
+    /// Answers to its requests dropped, for the warning.
+    answers_dropped: Repeats,
 }
 
 impl Connected {
@@ -967,6 +978,25 @@ impl Connected {
 /// How often, at most, the hub says that frames are dropped for a client: see
 /// [`Connected::dropped_one`].
 const DROPS_SAID_EVERY: Duration = Duration::from_secs(10);
+
+impl Connected {
+    /// An answer to one of its requests dropped, [`ANSWER_QUEUE`] of them waiting for it
+    /// (it sent requests and read nothing, while the radio's frames filled its
+    /// connection): counted, and said, the first at once, then at most one a second
+    /// with the number not said.
+    fn answer_dropped(&mut self, now: Instant) {
+        let peer = self.peer;
+        let more = match self.answers_dropped.count(now) {
+            None => return,
+            Some(0) => String::new(),
+            Some(more) => format!(", and {more} more since the last such warning"),
+        };
+        tracing::warn!(
+            "hub: an answer to a request of client {peer} dropped: {ANSWER_QUEUE} of its \
+             answers wait for it to read them{more}"
+        );
+    }
+}
 
 /// The hub's main task: frames from the radio to the clients, new clients accepted.
 struct Serve {
@@ -1167,17 +1197,19 @@ impl Serve {
         let behind = Arc::new(Mutex::new(None));
         let closed = Arc::new(Mutex::new(None));
         let dropped = Arc::new(AtomicU64::new(0));
+        let number = self.next_client;
+        self.next_client += 1;
         self.clients.push(Connected {
             peer,
+            number,
             queue: queue.clone(),
             end: end.clone(),
             behind: behind.clone(),
             closed: closed.clone(),
             dropped: dropped.clone(),
             said_dropped: None,
+            answers_dropped: Repeats::default(),
         });
-        let number = self.next_client;
-        self.next_client += 1;
         let client = Arc::new(Client {
             stalls: self.stalls.clone(),
             number,
@@ -1300,9 +1332,9 @@ impl Serve {
     /// An answer under hub id `id`: to the client that asked, under its own id; dropped
     /// if nobody asked for an answer of that type (and AT command) under it (every id on
     /// the hub's link is the hub's).
-    fn answer(&self, data: &[u8], id: u8) {
+    fn answer(&mut self, data: &[u8], id: u8) {
         let to = lock(&self.routes).answer(id, data, Instant::now());
-        let Some((client, own_id)) = to else {
+        let Some((client, own_id, number)) = to else {
             tracing::debug!(id, "hub: an answer nobody waits for dropped");
             return;
         };
@@ -1313,6 +1345,10 @@ impl Serve {
         if let Some(bytes) = encode(&data, self.mode) {
             if client.try_send(bytes).is_err() {
                 bump(&self.counters.frames_dropped);
+                let connected = self.clients.iter_mut().find(|c| c.number == number);
+                if let Some(connected) = connected {
+                    connected.answer_dropped(Instant::now());
+                }
             }
         }
     }

@@ -513,6 +513,81 @@ fn frames_dropped_for_a_client_that_does_not_read_are_said_while_the_hub_runs() 
     );
 }
 
+/// A client that sends requests and reads nothing, while the radio's frames fill its
+/// connection: the answers beyond those that wait for it (64) are dropped, and said.
+#[cfg(unix)]
+#[test]
+fn answers_dropped_for_a_client_that_does_not_read_are_said() {
+    // A radio that answers each AT command at once (AP as 1), and sends a burst of
+    // Modem Status frames once told to.
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let link = format!("tcp:{}", listener.local_addr().unwrap());
+    let (go, burst) = mpsc::channel::<()>();
+    let _radio = std::thread::spawn(move || {
+        let (radio, _) = listener.accept().unwrap();
+        let mut answers = radio.try_clone().unwrap();
+        std::thread::spawn(move || {
+            if burst.recv().is_ok() {
+                let modem_status = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F];
+                let _ = std::io::Write::write_all(
+                    &mut radio.try_clone().unwrap(),
+                    &modem_status.repeat(200_000),
+                );
+            }
+        });
+        let mut decoder: xbee_api::Decoder = xbee_api::Decoder::new(xbee_api::ApiMode::Unescaped);
+        let mut buf = [0u8; 4096];
+        let mut reading = answers.try_clone().unwrap();
+        while let Ok(n @ 1..) = std::io::Read::read(&mut reading, &mut buf) {
+            let mut rest = &buf[..n];
+            while !rest.is_empty() {
+                let (used, event) = decoder.decode(rest);
+                rest = &rest[used..];
+                let Some(Ok(frame)) = event else { continue };
+                if let [0x08, id, a, b, ..] = frame.data()[..] {
+                    let answer = [0x88, id, a, b, 0x00, 0x01];
+                    let sum = answer.iter().fold(0u8, |s, b| s.wrapping_add(*b));
+                    let mut bytes = vec![0x7E, 0x00, 0x06];
+                    bytes.extend(answer);
+                    bytes.push(0xFF - sum);
+                    if std::io::Write::write_all(&mut answers, &bytes).is_err() {
+                        return;
+                    }
+                }
+            }
+        }
+    });
+    let (mut hub, out, err) = start_hub_logging(&link, &[], Some("mcp_host::hub=info"));
+    let (_, addr) = serving(&out);
+    // A client that reads nothing, behind the radio's frames.
+    let mut client = std::net::TcpStream::connect(&addr).unwrap();
+    line_with(&err, "hub: client connected");
+    go.send(()).unwrap();
+    line_with(&err, "more slowly than they come");
+    // Its requests: 100 AT AP, ids 1 to 100, answered at once.
+    for id in 1..=100u8 {
+        let sum = [0x08, id, b'A', b'P']
+            .iter()
+            .fold(0u8, |s, b| s.wrapping_add(*b));
+        std::io::Write::write_all(
+            &mut client,
+            &[0x7E, 0x00, 0x04, 0x08, id, b'A', b'P', 0xFF - sum],
+        )
+        .unwrap();
+    }
+    let dropped = line_with(&err, "an answer to a request");
+    assert!(dropped.contains("WARN"), "{dropped}");
+    let peer = client.local_addr().unwrap();
+    assert!(
+        dropped.ends_with(&format!(
+            "hub: an answer to a request of client {peer} dropped: 64 of its answers wait \
+             for it to read them"
+        )),
+        "{dropped}"
+    );
+    stop_hub(&mut hub, &out);
+}
+
 #[cfg(unix)]
 #[test]
 fn a_hub_records_what_its_radio_heard_and_said_for_every_client() {
