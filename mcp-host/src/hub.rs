@@ -301,8 +301,9 @@ pub enum HubError {
     },
 }
 
-/// Counters of a hub.
+/// Counters of a hub. More may come: read them by name.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[non_exhaustive]
 pub struct HubStats {
     /// Whether the hub listens for clients now: not while the radio's link is down, nor
     /// after an outage while another program holds its port (it retries every second).
