@@ -1687,8 +1687,8 @@ impl Client {
             Some(0) => tracing::warn!(%peer, "hub: a client's frame refused: {why}"),
             Some(more) => tracing::warn!(
                 %peer,
-                "hub: a client's frame refused: {why}; and {more} more since the last such \
-                 warning"
+                "hub: a client's frame refused: {why}; and {more} more frames refused since \
+                 the last such warning (of any client, for any cause)"
             ),
             None => tracing::debug!(%peer, "hub: a client's frame refused: {why}"),
         }
