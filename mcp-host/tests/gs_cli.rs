@@ -661,7 +661,7 @@ fn send_status_and_at_in_json_print_a_link_lost_meanwhile() {
     let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
     let link = format!("tcp:{}", listener.local_addr().unwrap());
     let peer = std::thread::spawn(move || {
-        for stream in listener.incoming().take(4) {
+        for stream in listener.incoming().take(5) {
             let mut stream = stream.unwrap();
             let mut byte = [0u8];
             std::io::Read::read_exact(&mut stream, &mut byte).unwrap();
@@ -673,6 +673,8 @@ fn send_status_and_at_in_json_print_a_link_lost_meanwhile() {
     assert_eq!(at["command"], "NI");
     let all = json("at", &["--to", "000000000000ffff", "NI"]);
     assert_eq!(all["dst64"], "000000000000ffff");
+    let nodes = json("nodes", &[]);
+    assert_eq!(nodes["command"], "ND");
     peer.join().unwrap();
 }
 
@@ -699,6 +701,8 @@ fn send_status_and_at_in_json_print_a_request_never_sent_when_the_link_does_not_
     assert!(at.get("dst64").is_none(), "{at}");
     let remote = json("at", &["--to", "0013A20040B599B9", "NI"]);
     assert_eq!(remote["dst64"], "0013a20040b599b9");
+    let nodes = json("nodes", &[]);
+    assert_eq!(nodes["command"], "ND");
 }
 
 #[test]
@@ -718,14 +722,20 @@ fn a_broadcast_nobody_answers_says_so_and_what_keeps_the_radio_silent() {
         stderr.contains("nothing at all came from the local radio either"),
         "{stderr}"
     );
-    // Node discovery given a window, which asks the radio nothing first.
-    let output = run(&[&["nodes"][..], &options].concat());
+    // Node discovery given a window, which asks the radio nothing first; in JSON, one
+    // object that says so.
+    let output = run(&[&["nodes"][..], &options, &["--format", "json"]].concat());
     assert_eq!(output.status.code(), Some(4), "{output:?}");
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(stderr.contains("no radio answered"), "{stderr}");
     assert!(
         stderr.contains("nothing at all came from the local radio either"),
         "{stderr}"
+    );
+    let json: Value = serde_json::from_slice(&output.stdout).expect("one JSON object");
+    assert_eq!(
+        json,
+        serde_json::json!({"result": "timeout", "command": "ND"})
     );
     peer.join().unwrap();
 }

@@ -530,7 +530,7 @@ pub(crate) async fn run(args: AtArgs) -> Result<(), Failure> {
 
 /// An answer that did not come as a JSON object: `{"result":...,"command":"AP"}`, with
 /// the remote radio's `dst64`.
-fn outcome_json(result: &str, name: &str, to: Option<Address64>) -> serde_json::Value {
+pub(crate) fn outcome_json(result: &str, name: &str, to: Option<Address64>) -> serde_json::Value {
     let mut json = serde_json::json!({ "result": result, "command": name });
     if let Some(to) = to {
         json["dst64"] = to.to_string().into();
@@ -542,7 +542,11 @@ fn outcome_json(result: &str, name: &str, to: Option<Address64>) -> serde_json::
 /// remote radio's `dst64` and the frame id when the command went out; a link that went
 /// away meanwhile as `{"result":"disconnected",...}` with its `reason`; `None` for
 /// another failure.
-fn timeout_json(error: &SendError, name: &str, to: Option<Address64>) -> Option<serde_json::Value> {
+pub(crate) fn timeout_json(
+    error: &SendError,
+    name: &str,
+    to: Option<Address64>,
+) -> Option<serde_json::Value> {
     let lost = crate::send::link_lost(error);
     if !error.is_timeout() && lost.is_none() {
         return None;

@@ -3,7 +3,10 @@
 use std::time::Duration;
 
 use clap::Args;
+use mcp_host::SendError;
 use mcp_host::discovery::DiscoverError;
+
+use crate::at::{outcome_json, timeout_json};
 
 use crate::link_args::{LinkArgs, diagnosed_send, with_mode_hint};
 use crate::{Failure, Format};
@@ -22,15 +25,36 @@ pub(crate) struct NodesArgs {
     /// second more).
     #[arg(long, value_name = "SECONDS", value_parser = crate::link_args::parse_seconds)]
     window: Option<f64>,
-    /// Output format: a line per radio, or a JSON object per radio.
+    /// Output format: a line per radio, or a JSON object per radio; a discovery that
+    /// lists none prints one object that says why, as `at` does:
+    /// `{"result":"timeout","command":"ND"}` when no radio answered,
+    /// `{"result":"unreadable","command":"ND","unreadable":N}` when none of the answers
+    /// could be read, `{"result":"failed","command":"ND","status":...}` when the radio
+    /// refused ND, `{"result":"disconnected",...}` when the link went away, or
+    /// `{"result":"not_sent",...}` when it could not be opened.
     #[arg(long, value_enum, default_value_t = Format::Text)]
     format: Format,
 }
 
+/// The AT command `nodes` is, in its JSON outcomes.
+const ND: &str = "ND";
+
 /// Runs `nodes`.
 pub(crate) async fn run(args: NodesArgs) -> Result<(), Failure> {
-    let (_stream, sender) = args.link.open(false).await?;
-    let failed = |e| diagnosed_send(e, &args.link, &sender.stats());
+    let json = args.format == Format::Json;
+    let (_stream, sender) = args.link.open(false).await.inspect_err(|failure| {
+        if json {
+            let fields = outcome_json("not_sent", ND, None);
+            out!("{}", crate::link_args::not_sent_json(failure, fields));
+        }
+    })?;
+    // A link lost, or a radio that does not answer, is an outcome too, in JSON.
+    let failed = |e: SendError| {
+        if let (true, Some(outcome)) = (json, timeout_json(&e, ND, None)) {
+            out!("{outcome}");
+        }
+        diagnosed_send(e, &args.link, &sender.stats())
+    };
     let window = match args.window {
         Some(seconds) => Duration::from_secs_f64(seconds),
         None => mcp_host::discovery::window(&sender).await.map_err(failed)?,
@@ -42,7 +66,17 @@ pub(crate) async fn run(args: NodesArgs) -> Result<(), Failure> {
     crate::link_args::warn_hub_window(&args.link.link, window);
     let found = sender.discover(Some(window)).await.map_err(|e| match e {
         DiscoverError::Send(e) => failed(e),
-        other => Failure::new(Failure::OTHER, other.to_string()),
+        other => {
+            if let (true, DiscoverError::Refused { status, .. }) = (json, &other) {
+                let mut outcome = outcome_json("failed", ND, None);
+                outcome["status"] = u8::from(*status).into();
+                if let Some(name) = status.meaning().name() {
+                    outcome["status_name"] = name.into();
+                }
+                out!("{outcome}");
+            }
+            Failure::new(Failure::OTHER, other.to_string())
+        }
     })?;
     if found.unreadable > 0 {
         let unreadable = format!(
@@ -52,6 +86,11 @@ pub(crate) async fn run(args: NodesArgs) -> Result<(), Failure> {
         );
         // Radios answered, but none could be listed: no list, and no success.
         if found.nodes.is_empty() {
+            if json {
+                let mut outcome = outcome_json("unreadable", ND, None);
+                outcome["unreadable"] = found.unreadable.into();
+                out!("{outcome}");
+            }
             return Err(Failure::new(Failure::OTHER, unreadable));
         }
         err!("mcp-gs: {unreadable}");
@@ -70,6 +109,9 @@ pub(crate) async fn run(args: NodesArgs) -> Result<(), Failure> {
                 ),
             },
         );
+        if json {
+            out!("{}", outcome_json("timeout", ND, None));
+        }
         // Answers that failed their checksum: the local radio may be in the other mode.
         return Err(with_mode_hint(failure, &args.link, &stats));
     }
