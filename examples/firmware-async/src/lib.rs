@@ -246,14 +246,16 @@ impl<V: Model, M: FixedMode> MavCore<V, M> {
 /// The MAV task: sends the start-up message, then forever answers the frames `reader`
 /// reads and, on each tick of `ticker`, steps the model and sends the telemetry.
 ///
-/// A tick gives up a frame the line left unfinished when no byte came since the tick
-/// before (50 ms, far longer than a frame takes at 115200 baud): in API mode 1 a stray
-/// 0x7E would otherwise hold the frames behind it.
+/// In API mode 1 a tick gives up a frame the line left unfinished when no byte came
+/// since the tick before (50 ms, far longer than a frame takes at 115200 baud): a stray
+/// 0x7E would otherwise hold the frames behind it. In mode 2 nothing is given up: the
+/// next frame's 0x7E, which no frame holds unescaped, ends a frame cut off at once.
 ///
 /// That check counts bytes, not time: ticks that catch up after the task was busy (as
 /// `embassy_time::Ticker`'s do) come back to back, and the second may give up a frame
-/// whose next byte is only microseconds away. A firmware with a clock should compare the
-/// time of the last byte instead; the reader offers only [`FrameReader::bytes_read`].
+/// whose next byte is only microseconds away. A firmware with a clock races each read
+/// against a quiet-line timeout started with it instead, as [`FrameReader`]'s docs
+/// show; this task has only the ticker.
 ///
 /// Read and write errors are counted and the task goes on. Returns at the end of the
 /// input (a read of no bytes), which a UART never gives: for the tests.
@@ -279,7 +281,8 @@ pub async fn run<R, W, T, V, M>(
                 core.stats.read_errors = core.stats.read_errors.wrapping_add(1)
             }
             Either::Second(()) => {
-                if reader.bytes_read() == seen && !reader.decoder().is_idle() {
+                let quiet = reader.bytes_read() == seen;
+                if M::MODE == ApiMode::Unescaped && quiet && !reader.decoder().is_idle() {
                     core.stats.given_up = core.stats.given_up.wrapping_add(1);
                     while let Some(event) = reader.drop_partial() {
                         core.on_event(event, tx).await;

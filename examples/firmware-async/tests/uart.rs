@@ -329,6 +329,26 @@ fn mode2_stray_delimiter_needs_no_tick() {
     assert_eq!(out, [startup(true), reply(ON_GROUND, true)].concat());
 }
 
+/// Mode 2: ticks that come back to back (catching up after the task was busy) give up
+/// no frame, whose rest still comes whole.
+#[test]
+fn mode2_gives_up_no_frame_on_quiet_ticks() {
+    let wire = api_frame(&receive_packet(MAV_SRC, LANDING_REQUEST), true);
+    let steps = vec![
+        Step::Bytes(wire[..5].to_vec()),
+        Step::Tick,
+        Step::Tick,
+        Step::Bytes(wire[5..].to_vec()),
+    ];
+    let (out, stats) = run_script::<Mode2>(steps, 32, usize::MAX);
+    assert_eq!(out[..startup(true).len()], startup(true));
+    assert!(
+        out.ends_with(&reply(ON_GROUND, true)),
+        "the command is answered: {out:02x?}"
+    );
+    assert_eq!(stats.given_up, 0);
+}
+
 /// Take-off: the unsolicited landing report right after the command, then at each tick
 /// the telemetry (altitude, once enabled) as the model climbs.
 #[test]
