@@ -8,6 +8,16 @@
 //!   buffer on the stack; [`write_frame_async`] encodes it into a buffer the caller
 //!   gives and writes it.
 //!
+//! Each write function flushes the writer after the frame, so that the frame is on its
+//! way when it returns. On most UART drivers (Embassy's `BufferedUartTx`, say) a flush
+//! waits until the last byte has left the wire, about 87 µs a byte at 115200 baud: a
+//! task that reads the same UART reads nothing meanwhile, and a driver whose receive
+//! buffer fills drops bytes. To send frames back to back, or from a task that also
+//! reads, write the bytes of each encoded frame ([`EncodeFrame::encode`], or
+//! [`InPlaceFrame::finish`](crate::InPlaceFrame::finish)) with the writer's own
+//! `write_all`, and flush once, or not at all (a buffered driver sends what it holds),
+//! or read in a task of its own.
+//!
 //! ```
 //! use xbee_api::io::{FrameReader, write_frame};
 //! use xbee_api::{ApiMode, ModemStatus, ModemStatusRepr};
