@@ -182,6 +182,56 @@ pub struct Received<const P: usize> {
 }
 
 impl<const P: usize> Received<P> {
+    /// The payload of `frame`, a Receive Packet (0x90) or an Explicit Rx Indicator
+    /// (0x91), and who sent it: what an [`Inbox`] queues, for a firmware that reads
+    /// frames itself (an async task on [`io::FrameReader`](crate::io::FrameReader), say)
+    /// and hands payloads to another task over a channel.
+    ///
+    /// ```
+    /// use xbee_api::{RawFrame, Received, ReceivedError};
+    /// // A Receive Packet from 0013A20040522BAA (7D84), acknowledged, payload "Hi".
+    /// let data = [0x90, 0x00, 0x13, 0xA2, 0x00, 0x40, 0x52, 0x2B, 0xAA, 0x7D, 0x84, 0x01, b'H', b'i'];
+    /// let received: Received<84> = Received::from_frame(RawFrame::new(&data)?)?;
+    /// assert_eq!((received.src64().to_string(), received.data()), ("0013a20040522baa".into(), &b"Hi"[..]));
+    /// // A payload longer than its room, or a frame of another type, is refused.
+    /// let small = Received::<1>::from_frame(RawFrame::new(&data)?);
+    /// assert_eq!(small, Err(ReceivedError::TooLong { len: 2, capacity: 1 }));
+    /// let status = Received::<84>::from_frame(RawFrame::new(&[0x8A, 0x06])?);
+    /// assert_eq!(status, Err(ReceivedError::NotReceived { frame_type: 0x8A }));
+    /// # Ok::<(), Box<dyn core::error::Error>>(())
+    /// ```
+    // Inlined: the inbox ignores the error's fields, which then cost no flash.
+    #[inline]
+    pub fn from_frame(frame: RawFrame<'_>) -> Result<Self, ReceivedError> {
+        let data = frame.data();
+        let frame_type = data.first().copied().unwrap_or_default();
+        let not_received = ReceivedError::NotReceived { frame_type };
+        let (src64, src16, options, payload) = match frame_type {
+            frame_type::RECEIVE_PACKET => match ReceivePacket::new_checked(data) {
+                Ok(rx) => (rx.src64(), rx.src16(), rx.options(), rx.data()),
+                Err(_) => return Err(not_received),
+            },
+            frame_type::EXPLICIT_RX_INDICATOR => match ExplicitRxIndicator::new_checked(data) {
+                Ok(rx) => (rx.src64(), rx.src16(), rx.options(), rx.data()),
+                Err(_) => return Err(not_received),
+            },
+            _ => return Err(not_received),
+        };
+        let Ok(data) = Vec::from_slice(payload) else {
+            return Err(ReceivedError::TooLong {
+                len: payload.len(),
+                capacity: P,
+            });
+        };
+        Ok(Received {
+            frame_type,
+            src64: src64.to_bytes(),
+            src16: src16.to_bytes(),
+            options,
+            data,
+        })
+    }
+
     /// The type of the frame it came in: 0x90 (Receive Packet) or 0x91 (Explicit Rx
     /// Indicator, from a radio set to `AO=1`; its endpoints and cluster are not kept).
     pub const fn frame_type(&self) -> u8 {
@@ -209,6 +259,43 @@ impl<const P: usize> Received<P> {
         &self.data
     }
 }
+
+/// Why a frame's payload is no [`Received`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ReceivedError {
+    /// The frame is no Receive Packet (0x90) or Explicit Rx Indicator (0x91), or is
+    /// cut short of its fixed fields.
+    NotReceived {
+        /// Its frame type (0 for a frame with no byte).
+        frame_type: u8,
+    },
+    /// The payload is longer than a [`Received`] holds.
+    TooLong {
+        /// The payload's length.
+        len: usize,
+        /// The most it holds (`P`).
+        capacity: usize,
+    },
+}
+
+impl fmt::Display for ReceivedError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ReceivedError::NotReceived { frame_type } => write!(
+                f,
+                "frame type 0x{frame_type:02x} is no whole Receive Packet (0x90) or \
+                 Explicit Rx Indicator (0x91)"
+            ),
+            ReceivedError::TooLong { len, capacity } => write!(
+                f,
+                "a payload of {len} bytes is longer than the {capacity} a Received holds"
+            ),
+        }
+    }
+}
+
+impl core::error::Error for ReceivedError {}
 
 #[cfg(feature = "defmt")]
 impl<const P: usize> defmt::Format for Received<P> {
@@ -489,28 +576,10 @@ fn accept<const P: usize, const Q: usize>(
     stats: &mut InboxStats,
     frame: RawFrame<'_>,
 ) {
-    let data = frame.data();
-    let frame_type = data.first().copied().unwrap_or_default();
-    let (src64, src16, options, payload) = match frame_type {
-        frame_type::RECEIVE_PACKET => match ReceivePacket::new_checked(data) {
-            Ok(rx) => (rx.src64(), rx.src16(), rx.options(), rx.data()),
-            Err(_) => return count(&mut stats.other_frames),
-        },
-        frame_type::EXPLICIT_RX_INDICATOR => match ExplicitRxIndicator::new_checked(data) {
-            Ok(rx) => (rx.src64(), rx.src16(), rx.options(), rx.data()),
-            Err(_) => return count(&mut stats.other_frames),
-        },
-        _ => return count(&mut stats.other_frames),
-    };
-    let Ok(data) = Vec::from_slice(payload) else {
-        return count(&mut stats.too_long);
-    };
-    let received = Received {
-        frame_type,
-        src64: src64.to_bytes(),
-        src16: src16.to_bytes(),
-        options,
-        data,
+    let received = match Received::from_frame(frame) {
+        Ok(received) => received,
+        Err(ReceivedError::NotReceived { .. }) => return count(&mut stats.other_frames),
+        Err(ReceivedError::TooLong { .. }) => return count(&mut stats.too_long),
     };
     // The caller checked for room before it took the event.
     if queue.push_back(received).is_ok() {

@@ -175,7 +175,7 @@ pub use frame::transmit_request::{
 };
 pub use frame::transmit_status::{TransmitStatus, TransmitStatusRepr};
 pub use in_place::InPlaceFrame;
-pub use inbox::{Inbox, InboxFull, InboxStats, Received};
+pub use inbox::{Inbox, InboxFull, InboxStats, Received, ReceivedError};
 pub use mode::{ApiMode, InvalidApiMode};
 pub use node::{DeviceType, NodeInfo, NodeInfoError};
 pub use raw::RawFrame;

@@ -10,7 +10,7 @@ use proptest::prelude::*;
 use xbee_api::{
     Address16, Address64, AnyMode, ApiMode, Decoder, ExplicitRxIndicatorRepr, FixedMode, Inbox,
     InboxFull, InboxStats, Mode1, Mode2, ModemStatus, ModemStatusRepr, ReceivePacket,
-    ReceivePacketRepr, decoder_buffer_len,
+    ReceivePacketRepr, Received, ReceivedError, decoder_buffer_len,
 };
 
 const PAYLOAD: usize = 84;
@@ -365,4 +365,76 @@ fn reset_drops_the_queue_the_frame_in_progress_and_the_pending_events() {
     assert_eq!(inbox.read_from(|| fifo.next()), Err(InboxFull)); // a queue of one
     assert_eq!(inbox.pop().unwrap().data(), b"c\x02\xff");
     assert!(inbox.ready() && inbox.pop().is_none());
+}
+
+/// `Received::from_frame`, for a firmware that reads frames itself: what an inbox would
+/// queue, or why not (a frame of another type, or cut short; a payload too long).
+#[test]
+fn a_received_payload_from_a_frame_is_what_an_inbox_queues() {
+    let mode = ApiMode::Unescaped;
+    let frames = [
+        receive(7, b"c\x02\x01", mode),
+        receive(8, &[0x55; 9], mode),
+        encode(
+            &ModemStatusRepr {
+                status: ModemStatus::from(0x06),
+            },
+            mode,
+        ),
+    ];
+    let mut decoder: Decoder<64, Mode1> = Decoder::fixed();
+    let mut made = Vec::new();
+    for wire in &frames {
+        let (_, event) = decoder.decode(wire);
+        let frame = event.expect("a frame").expect("whole");
+        made.push(Received::<8>::from_frame(frame));
+    }
+    let first = made[0].clone().expect("a Receive Packet");
+    assert_eq!(
+        (
+            first.frame_type(),
+            first.src64(),
+            first.src16(),
+            first.options(),
+            first.data()
+        ),
+        (
+            0x90,
+            Address64(7),
+            Address16(0x1234),
+            0x01,
+            &b"c\x02\x01"[..]
+        )
+    );
+    assert_eq!(
+        made[1],
+        Err(ReceivedError::TooLong {
+            len: 9,
+            capacity: 8
+        })
+    );
+    assert_eq!(
+        made[2],
+        Err(ReceivedError::NotReceived { frame_type: 0x8A })
+    );
+    // Cut short of its fixed fields: no Receive Packet.
+    let cut = xbee_api::RawFrame::new(&[0x90, 0x00, 0x13]).unwrap();
+    assert_eq!(
+        Received::<8>::from_frame(cut),
+        Err(ReceivedError::NotReceived { frame_type: 0x90 })
+    );
+    assert_eq!(
+        ReceivedError::TooLong {
+            len: 9,
+            capacity: 8
+        }
+        .to_string(),
+        "a payload of 9 bytes is longer than the 8 a Received holds"
+    );
+    // The inbox queues the same.
+    let mut inbox: Inbox<64, Mode1, 8, 4> = Inbox::new();
+    let mut fifo = frames.concat().into_iter();
+    inbox.read_from(|| fifo.next()).unwrap();
+    assert_eq!(inbox.pop(), Some(first));
+    assert_eq!(inbox.pop(), None);
 }
