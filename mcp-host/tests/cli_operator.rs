@@ -1293,7 +1293,7 @@ fn replay_of_a_hostile_recording_is_an_input_error_at_a_slow_speed() {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("far.mcprec");
     std::fs::write(&file, recording(&[(0, 0), (0, u64::MAX)])).unwrap();
-    for speed in ["0.000001", "1", "1e-300"] {
+    for speed in ["0.000001", "1", "1e-300", "0.1234567890123"] {
         let (link, reader) = common::recording_peer();
         let output = run(&[
             "replay",
@@ -1307,7 +1307,7 @@ fn replay_of_a_hostile_recording_is_an_input_error_at_a_slow_speed() {
         assert!(!stderr.contains("panicked"), "{stderr}");
         assert_eq!(output.status.code(), Some(2), "{speed}: {stderr}");
         assert!(stderr.contains("too far ahead"), "{stderr}");
-        // The speed as given, not 1e-300 in 302 digits.
+        // The speed as given, not 1e-300 in 302 digits, nor 1.234567890123e-1.
         assert!(
             stderr.contains(&format!("at --speed {speed} (")),
             "{stderr}"

@@ -49,8 +49,8 @@ pub(crate) struct ReplayArgs {
     #[command(flatten)]
     link: LinkArgs,
     /// Playback speed: 1 is real time, 2 twice as fast, 0 as fast as possible.
-    #[arg(long, default_value_t = 1.0, value_parser = parse_speed)]
-    speed: f64,
+    #[arg(long, default_value = "1", value_parser = parse_speed)]
+    speed: Speed,
     /// Which frames to play. Sent frames (tx) carry the recorded commands: played to a
     /// radio, they act on the MAVs again as they did then (a landing, a trajectory, a
     /// time command that sets a MAV's clock to the recorded time); what they are is said
@@ -77,27 +77,29 @@ fn parse_max_gap(s: &str) -> Result<Duration, String> {
         .ok_or_else(|| format!("expected a number of seconds, 0 or more, got `{s}`"))
 }
 
+/// A `--speed`, and the text it was given as, for the messages that name it (as typed:
+/// `1e-300` rather than its 302 characters in full, `0.1234567890123` rather than
+/// `1.234567890123e-1`).
+#[derive(Debug, Clone)]
+struct Speed {
+    value: f64,
+    text: String,
+}
+
 /// `--speed`: a finite number, 0 or more.
-fn parse_speed(s: &str) -> Result<f64, String> {
+fn parse_speed(s: &str) -> Result<Speed, String> {
     s.parse::<f64>()
         .ok()
         .filter(|x| x.is_finite() && *x >= 0.0)
+        .map(|value| Speed {
+            value,
+            text: s.to_owned(),
+        })
         .ok_or_else(|| {
             format!(
                 "expected a speed of 0 (as fast as possible) or more (1 is real time), got `{s}`"
             )
         })
-}
-
-/// A `--speed` as an error message says it: in full up to 12 characters, beyond in
-/// scientific notation (`1e-300`, which in full is 302 characters).
-fn speed_text(speed: f64) -> String {
-    let full = speed.to_string();
-    if full.len() <= 12 {
-        full
-    } else {
-        format!("{speed:e}")
-    }
 }
 
 /// Runs `replay`.
@@ -535,7 +537,7 @@ async fn play(
                 // correction, a clock set at boot, recordings joined out of order): the
                 // frames after it keep their pace from there. Said where there is a
                 // pace to keep.
-                if args.speed > 0.0 && !std::mem::replace(&mut went_back, true) {
+                if args.speed.value > 0.0 && !std::mem::replace(&mut went_back, true) {
                     err!(
                         "mcp-gs: warning: the recording's clock goes back {} before its \
                          frame {}: played at once, and the frames after it at their pace \
@@ -550,10 +552,10 @@ async fn play(
         let gap = args
             .max_gap
             .map_or(recorded_gap, |max| recorded_gap.min(max));
-        if args.speed > 0.0 {
+        if args.speed.value > 0.0 {
             // A hostile or damaged recording may stamp a record beyond any time a clock
             // can wait for (at a slow speed, all the more).
-            let wait = Duration::try_from_secs_f64(gap.as_secs_f64() / args.speed)
+            let wait = Duration::try_from_secs_f64(gap.as_secs_f64() / args.speed.value)
                 .ok()
                 .filter(|wait| *wait <= MAX_WAIT);
             at = wait.and_then(|wait| at.checked_add(wait)).ok_or_else(|| {
@@ -563,7 +565,7 @@ async fn play(
                      frame at once, --max-gap shortens the waits)",
                     args.file.display(),
                     gap.as_secs(),
-                    speed_text(args.speed),
+                    args.speed.text,
                     crate::counted(played.frames, "frame")
                 ))
             })?;
