@@ -100,7 +100,11 @@
 //!   connected takes the place of the one that closed its connection first (the hub
 //!   read its end: it sends nothing more), else of the one that has taken none of the
 //!   radio's frames the longest while frames were dropped for it, [`STALLED`] at least,
-//!   or is turned away if none has (counted in
+//!   else of the one that has written ahead of the radio the longest, [`STALLED`] at
+//!   least (each of its frames since found its [`CLIENT_FRAMES_TO_RADIO`] places taken:
+//!   a flood, or a program that left with megabytes of frames still in its connection,
+//!   whose end the hub cannot read before them; its frames not yet written are
+//!   dropped), or is turned away if none has (counted in
 //!   [`HubStats::clients_turned_away`]; the first is logged as a warning, the next ones
 //!   together at most once a second). A client that closed
 //!   its connection is still served until its place is taken: the hub cannot tell a
@@ -220,7 +224,8 @@ pub const ANSWER_QUEUE: usize = 64;
 /// Clients served at once, at most. A client that comes while as many are connected
 /// takes the place of one that closed its connection, or of the one that has taken none
 /// of the radio's frames the longest, [`STALLED`] at least, while frames were dropped
-/// for it (see the [module](self) docs); without one, it is turned away.
+/// for it, or of the one that has written ahead of the radio the longest, [`STALLED`]
+/// at least (see the [module](self) docs); without one, it is turned away.
 pub const MAX_CLIENTS: usize = 64;
 
 /// Requests of one client waiting for answers at once, at most (each holds one of the
@@ -940,6 +945,9 @@ struct Connected {
     /// Since when it has sent nothing more: its connection closed (or its sending side
     /// shut), or failed.
     closed: Arc<Mutex<Option<Instant>>>,
+    /// Since when it has written ahead of the radio: each of its frames since found its
+    /// [`CLIENT_FRAMES_TO_RADIO`] places taken (see [`Client::ahead`]).
+    ahead: Arc<Mutex<Option<Instant>>>,
     /// The radio's frames dropped for it, so far.
     dropped: Arc<AtomicU64>,
     /// When the frames dropped for it were last said, and how many there were then.
@@ -1197,6 +1205,7 @@ impl Serve {
         let end = self.stop.child_token();
         let behind = Arc::new(Mutex::new(None));
         let closed = Arc::new(Mutex::new(None));
+        let ahead = Arc::new(Mutex::new(None));
         let dropped = Arc::new(AtomicU64::new(0));
         let number = self.next_client;
         self.next_client += 1;
@@ -1207,6 +1216,7 @@ impl Serve {
             end: end.clone(),
             behind: behind.clone(),
             closed: closed.clone(),
+            ahead: ahead.clone(),
             dropped: dropped.clone(),
             said_dropped: None,
             answers_dropped: Repeats::default(),
@@ -1228,6 +1238,7 @@ impl Serve {
             end,
             behind,
             closed,
+            ahead,
             dropped,
             skipped: AtomicU64::new(0),
         });
@@ -1260,6 +1271,13 @@ impl Serve {
                 )
             } else if let Some((since, index)) = longest(|c| &c.behind, STALLED) {
                 ("it has taken none of the radio's frames", since, index)
+            } else if let Some((since, index)) = longest(|c| &c.ahead, STALLED) {
+                (
+                    "it has written frames faster than the radio sends them, its frames \
+                     waiting their turn",
+                    since,
+                    index,
+                )
             } else {
                 return false;
             };
@@ -1360,7 +1378,8 @@ impl Serve {
 /// system in bursts, as a client's reads free about a third of the buffers of its
 /// connection (some 40 KB): a client that reads 4 KB/s or more, a third of what an
 /// XBee's UART carries at 115200 baud, takes some within this time, and keeps its
-/// place.
+/// place. A client that has written ahead of the radio for as long (each of its frames
+/// waiting its turn) may give its place up too.
 pub const STALLED: Duration = Duration::from_secs(20);
 
 /// The send buffer the hub asks the system for on each client's connection (Linux
@@ -1543,6 +1562,13 @@ struct Client {
     behind: Arc<Mutex<Option<Instant>>>,
     /// Since when it has sent nothing more (see [`Connected::closed`]).
     closed: Arc<Mutex<Option<Instant>>>,
+    /// Since when it has written ahead of the radio: each frame it sent since found its
+    /// [`CLIENT_FRAMES_TO_RADIO`] places taken, and waited its turn; `None` once one
+    /// finds a place free. A client that writes faster than the radio sends keeps it:
+    /// one that keeps it for [`STALLED`] gives its place up when the hub is full (a
+    /// program that left megabytes of frames in its connection, whose end the hub
+    /// cannot read before them, is one).
+    ahead: Arc<Mutex<Option<Instant>>>,
     /// The radio's frames dropped for it (see [`Connected::dropped`]).
     dropped: Arc<AtomicU64>,
     /// Its bytes that began no frame, skipped.
@@ -1709,10 +1735,14 @@ impl Client {
             CodecItem::Frame(frame) => {
                 if let Some(queued) = self.admit(frame.data(), since, &mut waited).await {
                     let queued = match to_radio.try_send(queued) {
-                        Ok(()) => None,
+                        Ok(()) => {
+                            *lock(&self.ahead) = None;
+                            None
+                        }
                         Err(mpsc::error::TrySendError::Full(queued)) => {
                             // Its turn waited for: the client's bytes are not read.
                             waited.get_or_insert_with(Instant::now);
+                            lock(&self.ahead).get_or_insert_with(Instant::now);
                             Some(queued)
                         }
                         Err(mpsc::error::TrySendError::Closed(_)) => return Err(()),

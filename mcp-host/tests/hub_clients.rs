@@ -214,6 +214,89 @@ async fn a_client_that_reads_slowly_keeps_its_place() {
     hub.stop().await;
 }
 
+/// A program that writes frames faster than the radio sends them (a flood, a replay at
+/// full speed onto the hub), which may have left with megabytes of them still in its
+/// connection, whose end the hub cannot read before them: when the hub is full, it
+/// gives its place to a new client once it has been ahead of the radio for `STALLED`,
+/// its frames not yet written dropped; quiet clients keep theirs.
+#[tokio::test(flavor = "multi_thread")]
+async fn a_client_that_writes_ahead_of_the_radio_gives_its_place_up() {
+    let (hub, mut radio) = hub_and_radio().await;
+    // The radio takes every frame; the test looks at them as they come.
+    let (to_test, mut frames) = tokio::sync::mpsc::unbounded_channel::<Vec<u8>>();
+    let radio_task = tokio::spawn(async move {
+        while let Some(Ok(item)) = radio.next().await {
+            if let CodecItem::Frame(frame) = item {
+                if to_test.send(frame.data().to_vec()).is_err() {
+                    return;
+                }
+            }
+        }
+    });
+    // 2 MB of Transmit Requests without a frame id: three minutes of the radio's UART.
+    let mut flood = Vec::new();
+    let mut codec = XBeeCodec::new(ApiMode::Unescaped);
+    let mut data = vec![
+        0x10, 0x00, 0, 0x13, 0xA2, 0, 0x40, 0xB5, 0xFF, 0xFF, 0xFF, 0xFE, 0, 0,
+    ];
+    data.extend([0xAA; 200]);
+    for _ in 0..10_000 {
+        let mut bytes = mcp_host::bytes::BytesMut::new();
+        tokio_util::codec::Encoder::encode(&mut codec, &RawFrame::new(&data).unwrap(), &mut bytes)
+            .unwrap();
+        flood.extend_from_slice(&bytes);
+    }
+    let flooder = TcpStream::connect(hub.local_addr()).await.unwrap();
+    let (mut flooder, mut flooding) = flooder.into_split();
+    let flooding = tokio::spawn(async move {
+        use tokio::io::AsyncWriteExt;
+        flooding.write_all(&flood).await
+    });
+    // Its frames go to the radio, at the radio's pace.
+    for _ in 0..3 {
+        let frame = tokio::time::timeout(GUARD, frames.recv())
+            .await
+            .unwrap()
+            .unwrap();
+        assert_eq!(frame[0], 0x10);
+    }
+    // The others connect and keep quiet; the radio is quiet: nobody is behind.
+    let mut quiet = Vec::new();
+    for _ in 1..MAX_CLIENTS {
+        quiet.push(TcpStream::connect(hub.local_addr()).await.unwrap());
+    }
+    // Full, and the flooder not ahead for long yet: a new client is turned away.
+    let mut late = TcpStream::connect(hub.local_addr()).await.unwrap();
+    assert!(turned_away(&mut late).await);
+    // The time the hub gives a client ahead of the radio.
+    tokio::time::sleep(STALLED).await;
+    // A new client takes the flooder's place: its frame reaches the radio.
+    let mut new = raw_client(&hub).await;
+    send(&mut new, &[0x08, 0x00, b'S', b'H']).await;
+    loop {
+        let frame = tokio::time::timeout(GUARD, frames.recv())
+            .await
+            .unwrap()
+            .unwrap();
+        if frame == [0x08, 0x00, b'S', b'H'] {
+            break;
+        }
+        assert_eq!(frame[0], 0x10, "{frame:02x?}");
+    }
+    // The flooder was let go: its connection ends, its frames not yet written dropped.
+    let mut byte = [0u8; 1];
+    let read = tokio::time::timeout(GUARD, flooder.read(&mut byte)).await;
+    assert!(matches!(read, Ok(Ok(0) | Err(_))), "{read:?}");
+    assert!(hub.stats().frames_refused > 0, "{:?}", hub.stats());
+    flooding.abort();
+    // The quiet clients kept their places: the next is turned away.
+    let mut late = TcpStream::connect(hub.local_addr()).await.unwrap();
+    assert!(turned_away(&mut late).await);
+    drop((quiet, new));
+    hub.stop().await;
+    radio_task.abort();
+}
+
 /// One-shot clients (as `mcp-gs at`): each connects, sends a frame and closes its
 /// connection, on a radio that sends nothing (so the hub never fails to write to them).
 /// Once `MAX_CLIENTS` of them have come and gone, the next client is still served: it
