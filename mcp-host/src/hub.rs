@@ -157,6 +157,11 @@
 //!   the radio there or back as a status line ([`STATUS_TARGET`]). A hub does not start
 //!   on a port another hub serves or holds (a small window remains for two hubs started
 //!   at the same moment).
+//! - **No authentication:** every client may send the radio any frame, AT commands
+//!   that change its settings (its API mode, its baud rate) or reset it included, and
+//!   every client then hears the radio as changed. Serve it on an address other
+//!   programs of this machine alone reach (127.0.0.1), or on a network whose every host
+//!   is trusted (`mcp-gs hub` warns of any other).
 //! - **The radio's mode:** each time the radio is there, before the hub listens, it
 //!   asks the radio's `AP` (twice at most, waiting [`MODE_CHECK_TIMEOUT`] each time) and
 //!   logs a warning if the radio is in another API mode than the hub, or does not

@@ -513,6 +513,36 @@ fn frames_dropped_for_a_client_that_does_not_read_are_said_while_the_hub_runs() 
     );
 }
 
+/// A hub served beyond this machine is warned about: it has no authentication.
+#[cfg(unix)]
+#[test]
+fn a_hub_that_listens_beyond_this_machine_warns_that_anyone_may_use_the_radio() {
+    let (_sim, radio, _sim_out) = sim_on_tcp("1");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_mcp-gs"))
+        .args(["hub", "--link", &radio, "--listen", "0.0.0.0:0"])
+        .env_remove("MCP_LOG")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run mcp-gs");
+    let out = lines(child.stdout.take().unwrap());
+    let err = lines(child.stderr.take().unwrap());
+    let mut hub = Running(child);
+    let warned = line_with(&err, "no authentication");
+    assert!(
+        warned.starts_with("mcp-gs: warning: serving on 0.0.0.0:")
+            && warned.ends_with(
+                "reached from other machines: the hub has no authentication, and every host \
+                 that reaches it can send the radio any frame, AT commands that change or \
+                 reset it included (listen on 127.0.0.1, or on a network whose every host \
+                 you trust)"
+            ),
+        "{warned}"
+    );
+    serving(&out);
+    stop_hub(&mut hub, &out);
+}
+
 /// A client that sends requests and reads nothing, while the radio's frames fill its
 /// connection: the answers beyond those that wait for it (64) are dropped, and said.
 #[cfg(unix)]

@@ -26,7 +26,10 @@ runs"
 pub(crate) struct HubArgs {
     #[command(flatten)]
     link: LinkArgs,
-    /// Where to serve the radio: other commands then take `--link tcp:ADDR:PORT`.
+    /// Where to serve the radio: other commands then take `--link tcp:ADDR:PORT`. The
+    /// hub has no authentication: every client may send the radio any frame, AT
+    /// commands that change or reset it included, so an address other programs of this
+    /// machine alone reach (127.0.0.1) is the default, and another is warned about.
     #[arg(long, value_name = "ADDR:PORT", default_value = "127.0.0.1:9750", value_parser = parse_listen)]
     listen: String,
     /// Wait for a radio that is not there yet (not plugged in, a simulator not
@@ -125,6 +128,14 @@ pub(crate) async fn run(mut args: HubArgs) -> Result<(), Failure> {
     crate::link_args::announce_radio_side(hub.radio_link());
     let addr = hub.local_addr();
     let mode = u8::from(hub.api_mode());
+    if !addr.ip().is_loopback() {
+        err!(
+            "mcp-gs: warning: serving on {addr}, reached from other machines: the hub has \
+             no authentication, and every host that reaches it can send the radio any \
+             frame, AT commands that change or reset it included (listen on 127.0.0.1, or \
+             on a network whose every host you trust)"
+        );
+    }
     if hub.stats().listening {
         out!(
             "serving {radio} on {addr}: give other commands --link tcp:{addr} --api-mode \
