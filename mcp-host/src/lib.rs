@@ -77,6 +77,12 @@
 //! # let _ = mav;
 //! ```
 //!
+//! # Features
+//!
+//! - `cli` (on by default): the `mcp-gs` ground station binary, and the clap,
+//!   tracing-subscriber and shlex it needs. A program that uses the library alone
+//!   leaves it out: `mcp-host = { version = "0.1", default-features = false }`.
+//!
 //! # Example
 //!
 //! ```no_run

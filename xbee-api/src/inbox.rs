@@ -263,6 +263,7 @@ impl<const P: usize> Received<P> {
 /// Why a frame's payload is no [`Received`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub enum ReceivedError {
     /// The frame is no Receive Packet (0x90) or Explicit Rx Indicator (0x91), or is
     /// cut short of its fixed fields.

@@ -39,6 +39,14 @@
 
 use core::fmt;
 
+/// The `embedded-io` crate whose traits this module reads and writes through, at the
+/// version it uses.
+pub use embedded_io;
+/// The `embedded-io-async` crate whose traits the async forms take, at the version
+/// they use.
+#[cfg(feature = "embedded-io-async")]
+pub use embedded_io_async;
+
 use crate::decoder::Outcome;
 use crate::{
     AnyMode, ApiMode, DEFAULT_CAPACITY, Decoder, DecoderMode, EncodeError, EncodeFrame, Event,

@@ -105,7 +105,9 @@
 //! - `embedded-io`: the `io` module, frames read from and written to any
 //!   [`embedded_io`](https://docs.rs/embedded-io/0.7) reader and writer (a HAL's UART):
 //!   `io::FrameReader` and `io::write_frame`. `embedded-io-async` adds their async
-//!   forms for `embedded_io_async` (Embassy's drivers). Off by default.
+//!   forms for `embedded_io_async` (Embassy's drivers). Off by default. Both crates are
+//!   re-exported in `io` (`io::embedded_io`, `io::embedded_io_async`), so that a
+//!   firmware names the traits at the version this crate implements.
 #![no_std]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]

@@ -28,7 +28,7 @@ struct Thread {
     ended: Receiver<()>,
 }
 
-/// Starts the thread: from now on [`write`] queues lines for it. Without it (it could
+/// Starts the thread: from now on [`write()`] queues lines for it. Without it (it could
 /// not start), lines are written at once.
 pub(crate) fn start() {
     let (lines, queued) = mpsc::sync_channel(QUEUE);
@@ -115,7 +115,7 @@ fn write_all(queued: &Receiver<Vec<u8>>, dropped: &AtomicU64, out: &mut impl Wri
     let _ = out.write_all(&batch);
 }
 
-/// A line of the logger, sent to [`write`] as a whole once it is formatted.
+/// A line of the logger, sent to [`write()`] as a whole once it is formatted.
 pub(crate) struct LogLine(Vec<u8>);
 
 impl Write for LogLine {
