@@ -41,7 +41,8 @@
 //!   buffers, a serial-to-TCP bridge's) could otherwise hold seconds of one client's
 //!   frames before another's. A client's frames wait their turn [`CLIENT_FRAMES_TO_RADIO`]
 //!   at most; the hub reads no more of them meanwhile, so a client that writes nonstop
-//!   slows itself alone. What it wrote ahead waits in the operating system's buffers of
+//!   slows itself alone (a client is a connection: a program that opens several gets
+//!   a turn on each). What it wrote ahead waits in the operating system's buffers of
 //!   its connection (on both machines: megabytes, minutes of a radio's time at 115200
 //!   baud), which the hub cannot date: frames with frame id 0 have no age limit, and go
 //!   to the radio even after their client has left. A client that must not have its
