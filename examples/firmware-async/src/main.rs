@@ -2,9 +2,12 @@
 //!
 //! No HAL and no executor: UART0 behind `embedded_io_async` by polling its FIFOs (a
 //! future that is pending while the FIFO is empty), SysTick's wrap flag as the 20 Hz
-//! ticker, and `embassy_futures::block_on`, which polls the task in a loop. An Embassy
-//! firmware swaps in its `BufferedUart` halves, `embassy_time::Ticker` and a spawned
-//! task; the task itself ([`mav_firmware_async::run`]) is the same.
+//! ticker, and `embassy_futures::block_on`, which polls the task in a loop. Its
+//! futures wake themselves at once when they are pending: a busy loop, which a chip
+//! with nothing else to do and no interrupt set up can afford; an Embassy driver
+//! instead wakes its task from its interrupt, and the executor sleeps meanwhile. An
+//! Embassy firmware swaps in its `BufferedUart` halves, `embassy_time::Ticker` and a
+//! spawned task; the task itself ([`mav_firmware_async::run`]) is the same.
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
 #[cfg(target_os = "none")]
@@ -47,8 +50,12 @@ mod target {
     const FR_BUSY: u32 = 1 << 3;
     const DR_ERRORS: u32 = 0xF << 8;
 
-    /// UART0's receive half.
-    struct Rx;
+    /// UART0's receive half; a byte received with an error flag (overrun, framing...)
+    /// after others in the same read is reported at the next read, so that those
+    /// before it are handed over.
+    struct Rx {
+        error: bool,
+    }
     /// UART0's transmit half.
     struct Tx;
 
@@ -62,6 +69,9 @@ mod target {
     impl Read for Rx {
         async fn read(&mut self, buf: &mut [u8]) -> Result<usize, ErrorKind> {
             poll_fn(|cx| {
+                if core::mem::take(&mut self.error) {
+                    return Poll::Ready(Err(ErrorKind::Other));
+                }
                 let mut n = 0;
                 for slot in buf.iter_mut() {
                     if FR.read() & FR_RXFE != 0 {
@@ -69,7 +79,11 @@ mod target {
                     }
                     let dr = DR.read();
                     if dr & DR_ERRORS != 0 {
-                        return Poll::Ready(Err(ErrorKind::Other));
+                        if n == 0 {
+                            return Poll::Ready(Err(ErrorKind::Other));
+                        }
+                        self.error = true;
+                        break;
                     }
                     *slot = dr as u8;
                     n += 1;
@@ -153,7 +167,7 @@ mod target {
         LCRH.write((0b11 << 5) | (1 << 4));
         CTL.write((1 << 0) | (1 << 8) | (1 << 9));
 
-        let mut reader: Reader<Rx, Mode1> = Reader::fixed(Rx);
+        let mut reader: Reader<Rx, Mode1> = Reader::fixed(Rx { error: false });
         let mut tx = Tx;
         let mut ticker = SysTicker(syst);
         let mut mav: MavCore<FlightModel, Mode1> = MavCore::new(FlightModel::new());
