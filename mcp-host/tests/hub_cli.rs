@@ -474,22 +474,63 @@ fn a_hub_stopped_a_while_says_for_how_long_to_the_millisecond() {
     stop_hub(&mut hub, &out);
 }
 
+/// A radio played by threads: it answers each AT command at once (AP as 1), and sends
+/// a burst of 200 000 Modem Status frames once told to on the sender it returns, whole
+/// frames never cut by an answer. Its `tcp:` link.
+#[cfg(unix)]
+fn bursting_radio() -> (String, mpsc::Sender<()>) {
+    use std::sync::{Arc, Mutex};
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let link = format!("tcp:{}", listener.local_addr().unwrap());
+    let (go, burst) = mpsc::channel::<()>();
+    std::thread::spawn(move || {
+        let (radio, _) = listener.accept().unwrap();
+        let mut reading = radio.try_clone().unwrap();
+        let writing = Arc::new(Mutex::new(radio));
+        let bursting = Arc::clone(&writing);
+        std::thread::spawn(move || {
+            if burst.recv().is_ok() {
+                let modem_status = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F];
+                let chunk = modem_status.repeat(1000);
+                for _ in 0..200 {
+                    let mut radio = bursting.lock().unwrap();
+                    if std::io::Write::write_all(&mut *radio, &chunk).is_err() {
+                        return;
+                    }
+                }
+            }
+        });
+        let mut decoder: xbee_api::Decoder = xbee_api::Decoder::new(xbee_api::ApiMode::Unescaped);
+        let mut buf = [0u8; 4096];
+        while let Ok(n @ 1..) = std::io::Read::read(&mut reading, &mut buf) {
+            let mut rest = &buf[..n];
+            while !rest.is_empty() {
+                let (used, event) = decoder.decode(rest);
+                rest = &rest[used..];
+                let Some(Ok(frame)) = event else { continue };
+                if let [0x08, id, a, b, ..] = frame.data()[..] {
+                    let answer = [0x88, id, a, b, 0x00, 0x01];
+                    let sum = answer.iter().fold(0u8, |s, b| s.wrapping_add(*b));
+                    let mut bytes = vec![0x7E, 0x00, 0x06];
+                    bytes.extend(answer);
+                    bytes.push(0xFF - sum);
+                    let mut radio = writing.lock().unwrap();
+                    if std::io::Write::write_all(&mut *radio, &bytes).is_err() {
+                        return;
+                    }
+                }
+            }
+        }
+    });
+    (link, go)
+}
+
 #[cfg(unix)]
 #[test]
 fn frames_dropped_for_a_client_that_does_not_read_are_said_while_the_hub_runs() {
     // A radio that sends a burst once told to: more frames than the client's queue at
     // the hub and its connection's buffers hold.
-    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
-    let link = format!("tcp:{}", listener.local_addr().unwrap());
-    let (go, burst) = mpsc::channel::<()>();
-    let _radio = std::thread::spawn(move || {
-        let (mut radio, _) = listener.accept().unwrap();
-        if burst.recv().is_ok() {
-            let modem_status = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F];
-            let _ = std::io::Write::write_all(&mut radio, &modem_status.repeat(200_000));
-        }
-        let _ = std::io::copy(&mut radio, &mut std::io::sink());
-    });
+    let (link, go) = bursting_radio();
     // With the hub's info lines, to know when it has the client.
     let (mut hub, out, err) = start_hub_logging(&link, &[], Some("mcp_host::hub=info"));
     let (_, addr) = serving(&out);
@@ -548,45 +589,7 @@ fn a_hub_that_listens_beyond_this_machine_warns_that_anyone_may_use_the_radio() 
 #[cfg(unix)]
 #[test]
 fn answers_dropped_for_a_client_that_does_not_read_are_said() {
-    // A radio that answers each AT command at once (AP as 1), and sends a burst of
-    // Modem Status frames once told to.
-    let listener = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
-    let link = format!("tcp:{}", listener.local_addr().unwrap());
-    let (go, burst) = mpsc::channel::<()>();
-    let _radio = std::thread::spawn(move || {
-        let (radio, _) = listener.accept().unwrap();
-        let mut answers = radio.try_clone().unwrap();
-        std::thread::spawn(move || {
-            if burst.recv().is_ok() {
-                let modem_status = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F];
-                let _ = std::io::Write::write_all(
-                    &mut radio.try_clone().unwrap(),
-                    &modem_status.repeat(200_000),
-                );
-            }
-        });
-        let mut decoder: xbee_api::Decoder = xbee_api::Decoder::new(xbee_api::ApiMode::Unescaped);
-        let mut buf = [0u8; 4096];
-        let mut reading = answers.try_clone().unwrap();
-        while let Ok(n @ 1..) = std::io::Read::read(&mut reading, &mut buf) {
-            let mut rest = &buf[..n];
-            while !rest.is_empty() {
-                let (used, event) = decoder.decode(rest);
-                rest = &rest[used..];
-                let Some(Ok(frame)) = event else { continue };
-                if let [0x08, id, a, b, ..] = frame.data()[..] {
-                    let answer = [0x88, id, a, b, 0x00, 0x01];
-                    let sum = answer.iter().fold(0u8, |s, b| s.wrapping_add(*b));
-                    let mut bytes = vec![0x7E, 0x00, 0x06];
-                    bytes.extend(answer);
-                    bytes.push(0xFF - sum);
-                    if std::io::Write::write_all(&mut answers, &bytes).is_err() {
-                        return;
-                    }
-                }
-            }
-        }
-    });
+    let (link, go) = bursting_radio();
     let (mut hub, out, err) = start_hub_logging(&link, &[], Some("mcp_host::hub=info"));
     let (_, addr) = serving(&out);
     // A client that reads nothing, behind the radio's frames.

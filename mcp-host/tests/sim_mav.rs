@@ -10,9 +10,10 @@ use tokio::time::Instant;
 use tokio_util::codec::Framed;
 use xbee_api::{Address16, Address64, ApiMode, Frame, ReceivePacketRepr};
 
-#[tokio::test(start_paused = true)]
-async fn telemetry_comes_at_20_hz_as_transmit_requests_to_the_coordinator() {
-    let (radio, mav) = tokio::io::duplex(4096);
+/// A simulated MAV on an in-memory stream of `buffer` bytes, told to send its altitude
+/// telemetry: the radio's side of the stream.
+async fn sending_altitude(buffer: usize) -> Framed<tokio::io::DuplexStream, XBeeCodec> {
+    let (radio, mav) = tokio::io::duplex(buffer);
     tokio::spawn(run_mav(mav, SimMav::new(1_000)));
     let mut radio = Framed::new(radio, XBeeCodec::new(ApiMode::Unescaped));
     let rx = ReceivePacketRepr {
@@ -22,6 +23,12 @@ async fn telemetry_comes_at_20_hz_as_transmit_requests_to_the_coordinator() {
         data: b"c\x01\x01\x1a",
     };
     radio.send(&rx).await.unwrap();
+    radio
+}
+
+#[tokio::test(start_paused = true)]
+async fn telemetry_comes_at_20_hz_as_transmit_requests_to_the_coordinator() {
+    let mut radio = sending_altitude(4096).await;
     let start = Instant::now();
     let mut times = Vec::new();
     while times.len() < 40 {
@@ -47,16 +54,7 @@ async fn telemetry_comes_at_20_hz_as_transmit_requests_to_the_coordinator() {
 
 #[tokio::test(start_paused = true)]
 async fn telemetry_keeps_20_hz_on_a_coarse_clock() {
-    let (radio, mav) = tokio::io::duplex(1 << 16);
-    tokio::spawn(run_mav(mav, SimMav::new(1_000)));
-    let mut radio = Framed::new(radio, XBeeCodec::new(ApiMode::Unescaped));
-    let rx = ReceivePacketRepr {
-        src64: Address64::COORDINATOR,
-        src16: Address16::COORDINATOR,
-        options: 0x01,
-        data: b"c\x01\x01\x1a",
-    };
-    radio.send(&rx).await.unwrap();
+    let mut radio = sending_altitude(1 << 16).await;
     // Timers that fire up to a tick of 15.625 ms late, as Windows' do by default: 10 s
     // of such ticks, the MAV's frames taken as they come.
     let tick = Duration::from_micros(15_625);
