@@ -139,8 +139,8 @@
 //!   many bytes (see the `Worst case` of [`xbee_api::Decoder`]). Bytes outside any
 //!   frame (before a start delimiter: text typed into a connection, a program in
 //!   transparent mode) are skipped, as a radio skips them, and counted in
-//!   [`HubStats::bytes_skipped`]; the first a client sends are said as a warning, as
-//!   the client itself hears nothing back.
+//!   [`HubStats::bytes_skipped`]; the first a client sends (outside a frame refused) are
+//!   said as a warning, as the client itself hears nothing back.
 //! - **Clients ended:** when the hub ends a client (its place taken, the radio's link
 //!   lost, the hub stopped) or its connection fails, its frames not yet written are
 //!   dropped (counted in [`HubStats::frames_refused`]): its commands are not carried out
@@ -345,9 +345,11 @@ pub struct HubStats {
     /// most once a second.
     pub clients_turned_away: u64,
     /// Bytes of clients that began no frame (before a start delimiter: text typed into
-    /// a connection, a program in transparent mode), skipped as a radio skips them.
-    /// The first a client sends is logged as a warning, with what they may be; its
-    /// others are counted in the line that says it has gone.
+    /// a connection, a program in transparent mode; in API mode 1 also the bytes of a
+    /// refused frame scanned again for a start delimiter), skipped as a radio skips
+    /// them. The first a client sends outside a refused frame are logged as a warning,
+    /// with what they may be; all of a client's are counted in the line that says it
+    /// has gone.
     pub bytes_skipped: u64,
     /// The counters of the hub's own link to the radio: frames and framing errors,
     /// disconnects and reconnects, and in [`Stats::events_dropped`] the frames lost
@@ -958,8 +960,9 @@ struct Connected {
     dropped: Arc<AtomicU64>,
     /// When the frames dropped for it were last said, and how many there were then.
     said_dropped: Option<(Instant, u64)>,
-    /// Answers to its requests dropped, for the warning.
-    answers_dropped: Repeats,
+    /// Answers to its requests dropped, for the warning (shared with its [`Client`],
+    /// which drops the answers of its requests refused).
+    answers_dropped: Arc<Mutex<Repeats>>,
 }
 
 impl Connected {
@@ -994,23 +997,20 @@ impl Connected {
 /// [`Connected::dropped_one`].
 const DROPS_SAID_EVERY: Duration = Duration::from_secs(10);
 
-impl Connected {
-    /// An answer to one of its requests dropped, [`ANSWER_QUEUE`] of them waiting for it
-    /// (it sent requests and read nothing, while the radio's frames filled its
-    /// connection): counted, and said, the first at once, then at most one a second
-    /// with the number not said.
-    fn answer_dropped(&mut self, now: Instant) {
-        let peer = self.peer;
-        let more = match self.answers_dropped.count(now) {
-            None => return,
-            Some(0) => String::new(),
-            Some(more) => format!(", and {more} more since the last such warning"),
-        };
-        tracing::warn!(
-            "hub: an answer to a request of client {peer} dropped: {ANSWER_QUEUE} of its \
-             answers wait for it to read them{more}"
-        );
-    }
+/// An answer to a request of client `peer` dropped, [`ANSWER_QUEUE`] of them waiting
+/// for it (it sent requests and read nothing, while the radio's frames filled its
+/// connection): said, the first at once, then at most one a second with the number not
+/// said (`repeats`, the client's).
+fn answer_dropped(peer: SocketAddr, repeats: &Mutex<Repeats>) {
+    let more = match lock(repeats).count(Instant::now()) {
+        None => return,
+        Some(0) => String::new(),
+        Some(more) => format!(", and {more} more since the last such warning"),
+    };
+    tracing::warn!(
+        "hub: an answer to a request of client {peer} dropped: {ANSWER_QUEUE} of its \
+         answers wait for it to read them{more}"
+    );
 }
 
 /// The hub's main task: frames from the radio to the clients, new clients accepted.
@@ -1212,6 +1212,7 @@ impl Serve {
         let behind = Arc::new(Mutex::new(None));
         let closed = Arc::new(Mutex::new(None));
         let ahead = Arc::new(Mutex::new(None));
+        let answers_dropped = Arc::new(Mutex::new(Repeats::default()));
         let dropped = Arc::new(AtomicU64::new(0));
         let number = self.next_client;
         self.next_client += 1;
@@ -1225,7 +1226,7 @@ impl Serve {
             ahead: ahead.clone(),
             dropped: dropped.clone(),
             said_dropped: None,
-            answers_dropped: Repeats::default(),
+            answers_dropped: answers_dropped.clone(),
         });
         let client = Arc::new(Client {
             stalls: self.stalls.clone(),
@@ -1246,6 +1247,7 @@ impl Serve {
             closed,
             ahead,
             dropped,
+            answers_dropped,
             skipped: AtomicU64::new(0),
         });
         let (rd, wr) = socket.into_split();
@@ -1258,7 +1260,8 @@ impl Serve {
 
     /// Ends, for `peer`, a new one, the client that closed its connection first, or
     /// without one the client that has taken none of the radio's frames the longest,
-    /// [`STALLED`] at least; whether there was one.
+    /// [`STALLED`] at least, or without one the client that has written ahead of the
+    /// radio the longest, [`STALLED`] at least; whether there was one.
     fn make_room(&mut self, peer: SocketAddr) -> bool {
         let longest = |state: fn(&Connected) -> &Mutex<Option<Instant>>, least: Duration| {
             self.clients
@@ -1370,9 +1373,9 @@ impl Serve {
         if let Some(bytes) = encode(&data, self.mode) {
             if client.try_send(bytes).is_err() {
                 bump(&self.counters.frames_dropped);
-                let connected = self.clients.iter_mut().find(|c| c.number == number);
+                let connected = self.clients.iter().find(|c| c.number == number);
                 if let Some(connected) = connected {
-                    connected.answer_dropped(Instant::now());
+                    answer_dropped(connected.peer, &connected.answers_dropped);
                 }
             }
         }
@@ -1570,7 +1573,8 @@ struct Client {
     closed: Arc<Mutex<Option<Instant>>>,
     /// Since when it has written ahead of the radio: each frame it sent since found its
     /// [`CLIENT_FRAMES_TO_RADIO`] places taken, and waited its turn; `None` once one
-    /// finds a place free. A client that writes faster than the radio sends keeps it:
+    /// finds a place free, or once the hub has read all it wrote (it waits for more).
+    /// A client that writes faster than the radio sends keeps it:
     /// one that keeps it for [`STALLED`] gives its place up when the hub is full (a
     /// program that left megabytes of frames in its connection, whose end the hub
     /// cannot read before them, is one).
@@ -1579,6 +1583,8 @@ struct Client {
     dropped: Arc<AtomicU64>,
     /// Its bytes that began no frame, skipped.
     skipped: AtomicU64,
+    /// Answers to its requests dropped, for the warning ([`Connected::answers_dropped`]).
+    answers_dropped: Arc<Mutex<Repeats>>,
 }
 
 impl Drop for Client {
@@ -1612,6 +1618,9 @@ impl Client {
                 let item = if let Some(item) = ready {
                     item
                 } else {
+                    // All it wrote is read: it is not ahead of the radio (a burst, then
+                    // quiet), whatever its last frame found.
+                    *lock(&self.ahead) = None;
                     tokio::select! {
                         item = reader.next() => item,
                         () = tokio::time::sleep_until(check_stale_at.unwrap_or_else(Instant::now)), if check_stale_at.is_some() => {
@@ -1622,7 +1631,14 @@ impl Client {
                             } else {
                                 if reader.decoder().codec().is_stale(timeout, Instant::now()) {
                                     old = None;
-                                    for item in reader.decoder_mut().codec_mut().drop_partial() {
+                                    for item in reader.decoder_mut().drop_partial() {
+                                        let item = match item {
+                                            ClientItem::Codec(item) => item,
+                                            ClientItem::Skipped { bytes, after_error } => {
+                                                self.skipped(bytes, after_error);
+                                                continue;
+                                            }
+                                        };
                                         if self.pass(item, &to_radio, None).await.is_err() {
                                             return;
                                         }
@@ -1702,8 +1718,8 @@ impl Client {
                 peer = %self.peer,
                 "hub: a client's bytes skipped: {} that began no frame (the hub takes \
                  XBee API frames in API mode {}, each from a 0x7E: is the client sending \
-                 text, or in transparent mode?); the client's later ones are counted \
-                 when it goes",
+                 text, or in transparent mode?); all the client's are counted when it \
+                 goes",
                 crate::diagnosis::counted(bytes, "byte"),
                 u8::from(self.mode)
             );
@@ -1857,6 +1873,7 @@ impl Client {
         if let Some(bytes) = answer {
             if self.queue.try_send(bytes).is_err() {
                 bump(&self.counters.frames_dropped);
+                answer_dropped(self.peer, &self.answers_dropped);
             }
         }
         let frame_type = request.first().copied().unwrap_or_default();

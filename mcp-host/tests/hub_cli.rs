@@ -931,7 +931,7 @@ fn a_clients_bytes_that_begin_no_frame_are_said_once_and_counted() {
         &skipped,
         " warning: hub: a client's bytes skipped: 5 bytes that began no frame (the hub \
          takes XBee API frames in API mode 1, each from a 0x7E: is the client sending \
-         text, or in transparent mode?); the client's later ones are counted when it goes",
+         text, or in transparent mode?); all the client's are counted when it goes",
     );
     let peer = client.local_addr().unwrap().to_string();
     assert!(skipped.ends_with(&format!("(peer {peer})")), "{skipped}");

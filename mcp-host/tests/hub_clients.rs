@@ -218,7 +218,8 @@ async fn a_client_that_reads_slowly_keeps_its_place() {
 /// full speed onto the hub), which may have left with megabytes of them still in its
 /// connection, whose end the hub cannot read before them: when the hub is full, it
 /// gives its place to a new client once it has been ahead of the radio for `STALLED`,
-/// its frames not yet written dropped; quiet clients keep theirs.
+/// its frames not yet written dropped; quiet clients keep theirs, and so does a client
+/// that wrote a burst ahead of the radio, then waited.
 #[tokio::test(flavor = "multi_thread")]
 async fn a_client_that_writes_ahead_of_the_radio_gives_its_place_up() {
     let (hub, mut radio) = hub_and_radio().await;
@@ -233,19 +234,39 @@ async fn a_client_that_writes_ahead_of_the_radio_gives_its_place_up() {
             }
         }
     });
-    // 2 MB of Transmit Requests without a frame id: three minutes of the radio's UART.
-    let mut flood = Vec::new();
-    let mut codec = XBeeCodec::new(ApiMode::Unescaped);
-    let mut data = vec![
-        0x10, 0x00, 0, 0x13, 0xA2, 0, 0x40, 0xB5, 0xFF, 0xFF, 0xFF, 0xFE, 0, 0,
-    ];
-    data.extend([0xAA; 200]);
-    for _ in 0..10_000 {
+    // Transmit Requests without a frame id, of 200 bytes of `fill`.
+    let requests = |fill: u8, count: usize| {
+        let mut codec = XBeeCodec::new(ApiMode::Unescaped);
+        let mut data = vec![
+            0x10, 0x00, 0, 0x13, 0xA2, 0, 0x40, 0xB5, 0xFF, 0xFF, 0xFF, 0xFE, 0, 0,
+        ];
+        data.extend([fill; 200]);
         let mut bytes = mcp_host::bytes::BytesMut::new();
-        tokio_util::codec::Encoder::encode(&mut codec, &RawFrame::new(&data).unwrap(), &mut bytes)
+        for _ in 0..count {
+            tokio_util::codec::Encoder::encode(
+                &mut codec,
+                &RawFrame::new(&data).unwrap(),
+                &mut bytes,
+            )
             .unwrap();
-        flood.extend_from_slice(&bytes);
+        }
+        bytes.to_vec()
+    };
+    // First a burst of 40, ahead of the radio while it lasts, then nothing: sent whole.
+    let mut burst = TcpStream::connect(hub.local_addr()).await.unwrap();
+    tokio::io::AsyncWriteExt::write_all(&mut burst, &requests(0xBB, 40))
+        .await
+        .unwrap();
+    let mut sent = 0;
+    while sent < 40 {
+        let frame = tokio::time::timeout(GUARD, frames.recv())
+            .await
+            .unwrap()
+            .unwrap();
+        sent += usize::from(frame[14] == 0xBB);
     }
+    // Then 2 MB: three minutes of the radio's UART.
+    let flood = requests(0xAA, 10_000);
     let flooder = TcpStream::connect(hub.local_addr()).await.unwrap();
     let (mut flooder, mut flooding) = flooder.into_split();
     let flooding = tokio::spawn(async move {
@@ -262,7 +283,7 @@ async fn a_client_that_writes_ahead_of_the_radio_gives_its_place_up() {
     }
     // The others connect and keep quiet; the radio is quiet: nobody is behind.
     let mut quiet = Vec::new();
-    for _ in 1..MAX_CLIENTS {
+    for _ in 2..MAX_CLIENTS {
         quiet.push(TcpStream::connect(hub.local_addr()).await.unwrap());
     }
     // Full, and the flooder not ahead for long yet: a new client is turned away.
@@ -289,10 +310,10 @@ async fn a_client_that_writes_ahead_of_the_radio_gives_its_place_up() {
     assert!(matches!(read, Ok(Ok(0) | Err(_))), "{read:?}");
     assert!(hub.stats().frames_refused > 0, "{:?}", hub.stats());
     flooding.abort();
-    // The quiet clients kept their places: the next is turned away.
+    // The quiet clients and the burst's kept their places: the next is turned away.
     let mut late = TcpStream::connect(hub.local_addr()).await.unwrap();
     assert!(turned_away(&mut late).await);
-    drop((quiet, new));
+    drop((quiet, new, burst));
     hub.stop().await;
     radio_task.abort();
 }

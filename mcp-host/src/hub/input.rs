@@ -45,14 +45,16 @@ pub(super) enum ClientItem {
 
 /// The [`XBeeCodec`] of a client's connection, which also yields the bytes it skipped
 /// (outside any frame, before a start delimiter) as they are skipped, rather than
-/// reading on without a word.
+/// reading on without a word; each time ahead of the item the codec found after them.
 #[derive(Debug)]
 pub(super) struct ClientCodec {
     codec: XBeeCodec,
     /// The codec's skipped bytes already yielded.
     skipped: u64,
-    /// Whether a candidate frame was dropped, with no frame since.
+    /// Whether the last item yielded was a candidate frame dropped.
     after_error: bool,
+    /// The codec's item found after bytes it skipped, yielded after them.
+    next: Option<CodecItem>,
 }
 
 impl ClientCodec {
@@ -62,6 +64,7 @@ impl ClientCodec {
             codec: XBeeCodec::with_counters(mode, input.max_frame_len, Default::default()),
             skipped: 0,
             after_error: false,
+            next: None,
         }
     }
 
@@ -70,31 +73,55 @@ impl ClientCodec {
         &self.codec
     }
 
-    /// The frame codec, to give up a partial frame.
-    pub(super) fn codec_mut(&mut self) -> &mut XBeeCodec {
-        &mut self.codec
+    /// Gives up on the partial frame ([`XBeeCodec::drop_partial`]): its error, then what
+    /// the bytes after its start delimiter hold, the bytes skipped among them yielded
+    /// last, after the error.
+    pub(super) fn drop_partial(&mut self) -> Vec<ClientItem> {
+        let mut items: Vec<ClientItem> = self
+            .next
+            .take()
+            .map(ClientItem::Codec)
+            .into_iter()
+            .collect();
+        let before = self.after_error;
+        let dropped = self.codec.drop_partial();
+        let after_error = before || !dropped.is_empty();
+        for item in dropped {
+            self.after_error = matches!(item, CodecItem::Error(_));
+            items.push(ClientItem::Codec(item));
+        }
+        items.extend(self.newly_skipped(after_error));
+        // The bytes it held are all scanned: those that come next are new.
+        self.after_error = false;
+        items
     }
 
-    /// The bytes skipped since they were last yielded, if any.
-    fn newly_skipped(&mut self) -> Option<ClientItem> {
+    /// The bytes skipped since they were last yielded, if any, said to have come
+    /// `after_error` or not.
+    fn newly_skipped(&mut self, after_error: bool) -> Option<ClientItem> {
         let skipped = self.codec.stats().bytes_skipped;
         let new = skipped.checked_sub(self.skipped).filter(|&new| new > 0)?;
         self.skipped = skipped;
         Some(ClientItem::Skipped {
             bytes: new,
-            after_error: self.after_error,
+            after_error,
         })
     }
 
-    /// `item` of the codec, or bytes it skipped (those skipped before a frame are
-    /// yielded after it, at the next call).
-    fn next(&mut self, item: Option<CodecItem>) -> Option<ClientItem> {
-        match item {
-            Some(item) => {
-                self.after_error = matches!(item, CodecItem::Error(_));
-                Some(ClientItem::Codec(item))
+    /// What a call of the codec that gave `item` yields: the bytes it skipped first (they
+    /// came before `item`, and after the last item yielded), `item` held for the next
+    /// call; else `item`.
+    fn take(&mut self, item: Option<CodecItem>) -> Option<ClientItem> {
+        let skipped = self.newly_skipped(self.after_error);
+        if let Some(item) = &item {
+            self.after_error = matches!(item, CodecItem::Error(_));
+        }
+        match skipped {
+            Some(skipped) => {
+                self.next = item;
+                Some(skipped)
             }
-            None => self.newly_skipped(),
+            None => item.map(ClientItem::Codec),
         }
     }
 }
@@ -104,19 +131,19 @@ impl Decoder for ClientCodec {
     type Error = std::io::Error;
 
     fn decode(&mut self, src: &mut BytesMut) -> Result<Option<ClientItem>, std::io::Error> {
-        if let Some(skipped) = self.newly_skipped() {
-            return Ok(Some(skipped));
+        if let Some(item) = self.next.take() {
+            return Ok(Some(ClientItem::Codec(item)));
         }
         let item = self.codec.decode(src)?;
-        Ok(self.next(item))
+        Ok(self.take(item))
     }
 
     fn decode_eof(&mut self, src: &mut BytesMut) -> Result<Option<ClientItem>, std::io::Error> {
-        if let Some(skipped) = self.newly_skipped() {
-            return Ok(Some(skipped));
+        if let Some(item) = self.next.take() {
+            return Ok(Some(ClientItem::Codec(item)));
         }
         let item = self.codec.decode_eof(src)?;
-        Ok(self.next(item))
+        Ok(self.take(item))
     }
 }
 
@@ -125,11 +152,26 @@ mod tests {
     use super::*;
 
     fn codec() -> ClientCodec {
+        codec_of(ApiMode::Unescaped, 256)
+    }
+
+    fn codec_of(mode: ApiMode, max_frame_len: usize) -> ClientCodec {
         let input = ClientInput {
-            max_frame_len: 256,
+            max_frame_len,
             partial_frame_timeout: None,
         };
-        ClientCodec::new(ApiMode::Unescaped, input)
+        ClientCodec::new(mode, input)
+    }
+
+    fn said(item: ClientItem) -> String {
+        match item {
+            ClientItem::Skipped { bytes, after_error } => format!(
+                "skipped {bytes}{}",
+                ["", " after an error"][usize::from(after_error)]
+            ),
+            ClientItem::Codec(CodecItem::Frame(f)) => format!("frame {:02x?}", &f.data()[..]),
+            ClientItem::Codec(CodecItem::Error(e)) => format!("error {e}"),
+        }
     }
 
     fn items(codec: &mut ClientCodec, bytes: &[u8], eof: bool) -> Vec<String> {
@@ -142,16 +184,7 @@ mod tests {
                 codec.decode(&mut buf)
             };
             match item.unwrap() {
-                Some(ClientItem::Skipped { bytes, after_error }) => {
-                    items.push(format!(
-                        "skipped {bytes}{}",
-                        ["", " after an error"][usize::from(after_error)]
-                    ));
-                }
-                Some(ClientItem::Codec(CodecItem::Frame(f))) => {
-                    items.push(format!("frame {:02x?}", &f.data()[..]));
-                }
-                Some(ClientItem::Codec(CodecItem::Error(e))) => items.push(format!("error {e}")),
+                Some(item) => items.push(said(item)),
                 None => return items,
             }
         }
@@ -164,11 +197,11 @@ mod tests {
         assert_eq!(items(&mut codec, b"hello\n", false), ["skipped 6"]);
         // Text, a Modem Status frame, more text: each in its turn, counted once.
         let mut bytes = b"AT".to_vec();
-        bytes.extend([0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F]);
+        bytes.extend(MODEM_STATUS);
         bytes.extend(b"ok");
         assert_eq!(
             items(&mut codec, &bytes, false),
-            ["frame [8a, 06]", "skipped 2", "skipped 2"]
+            ["skipped 2", "frame [8a, 06]", "skipped 2"]
         );
         assert_eq!(items(&mut codec, b"!", true), ["skipped 1"]);
         assert_eq!(codec.codec().stats().bytes_skipped, 11);
@@ -194,6 +227,72 @@ mod tests {
             items(&mut codec, &bytes, false),
             ["frame [8a, 06]", "skipped 5"]
         );
+    }
+
+    const MODEM_STATUS: [u8; 6] = [0x7E, 0x00, 0x02, 0x8A, 0x06, 0x6F];
+
+    #[test]
+    fn the_rest_of_a_dropped_candidate_is_skipped_after_its_error_and_before_the_next_frame() {
+        // Mode 1: `AT AP` with its checksum off by one, then a frame, in one read: the
+        // candidate's bytes scanned again come between the two.
+        let mut codec = codec();
+        let mut bytes = vec![0x7E, 0x00, 0x04, 0x08, 0x01, b'A', b'P', 0x66];
+        bytes.extend(MODEM_STATUS);
+        assert_eq!(
+            items(&mut codec, &bytes, false),
+            [
+                "error bad checksum: computed 0x65, received 0x66",
+                "skipped 7 after an error",
+                "frame [8a, 06]"
+            ]
+        );
+        // Mode 2: a frame longer than the hub takes, then a frame.
+        let mut codec = codec_of(ApiMode::Escaped, 4);
+        let mut bytes = vec![0x7E, 0x00, 0x06, 0x10, 0x01, 1, 2, 3, 4, 0xD9];
+        bytes.extend(MODEM_STATUS);
+        let said = items(&mut codec, &bytes, false);
+        assert_eq!(said.len(), 3, "{said:?}");
+        assert!(said[0].starts_with("error "), "{said:?}");
+        assert!(said[1].ends_with(" after an error"), "{said:?}");
+        assert_eq!(said[2], "frame [8a, 06]");
+    }
+
+    #[test]
+    fn text_before_a_dropped_candidate_is_skipped_before_its_error() {
+        let mut codec = codec();
+        let mut bytes = b"hello".to_vec();
+        bytes.extend([0x7E, 0x00, 0x04, 0x08, 0x01, b'A', b'P', 0x66]);
+        let said = items(&mut codec, &bytes, false);
+        assert_eq!(
+            said[..2],
+            [
+                "skipped 5",
+                "error bad checksum: computed 0x65, received 0x66"
+            ]
+        );
+        assert!(
+            said[2..].iter().all(|s| s.ends_with(" after an error")),
+            "{said:?}"
+        );
+    }
+
+    #[test]
+    fn a_partial_frame_given_up_is_its_error_then_its_bytes_skipped() {
+        let mut codec = codec();
+        assert_eq!(
+            items(
+                &mut codec,
+                &[0x7E, 0x00, 0x10, 0x08, 0x01, b'A', b'P'],
+                false
+            ),
+            Vec::<String>::new()
+        );
+        let said: Vec<String> = codec.drop_partial().into_iter().map(said).collect();
+        assert_eq!(said.len(), 2, "{said:?}");
+        assert!(said[0].starts_with("error "), "{said:?}");
+        assert_eq!(said[1], "skipped 6 after an error");
+        // Text after it is said as text.
+        assert_eq!(items(&mut codec, b"hi", false), ["skipped 2"]);
     }
 
     #[test]
