@@ -1308,12 +1308,18 @@ fn monitor_records_every_frame_while_its_warnings_are_not_read() {
             &format!("frame {frames}, {:?} in", start.elapsed()),
         );
     }
+    // The reader comes back, then Ctrl-C: what waited for it, the warnings among it,
+    // is read.
+    let reader = std::thread::spawn(move || {
+        let mut said = String::new();
+        std::io::Read::read_to_string(&mut pipe, &mut said).unwrap();
+        said
+    });
     let pid = i32::try_from(child.0.id()).unwrap();
     // SAFETY: kill(2) with the pid of a child of this process and a valid signal.
     assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
     assert_eq!(common::exit_code(&mut child.0), Some(0));
-    let mut said = String::new();
-    std::io::Read::read_to_string(&mut pipe, &mut said).unwrap();
+    let said = reader.join().unwrap();
     assert!(
         said.contains(
             " received frames not shown: standard output is not read as fast as they come"

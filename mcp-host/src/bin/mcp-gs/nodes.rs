@@ -50,7 +50,12 @@ pub(crate) async fn run(args: NodesArgs) -> Result<(), Failure> {
     })?;
     // A link lost, or a radio that does not answer, is an outcome too, in JSON.
     let failed = |e: SendError| {
-        if let (true, Some(outcome)) = (json, timeout_json(&e, ND, None)) {
+        if let (true, Some(mut outcome)) = (json, timeout_json(&e, ND, None)) {
+            // The outcome of `nodes` as a whole: the frame id of what timed out (ND, or
+            // the N? or NT asked first) would say another command's.
+            if let Some(fields) = outcome.as_object_mut() {
+                fields.remove("id");
+            }
             out!("{outcome}");
         }
         diagnosed_send(e, &args.link, &sender.stats())
