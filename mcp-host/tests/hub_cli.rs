@@ -467,7 +467,9 @@ fn a_hub_stopped_a_while_says_for_how_long_to_the_millisecond() {
             .unwrap_or_else(|| panic!("{stalled}"));
         let decimals = seconds.split('.').nth(1).map_or(0, str::len);
         assert!(decimals <= 3, "{stalled}");
-        if seconds.parse::<f64>().is_ok_and(|s| s >= 2.5) {
+        // The stop lasts 2.5 s by this clock; the hub's last beat before it may come a
+        // little after the signal was sent, on a busy machine.
+        if seconds.parse::<f64>().is_ok_and(|s| s >= 2.4) {
             break;
         }
     }
