@@ -75,15 +75,18 @@ fn lines(stream: impl std::io::Read + Send + 'static) -> mpsc::Receiver<String> 
     rx
 }
 
-/// The next line of `lines` containing `text`.
+/// The next line of `lines` containing `text` (the lines before it, if it never comes, in
+/// the failure).
 fn line_with(lines: &mpsc::Receiver<String>, text: &str) -> String {
+    let mut before = Vec::new();
     loop {
         let line = lines
             .recv_timeout(GUARD)
-            .unwrap_or_else(|e| panic!("no line with {text:?}: {e}"));
+            .unwrap_or_else(|e| panic!("no line with {text:?}: {e}; before: {before:#?}"));
         if line.contains(text) {
             return line;
         }
+        before.push(line);
     }
 }
 
