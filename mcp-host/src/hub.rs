@@ -139,8 +139,9 @@
 //!   many bytes (see the `Worst case` of [`xbee_api::Decoder`]). Bytes outside any
 //!   frame (before a start delimiter: text typed into a connection, a program in
 //!   transparent mode) are skipped, as a radio skips them, and counted in
-//!   [`HubStats::bytes_skipped`]; the first a client sends (outside a frame refused) are
-//!   said as a warning, as the client itself hears nothing back.
+//!   [`HubStats::bytes_skipped`]; the first a client sends (but for those between a
+//!   frame refused and its next frame taken) are said as a warning, as the client
+//!   itself hears nothing back.
 //! - **Clients ended:** when the hub ends a client (its place taken, the radio's link
 //!   lost, the hub stopped) or its connection fails, its frames not yet written are
 //!   dropped (counted in [`HubStats::frames_refused`]): its commands are not carried out
@@ -347,9 +348,10 @@ pub struct HubStats {
     /// Bytes of clients that began no frame (before a start delimiter: text typed into
     /// a connection, a program in transparent mode; in API mode 1 also the bytes of a
     /// refused frame scanned again for a start delimiter), skipped as a radio skips
-    /// them. The first a client sends outside a refused frame are logged as a warning,
-    /// with what they may be; all of a client's are counted in the line that says it
-    /// has gone.
+    /// them. The first a client sends are logged as a warning, with what they may be,
+    /// but for those between a refused frame and the client's next frame taken (the
+    /// refused frame's own, perhaps); all of a client's are counted in the line that
+    /// says it has gone.
     pub bytes_skipped: u64,
     /// The counters of the hub's own link to the radio: frames and framing errors,
     /// disconnects and reconnects, and in [`Stats::events_dropped`] the frames lost
@@ -1249,6 +1251,7 @@ impl Serve {
             dropped,
             answers_dropped,
             skipped: AtomicU64::new(0),
+            warned_skipped: AtomicBool::new(false),
         });
         let (rd, wr) = socket.into_split();
         let (frames_to_radio, queue) = mpsc::channel(CLIENT_FRAMES_TO_RADIO);
@@ -1571,10 +1574,12 @@ struct Client {
     behind: Arc<Mutex<Option<Instant>>>,
     /// Since when it has sent nothing more (see [`Connected::closed`]).
     closed: Arc<Mutex<Option<Instant>>>,
-    /// Since when it has written ahead of the radio: each frame it sent since found its
-    /// [`CLIENT_FRAMES_TO_RADIO`] places taken, and waited its turn; `None` once one
-    /// finds a place free, or once the hub has read all it wrote (it waits for more).
-    /// A client that writes faster than the radio sends keeps it:
+    /// Since when it has written ahead of the radio: a frame it sent found its
+    /// [`CLIENT_FRAMES_TO_RADIO`] places taken, and waited its turn, and the hub has not
+    /// read all it wrote since; `None` once it has (the client waits for more: a frame
+    /// finding a place free says nothing, as the radio's writer may take two short
+    /// frames of a flood at once). A client that writes faster than the radio sends
+    /// keeps it:
     /// one that keeps it for [`STALLED`] gives its place up when the hub is full (a
     /// program that left megabytes of frames in its connection, whose end the hub
     /// cannot read before them, is one).
@@ -1583,6 +1588,8 @@ struct Client {
     dropped: Arc<AtomicU64>,
     /// Its bytes that began no frame, skipped.
     skipped: AtomicU64,
+    /// Whether its bytes skipped were said (the first not after a refused frame).
+    warned_skipped: AtomicBool,
     /// Answers to its requests dropped, for the warning ([`Connected::answers_dropped`]).
     answers_dropped: Arc<Mutex<Repeats>>,
 }
@@ -1610,6 +1617,9 @@ impl Client {
         // began to wait (see `admit`), and since when: frames wholly among them were
         // there all that time, and their own wait counts from then.
         let mut old: Option<(Instant, usize)> = None;
+        // When the bytes of the last item, skipped bytes, were read (see `old`), for the
+        // frame the codec found after them, which it yields next from the same bytes.
+        let mut held: Option<Option<Instant>> = None;
         let read = async {
             loop {
                 let check_stale_at = reader.decoder().codec().stale_check_at(timeout);
@@ -1631,6 +1641,7 @@ impl Client {
                             } else {
                                 if reader.decoder().codec().is_stale(timeout, Instant::now()) {
                                     old = None;
+                                    held = None;
                                     for item in reader.decoder_mut().drop_partial() {
                                         let item = match item {
                                             ClientItem::Codec(item) => item,
@@ -1661,6 +1672,15 @@ impl Client {
                         None
                     }
                 };
+                // A frame held behind bytes skipped was taken from the buffer with them:
+                // read when they were.
+                let since = match held.take() {
+                    Some(held) if after == before => held,
+                    _ => since,
+                };
+                if let Some(Ok(ClientItem::Skipped { .. })) = &item {
+                    held = Some(since);
+                }
                 // Just after a stall of the hub, the request may have come as it began.
                 let since = match (self.stalls.beat(), since) {
                     (Some(began), Some(since)) => Some(since.min(began)),
@@ -1713,7 +1733,8 @@ impl Client {
         self.counters
             .bytes_skipped
             .fetch_add(bytes, Ordering::Relaxed);
-        if self.skipped.fetch_add(bytes, Ordering::Relaxed) == 0 && !after_error {
+        self.skipped.fetch_add(bytes, Ordering::Relaxed);
+        if !after_error && !self.warned_skipped.swap(true, Ordering::Relaxed) {
             tracing::warn!(
                 peer = %self.peer,
                 "hub: a client's bytes skipped: {} that began no frame (the hub takes \
@@ -1757,10 +1778,7 @@ impl Client {
             CodecItem::Frame(frame) => {
                 if let Some(queued) = self.admit(frame.data(), since, &mut waited).await {
                     let queued = match to_radio.try_send(queued) {
-                        Ok(()) => {
-                            *lock(&self.ahead) = None;
-                            None
-                        }
+                        Ok(()) => None,
                         Err(mpsc::error::TrySendError::Full(queued)) => {
                             // Its turn waited for: the client's bytes are not read.
                             waited.get_or_insert_with(Instant::now);

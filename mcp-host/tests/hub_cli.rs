@@ -589,29 +589,28 @@ fn a_hub_that_listens_beyond_this_machine_warns_that_anyone_may_use_the_radio() 
     stop_hub(&mut hub, &out);
 }
 
-/// A client that sends requests and reads nothing, while the radio's frames fill its
-/// connection: the answers beyond those that wait for it (64) are dropped, and said.
+/// `data` as an API mode 1 frame.
 #[cfg(unix)]
-#[test]
-fn answers_dropped_for_a_client_that_does_not_read_are_said() {
+fn api_frame(data: &[u8]) -> Vec<u8> {
+    let sum = data.iter().fold(0u8, |s, b| s.wrapping_add(*b));
+    let len = u16::try_from(data.len()).unwrap().to_be_bytes();
+    [&[0x7E, len[0], len[1]][..], data, &[0xFF - sum]].concat()
+}
+
+/// A client that reads nothing, behind the radio's frames, sends 100 requests made by
+/// `request` (of frame ids 1 to 100): the answers beyond those that wait for it (64)
+/// are dropped, and said.
+#[cfg(unix)]
+fn answers_dropped_are_said(request: impl Fn(u8) -> Vec<u8>) {
     let (link, go) = bursting_radio();
     let (mut hub, out, err) = start_hub_logging(&link, &[], Some("mcp_host::hub=info"));
     let (_, addr) = serving(&out);
-    // A client that reads nothing, behind the radio's frames.
     let mut client = std::net::TcpStream::connect(&addr).unwrap();
     line_with(&err, "hub: client connected");
     go.send(()).unwrap();
     line_with(&err, "more slowly than they come");
-    // Its requests: 100 AT AP, ids 1 to 100, answered at once.
     for id in 1..=100u8 {
-        let sum = [0x08, id, b'A', b'P']
-            .iter()
-            .fold(0u8, |s, b| s.wrapping_add(*b));
-        std::io::Write::write_all(
-            &mut client,
-            &[0x7E, 0x00, 0x04, 0x08, id, b'A', b'P', 0xFF - sum],
-        )
-        .unwrap();
+        std::io::Write::write_all(&mut client, &api_frame(&request(id))).unwrap();
     }
     let dropped = line_with(&err, "an answer to a request");
     assert!(dropped.contains("WARN"), "{dropped}");
@@ -624,6 +623,28 @@ fn answers_dropped_for_a_client_that_does_not_read_are_said() {
         "{dropped}"
     );
     stop_hub(&mut hub, &out);
+}
+
+/// The radio's answers: 100 `AT AP`, answered at once.
+#[cfg(unix)]
+#[test]
+fn answers_dropped_for_a_client_that_does_not_read_are_said() {
+    answers_dropped_are_said(|id| vec![0x08, id, b'A', b'P']);
+}
+
+/// The hub's own: 100 Transmit Requests that the radio never answers, so that all but
+/// the client's first 16 wait for a place, 5 s, and are refused, each answered as
+/// failed by the hub.
+#[cfg(unix)]
+#[test]
+fn answers_of_refused_requests_dropped_for_a_client_that_does_not_read_are_said() {
+    answers_dropped_are_said(|id| {
+        let mut request = vec![
+            0x10, id, 0, 0x13, 0xA2, 0, 0x40, 0xB5, 0x99, 0xB9, 0xFF, 0xFE, 0, 0,
+        ];
+        request.push(b'm');
+        request
+    });
 }
 
 #[cfg(unix)]

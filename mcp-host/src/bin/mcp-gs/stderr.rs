@@ -48,11 +48,14 @@ pub(crate) fn start() {
             ended,
         };
         let _ = THREAD.set(Mutex::new(Some(thread)));
-        // A panic's message comes after the lines queued before it, which are not lost
-        // as the program ends.
+        // A panic of the main thread, which ends the program, says its message after
+        // the lines queued before it, which are not lost. (One of another thread, a
+        // task's that the runtime catches, leaves the thread running.)
         let said = std::panic::take_hook();
         std::panic::set_hook(Box::new(move |info| {
-            finish();
+            if std::thread::current().name() == Some("main") {
+                finish();
+            }
             said(info);
         }));
     }
