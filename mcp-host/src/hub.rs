@@ -615,8 +615,8 @@ impl Held {
 struct Route {
     /// The client's number (see [`Serve::next_client`]).
     client: u64,
-    /// The client's queue of answers ([`ANSWER_QUEUE`]).
-    queue: mpsc::Sender<Bytes>,
+    /// The client's queue of answers.
+    queue: AnswerQueue,
     own_id: u8,
     /// The frame type of the answers (see [`answer_type`]): an answer of another type
     /// under the same id is not this request's.
@@ -713,14 +713,9 @@ impl Routes {
             .remove_where(|r| r.client == client && !r.orphan.get(), |_, _| {});
     }
 
-    /// Where `answer` (frame data) under hub id `id` goes, the client's own id and the
-    /// client's number; the route ends with it unless more answers are due.
-    fn answer(
-        &mut self,
-        id: u8,
-        answer: &[u8],
-        now: Instant,
-    ) -> Option<(mpsc::Sender<Bytes>, u8, u64)> {
+    /// Where `answer` (frame data) under hub id `id` goes, and the client's own id; the
+    /// route ends with it unless more answers are due.
+    fn answer(&mut self, id: u8, answer: &[u8], now: Instant) -> Option<(AnswerQueue, u8)> {
         let route = self.0.get(id)?;
         // Not yet written: not its answer (a late one to an earlier request).
         let until = route.until.get()?;
@@ -733,8 +728,7 @@ impl Routes {
             }
         }
         // An orphan's answer is taken, and goes nowhere.
-        let to = (until > now && !route.orphan.get())
-            .then(|| (route.queue.clone(), route.own_id, route.client));
+        let to = (until > now && !route.orphan.get()).then(|| (route.queue.clone(), route.own_id));
         if until <= now || !route.many {
             self.0.remove(id);
         }
@@ -943,8 +937,6 @@ impl RadioWriter {
 /// A client as the hub's main task knows it.
 struct Connected {
     peer: SocketAddr,
-    /// Its number, in its routes.
-    number: u64,
     /// Its queue of frames from the radio.
     queue: mpsc::Sender<Bytes>,
     /// Ends its tasks.
@@ -962,9 +954,6 @@ struct Connected {
     dropped: Arc<AtomicU64>,
     /// When the frames dropped for it were last said, and how many there were then.
     said_dropped: Option<(Instant, u64)>,
-    /// Answers to its requests dropped, for the warning (shared with its [`Client`],
-    /// which drops the answers of its requests refused).
-    answers_dropped: Arc<Mutex<Repeats>>,
 }
 
 impl Connected {
@@ -999,20 +988,43 @@ impl Connected {
 /// [`Connected::dropped_one`].
 const DROPS_SAID_EVERY: Duration = Duration::from_secs(10);
 
-/// An answer to a request of client `peer` dropped, [`ANSWER_QUEUE`] of them waiting
-/// for it (it sent requests and read nothing, while the radio's frames filled its
-/// connection): said, the first at once, then at most one a second with the number not
-/// said (`repeats`, the client's).
-fn answer_dropped(peer: SocketAddr, repeats: &Mutex<Repeats>) {
-    let more = match lock(repeats).count(Instant::now()) {
-        None => return,
-        Some(0) => String::new(),
-        Some(more) => format!(", and {more} more since the last such warning"),
-    };
-    tracing::warn!(
-        "hub: an answer to a request of client {peer} dropped: {ANSWER_QUEUE} of its \
-         answers wait for it to read them{more}"
-    );
+/// A client's queue of the answers to its requests ([`ANSWER_QUEUE`] at most), apart
+/// from the radio's other frames: the radio's answers routed to it, and the hub's own
+/// to its requests refused.
+#[derive(Clone)]
+struct AnswerQueue {
+    queue: mpsc::Sender<Bytes>,
+    peer: SocketAddr,
+    counters: Arc<Counters>,
+    /// Answers dropped, for the warning.
+    dropped: Arc<Mutex<Repeats>>,
+}
+
+impl AnswerQueue {
+    /// Queues an answer (encoded); one that finds the queue full (the client sent
+    /// requests and read nothing, while the radio's frames filled its connection) is
+    /// dropped, counted in [`HubStats::frames_dropped`] and said, the first at once,
+    /// then at most one a second with the number not said.
+    fn send(&self, bytes: Bytes) {
+        let full = match self.queue.try_send(bytes) {
+            Ok(()) => return,
+            Err(error) => matches!(error, mpsc::error::TrySendError::Full(_)),
+        };
+        bump(&self.counters.frames_dropped);
+        if !full {
+            return; // The client is gone.
+        }
+        let more = match lock(&self.dropped).count(Instant::now()) {
+            None => return,
+            Some(0) => String::new(),
+            Some(more) => format!(", and {more} more since the last such warning"),
+        };
+        let peer = self.peer;
+        tracing::warn!(
+            "hub: an answer to a request of client {peer} dropped: {ANSWER_QUEUE} of its \
+             answers wait for it to read them{more}"
+        );
+    }
 }
 
 /// The hub's main task: frames from the radio to the clients, new clients accepted.
@@ -1214,13 +1226,9 @@ impl Serve {
         let behind = Arc::new(Mutex::new(None));
         let closed = Arc::new(Mutex::new(None));
         let ahead = Arc::new(Mutex::new(None));
-        let answers_dropped = Arc::new(Mutex::new(Repeats::default()));
         let dropped = Arc::new(AtomicU64::new(0));
-        let number = self.next_client;
-        self.next_client += 1;
         self.clients.push(Connected {
             peer,
-            number,
             queue: queue.clone(),
             end: end.clone(),
             behind: behind.clone(),
@@ -1228,15 +1236,21 @@ impl Serve {
             ahead: ahead.clone(),
             dropped: dropped.clone(),
             said_dropped: None,
-            answers_dropped: answers_dropped.clone(),
         });
+        let number = self.next_client;
+        self.next_client += 1;
         let client = Arc::new(Client {
             stalls: self.stalls.clone(),
             number,
             peer,
             mode: self.mode,
             to_radio: self.to_radio.clone(),
-            queue: answers_queue,
+            queue: AnswerQueue {
+                queue: answers_queue,
+                peer,
+                counters: self.counters.clone(),
+                dropped: Arc::default(),
+            },
             routes: self.routes.clone(),
             ids: self.ids.clone(),
             shared: self.shared.clone(),
@@ -1249,7 +1263,6 @@ impl Serve {
             closed,
             ahead,
             dropped,
-            answers_dropped,
             skipped: AtomicU64::new(0),
             warned_skipped: AtomicBool::new(false),
         });
@@ -1363,9 +1376,9 @@ impl Serve {
     /// An answer under hub id `id`: to the client that asked, under its own id; dropped
     /// if nobody asked for an answer of that type (and AT command) under it (every id on
     /// the hub's link is the hub's).
-    fn answer(&mut self, data: &[u8], id: u8) {
+    fn answer(&self, data: &[u8], id: u8) {
         let to = lock(&self.routes).answer(id, data, Instant::now());
-        let Some((client, own_id, number)) = to else {
+        let Some((client, own_id)) = to else {
             tracing::debug!(id, "hub: an answer nobody waits for dropped");
             return;
         };
@@ -1374,13 +1387,7 @@ impl Serve {
             *slot = own_id;
         }
         if let Some(bytes) = encode(&data, self.mode) {
-            if client.try_send(bytes).is_err() {
-                bump(&self.counters.frames_dropped);
-                let connected = self.clients.iter().find(|c| c.number == number);
-                if let Some(connected) = connected {
-                    answer_dropped(connected.peer, &connected.answers_dropped);
-                }
-            }
+            client.send(bytes);
         }
     }
 }
@@ -1549,9 +1556,8 @@ struct Client {
     mode: ApiMode,
     /// Where its queue of frames to the radio is taken from.
     to_radio: Arc<ToRadio>,
-    /// Its queue of the answers to its requests ([`ANSWER_QUEUE`]), apart from the
-    /// radio's other frames.
-    queue: mpsc::Sender<Bytes>,
+    /// Its queue of the answers to its requests.
+    queue: AnswerQueue,
     routes: Arc<Mutex<Routes>>,
     /// The permits of the 255 frame ids, shared by all clients.
     ids: Arc<Semaphore>,
@@ -1590,8 +1596,6 @@ struct Client {
     skipped: AtomicU64,
     /// Whether its bytes skipped were said (the first not after a refused frame).
     warned_skipped: AtomicBool,
-    /// Answers to its requests dropped, for the warning ([`Connected::answers_dropped`]).
-    answers_dropped: Arc<Mutex<Repeats>>,
 }
 
 impl Drop for Client {
@@ -1889,10 +1893,7 @@ impl Client {
         // The answer first: once the refusal is counted, it is on its way.
         let answer = not_sent_answer(request).and_then(|answer| encode(&answer, self.mode));
         if let Some(bytes) = answer {
-            if self.queue.try_send(bytes).is_err() {
-                bump(&self.counters.frames_dropped);
-                answer_dropped(self.peer, &self.answers_dropped);
-            }
+            self.queue.send(bytes);
         }
         let frame_type = request.first().copied().unwrap_or_default();
         self.refuse(format_args!(

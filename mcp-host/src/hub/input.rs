@@ -83,13 +83,9 @@ impl ClientCodec {
             .map(ClientItem::Codec)
             .into_iter()
             .collect();
-        let before = self.after_error;
         let dropped = self.codec.drop_partial();
-        let after_error = before || !dropped.is_empty();
-        for item in dropped {
-            self.after_error = matches!(item, CodecItem::Error(_));
-            items.push(ClientItem::Codec(item));
-        }
+        let after_error = self.after_error || !dropped.is_empty();
+        items.extend(dropped.into_iter().map(ClientItem::Codec));
         items.extend(self.newly_skipped(after_error));
         // The bytes it held are all scanned: those that come next are new.
         self.after_error = false;
