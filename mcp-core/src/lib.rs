@@ -155,3 +155,8 @@ pub const MAX_PAYLOAD: usize = 255;
 /// by this (its telemetry buffer, say) keeps each in one radio packet; a longer one
 /// goes out in fragments, lost whole if one fragment is.
 pub const MAX_UNFRAGMENTED_PAYLOAD: usize = 84;
+
+/// This crate's README, its example compiled and run as a doc test.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

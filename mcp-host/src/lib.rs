@@ -551,7 +551,7 @@ impl futures::stream::FusedStream for PacketStream {
     }
 }
 
-/// The README's examples, compiled and run as doc tests.
+/// This crate's README, its example compiled as a doc test.
 #[cfg(doctest)]
-#[doc = include_str!("../../README.md")]
+#[doc = include_str!("../README.md")]
 pub struct ReadmeDoctests;

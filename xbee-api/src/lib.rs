@@ -183,3 +183,8 @@ pub use node::{DeviceType, NodeInfo, NodeInfoError};
 pub use raw::RawFrame;
 pub use stats::Stats;
 pub use status::{AtStatus, DeliveryStatus, DiscoveryStatus, ModemStatus};
+
+/// This crate's README, its example compiled and run as a doc test.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

@@ -35,3 +35,9 @@ pub fn link(arg: Option<String>) -> Result<Link, LinkParseError> {
 pub fn mav(arg: Option<String>) -> Result<Address64, Box<dyn std::error::Error>> {
     Ok(arg.as_deref().unwrap_or("0013A20040B599B9").parse()?)
 }
+
+/// The workspace's README, its examples compiled and run as doc tests (here, in a
+/// package never published, as the README is no part of any crate's).
+#[cfg(doctest)]
+#[doc = include_str!("../../../README.md")]
+pub struct WorkspaceReadmeDoctests;
