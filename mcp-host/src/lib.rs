@@ -64,7 +64,8 @@
 //! (`use mcp_host::mcp_core::Command;`), as every example of these docs does. So is
 //! [`tokio_serial`], whose errors a [`LinkError::Serial`] holds
 //! (`mcp_host::tokio_serial::ErrorKind::NoDevice`: on Unix, the port is in use), and
-//! [`tokio_util`], whose `Decoder` and `Encoder` traits [`codec::XBeeCodec`] implements.
+//! [`tokio_util`], whose `Decoder` and `Encoder` traits [`codec::XBeeCodec`] implements,
+//! and [`serde_json`], whose `Value`s the JSON of [`render::json`] is.
 //!
 //! ```
 //! use mcp_host::bytes::Bytes;
@@ -189,6 +190,7 @@ use tokio::sync::mpsc;
 
 pub use bytes;
 pub use mcp_core;
+pub use serde_json;
 pub use tokio_serial;
 pub use tokio_util;
 pub use xbee_api;
