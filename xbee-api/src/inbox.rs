@@ -184,7 +184,7 @@ pub struct Received<const P: usize> {
 impl<const P: usize> Received<P> {
     /// The payload of `frame`, a Receive Packet (0x90) or an Explicit Rx Indicator
     /// (0x91), and who sent it: what an [`Inbox`] queues, for a firmware that reads
-    /// frames itself (an async task on [`io::FrameReader`](crate::io::FrameReader), say)
+    /// frames itself (an async task on `io::FrameReader`, feature `embedded-io`, say)
     /// and hands payloads to another task over a channel.
     ///
     /// ```
