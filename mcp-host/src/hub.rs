@@ -327,7 +327,9 @@ pub struct HubStats {
     pub frames_from_radio: u64,
     /// Frames from clients written to the radio.
     pub frames_from_clients: u64,
-    /// Frames from the radio not given to a client that had fallen behind.
+    /// Frames not given to a client that had fallen behind (its queue full): the
+    /// radio's, and the hub's own answers to requests it refused. Not those for a client
+    /// gone meanwhile.
     pub frames_dropped: u64,
     /// Frames of clients not written: a frame of a type a radio sends (0x80 and up), a
     /// request not sent in [`REQUEST_WAIT`], a frame id on a frame type the hub does not
@@ -1006,13 +1008,10 @@ impl AnswerQueue {
     /// dropped, counted in [`HubStats::frames_dropped`] and said, the first at once,
     /// then at most one a second with the number not said.
     fn send(&self, bytes: Bytes) {
-        let full = match self.queue.try_send(bytes) {
-            Ok(()) => return,
-            Err(error) => matches!(error, mpsc::error::TrySendError::Full(_)),
-        };
-        bump(&self.counters.frames_dropped);
-        if !full {
-            return; // The client is gone.
+        match self.queue.try_send(bytes) {
+            Err(mpsc::error::TrySendError::Full(_)) => bump(&self.counters.frames_dropped),
+            // Sent, or the client is gone.
+            Ok(()) | Err(mpsc::error::TrySendError::Closed(_)) => return,
         }
         let more = match lock(&self.dropped).count(Instant::now()) {
             None => return,
