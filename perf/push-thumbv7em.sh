@@ -40,11 +40,11 @@ lto = true
 TOML
 cat >"$work/isr/src/lib.rs" <<'RS'
 #![no_std]
-use xbee_api::{Decoder, Event};
+use xbee_api::{DecodeEvent, Decoder};
 
 /// What a UART receive interrupt does with each byte: push it, hand any event on.
 #[unsafe(no_mangle)]
-pub fn uart_rx(decoder: &mut Decoder, byte: u8, sink: fn(Event<'_>)) {
+pub fn uart_rx(decoder: &mut Decoder, byte: u8, sink: fn(DecodeEvent<'_>)) {
     if let Some(event) = decoder.push(byte) {
         sink(event);
     }

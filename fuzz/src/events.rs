@@ -1,6 +1,6 @@
 //! Decoder events as owned values, collected by each way of feeding the decoder.
 
-use xbee_api::{DecodeError, Decoder, DecoderMode, Stats};
+use xbee_api::{DecodeError, Decoder, DecoderMode, DecoderStats};
 
 /// One decoder event, owned so that runs can be compared.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -110,8 +110,8 @@ pub fn finish_all<const N: usize, M: DecoderMode>(
 }
 
 /// Checks the counters against the events: one count per event of each kind.
-pub fn check_stats(stats: &Stats, events: &[Event]) {
-    let mut expected = Stats {
+pub fn check_stats(stats: &DecoderStats, events: &[Event]) {
+    let mut expected = DecoderStats {
         frames_ok: 0,
         bad_checksum: 0,
         oversize: 0,

@@ -80,7 +80,7 @@ pub fn check_stream_with<const N: usize, M: DecoderMode>(
     mode: ApiMode,
     sizes: &[u8],
     stream: &[u8],
-) -> (Vec<Event>, xbee_api::Stats) {
+) -> (Vec<Event>, xbee_api::DecoderStats) {
     let bound = event_bound(stream.len());
 
     // Whole slice.

@@ -76,7 +76,7 @@ pub struct XBeeCodec {
     decoder: Box<xbee_api::Decoder>,
     mode: ApiMode,
     counters: Arc<Counters>,
-    seen: xbee_api::Stats,
+    seen: xbee_api::DecoderStats,
     /// When `decode` last got bytes.
     last_input: Instant,
 }
@@ -98,7 +98,7 @@ impl XBeeCodec {
             decoder: Box::new(xbee_api::Decoder::with_max_len(mode, max_frame_len)),
             mode,
             counters,
-            seen: xbee_api::Stats::default(),
+            seen: xbee_api::DecoderStats::default(),
             last_input: Instant::now(),
         }
     }
@@ -193,7 +193,7 @@ impl XBeeCodec {
     }
 }
 
-fn convert(event: Option<xbee_api::Event<'_>>) -> Option<CodecItem> {
+fn convert(event: Option<xbee_api::DecodeEvent<'_>>) -> Option<CodecItem> {
     Some(match event? {
         Ok(frame) => match OwnedFrame::new(Bytes::copy_from_slice(frame.data())) {
             Some(frame) => CodecItem::Frame(frame),

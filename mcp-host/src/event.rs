@@ -10,9 +10,6 @@ use xbee_api::{Address16, Address64};
 pub type OwnedPacket = mcp_core::Packet<Bytes>;
 
 /// Something that happened on the link.
-///
-/// Not to be confused with [`xbee_api::Event`], what one decoder call yields (a frame
-/// borrowed from the decoder, or why one was dropped).
 #[derive(Debug, Clone, PartialEq)]
 #[non_exhaustive]
 pub enum Event {

@@ -4,9 +4,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 /// A snapshot of a link's counters since [`connect`](crate::connect), across reconnections.
 ///
-/// Not to be confused with [`xbee_api::Stats`], one decoder's counters (`u32`, wrapping;
-/// its `frames_ok` is [`frames`](Self::frames) here, its `errors()`
-/// [`decode_errors`](Self::decode_errors)).
+/// The link's decoders count in [`xbee_api::DecoderStats`] (`u32`, wrapping), which
+/// these add up across reconnections: its `frames_ok` is [`frames`](Self::frames) here,
+/// its `errors()` [`decode_errors`](Self::decode_errors).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
 pub struct Stats {
     /// Frames with a good checksum.
@@ -62,14 +62,14 @@ impl Stats {
     ///
     /// ```
     /// use mcp_host::Stats;
-    /// let earlier = mcp_host::xbee_api::Stats { bytes_skipped: u32::MAX - 1, ..Default::default() };
-    /// let now = mcp_host::xbee_api::Stats { frames_ok: 3, bytes_skipped: 2, ..Default::default() };
+    /// let earlier = mcp_host::xbee_api::DecoderStats { bytes_skipped: u32::MAX - 1, ..Default::default() };
+    /// let now = mcp_host::xbee_api::DecoderStats { frames_ok: 3, bytes_skipped: 2, ..Default::default() };
     /// let mut total = Stats { bytes_skipped: u64::from(u32::MAX - 1), ..Stats::default() };
     /// // 3 frames, and 4 bytes skipped across the wrap of the decoder's counter.
     /// total += Stats::decoder_since(&now, &earlier);
     /// assert_eq!((total.frames, total.bytes_skipped), (3, u64::from(u32::MAX) + 3));
     /// ```
-    pub fn decoder_since(now: &xbee_api::Stats, earlier: &xbee_api::Stats) -> Stats {
+    pub fn decoder_since(now: &xbee_api::DecoderStats, earlier: &xbee_api::DecoderStats) -> Stats {
         let delta = |now: u32, earlier: u32| u64::from(now.wrapping_sub(earlier));
         Stats {
             frames: delta(now.frames_ok, earlier.frames_ok),

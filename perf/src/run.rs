@@ -5,7 +5,7 @@
 
 use mcp_core::Packet;
 use xbee_api::{
-    ApiMode, DEFAULT_CAPACITY, Decoder, DecoderMode, Event, Mode1, Mode2, ReceivePacket,
+    ApiMode, DEFAULT_CAPACITY, DecodeEvent, Decoder, DecoderMode, Mode1, Mode2, ReceivePacket,
 };
 
 use crate::Totals;
@@ -98,7 +98,7 @@ fn fifo_all<M: DecoderMode>(
 ///
 /// On a decode error: the streams hold none.
 #[inline(always)]
-fn count(event: Event<'_>, totals: &mut Totals) {
+fn count(event: DecodeEvent<'_>, totals: &mut Totals) {
     match event {
         Ok(frame) => {
             totals.frames += 1;

@@ -13,7 +13,7 @@ use crate::unescape::{STEP, is_plain, is_plain_byte, unescape, unescape_byte};
 #[cfg(target_pointer_width = "64")]
 use crate::window::{DATA, MAX_LEN, WINDOW_ROOM, frame_in_window};
 use crate::wire::{ESCAPE, ESCAPE_XOR, START_DELIMITER, checksum_of_sum, needs_escape, sum};
-use crate::{AnyMode, ApiMode, DecodeError, DecoderMode, FixedMode, RawFrame, Stats};
+use crate::{AnyMode, ApiMode, DecodeError, DecoderMode, DecoderStats, FixedMode, RawFrame};
 use core::fmt;
 use core::marker::PhantomData;
 
@@ -55,10 +55,7 @@ pub const fn decoder_buffer_len(frame_data_len: usize, mode: ApiMode) -> usize {
 
 /// What the decoder yields: a frame borrowed from its buffer, or why a candidate frame
 /// was dropped. The frame stays valid until the decoder is called again.
-///
-/// Not to be confused with `mcp_host::Event`, what happens on a host's link (packets,
-/// frames, decode errors and link events, owned).
-pub type Event<'a> = Result<RawFrame<'a>, DecodeError>;
+pub type DecodeEvent<'a> = Result<RawFrame<'a>, DecodeError>;
 
 /// An event before it borrows the buffer: a frame as a range of the buffer.
 pub(crate) type Outcome = Result<(usize, usize), DecodeError>;
@@ -239,7 +236,7 @@ pub struct Decoder<const N: usize = DEFAULT_CAPACITY, M: DecoderMode = AnyMode> 
     /// The mode of an [`AnyMode`] decoder. A decoder of a fixed mode reads `M`'s and
     /// keeps mode 1 here, which is 0, so that a new one is all zeros.
     mode: ApiMode,
-    stats: Stats,
+    stats: DecoderStats,
     _mode: PhantomData<M>,
 }
 
@@ -252,7 +249,7 @@ pub struct Decoder<const N: usize = DEFAULT_CAPACITY, M: DecoderMode = AnyMode> 
 /// decoder.push(0x7E);
 /// assert_eq!(
 ///     format!("{decoder:?}"),
-///     "Decoder { mode: Escaped, capacity: 64, state: LenHi, buffered: 0, stats: Stats { \
+///     "Decoder { mode: Escaped, capacity: 64, state: LenHi, buffered: 0, stats: DecoderStats { \
 ///      frames_ok: 0, bad_checksum: 0, oversize: 0, empty: 0, truncated: 0, bad_escape: 0, \
 ///      bytes_skipped: 0 }, .. }"
 /// );
@@ -411,7 +408,7 @@ impl<const N: usize, M: DecoderMode> Decoder<N, M> {
             state: State::Hunt,
             escaped: false,
             mode,
-            stats: Stats {
+            stats: DecoderStats {
                 frames_ok: 0,
                 bad_checksum: 0,
                 oversize: 0,
@@ -459,7 +456,7 @@ impl<const N: usize, M: DecoderMode> Decoder<N, M> {
     }
 
     /// Counters of frames, errors and skipped bytes so far.
-    pub const fn stats(&self) -> &Stats {
+    pub const fn stats(&self) -> &DecoderStats {
         &self.stats
     }
 
@@ -494,7 +491,7 @@ impl<const N: usize, M: DecoderMode> Decoder<N, M> {
     /// one step of the state machine, in line in mode 2 (a few tests each) and out of
     /// line in mode 1; the frame data is summed once, with the checksum.
     #[inline(always)]
-    pub fn push(&mut self, byte: u8) -> Option<Event<'_>> {
+    pub fn push(&mut self, byte: u8) -> Option<DecodeEvent<'_>> {
         let end = self.end;
         if end < self.fill_to && is_plain_byte(byte) {
             if let Some(next) = self.store(end, byte) {
@@ -538,7 +535,7 @@ impl<const N: usize, M: DecoderMode> Decoder<N, M> {
 
     /// Delivers the next pending event (mode 1 rescans of buffered bytes) without new
     /// input; `None` when nothing is pending. Always `None` in mode 2.
-    pub fn poll(&mut self) -> Option<Event<'_>> {
+    pub fn poll(&mut self) -> Option<DecodeEvent<'_>> {
         let outcome = match self.mode() {
             ApiMode::Escaped => None,
             ApiMode::Unescaped => self.drain1(),
@@ -558,7 +555,7 @@ impl<const N: usize, M: DecoderMode> Decoder<N, M> {
     ///
     /// The bytes taken are the decoder's from then on (a caller holding a `BytesMut` can
     /// advance past them at once).
-    pub fn decode(&mut self, input: &[u8]) -> (usize, Option<Event<'_>>) {
+    pub fn decode(&mut self, input: &[u8]) -> (usize, Option<DecodeEvent<'_>>) {
         let (consumed, outcome) = self.decode_outcome(input);
         (consumed, outcome.map(|o| self.event(o)))
     }
@@ -650,7 +647,7 @@ impl<const N: usize, M: DecoderMode> Decoder<N, M> {
     /// assert_eq!(frames, 2);
     /// ```
     #[inline(always)]
-    pub fn decode_each<F: FnMut(Event<'_>)>(&mut self, input: &[u8], mut f: F) {
+    pub fn decode_each<F: FnMut(DecodeEvent<'_>)>(&mut self, input: &[u8], mut f: F) {
         // Most chunks from a UART FIFO or a DMA buffer are frame data of the frame in
         // progress: stored here, in line in the caller, without a call.
         let mut rest = self.fill(input);
@@ -764,7 +761,7 @@ impl<const N: usize, M: DecoderMode> Decoder<N, M> {
         input: &mut &[u8],
         limit: usize,
         between: &mut bool,
-    ) -> Option<Event<'s>> {
+    ) -> Option<DecodeEvent<'s>> {
         loop {
             // Between frames (`escaped` is only ever set inside one).
             if *between || (self.state == State::Hunt && !self.escaped) {
@@ -924,7 +921,7 @@ impl<const N: usize, M: DecoderMode> Decoder<N, M> {
         &'s mut self,
         input: &mut &'i [u8],
         between: &mut bool,
-    ) -> Option<Event<'s>> {
+    ) -> Option<DecodeEvent<'s>> {
         if *between || (self.state == State::Hunt && self.pos == self.end) {
             if let Some((n, data)) = self.valid1(input) {
                 *input = input.get(n..).unwrap_or_default();
@@ -943,7 +940,7 @@ impl<const N: usize, M: DecoderMode> Decoder<N, M> {
     /// (if its length is one the buffer can take), its frame data and its checksum byte
     /// buffered at once.
     #[inline(always)]
-    fn feed1(&mut self, input: &[u8]) -> (usize, Option<Event<'_>>) {
+    fn feed1(&mut self, input: &[u8]) -> (usize, Option<DecodeEvent<'_>>) {
         let mut rest = input;
         if self.state == State::Hunt && self.pos == self.end {
             // As `begin1` and `drain1` would.
@@ -1027,7 +1024,7 @@ impl<const N: usize, M: DecoderMode> Decoder<N, M> {
     /// }
     /// assert_eq!(frames, 1);
     /// ```
-    pub fn finish(&mut self) -> Option<Event<'_>> {
+    pub fn finish(&mut self) -> Option<DecodeEvent<'_>> {
         self.finish_outcome().map(|o| self.event(o))
     }
 
@@ -1058,7 +1055,7 @@ impl<const N: usize, M: DecoderMode> Decoder<N, M> {
     }
 
     /// The event of `outcome`, a frame borrowing the buffer.
-    pub(crate) fn event(&self, outcome: Outcome) -> Event<'_> {
+    pub(crate) fn event(&self, outcome: Outcome) -> DecodeEvent<'_> {
         outcome
             .map(|(start, end)| RawFrame::from_data(self.buf.get(start..end).unwrap_or_default()))
     }

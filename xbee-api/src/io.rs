@@ -49,8 +49,8 @@ pub use embedded_io_async;
 
 use crate::decoder::Outcome;
 use crate::{
-    AnyMode, ApiMode, DEFAULT_CAPACITY, Decoder, DecoderMode, EncodeError, EncodeFrame, Event,
-    FixedMode,
+    AnyMode, ApiMode, DEFAULT_CAPACITY, DecodeEvent, Decoder, DecoderMode, EncodeError,
+    EncodeFrame, FixedMode,
 };
 
 /// Bytes read from the reader at a time, and written to the writer at a time by
@@ -230,7 +230,7 @@ impl<R, const N: usize, M: DecoderMode> FrameReader<R, N, M> {
     /// assert_eq!(frames, 1);
     /// # Ok::<(), core::convert::Infallible>(())
     /// ```
-    pub fn drop_partial(&mut self) -> Option<Event<'_>> {
+    pub fn drop_partial(&mut self) -> Option<DecodeEvent<'_>> {
         let outcome = match self.pending_outcome() {
             Some(outcome) => Some(outcome),
             // Given up once: a new candidate the scan starts among the bytes held
@@ -256,7 +256,7 @@ impl<R, const N: usize, M: DecoderMode> FrameReader<R, N, M> {
     /// Passes the events of `bytes`, just read, to `f` (after those of bytes read
     /// earlier that [`read_event`](Self::read_event) left); at the end of the input (no
     /// bytes), those of [`Decoder::finish`].
-    fn feed<F: FnMut(Event<'_>)>(&mut self, n: usize, mut f: F) {
+    fn feed<F: FnMut(DecodeEvent<'_>)>(&mut self, n: usize, mut f: F) {
         self.took(n);
         self.pos = 0;
         self.len = 0;
@@ -272,7 +272,7 @@ impl<R, const N: usize, M: DecoderMode> FrameReader<R, N, M> {
 
     /// Passes the events of what [`read_event`](Self::read_event) left (bytes read and
     /// not yet decoded, frames the decoder holds) to `f`, before a read.
-    fn pass_left<F: FnMut(Event<'_>)>(&mut self, f: &mut F) {
+    fn pass_left<F: FnMut(DecodeEvent<'_>)>(&mut self, f: &mut F) {
         while let Some(outcome) = self.pending_outcome() {
             f(self.decoder.event(outcome));
         }
@@ -321,7 +321,7 @@ impl<R: embedded_io::Read, const N: usize, M: DecoderMode> FrameReader<R, N, M> 
     ///
     /// A read error is returned as it is; the decoder keeps what it had, so the next call
     /// goes on with the frame in progress.
-    pub fn read_events<F: FnMut(Event<'_>)>(&mut self, mut f: F) -> Result<usize, R::Error> {
+    pub fn read_events<F: FnMut(DecodeEvent<'_>)>(&mut self, mut f: F) -> Result<usize, R::Error> {
         self.pass_left(&mut f);
         let n = self.reader.read(&mut self.chunk)?;
         self.feed(n, f);
@@ -353,7 +353,7 @@ impl<R: embedded_io::Read, const N: usize, M: DecoderMode> FrameReader<R, N, M> 
     /// assert!(events[1].is_err());
     /// # Ok::<(), core::convert::Infallible>(())
     /// ```
-    pub fn read_event(&mut self) -> Result<Option<Event<'_>>, R::Error> {
+    pub fn read_event(&mut self) -> Result<Option<DecodeEvent<'_>>, R::Error> {
         let outcome = loop {
             if let Some(outcome) = self.pending_outcome() {
                 break Some(outcome);
@@ -397,7 +397,7 @@ impl<R: embedded_io_async::Read, const N: usize, M: DecoderMode> FrameReader<R, 
     /// # Ok::<(), core::convert::Infallible>(())
     /// # }).unwrap();
     /// ```
-    pub async fn read_events_async<F: FnMut(Event<'_>)>(
+    pub async fn read_events_async<F: FnMut(DecodeEvent<'_>)>(
         &mut self,
         mut f: F,
     ) -> Result<usize, R::Error> {
@@ -431,7 +431,7 @@ impl<R: embedded_io_async::Read, const N: usize, M: DecoderMode> FrameReader<R, 
     /// # Ok::<(), core::convert::Infallible>(())
     /// # }).unwrap();
     /// ```
-    pub async fn read_event_async(&mut self) -> Result<Option<Event<'_>>, R::Error> {
+    pub async fn read_event_async(&mut self) -> Result<Option<DecodeEvent<'_>>, R::Error> {
         let outcome = loop {
             if let Some(outcome) = self.pending_outcome() {
                 break Some(outcome);

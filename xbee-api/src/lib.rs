@@ -154,7 +154,7 @@ pub mod wire;
 
 pub use address::{Address16, Address64, ParseAddressError};
 pub use decode_error::DecodeError;
-pub use decoder::{DEFAULT_CAPACITY, Decoder, Event, decoder_buffer_len};
+pub use decoder::{DEFAULT_CAPACITY, DecodeEvent, Decoder, decoder_buffer_len};
 pub use decoder_mode::{AnyMode, DecoderMode, FixedMode, Mode1, Mode2};
 pub use encode::{EncodeFrame, MAX_FRAME_DATA_LEN, max_encoded_len};
 pub use error::{EncodeError, FrameError};
@@ -181,7 +181,7 @@ pub use inbox::{Inbox, InboxFull, InboxStats, Received, ReceivedError};
 pub use mode::{ApiMode, InvalidApiMode};
 pub use node::{DeviceType, NodeInfo, NodeInfoError};
 pub use raw::RawFrame;
-pub use stats::Stats;
+pub use stats::DecoderStats;
 pub use status::{AtStatus, DeliveryStatus, DiscoveryStatus, ModemStatus};
 
 /// This crate's README, its example compiled and run as a doc test.

@@ -3,15 +3,14 @@
 /// What a [`Decoder`](crate::Decoder) has seen since it was made. Counters wrap at
 /// `u32::MAX`.
 ///
-/// Not to be confused with `mcp_host::Stats`, a host link's counters across
-/// reconnections (`u64`; `frames_ok` is `frames` there, [`errors`](Self::errors) is
-/// `decode_errors`).
+/// A host link's counters (`mcp_host::Stats`) add these up across reconnections, as
+/// `u64`: `frames_ok` is `frames` there, [`errors`](Self::errors) is `decode_errors`.
 ///
 /// In API mode 1 the bytes of a failed candidate frame are scanned again, so a byte can
 /// be part of a failed candidate and then be counted in `bytes_skipped` too.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct Stats {
+pub struct DecoderStats {
     /// Frames yielded with a good checksum.
     pub frames_ok: u32,
     /// Candidate frames whose checksum did not match.
@@ -30,7 +29,7 @@ pub struct Stats {
     pub bytes_skipped: u32,
 }
 
-impl Stats {
+impl DecoderStats {
     /// All failed candidate frames, of every kind.
     pub const fn errors(&self) -> u32 {
         self.bad_checksum

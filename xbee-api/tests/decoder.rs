@@ -11,7 +11,7 @@ use xbee_api::{
 
 const MODEM: &str = "7E 00 02 8A 06 6F";
 
-fn both<const N: usize>(mode: ApiMode, stream: &[u8]) -> (Vec<Owned>, xbee_api::Stats) {
+fn both<const N: usize>(mode: ApiMode, stream: &[u8]) -> (Vec<Owned>, xbee_api::DecoderStats) {
     let slices = decode_slices::<N>(mode, stream, &[stream.len()]);
     let ones = decode_slices::<N>(mode, stream, &[1]);
     let bytes = decode_bytes::<N>(mode, stream);

@@ -8,7 +8,8 @@ use xbee_api::io::{
     FrameReader, WriteError, write_encoded, write_encoded_async, write_frame, write_frame_async,
 };
 use xbee_api::{
-    ApiMode, DecodeError, DecoderMode, EncodeError, EncodeFrame, Event, Mode1, Mode2, RawFrame,
+    ApiMode, DecodeError, DecodeEvent, DecoderMode, EncodeError, EncodeFrame, Mode1, Mode2,
+    RawFrame,
 };
 
 /// A UART that hands over at most the next of `sizes` bytes a read (cycling), and fails
@@ -112,7 +113,7 @@ enum Seen {
     Error(DecodeError),
 }
 
-fn seen(event: Event<'_>) -> Seen {
+fn seen(event: DecodeEvent<'_>) -> Seen {
     match event {
         Ok(frame) => Seen::Frame(frame.data().to_vec()),
         Err(error) => Seen::Error(error),

@@ -3,7 +3,7 @@
 //! chunks of any sizes (empty reads included) or a byte at a time, and a decoder takes
 //! new input after `finish` as a new one would.
 
-use xbee_api::{ApiMode, DecodeError, Decoder, EncodeFrame, RawFrame, Stats};
+use xbee_api::{ApiMode, DecodeError, Decoder, DecoderStats, EncodeFrame, RawFrame};
 
 #[derive(Debug, Clone, PartialEq, Eq)]
 enum Event {
@@ -40,7 +40,10 @@ fn finish_all<const N: usize>(decoder: &mut Decoder<N>, out: &mut Vec<Event>) {
 }
 
 /// Decodes `stream` every way; asserts they agree; returns the events and counters.
-fn check_split_invariance<const N: usize>(mode: ApiMode, stream: &[u8]) -> (Vec<Event>, Stats) {
+fn check_split_invariance<const N: usize>(
+    mode: ApiMode,
+    stream: &[u8],
+) -> (Vec<Event>, DecoderStats) {
     let mut whole = Decoder::<N>::new(mode);
     let mut expected = Vec::new();
     decode_all(&mut whole, stream, &mut expected);

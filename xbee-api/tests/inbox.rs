@@ -34,7 +34,7 @@ fn receive(src: u64, data: &[u8], mode: ApiMode) -> Vec<u8> {
 fn reference<const N: usize, M: FixedMode>(stream: &[u8]) -> Vec<(u64, Vec<u8>)> {
     let mut decoder: Decoder<N, M> = Decoder::fixed();
     let mut out = Vec::new();
-    let mut take = |event: Option<xbee_api::Event<'_>>| {
+    let mut take = |event: Option<xbee_api::DecodeEvent<'_>>| {
         let Some(event) = event else { return false };
         if let Ok(frame) = event {
             if let Ok(rx) = ReceivePacket::new_checked(frame.data()) {

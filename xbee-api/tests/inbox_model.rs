@@ -11,7 +11,7 @@ mod common;
 use common::encode;
 use proptest::prelude::*;
 use xbee_api::{
-    Address16, Address64, AnyMode, ApiMode, Decoder, DecoderMode, Event, ExplicitRxIndicator,
+    Address16, Address64, AnyMode, ApiMode, DecodeEvent, Decoder, DecoderMode, ExplicitRxIndicator,
     ExplicitRxIndicatorRepr, Inbox, Mode1, Mode2, ModemStatus, ModemStatusRepr, ReceivePacket,
     ReceivePacketRepr, decoder_buffer_len,
 };
@@ -100,7 +100,7 @@ fn op() -> impl Strategy<Value = Op> {
 
 /// Takes a plain decoder's event into `out` as the inbox would queue it; `false` for no
 /// event.
-fn take(out: &mut Vec<Item>, ev: Option<Event<'_>>) -> bool {
+fn take(out: &mut Vec<Item>, ev: Option<DecodeEvent<'_>>) -> bool {
     let Some(ev) = ev else { return false };
     if let Ok(f) = ev {
         let d = f.data();

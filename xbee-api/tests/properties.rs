@@ -490,7 +490,7 @@ fn every_way<M: DecoderMode>(
     new: impl Fn() -> Decoder<64, M>,
     stream: &[u8],
     reads: &[usize],
-) -> [(Vec<common::Owned>, xbee_api::Stats); 4] {
+) -> [(Vec<common::Owned>, xbee_api::DecoderStats); 4] {
     [
         decode_bytes_with(new(), stream),
         decode_slices_with(new(), stream, reads),

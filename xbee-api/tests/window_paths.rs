@@ -13,7 +13,7 @@ use common::{
 };
 use proptest::prelude::*;
 use xbee_api::wire::{checksum, needs_escape};
-use xbee_api::{ApiMode, DecodeError, Decoder, Stats};
+use xbee_api::{ApiMode, DecodeError, Decoder, DecoderStats};
 
 const MODE: ApiMode = ApiMode::Escaped;
 
@@ -47,7 +47,7 @@ fn same_as_push<const N: usize>(
     stream: &[u8],
     limit: Option<usize>,
     reads: &[&[usize]],
-) -> (Vec<Owned>, Stats) {
+) -> (Vec<Owned>, DecoderStats) {
     let expected = decode_bytes_with(decoder::<N>(limit), stream);
     for reads in reads {
         let got = decode_slices_with(decoder::<N>(limit), stream, reads);
@@ -71,7 +71,7 @@ fn same_as_push<const N: usize>(
 /// [`same_as_push`] for buffers of 64, 127, 128, 129, 200 and 512 bytes and every limit
 /// of [`LIMITS`]; also checks that a limit decodes as a buffer of that size does.
 /// `push`'s events and counters on the largest buffer, without a limit.
-fn check(stream: &[u8], reads: &[&[usize]]) -> (Vec<Owned>, Stats) {
+fn check(stream: &[u8], reads: &[&[usize]]) -> (Vec<Owned>, DecoderStats) {
     let mut limited = Vec::new();
     for limit in LIMITS {
         let runs = [
@@ -186,7 +186,7 @@ fn every_length_with_escapes_up_to_the_window_end() {
 }
 
 /// [`check`] with the reads of [`READS`].
-fn check_stream(stream: &[u8]) -> (Vec<Owned>, Stats) {
+fn check_stream(stream: &[u8]) -> (Vec<Owned>, DecoderStats) {
     check(stream, &READS)
 }
 

@@ -24,7 +24,7 @@ use mcp_core::mav::Mav;
 use mcp_core::{BufferTooSmall, Command};
 use xbee_api::io::{FrameReader, WriteError, write_encoded_async};
 use xbee_api::{
-    Address64, ApiMode, EncodeError, Event, FixedMode, InPlaceFrame, ReceivePacket,
+    Address64, ApiMode, DecodeEvent, EncodeError, FixedMode, InPlaceFrame, ReceivePacket,
     ReceivePacketRepr, TransmitRequestRepr, decoder_buffer_len, max_encoded_len, transmit_options,
 };
 
@@ -146,7 +146,7 @@ impl<V: Model, M: FixedMode> MavCore<V, M> {
 
     /// Handles one event of the reader: a Receive Packet's command is carried out and
     /// answered, then the unsolicited reports go out; anything else is counted.
-    pub async fn on_event<W: Write>(&mut self, event: Event<'_>, tx: &mut W) {
+    pub async fn on_event<W: Write>(&mut self, event: DecodeEvent<'_>, tx: &mut W) {
         let Ok(frame) = event else {
             self.stats.bad_frames = self.stats.bad_frames.wrapping_add(1);
             return;

@@ -126,7 +126,7 @@ pub fn is_pending(cs: CriticalSection<'_>) -> bool {
 
 /// The receive counters: the inbox's, the bytes dropped for UART errors and the
 /// decoder's.
-pub fn stats() -> (InboxStats, u32, xbee_api::Stats) {
+pub fn stats() -> (InboxStats, u32, xbee_api::DecoderStats) {
     critical_section::with(|cs| {
         let errors = UART_ERRORS.borrow(cs).get();
         match INBOX.borrow(cs).try_borrow() {

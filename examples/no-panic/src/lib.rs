@@ -17,7 +17,7 @@ use mcp_core::{
 };
 use xbee_api::io::{self, FrameReader};
 use xbee_api::{
-    Address16, Address64, AnyMode, ApiMode, Decoder, EncodeFrame, Event, Frame, InPlaceFrame,
+    Address16, Address64, AnyMode, ApiMode, DecodeEvent, Decoder, EncodeFrame, Frame, InPlaceFrame,
     Inbox, Mode1, Mode2, ReceivePacket, TransmitRequestRepr,
 };
 
@@ -174,7 +174,7 @@ fn transmit(mode: ApiMode, payload: &[u8], frame: &mut [u8]) {
 impl MavSide {
     /// Handles one decoded frame: a command in a Receive Packet is carried out and
     /// answered.
-    fn receive(&mut self, event: Event<'_>, mode: ApiMode) {
+    fn receive(&mut self, event: DecodeEvent<'_>, mode: ApiMode) {
         let Ok(raw) = event else { return };
         let Ok(rx) = ReceivePacket::new_checked(raw.data()) else {
             return;

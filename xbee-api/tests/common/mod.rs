@@ -1,7 +1,7 @@
 //! Helpers shared by the integration tests (included with `mod common;`).
 #![allow(dead_code)]
 
-use xbee_api::{ApiMode, DecodeError, Decoder, DecoderMode, EncodeFrame, Stats};
+use xbee_api::{ApiMode, DecodeError, Decoder, DecoderMode, DecoderStats, EncodeFrame};
 
 /// `frame` encoded in `mode`, exactly its `encoded_len` bytes.
 pub(crate) fn encode(frame: &impl EncodeFrame, mode: ApiMode) -> Vec<u8> {
@@ -30,7 +30,7 @@ pub(crate) fn decode_slices<const N: usize>(
     mode: ApiMode,
     stream: &[u8],
     reads: &[usize],
-) -> (Vec<Owned>, Stats) {
+) -> (Vec<Owned>, DecoderStats) {
     decode_slices_with(Decoder::<N>::new(mode), stream, reads)
 }
 
@@ -39,7 +39,7 @@ pub(crate) fn decode_slices_with<const N: usize, M: DecoderMode>(
     mut decoder: Decoder<N, M>,
     stream: &[u8],
     reads: &[usize],
-) -> (Vec<Owned>, Stats) {
+) -> (Vec<Owned>, DecoderStats) {
     let mut out = Vec::new();
     let mut offset = 0;
     let mut r = 0;
@@ -80,7 +80,7 @@ pub(crate) fn decode_each_slices<const N: usize>(
     mode: ApiMode,
     stream: &[u8],
     reads: &[usize],
-) -> (Vec<Owned>, Stats) {
+) -> (Vec<Owned>, DecoderStats) {
     decode_each_slices_with(Decoder::<N>::new(mode), stream, reads)
 }
 
@@ -89,7 +89,7 @@ pub(crate) fn decode_each_slices_with<const N: usize, M: DecoderMode>(
     mut decoder: Decoder<N, M>,
     stream: &[u8],
     reads: &[usize],
-) -> (Vec<Owned>, Stats) {
+) -> (Vec<Owned>, DecoderStats) {
     let mut out = Vec::new();
     let to_owned = |event: Result<xbee_api::RawFrame<'_>, DecodeError>| match event {
         Ok(frame) => Owned::Frame(frame.data().to_vec()),
@@ -116,7 +116,10 @@ pub(crate) fn decode_each_slices_with<const N: usize, M: DecoderMode>(
 }
 
 /// Decodes `stream` one byte at a time with `push`/`poll`, then finishes.
-pub(crate) fn decode_bytes<const N: usize>(mode: ApiMode, stream: &[u8]) -> (Vec<Owned>, Stats) {
+pub(crate) fn decode_bytes<const N: usize>(
+    mode: ApiMode,
+    stream: &[u8],
+) -> (Vec<Owned>, DecoderStats) {
     decode_bytes_with(Decoder::<N>::new(mode), stream)
 }
 
@@ -124,7 +127,7 @@ pub(crate) fn decode_bytes<const N: usize>(mode: ApiMode, stream: &[u8]) -> (Vec
 pub(crate) fn decode_bytes_with<const N: usize, M: DecoderMode>(
     mut decoder: Decoder<N, M>,
     stream: &[u8],
-) -> (Vec<Owned>, Stats) {
+) -> (Vec<Owned>, DecoderStats) {
     let mut out = Vec::new();
     let to_owned = |event: Result<xbee_api::RawFrame<'_>, DecodeError>| match event {
         Ok(frame) => Owned::Frame(frame.data().to_vec()),

@@ -473,7 +473,7 @@ impl Summary {
 struct Totals {
     stats: mcp_host::Stats,
     /// The decoder's counters when last taken.
-    seen: xbee_api::Stats,
+    seen: xbee_api::DecoderStats,
 }
 
 impl Totals {
