@@ -278,8 +278,8 @@ async fn the_emulated_network_answers_with_every_radio_it_can_reach() {
         .unwrap()
         .nodes;
     let expected = [
-        (a.address, a.addr16, &b"MAV 1"[..]),
-        (b.address, b.addr16, b" "),
+        (a.addr64, a.addr16, &b"MAV 1"[..]),
+        (b.addr64, b.addr16, b" "),
     ];
     let found: Vec<(Address64, Address16, &[u8])> = nodes
         .iter()

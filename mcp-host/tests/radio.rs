@@ -204,7 +204,7 @@ async fn unicast_and_broadcast_between_a_tcp_coordinator_and_pty_nodes() {
     assert_ne!(a.addr16, b.addr16);
     for info in [&a, &b] {
         assert!(![0x0000, 0xFFFE, 0xFFFF].contains(&info.addr16.0));
-        assert_eq!(network.addr16(info.address), Some(info.addr16));
+        assert_eq!(network.addr16(info.addr64), Some(info.addr16));
     }
     let mut ground = Dev::tcp(coord.local_addr.unwrap(), ApiMode::Unescaped).await;
     let mut dev_a = Dev::pty(a.pty_path.as_deref().unwrap(), ApiMode::Unescaped);

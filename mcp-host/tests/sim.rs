@@ -524,7 +524,7 @@ async fn a_dropped_ground_station_link_comes_back_to_mavs_that_kept_their_state(
     let mut g = over_tcp(&[MAV]).await;
     g.send(MAV, Command::Controllers(Controller::Mpc)).await;
     assert_eq!(g.report(MAV).await, Report::Controllers(Controller::Mpc));
-    let coordinator = g.sim.coordinator().address;
+    let coordinator = g.sim.coordinator().addr64;
     assert!(g.sim.network().disconnect(coordinator));
     // The ground station sees its link drop and come back (its `tcp:` link reconnects
     // to the coordinator's `tcp-listen:` port, which takes it again).
@@ -569,9 +569,9 @@ async fn a_mav_added_while_running_flies_like_the_others() {
     g.send(fleet[0], Command::Controllers(Controller::Mpc))
         .await;
     let info = g.sim.add_mav(fleet[1]).unwrap();
-    assert_eq!(info.address, fleet[1]);
+    assert_eq!(info.addr64, fleet[1]);
     assert_eq!(
-        g.sim.mavs().iter().map(|m| m.address).collect::<Vec<_>>(),
+        g.sim.mavs().iter().map(|m| m.addr64).collect::<Vec<_>>(),
         fleet
     );
     // It takes commands and sends telemetry; the first MAV keeps its state.

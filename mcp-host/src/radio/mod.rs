@@ -229,14 +229,11 @@ impl NodeOptions {
     }
 }
 
-/// A node as added to the network.
-///
-/// Not to be confused with [`xbee_api::NodeInfo`], a node discovery answer as the radio
-/// gives it, nor with [`crate::discovery::Node`], such an answer owned.
+/// A node as added to the network: its addresses, mode and where its link is.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct NodeInfo {
+pub struct AddedNode {
     /// Its 64-bit address.
-    pub address: Address64,
+    pub addr64: Address64,
     /// Its 16-bit address.
     pub addr16: Address16,
     /// Its API mode.
@@ -410,7 +407,7 @@ impl Network {
 
     /// Adds a node whose device is at the other end of `link`: a serial port, a TCP
     /// connection, a TCP listener (each new peer is the device back) or a
-    /// pseudo-terminal (its path is in the returned [`NodeInfo::pty_path`]; the link is
+    /// pseudo-terminal (its path is in the returned [`AddedNode::pty_path`]; the link is
     /// up while a device has that path open). The link is opened in the background and
     /// reopened after each disconnection; a `serial` or `tcp` link that is not there yet
     /// is retried.
@@ -419,7 +416,7 @@ impl Network {
         address: Address64,
         link: &Link,
         options: NodeOptions,
-    ) -> Result<NodeInfo, NetworkError> {
+    ) -> Result<AddedNode, NetworkError> {
         self.check_new(address)?;
         if matches!(link, Link::Pty) {
             let port = crate::pty::PtyPort::new().map_err(|error| NetworkError::Link {
@@ -464,7 +461,7 @@ impl Network {
         address: Address64,
         stream: S,
         options: NodeOptions,
-    ) -> Result<NodeInfo, NetworkError>
+    ) -> Result<AddedNode, NetworkError>
     where
         S: AsyncRead + AsyncWrite + Send + Unpin + 'static,
     {
@@ -478,7 +475,7 @@ impl Network {
         &self,
         address: Address64,
         options: NodeOptions,
-    ) -> Result<(NodeInfo, DuplexStream), NetworkError> {
+    ) -> Result<(AddedNode, DuplexStream), NetworkError> {
         let (device, radio) = tokio::io::duplex(IN_PROCESS_BUFFER);
         let info = self.add_stream(address, radio, options)?;
         Ok((info, device))
@@ -499,7 +496,7 @@ impl Network {
         address: Address64,
         options: NodeOptions,
         source: Source,
-    ) -> Result<NodeInfo, NetworkError> {
+    ) -> Result<AddedNode, NetworkError> {
         let (tx, rx) = mpsc::channel(OUT_CAPACITY);
         let up_already = matches!(source, Source::Once(_));
         let info = {
@@ -542,8 +539,8 @@ impl Network {
                 // A stream is there at once: the node is reachable as soon as it is added.
                 state.connected(address, port::IN_PROCESS.to_owned());
             }
-            NodeInfo {
-                address,
+            AddedNode {
+                addr64: address,
                 addr16,
                 api_mode: options.api_mode,
                 transparent: options.transparent,

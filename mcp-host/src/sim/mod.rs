@@ -39,7 +39,7 @@ pub use vehicle::{CRUISE_ALTITUDE, LANDING_RATE, STABILIZATION_TIME, SimVehicle}
 
 use crate::codec::{CodecItem, XBeeCodec};
 use crate::link::Link;
-use crate::radio::{Network, NetworkConfig, NetworkError, NodeInfo, NodeOptions};
+use crate::radio::{AddedNode, Network, NetworkConfig, NetworkError, NodeOptions};
 
 /// Period of the telemetry packets (20 Hz).
 pub const TELEMETRY_PERIOD: Duration = Duration::from_millis(50);
@@ -276,8 +276,8 @@ where
 #[must_use = "dropping a Simulator stops it at once"]
 pub struct Simulator {
     network: Network,
-    coordinator: NodeInfo,
-    mavs: Vec<NodeInfo>,
+    coordinator: AddedNode,
+    mavs: Vec<AddedNode>,
     options: SimOptions,
 }
 
@@ -358,7 +358,7 @@ impl Simulator {
     /// # Ok(())
     /// # }
     /// ```
-    pub fn add_mav(&mut self, address: Address64) -> Result<&NodeInfo, NetworkError> {
+    pub fn add_mav(&mut self, address: Address64) -> Result<&AddedNode, NetworkError> {
         let (info, io) = self
             .network
             .add_in_process(address, NodeOptions::with_mode(ApiMode::Unescaped))?;
@@ -389,14 +389,14 @@ impl Simulator {
         &self.network
     }
 
-    /// The coordinator: where its link listens ([`NodeInfo::pty_path`],
-    /// [`NodeInfo::local_addr`]).
-    pub fn coordinator(&self) -> &NodeInfo {
+    /// The coordinator: where its link listens ([`AddedNode::pty_path`],
+    /// [`AddedNode::local_addr`]).
+    pub fn coordinator(&self) -> &AddedNode {
         &self.coordinator
     }
 
     /// The simulated MAVs.
-    pub fn mavs(&self) -> &[NodeInfo] {
+    pub fn mavs(&self) -> &[AddedNode] {
         &self.mavs
     }
 

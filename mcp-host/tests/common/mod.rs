@@ -441,7 +441,7 @@ impl ReservedPort {
 
 /// Adds `network`'s coordinator on a TCP port of this machine, found free (its
 /// `local_addr`), for a ground station to connect to.
-pub async fn tcp_coordinator(network: &mcp_host::radio::Network) -> mcp_host::radio::NodeInfo {
+pub async fn tcp_coordinator(network: &mcp_host::radio::Network) -> mcp_host::radio::AddedNode {
     network
         .add_link(
             Address64::COORDINATOR,

@@ -6,7 +6,7 @@ use std::time::{Duration, SystemTime};
 use clap::Args;
 use mcp_host::Link;
 use mcp_host::radio::{
-    Faults, MAX_UNICAST, MAX_UNICAST_FRAGMENTED, NetEvent, Network, NetworkConfig, NodeInfo,
+    AddedNode, Faults, MAX_UNICAST, MAX_UNICAST_FRAGMENTED, NetEvent, Network, NetworkConfig,
     NodeOptions,
 };
 use tokio::sync::broadcast;
@@ -434,7 +434,7 @@ pub(crate) fn parse_address(s: &str) -> Result<Address64, String> {
 }
 
 /// Where a node's device connects, as a line.
-pub(crate) fn describe_node(name: &str, info: &NodeInfo, link: &Link) -> String {
+pub(crate) fn describe_node(name: &str, info: &AddedNode, link: &Link) -> String {
     // A radio as from the factory runs its UART at 9600 baud, one in API mode at
     // 115200 (the links' default), and a pseudo-terminal set to another rate gets
     // garbage.
@@ -454,7 +454,7 @@ pub(crate) fn describe_node(name: &str, info: &NodeInfo, link: &Link) -> String 
     } else {
         format!("API mode {}", u8::from(info.api_mode))
     };
-    format!("{name} {}/{}: {at}, {mode}", info.address, info.addr16)
+    format!("{name} {}/{}: {at}, {mode}", info.addr64, info.addr16)
 }
 
 /// One line for a network event at `now`, or `None` to stay quiet.

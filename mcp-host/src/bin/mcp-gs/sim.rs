@@ -130,8 +130,8 @@ pub(crate) async fn run(args: SimArgs) -> Result<(), Failure> {
     args.net.describe(&described);
     let events = sim.network().subscribe();
     for mav in sim.mavs() {
-        if let Some(faults) = args.net.faults_of(mav.address) {
-            sim.network().set_faults(mav.address, Some(faults));
+        if let Some(faults) = args.net.faults_of(mav.addr64) {
+            sim.network().set_faults(mav.addr64, Some(faults));
         }
     }
     if let Some(faults) = args.net.faults_of(Address64::COORDINATOR) {
@@ -149,7 +149,7 @@ pub(crate) async fn run(args: SimArgs) -> Result<(), Failure> {
     let list: Vec<String> = sim
         .mavs()
         .iter()
-        .map(|m| format!("{}/{}", m.address, m.addr16))
+        .map(|m| format!("{}/{}", m.addr64, m.addr16))
         .collect();
     if list.len() <= MAVS_A_LINE {
         out!(
