@@ -164,6 +164,7 @@ mod event;
 pub mod hub;
 mod ids;
 pub mod link;
+mod mutex;
 pub mod options;
 // Pseudo-terminals are Unix's: elsewhere `pty` links fail to open, saying so.
 #[cfg_attr(not(unix), path = "pty_unsupported.rs")]

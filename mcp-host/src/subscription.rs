@@ -10,6 +10,7 @@ use std::task::{Context, Poll};
 use futures::stream::{BoxStream, Fuse, FusedStream, StreamExt};
 use tokio::sync::broadcast;
 
+use crate::mutex::lock;
 use crate::record::Record;
 use crate::{Event, Received};
 
@@ -111,11 +112,6 @@ impl<T: Clone + Send + 'static> State<T> {
             let _ = tx.send(make());
         }
     }
-}
-
-/// `state`, locked: its data is consistent however a holder of the lock panicked.
-fn lock<T>(state: &Mutex<State<T>>) -> std::sync::MutexGuard<'_, State<T>> {
-    state.lock().unwrap_or_else(PoisonError::into_inner)
 }
 
 impl Subscribers {

@@ -149,7 +149,9 @@ pub use faults::{Faults, REORDER_WINDOW};
 use crate::link::Link;
 use crate::options::{DEFAULT_CONNECT_TIMEOUT, LinkOptions, ReconnectPolicy};
 use crate::transport::{Connector, LinkError};
-use port::{Source, lock};
+use port::Source;
+
+use crate::mutex::lock;
 use router::{Node, OUT_CAPACITY, State};
 
 /// Largest unicast RF payload without fragmentation (`NP` = 0x54).

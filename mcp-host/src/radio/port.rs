@@ -19,6 +19,7 @@ use super::command_mode::{CommandMode, Step};
 use super::router::{LinkMode, OUT_CAPACITY, Out, State};
 use super::uart::Uart;
 use crate::codec::{CodecItem, MAX_REQUEST_DATA, XBeeCodec};
+use crate::mutex::lock;
 use crate::options::ReconnectPolicy;
 use crate::pty::{PtyPort, PtyStream};
 use crate::repeats::Repeats;
@@ -209,12 +210,6 @@ async fn run_node(
             return;
         }
     }
-}
-
-pub(crate) fn lock(state: &Mutex<State>) -> std::sync::MutexGuard<'_, State> {
-    state
-        .lock()
-        .unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
 enum End {
