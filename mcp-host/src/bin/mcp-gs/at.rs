@@ -7,9 +7,8 @@ use mcp_host::command_mode::BAUD_RATES;
 use mcp_host::{Link, SendError};
 use xbee_api::{Address64, AtStatus, Frame};
 
-use crate::link_args::{
-    ApiModeChoice, LinkArgs, diagnosed_send, warn_mode_mismatch, with_mode_hint,
-};
+use crate::hints::{diagnosed_send, warn_mode_mismatch, with_mode_hint};
+use crate::link_args::{ApiModeChoice, LinkArgs};
 use crate::{Failure, Format};
 use mcp_host::render::json::hex;
 
@@ -150,7 +149,7 @@ fn value_line(name: &str, command: &[u8; 2], data: &[u8]) -> String {
     if let (b"BD", Some(rate)) = (command, baud_rate(data)) {
         // As `setup` prints it (the value as the radio's command mode writes it, hex
         // without leading zeros): the rate is what the operator gives a serial link.
-        let code = crate::link_args::at_number(data);
+        let code = crate::radio_query::at_number(data);
         return format!("{name} = {code:X} ({rate} baud)");
     }
     if data.len() <= 16 {
@@ -167,7 +166,7 @@ fn value_line(name: &str, command: &[u8; 2], data: &[u8]) -> String {
 
 /// The baud rate a `BD` value stands for, if it is one of the standard ones.
 fn baud_rate(bd: &[u8]) -> Option<u32> {
-    let index = usize::try_from(crate::link_args::at_number(bd)).ok()?;
+    let index = usize::try_from(crate::radio_query::at_number(bd)).ok()?;
     BAUD_RATES.get(index).copied()
 }
 
@@ -191,7 +190,7 @@ fn change_note(command: &[u8; 2], value: &[u8], link: &LinkArgs) -> Option<Strin
         other => format!("`mcp-gs setup --link {other}`"),
     };
     match command {
-        b"AP" => match crate::link_args::at_number(value) {
+        b"AP" => match crate::radio_query::at_number(value) {
             0 => Some(format!(
                 "the radio is now in transparent mode (AP=0) and answers no API frame: \
                  {setup} puts it back into API mode"
@@ -269,7 +268,7 @@ fn answer_json(frame: &Frame<'_>, command: &[u8; 2], data: &[u8]) -> serde_json:
     } else if is_text(command) {
         Some(mcp_host::render::json::text(data))
     } else if data.len() <= 6 {
-        Some(crate::link_args::at_number(data).into())
+        Some(crate::radio_query::at_number(data).into())
     } else {
         None
     };
@@ -290,7 +289,7 @@ async fn broadcast(
     parameter: &[u8],
 ) -> Result<(), Failure> {
     let window = std::time::Duration::from_secs_f64(args.window.unwrap_or(BROADCAST_WINDOW));
-    crate::link_args::warn_hub_window(&args.link.link, window);
+    crate::hints::warn_hub_window(&args.link.link, window);
     let name = String::from_utf8_lossy(&command).into_owned();
     // A link lost is an outcome too, in JSON as for one radio.
     let failed = |e: SendError| {

@@ -13,7 +13,8 @@ use mcp_host::record::Record;
 use mcp_host::{Diagnoser, Subscription};
 
 use crate::Failure;
-use crate::link_args::{ApiModeChoice, LinkArgs, Role, connect_failure_as, hint};
+use crate::hints::{Role, connect_failure_as, hint};
+use crate::link_args::{ApiModeChoice, LinkArgs};
 use crate::recording::{self, Recording, RecordingFile};
 
 /// Arguments of `hub`.
@@ -70,7 +71,7 @@ fn listen_failure(addr: &str, error: &std::io::Error) -> Failure {
             "another hub serves there or holds the port while its radio is away, or another \
              program serves there: give this one another --listen ADDR:PORT",
         ),
-        _ => crate::link_args::listen_hint(error),
+        _ => crate::hints::listen_hint(error),
     };
     let hint = hint.map(|h| format!(" ({h})")).unwrap_or_default();
     Failure::link(format!("cannot listen on {addr}: {error}{hint}"))
@@ -125,7 +126,7 @@ pub(crate) async fn run(mut args: HubArgs) -> Result<(), Failure> {
         }
     };
     let mut recorder = record.zip(tap).map(|(file, tap)| Recorder::new(file, tap));
-    crate::link_args::announce_radio_side(hub.radio_link());
+    crate::hints::announce_radio_side(hub.radio_link());
     let addr = hub.local_addr();
     let mode = u8::from(hub.api_mode());
     if !addr.ip().is_loopback() {

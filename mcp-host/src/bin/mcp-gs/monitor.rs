@@ -11,8 +11,10 @@ use mcp_host::record::Direction;
 use mcp_host::render;
 use mcp_host::{Diagnoser, Event, LinkEvent};
 
-use crate::link_args::{ApiModeChoice, LinkArgs, check_mode, hint};
+use crate::hints::hint;
+use crate::link_args::{ApiModeChoice, LinkArgs};
 use crate::output::Output;
+use crate::radio_query::check_mode;
 use crate::recording::{self, Recording, RecordingFile};
 use crate::{Failure, Format};
 
@@ -80,7 +82,7 @@ pub(crate) async fn run(mut args: MonitorArgs) -> Result<(), Failure> {
         Some(file) if !waiting => Some(file.create()?),
         _ => None,
     };
-    crate::link_args::announce_radio_side(stream.info());
+    crate::hints::announce_radio_side(stream.info());
     if let (
         ApiModeChoice::Fixed(mode),
         mcp_host::Link::Serial { .. } | mcp_host::Link::Tcp { .. },
@@ -259,11 +261,11 @@ pub(crate) async fn run(mut args: MonitorArgs) -> Result<(), Failure> {
         if let (Event::Link(LinkEvent::Disconnected { .. }), mcp_host::Link::Tcp { .. }) =
             (&event, &args.link.link)
         {
-            if crate::link_args::nothing_came(&stream.stats()) {
+            if crate::hints::nothing_came(&stream.stats()) {
                 ended_silent += 1;
                 // Once, when it is not a one-off.
                 if ended_silent == TURNED_AWAY {
-                    err!("mcp-gs: {}", crate::link_args::turned_away_hint());
+                    err!("mcp-gs: {}", crate::hints::turned_away_hint());
                 }
             }
         }

@@ -8,7 +8,8 @@ use mcp_host::discovery::DiscoverError;
 
 use crate::at::{outcome_json, timeout_json};
 
-use crate::link_args::{LinkArgs, diagnosed_send, with_mode_hint};
+use crate::hints::{diagnosed_send, with_mode_hint};
+use crate::link_args::LinkArgs;
 use crate::{Failure, Format};
 
 /// Arguments of `nodes`.
@@ -68,7 +69,7 @@ pub(crate) async fn run(args: NodesArgs) -> Result<(), Failure> {
         "mcp-gs: asking who is there (ND), answers for {}",
         mcp_host::render::Seconds(window)
     );
-    crate::link_args::warn_hub_window(&args.link.link, window);
+    crate::hints::warn_hub_window(&args.link.link, window);
     let found = sender.discover(Some(window)).await.map_err(|e| match e {
         DiscoverError::Send(e) => failed(e),
         other => {

@@ -9,7 +9,8 @@ use mcp_host::{Link, LinkOptions, ReconnectPolicy};
 use xbee_api::ApiMode;
 
 use crate::Failure;
-use crate::link_args::{ask_ap, open_once, parse_seconds};
+use crate::link_args::parse_seconds;
+use crate::radio_query::{ask_ap, open_once};
 use crate::setup::GuardTime;
 
 /// Arguments of `probe`.
@@ -86,7 +87,7 @@ pub(crate) async fn run(args: ProbeArgs) -> Result<(), Failure> {
     // Named at the first rate to try: the link's own (115200 unless given) may be none
     // of those tried first.
     let first = rates(args.link.given).next().unwrap_or(ORDER[0]);
-    crate::link_args::check_serial_path(
+    crate::hints::check_serial_path(
         &Link::serial_with(path.clone(), first, *flow_control),
         false,
     )?;

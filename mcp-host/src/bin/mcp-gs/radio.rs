@@ -587,7 +587,7 @@ fn ended_before(network: &Network, links: &[NamedLink]) -> Option<Failure> {
 /// The failure of `named`, whose link ended for good with `error`: `radio` and `sim`
 /// stop, rather than run on with a link that will never be there.
 fn ended_failure(named: &NamedLink, error: &str) -> Failure {
-    crate::link_args::link_ended_failure(&named.name, &named.link, error)
+    crate::hints::link_ended_failure(&named.name, &named.link, error)
 }
 
 /// The line saying the network runs: until Ctrl-C, or for `duration` (0: no limit).
@@ -744,7 +744,7 @@ pub(crate) async fn watch(
 pub(crate) async fn run(args: RadioArgs) -> Result<(), Failure> {
     let links = std::iter::once(&args.coordinator).chain(args.nodes.iter().map(|n| &n.link));
     for link in links {
-        crate::link_args::check_serial_path(&link.link, false)?;
+        crate::hints::check_serial_path(&link.link, false)?;
     }
     let config = args.net.config(MAX_UNICAST)?;
     let addresses: Vec<Address64> = args.nodes.iter().map(|n| n.address).collect();
@@ -770,7 +770,7 @@ pub(crate) async fn run(args: RadioArgs) -> Result<(), Failure> {
         let info = network
             .add_link(address, &link.link, options)
             .await
-            .map_err(|e| crate::link_args::network_failure(e, &link.link))?;
+            .map_err(|e| crate::hints::network_failure(e, &link.link))?;
         let (name, called) = if address == Address64::COORDINATOR {
             ("coordinator", "the coordinator's link".to_owned())
         } else {

@@ -13,7 +13,8 @@ use mcp_host::xbee_api::Address64;
 use mcp_host::{CommandSender, Link, SendError};
 
 use crate::Failure;
-use crate::link_args::{LinkArgs, send_failure};
+use crate::hints::send_failure;
+use crate::link_args::LinkArgs;
 use mcp_host::render::Seconds;
 
 /// Which recorded frames to play.

@@ -12,7 +12,8 @@ use mcp_host::{
 use xbee_api::{Address64, DeliveryStatus, DiscoveryStatus, ReceivePacketRepr};
 
 use crate::command::CommandArgs;
-use crate::link_args::{LinkArgs, diagnosed, diagnosed_send};
+use crate::hints::{diagnosed, diagnosed_send};
+use crate::link_args::LinkArgs;
 use crate::{Failure, Format};
 
 /// Arguments of `send`.

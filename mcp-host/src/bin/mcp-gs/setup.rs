@@ -13,10 +13,9 @@ use mcp_host::render::Seconds;
 use mcp_host::{Link, LinkOptions, ReconnectPolicy};
 use xbee_api::{ApiMode, Frame};
 
-use crate::link_args::{
-    ask_ap, ask_parameter, at_exchange, at_number, connect_failure, open_once, parse_seconds,
-    send_failure, serial_at,
-};
+use crate::hints::{connect_failure, send_failure, serial_at};
+use crate::link_args::parse_seconds;
+use crate::radio_query::{ask_ap, ask_parameter, at_exchange, at_number, open_once};
 use crate::{ApiModeArg, Failure};
 
 /// Arguments of `setup`.
@@ -163,7 +162,7 @@ pub(crate) async fn run(args: SetupArgs) -> Result<(), Failure> {
             "setup needs a link to a radio that is there: serial:PATH[:BAUD] or tcp:HOST:PORT",
         ));
     }
-    crate::link_args::warn_unusual_baud(&args.link);
+    crate::hints::warn_unusual_baud(&args.link);
     let timeout = Duration::from_secs_f64(args.timeout);
     let guard = args.guard.duration();
     let target = ap(args.api_mode.0);

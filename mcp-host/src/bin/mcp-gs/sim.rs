@@ -93,7 +93,7 @@ const MAVS_A_LINE: usize = 4;
 
 /// Runs `sim`.
 pub(crate) async fn run(args: SimArgs) -> Result<(), Failure> {
-    crate::link_args::check_serial_path(&args.link, false)?;
+    crate::hints::check_serial_path(&args.link, false)?;
     // Checked as given: the defaults added below never repeat an address.
     check_distinct(&args.addresses, "simulated MAV")?;
     let mut addresses = args.addresses.clone();
@@ -126,7 +126,7 @@ pub(crate) async fn run(args: SimArgs) -> Result<(), Failure> {
     let mode = args.api_mode.api_mode;
     let sim = Simulator::start_with(&args.link, mode, &addresses, config, options)
         .await
-        .map_err(|e| crate::link_args::network_failure(e, &args.link))?;
+        .map_err(|e| crate::hints::network_failure(e, &args.link))?;
     args.net.describe(&described);
     let events = sim.network().subscribe();
     for mav in sim.mavs() {

@@ -6,7 +6,8 @@ use mcp_host::{CommandSender, RequestError};
 use xbee_api::Address64;
 
 use crate::command::status_request;
-use crate::link_args::{LinkArgs, diagnosed, diagnosed_send, diagnosed_unanswered};
+use crate::hints::{diagnosed, diagnosed_send, diagnosed_unanswered};
+use crate::link_args::LinkArgs;
 use crate::send::{failure_json, timeout_json};
 use crate::{Failure, Format};
 
