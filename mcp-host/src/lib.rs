@@ -163,6 +163,7 @@ mod error;
 mod event;
 pub mod hub;
 mod ids;
+mod keepalive;
 pub mod link;
 mod mutex;
 pub mod options;

@@ -500,7 +500,7 @@ const CLIENT_SEND_BUFFER: usize = 64 * 1024;
 /// keeps it until its place is needed; one that is gone with data unacknowledged is
 /// let go once the system stops sending it again (about a quarter of an hour on
 /// Linux), or its place taken first.
-const CLIENT_KEEPALIVE: crate::transport::KeepAlive = crate::transport::KeepAlive {
+const CLIENT_KEEPALIVE: crate::keepalive::KeepAlive = crate::keepalive::KeepAlive {
     idle: Duration::from_secs(60),
     interval: Duration::from_secs(10),
     probes: 9,
@@ -603,7 +603,7 @@ fn tune_client_socket(socket: &TcpStream) {
     let _ = sock.set_send_buffer_size(CLIENT_SEND_BUFFER);
     // While the radio's frames flow to a peer that is gone, the system would otherwise
     // retransmit for a quarter of an hour before giving it up.
-    crate::transport::keep_alive(socket, &CLIENT_KEEPALIVE);
+    crate::keepalive::keep_alive(socket, &CLIENT_KEEPALIVE);
 }
 
 /// The next client of `listener`; never, without one.
@@ -635,6 +635,6 @@ mod tests {
         // (A system whose `net.core.wmem_max` is lower caps it.)
         let buffer = sock.send_buffer_size().unwrap();
         assert!(buffer <= 2 * CLIENT_SEND_BUFFER, "{buffer}");
-        crate::transport::assert_kept_alive(&socket, &CLIENT_KEEPALIVE);
+        crate::keepalive::assert_kept_alive(&socket, &CLIENT_KEEPALIVE);
     }
 }
