@@ -2,6 +2,9 @@
 //! frames, matches statuses, responses and reports to the requests in flight, and
 //! reconnects.
 
+mod op;
+mod pending;
+
 use std::collections::VecDeque;
 use std::fmt;
 use std::ops::Range;
@@ -12,7 +15,7 @@ use std::time::{Duration, SystemTime};
 use bytes::{Buf, Bytes, BytesMut};
 use futures::StreamExt;
 use tokio::io::AsyncWriteExt;
-use tokio::sync::{Notify, mpsc, oneshot, watch};
+use tokio::sync::{Notify, mpsc, watch};
 use tokio::time::Instant;
 use tokio_util::codec::FramedRead;
 use xbee_api::{Address64, EncodeFrame};
@@ -33,6 +36,11 @@ use crate::subscription::Subscribers;
 use crate::tap::SentFrames;
 use crate::transport::{Connector, Transport};
 
+pub(crate) use self::op::{ANSWERS_HELD, Op};
+use self::op::{fail_answers, refuse, refuse_closed};
+pub(crate) use self::pending::ReportKey;
+use self::pending::{Pending, PendingKind, Waiter};
+
 /// Stop accepting new requests while this many bytes wait to be written.
 const HIGH_WATER: usize = 16 * 1024;
 
@@ -45,299 +53,6 @@ const PARKED_MAX: usize = 64;
 /// How often the link's task looks for callers that gave up on their requests while it
 /// takes no new ones and requests wait for a frame id.
 const PRUNE_EVERY: Duration = Duration::from_millis(100);
-
-/// A request from a [`crate::CommandSender`] to the background task.
-#[derive(Debug)]
-pub(crate) enum Op {
-    Transmit {
-        to: Address64,
-        payload: Bytes,
-        with_status: bool,
-        deadline: Instant,
-        timeout: Duration,
-        reply: oneshot::Sender<Result<DeliveryReport, SendError>>,
-    },
-    Request {
-        to: Address64,
-        payload: Bytes,
-        request: mcp_core::StatusRequest,
-        deadline: Instant,
-        timeout: Duration,
-        reply: oneshot::Sender<Result<mcp_core::Report<Bytes>, RequestError>>,
-    },
-    Frame {
-        data: Bytes,
-        deadline: Instant,
-        timeout: Duration,
-        reply: oneshot::Sender<Result<OwnedFrame, SendError>>,
-    },
-    Write {
-        data: Bytes,
-        /// For [`write_frame`](crate::CommandSender::write_frame): when its caller stops
-        /// waiting, and its timeout; a write not taken by then is not written. `None`
-        /// for a sink's packets, which are handed over.
-        deadline: Option<(Instant, Duration)>,
-        reply: oneshot::Sender<Result<(), SendError>>,
-    },
-    /// A frame whose answers are gathered until the deadline, not just the first.
-    Answers {
-        data: Bytes,
-        deadline: Instant,
-        timeout: Duration,
-        answers: AnswerSender,
-    },
-}
-
-/// Where the answers of an [`Op::Answers`] go, with the error that ends them early.
-pub(crate) type AnswerSender = mpsc::Sender<Result<OwnedFrame, SendError>>;
-
-/// Answers to one request held for its caller at most ([`crate::Answers`]); later
-/// ones are dropped until the caller takes some. One more place is kept for the error
-/// that may end them.
-pub(crate) const ANSWERS_HELD: usize = 256;
-
-/// Ends the answers of `answers` with `error` (the place for it is kept free).
-fn fail_answers(answers: &AnswerSender, error: SendError) {
-    let _ = answers.try_send(Err(error));
-}
-
-impl Op {
-    /// Whether the request needs a frame id of its own (it awaits a status or response).
-    pub(crate) fn needs_id(&self) -> bool {
-        match self {
-            Op::Transmit { with_status, .. } => *with_status,
-            Op::Request { .. } | Op::Frame { .. } | Op::Answers { .. } => true,
-            Op::Write { .. } => false,
-        }
-    }
-
-    /// When the request times out (`None` for a sink's writes, which do not wait).
-    fn deadline(&self) -> Option<Instant> {
-        match self {
-            Op::Transmit { deadline, .. }
-            | Op::Request { deadline, .. }
-            | Op::Frame { deadline, .. }
-            | Op::Answers { deadline, .. } => Some(*deadline),
-            Op::Write { deadline, .. } => deadline.map(|(at, _)| at),
-        }
-    }
-
-    /// Whether the caller stopped waiting for the answer (a raw write is written all the
-    /// same).
-    fn caller_gone(&self) -> bool {
-        match self {
-            Op::Transmit { reply, .. } => reply.is_closed(),
-            Op::Request { reply, .. } => reply.is_closed(),
-            Op::Frame { reply, .. } => reply.is_closed(),
-            Op::Answers { answers, .. } => answers.is_closed(),
-            Op::Write { .. } => false,
-        }
-    }
-
-    /// Answers a request that timed out before it was sent: if `parked`, it waited
-    /// for a frame id ([`SendError::NoFreeFrameId`]); else its deadline had passed when
-    /// it was taken ([`SendError::NotSent`]). Whether its caller was there to be told
-    /// (the timeouts counted are those).
-    fn time_out(self, parked: bool) -> bool {
-        let error = |timeout| {
-            if parked {
-                SendError::NoFreeFrameId { timeout }
-            } else {
-                SendError::NotSent { timeout }
-            }
-        };
-        match self {
-            Op::Transmit { timeout, reply, .. } => reply.send(Err(error(timeout))).is_ok(),
-            Op::Request { timeout, reply, .. } => reply.send(Err(error(timeout).into())).is_ok(),
-            Op::Frame { timeout, reply, .. } => reply.send(Err(error(timeout))).is_ok(),
-            Op::Answers {
-                timeout, answers, ..
-            } => answers.try_send(Err(error(timeout))).is_ok(),
-            // Never parked: it needs no frame id.
-            Op::Write {
-                deadline, reply, ..
-            } => {
-                let timeout = deadline.map_or(Duration::ZERO, |(_, timeout)| timeout);
-                reply.send(Err(SendError::NotSent { timeout })).is_ok()
-            }
-        }
-    }
-}
-
-/// Which report answers a status request: its type, and for telemetry to coordinator
-/// the telemetry id.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub(crate) struct ReportKey {
-    report_type: mcp_core::CommandType,
-    telemetry: Option<mcp_core::TelemetryId>,
-}
-
-impl ReportKey {
-    pub(crate) fn of_request(request: &mcp_core::StatusRequest) -> Self {
-        let telemetry = match request {
-            mcp_core::StatusRequest::TelemetryToCoordinator(id) => Some(*id),
-            _ => None,
-        };
-        ReportKey {
-            report_type: request.command_type(),
-            telemetry,
-        }
-    }
-
-    fn of_report<B: AsRef<[u8]>>(report: &mcp_core::Report<B>) -> Self {
-        let telemetry = match report {
-            mcp_core::Report::TelemetryToCoordinator { id, .. } => Some(*id),
-            _ => None,
-        };
-        ReportKey {
-            report_type: report.report_type(),
-            telemetry,
-        }
-    }
-}
-
-impl fmt::Display for ReportKey {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self.telemetry {
-            Some(id) => write!(f, "{} ({id})", self.report_type),
-            None => write!(f, "{}", self.report_type),
-        }
-    }
-}
-
-#[derive(Debug)]
-struct Pending {
-    deadline: Instant,
-    timeout: Duration,
-    /// Where its frame is in the bytes queued for the transport, counted from the
-    /// transport's first (empty until queued): the frame went out once
-    /// [`Driver::written`] reaches its end, and none of it has while that is at most its
-    /// start.
-    bytes: Range<u64>,
-    kind: PendingKind,
-}
-
-impl Pending {
-    /// A request under a frame id, its frame not queued yet.
-    fn new(deadline: Instant, timeout: Duration, kind: PendingKind) -> Self {
-        Pending {
-            deadline,
-            timeout,
-            bytes: 0..0,
-            kind,
-        }
-    }
-
-    /// Whether none of its frame has gone out: it can still be taken back.
-    fn unsent(&self, written: u64) -> bool {
-        !self.bytes.is_empty() && written <= self.bytes.start
-    }
-
-    /// What stays under its id once its caller has its timeout, or has gone, after its
-    /// frame went out: the id, kept from new requests until the answer comes or
-    /// [`LATE_ANSWER_WINDOW`] has passed, so that a late answer is never taken for a
-    /// new request's. `None` for a request already in that state.
-    fn expired(&self, now: Instant) -> Option<Pending> {
-        let (answer_type, single) = match &self.kind {
-            PendingKind::Transmit { .. } | PendingKind::Request { .. } => {
-                (Some(xbee_api::frame::frame_type::TRANSMIT_STATUS), true)
-            }
-            PendingKind::Frame { answer_type, .. } => (*answer_type, true),
-            PendingKind::Answers { answer_type, .. } => (Some(*answer_type), false),
-            PendingKind::Expired { .. } => return None,
-        };
-        // Answers from every radio keep coming to the end of their window (held that
-        // long at most: a window may be an hour, or a disconnection cut it short).
-        let from = if single {
-            now
-        } else {
-            self.deadline
-                .clamp(now, crate::options::later(now, LATE_ANSWER_WINDOW))
-        };
-        Some(Pending {
-            deadline: crate::options::later(from, LATE_ANSWER_WINDOW),
-            timeout: self.timeout,
-            bytes: self.bytes.clone(),
-            kind: PendingKind::Expired {
-                answer_type,
-                single,
-            },
-        })
-    }
-}
-
-/// How long the frame id of a request that timed out after its frame went out is kept
-/// from new requests, waiting for its late answer: a frame may wait in a serial
-/// bridge's or the radio's buffers, and a radio takes seconds to report a failed
-/// delivery.
-const LATE_ANSWER_WINDOW: Duration = Duration::from_secs(10);
-
-#[derive(Debug)]
-enum PendingKind {
-    Transmit {
-        to: Address64,
-        reply: oneshot::Sender<Result<DeliveryReport, SendError>>,
-    },
-    Request {
-        to: Address64,
-        waiter: u64,
-    },
-    Frame {
-        reply: oneshot::Sender<Result<OwnedFrame, SendError>>,
-        /// The frame type of its answer, when its request's type has a known one
-        /// (0x88 for an AT command): a frame of another type under its id is none.
-        answer_type: Option<u8>,
-    },
-    Answers {
-        answers: AnswerSender,
-        /// The frame type of its answers (0x88 for AT commands, 0x97 for remote ones).
-        answer_type: u8,
-        /// Answers dropped while [`ANSWERS_HELD`] waited for the caller: the first is
-        /// logged, the count when the window ends.
-        dropped: u64,
-    },
-    /// A request whose caller has its timeout (or is gone), its frame sent: its late
-    /// answer comes as an unclaimed frame ([`Pending::expired`]).
-    Expired {
-        /// The frame type of its answer (`None`: any).
-        answer_type: Option<u8>,
-        /// Whether one answer ends it (not so for answers from every radio).
-        single: bool,
-    },
-}
-
-impl PendingKind {
-    /// Fails the request with `error`. A report request tells its caller nothing here:
-    /// its report waiter does.
-    fn fail(self, error: SendError) {
-        match self {
-            PendingKind::Transmit { reply, .. } => {
-                let _ = reply.send(Err(error));
-            }
-            PendingKind::Frame { reply, .. } => {
-                let _ = reply.send(Err(error));
-            }
-            PendingKind::Answers { answers, .. } => fail_answers(&answers, error),
-            PendingKind::Request { .. } | PendingKind::Expired { .. } => {}
-        }
-    }
-}
-
-#[derive(Debug)]
-struct Waiter {
-    id: u64,
-    from: Address64,
-    /// The request, and which report answers it.
-    request: mcp_core::StatusRequest,
-    key: ReportKey,
-    deadline: Instant,
-    timeout: Duration,
-    /// The radio confirmed delivery of the request (Transmit Status success).
-    delivered: bool,
-    /// Frames dropped undecodable when the request was taken.
-    undecodable_before: u64,
-    reply: oneshot::Sender<Result<mcp_core::Report<Bytes>, RequestError>>,
-}
 
 enum Served {
     /// Every sender and the stream are gone.
@@ -1503,46 +1218,6 @@ fn deliver_pending_link(
     }
 }
 
-/// Answers a request made while the transport is down.
-fn refuse(op: Op, why: &str) {
-    let error = SendError::Disconnected {
-        reason: why.to_owned(),
-    };
-    match op {
-        Op::Transmit { reply, .. } => {
-            let _ = reply.send(Err(error));
-        }
-        Op::Request { reply, .. } => {
-            let _ = reply.send(Err(error.into()));
-        }
-        Op::Frame { reply, .. } => {
-            let _ = reply.send(Err(error));
-        }
-        Op::Write { reply, .. } => {
-            let _ = reply.send(Err(error));
-        }
-        Op::Answers { answers, .. } => fail_answers(&answers, error),
-    }
-}
-
-fn refuse_closed(op: Op) {
-    match op {
-        Op::Transmit { reply, .. } => {
-            let _ = reply.send(Err(SendError::Closed));
-        }
-        Op::Request { reply, .. } => {
-            let _ = reply.send(Err(SendError::Closed.into()));
-        }
-        Op::Frame { reply, .. } => {
-            let _ = reply.send(Err(SendError::Closed));
-        }
-        Op::Write { reply, .. } => {
-            let _ = reply.send(Err(SendError::Closed));
-        }
-        Op::Answers { answers, .. } => fail_answers(&answers, SendError::Closed),
-    }
-}
-
 /// The outcome of a Transmit Status.
 fn delivery(
     to: Address64,
@@ -1595,6 +1270,9 @@ fn write_raw(mode: xbee_api::ApiMode, out: &mut BytesMut, data: &[u8]) -> Result
 
 #[cfg(test)]
 mod tests {
+    use tokio::sync::oneshot;
+
+    use super::pending::LATE_ANSWER_WINDOW;
     use super::*;
 
     /// How long the id of a request given up (or failed with the link) is kept for its
