@@ -18,15 +18,13 @@ use tokio::io::AsyncWriteExt;
 use tokio::sync::{Notify, mpsc, watch};
 use tokio::time::Instant;
 use tokio_util::codec::FramedRead;
+use xbee_api::frame::frame_type::{answer_type, is_answer, is_from_radio};
 use xbee_api::{Address64, EncodeFrame};
 
 use crate::codec::{CodecItem, XBeeCodec, encode_frame};
 use crate::diagnosis::Diagnoser;
 use crate::error::{RequestError, SendError};
-use crate::event::{
-    Event, InvalidPacket, LinkEvent, LinkState, Origin, OwnedFrame, Received, is_from_radio,
-    is_response,
-};
+use crate::event::{Event, InvalidPacket, LinkEvent, LinkState, Origin, OwnedFrame, Received};
 use crate::ids::IdTable;
 use crate::options::LinkOptions;
 use crate::record::{Direction, Record};
@@ -570,7 +568,7 @@ impl Driver {
                 }
                 Err(error) => self.malformed(frame, &error),
             },
-            t if is_response(t) => self.on_response(frame),
+            t if is_answer(t) => self.on_response(frame),
             t => {
                 // A request's type, which a radio takes but never sends: an echo.
                 if !is_from_radio(t) {
@@ -933,7 +931,7 @@ impl Driver {
                 timeout,
                 reply,
             } => {
-                let answer_type = data.first().and_then(|&t| crate::event::answer_type(t));
+                let answer_type = data.first().and_then(|&t| answer_type(t));
                 let kind = PendingKind::Frame { reply, answer_type };
                 self.write_under_id(out, &data, deadline, timeout, kind);
             }
@@ -950,7 +948,7 @@ impl Driver {
                 // commands, the only requests queued as `Op::Answers` but remote ones).
                 let answer_type = data
                     .first()
-                    .and_then(|&t| crate::event::answer_type(t))
+                    .and_then(|&t| answer_type(t))
                     .unwrap_or(xbee_api::frame::frame_type::AT_COMMAND_RESPONSE);
                 let kind = PendingKind::Answers {
                     answers,

@@ -245,7 +245,7 @@ impl OwnedFrame {
     /// their responses: 0x00, 0x01, 0x08, 0x09, 0x10, 0x11, 0x17, 0x20, 0x24, 0x88,
     /// 0x89, 0x8B, 0x97, 0xA4).
     pub fn frame_id(&self) -> Option<u8> {
-        if carries_frame_id(self.frame_type()) {
+        if xbee_api::frame::frame_type::carries_frame_id(self.frame_type()) {
             self.data.get(1).copied()
         } else {
             None
@@ -272,56 +272,6 @@ impl fmt::Debug for OwnedFrame {
         f.write_str(")")
     }
 }
-
-/// Frame types whose second byte is a frame id: the requests of [`answer_type`] and
-/// their answers.
-pub(crate) fn carries_frame_id(frame_type: u8) -> bool {
-    answer_type(frame_type).is_some() || is_response(frame_type)
-}
-
-/// Whether a frame of `frame_type` is one a radio sends, never one it takes: Digi's
-/// API identifiers of responses and indications have the high bit set (0x88 AT Command
-/// Response, 0x90 Receive Packet, ...), those of requests not.
-pub(crate) fn is_from_radio(frame_type: u8) -> bool {
-    frame_type & 0x80 != 0
-}
-
-/// Response frame types answering a request by frame id: those [`answer_type`] gives.
-pub(crate) fn is_response(frame_type: u8) -> bool {
-    use xbee_api::frame::frame_type::*;
-    matches!(
-        frame_type,
-        TX_STATUS_802_15_4
-            | AT_COMMAND_RESPONSE
-            | TRANSMIT_STATUS
-            | REMOTE_AT_RESPONSE
-            | REGISTER_JOINING_DEVICE_STATUS
-    )
-}
-
-/// The frame type answering requests of type `frame_type` under their frame id; `None`
-/// for frame types not known as requests. Every XBee request type has its frame id at
-/// byte 1.
-pub(crate) fn answer_type(frame_type: u8) -> Option<u8> {
-    use xbee_api::frame::frame_type::*;
-    match frame_type {
-        // Transmit Request 64-bit and 16-bit address (802.15.4), Transmit Request IPv4
-        // (Wi-Fi, Cellular): TX Status.
-        0x00 | 0x01 | 0x20 => Some(TX_STATUS_802_15_4),
-        AT_COMMAND | AT_COMMAND_QUEUE => Some(AT_COMMAND_RESPONSE),
-        TRANSMIT_REQUEST | EXPLICIT_ADDRESSING_COMMAND => Some(TRANSMIT_STATUS),
-        REMOTE_AT_COMMAND => Some(REMOTE_AT_RESPONSE),
-        // Register Joining Device: Register Joining Device Status.
-        0x24 => Some(REGISTER_JOINING_DEVICE_STATUS),
-        _ => None,
-    }
-}
-
-/// TX Status (802.15.4, Wi-Fi, Cellular).
-pub(crate) const TX_STATUS_802_15_4: u8 = 0x89;
-
-/// Register Joining Device Status, the answer to a Register Joining Device (0x24).
-pub(crate) const REGISTER_JOINING_DEVICE_STATUS: u8 = 0xA4;
 
 #[cfg(test)]
 mod tests {

@@ -6,6 +6,7 @@ use std::time::Duration;
 use bytes::Bytes;
 use tokio::sync::{mpsc, oneshot, watch};
 use tokio::time::Instant;
+use xbee_api::frame::frame_type::carries_frame_id;
 use xbee_api::{Address16, Address64, DiscoveryStatus};
 
 use crate::LinkInfo;
@@ -13,7 +14,7 @@ use crate::answers::Answers;
 use crate::discovery::{DiscoverError, Discovery};
 use crate::driver::Op;
 use crate::error::{RequestError, SendError};
-use crate::event::{LinkState, OwnedFrame, carries_frame_id};
+use crate::event::{LinkState, OwnedFrame};
 use crate::stats::{Counters, Stats};
 
 /// How long a caller waits past its deadline for the background task's answer.

@@ -15,6 +15,7 @@ use tokio::time::Instant;
 use tokio_util::codec::FramedRead;
 use tokio_util::sync::CancellationToken;
 use xbee_api::ApiMode;
+use xbee_api::frame::frame_type::answer_type;
 
 use super::input::{ClientCodec, ClientInput, ClientItem};
 use super::radio_writer::{Queued, ToRadio};
@@ -24,7 +25,6 @@ use super::serve::AnswerQueue;
 use super::stall::Stalls;
 use super::{Counters, IDS_PER_CLIENT, REQUEST_WAIT, ROUTES_PER_CLIENT, encode};
 use crate::codec::CodecItem;
-use crate::event::answer_type;
 use crate::mutex::lock;
 use crate::stats::bump;
 
@@ -404,7 +404,7 @@ impl Client {
         if let Some(&frame_type) = data.first() {
             // A radio drops such a frame unanswered; the hub refuses it, so that the
             // client's mistake is counted and said rather than lost at the radio.
-            if crate::event::is_from_radio(frame_type) {
+            if xbee_api::frame::frame_type::is_from_radio(frame_type) {
                 self.refuse(format_args!(
                     "type 0x{frame_type:02x}{} is a frame a radio sends, not one it takes \
                      (a recording of what a radio said, played onto the hub?)",

@@ -1,6 +1,12 @@
 //! What the hub reads in a client's request: whether it is whole, its AT command,
 //! whether it gets several answers, and the answer the hub gives one it did not send.
 
+use xbee_api::frame::frame_type::{
+    AT_COMMAND, AT_COMMAND_QUEUE, AT_COMMAND_RESPONSE, EXPLICIT_ADDRESSING_COMMAND,
+    REGISTER_JOINING_DEVICE, REMOTE_AT_COMMAND, REMOTE_AT_RESPONSE, TRANSMIT_REQUEST,
+    TRANSMIT_STATUS, TX_REQUEST_16, TX_REQUEST_64, TX_REQUEST_IPV4, TX_STATUS,
+};
+
 /// Whether a request gets several answers under its id: node discovery, find neighbors
 /// and active scan, as local AT (or queued AT) commands or remote ones (a remote radio
 /// sends each answer on its own), and any remote AT command to the broadcast address
@@ -13,16 +19,20 @@ pub(super) fn answered_many_times(data: &[u8]) -> bool {
             .iter()
             .any(|name| command.eq_ignore_ascii_case(*name))
     });
-    gathers || matches!(data, [0x17, _, 0, 0, 0, 0, 0, 0, 0xFF, 0xFF, ..])
+    gathers
+        || matches!(
+            data,
+            [REMOTE_AT_COMMAND, _, 0, 0, 0, 0, 0, 0, 0xFF, 0xFF, ..]
+        )
 }
 
 /// The AT command of an AT request or answer (frame data): local (0x08, 0x09, 0x88) or
 /// remote (0x17, 0x97); `None` for other frames, or one cut short of it.
 pub(super) fn at_command(data: &[u8]) -> Option<[u8; 2]> {
-    let at = match data.first()? {
-        0x08 | 0x09 | 0x88 => 2,
-        0x97 => 12,
-        0x17 => 13,
+    let at = match *data.first()? {
+        AT_COMMAND | AT_COMMAND_QUEUE | AT_COMMAND_RESPONSE => 2,
+        REMOTE_AT_RESPONSE => 12,
+        REMOTE_AT_COMMAND => 13,
         _ => return None,
     };
     data.get(at..at + 2)?.try_into().ok()
@@ -33,14 +43,14 @@ pub(super) fn at_command(data: &[u8]) -> Option<[u8; 2]> {
 pub(super) fn is_whole_request(data: &[u8]) -> bool {
     match data.first() {
         // 802.15.4 Transmit Request, 64-bit address: type, id, address, options.
-        Some(0x00) => data.len() >= 11,
+        Some(&TX_REQUEST_64) => data.len() >= 11,
         // 16-bit address: type, id, address, options.
-        Some(0x01) => data.len() >= 5,
+        Some(&TX_REQUEST_16) => data.len() >= 5,
         // Transmit Request IPv4: type, id, address, two ports, protocol, options.
-        Some(0x20) => data.len() >= 12,
+        Some(&TX_REQUEST_IPV4) => data.len() >= 12,
         // Register Joining Device: type, id, 64-bit address, 0xFFFE, options (and the
         // key, none to take the device out of the table).
-        Some(0x24) => data.len() >= 13,
+        Some(&REGISTER_JOINING_DEVICE) => data.len() >= 13,
         // The others `xbee-api` types (0x08, 0x09, 0x10, 0x11, 0x17).
         _ => xbee_api::Frame::parse_bytes(data).is_ok(),
     }
@@ -58,17 +68,28 @@ pub(super) fn not_sent_answer(request: &[u8]) -> Option<Vec<u8>> {
         return None;
     }
     match request {
-        [0x08 | 0x09, id, a, b, ..] => Some(vec![0x88, *id, *a, *b, 0x01]),
+        [AT_COMMAND | AT_COMMAND_QUEUE, id, a, b, ..] => {
+            Some(vec![AT_COMMAND_RESPONSE, *id, *a, *b, 0x01])
+        }
         // Resource error in a TX Status too, as 802.15.4 (S2C) and IPv4 radios give it.
-        [0x00 | 0x01 | 0x20, id, ..] => Some(vec![0x89, *id, 0x32]),
+        [TX_REQUEST_64 | TX_REQUEST_16 | TX_REQUEST_IPV4, id, ..] => {
+            Some(vec![TX_STATUS, *id, 0x32])
+        }
         // The 16-bit address after the 64-bit one; no retries, no discovery.
-        [0x10 | 0x11, id, _, _, _, _, _, _, _, _, hi, lo, ..] => {
-            Some(vec![0x8B, *id, *hi, *lo, 0x00, 0x32, 0x00])
+        [
+            TRANSMIT_REQUEST | EXPLICIT_ADDRESSING_COMMAND,
+            id,
+            rest @ ..,
+        ] => {
+            let mut answer = vec![TRANSMIT_STATUS, *id];
+            answer.extend_from_slice(rest.get(8..10)?);
+            answer.extend_from_slice(&[0x00, 0x32, 0x00]);
+            Some(answer)
         }
         // The 64- and 16-bit addresses, options, the command.
-        [0x17, id, rest @ ..] => {
+        [REMOTE_AT_COMMAND, id, rest @ ..] => {
             let (addresses, command) = (rest.get(..10)?, rest.get(11..13)?);
-            let mut answer = vec![0x97, *id];
+            let mut answer = vec![REMOTE_AT_RESPONSE, *id];
             answer.extend_from_slice(addresses);
             answer.extend_from_slice(command);
             answer.push(0x04);

@@ -15,6 +15,7 @@ use tokio::time::Instant;
 use tokio_util::sync::CancellationToken;
 use tokio_util::task::TaskTracker;
 use xbee_api::ApiMode;
+use xbee_api::frame::frame_type::is_answer;
 
 use super::client::Client;
 use super::input::ClientInput;
@@ -26,7 +27,6 @@ use super::{
     ANSWER_QUEUE, CLIENT_FRAMES_TO_RADIO, CLIENT_QUEUE, Counters, MANY_ANSWER_PER_CLIENT,
     MAX_CLIENTS, MODE_CHECK_TIMEOUT, ROUTES_PER_CLIENT, STALLED, STATUS_TARGET, encode,
 };
-use crate::event::is_response;
 use crate::mutex::lock;
 use crate::repeats::Repeats;
 use crate::stats::bump;
@@ -445,7 +445,7 @@ impl Serve {
         };
         bump(&self.counters.frames_from_radio);
         if let [frame_type, id, ..] = data[..] {
-            if is_response(frame_type) && id != 0 {
+            if is_answer(frame_type) && id != 0 {
                 self.answer(data, id);
                 return;
             }

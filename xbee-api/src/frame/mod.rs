@@ -17,8 +17,14 @@ pub mod remote_at_response;
 pub mod transmit_request;
 pub mod transmit_status;
 
-/// Frame type bytes (API identifiers) of the typed frames.
+/// Frame type bytes (API identifiers): those of the typed frames, and of the other
+/// requests that take a frame id and their answers; which frame type answers which
+/// request ([`answer_type`](frame_type::answer_type)).
 pub mod frame_type {
+    /// TX Request, 64-bit address (802.15.4 radios), answered by a [`TX_STATUS`].
+    pub const TX_REQUEST_64: u8 = 0x00;
+    /// TX Request, 16-bit address (802.15.4 radios), answered by a [`TX_STATUS`].
+    pub const TX_REQUEST_16: u8 = 0x01;
     /// AT Command.
     pub const AT_COMMAND: u8 = 0x08;
     /// AT Command - Queue Parameter Value.
@@ -29,8 +35,15 @@ pub mod frame_type {
     pub const EXPLICIT_ADDRESSING_COMMAND: u8 = 0x11;
     /// Remote AT Command.
     pub const REMOTE_AT_COMMAND: u8 = 0x17;
+    /// Transmit Request IPv4 (Wi-Fi and Cellular radios), answered by a [`TX_STATUS`].
+    pub const TX_REQUEST_IPV4: u8 = 0x20;
+    /// Register Joining Device (Zigbee trust centre), answered by a
+    /// [`REGISTER_JOINING_DEVICE_STATUS`].
+    pub const REGISTER_JOINING_DEVICE: u8 = 0x24;
     /// AT Command Response.
     pub const AT_COMMAND_RESPONSE: u8 = 0x88;
+    /// TX Status: the delivery status of an 802.15.4 or IPv4 transmit request.
+    pub const TX_STATUS: u8 = 0x89;
     /// Modem Status.
     pub const MODEM_STATUS: u8 = 0x8A;
     /// Transmit Status.
@@ -43,6 +56,55 @@ pub mod frame_type {
     pub const NODE_IDENTIFICATION_INDICATOR: u8 = 0x95;
     /// Remote AT Command Response.
     pub const REMOTE_AT_RESPONSE: u8 = 0x97;
+    /// Register Joining Device Status.
+    pub const REGISTER_JOINING_DEVICE_STATUS: u8 = 0xA4;
+
+    /// The frame type of the answer to a request of type `frame_type`, which carries
+    /// the request's frame id (byte 1 of every request and of its answer); `None` for
+    /// a frame type that is no request answered so.
+    ///
+    /// ```
+    /// use xbee_api::frame::frame_type::{self, answer_type};
+    /// assert_eq!(answer_type(frame_type::AT_COMMAND), Some(frame_type::AT_COMMAND_RESPONSE));
+    /// assert_eq!(answer_type(frame_type::TRANSMIT_REQUEST), Some(frame_type::TRANSMIT_STATUS));
+    /// assert_eq!(answer_type(frame_type::RECEIVE_PACKET), None);
+    /// ```
+    pub const fn answer_type(frame_type: u8) -> Option<u8> {
+        match frame_type {
+            TX_REQUEST_64 | TX_REQUEST_16 | TX_REQUEST_IPV4 => Some(TX_STATUS),
+            AT_COMMAND | AT_COMMAND_QUEUE => Some(AT_COMMAND_RESPONSE),
+            TRANSMIT_REQUEST | EXPLICIT_ADDRESSING_COMMAND => Some(TRANSMIT_STATUS),
+            REMOTE_AT_COMMAND => Some(REMOTE_AT_RESPONSE),
+            REGISTER_JOINING_DEVICE => Some(REGISTER_JOINING_DEVICE_STATUS),
+            _ => None,
+        }
+    }
+
+    /// Whether a frame of `frame_type` answers a request under its frame id: one that
+    /// [`answer_type`] gives.
+    pub const fn is_answer(frame_type: u8) -> bool {
+        matches!(
+            frame_type,
+            TX_STATUS
+                | AT_COMMAND_RESPONSE
+                | TRANSMIT_STATUS
+                | REMOTE_AT_RESPONSE
+                | REGISTER_JOINING_DEVICE_STATUS
+        )
+    }
+
+    /// Whether byte 1 of a frame of `frame_type` is a frame id: a request of
+    /// [`answer_type`], or its answer.
+    pub const fn carries_frame_id(frame_type: u8) -> bool {
+        answer_type(frame_type).is_some() || is_answer(frame_type)
+    }
+
+    /// Whether a frame of `frame_type` is one a radio sends, never one it takes: the
+    /// API identifiers of responses and indications have the high bit set (0x88 AT
+    /// Command Response, 0x90 Receive Packet...), those of requests not.
+    pub const fn is_from_radio(frame_type: u8) -> bool {
+        frame_type & 0x80 != 0
+    }
 }
 
 use at_command::AtCommandRepr;
