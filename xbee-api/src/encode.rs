@@ -285,6 +285,9 @@ impl Writer<'_> {
 
 #[cfg(test)]
 mod tests {
+    extern crate std;
+    use std::{vec, vec::Vec};
+
     use super::*;
     use crate::RawFrame;
 
@@ -343,6 +346,32 @@ mod tests {
         ));
     }
 
+    /// Announces more frame data than it writes.
+    struct Short;
+
+    impl EncodeFrame for Short {
+        fn frame_data_len(&self) -> usize {
+            4
+        }
+        fn write_frame_data<F: FnMut(&[u8])>(&self, out: &mut F) {
+            out(&[1, 2]);
+        }
+    }
+
+    #[test]
+    fn a_writer_short_of_its_length_is_an_error_not_a_frame_with_a_false_length() {
+        let short = Err(EncodeError::LengthMismatch {
+            announced: 4,
+            written: 2,
+        });
+        for mode in [ApiMode::Unescaped, ApiMode::Escaped] {
+            let mut buf = [0u8; 16];
+            assert_eq!(Short.encode(mode, &mut buf), short);
+            assert_eq!(Short.write_to(mode, |_| {}), short);
+        }
+        assert_eq!(Short.emit_frame_data(&mut [0u8; 16]), short);
+    }
+
     struct Nothing;
 
     impl EncodeFrame for Nothing {
@@ -371,9 +400,28 @@ mod tests {
         let data = [0u8; MAX_FRAME_DATA_LEN + 1];
         let raw = RawFrame::new(&data).unwrap();
         let mut buf = [0u8; 8];
-        assert_eq!(
-            raw.encode(ApiMode::Unescaped, &mut buf),
-            Err(EncodeError::FrameTooLong { len: data.len() })
-        );
+        let too_long = Err(EncodeError::FrameTooLong { len: data.len() });
+        for mode in [ApiMode::Unescaped, ApiMode::Escaped] {
+            assert_eq!(raw.encode(mode, &mut buf), too_long);
+            let mut written = 0usize;
+            assert_eq!(raw.write_to(mode, |_| written += 1), too_long);
+            assert_eq!(written, 0, "bytes written of a frame refused");
+        }
+    }
+
+    #[test]
+    fn the_longest_frame_data_encodes_with_length_ffff() {
+        let mut data = vec![0u8; MAX_FRAME_DATA_LEN];
+        data[0] = 0x10;
+        let raw = RawFrame::new(&data).unwrap();
+        for mode in [ApiMode::Unescaped, ApiMode::Escaped] {
+            let mut buf = vec![0u8; raw.encoded_len(mode)];
+            let n = raw.encode(mode, &mut buf).unwrap();
+            assert_eq!(n, buf.len());
+            assert_eq!(buf[..3], [START_DELIMITER, 0xFF, 0xFF]);
+            let mut out = Vec::new();
+            assert_eq!(raw.write_to(mode, |byte| out.push(byte)), Ok(n));
+            assert_eq!(out, buf);
+        }
     }
 }

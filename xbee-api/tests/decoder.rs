@@ -323,6 +323,54 @@ fn reset_drops_partial_frame() {
 }
 
 #[test]
+fn reset_after_an_escape_byte_leaves_nothing_of_it() {
+    // Mode 2, cut off just after an escape byte: the next frame owes it nothing.
+    let mut decoder: Decoder = Decoder::new(ApiMode::Escaped);
+    for byte in hex("7E 00 02 8A 7D") {
+        assert!(decoder.push(byte).is_none());
+    }
+    decoder.reset();
+    assert!(decoder.is_idle(), "an escape pending after reset");
+    let (_, event) = decoder.decode(&hex(MODEM));
+    assert_eq!(event.unwrap().unwrap().data(), &[0x8A, 0x06]);
+    assert_eq!(decoder.stats().errors(), 0);
+}
+
+#[test]
+fn bytes_after_a_reset_inside_a_frame_are_skipped_until_a_start_delimiter() {
+    // Mode 2, reset part way through a frame's data: what follows, up to the next 0x7E,
+    // belongs to no frame and is counted as skipped, whichever way it is fed.
+    for by_byte in [false, true] {
+        let mut decoder: Decoder = Decoder::new(ApiMode::Escaped);
+        let start = hex("7E 00 10 90 00 13");
+        let rest = [0x41, 0x42, 0x43, 0x44, 0x45];
+        if by_byte {
+            start
+                .iter()
+                .for_each(|&byte| assert!(decoder.push(byte).is_none()));
+        } else {
+            assert!(decoder.decode(&start).1.is_none());
+        }
+        decoder.reset();
+        let skipped = decoder.stats().bytes_skipped;
+        if by_byte {
+            rest.iter()
+                .for_each(|&byte| assert!(decoder.push(byte).is_none()));
+        } else {
+            assert_eq!(decoder.decode(&rest), (rest.len(), None));
+        }
+        assert_eq!(
+            decoder.stats().bytes_skipped - skipped,
+            5,
+            "by byte: {by_byte}"
+        );
+        assert!(decoder.is_idle());
+        let (_, event) = decoder.decode(&hex(MODEM));
+        assert_eq!(event.unwrap().unwrap().data(), &[0x8A, 0x06]);
+    }
+}
+
+#[test]
 fn decoder_ram_is_buffer_plus_a_few_words() {
     let overhead = std::mem::size_of::<Decoder>() - xbee_api::DEFAULT_CAPACITY;
     println!("size_of::<Decoder>() = {}", std::mem::size_of::<Decoder>());

@@ -197,6 +197,57 @@ fn a_full_queue_takes_no_byte_and_gives_nothing_up() {
 }
 
 #[test]
+fn a_tick_while_full_gives_up_no_frame_the_decoder_holds() {
+    // Mode 1, a queue of one: a stray delimiter whose length covers two frames, given
+    // up, queues the first; the second waits in the decoder while the queue is full, and
+    // more ticks then must not give it up (into a queue with no room).
+    let mut inbox: Inbox<N1, Mode1, PAYLOAD, 1> = Inbox::new();
+    let frame = status_request();
+    let line = [&[0x7E, 0x00, 0x42][..], &frame, &frame].concat();
+    let mut fifo = line.into_iter();
+    inbox.read_from(|| fifo.next()).unwrap();
+    inbox.tick();
+    inbox.tick();
+    assert!(inbox.is_full() && !inbox.ready());
+    for _ in 0..3 {
+        inbox.tick();
+    }
+    assert_eq!(inbox.pop().unwrap().data(), b"c\x02\xff");
+    // Room: the frame held comes out of the decoder, and fills the queue again.
+    assert!(!inbox.ready());
+    assert_eq!(inbox.pop().unwrap().data(), b"c\x02\xff");
+    assert_eq!(inbox.stats().queued, 2);
+    assert_eq!(inbox.decoder().stats().frames_ok, 2);
+}
+
+#[test]
+fn a_pop_from_a_full_queue_counts_the_quiet_ticks_from_nought() {
+    // Mode 1, a queue of one: giving up a stray delimiter queues a frame and leaves the
+    // next one begun, its rest in the UART while the queue is full. The pop that makes
+    // room starts the count again: the next tick gives nothing up.
+    let mut inbox: Inbox<N1, Mode1, PAYLOAD, 1> = Inbox::new();
+    let frame = status_request();
+    let line = [&[0x7E, 0x00, 0x42][..], &frame, &frame[..5]].concat();
+    let mut fifo = line.into_iter();
+    inbox.read_from(|| fifo.next()).unwrap();
+    inbox.tick();
+    inbox.tick();
+    assert!(inbox.is_full());
+    assert!(!inbox.decoder().is_idle(), "the second frame begun");
+    let errors = inbox.decoder().stats().errors(); // the stray delimiter's
+    inbox.pop().unwrap();
+    inbox.tick();
+    assert!(
+        !inbox.decoder().is_idle(),
+        "given up one tick after the pop"
+    );
+    let mut rest = frame[5..].iter().copied();
+    assert_eq!(inbox.read_from(|| rest.next()), Err(InboxFull));
+    assert_eq!(inbox.pop().unwrap().data(), b"c\x02\xff");
+    assert_eq!(inbox.decoder().stats().errors(), errors);
+}
+
+#[test]
 fn popping_a_full_queue_resets_the_quiet_count() {
     let mut inbox = Rx::new();
     let frame = status_request();
