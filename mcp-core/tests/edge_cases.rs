@@ -615,3 +615,96 @@ fn encode_reports_a_small_buffer() {
     assert_eq!((e.needed, e.available), (6, 5));
     assert_eq!(buf, [0; 5]);
 }
+
+#[test]
+fn record_and_waypoint_iterators_count_what_is_left() {
+    // `t`, then two records: altitude 1.5 and pitch -0.25.
+    let telemetry = [
+        b't', 0x01, 0x00, 0x00, 0xC0, 0x3F, 0x19, 0x00, 0x00, 0x80, 0xBE,
+    ];
+    let Packet::Telemetry(telemetry) = parse(&telemetry).unwrap() else {
+        panic!("not telemetry")
+    };
+    let mut records = telemetry.iter();
+    assert_eq!((records.len(), records.size_hint()), (2, (2, Some(2))));
+    records.next();
+    assert_eq!((records.len(), records.size_hint()), (1, (1, Some(1))));
+    records.next();
+    assert_eq!((records.len(), records.next()), (0, None));
+
+    // Three waypoints of 16 bytes each.
+    let waypoints = mcp_core::Waypoints::new_checked(&[0u8; 48][..]).unwrap();
+    let mut each = waypoints.iter();
+    assert_eq!((each.len(), each.size_hint()), (3, (3, Some(3))));
+    each.next();
+    assert_eq!((each.len(), each.size_hint()), (2, (2, Some(2))));
+    assert_eq!(each.count(), 2);
+}
+
+#[test]
+fn a_record_index_past_any_packet_is_none_not_a_wrapped_one() {
+    let telemetry = [
+        b't', 0x01, 0x00, 0x00, 0xC0, 0x3F, 0x19, 0x00, 0x00, 0x80, 0xBE,
+    ];
+    let Packet::Telemetry(telemetry) = parse(&telemetry).unwrap() else {
+        panic!("not telemetry")
+    };
+    assert_eq!(
+        telemetry.get(1).map(|r| r.id),
+        Some(TelemetryId::PitchAngle)
+    );
+    assert_eq!(telemetry.get(2), None);
+    // 5 * (usize::MAX / 5 + 1) wraps to 4 or less: the index must not read record 0.
+    assert_eq!(telemetry.get(usize::MAX / 5 + 1), None);
+    assert_eq!(telemetry.get(usize::MAX), None);
+}
+
+#[test]
+fn a_status_request_is_one_and_a_set_command_is_not() {
+    let requests = [
+        StatusRequest::TelemetryToCoordinator(TelemetryId::Altitude),
+        StatusRequest::Landing,
+        StatusRequest::Controllers,
+        StatusRequest::TrajectorySet,
+        StatusRequest::PositionSlaveSet,
+        StatusRequest::Time,
+    ];
+    for request in requests {
+        assert!(Command::<&[u8]>::status_request(request).is_status_request());
+    }
+    assert!(!Command::<&[u8]>::landing(true).is_status_request());
+    assert!(
+        !Command::<&[u8]>::telemetry_to_coordinator(true, TelemetryId::Altitude)
+            .is_status_request()
+    );
+    assert!(!Command::<&[u8]>::Time(0).is_status_request());
+}
+
+#[test]
+fn waypoints_not_whole_are_a_length_error_naming_a_command() {
+    let partial = mcp_core::Waypoints::new_unchecked(&[0u8; 17][..]);
+    let error = partial.check_len().unwrap_err();
+    assert!(
+        matches!(
+            error.kind(),
+            ErrorKind::WrongLength {
+                category: Category::Command,
+                got: 20,
+                ..
+            }
+        ),
+        "{error:?}"
+    );
+    assert!(
+        mcp_core::Waypoints::new_unchecked(&[0u8; 32][..])
+            .check_len()
+            .is_ok()
+    );
+}
+
+#[test]
+fn text_with_a_byte_is_not_empty() {
+    assert!(mcp_core::Text::new(&b""[..]).is_empty());
+    assert!(!mcp_core::Text::new(&b"x"[..]).is_empty());
+    assert_eq!(mcp_core::Text::new(&b"xy"[..]).len(), 2);
+}
