@@ -343,6 +343,10 @@ pub struct HubStats {
     pub frames_from_radio: u64,
     /// Frames from clients written to the radio.
     pub frames_from_clients: u64,
+    /// Frames read from clients, those that fail their checksum or escapes included:
+    /// each is written to the radio ([`frames_from_clients`](Self::frames_from_clients)),
+    /// refused ([`frames_refused`](Self::frames_refused)) or waits its turn.
+    pub frames_read_from_clients: u64,
     /// Frames not given to a client that had fallen behind (its queue full): the
     /// radio's, and the hub's own answers to requests it refused. Not those for a client
     /// gone meanwhile.
@@ -385,6 +389,7 @@ struct Counters {
     clients: AtomicU64,
     frames_from_radio: AtomicU64,
     frames_from_clients: AtomicU64,
+    frames_read_from_clients: AtomicU64,
     frames_dropped: AtomicU64,
     frames_refused: AtomicU64,
     requests_held: AtomicU64,
@@ -559,6 +564,7 @@ impl Hub {
             clients: c.clients.load(Ordering::Relaxed),
             frames_from_radio: c.frames_from_radio.load(Ordering::Relaxed),
             frames_from_clients: c.frames_from_clients.load(Ordering::Relaxed),
+            frames_read_from_clients: c.frames_read_from_clients.load(Ordering::Relaxed),
             frames_dropped: c.frames_dropped.load(Ordering::Relaxed),
             frames_refused: c.frames_refused.load(Ordering::Relaxed),
             requests_held: c.requests_held.load(Ordering::Relaxed),

@@ -94,6 +94,12 @@ async fn shares_one_radio(mode: ApiMode) {
     assert!(stats.listening);
     assert_eq!(stats.clients, 2);
     assert!(stats.frames_from_radio > 0 && stats.frames_from_clients >= 6);
+    // Every frame read from the clients answered: none waits, none was refused.
+    assert_eq!(
+        stats.frames_read_from_clients, stats.frames_from_clients,
+        "{stats:?}"
+    );
+    assert_eq!(stats.frames_refused, 0, "{stats:?}");
     // The hub's own link saw every frame it passed on, whole, and kept up.
     assert!(stats.radio.frames >= stats.frames_from_radio, "{stats:?}");
     assert_eq!(stats.radio.decode_errors(), 0, "{stats:?}");

@@ -193,10 +193,15 @@ async fn a_request_that_waited_its_turn_too_long_is_answered_as_failed_not_sent(
     for _ in 0..6 {
         assert_eq!(next(&mut radio).await, filler);
     }
-    // Until the hub has read the request (real time; the clock stands still).
-    tokio::task::spawn_blocking(|| std::thread::sleep(Duration::from_millis(200)))
-        .await
-        .unwrap();
+    // Until the hub has read the request, in real time: the clock stands still.
+    let mut looks = 0;
+    while hub.stats().frames_read_from_clients < 7 {
+        looks += 1;
+        assert!(looks < 30_000, "the hub never read the request");
+        tokio::task::spawn_blocking(|| std::thread::sleep(Duration::from_millis(1)))
+            .await
+            .unwrap();
+    }
     tokio::time::advance(REQUEST_WAIT + Duration::from_secs(1)).await;
     assert_eq!(next(&mut client).await, [0x88, 0x01, b'N', b'I', 0x01]);
     // The radio gets the client's next frame, never the request.

@@ -85,6 +85,9 @@ async fn requests_cut_short_take_no_frame_id() {
     let stats = hub.stats();
     assert_eq!(stats.frames_refused, refused, "{stats:?}");
     assert_eq!(stats.requests_held, 0, "{stats:?}");
+    // Every frame read was refused or written: the refused ones and the request.
+    assert_eq!(stats.frames_read_from_clients, refused + 1, "{stats:?}");
+    assert_eq!(stats.frames_from_clients, 1, "{stats:?}");
     hub.stop().await;
 }
 

@@ -179,6 +179,7 @@ impl Client {
                         self.skipped(bytes, after_error);
                     }
                     Some(Ok(ClientItem::Codec(item))) => {
+                        bump(&self.counters.frames_read_from_clients);
                         match self.pass(item, &to_radio, since).await {
                             Err(()) => return, // The hub stops.
                             // The bytes waiting behind it now were there when it began to
