@@ -236,7 +236,12 @@ fn unprivileged() -> Option<Command> {
 #[test]
 fn a_device_this_user_may_not_open_says_what_to_do_also_while_waiting() {
     let Some(_) = unprivileged() else {
-        eprintln!("skipped: root, and no way to run mcp-gs as another user (setpriv)");
+        // Straight to the process's stderr, past the harness's capture: said in every run.
+        let _ = std::io::Write::write_all(
+            &mut std::io::stderr(),
+            b"SKIPPED a_device_this_user_may_not_open_says_what_to_do_also_while_waiting: \
+              root, and no way to run mcp-gs as another user (setpriv, and a user nobody)\n",
+        );
         return;
     };
     let (_master, _far, terminal) = pseudo_terminal();
