@@ -4,6 +4,10 @@ use core::fmt;
 
 /// The API operating mode of an XBee (`AP` parameter).
 ///
+/// Its `AP` value is `u8::from(mode)`, 1 or 2. Not `mode as u8`, which gives the
+/// discriminant, 0 or 1 (mode 1 is stored as 0, so that a decoder of a fixed mode is
+/// all zeros and a `static` of one takes no flash).
+///
 /// ```
 /// use xbee_api::ApiMode;
 /// assert_eq!(ApiMode::try_from(2), Ok(ApiMode::Escaped));
