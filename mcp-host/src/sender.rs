@@ -91,6 +91,14 @@ impl std::fmt::Display for DeliveryReport {
 /// Sends MCP packets and XBee frames over a link. Cheap to clone; usable from many tasks
 /// at once.
 ///
+/// Waiting times are given one way throughout: a `timeout: Option<Duration>` (for a
+/// transmission, in [`SendOptions`]) is how long to wait for the answer, `None` taking
+/// the link's [`send_timeout`](crate::LinkOptions::send_timeout). A `window` is another
+/// thing: how long answers from many radios are gathered ([`at_answers`](Self::at_answers),
+/// [`discover`](Self::discover), whose `None` is the radio's own discovery time).
+/// [`send_frame`](Self::send_frame) waits for the answer under the frame's id;
+/// [`write_frame`](Self::write_frame) for none, only until the link has the frame.
+///
 /// Every request waits at most its timeout (and half a second's grace for the background
 /// task's answer) and fails with a clear [`SendError`] (inside the
 /// [`RequestError`](crate::RequestError), [`ConfirmError`](crate::ConfirmError) or
