@@ -85,10 +85,7 @@ pub async fn detect_api_mode(link: &Link, options: LinkOptions) -> Result<ApiMod
         Ok(Frame::AtCommandResponse(at)) if at.status.is_ok() => at.data.to_vec(),
         _ => return Err(DetectError::Unexpected(None)),
     };
-    // A number, big-endian, in as many bytes as the radio gives it.
-    let number = (!value.is_empty() && value.len() <= 8)
-        .then(|| value.iter().fold(0u64, |n, &b| (n << 8) | u64::from(b)));
-    match number {
+    match xbee_api::at_number(&value) {
         Some(1) => Ok(ApiMode::Unescaped),
         Some(2) => Ok(ApiMode::Escaped),
         Some(0) => Err(DetectError::Transparent),

@@ -210,8 +210,8 @@ pub async fn window(sender: &CommandSender) -> Result<Duration, SendError> {
 async fn read_number(sender: &CommandSender, command: [u8; 2]) -> Result<Option<u64>, SendError> {
     let response = sender.at(command, &[], None).await?;
     Ok(match response.parse() {
-        Ok(Frame::AtCommandResponse(at)) if at.status.is_ok() && matches!(at.data.len(), 1..=4) => {
-            Some(at.data.iter().fold(0u64, |n, &b| (n << 8) | u64::from(b)))
+        Ok(Frame::AtCommandResponse(at)) if at.status.is_ok() && at.data.len() <= 4 => {
+            xbee_api::at_number(at.data)
         }
         _ => None,
     })

@@ -159,7 +159,7 @@ pub use decoder_mode::{AnyMode, DecoderMode, FixedMode, Mode1, Mode2};
 pub use encode::{EncodeFrame, MAX_FRAME_DATA_LEN, max_encoded_len};
 pub use error::{EncodeError, FrameError};
 pub use frame::Frame;
-pub use frame::at_command::{AtCommand, AtCommandRepr};
+pub use frame::at_command::{AtCommand, AtCommandRepr, at_number};
 pub use frame::at_command_response::{AtCommandResponse, AtCommandResponseRepr};
 pub use frame::explicit_addressing_command::{
     ExplicitAddressingCommand, ExplicitAddressingCommandRepr,

@@ -88,6 +88,23 @@ impl<'a> AtCommand<&'a [u8]> {
     }
 }
 
+/// An AT parameter's value as a number: big-endian, in as many bytes as it has (a radio
+/// answers `AP` with one byte, `NT` with two, `SH` with four, and drops leading zeros);
+/// `None` for no byte, or for more than eight.
+///
+/// ```
+/// assert_eq!(xbee_api::at_number(&[0x02]), Some(2));
+/// assert_eq!(xbee_api::at_number(&[0x00, 0x13, 0xA2, 0x00]), Some(0x0013_A200));
+/// assert_eq!(xbee_api::at_number(&[]), None);
+/// assert_eq!(xbee_api::at_number(&[1; 9]), None);
+/// ```
+pub fn at_number(value: &[u8]) -> Option<u64> {
+    if value.is_empty() || value.len() > 8 {
+        return None;
+    }
+    Some(value.iter().fold(0, |n, &b| (n << 8) | u64::from(b)))
+}
+
 /// The fields of an AT Command (0x08) or AT Command - Queue Parameter Value (0x09)
 /// frame: parse one from a view, or fill one in and encode it with [`EncodeFrame`].
 ///
