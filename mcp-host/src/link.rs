@@ -138,8 +138,11 @@ pub enum LinkParseError {
     /// `tcp:`/`tcp-listen:` with an empty host or address.
     #[error("missing host in {0:?} (expected HOST:PORT)")]
     MissingHost(String),
-    /// The host or address holds white space (`tcp: 127.0.0.1:9750`).
-    #[error("invalid host {0:?} (no spaces in a host name or address)")]
+    /// The host or address holds white space (`tcp: 127.0.0.1:9750`), a control
+    /// character, a `/`, or a bracket inside brackets (`tcp:[[]:1`).
+    #[error(
+        "invalid host {0:?} (a host name or address holds no space, control character, '/', '[' or ']')"
+    )]
     InvalidHost(String),
     /// The host holds a `:` outside brackets (`tcp:::1:9750`, `tcp:host:1:2`): which
     /// `:` begins the port cannot be told. An IPv6 address goes in brackets.
@@ -407,7 +410,10 @@ fn parse_host_port(rest: &str) -> Result<(String, u16), LinkParseError> {
     if host.is_empty() {
         return Err(LinkParseError::MissingHost(rest.to_owned()));
     }
-    if host.contains(char::is_whitespace) {
+    // None could be read back from the link's text: `[` and `]` would end brackets, and a
+    // host of `//` would show as the URL form (`tcp://:1`).
+    let unfit = |c: char| c.is_whitespace() || c.is_control() || matches!(c, '/' | '[' | ']');
+    if host.contains(unfit) {
         return Err(LinkParseError::InvalidHost(host.to_owned()));
     }
     if !rest.starts_with('[') && host.contains(':') {
@@ -542,6 +548,10 @@ mod tests {
             ("localhost:9750", BareHostPort("localhost:9750".into())),
             ("127.0.0.1:http", UnknownKind("127.0.0.1".into())),
             ("tcp: 127.0.0.1:9750", InvalidHost(" 127.0.0.1".into())),
+            ("tcp:[[]:1", InvalidHost("[".into())),
+            ("tcp:[//]:1", InvalidHost("//".into())),
+            ("tcp:a]b:1", InvalidHost("a]b".into())),
+            ("tcp:host\u{0}:1", InvalidHost("host\u{0}".into())),
             ("tcp-listen:0.0.0.0 :9750", InvalidHost("0.0.0.0 ".into())),
             ("TCP:127.0.0.1:9750", UnknownKind("TCP".into())),
             ("io", MissingIoName),

@@ -45,6 +45,15 @@ proptest! {
     }
 
     #[test]
+    fn host_and_port_text_rich_in_brackets_and_slashes_reads_back(
+        text in "(tcp|tcp-listen):(\\[[\\[\\]/:a1 \u{0}]{0,3}\\]|[\\[\\]/a1]{1,3}):[0-9]{1,3}"
+    ) {
+        if let Ok(link) = text.parse::<Link>() {
+            prop_assert_eq!(link.to_string().parse::<Link>(), Ok(link));
+        }
+    }
+
+    #[test]
     fn parsing_arbitrary_text_never_panics(text in "\\PC{0,60}") {
         if let Ok(link) = text.parse::<Link>() {
             // Whatever parses displays to something that parses to the same link.
