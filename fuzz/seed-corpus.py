@@ -15,6 +15,9 @@ Each target's directory is emptied and written again. Input formats:
 - frame_roundtrip: structured input read by `arbitrary`; seeded with frame data and
   payloads (padded with zeros to 64 bytes, which `arbitrary` needs at least) so that
   its first inputs are not all zeros.
+- hub_client_codec: host_codec's seeds (the same layout: a byte of mode, here also of
+  frame size limit, then host_codec's).
+- the other targets start from no seed.
 """
 
 import pathlib
@@ -164,6 +167,10 @@ ROUNDTRIP_MIN_LEN = 64
 
 
 def write(target, name, data, seen):
+    # The hub's client codec reads the host codec's layout (its first byte picks the
+    # frame size limit too): the same streams, read as a client's.
+    if target == "host_codec":
+        write("hub_client_codec", name, data, seen)
     if target == "frame_roundtrip":
         data = data + bytes(max(0, ROUNDTRIP_MIN_LEN - len(data)))
     if data in seen[target]:
@@ -184,6 +191,7 @@ def main():
         "mcp_parse",
         "frame_roundtrip",
         "host_codec",
+        "hub_client_codec",
     ]
     for t in targets:
         shutil.rmtree(CORPUS / t, ignore_errors=True)
