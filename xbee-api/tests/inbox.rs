@@ -196,12 +196,10 @@ fn a_full_queue_takes_no_byte_and_gives_nothing_up() {
     assert!(!inbox.decoder().is_idle());
 }
 
-#[test]
-fn a_tick_while_full_gives_up_no_frame_the_decoder_holds() {
-    // Mode 1, a queue of one: a stray delimiter whose length covers two frames, given
-    // up, queues the first; the second waits in the decoder while the queue is full, and
-    // more ticks then must not give it up (into a queue with no room).
-    let mut inbox: Inbox<N1, Mode1, PAYLOAD, 1> = Inbox::new();
+/// Mode 1, a queue of one: a stray delimiter whose length covers two frames, given up
+/// at the second quiet tick, has queued the first; the second waits in the decoder.
+fn full_with_a_frame_held() -> Inbox<N1, Mode1, PAYLOAD, 1> {
+    let mut inbox = Inbox::new();
     let frame = status_request();
     let line = [&[0x7E, 0x00, 0x42][..], &frame, &frame].concat();
     let mut fifo = line.into_iter();
@@ -209,6 +207,14 @@ fn a_tick_while_full_gives_up_no_frame_the_decoder_holds() {
     inbox.tick();
     inbox.tick();
     assert!(inbox.is_full() && !inbox.ready());
+    inbox
+}
+
+#[test]
+fn a_tick_while_full_gives_up_no_frame_the_decoder_holds() {
+    // More ticks while the queue is full must not give the held frame up (into a queue
+    // with no room).
+    let mut inbox = full_with_a_frame_held();
     for _ in 0..3 {
         inbox.tick();
     }
@@ -398,16 +404,8 @@ fn a_tick_takes_the_pending_events_before_it_gives_up() {
 
 #[test]
 fn reset_drops_the_queue_the_frame_in_progress_and_the_pending_events() {
-    let mut inbox: Inbox<N1, Mode1, PAYLOAD, 1> = Inbox::new();
+    let mut inbox = full_with_a_frame_held();
     let frame = status_request();
-    // A stray delimiter holding two frames, given up: one queued, one pending; then
-    // the start of a third.
-    let line = [&[0x7E, 0x00, 0x42][..], &frame, &frame].concat();
-    let mut fifo = line.into_iter();
-    inbox.read_from(|| fifo.next()).unwrap();
-    inbox.tick();
-    inbox.tick();
-    assert!(inbox.is_full() && !inbox.ready());
     inbox.reset();
     assert!(inbox.is_empty() && inbox.ready() && inbox.decoder().is_idle());
     assert_eq!(inbox.stats().queued, 1, "the counters are kept");
