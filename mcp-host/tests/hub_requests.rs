@@ -260,6 +260,15 @@ async fn a_stray_start_delimiter_holds_a_request_back_for_the_partial_frame_time
     assert!(sent.elapsed() >= DEFAULT_PARTIAL_FRAME_TIMEOUT - Duration::from_millis(50));
     send(&mut radio, &[0x88, at[1], b'S', b'H', 0x00]).await;
     assert_eq!(next(&mut client).await, [0x88, 0x05, b'S', b'H', 0x00]);
+    // The candidate given up (refused) and the request found behind it (written) were
+    // both read.
+    let stats = hub.stats();
+    assert_eq!(
+        (stats.frames_refused, stats.frames_from_clients),
+        (1, 1),
+        "{stats:?}"
+    );
+    assert_eq!(stats.frames_read_from_clients, 2, "{stats:?}");
     hub.stop().await;
 }
 

@@ -179,7 +179,6 @@ impl Client {
                         self.skipped(bytes, after_error);
                     }
                     Some(Ok(ClientItem::Codec(item))) => {
-                        bump(&self.counters.frames_read_from_clients);
                         match self.pass(item, &to_radio, since).await {
                             Err(()) => return, // The hub stops.
                             // The bytes waiting behind it now were there when it began to
@@ -262,6 +261,8 @@ impl Client {
         to_radio: &mpsc::Sender<Queued>,
         since: Option<Instant>,
     ) -> Result<Option<Instant>, ()> {
+        // Read, whichever way it goes (a partial frame given up comes here too).
+        bump(&self.counters.frames_read_from_clients);
         let mut waited = None;
         match item {
             CodecItem::Frame(frame) => {
