@@ -26,7 +26,7 @@ use crate::event::OwnedFrame;
 #[derive(Debug)]
 pub struct Answers {
     pub(crate) answers: mpsc::Receiver<Result<OwnedFrame, SendError>>,
-    /// It has ended (given `None`): for [`FusedStream`].
+    /// It has ended (given `None`): for [`FusedStream`](futures::stream::FusedStream).
     pub(crate) ended: bool,
 }
 

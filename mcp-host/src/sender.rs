@@ -101,8 +101,8 @@ impl std::fmt::Display for DeliveryReport {
 ///
 /// Every request waits at most its timeout (and half a second's grace for the background
 /// task's answer) and fails with a clear [`SendError`] (inside the
-/// [`RequestError`](crate::RequestError), [`ConfirmError`](crate::ConfirmError) or
-/// [`DiscoverError`](crate::DiscoverError) of the methods that return those) when the
+/// [`RequestError`], [`ConfirmError`](crate::ConfirmError) or
+/// [`DiscoverError`] of the methods that return those) when the
 /// link goes down while the request is in flight, or is down when it is made. Waits
 /// that are not one request's: [`closed`](Self::closed) waits for the link's end;
 /// [`send_confirmed`](Self::send_confirmed) and the trajectories send and wait in steps,
@@ -657,9 +657,9 @@ impl CommandSender {
     /// [`LinkEvent::Closed`](crate::LinkEvent::Closed) and ends. Returns at once.
     ///
     /// Requests in flight fail as in any disconnection, with
-    /// [`SendError::Disconnected`](crate::SendError::Disconnected) (reason `closed by the
+    /// [`SendError::Disconnected`] (reason `closed by the
     /// application`): they may have gone out. Later ones fail with
-    /// [`SendError::Closed`](crate::SendError::Closed) at once, also before the link's
+    /// [`SendError::Closed`] at once, also before the link's
     /// task has seen the request, and so do a [`PacketSink`](crate::PacketSink)'s
     /// packets.
     ///

@@ -62,8 +62,8 @@ pub(super) struct Pending {
     pub(super) timeout: Duration,
     /// Where its frame is in the bytes queued for the transport, counted from the
     /// transport's first (empty until queued): the frame went out once
-    /// [`Driver::written`] reaches its end, and none of it has while that is at most its
-    /// start.
+    /// [`Driver::written`](super::Driver::written) reaches its end, and none of it has
+    /// while that is at most its start.
     pub(super) bytes: Range<u64>,
     pub(super) kind: PendingKind,
 }
@@ -143,8 +143,8 @@ pub(super) enum PendingKind {
         answers: AnswerSender,
         /// The frame type of its answers (0x88 for AT commands, 0x97 for remote ones).
         answer_type: u8,
-        /// Answers dropped while [`ANSWERS_HELD`] waited for the caller: the first is
-        /// logged, the count when the window ends.
+        /// Answers dropped while [`ANSWERS_HELD`](super::ANSWERS_HELD) waited for the
+        /// caller: the first is logged, the count when the window ends.
         dropped: u64,
     },
     /// A request whose caller has its timeout (or is gone), its frame sent: its late

@@ -45,13 +45,13 @@ pub(super) struct Client {
     pub(super) routes: Arc<Mutex<Routes>>,
     /// The permits of the 255 frame ids, shared by all clients.
     pub(super) ids: Arc<Semaphore>,
-    /// The permits of the [`SHARED_IDS`], shared by all clients' requests beyond their
-    /// first [`IDS_PER_CLIENT`].
+    /// The permits of the [`SHARED_IDS`](super::SHARED_IDS), shared by all clients'
+    /// requests beyond their first [`IDS_PER_CLIENT`].
     pub(super) shared: Arc<Semaphore>,
     /// Its [`ROUTES_PER_CLIENT`] permits to have a request waiting for answers.
     pub(super) permits: Arc<Semaphore>,
-    /// Its [`MANY_ANSWER_PER_CLIENT`] permits to have a request answered many times
-    /// waiting.
+    /// Its [`MANY_ANSWER_PER_CLIENT`](super::MANY_ANSWER_PER_CLIENT) permits to have a
+    /// request answered many times waiting.
     pub(super) many: Arc<Semaphore>,
     /// How its frames are read.
     pub(super) input: ClientInput,
@@ -62,19 +62,20 @@ pub(super) struct Client {
     /// Since when its queue of frames from the radio has been full, without being
     /// drained since.
     pub(super) behind: Arc<Mutex<Option<Instant>>>,
-    /// Since when it has sent nothing more (see [`Connected::closed`]).
+    /// Since when it has sent nothing more (see
+    /// [`Connected::closed`](super::serve::Connected::closed)).
     pub(super) closed: Arc<Mutex<Option<Instant>>>,
     /// Since when it has written ahead of the radio: a frame it sent found its
-    /// [`CLIENT_FRAMES_TO_RADIO`] places taken, and waited its turn, and the hub has not
-    /// read all it wrote since; `None` once it has (the client waits for more: a frame
-    /// finding a place free says nothing, as the radio's writer may take two short
-    /// frames of a flood at once). A client that writes faster than the radio sends
-    /// keeps it:
-    /// one that keeps it for [`STALLED`] gives its place up when the hub is full (a
-    /// program that left megabytes of frames in its connection, whose end the hub
-    /// cannot read before them, is one).
+    /// [`CLIENT_FRAMES_TO_RADIO`](super::CLIENT_FRAMES_TO_RADIO) places taken, and waited
+    /// its turn, and the hub has not read all it wrote since; `None` once it has (the
+    /// client waits for more: a frame finding a place free says nothing, as the radio's
+    /// writer may take two short frames of a flood at once). A client that writes faster
+    /// than the radio sends keeps it: one that keeps it for [`STALLED`](super::STALLED)
+    /// gives its place up when the hub is full (a program that left megabytes of frames
+    /// in its connection, whose end the hub cannot read before them, is one).
     pub(super) ahead: Arc<Mutex<Option<Instant>>>,
-    /// The radio's frames dropped for it (see [`Connected::dropped`]).
+    /// The radio's frames dropped for it (see
+    /// [`Connected::dropped`](super::serve::Connected::dropped)).
     pub(super) dropped: Arc<AtomicU64>,
     /// Its bytes that began no frame, skipped.
     pub(super) skipped: AtomicU64,
@@ -252,9 +253,9 @@ impl Client {
     }
 
     /// Passes an item of the client's reader on: a frame admitted to the radio's queue
-    /// (waiting while [`CLIENT_FRAMES_TO_RADIO`] frames wait their turn), its wait
-    /// counted from `since` if it was read then already (see `read`). Since when it
-    /// waited, if it did; `Err` once the hub stops.
+    /// (waiting while [`CLIENT_FRAMES_TO_RADIO`](super::CLIENT_FRAMES_TO_RADIO) frames
+    /// wait their turn), its wait counted from `since` if it was read then already (see
+    /// `read`). Since when it waited, if it did; `Err` once the hub stops.
     async fn pass(
         &self,
         item: CodecItem,

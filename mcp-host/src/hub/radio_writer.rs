@@ -24,8 +24,9 @@ type ClientFrames = (mpsc::Receiver<Queued>, Arc<Client>);
 pub(super) struct Queued {
     /// Its frame data, a request's under its hub id.
     pub(super) data: Vec<u8>,
-    /// For a request: when it must have gone to the radio ([`REQUEST_WAIT`] after the
-    /// hub could first have read it); one still waiting its turn then is not sent.
+    /// For a request: when it must have gone to the radio
+    /// ([`REQUEST_WAIT`](super::REQUEST_WAIT) after the hub could first have read it);
+    /// one still waiting its turn then is not sent.
     pub(super) deadline: Option<Instant>,
 }
 

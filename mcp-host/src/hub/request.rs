@@ -38,8 +38,9 @@ pub(super) fn at_command(data: &[u8]) -> Option<[u8; 2]> {
     data.get(at..at + 2)?.try_into().ok()
 }
 
-/// Whether `data`, a request of a type the hub routes (see [`answer_type`]), holds the
-/// fixed fields of its type: a radio drops a request cut short without an answer.
+/// Whether `data`, a request of a type the hub routes (see
+/// [`answer_type`](xbee_api::frame::frame_type::answer_type)), holds the fixed fields of
+/// its type: a radio drops a request cut short without an answer.
 pub(super) fn is_whole_request(data: &[u8]) -> bool {
     match data.first() {
         // 802.15.4 Transmit Request, 64-bit address: type, id, address, options.
@@ -56,13 +57,14 @@ pub(super) fn is_whole_request(data: &[u8]) -> bool {
     }
 }
 
-/// The answer the hub gives a request it did not send ([`REQUEST_WAIT`]), as the radio
-/// answers one it could not carry out, under the client's own id: an AT command
-/// `ERROR` (1), a transmission's delivery status 0x32 (resource error: the radio's own
-/// word for a lack of buffers; in a Transmit Status 0x8B, or a TX Status 0x89 for the
-/// 802.15.4 and IPv4 Transmit Requests), a remote AT command's transmission failure
-/// (4). `None` for the other requests (Register Joining Device), and for requests cut
-/// short ([`is_whole_request`]), whose clients wait for their own timeouts.
+/// The answer the hub gives a request it did not send
+/// ([`REQUEST_WAIT`](super::REQUEST_WAIT)), as the radio answers one it could not carry
+/// out, under the client's own id: an AT command `ERROR` (1), a transmission's delivery
+/// status 0x32 (resource error: the radio's own word for a lack of buffers; in a Transmit
+/// Status 0x8B, or a TX Status 0x89 for the 802.15.4 and IPv4 Transmit Requests), a
+/// remote AT command's transmission failure (4). `None` for the other requests (Register
+/// Joining Device), and for requests cut short ([`is_whole_request`]), whose clients wait
+/// for their own timeouts.
 pub(super) fn not_sent_answer(request: &[u8]) -> Option<Vec<u8>> {
     if !is_whole_request(request) {
         return None;

@@ -33,13 +33,14 @@ impl Held {
 }
 
 pub(super) struct Route {
-    /// The client's number (see [`Serve::next_client`]).
+    /// The client's number (see [`Serve::next_client`](super::serve::Serve::next_client)).
     pub(super) client: u64,
     /// The client's queue of answers.
     pub(super) queue: AnswerQueue,
     pub(super) own_id: u8,
-    /// The frame type of the answers (see [`answer_type`]): an answer of another type
-    /// under the same id is not this request's.
+    /// The frame type of the answers (see
+    /// [`answer_type`](xbee_api::frame::frame_type::answer_type)): an answer of another
+    /// type under the same id is not this request's.
     pub(super) answer_type: u8,
     /// The AT command of an AT or remote AT request ([`at_command`]): an answer that
     /// echoes another is not this request's either.
@@ -52,18 +53,19 @@ pub(super) struct Route {
     /// broadcast remote AT).
     pub(super) many: bool,
     /// Its client has gone since the request was written: its answers are dropped, and
-    /// its id stays taken until they have come (or `until`), so that no late answer
-    /// of its reaches a new request under the same id. An orphan holds one of the
-    /// [`SHARED_IDS`] (taken when it became one, if it had none): orphans never take
-    /// the ids each client's first requests find.
+    /// its id stays taken until they have come (or `until`), so that no late answer of
+    /// its reaches a new request under the same id. An orphan holds one of the
+    /// [`SHARED_IDS`](super::SHARED_IDS) (taken when it became one, if it had none):
+    /// orphans never take the ids each client's first requests find.
     pub(super) orphan: Cell<bool>,
-    /// One of the client's [`ROUTES_PER_CLIENT`] permits, given back with the route.
+    /// One of the client's [`ROUTES_PER_CLIENT`](super::ROUTES_PER_CLIENT) permits, given
+    /// back with the route.
     pub(super) _permit: OwnedSemaphorePermit,
     /// For a request answered many times, one of the client's
-    /// [`MANY_ANSWER_PER_CLIENT`] permits.
+    /// [`MANY_ANSWER_PER_CLIENT`](super::MANY_ANSWER_PER_CLIENT) permits.
     pub(super) _many: Option<OwnedSemaphorePermit>,
-    /// For a request beyond its client's first [`IDS_PER_CLIENT`], one of the
-    /// [`SHARED_IDS`] permits.
+    /// For a request beyond its client's first [`IDS_PER_CLIENT`](super::IDS_PER_CLIENT),
+    /// one of the [`SHARED_IDS`](super::SHARED_IDS) permits.
     pub(super) _shared: Option<OwnedSemaphorePermit>,
     /// One of the 255 frame ids' permits: requests of all clients wait for a free id in
     /// the order they came.

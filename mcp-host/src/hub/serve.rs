@@ -101,8 +101,8 @@ pub(super) struct AnswerQueue {
 impl AnswerQueue {
     /// Queues an answer (encoded); one that finds the queue full (the client sent
     /// requests and read nothing, while the radio's frames filled its connection) is
-    /// dropped, counted in [`HubStats::frames_dropped`] and said, the first at once,
-    /// then at most one a second with the number not said.
+    /// dropped, counted in [`HubStats::frames_dropped`](super::HubStats::frames_dropped)
+    /// and said, the first at once, then at most one a second with the number not said.
     pub(super) fn send(&self, bytes: Bytes) {
         match self.queue.try_send(bytes) {
             Err(mpsc::error::TrySendError::Full(_)) => bump(&self.counters.frames_dropped),
@@ -126,7 +126,8 @@ impl AnswerQueue {
 pub(super) struct Serve {
     /// The hub's stalls, which the requests read after one count from.
     pub(super) stalls: Arc<Stalls>,
-    /// New clients' queues of frames to the radio, for the [`RadioWriter`].
+    /// New clients' queues of frames to the radio, for the
+    /// [`RadioWriter`](super::radio_writer::RadioWriter).
     pub(super) to_radio: Arc<ToRadio>,
     pub(super) mode: ApiMode,
     pub(super) sender: CommandSender,
@@ -136,8 +137,8 @@ pub(super) struct Serve {
     pub(super) routes: Arc<Mutex<Routes>>,
     /// The permits of the 255 frame ids, one held by each route.
     pub(super) ids: Arc<Semaphore>,
-    /// The permits of the [`SHARED_IDS`], one held by each route beyond its client's
-    /// first [`IDS_PER_CLIENT`].
+    /// The permits of the [`SHARED_IDS`](super::SHARED_IDS), one held by each route
+    /// beyond its client's first [`IDS_PER_CLIENT`](super::IDS_PER_CLIENT).
     pub(super) shared: Arc<Semaphore>,
     /// How the clients' frames are read.
     pub(super) client_input: ClientInput,
