@@ -654,7 +654,8 @@ fn a_record_index_past_any_packet_is_none_not_a_wrapped_one() {
         Some(TelemetryId::PitchAngle)
     );
     assert_eq!(telemetry.get(2), None);
-    // 5 * (usize::MAX / 5 + 1) wraps to 4 or less: the index must not read record 0.
+    // 5 * (usize::MAX / 5 + 1) wraps to 4 or less: the index must not read a record at
+    // the wrapped offset.
     assert_eq!(telemetry.get(usize::MAX / 5 + 1), None);
     assert_eq!(telemetry.get(usize::MAX), None);
 }

@@ -15,6 +15,8 @@ use std::time::Duration;
 use tokio::time::Instant;
 use tokio_util::sync::CancellationToken;
 
+use crate::mutex::lock;
+
 /// How often the hub notes that it runs.
 const BEAT: Duration = Duration::from_millis(250);
 
@@ -56,10 +58,7 @@ impl Stalls {
     /// as the task reading it may run before the beat after a stall.
     pub(super) fn beat(&self) -> Option<Instant> {
         let now = Instant::now();
-        let mut state = self
-            .state
-            .lock()
-            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        let mut state = lock(&self.state);
         let then = state.beat;
         let gap = now.saturating_duration_since(then);
         if gap > STALL {

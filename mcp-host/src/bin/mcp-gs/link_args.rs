@@ -272,8 +272,8 @@ impl LinkArgs {
         }
     }
 
-    /// Asks the radio for its API mode ([`ask_ap`](crate::radio_query::ask_ap)): within 3 s, or the `--timeout`
-    /// given (a slow radio, a link with latency).
+    /// Asks the radio for its API mode ([`ask_ap`](crate::radio_query::ask_ap)): within
+    /// 3 s, or the `--timeout` given (a slow radio, a link with latency).
     async fn detect_mode(&self, role: Role) -> Result<ApiMode, Failure> {
         let timeout = self
             .given_timeout()

@@ -36,10 +36,10 @@ pub(crate) async fn ask_parameter(
     at_exchange(link, options, command, &[]).await
 }
 
-/// An AT parameter's value as a number: its bytes, big-endian, as the radio gives them
-/// (more than 8 keep their last 8).
+/// An AT parameter's value as a number, as the radio gives it: 0 for no byte, and of
+/// more than 8 bytes the last 8.
 pub(crate) fn at_number(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0u64, |n, &b| (n << 8) | u64::from(b))
+    xbee_api::at_number(&bytes[bytes.len().saturating_sub(8)..]).unwrap_or(0)
 }
 
 /// [`ask_parameter`], with `value` given: the parameter set (or the command carried
