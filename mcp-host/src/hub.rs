@@ -349,7 +349,8 @@ pub struct HubStats {
     pub frames_from_clients: u64,
     /// Frames read from clients, those that fail their checksum or escapes included:
     /// each is written to the radio ([`frames_from_clients`](Self::frames_from_clients)),
-    /// refused ([`frames_refused`](Self::frames_refused)) or waits its turn.
+    /// refused ([`frames_refused`](Self::frames_refused)) or waits its turn. Never fewer
+    /// than those two together: the difference is the clients' frames waiting.
     pub frames_read_from_clients: u64,
     /// Frames not given to a client that had fallen behind (its queue full): the
     /// radio's, and the hub's own answers to requests it refused. Not those for a client
@@ -385,6 +386,13 @@ pub struct HubStats {
     /// hub writes its clients' requests as raw frames, so the answers it routes to them
     /// count in [`Stats::unclaimed_responses`].
     pub radio: Stats,
+}
+
+/// Counts a client's frame written to the radio or refused: after its count of frames
+/// read ([`Hub::stats`] loads that last, so that its snapshot never shows more frames
+/// written and refused than read).
+fn settled(counter: &AtomicU64) {
+    counter.fetch_add(1, Ordering::Release);
 }
 
 #[derive(Debug, Default)]
@@ -563,14 +571,20 @@ impl Hub {
     /// Counters so far.
     pub fn stats(&self) -> HubStats {
         let c = &self.counters;
+        // A frame is counted read before it is written or refused ([`settled`]): loaded
+        // last, the count of frames read takes in those of the others.
+        let (frames_from_clients, frames_refused) = (
+            c.frames_from_clients.load(Ordering::Acquire),
+            c.frames_refused.load(Ordering::Acquire),
+        );
         HubStats {
             listening: c.listening.load(Ordering::Relaxed),
             clients: c.clients.load(Ordering::Relaxed),
             frames_from_radio: c.frames_from_radio.load(Ordering::Relaxed),
-            frames_from_clients: c.frames_from_clients.load(Ordering::Relaxed),
-            frames_read_from_clients: c.frames_read_from_clients.load(Ordering::Relaxed),
+            frames_from_clients,
+            frames_read_from_clients: c.frames_read_from_clients.load(Ordering::Acquire),
             frames_dropped: c.frames_dropped.load(Ordering::Relaxed),
-            frames_refused: c.frames_refused.load(Ordering::Relaxed),
+            frames_refused,
             requests_held: c.requests_held.load(Ordering::Relaxed),
             clients_turned_away: c.clients_turned_away.load(Ordering::Relaxed),
             bytes_skipped: c.bytes_skipped.load(Ordering::Relaxed),

@@ -313,6 +313,21 @@ async fn a_client_that_writes_ahead_of_the_radio_gives_its_place_up() {
     let read = tokio::time::timeout(GUARD, flooder.read(&mut byte)).await;
     assert!(matches!(read, Ok(Ok(0) | Err(_))), "{read:?}");
     assert!(hub.stats().frames_refused > 0, "{:?}", hub.stats());
+    // Every frame the hub read went to the radio or was refused, the one the flooder's
+    // reader held on its way when it was let go too: none waits now.
+    let mut looks = 0;
+    while {
+        let stats = hub.stats();
+        stats.frames_read_from_clients != stats.frames_from_clients + stats.frames_refused
+    } {
+        looks += 1;
+        assert!(
+            looks < 500,
+            "frames read and never settled: {:?}",
+            hub.stats()
+        );
+        tokio::time::sleep(Duration::from_millis(10)).await;
+    }
     flooding.abort();
     // The quiet clients and the burst's kept their places: the next is turned away.
     let mut late = TcpStream::connect(hub.local_addr()).await.unwrap();

@@ -23,7 +23,7 @@ use super::request::{answered_many_times, at_command, is_whole_request, not_sent
 use super::routes::{Route, Routes};
 use super::serve::AnswerQueue;
 use super::stall::Stalls;
-use super::{Counters, IDS_PER_CLIENT, REQUEST_WAIT, ROUTES_PER_CLIENT, encode};
+use super::{Counters, IDS_PER_CLIENT, REQUEST_WAIT, ROUTES_PER_CLIENT, encode, settled};
 use crate::codec::CodecItem;
 use crate::mutex::lock;
 use crate::stats::bump;
@@ -239,7 +239,7 @@ impl Client {
     /// Counts a frame of this client's refused, and says why as a warning: the first at
     /// once, then at most one a second with the number of those not said.
     pub(super) fn refuse(&self, why: std::fmt::Arguments<'_>) {
-        bump(&self.counters.frames_refused);
+        settled(&self.counters.frames_refused);
         let peer = self.peer;
         match lock(&self.counters.refusals).count(Instant::now()) {
             Some(0) => tracing::warn!(%peer, "hub: a client's frame refused: {why}"),
@@ -264,6 +264,23 @@ impl Client {
     ) -> Result<Option<Instant>, ()> {
         // Read, whichever way it goes (a partial frame given up comes here too).
         bump(&self.counters.frames_read_from_clients);
+        // A frame on its way (waiting for a frame id or its turn) when the client is
+        // ended, its reader dropped, or when the hub stops, is refused: never written.
+        let on_its_way = RefusedIfDropped(&self.counters.frames_refused);
+        let passed = self.pass_on(item, to_radio, since).await;
+        if passed.is_ok() {
+            std::mem::forget(on_its_way);
+        }
+        passed
+    }
+
+    /// [`pass`](Self::pass), but for the counting.
+    async fn pass_on(
+        &self,
+        item: CodecItem,
+        to_radio: &mpsc::Sender<Queued>,
+        since: Option<Instant>,
+    ) -> Result<Option<Instant>, ()> {
         let mut waited = None;
         match item {
             CodecItem::Frame(frame) => {
@@ -512,5 +529,15 @@ impl Client {
             data,
             deadline: request_deadline,
         })
+    }
+}
+
+/// Counts a client's frame refused when dropped: one that never reached the radio's
+/// queue, nor was refused on its way.
+struct RefusedIfDropped<'a>(&'a AtomicU64);
+
+impl Drop for RefusedIfDropped<'_> {
+    fn drop(&mut self) {
+        settled(self.0);
     }
 }

@@ -11,10 +11,9 @@ use xbee_api::ApiMode;
 
 use super::client::Client;
 use super::routes::Routes;
-use super::{Counters, RADIO_BACKLOG, encode};
+use super::{Counters, RADIO_BACKLOG, encode, settled};
 use crate::CommandSender;
 use crate::mutex::lock;
-use crate::stats::bump;
 
 /// A client's queue of frames to the radio, and the client (kept until the queue is
 /// drained, so that the routes of its last frames stay until these are written).
@@ -96,7 +95,7 @@ impl RadioWriter {
             };
             match written {
                 Ok(()) => {
-                    bump(&self.counters.frames_from_clients);
+                    settled(&self.counters.frames_from_clients);
                     let len = encode(&data, self.mode).map_or(data.len(), |bytes| bytes.len());
                     let time = Duration::from_secs_f64(len as f64 / self.bytes_per_second);
                     through = through.max(Instant::now()) + time;
@@ -113,7 +112,7 @@ impl RadioWriter {
                         if let Some(id) = hub_id {
                             lock(&self.routes).remove(id);
                         }
-                        bump(&self.counters.frames_refused);
+                        settled(&self.counters.frames_refused);
                     }
                 }
             }
@@ -150,7 +149,7 @@ impl RadioWriter {
                 if client.end.is_cancelled() {
                     queue.close();
                     while queue.try_recv().is_ok() {
-                        bump(&self.counters.frames_refused);
+                        settled(&self.counters.frames_refused);
                     }
                     return false;
                 }
