@@ -116,6 +116,10 @@ fuzz_target!(|input: &[u8]| {
                 assert!(!bad.problem.is_empty());
                 out.push(Out::Bad(bad.line, bad.skipped));
                 if !bad.goes_on() {
+                    // Reading has ended: nothing more comes, no byte and no error.
+                    for _ in 0..3 {
+                        assert_eq!(reader.read(&mut buf).ok(), Some(0), "read after the end");
+                    }
                     break;
                 }
             }

@@ -5,7 +5,7 @@
 //! (`admit`: AT command, whole request, the answer to a request not sent).
 //!
 //! Input: byte 0 picks the mode (bit 0: odd is API mode 1) and the hub's
-//! `max_frame_len` (the rest: the default, `MAX_REQUEST_DATA`, or 2 to 65); byte 1 says
+//! `max_frame_len` (the rest: the default, `MAX_REQUEST_DATA`, or 2 to 33); byte 1 says
 //! how many of the next bytes are chunk sizes (0-7); the rest is the stream. A chunk
 //! size's low 7 bits are the read's length (all zero: a byte at a time); its high bit
 //! gives up the partial frame once the read is decoded. In API mode 2 a Modem Status

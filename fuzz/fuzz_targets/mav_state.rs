@@ -333,14 +333,15 @@ fuzz_target!(|input: &[u8]| {
                 check_changes(&mut mav, &sim, &mut model, buf_len);
             }
             _ => {
+                let change = input.u8().unwrap_or(0);
                 let l = input.u8().unwrap_or(0);
                 let c = input.u8().unwrap_or(0);
-                if l & 1 == 1 {
-                    sim.landing = LandingState::from(l >> 1);
+                if change & 1 == 1 {
+                    sim.landing = LandingState::from(l);
                 }
-                if c & 1 == 1 {
+                if change & 2 == 2 {
                     // A controller the vehicle itself runs: 0x00-0xFE.
-                    sim.controller = Controller::from((c >> 1).min(0xFE));
+                    sim.controller = Controller::from(c.min(0xFE));
                 }
             }
         }

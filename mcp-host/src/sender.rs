@@ -92,18 +92,19 @@ impl std::fmt::Display for DeliveryReport {
 /// at once.
 ///
 /// Waiting times are given one way throughout: a `timeout: Option<Duration>` (for a
-/// transmission, in [`SendOptions`]) is how long to wait for the answer, `None` taking
-/// the link's [`send_timeout`](crate::LinkOptions::send_timeout). A `window` is another
+/// transmission, in [`SendOptions`]) is how long to wait for the answer (for a
+/// transmission without a frame id, [`FrameId::None`], only for the link to take it),
+/// `None` taking the link's [`send_timeout`](crate::LinkOptions::send_timeout). A `window` is another
 /// thing: how long answers from many radios are gathered ([`at_answers`](Self::at_answers),
 /// [`discover`](Self::discover), whose `None` is the radio's own discovery time).
 /// [`send_frame`](Self::send_frame) waits for the answer under the frame's id;
 /// [`write_frame`](Self::write_frame) for none, only until the link has the frame.
 ///
 /// Every request waits at most its timeout (and half a second's grace for the background
-/// task's answer) and fails with a clear [`SendError`] (inside the
-/// [`RequestError`], [`ConfirmError`](crate::ConfirmError) or
-/// [`DiscoverError`] of the methods that return those) when the
-/// link goes down while the request is in flight, or is down when it is made. Waits
+/// task's answer) and fails with a clear [`SendError`] (inside the [`RequestError`],
+/// [`ConfirmError`](crate::ConfirmError) or [`DiscoverError`] of the methods that return
+/// those) when the link goes down while the request is in flight, or is down when it is
+/// made. Waits
 /// that are not one request's: [`closed`](Self::closed) waits for the link's end;
 /// [`send_confirmed`](Self::send_confirmed) and the trajectories send and wait in steps,
 /// each within the timeout; a [`PacketSink`](crate::PacketSink) waits while the link is
@@ -656,12 +657,10 @@ impl CommandSender {
     /// the [`PacketStream`](crate::PacketStream) yields
     /// [`LinkEvent::Closed`](crate::LinkEvent::Closed) and ends. Returns at once.
     ///
-    /// Requests in flight fail as in any disconnection, with
-    /// [`SendError::Disconnected`] (reason `closed by the
-    /// application`): they may have gone out. Later ones fail with
-    /// [`SendError::Closed`] at once, also before the link's
-    /// task has seen the request, and so do a [`PacketSink`](crate::PacketSink)'s
-    /// packets.
+    /// Requests in flight fail as in any disconnection, with [`SendError::Disconnected`]
+    /// (reason `closed by the application`): they may have gone out. Later ones fail with
+    /// [`SendError::Closed`] at once, also before the link's task has seen the request,
+    /// and so do a [`PacketSink`](crate::PacketSink)'s packets.
     ///
     /// The transport is closed before that event, so once the stream has yielded it (or
     /// ended) the same device can be opened again at once: a serial port is opened for

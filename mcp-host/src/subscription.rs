@@ -259,10 +259,7 @@ impl<T> std::fmt::Debug for Subscription<T> {
 /// Read again after its end (in a `select!` loop, say), it ends again.
 impl<T> FusedStream for Subscription<T> {
     fn is_terminated(&self) -> bool {
-        self.events
-            .lock()
-            .unwrap_or_else(PoisonError::into_inner)
-            .is_terminated()
+        lock(&self.events).is_terminated()
     }
 }
 

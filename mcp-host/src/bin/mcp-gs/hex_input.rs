@@ -140,9 +140,10 @@ impl<R: BufRead> HexReader<R> {
             for &c in chunk {
                 used += 1;
                 if let Err(bad) = self.parser.take(c) {
-                    // Reading ends here, the line's bytes before it left out too.
+                    // Reading ends here, the line's bytes (and fault) before it left out.
                     self.ended = true;
                     self.parser.bytes.clear();
+                    self.parser.bad = None;
                     return Err(bad.into());
                 }
                 if c == b'\n' && self.parser.bad.is_some() {
@@ -333,12 +334,16 @@ mod tests {
 
     #[test]
     fn reading_ends_at_text_that_is_not_text_its_line_left_out() {
-        let mut reader = HexReader::new(&b"7E 00\n12 34\x01\n56\n"[..]);
-        let mut buf = [0u8; 16];
-        assert_eq!(reader.read(&mut buf).unwrap(), 2);
-        let e = reader.read(&mut buf).unwrap_err();
-        assert!(e.to_string().starts_with("line 2: not text"), "{e}");
-        assert_eq!(reader.read(&mut buf).unwrap(), 0, "{:02X?}", &buf[..2]);
+        for line in [&b"12 34\x01"[..], b"12 zz\x01"] {
+            let text = [&b"7E 00\n"[..], line, b"\n56\n"].concat();
+            let mut reader = HexReader::new(&text[..]);
+            let mut buf = [0u8; 16];
+            assert_eq!(reader.read(&mut buf).unwrap(), 2);
+            let e = reader.read(&mut buf).unwrap_err();
+            assert!(e.to_string().starts_with("line 2: not text"), "{e}");
+            let after = reader.read(&mut buf).map_err(|e| e.to_string());
+            assert_eq!(after, Ok(0), "{:02X?}", &buf[..2]);
+        }
     }
 
     #[test]
