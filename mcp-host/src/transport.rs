@@ -20,6 +20,7 @@ use tokio_serial::{SerialPortBuilderExt, SerialStream};
 use self::listen::{Listen, Turn};
 use crate::keepalive::{LINK_KEEPALIVE, keep_alive};
 use crate::link::Link;
+use crate::mutex::lock;
 use crate::options::{LinkOptions, ReconnectPolicy};
 use crate::pty::{PtyPort, PtyStream};
 
@@ -348,7 +349,7 @@ impl Lent {
 impl Drop for Lent {
     fn drop(&mut self) {
         if let Some(stream) = self.stream.take() {
-            *self.back.lock().unwrap_or_else(PoisonError::into_inner) = Some(stream);
+            *lock(&self.back) = Some(stream);
         }
     }
 }
@@ -643,11 +644,7 @@ impl Connector {
                 })
             }
             Kind::Pty(pty) => {
-                let lent = pty
-                    .back
-                    .lock()
-                    .unwrap_or_else(PoisonError::into_inner)
-                    .take();
+                let lent = lock(&pty.back).take();
                 if let Some(stream) = lent {
                     pty.port.give_back(stream);
                 }
