@@ -616,15 +616,21 @@ fn encode_reports_a_small_buffer() {
     assert_eq!(buf, [0; 5]);
 }
 
-#[test]
-fn record_and_waypoint_iterators_count_what_is_left() {
-    // `t`, then two records: altitude 1.5 and pitch -0.25.
-    let telemetry = [
-        b't', 0x01, 0x00, 0x00, 0xC0, 0x3F, 0x19, 0x00, 0x00, 0x80, 0xBE,
-    ];
-    let Packet::Telemetry(telemetry) = parse(&telemetry).unwrap() else {
+/// `t`, then two records: altitude 1.5 and pitch -0.25.
+const TWO_RECORDS: [u8; 11] = [
+    b't', 0x01, 0x00, 0x00, 0xC0, 0x3F, 0x19, 0x00, 0x00, 0x80, 0xBE,
+];
+
+fn telemetry(bytes: &[u8]) -> mcp_core::Telemetry<&[u8]> {
+    let Packet::Telemetry(telemetry) = parse(bytes).unwrap() else {
         panic!("not telemetry")
     };
+    telemetry
+}
+
+#[test]
+fn record_and_waypoint_iterators_count_what_is_left() {
+    let telemetry = telemetry(&TWO_RECORDS);
     let mut records = telemetry.iter();
     assert_eq!((records.len(), records.size_hint()), (2, (2, Some(2))));
     records.next();
@@ -643,12 +649,7 @@ fn record_and_waypoint_iterators_count_what_is_left() {
 
 #[test]
 fn a_record_index_past_any_packet_is_none_not_a_wrapped_one() {
-    let telemetry = [
-        b't', 0x01, 0x00, 0x00, 0xC0, 0x3F, 0x19, 0x00, 0x00, 0x80, 0xBE,
-    ];
-    let Packet::Telemetry(telemetry) = parse(&telemetry).unwrap() else {
-        panic!("not telemetry")
-    };
+    let telemetry = telemetry(&TWO_RECORDS);
     assert_eq!(
         telemetry.get(1).map(|r| r.id),
         Some(TelemetryId::PitchAngle)
