@@ -39,14 +39,6 @@ struct Reference {
     events: Vec<(Event, u64)>,
 }
 
-/// An event as an owned value.
-fn own(event: Option<xbee_api::DecodeEvent<'_>>) -> Option<Event> {
-    Some(match event? {
-        Ok(frame) => Event::Frame(frame.data().to_vec()),
-        Err(error) => Event::Error(error),
-    })
-}
-
 impl Reference {
     fn push(&mut self, event: Option<Event>) -> bool {
         let Some(event) = event else { return false };
@@ -58,7 +50,7 @@ impl Reference {
     fn decode(&mut self, mut input: &[u8]) {
         loop {
             let (consumed, event) = self.decoder.decode(input);
-            let event = own(event);
+            let event = event.map(Event::from_decoder);
             input = &input[consumed..];
             if !self.push(event) {
                 assert!(input.is_empty());
@@ -68,10 +60,10 @@ impl Reference {
     }
 
     fn drop_partial(&mut self) {
-        let event = own(self.decoder.finish());
+        let event = self.decoder.finish().map(Event::from_decoder);
         if self.push(event) {
             loop {
-                let event = own(self.decoder.poll());
+                let event = self.decoder.poll().map(Event::from_decoder);
                 if !self.push(event) {
                     break;
                 }
@@ -81,7 +73,7 @@ impl Reference {
 
     fn finish(&mut self) {
         loop {
-            let event = own(self.decoder.finish());
+            let event = self.decoder.finish().map(Event::from_decoder);
             if !self.push(event) {
                 break;
             }

@@ -12,7 +12,8 @@ pub enum Event {
 }
 
 impl Event {
-    fn from_decoder(event: Result<xbee_api::RawFrame<'_>, DecodeError>) -> Self {
+    /// A decoder's event, owned.
+    pub fn from_decoder(event: xbee_api::DecodeEvent<'_>) -> Self {
         match event {
             Ok(frame) => Event::Frame(frame.data().to_vec()),
             Err(error) => Event::Error(error),
